@@ -1,0 +1,1 @@
+"""What a user does with readings: hysteresis and repeatability errors, calibration."""

@@ -1,0 +1,83 @@
+"""The ``fsrlab`` command line: thin Typer commands, one module per topic, no computation here.
+
+Every command that prints numbers takes ``--json``. Bad input ends with one line on stderr that
+names the field and what is allowed, and exit code 2 (see :func:`main`).
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import sys
+
+import typer
+
+from fsrlab import __version__
+
+app = typer.Typer(
+    name="fsrlab",
+    help="Force sensing with FSRs: physics, LM555 readout, firmware, acquisition, calibration, reports.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+
+# Topic modules that add commands to ``app``; a topic not written yet is simply absent.
+COMMAND_MODULES = ("report", "physics", "oscillator", "analysis", "acquisition")
+for _name in COMMAND_MODULES:
+    try:
+        importlib.import_module(f"{__name__}.{_name}")
+    except ModuleNotFoundError as _err:
+        if _err.name != f"{__name__}.{_name}":
+            raise
+
+
+def _version(value: bool) -> None:
+    if value:
+        typer.echo(f"fsrlab {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: bool = typer.Option(False, "--version", callback=_version, is_eager=True, help="Print the version and exit."),
+) -> None:
+    """Force sensing with FSRs read through their piezocapacitance (Matute et al. 2018)."""
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command line; usage errors and invalid values end with one line and exit code 2.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments without the program name; ``sys.argv[1:]`` when omitted.
+
+    Returns
+    -------
+    int
+        The exit code (also raised as ``SystemExit``).
+    """
+    args = sys.argv[1:] if argv is None else list(argv)
+    command = typer.main.get_command(app)
+    try:
+        # In non-standalone mode typer returns an explicit Exit's code, or the command's value.
+        result = command.main(args=args, prog_name="fsrlab", standalone_mode=False)
+        code = result if isinstance(result, int) else 0
+    except typer.Abort:
+        print("fsrlab: aborted", file=sys.stderr)
+        code = 130
+    except typer.TyperException as exc:  # click's usage errors (bad option, bad value): exit 2
+        print(f"fsrlab: error: {_one_line(exc.format_message())}", file=sys.stderr)
+        code = getattr(exc, "exit_code", 2)
+    except (ValueError, OSError) as exc:
+        # Our models raise ValueError naming the parameter; files raise OSError.
+        if os.environ.get("FSRLAB_DEBUG"):
+            raise
+        print(f"fsrlab: error: {_one_line(str(exc))}", file=sys.stderr)
+        code = 2
+    raise SystemExit(code)
+
+
+def _one_line(message: str) -> str:
+    return " ".join(message.split())

@@ -1,0 +1,29 @@
+"""``fsrlab paper``: the reproduction report."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+from rich.console import Console
+
+from fsrlab.cli import app
+from fsrlab.cli._common import emit_json
+
+
+@app.command("paper")
+def paper(
+    out: Path = typer.Option(Path("report"), "--out", "-o", help="Directory for index.html, paper.json and the PNG figures."),
+    json_out: bool = typer.Option(False, "--json", help="Print the paths written as JSON instead of a summary."),
+) -> None:
+    """Reproduce every figure and table of the paper, with the paper's values beside ours and the errata."""
+    from fsrlab.report.paper import write_report
+
+    console = Console(stderr=True)
+    with console.status("building report") as status:
+        result = write_report(out, progress=lambda name: status.update(f"building report: {name}"))
+    if json_out:
+        emit_json({"index": result.index, "json": result.json, "figures": result.figures,
+                   "errata": sum(len(s.errata) for s in result.sections)})
+    else:
+        typer.echo(str(result.index.resolve()))

@@ -1,0 +1,1 @@
+"""Report section builders, one per capability; each exposes ``build(outdir) -> Section``."""
