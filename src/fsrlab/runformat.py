@@ -1,0 +1,518 @@
+"""The run file format shared by acquisition and analysis (normative copy: ``docs/data-format.md``).
+
+A run is ``NAME.csv`` -- UTF-8, comma separated, one header row, one row per reading in time order,
+plain numbers, an empty cell meaning "missing" -- plus an optional sidecar ``NAME.meta.json``
+(``"format": "fsrlab-run"``, ``"version": 1``) holding the units of every column, the circuit parts,
+the sensor model and area, the origin of the data, the creation time and free notes.
+
+:class:`RunWriter` appends rows and hands each one to the operating system at once, so a crash or
+a ``SIGKILL`` leaves a readable file that lacks at most the rows not yet written. :func:`load_run`
+reads a run back and rejects a bad file with one line naming the file, the row and the column.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import os
+import time
+from dataclasses import dataclass, field
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any, Iterable, Mapping, Sequence
+
+import numpy as np
+
+__all__ = [
+    "FORMAT",
+    "VERSION",
+    "KNOWN_COLUMNS",
+    "QUANTITY_COLUMNS",
+    "RunFormatError",
+    "Run",
+    "RunWriter",
+    "load_run",
+    "write_run",
+    "sidecar_path",
+]
+
+#: Value of the sidecar's ``"format"`` key.
+FORMAT = "fsrlab-run"
+#: Version of the format described here.
+VERSION = 1
+
+#: Known columns and their units (``"1"``: dimensionless or a count).
+KNOWN_COLUMNS: dict[str, str] = {
+    "time_s": "s",
+    "frequency_hz": "Hz",
+    "duty_cycle": "1",
+    "voltage_v": "V",
+    "stress_pa": "Pa",
+    "force_n": "N",
+    "cycle": "1",
+    "direction": "1",
+    "range": "1",
+    "periods": "1",
+    "missed": "1",
+    "seq": "1",
+}
+
+#: Readout quantities a calibration or a hysteresis error can be computed on.
+QUANTITY_COLUMNS = ("frequency_hz", "duty_cycle", "voltage_v")
+
+
+class RunFormatError(ValueError):
+    """A run file that does not follow the format; the message is one line naming file, row, column."""
+
+
+def sidecar_path(path: str | os.PathLike) -> Path:
+    """Return the metadata sidecar of a run: ``NAME.csv`` -> ``NAME.meta.json``.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The run's CSV file.
+
+    Returns
+    -------
+    Path
+    """
+    p = Path(path)
+    return p.with_name((p.name[:-4] if p.name.lower().endswith(".csv") else p.name) + ".meta.json")
+
+
+def _utc_now() -> str:
+    return datetime.now(timezone.utc).isoformat(timespec="seconds").replace("+00:00", "Z")
+
+
+def _format_value(value: Any) -> str:
+    """One cell: plain numbers, shortest round-trip form; ``None``/NaN -> empty (missing)."""
+    if value is None:
+        return ""
+    if isinstance(value, (bool, np.bool_)):
+        return "1" if value else "0"
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    v = float(value)
+    if math.isnan(v):
+        return ""
+    if math.isinf(v):
+        raise ValueError(f"row value must be finite, got {value!r}")
+    if v.is_integer() and abs(v) < 1e15:
+        return str(int(v))
+    return repr(v)
+
+
+def _check_columns(columns: Sequence[str]) -> list[str]:
+    cols = [str(c) for c in columns]
+    if not cols:
+        raise ValueError("columns must name at least one column")
+    for c in cols:
+        if not c or c != c.strip() or any(ch in c for ch in ',"\r\n'):
+            raise ValueError(f"columns: invalid column name {c!r} (no commas, quotes, newlines or edge spaces)")
+    dup = sorted({c for c in cols if cols.count(c) > 1})
+    if dup:
+        raise ValueError(f"columns: duplicate column names {dup}")
+    return cols
+
+
+def _write_json_atomic(path: Path, obj: dict) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    with open(tmp, "w", encoding="utf-8") as fh:
+        json.dump(obj, fh, indent=2, allow_nan=False)
+        fh.write("\n")
+        fh.flush()
+        os.fsync(fh.fileno())
+    os.replace(tmp, path)
+
+
+def _build_metadata(columns: list[str], metadata: Mapping[str, Any] | None) -> dict:
+    meta = dict(metadata or {})
+    units = {c: KNOWN_COLUMNS.get(c, "") for c in columns}
+    units.update({k: str(v) for k, v in dict(meta.pop("units", {}) or {}).items() if k in units})
+    out = {
+        "format": FORMAT,
+        "version": VERSION,
+        "created": meta.pop("created", None) or _utc_now(),
+        "columns": columns,
+        "units": units,
+        "circuit": meta.pop("circuit", {}),
+        "sensor": meta.pop("sensor", {}),
+        "origin": meta.pop("origin", ""),
+        "notes": meta.pop("notes", ""),
+    }
+    out.update(meta)  # anything else the writer wants to keep
+    out["complete"] = False
+    out["rows"] = None
+    return out
+
+
+class RunWriter:
+    """Write a run row by row, crash-safe.
+
+    The header and the sidecar are written when the writer opens. Each :meth:`write` appends one
+    whole line with a single write to the operating system, so a process killed at any moment
+    leaves a file whose rows are all complete; :meth:`sync` also asks the OS to put them on disk
+    (``fsync``), which protects against power loss. Closing records the row count and
+    ``"complete": true`` in the sidecar.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The CSV file (``NAME.csv``); the sidecar is ``NAME.meta.json``. An existing file is replaced.
+    columns : sequence of str
+        Column names in order, e.g. ``["time_s", "frequency_hz", "duty_cycle"]``.
+    metadata : mapping, optional
+        Sidecar content: ``units`` (per column, defaults from :data:`KNOWN_COLUMNS`), ``circuit``
+        (e.g. ``{"r_ohm": 10e3, "c_off_farad": 0, "diode": true}``), ``sensor`` (e.g.
+        ``{"model": "FlexiForce A201-1", "area_m2": 7.1e-5}``), ``origin``, ``notes``; other keys are kept.
+
+    Examples
+    --------
+    >>> with RunWriter("run.csv", ["time_s", "frequency_hz"], {"origin": "virtual"}) as w:  # doctest: +SKIP
+    ...     w.write({"time_s": 0.1, "frequency_hz": 5123.4})
+    """
+
+    def __init__(self, path: str | os.PathLike, columns: Sequence[str], metadata: Mapping[str, Any] | None = None):
+        self.path = Path(path)
+        self.columns = _check_columns(columns)
+        self._set = set(self.columns)
+        self.metadata = _build_metadata(self.columns, metadata)
+        self.meta_path = sidecar_path(self.path)
+        self.rows = 0
+        _write_json_atomic(self.meta_path, self.metadata)
+        # buffering=0: every write() below is one system call carrying one whole line.
+        self._fd = open(self.path, "wb", buffering=0)
+        self._raw(",".join(self.columns) + "\n")
+        self.sync()
+
+    def _raw(self, text: str) -> None:
+        data = text.encode("utf-8")
+        view = memoryview(data)
+        while view:
+            n = self._fd.write(view)
+            view = view[n:]
+
+    @property
+    def closed(self) -> bool:
+        """Whether the writer has been closed."""
+        return self._fd.closed
+
+    def write(self, row: Mapping[str, Any]) -> None:
+        """Append one reading.
+
+        Parameters
+        ----------
+        row : mapping
+            Column name -> number; absent columns, ``None`` and NaN are written as empty (missing) cells.
+
+        Raises
+        ------
+        ValueError
+            If ``row`` names a column the run does not have, or holds a non-finite number.
+        """
+        unknown = [k for k in row if k not in self._set]
+        if unknown:
+            raise ValueError(f"row: unknown columns {unknown}; the run has {self.columns}")
+        line = ",".join(_format_value(row.get(c)) for c in self.columns) + "\n"
+        self._raw(line)
+        self.rows += 1
+
+    def write_many(self, rows: Iterable[Mapping[str, Any]]) -> None:
+        """Append several readings (see :meth:`write`)."""
+        for row in rows:
+            self.write(row)
+
+    def sync(self) -> None:
+        """Force the rows written so far to disk (``os.fsync``)."""
+        os.fsync(self._fd.fileno())
+
+    def close(self) -> None:
+        """Sync, close the CSV and mark the sidecar complete with the row count."""
+        if self._fd.closed:
+            return
+        self.sync()
+        self._fd.close()
+        self.metadata["complete"] = True
+        self.metadata["rows"] = self.rows
+        self.metadata["closed"] = _utc_now()
+        _write_json_atomic(self.meta_path, self.metadata)
+
+    def __enter__(self) -> "RunWriter":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def write_run(path: str | os.PathLike, columns: Mapping[str, Any], metadata: Mapping[str, Any] | None = None) -> Path:
+    """Write a whole run at once from column arrays.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The CSV file; the sidecar goes next to it.
+    columns : mapping of str to array_like
+        Column name -> 1-D values, all of the same length (NaN = missing).
+    metadata : mapping, optional
+        As for :class:`RunWriter`.
+
+    Returns
+    -------
+    Path
+        The CSV file written.
+    """
+    names = list(columns)
+    arrays = [np.asarray(columns[c]) for c in names]
+    n = {a.shape for a in arrays}
+    if len(n) != 1 or arrays[0].ndim != 1:
+        raise ValueError("columns: every column must be a 1-D array of the same length")
+    buf = io.StringIO()
+    for i in range(arrays[0].shape[0]):
+        buf.write(",".join(_format_value(a[i]) for a in arrays))
+        buf.write("\n")
+    with RunWriter(path, names, metadata) as w:
+        w._raw(buf.getvalue())
+        w.rows = arrays[0].shape[0]
+    return Path(path)
+
+
+@dataclass
+class Run:
+    """A loaded run.
+
+    Parameters
+    ----------
+    path : Path
+        The CSV file.
+    columns : dict of str to ndarray
+        Every column as float64 (missing cells are NaN), in file order.
+    metadata : dict
+        The sidecar (or defaults when there is none).
+    truncated : bool
+        True when an incomplete last line (a crash while writing) was dropped.
+    """
+
+    path: Path
+    columns: dict[str, np.ndarray]
+    metadata: dict = field(default_factory=dict)
+    truncated: bool = False
+
+    @property
+    def n_rows(self) -> int:
+        """Number of readings."""
+        return len(next(iter(self.columns.values()))) if self.columns else 0
+
+    @property
+    def units(self) -> dict[str, str]:
+        """Unit of each column."""
+        units = self.metadata.get("units", {}) or {}
+        return {c: units.get(c, KNOWN_COLUMNS.get(c, "")) for c in self.columns}
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        try:
+            return self.columns[name]
+        except KeyError:
+            raise RunFormatError(f"{self.path}: column {name!r} missing (columns: {', '.join(self.columns)})") from None
+
+    def __contains__(self, name: str) -> bool:
+        return name in self.columns
+
+    def require(self, *names: str) -> None:
+        """Raise :class:`RunFormatError` naming the first of ``names`` the run lacks."""
+        for n in names:
+            if n not in self.columns:
+                raise RunFormatError(f"{self.path}: column {n!r} missing (columns: {', '.join(self.columns)})")
+
+    def stress_pa(self) -> np.ndarray:
+        """Reference stress [Pa]: ``stress_pa``, or ``force_n`` divided by the sidecar's ``sensor.area_m2``.
+
+        Raises
+        ------
+        RunFormatError
+            If neither is available.
+        """
+        if "stress_pa" in self.columns:
+            return self.columns["stress_pa"]
+        if "force_n" in self.columns:
+            area = (self.metadata.get("sensor") or {}).get("area_m2")
+            if not area or float(area) <= 0:
+                raise RunFormatError(f"{self.path}: column 'force_n' needs sensor.area_m2 > 0 in {sidecar_path(self.path).name} to give stress")
+            return self.columns["force_n"] / float(area)
+        raise RunFormatError(f"{self.path}: column 'stress_pa' missing (or 'force_n' with a sensor area)")
+
+    def to_pandas(self):
+        """The run as a ``pandas.DataFrame`` (pandas is imported only here)."""
+        import pandas as pd
+
+        return pd.DataFrame(self.columns)
+
+
+def _default_metadata(columns: list[str]) -> dict:
+    return {"format": FORMAT, "version": VERSION, "created": None, "columns": columns,
+            "units": {c: KNOWN_COLUMNS.get(c, "") for c in columns}, "circuit": {}, "sensor": {},
+            "origin": "", "notes": "", "complete": None, "rows": None}
+
+
+def _load_metadata(path: Path) -> dict | None:
+    mp = sidecar_path(path)
+    if not mp.exists():
+        return None
+    try:
+        meta = json.loads(mp.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise RunFormatError(f"{mp}: not valid JSON ({exc})") from None
+    if not isinstance(meta, dict) or meta.get("format") != FORMAT:
+        raise RunFormatError(f"{mp}: not an {FORMAT!r} sidecar (\"format\" must be {FORMAT!r})")
+    if meta.get("version") != VERSION:
+        raise RunFormatError(f"{mp}: format version {meta.get('version')!r} not supported (this fsrlab reads version {VERSION})")
+    return meta
+
+
+def _where(path: Path, row: int, column: str | None) -> str:
+    # row: 1-based data row; the file line is row + 1 (the header is line 1).
+    col = f", column {column!r}" if column is not None else ""
+    return f"{path}: row {row} (line {row + 1}){col}"
+
+
+def load_run(path: str | os.PathLike, require: Sequence[str] = ()) -> Run:
+    """Read a run written by :class:`RunWriter`, by acquisition, by hand or by a spreadsheet.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The CSV file. Its sidecar ``NAME.meta.json`` is read when present (optional).
+    require : sequence of str, optional
+        Columns that must be present.
+
+    Returns
+    -------
+    Run
+
+    Raises
+    ------
+    RunFormatError
+        One line naming the file, the row (1-based data row, and its file line) and the column,
+        for: a missing column, a row with too few or too many cells, a non-numeric cell, a NaN or
+        infinite value, an empty ``time_s`` cell, ``time_s`` going backwards, a ``direction``
+        other than -1, 0, +1; or a bad sidecar.
+    OSError
+        If the file cannot be read.
+
+    Notes
+    -----
+    A last line without its newline is the trace of a crash while writing; when the sidecar says
+    the run was not closed (``"complete": false``) that line is dropped and ``Run.truncated`` is
+    set. Without a sidecar (a hand-made file) it is kept if it parses.
+    """
+    p = Path(path)
+    with open(p, "rb") as fh:
+        raw = fh.read()
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise RunFormatError(f"{p}: not UTF-8 text (byte {exc.start})") from None
+    meta = _load_metadata(p)
+    lines = text.splitlines()
+    truncated = False
+    if lines and not text.endswith(("\n", "\r")) and meta is not None and meta.get("complete") is False and len(lines) > 1:
+        lines = lines[:-1]
+        truncated = True
+    while lines and not lines[-1].strip():
+        lines.pop()
+    if not lines:
+        raise RunFormatError(f"{p}: empty file (a header row is needed)")
+    header = next(csv.reader([lines[0]]))
+    header = [h.strip() for h in header]
+    try:
+        header = _check_columns(header)
+    except ValueError as exc:
+        raise RunFormatError(f"{p}: row 0 (line 1, header): {exc}") from None
+    for name in require:
+        if name not in header:
+            raise RunFormatError(f"{p}: column {name!r} missing (columns: {', '.join(header)})")
+    body = lines[1:]
+    ncol = len(header)
+    data = _parse_fast(body, ncol)
+    if data is None:
+        data = _parse_slow(p, body, header)
+    # NaN / inf written as text are errors (an empty cell is the way to say "missing").
+    if data.size:
+        bad = ~np.isfinite(data)
+        if bad.any():
+            # empty cells were parsed as NaN by the slow path only; re-check which are textual.
+            empties = _empty_mask(body, ncol) if not _has_no_empties(body) else np.zeros_like(bad)
+            textual = bad & ~empties
+            if textual.any():
+                r, c = np.argwhere(textual)[0]
+                cell = next(csv.reader([body[r]]))[c].strip()
+                raise RunFormatError(f"{_where(p, r + 1, header[c])}: {cell!r} is not a finite number (leave the cell empty for a missing value)")
+    columns = {h: data[:, j].copy() for j, h in enumerate(header)}
+    if "time_s" in columns:
+        t = columns["time_s"]
+        nan = np.flatnonzero(np.isnan(t))
+        if nan.size:
+            raise RunFormatError(f"{_where(p, nan[0] + 1, 'time_s')}: empty time cell")
+        back = np.flatnonzero(np.diff(t) < 0)
+        if back.size:
+            i = back[0] + 1
+            raise RunFormatError(f"{_where(p, i + 1, 'time_s')}: time goes backwards ({t[i]!r} s after {t[i - 1]!r} s); rows must be in time order")
+    if "direction" in columns:
+        d = columns["direction"]
+        badd = np.flatnonzero(~np.isnan(d) & ~np.isin(d, (-1.0, 0.0, 1.0)))
+        if badd.size:
+            raise RunFormatError(f"{_where(p, badd[0] + 1, 'direction')}: {d[badd[0]]!r} is not -1 (unloading), 0 (hold) or +1 (loading)")
+    if meta is None:
+        meta = _default_metadata(header)
+    return Run(path=p, columns=columns, metadata=meta, truncated=truncated)
+
+
+def _has_no_empties(body: list[str]) -> bool:
+    return not any(",," in ln or ln.startswith(",") or ln.rstrip().endswith(",") for ln in body)
+
+
+def _empty_mask(body: list[str], ncol: int) -> np.ndarray:
+    mask = np.zeros((len(body), ncol), dtype=bool)
+    for i, row in enumerate(csv.reader(body)):
+        for j, cell in enumerate(row[:ncol]):
+            if not cell.strip():
+                mask[i, j] = True
+    return mask
+
+
+def _parse_fast(body: list[str], ncol: int) -> np.ndarray | None:
+    """numpy's C parser for the common case; None when anything is unusual (empties, text, quotes)."""
+    if not body:
+        return np.empty((0, ncol))
+    if not _has_no_empties(body) or any('"' in ln for ln in body[:1]):
+        return None
+    try:
+        arr = np.loadtxt(body, delimiter=",", dtype=np.float64, ndmin=2, comments=None)
+    except ValueError:
+        return None
+    if arr.shape != (len(body), ncol):
+        return None
+    return arr
+
+
+def _parse_slow(p: Path, body: list[str], header: list[str]) -> np.ndarray:
+    """Cell by cell, to name the first bad cell exactly; empty cells become NaN."""
+    ncol = len(header)
+    out = np.full((len(body), ncol), np.nan)
+    for i, row in enumerate(csv.reader(body)):
+        if len(row) < ncol:
+            raise RunFormatError(f"{_where(p, i + 1, header[len(row)])}: missing ({len(row)} cells, the header has {ncol})")
+        if len(row) > ncol:
+            if any(c.strip() for c in row[ncol:]):
+                raise RunFormatError(f"{_where(p, i + 1, None)}: {len(row)} cells, the header has {ncol}")
+        for j in range(ncol):
+            cell = row[j].strip()
+            if not cell:
+                continue
+            try:
+                out[i, j] = float(cell)
+            except ValueError:
+                raise RunFormatError(f"{_where(p, i + 1, header[j])}: non-numeric cell {cell!r}") from None
+    return out

@@ -1,0 +1,176 @@
+"""The run format (docs/data-format.md): round trips, one-line errors, crash safety.
+
+References: the format's own specification (docs/data-format.md); round trips are exact because
+cells are written in Python's shortest round-trip float form.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import numpy as np
+import pytest
+from hypothesis import given, strategies as st
+
+from fsrlab.runformat import RunFormatError, RunWriter, load_run, sidecar_path, write_run
+
+
+def test_writer_roundtrip_with_sidecar(tmp_path):
+    path = tmp_path / "run.csv"
+    meta = {"origin": "unit test", "sensor": {"model": "FlexiForce A201-1", "area_m2": 7.13e-5},
+            "circuit": {"r_ohm": 10e3, "diode": True}, "units": {"extra": "K"}, "operator": "me"}
+    with RunWriter(path, ["time_s", "frequency_hz", "duty_cycle", "direction", "extra"], meta) as w:
+        w.write({"time_s": 0.0, "frequency_hz": 5123.456789, "duty_cycle": 0.51, "direction": 1, "extra": 3})
+        w.write({"time_s": 0.1, "frequency_hz": None, "duty_cycle": float("nan"), "direction": -1})
+        w.sync()
+    run = load_run(path)
+    assert run.n_rows == 2
+    assert run.columns["frequency_hz"][0] == 5123.456789
+    assert np.isnan(run.columns["frequency_hz"][1]) and np.isnan(run.columns["duty_cycle"][1])
+    assert np.isnan(run.columns["extra"][1])
+    assert run.metadata["complete"] is True and run.metadata["rows"] == 2
+    assert run.metadata["operator"] == "me"
+    assert run.units["frequency_hz"] == "Hz" and run.units["extra"] == "K"
+    assert not run.truncated
+    # Force -> stress needs the area from the sidecar.
+    assert sidecar_path(path).name == "run.meta.json"
+
+
+def test_sidecar_written_at_open_marked_incomplete(tmp_path):
+    path = tmp_path / "r.csv"
+    w = RunWriter(path, ["time_s", "voltage_v"])
+    meta = json.loads(sidecar_path(path).read_text())
+    assert meta["format"] == "fsrlab-run" and meta["version"] == 1 and meta["complete"] is False
+    w.write({"time_s": 1, "voltage_v": 0.25})
+    assert load_run(path).n_rows == 1  # readable while open
+    w.close()
+    assert json.loads(sidecar_path(path).read_text())["complete"] is True
+
+
+def test_writer_rejects_unknown_column_and_inf(tmp_path):
+    with RunWriter(tmp_path / "r.csv", ["time_s"]) as w:
+        with pytest.raises(ValueError, match="unknown columns"):
+            w.write({"time_s": 0, "bogus": 1})
+        with pytest.raises(ValueError, match="finite"):
+            w.write({"time_s": float("inf")})
+
+
+def test_minimal_csv_without_sidecar_loads(tmp_path):
+    path = tmp_path / "min.csv"
+    path.write_text("stress_pa,frequency_hz\n0,3012.5\n1000,3890.1\n2000,4630.7\n", encoding="utf-8")
+    run = load_run(path, require=["stress_pa"])
+    assert run.n_rows == 3
+    np.testing.assert_array_equal(run.stress_pa(), [0, 1000, 2000])
+    assert run.metadata["format"] == "fsrlab-run" and run.metadata["complete"] is None
+
+
+def test_force_column_gives_stress_with_area(tmp_path):
+    path = write_run(tmp_path / "f.csv", {"force_n": np.array([0.0, 1.0]), "voltage_v": np.array([0.1, 0.2])},
+                     {"sensor": {"area_m2": 1e-4}})
+    np.testing.assert_allclose(load_run(path).stress_pa(), [0.0, 1e4])
+    (tmp_path / "g.csv").write_text("force_n,voltage_v\n1,2\n")
+    with pytest.raises(RunFormatError, match="area_m2"):
+        load_run(tmp_path / "g.csv").stress_pa()
+
+
+@pytest.mark.parametrize(
+    "body, message",
+    [
+        ("time_s,frequency_hz\n0,1\n0.1,5.1k\n", r"row 2 \(line 3\), column 'frequency_hz': non-numeric cell '5.1k'"),
+        ("time_s,frequency_hz\n0,1\n0.1,nan\n", r"row 2 \(line 3\), column 'frequency_hz': 'nan' is not a finite"),
+        ("time_s,frequency_hz\n0,1\n0.1,\n0.2,NaN\n", r"row 3 \(line 4\), column 'frequency_hz': 'NaN' is not a finite"),
+        ("time_s,frequency_hz\n0,1\n0.2,2\n0.1,3\n", r"row 3 \(line 4\), column 'time_s': time goes backwards"),
+        ("time_s,frequency_hz\n0,1\n,2\n", r"row 2 \(line 3\), column 'time_s': empty time cell"),
+        ("time_s,frequency_hz,stress_pa\n0,1,2\n0.1,2\n", r"row 2 \(line 3\), column 'stress_pa': missing"),
+        ("time_s,direction\n0,1\n0.1,2\n", r"row 2 \(line 3\), column 'direction'"),
+        ("time_s,inf_col\n0,1\n1,inf\n", r"row 2 \(line 3\), column 'inf_col'"),
+    ],
+)
+def test_bad_files_fail_with_one_line_naming_file_row_column(tmp_path, body, message):
+    path = tmp_path / "bad.csv"
+    path.write_text(body, encoding="utf-8")
+    with pytest.raises(RunFormatError, match=message) as info:
+        load_run(path)
+    text = str(info.value)
+    assert "\n" not in text and str(path) in text
+
+
+def test_missing_required_column(tmp_path):
+    path = tmp_path / "m.csv"
+    path.write_text("time_s,frequency_hz\n0,1\n", encoding="utf-8")
+    with pytest.raises(RunFormatError, match=r"m.csv: column 'stress_pa' missing"):
+        load_run(path, require=["stress_pa"])
+    with pytest.raises(RunFormatError, match="column 'stress_pa' missing"):
+        load_run(path).stress_pa()
+
+
+def test_bad_sidecar_rejected(tmp_path):
+    path = tmp_path / "s.csv"
+    path.write_text("a\n1\n")
+    sidecar_path(path).write_text(json.dumps({"format": "fsrlab-run", "version": 2}))
+    with pytest.raises(RunFormatError, match="version 2 not supported"):
+        load_run(path)
+
+
+def test_incomplete_last_line_dropped_when_writer_did_not_close(tmp_path):
+    # Simulates power loss mid-write: the OS kept half a line; the sidecar still says complete=false.
+    path = tmp_path / "p.csv"
+    w = RunWriter(path, ["time_s", "frequency_hz"])
+    w.write({"time_s": 0, "frequency_hz": 1000.5})
+    w._raw("0.1,10")  # half a row, no newline
+    run = load_run(path)
+    assert run.n_rows == 1 and run.truncated
+
+
+@given(st.lists(st.tuples(st.floats(-1e12, 1e12, allow_nan=False), st.one_of(st.none(), st.floats(-1e6, 1e6))),
+                min_size=1, max_size=30))
+def test_roundtrip_property(tmp_path_factory, rows):
+    # Property: load(write(x)) == x exactly (shortest round-trip repr), NaN/None <-> empty cell.
+    path = tmp_path_factory.mktemp("rt") / "r.csv"
+    t = np.cumsum(np.abs([r[0] for r in rows]))
+    q = np.array([np.nan if r[1] is None else r[1] for r in rows])
+    write_run(path, {"time_s": t, "q": q})
+    run = load_run(path)
+    np.testing.assert_array_equal(run.columns["time_s"], t)
+    np.testing.assert_array_equal(run.columns["q"], q)
+
+
+def test_sigkill_mid_run_leaves_readable_file(tmp_path):
+    """A writer process killed with SIGKILL at an arbitrary moment leaves complete rows only."""
+    path = tmp_path / "killed.csv"
+    script = textwrap.dedent(f"""
+        import itertools
+        from fsrlab.runformat import RunWriter
+        w = RunWriter({str(path)!r}, ["time_s", "frequency_hz", "duty_cycle", "seq"], {{"origin": "kill test"}})
+        for i in itertools.count():
+            w.write({{"time_s": i * 0.001, "frequency_hz": 5000.123456789 + i, "duty_cycle": 0.5123456789, "seq": i}})
+    """)
+    proc = subprocess.Popen([sys.executable, "-c", script])
+    try:
+        # Wait (bounded) until a few thousand rows are on the OS side, then kill without warning.
+        for _ in range(600):
+            if path.exists() and path.stat().st_size > 200_000:
+                break
+            time.sleep(0.05)
+        os.kill(proc.pid, signal.SIGKILL)
+    finally:
+        proc.wait()
+    assert proc.returncode == -signal.SIGKILL
+    run = load_run(path)
+    assert run.n_rows > 1000
+    np.testing.assert_array_equal(run.columns["seq"], np.arange(run.n_rows))
+    np.testing.assert_allclose(run.columns["frequency_hz"], 5000.123456789 + np.arange(run.n_rows))
+    assert run.metadata["complete"] is False
+
+
+def test_to_pandas(tmp_path):
+    pd = pytest.importorskip("pandas")
+    path = write_run(tmp_path / "x.csv", {"stress_pa": np.array([1.0, 2.0]), "frequency_hz": np.array([3.0, 4.0])})
+    df = load_run(path).to_pandas()
+    assert isinstance(df, pd.DataFrame) and list(df.columns) == ["stress_pa", "frequency_hz"]
