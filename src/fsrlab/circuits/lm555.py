@@ -1,0 +1,399 @@
+"""LM555 astable with the FSR as timing element: closed forms, oscillation condition, decoding, design.
+
+The FSR is electrically ``R_FSR ∥ C_FSR``; it replaces the timing capacitor of a 555 astable with
+``R_A = R_B = R`` (paper Fig. 9b), an offset capacitor ``C_off`` sits in parallel (Fig. 16), and
+optionally a diode D1 is in series with ``R_B`` (Figs. 13, 16). The timing capacitance is
+``C = C_FSR + C_off``.
+
+Model (what is kept, what is neglected)
+---------------------------------------
+* Comparator thresholds at ``lower_fraction·Vcc`` and ``upper_fraction·Vcc`` (1/3 and 2/3 for the
+  internal divider; a voltage on the control pin moves both).
+* Charge (output high, discharge transistor off): Vcc → R_A → (D1) → R_B → C, with R_FSR across C.
+  Thevenin: source ``Vs·R_FSR/(2R + R_FSR)`` behind ``2R ∥ R_FSR``, where ``Vs = Vcc − V_D`` with a
+  diode of constant forward drop ``V_D`` (``V_D = 0``: ideal diode or no diode).
+* Discharge (output low, pin 7 at ground): without the diode C discharges through ``R ∥ R_FSR``;
+  with the diode D1 blocks R_B and C discharges through R_FSR alone. The diode drop does not enter
+  the discharge: D1 is reverse biased.
+* Neglected: discharge-transistor saturation resistance and voltage, comparator delay and offset,
+  output edge times, threshold/trigger input currents, diode reverse leakage, the diode's
+  current-dependent drop (a constant drop is used), leakage of C_off.
+
+References
+----------
+A. Matute, L. Paredes-Madrid, G. Moreno, F. Cárdenas, C. A. Palacio, "A Novel and Inexpensive
+Approach for Force Sensing Based on FSR Piezocapacitance Aimed at Hysteresis Error Reduction",
+Journal of Sensors 2018, 6561901, doi:10.1155/2018/6561901, §5, eqs. (19)–(37).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "NoOscillationError",
+    "AstableResult",
+    "astable",
+    "minimum_n_ratio",
+    "oscillation_margin",
+    "tau_ratio",
+    "duty_cycle_limits",
+    "TIMER_TICK_S",
+]
+
+#: Arduino Uno Timer1 input-capture resolution at prescaler 1 (16 MHz clock). [s]
+TIMER_TICK_S = 62.5e-9
+
+
+class NoOscillationError(ValueError):
+    """The circuit does not oscillate; the message names the failed condition and by how much.
+
+    Attributes
+    ----------
+    condition : str
+        ``"charge"`` (the charge target stays below the upper threshold, N ≤ N_min),
+        ``"diode_drop"`` (the supply minus the diode drop cannot reach the upper threshold) or
+        ``"discharge"`` (diode variant with R_FSR = ∞: no discharge path).
+    shortfall : float
+        Relative amount by which the condition is missed (e.g. ``1 − N/N_min``). [1]
+    """
+
+    def __init__(self, message: str, condition: str, shortfall: float):
+        super().__init__(message)
+        self.condition = condition
+        self.shortfall = shortfall
+
+
+@dataclass(frozen=True)
+class AstableResult:
+    """Steady-state timing of the astable.
+
+    Attributes
+    ----------
+    frequency_hz : float or ndarray
+        Output frequency ``1/(τH + τL)``; NaN where the circuit does not oscillate. [Hz]
+    duty_cycle : float or ndarray
+        ``τH/(τH + τL)`` (output high fraction, 0–1); NaN where it does not oscillate. [1]
+    tau_high_s : float or ndarray
+        Output-high (charge) time τH. [s]
+    tau_low_s : float or ndarray
+        Output-low (discharge) time τL. [s]
+    n_ratio : float or ndarray
+        ``N = R_FSR / R``. [1]
+    oscillates : bool or ndarray
+        Whether every oscillation condition holds.
+    """
+
+    frequency_hz: np.ndarray | float
+    duty_cycle: np.ndarray | float
+    tau_high_s: np.ndarray | float
+    tau_low_s: np.ndarray | float
+    n_ratio: np.ndarray | float
+    oscillates: np.ndarray | bool
+
+    @property
+    def period_s(self):
+        """Period ``τH + τL``. [s]"""
+        return self.tau_high_s + self.tau_low_s
+
+    @property
+    def ratio(self):
+        """τH/τL (the quantity of the paper's eqs. 32 and 37). [1]"""
+        return self.tau_high_s / self.tau_low_s
+
+
+def _check_fractions(lower_fraction: float, upper_fraction: float) -> None:
+    if not (0.0 < lower_fraction < upper_fraction < 1.0):
+        raise ValueError(
+            "lower_fraction and upper_fraction: need 0 < lower_fraction < upper_fraction < 1, got "
+            f"{lower_fraction!r} and {upper_fraction!r}"
+        )
+
+
+def _check_supply(diode: bool, diode_drop_v: float, vcc_v: float) -> None:
+    if not (np.isfinite(vcc_v) and vcc_v > 0):
+        raise ValueError(f"vcc_v: must be a finite supply voltage > 0 V, got {vcc_v!r}")
+    if not (np.isfinite(diode_drop_v) and diode_drop_v >= 0):
+        raise ValueError(f"diode_drop_v: must be a finite forward drop >= 0 V, got {diode_drop_v!r}")
+    if diode_drop_v > 0 and not diode:
+        raise ValueError("diode_drop_v: a forward drop needs diode=True (the drop belongs to D1 in series with R_B)")
+
+
+def minimum_n_ratio(diode_drop_v: float = 0.0, vcc_v: float = 5.0, upper_fraction: float = 2 / 3) -> float:
+    """Smallest ``N = R_FSR/R`` for which the charge phase reaches the upper threshold.
+
+    Parameters
+    ----------
+    diode_drop_v : float
+        Forward drop of D1 in the charge path (0 without diode or with an ideal diode). [V]
+    vcc_v : float
+        Supply voltage. [V]
+    upper_fraction : float
+        Upper threshold as a fraction of Vcc (2/3 by default). [1]
+
+    Returns
+    -------
+    float
+        ``N_min = 2·u·Vcc / (Vcc − V_D − u·Vcc)``; ``inf`` when ``V_D ≥ (1 − u)·Vcc`` (the charge
+        can never reach the threshold). [1]
+
+    Notes
+    -----
+    The charge target ``(Vcc − V_D)·N/(N + 2)`` must exceed ``u·Vcc``. With ``V_D = 0`` and
+    ``u = 2/3`` this is the paper's eq. (30), ``R < R_FSR/4`` (N > 4).
+    """
+    if not (0.0 < upper_fraction < 1.0):
+        raise ValueError(f"upper_fraction: must be in (0, 1), got {upper_fraction!r}")
+    headroom = vcc_v - diode_drop_v - upper_fraction * vcc_v
+    if headroom <= 0:
+        return math.inf
+    return 2.0 * upper_fraction * vcc_v / headroom
+
+
+def _timing_per_rc(n, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction):
+    """τH/(R·C) and τL/(R·C) as functions of N (arrays; NaN/inf outside the oscillating domain)."""
+    n = np.asarray(n, dtype=float)
+    vs = vcc_v - diode_drop_v
+    v_lo, v_hi = lower_fraction * vcc_v, upper_fraction * vcc_v
+    finite = np.isfinite(n)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        nn = np.where(finite, n, 1.0)
+        # Thevenin of the charge path: 2R ∥ R_FSR and the divider Vs·R_FSR/(2R + R_FSR).   # Eq. (21)
+        r_charge = np.where(finite, 2.0 * nn / (nn + 2.0), 2.0)
+        v_inf = np.where(finite, vs * nn / (nn + 2.0), vs)
+        arg = (v_inf - v_lo) / (v_inf - v_hi)
+        th = np.where(v_inf > v_hi, r_charge * np.log(arg), np.nan)                        # Eq. (23)
+        if diode:
+            # D1 blocks R_B: C discharges through R_FSR alone.                               # Eq. (34)
+            r_dis = np.where(finite, nn, np.inf)
+        else:
+            # C discharges through R ∥ R_FSR.                                                 # Eq. (26)
+            r_dis = np.where(finite, nn / (nn + 1.0), 1.0)
+        tl = r_dis * math.log(upper_fraction / lower_fraction)
+    return th, tl
+
+
+def tau_ratio(n_ratio, diode: bool = False, diode_drop_v: float = 0.0, vcc_v: float = 5.0,
+              lower_fraction: float = 1 / 3, upper_fraction: float = 2 / 3):
+    """τH/τL as a function of ``N = R_FSR/R`` (independent of R and C).
+
+    Parameters
+    ----------
+    n_ratio : float or array_like
+        ``N = R_FSR / R``. [1]
+    diode : bool
+        With D1 in series with R_B (paper Fig. 13).
+    diode_drop_v : float
+        Constant forward drop of D1 (needs ``diode=True``). [V]
+    vcc_v : float
+        Supply. [V]
+    lower_fraction, upper_fraction : float
+        Comparator thresholds as fractions of Vcc. [1]
+
+    Returns
+    -------
+    float or ndarray
+        τH/τL; NaN where ``N ≤ N_min`` (no oscillation). [1]
+
+    Notes
+    -----
+    Without the diode and with the default thresholds this is the paper's eq. (32),
+    ``τH/τL = ln((2N − 2)/(N − 4))·2(N + 1)/((N + 2)·ln 2)``, which falls monotonically from ∞ at
+    N = 4 to 2 as N → ∞. With an ideal diode it is ``2·ln((2N − 2)/(N − 4))/((N + 2)·ln 2)``,
+    which falls to 0; the paper's printed eq. (37) has an extra factor N (see docs/errata.md, O2).
+    """
+    _check_fractions(lower_fraction, upper_fraction)
+    _check_supply(diode, diode_drop_v, vcc_v)
+    th, tl = _timing_per_rc(n_ratio, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = th / tl
+    return out[()] if np.ndim(out) == 0 else out
+
+
+def duty_cycle_limits(diode: bool = False, diode_drop_v: float = 0.0, vcc_v: float = 5.0,
+                      lower_fraction: float = 1 / 3, upper_fraction: float = 2 / 3) -> tuple[float, float]:
+    """Range of duty cycles the circuit can produce over all ``N > N_min`` (open interval).
+
+    Parameters
+    ----------
+    diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction
+        As in :func:`astable`.
+
+    Returns
+    -------
+    (float, float)
+        ``(inf DC, sup DC)``: the supremum is 1 (N → N_min); the infimum is reached as N → ∞:
+        ``ρ∞/(1 + ρ∞)`` with ``ρ∞ = 2·ln((Vs − ℓVcc)/(Vs − uVcc))/ln(u/ℓ)`` without the diode
+        (2/3 for the default thresholds) and 0 with the diode (τL = ln(u/ℓ)·R_FSR·C grows without
+        bound while τH stays finite). Neither limit is attained. [1]
+    """
+    _check_fractions(lower_fraction, upper_fraction)
+    _check_supply(diode, diode_drop_v, vcc_v)
+    if math.isinf(minimum_n_ratio(diode_drop_v, vcc_v, upper_fraction)):
+        raise NoOscillationError(_drop_message(diode_drop_v, vcc_v, upper_fraction), "diode_drop",
+                                 diode_drop_v / ((1 - upper_fraction) * vcc_v) - 1.0)
+    if diode:
+        return 0.0, 1.0
+    vs = vcc_v - diode_drop_v
+    rho = 2.0 * math.log((vs - lower_fraction * vcc_v) / (vs - upper_fraction * vcc_v)) / math.log(
+        upper_fraction / lower_fraction)
+    return rho / (1.0 + rho), 1.0
+
+
+def oscillation_margin(r_ohm, r_fsr_ohm, diode_drop_v: float = 0.0, vcc_v: float = 5.0,
+                       upper_fraction: float = 2 / 3):
+    """Relative margin of the charge condition, ``N/N_min − 1`` (> 0: oscillates).
+
+    Parameters
+    ----------
+    r_ohm : float or array_like
+        R_A = R_B = R. [Ω]
+    r_fsr_ohm : float or array_like
+        FSR resistance (``inf`` allowed). [Ω]
+    diode_drop_v, vcc_v, upper_fraction
+        As in :func:`astable`.
+
+    Returns
+    -------
+    float or ndarray
+        ``N/N_min − 1``; ``-1`` when the diode drop leaves no headroom at all. [1]
+    """
+    n = np.asarray(r_fsr_ohm, dtype=float) / np.asarray(r_ohm, dtype=float)
+    n_min = minimum_n_ratio(diode_drop_v, vcc_v, upper_fraction)
+    out = np.full(np.shape(n), -1.0) if math.isinf(n_min) else n / n_min - 1.0
+    return out[()] if np.ndim(out) == 0 else out
+
+
+def _drop_message(diode_drop_v, vcc_v, upper_fraction):
+    return (f"no oscillation: the diode drop {diode_drop_v:.4g} V leaves Vcc − V_D = {vcc_v - diode_drop_v:.4g} V, "
+            f"not above the upper threshold {upper_fraction * vcc_v:.4g} V; the drop must stay below "
+            f"{(1 - upper_fraction) * vcc_v:.4g} V")
+
+
+def astable(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad=0.0, diode: bool = False, diode_drop_v: float = 0.0,
+            vcc_v: float = 5.0, lower_fraction: float = 1 / 3, upper_fraction: float = 2 / 3,
+            check: bool = True) -> AstableResult:
+    """Closed-form steady-state τH, τL, frequency and duty cycle of the FSR-timed LM555 astable.
+
+    Parameters
+    ----------
+    r_ohm : float or array_like
+        R_A = R_B = R (> 0). [Ω]
+    r_fsr_ohm : float or array_like
+        FSR resistance R_FSR (> 0; ``inf`` for an ideal capacitor, which gives the classic 555). [Ω]
+    c_fsr_farad : float or array_like
+        FSR capacitance C_FSR (≥ 0). [F]
+    c_off_farad : float or array_like
+        Offset capacitor in parallel with the FSR (≥ 0); C = C_FSR + C_off must be > 0. [F]
+    diode : bool
+        D1 in series with R_B (paper Figs. 13 and 16).
+    diode_drop_v : float
+        Constant forward drop of D1 during the charge; 0 is the paper's ideal diode. Needs
+        ``diode=True``. [V]
+    vcc_v : float
+        Supply voltage. [V]
+    lower_fraction, upper_fraction : float
+        Trigger and threshold levels as fractions of Vcc (1/3 and 2/3 by default; the control pin
+        moves them). Must satisfy 0 < lower < upper < 1. [1]
+    check : bool
+        True (default): raise :class:`NoOscillationError` if any element does not oscillate.
+        False: return NaN for frequency and duty cycle (and for the affected τ) where the circuit
+        does not oscillate, with ``oscillates`` False there.
+
+    Returns
+    -------
+    AstableResult
+        Scalars when every input is scalar, otherwise broadcast arrays.
+
+    Raises
+    ------
+    ValueError
+        A parameter out of range (the message names it).
+    NoOscillationError
+        ``check=True`` and the circuit does not oscillate for some element: the message names the
+        condition (charge target below the upper threshold, diode drop too large, or no discharge
+        path) and the shortfall.
+
+    Notes
+    -----
+    With ``N = R_FSR/R``, ``Vs = Vcc − V_D``, ``V∞ = Vs·N/(N + 2)``, thresholds ``V_ℓ = ℓ·Vcc`` and
+    ``V_u = u·Vcc``::
+
+        τH = C·(2R ∥ R_FSR)·ln((V∞ − V_ℓ)/(V∞ − V_u))     # Eq. (23) for V_D = 0, ℓ = 1/3, u = 2/3
+        τL = C·(R ∥ R_FSR)·ln(u/ℓ)                         # Eq. (26), no diode
+        τL = C·R_FSR·ln(u/ℓ)                               # Eq. (34), with D1
+        f = 1/(τH + τL),  DC = τH/(τH + τL)                 # Eqs. (27), (28), (35), (36)
+
+    Oscillation needs ``V∞ > V_u``, i.e. ``N > N_min = 2uVcc/(Vs − uVcc)`` (eq. 30: N > 4), which
+    in turn needs ``V_D < (1 − u)·Vcc``; with D1, R_FSR must be finite (else C never discharges).
+    As ``R_FSR → ∞`` without diode this tends to the classic ``f = 1/(3 ln 2·R·C) ≈ 1.44/(3RC)``
+    (eq. 19 with R_A = R_B = R).
+
+    References
+    ----------
+    Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901.
+    """
+    _check_fractions(lower_fraction, upper_fraction)
+    _check_supply(diode, diode_drop_v, vcc_v)
+    r = np.asarray(r_ohm, dtype=float)
+    rf = np.asarray(r_fsr_ohm, dtype=float)
+    cf = np.asarray(c_fsr_farad, dtype=float)
+    co = np.asarray(c_off_farad, dtype=float)
+    if np.any(~np.isfinite(r)) or np.any(r <= 0):
+        raise ValueError(f"r_ohm: must be finite and > 0 Ω, got {r_ohm!r}")
+    if np.any(np.isnan(rf)) or np.any(rf <= 0):
+        raise ValueError(f"r_fsr_ohm: must be > 0 Ω (inf allowed), got {r_fsr_ohm!r}")
+    if np.any(~np.isfinite(cf)) or np.any(cf < 0):
+        raise ValueError(f"c_fsr_farad: must be finite and >= 0 F, got {c_fsr_farad!r}")
+    if np.any(~np.isfinite(co)) or np.any(co < 0):
+        raise ValueError(f"c_off_farad: must be finite and >= 0 F, got {c_off_farad!r}")
+    c = cf + co
+    if np.any(c <= 0):
+        raise ValueError("c_fsr_farad + c_off_farad: the timing capacitance must be > 0 F")
+    r, rf, c = np.broadcast_arrays(r, rf, c)
+    n = rf / r
+    n_min = minimum_n_ratio(diode_drop_v, vcc_v, upper_fraction)
+    th_rc, tl_rc = _timing_per_rc(n, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction)
+    # A relative guard of 1e-12 keeps N = N_min (e.g. exactly 4, eq. 30) on the non-oscillating side
+    # despite rounding of the thresholds; there τH would be infinite anyway.
+    ok_charge = (n > n_min * (1.0 + 1e-12)) & np.isfinite(th_rc)
+    ok_discharge = np.isfinite(tl_rc)
+    ok = ok_charge & ok_discharge
+    if check and not np.all(ok):
+        _raise_no_oscillation(n, n_min, ok_charge, ok_discharge, diode_drop_v, vcc_v, upper_fraction)
+    rc = r * c
+    with np.errstate(invalid="ignore"):
+        th = np.where(ok_charge, th_rc * rc, np.nan)
+        tl = np.where(ok_discharge, tl_rc * rc, np.nan)
+        period = np.where(ok, th + tl, np.nan)
+        f = 1.0 / period
+        dc = th / period
+
+    def out(a):
+        return a[()] if a.ndim == 0 else a
+
+    return AstableResult(frequency_hz=out(f), duty_cycle=out(dc), tau_high_s=out(th), tau_low_s=out(tl),
+                         n_ratio=out(n), oscillates=out(ok))
+
+
+def _raise_no_oscillation(n, n_min, ok_charge, ok_discharge, diode_drop_v, vcc_v, upper_fraction):
+    bad = ~(ok_charge & ok_discharge)
+    count, total = int(np.count_nonzero(bad)), int(bad.size)
+    where = "" if total == 1 else f" ({count} of {total} elements; first at index {np.argwhere(bad)[0].tolist()})"
+    if math.isinf(n_min):
+        raise NoOscillationError(_drop_message(diode_drop_v, vcc_v, upper_fraction) + where, "diode_drop",
+                                 diode_drop_v / ((1 - upper_fraction) * vcc_v) - 1.0)
+    if not np.all(ok_charge):
+        idx = np.unravel_index(np.argmin(np.where(ok_charge, np.inf, n)), n.shape)
+        worst = float(n[idx])
+        short = 1.0 - worst / n_min
+        raise NoOscillationError(
+            f"no oscillation: the charge target stays below the upper threshold {upper_fraction * vcc_v:.4g} V; "
+            f"N = R_FSR/R = {worst:.4g} must exceed {n_min:.4g} (short by {100 * short:.3g} %; "
+            f"make R < R_FSR/{n_min:.4g}){where}", "charge", short)
+    raise NoOscillationError(
+        f"no oscillation: with the diode C can discharge only through R_FSR, which is infinite{where}",
+        "discharge", math.inf)
