@@ -1,0 +1,221 @@
+"""Hysteresis error of eq. (13), for model curves and for sampled data.
+
+References
+----------
+Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, eq. (13), Table 2.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+from fsrlab.physics.electrical import capacitance_per_area, resistance_per_area
+from fsrlab.physics.params import PAPER, PaperParameters, check_positive
+from fsrlab.physics.separation import separation_loading, separation_unloading
+
+__all__ = [
+    "HysteresisResult",
+    "hysteresis_error",
+    "hysteresis_error_curves",
+    "CycleErrors",
+    "model_cycle_errors",
+]
+
+
+@dataclass
+class HysteresisResult:
+    """Outcome of eq. (13).
+
+    Parameters
+    ----------
+    percent : float
+        HE = 100 % · |Q_u(σd) − Q_l(σd)| / |Q(σf)|. [%]
+    stress_at_max_pa : float
+        σd, the stress of the largest difference between the branches. [Pa]
+    difference : float
+        Q_u(σd) − Q_l(σd), in the quantity's unit.
+    full_scale : float
+        |Q(σf)|, the loading branch at the largest stress, in the quantity's unit.
+    sigma_f_pa : float
+        σf, the largest stress. [Pa]
+    method : str
+        How the branches were compared.
+    """
+
+    percent: float
+    stress_at_max_pa: float
+    difference: float
+    full_scale: float
+    sigma_f_pa: float
+    method: str
+
+
+def _branch(stress, q, name: str) -> tuple[np.ndarray, np.ndarray]:
+    x = np.asarray(stress, dtype=float).ravel()
+    y = np.asarray(q, dtype=float).ravel()
+    if x.shape != y.shape:
+        raise ValueError(f"{name}: stress and quantity must have the same length, got {x.size} and {y.size}")
+    if x.size < 2:
+        raise ValueError(f"{name}: needs at least 2 samples, got {x.size}")
+    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
+        raise ValueError(f"{name}: stress and quantity must be finite")
+    # Sort by stress and average repeated stresses so that interpolation is well defined.
+    xs, inverse = np.unique(x, return_inverse=True)
+    ys = np.bincount(inverse, weights=y) / np.bincount(inverse)
+    if xs.size < 2:
+        raise ValueError(f"{name}: needs at least 2 distinct stresses")
+    return xs, ys
+
+
+def hysteresis_error(stress_load_pa, q_load, stress_unload_pa, q_unload) -> HysteresisResult:
+    """Hysteresis error of eq. (13) from sampled loading and unloading branches.
+
+    Parameters
+    ----------
+    stress_load_pa, q_load : array_like
+        Loading branch: stresses [Pa] and the quantity Q at them (any unit, any order).
+    stress_unload_pa, q_unload : array_like
+        Unloading branch, sampled at stresses that need not match the loading ones.
+
+    Returns
+    -------
+    HysteresisResult
+
+    Notes
+    -----
+    Eq. (13): ``HE = 100 % |Q_u(σd) − Q_l(σd)| / |Q(σf)|``. The two branches rarely share their
+    stresses, so each branch is sorted by stress (readings at a repeated stress are averaged) and
+    interpolated piecewise-linearly onto the union of both branches' stresses inside the range they
+    share; σd is the grid stress with the largest |Q_u − Q_l|. Q(σf) is the loading branch at its
+    largest stress (both branches meet there in the model; a measured reading at the peak belongs to
+    loading).
+
+    References
+    ----------
+    Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901.
+    """
+    xl, yl = _branch(stress_load_pa, q_load, "loading branch")
+    xu, yu = _branch(stress_unload_pa, q_unload, "unloading branch")
+    lo, hi = max(xl[0], xu[0]), min(xl[-1], xu[-1])
+    if not hi > lo:
+        raise ValueError(f"the branches share no stress range (loading {xl[0]:g}–{xl[-1]:g} Pa, "
+                         f"unloading {xu[0]:g}–{xu[-1]:g} Pa)")
+    grid = np.union1d(xl[(xl >= lo) & (xl <= hi)], xu[(xu >= lo) & (xu <= hi)])
+    diff = np.interp(grid, xu, yu) - np.interp(grid, xl, yl)
+    i = int(np.argmax(np.abs(diff)))
+    full = abs(yl[-1])
+    if full == 0:
+        raise ValueError("q_load is 0 at the largest stress: eq. (13) needs Q(σf) ≠ 0")
+    return HysteresisResult(
+        percent=float(100 * abs(diff[i]) / full),  # Eq. (13)
+        stress_at_max_pa=float(grid[i]),
+        difference=float(diff[i]),
+        full_scale=float(full),
+        sigma_f_pa=float(xl[-1]),
+        method=f"linear interpolation of both branches onto the union of their {grid.size} stresses "
+               f"in the shared range {lo:g}–{hi:g} Pa",
+    )
+
+
+def hysteresis_error_curves(
+    q_load: Callable, q_unload: Callable, sigma_f_pa: float, n: int = 4001, refine: bool = True
+) -> HysteresisResult:
+    """Hysteresis error of eq. (13) for model branches given as functions of stress.
+
+    Parameters
+    ----------
+    q_load, q_unload : callable
+        Vectorised functions of stress [Pa] giving Q on each branch.
+    sigma_f_pa : float
+        Final stress σf; both branches are compared on [0, σf]. [Pa]
+    n : int
+        Points of the search grid, ≥ 3.
+    refine : bool
+        Refine σd by a bounded scalar search around the best grid point.
+
+    Returns
+    -------
+    HysteresisResult
+    """
+    check_positive("sigma_f_pa", sigma_f_pa, "Pa")
+    if n < 3:
+        raise ValueError(f"n must be >= 3, got {n!r}")
+    x = np.linspace(0.0, sigma_f_pa, n)
+    diff = np.asarray(q_unload(x), dtype=float) - np.asarray(q_load(x), dtype=float)
+    i = int(np.nanargmax(np.abs(diff)))
+    sd, d = float(x[i]), float(diff[i])
+    method = f"both branches evaluated on {n} stresses in [0, σf]"
+    if refine and 0 < i < n - 1:
+        res = minimize_scalar(lambda t: -abs(float(q_unload(t)) - float(q_load(t))),
+                              bounds=(x[i - 1], x[i + 1]), method="bounded", options={"xatol": 1e-9 * sigma_f_pa})
+        if -res.fun >= abs(d):
+            sd = float(res.x)
+            d = float(q_unload(sd)) - float(q_load(sd))
+        method += ", σd refined by a bounded scalar search"
+    full = abs(float(q_load(sigma_f_pa)))
+    return HysteresisResult(percent=100 * abs(d) / full, stress_at_max_pa=sd, difference=d,  # Eq. (13)
+                            full_scale=full, sigma_f_pa=float(sigma_f_pa), method=method)
+
+
+@dataclass
+class CycleErrors:
+    """Hysteresis errors of R_A and C_A over one model cycle 0 → σf → 0 (the paper's Table 2).
+
+    Parameters
+    ----------
+    u_v : float
+        Voltage across the composite. [V]
+    resistance : HysteresisResult
+        HE of R_A (eqs. 16–18).
+    capacitance : HysteresisResult
+        HE of C_A (eq. 15).
+    regime : int
+        Tunnelling equation used for R_A (10, 11 or 12).
+    """
+
+    u_v: float
+    resistance: HysteresisResult
+    capacitance: HysteresisResult
+    regime: int
+
+
+def model_cycle_errors(u_v: float, params: PaperParameters = PAPER, n: int = 4001) -> CycleErrors:
+    """Hysteresis errors of R_A and C_A for one cycle of the paper's model (Table 2).
+
+    Parameters
+    ----------
+    u_v : float
+        Voltage across the composite u, > 0. [V]
+    params : PaperParameters
+        Material and cycle parameters (default: Table 1 with k = 2).
+    n : int
+        Points of the search grid.
+
+    Returns
+    -------
+    CycleErrors
+
+    Notes
+    -----
+    Loading by eq. (1), unloading by eq. (9), R_A by eqs. (16)–(18) with the regime the paper's
+    thresholds select, C_A by eq. (15), HE by eq. (13).
+    """
+    check_positive("u_v", u_v, "V")
+    p = params
+
+    def s_l(x):
+        return separation_loading(x, p.s0_m, p.modulus_pa)
+
+    def s_u(x):
+        return separation_unloading(x, p.sigma_f_pa, p.s0_m, p.modulus_pa, p.k)
+
+    _, regime = resistance_per_area(u_v, p.s0_m, p.phi0_j, return_regime=True)
+    he_r = hysteresis_error_curves(lambda x: resistance_per_area(u_v, s_l(x), p.phi0_j),
+                                   lambda x: resistance_per_area(u_v, s_u(x), p.phi0_j), p.sigma_f_pa, n)
+    he_c = hysteresis_error_curves(lambda x: capacitance_per_area(s_l(x), p.eps_r),
+                                   lambda x: capacitance_per_area(s_u(x), p.eps_r), p.sigma_f_pa, n)
+    return CycleErrors(u_v=float(u_v), resistance=he_r, capacitance=he_c, regime=int(regime))

@@ -1,0 +1,72 @@
+"""The paper's printed parameters, in SI units: the one place they live.
+
+References
+----------
+Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, Table 1.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+from scipy.constants import electron_volt
+
+__all__ = ["PaperParameters", "PAPER", "check_positive", "check_finite"]
+
+
+@dataclass(frozen=True)
+class PaperParameters:
+    """Simulation parameters of the paper's Table 1 (Figures 4 and 8, Table 2).
+
+    Parameters
+    ----------
+    modulus_pa : float
+        Material stiffness M. [Pa]
+    sigma_f_pa : float
+        Final (largest) stress σf of the loading–unloading cycle. [Pa]
+    u_v : float
+        Voltage U across the composite. [V]
+    s0_m : float
+        Interparticle separation at zero stress s0. [m]
+    phi0_j : float
+        Barrier height φ0 (Table 1 prints 0.223 eV). [J]
+    eps_r : float
+        Relative permittivity of the polymer matrix. [-]
+    k : float
+        Unloading exponent. Not printed; k = 2 reproduces Table 2's capacitance column. [-]
+    """
+
+    modulus_pa: float = 4.73e6
+    sigma_f_pa: float = 322e3
+    u_v: float = 2.0
+    s0_m: float = 4.418e-9
+    phi0_j: float = 0.223 * electron_volt
+    eps_r: float = 7.0
+    k: float = 2.0
+
+    def as_dict(self) -> dict:
+        """Values keyed by name, plus the barrier height in eV for display."""
+        d = asdict(self)
+        d["phi0_ev"] = self.phi0_j / electron_volt
+        return d
+
+
+#: Table 1 of the paper, with k = 2.
+PAPER = PaperParameters()
+
+
+def check_finite(name: str, value) -> None:
+    """Raise ``ValueError`` naming ``name`` unless every element of ``value`` is finite."""
+    import numpy as np
+
+    if not np.all(np.isfinite(np.asarray(value, dtype=float))):
+        raise ValueError(f"{name} must be finite, got {value!r}")
+
+
+def check_positive(name: str, value, unit: str = "") -> None:
+    """Raise ``ValueError`` naming ``name`` unless ``value`` is finite and > 0 (every element)."""
+    import numpy as np
+
+    check_finite(name, value)
+    if not np.all(np.asarray(value, dtype=float) > 0):
+        raise ValueError(f"{name} must be > 0{(' ' + unit) if unit else ''}, got {value!r}")
