@@ -1,0 +1,366 @@
+"""Loading and unloading branches and cycles of a run, and the hysteresis error (eq. 13) from data.
+
+A run of a loading bench (paper §6.1: stepper motor and spring) goes up and down in stress. The
+branches are found from the ``direction`` column when the run has one (+1 loading, -1 unloading,
+0 hold), otherwise from the reference stress itself: a turning point is confirmed once the stress
+has moved back from its running extremum by more than a threshold (a fraction of the run's stress
+span), which ignores noise smaller than the threshold. A cycle is a loading branch followed by an
+unloading branch; the turning-point reading belongs to both, so each branch spans the full range.
+
+The hysteresis error itself is eq. (13) as implemented by
+:func:`fsrlab.analysis.hysteresis.hysteresis_error` (branches interpolated onto a common stress
+axis); this module only feeds it the branches, per cycle and for the run as a whole.
+
+References
+----------
+A. Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, eq. (13), §6.1, Table 3.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "Cycle",
+    "turning_points",
+    "branch_directions",
+    "split_cycles",
+    "RunHysteresis",
+    "run_hysteresis",
+]
+
+
+@dataclass(frozen=True)
+class Cycle:
+    """One loading-unloading cycle of a run.
+
+    Parameters
+    ----------
+    number : int
+        Cycle number (0, 1, ...; the ``cycle`` column's value when the run has one).
+    load_index : ndarray of int
+        Row indices of the loading branch, in time order.
+    unload_index : ndarray of int
+        Row indices of the unloading branch, in time order.
+    """
+
+    number: int
+    load_index: np.ndarray
+    unload_index: np.ndarray
+
+    @property
+    def index(self) -> np.ndarray:
+        """All rows of the cycle (loading then unloading, the turning point once)."""
+        return np.unique(np.concatenate([self.load_index, self.unload_index]))
+
+
+def _check_threshold(threshold: float) -> float:
+    if not (0 < threshold < 1):
+        raise ValueError(f"threshold must be a fraction of the stress span in (0, 1), got {threshold!r}")
+    return float(threshold)
+
+
+def turning_points(stress_pa, threshold: float = 0.05) -> np.ndarray:
+    """Indices of the confirmed turning points of a stress sequence, with its first and last index.
+
+    Parameters
+    ----------
+    stress_pa : array_like, shape (n,)
+        Reference stress in time order. [Pa]
+    threshold : float
+        A reversal counts once the stress has come back from its running extremum by more than
+        ``threshold`` times the span ``max - min`` (noise below that is ignored). [1]
+
+    Returns
+    -------
+    ndarray of int
+        Increasing indices: 0, the turning points (first reading at each extremum), n - 1.
+    """
+    x = np.asarray(stress_pa, dtype=float)
+    threshold = _check_threshold(threshold)
+    n = x.size
+    if n < 2:
+        return np.arange(n)
+    if not np.all(np.isfinite(x)):
+        raise ValueError("stress_pa must be finite (drop rows without a reference stress first)")
+    span = float(x.max() - x.min())
+    if span == 0:
+        return np.array([0, n - 1])
+    thr = threshold * span
+    # Only local extrema can be turning points: reduce to them first (vectorised), then scan.
+    d = np.sign(np.diff(x))
+    nz = np.flatnonzero(d)
+    if nz.size == 0:
+        return np.array([0, n - 1])
+    cand = [0]
+    ds = d[nz]
+    change = np.flatnonzero(ds[1:] != ds[:-1])
+    # the extremum is the first reading after the last move in the old direction
+    cand.extend((nz[change] + 1).tolist())
+    cand.append(n - 1)
+    pivots = [0]
+    trend = 0  # 0: not yet moved beyond the threshold; +1 rising; -1 falling
+    hi_i = lo_i = ext_i = 0
+    for i in cand[1:]:
+        xi = x[i]
+        if trend == 0:
+            if xi > x[hi_i]:
+                hi_i = i
+            if xi < x[lo_i]:
+                lo_i = i
+            if x[hi_i] - x[lo_i] > thr:
+                # The first excursion beyond the threshold sets the direction (from index 0).
+                trend = 1 if hi_i > lo_i else -1
+                ext_i = hi_i if trend == 1 else lo_i
+        elif trend == 1:
+            if xi > x[ext_i]:
+                ext_i = i
+            elif x[ext_i] - xi > thr:
+                pivots.append(ext_i)
+                trend, ext_i = -1, i
+        else:
+            if xi < x[ext_i]:
+                ext_i = i
+            elif xi - x[ext_i] > thr:
+                pivots.append(ext_i)
+                trend, ext_i = 1, i
+    if pivots[-1] != n - 1:
+        pivots.append(n - 1)
+    return np.array(sorted(set(pivots)))
+
+
+def branch_directions(stress_pa, threshold: float = 0.05) -> np.ndarray:
+    """Label each reading +1 (loading) or -1 (unloading) from the stress sequence.
+
+    Parameters
+    ----------
+    stress_pa : array_like, shape (n,)
+        Reference stress in time order. [Pa]
+    threshold : float
+        See :func:`turning_points`. [1]
+
+    Returns
+    -------
+    ndarray of int, shape (n,)
+        +1 on rising segments, -1 on falling ones, 0 where the stress never moves beyond the
+        threshold. A turning-point reading carries the label of the segment it ends.
+    """
+    x = np.asarray(stress_pa, dtype=float)
+    piv = turning_points(x, threshold)
+    out = np.zeros(x.size, dtype=int)
+    for a, b in zip(piv[:-1], piv[1:]):
+        out[a + 1:b + 1] = int(np.sign(x[b] - x[a]))
+    if x.size > 1:
+        out[0] = out[1]
+    return out
+
+
+def _runs(labels: np.ndarray) -> list[tuple[int, int, int]]:
+    """(value, start, stop) of runs of equal non-zero labels (zeros are skipped, they split nothing)."""
+    idx = np.flatnonzero(labels != 0)
+    if idx.size == 0:
+        return []
+    vals = labels[idx]
+    brk = np.flatnonzero(vals[1:] != vals[:-1]) + 1
+    starts = np.concatenate([[0], brk])
+    stops = np.concatenate([brk, [idx.size]])
+    return [(int(vals[s]), int(idx[s]), int(idx[e - 1]) + 1) for s, e in zip(starts, stops)]
+
+
+def _pair(labels: np.ndarray, number0: int = 0, rows: np.ndarray | None = None) -> list[Cycle]:
+    rows = np.arange(labels.size) if rows is None else rows
+    runs = _runs(labels)
+    cycles = []
+    k = 0
+    while k < len(runs) - 1:
+        (v1, a1, b1), (v2, a2, b2) = runs[k], runs[k + 1]
+        if v1 == 1 and v2 == -1:
+            # The last loading reading (the turning point) also starts the unloading branch.
+            unload = np.concatenate([[b1 - 1], np.arange(a2, b2)]) if a2 == b1 else np.arange(a2, b2)
+            # ... and the reading that ended the previous unloading (the lower turning point) starts this loading.
+            load = np.arange(a1 - 1, b1) if a1 > 0 and labels[a1 - 1] == -1 else np.arange(a1, b1)
+            cycles.append(Cycle(number0 + len(cycles), rows[load], rows[unload]))
+            k += 2
+        else:
+            k += 1
+    return cycles
+
+
+def split_cycles(stress_pa, direction=None, cycle=None, threshold: float = 0.05) -> list[Cycle]:
+    """Split a run into loading-unloading cycles.
+
+    Parameters
+    ----------
+    stress_pa : array_like, shape (n,)
+        Reference stress in time order. [Pa]
+    direction : array_like, optional
+        The run's ``direction`` column (+1 loading, -1 unloading, 0 hold, NaN unknown); when given
+        it decides the branches and the stress is not examined.
+    cycle : array_like, optional
+        The run's ``cycle`` column; when given, rows are grouped by it (each group one cycle,
+        numbered by its value) and the branches are found within each group.
+    threshold : float
+        Reversal threshold as a fraction of the stress span when branches come from the stress. [1]
+
+    Returns
+    -------
+    list of Cycle
+        Complete cycles only (a loading branch followed by an unloading branch), in time order.
+        A run that starts while unloading or ends while loading has that part left out.
+    """
+    x = np.asarray(stress_pa, dtype=float)
+    if x.ndim != 1:
+        raise ValueError("stress_pa must be 1-D")
+    n = x.size
+    if direction is not None:
+        dirn = np.asarray(direction, dtype=float)
+        if dirn.shape != (n,):
+            raise ValueError("direction must have the same length as stress_pa")
+        dirn = np.nan_to_num(dirn, nan=0.0)
+        if not np.all(np.isin(dirn, (-1, 0, 1))):
+            raise ValueError("direction must hold -1 (unloading), 0 (hold) or +1 (loading)")
+        labels = dirn.astype(int)
+    else:
+        labels = None
+    if cycle is not None:
+        cyc = np.asarray(cycle, dtype=float)
+        if cyc.shape != (n,):
+            raise ValueError("cycle must have the same length as stress_pa")
+        out = []
+        for value in dict.fromkeys(cyc[~np.isnan(cyc)].tolist()):
+            rows = np.flatnonzero(cyc == value)
+            lab = labels[rows] if labels is not None else branch_directions(x[rows], threshold)
+            for c in _pair(lab, 0, rows):
+                out.append(Cycle(int(value) if float(value).is_integer() else len(out), c.load_index, c.unload_index))
+        return out
+    if labels is None:
+        labels = branch_directions(x, threshold)
+    return _pair(labels)
+
+
+@dataclass(frozen=True)
+class RunHysteresis:
+    """Hysteresis error of a run (eq. 13), per cycle and overall.
+
+    Parameters
+    ----------
+    percent : float
+        Overall HE: eq. (13) on the mean loading and mean unloading curves (each cycle's branch
+        interpolated onto a common stress grid, then averaged over the cycles). [%]
+    stress_at_max_pa : float
+        Stress of the largest branch difference of the overall curves. [Pa]
+    cycles : list
+        One :class:`~fsrlab.analysis.hysteresis.HysteresisResult` per cycle.
+    cycle_numbers : list of int
+        The cycles' numbers.
+    method : str
+        How the branches were found and combined.
+    """
+
+    percent: float
+    stress_at_max_pa: float
+    cycles: list = field(default_factory=list)
+    cycle_numbers: list = field(default_factory=list)
+    method: str = ""
+
+    def to_dict(self) -> dict[str, Any]:
+        """The CLI's JSON shape."""
+        return {
+            "hysteresis_error_percent": self.percent,
+            "stress_at_max_difference_pa": self.stress_at_max_pa,
+            "cycles": [{"hysteresis_error_percent": float(c.percent),
+                        "stress_at_max_difference_pa": float(c.stress_at_max_pa)} for c in self.cycles],
+        }
+
+
+def mean_branches(stress_pa, q, cycles: list[Cycle], points: int = 201):
+    """Mean loading and unloading curves over cycles on a common stress grid.
+
+    Parameters
+    ----------
+    stress_pa, q : array_like, shape (n,)
+        Reference stress [Pa] and readout quantity [any unit].
+    cycles : list of Cycle
+        From :func:`split_cycles`.
+    points : int
+        Grid points between the largest branch start and the smallest branch end.
+
+    Returns
+    -------
+    grid : ndarray
+        Stress grid. [Pa]
+    q_load, q_unload : ndarray
+        Mean over cycles of each branch linearly interpolated onto ``grid``.
+    """
+    x = np.asarray(stress_pa, dtype=float)
+    y = np.asarray(q, dtype=float)
+    lo, hi = -np.inf, np.inf
+    prepared = []
+    for c in cycles:
+        br = []
+        for idx in (c.load_index, c.unload_index):
+            xs, ys = x[idx], y[idx]
+            keep = np.isfinite(xs) & np.isfinite(ys)
+            xs, ys = xs[keep], ys[keep]
+            o = np.argsort(xs, kind="stable")
+            br.append((xs[o], ys[o]))
+            lo, hi = max(lo, xs.min()), min(hi, xs.max())
+        prepared.append(br)
+    if not prepared or not hi > lo:
+        raise ValueError("cycles: the branches share no stress range")
+    grid = np.linspace(lo, hi, points)
+    ql = np.mean([np.interp(grid, *b[0]) for b in prepared], axis=0)
+    qu = np.mean([np.interp(grid, *b[1]) for b in prepared], axis=0)
+    return grid, ql, qu
+
+
+def run_hysteresis(stress_pa, q, direction=None, cycle=None, threshold: float = 0.05, **kwargs) -> RunHysteresis:
+    """Hysteresis error (eq. 13) of a run, per cycle and overall.
+
+    Parameters
+    ----------
+    stress_pa : array_like, shape (n,)
+        Reference stress in time order. [Pa]
+    q : array_like, shape (n,)
+        Readout quantity (frequency [Hz], voltage [V], calibrated stress [Pa], ...); NaN rows are skipped.
+    direction, cycle : array_like, optional
+        The run's ``direction`` and ``cycle`` columns (see :func:`split_cycles`).
+    threshold : float
+        Reversal threshold as a fraction of the stress span. [1]
+    **kwargs
+        Passed to :func:`fsrlab.analysis.hysteresis.hysteresis_error`.
+
+    Returns
+    -------
+    RunHysteresis
+
+    Raises
+    ------
+    ValueError
+        If the run holds no complete loading-unloading cycle.
+    """
+    from fsrlab.analysis.hysteresis import hysteresis_error
+
+    x = np.asarray(stress_pa, dtype=float)
+    y = np.asarray(q, dtype=float)
+    if y.shape != x.shape:
+        raise ValueError("q must have the same length as stress_pa")
+    cycles = split_cycles(x, direction, cycle, threshold)
+    if not cycles:
+        raise ValueError("the run holds no complete loading-unloading cycle (need the stress to rise and fall "
+                         "back by more than the threshold, or a direction column with +1 then -1)")
+    results = []
+    for c in cycles:
+        li = c.load_index[np.isfinite(y[c.load_index])]
+        ui = c.unload_index[np.isfinite(y[c.unload_index])]
+        results.append(hysteresis_error(x[li], y[li], x[ui], y[ui], **kwargs))
+    grid, ql, qu = mean_branches(x, y, cycles)
+    overall = hysteresis_error(grid, ql, grid, qu, **kwargs)
+    how = "direction column" if direction is not None else f"stress reversals beyond {threshold:.0%} of the span"
+    method = (f"branches from {how}; per cycle: eq. (13) via hysteresis_error ({overall.method}); "
+              f"overall: eq. (13) on the mean of the {len(cycles)} cycles' branches on a common stress grid")
+    return RunHysteresis(percent=float(overall.percent), stress_at_max_pa=float(overall.stress_at_max_pa),
+                         cycles=results, cycle_numbers=[c.number for c in cycles], method=method)
