@@ -1,0 +1,323 @@
+"""Exact event-driven transient of the FSR-timed LM555 astable.
+
+Between events the timing capacitor follows a closed-form RC exponential, so the simulation jumps
+from one threshold crossing to the next without a time step: each crossing time is solved exactly,
+``Δt = τ·ln((V − V∞)/(V_th − V∞))``. The circuit model is the one of :mod:`fsrlab.circuits.lm555`
+(ideal comparators, ideal discharge switch, constant-drop diode D1 in series with R_B).
+
+Parts that change in time (the sensor under a changing force) are given as samples
+``time_s``, ``r_fsr_ohm``, ``c_fsr_farad`` and held constant from one sample to the next (zero-order
+hold), which makes every piece an exact RC segment. When the capacitance steps, the charge
+``Q = C·V`` is conserved by default (a capacitor whose plates move at fixed charge; the continuous
+limit of ``i = d(C·v)/dt``); ``capacitance_step="voltage"`` keeps the voltage instead
+(quasi-static). A step can cross a threshold, which then switches the output at the sample time.
+
+References
+----------
+Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, §5 (eqs. 20–26, 33–34).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from fsrlab.circuits.lm555 import _check_fractions, _check_supply
+
+__all__ = ["TransientResult", "simulate"]
+
+
+@dataclass(frozen=True)
+class TransientResult:
+    """Output edges (and optionally the capacitor waveform) of a transient run.
+
+    Attributes
+    ----------
+    rising_s : ndarray
+        Times the output goes high (start of a charge). [s]
+    falling_s : ndarray
+        Times the output goes low (start of a discharge). [s]
+    t_s : ndarray or None
+        Waveform sample times (``waveform=True``). [s]
+    v_cap_v : ndarray or None
+        Capacitor voltage at ``t_s``. [V]
+    output_high : ndarray or None
+        Output state at ``t_s`` (True = high).
+    t_end_s : float
+        Time the run stopped. [s]
+    v_end_v : float
+        Capacitor voltage at ``t_end_s`` (to continue a run). [V]
+    high_end : bool
+        Output state at ``t_end_s``.
+    """
+
+    rising_s: np.ndarray
+    falling_s: np.ndarray
+    t_s: np.ndarray | None
+    v_cap_v: np.ndarray | None
+    output_high: np.ndarray | None
+    t_end_s: float
+    v_end_v: float
+    high_end: bool
+
+    def _complete(self):
+        """Rising edges r[i], the falling edge inside each complete period, and r[i+1]."""
+        r, f = self.rising_s, self.falling_s
+        if r.size < 2:
+            return r[:0], f[:0], r[:0]
+        starts, ends = r[:-1], r[1:]
+        idx = np.searchsorted(f, starts, side="left")
+        valid = idx < f.size
+        falls = np.full(starts.shape, np.nan)
+        falls[valid] = f[idx[valid]]
+        ok = valid & (falls < ends)
+        return starts[ok], falls[ok], ends[ok]
+
+    @property
+    def periods_s(self) -> np.ndarray:
+        """Duration of each complete period (rising edge to rising edge). [s]"""
+        s, _, e = self._complete()
+        return e - s
+
+    @property
+    def high_times_s(self) -> np.ndarray:
+        """Output-high time of each complete period. [s]"""
+        s, f, _ = self._complete()
+        return f - s
+
+    @property
+    def frequency_hz(self) -> float:
+        """Mean frequency over the complete periods (as a counter would average them). [Hz]"""
+        p = self.periods_s
+        return float(p.size / p.sum()) if p.size else math.nan
+
+    @property
+    def duty_cycle(self) -> float:
+        """Mean duty cycle, total high time over total period time. [1]"""
+        p = self.periods_s
+        return float(self.high_times_s.sum() / p.sum()) if p.size else math.nan
+
+
+def _as_series(name, value, n):
+    a = np.asarray(value, dtype=float)
+    if a.ndim == 0:
+        return np.full(n, float(a))
+    if a.shape != (n,):
+        raise ValueError(f"{name}: must be a scalar or have the shape of time_s ({n},), got {a.shape}")
+    return a
+
+
+def simulate(r_ohm: float, r_fsr_ohm, c_fsr_farad, c_off_farad: float = 0.0, diode: bool = False,
+             diode_drop_v: float = 0.0, vcc_v: float = 5.0, lower_fraction: float = 1 / 3,
+             upper_fraction: float = 2 / 3, *, periods: int | None = None, t_stop_s: float | None = None,
+             time_s=None, v_initial_v: float | None = None, waveform: bool = False,
+             points_per_segment: int = 16, capacitance_step: str = "charge") -> TransientResult:
+    """Simulate the astable event by event with closed-form RC segments.
+
+    Parameters
+    ----------
+    r_ohm : float
+        R_A = R_B = R. [Ω]
+    r_fsr_ohm : float or array_like
+        FSR resistance; an array gives its value at each ``time_s`` sample (``inf`` allowed). [Ω]
+    c_fsr_farad : float or array_like
+        FSR capacitance, scalar or per ``time_s`` sample. [F]
+    c_off_farad : float
+        Offset capacitor in parallel. [F]
+    diode : bool
+        D1 in series with R_B.
+    diode_drop_v : float
+        Constant forward drop of D1 (needs ``diode=True``). [V]
+    vcc_v : float
+        Supply. [V]
+    lower_fraction, upper_fraction : float
+        Comparator thresholds as fractions of Vcc. [1]
+    periods : int, optional
+        Constant parts only: stop after this many complete periods.
+    t_stop_s : float, optional
+        Stop time (constant parts; default for time series: ``time_s[-1]``). [s]
+    time_s : array_like, optional
+        Sample times of the part values, strictly increasing; each sample holds until the next. [s]
+    v_initial_v : float, optional
+        Capacitor voltage at the start. Default: the lower threshold with the output just gone
+        high (steady state; a rising edge is recorded at the start time). A value at or below the
+        lower threshold starts high (power-up: 0), at or above the upper one low, in between high. [V]
+    waveform : bool
+        Also return the capacitor voltage, ``points_per_segment`` points per RC segment.
+    points_per_segment : int
+        Waveform points per segment (≥ 2), segment ends included.
+    capacitance_step : {"charge", "voltage"}
+        What is conserved when the capacitance steps between samples.
+
+    Returns
+    -------
+    TransientResult
+
+    Raises
+    ------
+    ValueError
+        Parameters out of range, or neither/both of ``periods`` and a stop time for constant parts.
+
+    Notes
+    -----
+    Charge (output high): ``V∞ = (Vcc − V_D)·R_FSR/(2R + R_FSR)``, ``τ = C·(2R ∥ R_FSR)`` (eq. 21);
+    if the capacitor sits above ``Vcc − V_D`` D1 is off and C decays through R_FSR until it
+    conducts again. Discharge (output low): ``V∞ = 0``, ``τ = C·(R ∥ R_FSR)`` without D1 (eq. 24)
+    or ``τ = C·R_FSR`` with D1 (eq. 33). A circuit that does not oscillate simply produces no more
+    edges (the capacitor settles below the upper threshold).
+    """
+    _check_fractions(lower_fraction, upper_fraction)
+    _check_supply(diode, diode_drop_v, vcc_v)
+    if not (math.isfinite(r_ohm) and r_ohm > 0):
+        raise ValueError(f"r_ohm: must be finite and > 0 Ω, got {r_ohm!r}")
+    if not (math.isfinite(c_off_farad) and c_off_farad >= 0):
+        raise ValueError(f"c_off_farad: must be finite and >= 0 F, got {c_off_farad!r}")
+    if capacitance_step not in ("charge", "voltage"):
+        raise ValueError(f"capacitance_step: must be 'charge' or 'voltage', got {capacitance_step!r}")
+    if int(points_per_segment) < 2:
+        raise ValueError(f"points_per_segment: must be >= 2, got {points_per_segment!r}")
+
+    if time_s is None:
+        if np.ndim(r_fsr_ohm) or np.ndim(c_fsr_farad):
+            raise ValueError("time_s: part values given as arrays need their sample times time_s")
+        if (periods is None) == (t_stop_s is None):
+            raise ValueError("periods, t_stop_s: give exactly one of them for constant parts")
+        if periods is not None and int(periods) < 1:
+            raise ValueError(f"periods: must be >= 1, got {periods!r}")
+        times = np.array([0.0, math.inf if t_stop_s is None else float(t_stop_s)])
+        if not times[1] > 0:
+            raise ValueError(f"t_stop_s: must be > 0 s, got {t_stop_s!r}")
+        rf = np.full(2, float(r_fsr_ohm))
+        cf = np.full(2, float(c_fsr_farad))
+    else:
+        times = np.asarray(time_s, dtype=float)
+        if times.ndim != 1 or times.size < 2 or not np.all(np.isfinite(times)) or np.any(np.diff(times) <= 0):
+            raise ValueError("time_s: must be a 1-D array of at least 2 finite, strictly increasing times")
+        rf = _as_series("r_fsr_ohm", r_fsr_ohm, times.size)
+        cf = _as_series("c_fsr_farad", c_fsr_farad, times.size)
+        if t_stop_s is not None:
+            if not t_stop_s > times[0]:
+                raise ValueError("t_stop_s: must be after time_s[0]")
+            keep = times < t_stop_s
+            times = np.append(times[keep], float(t_stop_s))
+            rf, cf = np.append(rf[keep], rf[keep][-1]), np.append(cf[keep], cf[keep][-1])
+    if np.any(np.isnan(rf)) or np.any(rf <= 0):
+        raise ValueError("r_fsr_ohm: must be > 0 Ω (inf allowed)")
+    if np.any(~np.isfinite(cf)) or np.any(cf < 0):
+        raise ValueError("c_fsr_farad: must be finite and >= 0 F")
+    cap = cf + c_off_farad
+    if np.any(cap <= 0):
+        raise ValueError("c_fsr_farad + c_off_farad: the timing capacitance must be > 0 F")
+
+    r = float(r_ohm)
+    vs = vcc_v - diode_drop_v
+    v_lo, v_hi = lower_fraction * vcc_v, upper_fraction * vcc_v
+    max_rising = None if periods is None else int(periods) + 1
+    npts = int(points_per_segment)
+
+    rising: list[float] = []
+    falling: list[float] = []
+    wt: list[np.ndarray] = []
+    wv: list[np.ndarray] = []
+    wh: list[np.ndarray] = []
+
+    t = float(times[0])
+    if v_initial_v is None:
+        v, high = v_lo, True
+        rising.append(t)
+    else:
+        v = float(v_initial_v)
+        if not math.isfinite(v):
+            raise ValueError(f"v_initial_v: must be finite, got {v_initial_v!r}")
+        high = v < v_hi
+
+    def record(t0, dt, v0, vinf, tau, state):
+        frac = np.linspace(0.0, 1.0, npts)
+        ts = t0 + frac * dt
+        if math.isinf(tau):
+            vs_ = np.full(npts, v0)
+        else:
+            vs_ = vinf + (v0 - vinf) * np.exp(-(frac * dt) / tau)
+        wt.append(ts)
+        wv.append(vs_)
+        wh.append(np.full(npts, state))
+
+    done = False
+    for k in range(times.size - 1):
+        t_end = float(times[k + 1])
+        rfk, ck = float(rf[k]), float(cap[k])
+        if k > 0 and capacitance_step == "charge" and ck != float(cap[k - 1]):
+            v *= float(cap[k - 1]) / ck  # Q = C·V conserved across the step
+        # Closed-form segment constants for this sample interval.
+        if math.isinf(rfk):
+            charge_vinf, charge_tau = vs, 2.0 * r * ck
+            dis_tau = math.inf if diode else r * ck
+            leak_tau = math.inf
+        else:
+            charge_vinf = vs * rfk / (2.0 * r + rfk)
+            charge_tau = 2.0 * r * rfk / (2.0 * r + rfk) * ck
+            dis_tau = rfk * ck if diode else r * rfk / (r + rfk) * ck
+            leak_tau = rfk * ck
+        while True:
+            # A step of C (or the start) may already sit beyond a threshold: switch now.
+            if high and v >= v_hi:
+                falling.append(t)
+                high = False
+            elif not high and v <= v_lo:
+                rising.append(t)
+                high = True
+                if max_rising is not None and len(rising) >= max_rising:
+                    done = True
+                    break
+            if high:
+                if diode and v > vs:
+                    # D1 reverse biased: C decays through R_FSR until it reaches Vcc − V_D.
+                    vinf, tau, target, edge = 0.0, leak_tau, vs, False
+                else:
+                    vinf, tau, target, edge = charge_vinf, charge_tau, v_hi, True
+            else:
+                vinf, tau, target, edge = 0.0, dis_tau, v_lo, True
+            if math.isinf(tau):
+                dt = math.inf
+            else:
+                ratio = (target - vinf) / (v - vinf) if v != vinf else -1.0
+                dt = tau * math.log(1.0 / ratio) if 0.0 < ratio <= 1.0 else math.inf
+            if t + dt < t_end:
+                if waveform:
+                    record(t, dt, v, vinf, tau, high)
+                t += dt
+                v = target
+                if edge:
+                    if high:
+                        falling.append(t)
+                        high = False
+                    else:
+                        rising.append(t)
+                        high = True
+                        if max_rising is not None and len(rising) >= max_rising:
+                            done = True
+                            break
+                continue
+            # No event before the end of this sample interval.
+            if math.isinf(t_end):
+                done = True  # constant parts that stopped oscillating: nothing more will happen
+                break
+            span = t_end - t
+            if waveform:
+                record(t, span, v, vinf, tau, high)
+            if not math.isinf(tau):
+                v = vinf + (v - vinf) * math.exp(-span / tau)
+            t = t_end
+            break
+        if done:
+            break
+
+    as_arr = (lambda parts: np.concatenate(parts) if parts else np.empty(0))
+    return TransientResult(
+        rising_s=np.asarray(rising), falling_s=np.asarray(falling),
+        t_s=as_arr(wt) if waveform else None, v_cap_v=as_arr(wv) if waveform else None,
+        output_high=as_arr(wh).astype(bool) if waveform else None,
+        t_end_s=t, v_end_v=v, high_end=high,
+    )
