@@ -82,3 +82,56 @@ def test_property_cycle_count_and_monotone_labels(n_cycles, per_ramp, peak, seed
     assert len(cs) == n_cycles
     lab = branch_directions(x, threshold=0.1)
     assert set(np.unique(lab)) <= {-1, 1}
+
+
+# --- hysteresis error from runs (eq. 13 through fsrlab.analysis.hysteresis.hysteresis_error) ---
+
+from fsrlab.analysis.cycles import run_hysteresis  # noqa: E402
+
+
+def test_run_hysteresis_closed_form():
+    # Loading q = σ, unloading q = σ + a σ(σf − σ)/σf²: the largest difference is a/4 at σf/2 and
+    # Q(σf) = σf, so eq. (13) gives HE = 100 a / (4 σf) exactly (independent closed form).
+    sf, a = 10e3, 2e3
+    up = np.linspace(0, sf, 201)
+    down = up[::-1]
+    x = np.concatenate([up, down[1:], up[1:], down[1:]])
+    q = np.where(np.arange(x.size) % 400 < 200, x, x + a * x * (sf - x) / sf**2)
+    q[np.arange(x.size) % 400 == 200] = sf
+    res = run_hysteresis(x, q)
+    assert len(res.cycles) == 2
+    for c in res.cycles:
+        assert c.percent == pytest.approx(100 * a / (4 * sf), rel=1e-9)
+        assert c.stress_at_max_pa == pytest.approx(sf / 2)
+    assert res.percent == pytest.approx(5.0, rel=1e-3)  # mean curves on a 201-point grid hold σf/2
+    d = res.to_dict()
+    assert set(d) == {"hysteresis_error_percent", "stress_at_max_difference_pa", "cycles"}
+    assert set(d["cycles"][0]) == {"hysteresis_error_percent", "stress_at_max_difference_pa"}
+
+
+def test_run_hysteresis_on_synthetic_bench_run_matches_noiseless_model():
+    """Data: synthetic_run (VirtualFSR -> lm555.astable, R = 10 kΩ, ideal D1; 0.2 % frequency noise,
+    62.5 ns quantization, 100 ms windows). Reference: the same chain without noise and quantization
+    sampled finely (eq. 13 on exact branches). Tolerance 1 percentage point: 3 σ of 0.2 % noise on
+    a difference of two readings relative to full scale is ≈ 0.85 pp."""
+    from fsrlab.analysis.hysteresis import hysteresis_error
+    from fsrlab.analysis.synthetic import synthetic_run, triangle_stress
+    from fsrlab.circuits.lm555 import astable
+    from fsrlab.physics.sensor import VirtualFSR
+
+    run = synthetic_run(cycles=2, peak_pa=50e3, points_per_ramp=100, seed=3)
+    c = run.columns
+    res = run_hysteresis(c["stress_pa"], c["frequency_hz"])
+    s = triangle_stress(1, 50e3, 2000)
+    r = VirtualFSR().respond(s)
+    f = astable(10e3, r.r_fsr_ohm, r.c_fsr_farad, diode=True).frequency_hz
+    ref = hysteresis_error(s[:2001], f[:2001], s[2000:], f[2000:]).percent
+    assert 5 < ref < 40  # the virtual sensor is strongly hysteretic, like the paper's Table 3
+    for cyc in res.cycles:
+        assert cyc.percent == pytest.approx(ref, abs=1.0)
+    assert res.percent == pytest.approx(ref, abs=1.0)
+
+
+def test_run_without_cycle_is_rejected():
+    with pytest.raises(ValueError, match="no complete loading-unloading cycle"):
+        run_hysteresis(np.linspace(0, 1, 10), np.linspace(1, 2, 10))

@@ -170,7 +170,13 @@ def _runs(labels: np.ndarray) -> list[tuple[int, int, int]]:
     return [(int(vals[s]), int(idx[s]), int(idx[e - 1]) + 1) for s, e in zip(starts, stops)]
 
 
-def _pair(labels: np.ndarray, number0: int = 0, rows: np.ndarray | None = None) -> list[Cycle]:
+def _pair(labels: np.ndarray, x: np.ndarray, number0: int = 0, rows: np.ndarray | None = None) -> list[Cycle]:
+    """Pair each loading run with the unloading run that follows it.
+
+    The reading at a turning point belongs to both branches: at the top, whichever of the last
+    loading reading and the first unloading reading has the larger stress is shared; at the bottom,
+    the reading before the loading run is shared when it lies lower than the run's first reading.
+    """
     rows = np.arange(labels.size) if rows is None else rows
     runs = _runs(labels)
     cycles = []
@@ -178,11 +184,16 @@ def _pair(labels: np.ndarray, number0: int = 0, rows: np.ndarray | None = None) 
     while k < len(runs) - 1:
         (v1, a1, b1), (v2, a2, b2) = runs[k], runs[k + 1]
         if v1 == 1 and v2 == -1:
-            # The last loading reading (the turning point) also starts the unloading branch.
-            unload = np.concatenate([[b1 - 1], np.arange(a2, b2)]) if a2 == b1 else np.arange(a2, b2)
-            # ... and the reading that ended the previous unloading (the lower turning point) starts this loading.
-            load = np.arange(a1 - 1, b1) if a1 > 0 and labels[a1 - 1] == -1 else np.arange(a1, b1)
-            cycles.append(Cycle(number0 + len(cycles), rows[load], rows[unload]))
+            load = list(range(a1, b1))
+            unload = list(range(a2, b2))
+            if a1 > 0 and labels[a1 - 1] == -1 and x[a1 - 1] <= x[a1]:
+                load.insert(0, a1 - 1)
+            if a2 == b1:
+                if x[b1 - 1] >= x[a2]:
+                    unload.insert(0, b1 - 1)
+                else:
+                    load.append(a2)
+            cycles.append(Cycle(number0 + len(cycles), rows[np.array(load)], rows[np.array(unload)]))
             k += 2
         else:
             k += 1
@@ -233,12 +244,12 @@ def split_cycles(stress_pa, direction=None, cycle=None, threshold: float = 0.05)
         for value in dict.fromkeys(cyc[~np.isnan(cyc)].tolist()):
             rows = np.flatnonzero(cyc == value)
             lab = labels[rows] if labels is not None else branch_directions(x[rows], threshold)
-            for c in _pair(lab, 0, rows):
+            for c in _pair(lab, x[rows], 0, rows):
                 out.append(Cycle(int(value) if float(value).is_integer() else len(out), c.load_index, c.unload_index))
         return out
     if labels is None:
         labels = branch_directions(x, threshold)
-    return _pair(labels)
+    return _pair(labels, x)
 
 
 @dataclass(frozen=True)
