@@ -1,0 +1,294 @@
+"""ngspice netlists for the FSR-timed LM555 astable, a batch runner and the edge measurement.
+
+ngspice ships no 555 model, so fsrlab writes its own behavioural one (:data:`SUBCKT_555`): the
+555's two comparators and its SR latch act, in the astable, as one Schmitt trigger on the
+capacitor voltage, which is exactly a voltage-controlled switch ``SW`` with hysteresis
+(on above ``VT + VH`` = upper threshold, off below ``VT − VH`` = lower threshold). One switch is
+the discharge transistor (pin 7 to ground), a second one with the same control pulls the output
+low. The control is the capacitor voltage amplified by ``GAIN`` = 1e4 in a VCVS, because ngspice's
+switch time-step control (``SWtrunc``) lets the control overshoot a threshold by up to 0.05 V;
+amplified, that is 5 µV on the capacitor, i.e. threshold crossings accurate to ~1e-6 of the swing
+without a tiny global time step.
+
+The diode D1 is a SPICE diode with emission coefficient ``N = 1e-4`` (forward drop ≈ 60 µV at
+the charge current, reverse leakage 1e-14 A), i.e. practically ideal; a real diode's constant drop
+is a DC source in series with it, matching the constant-drop model of
+:mod:`fsrlab.circuits.lm555`.
+
+The netlist is independent of fsrlab's closed forms; only the simulated duration uses the closed
+form's period estimate, so that a run covers the requested number of periods.
+
+References
+----------
+ngspice manual, voltage-controlled switch ``S``/``SW`` model (VT, VH, RON, ROFF); Matute et al.,
+J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, Figs. 9b, 13, 16.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import subprocess
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from fsrlab.circuits.lm555 import _check_fractions, _check_supply, astable
+
+__all__ = ["SUBCKT_555", "SpiceResult", "netlist", "run_ngspice", "simulate_spice", "ngspice_available",
+           "edges_from_waveform"]
+
+#: Control-voltage gain in front of the latch switches (see module docstring). [1]
+GAIN = 1e4
+
+#: Behavioural 555 for fsrlab: pins VCC, DIS (7), THR (6 and 2 tied), OUT (3). ``{vt}``/``{vh}``
+#: are the switch threshold and hysteresis in control volts (GAIN × capacitor volts).
+SUBCKT_555 = """\
+* fsrlab behavioural LM555 (astable use): comparators + SR latch as one hysteresis switch.
+* Switch closed (discharge on, output low) once V(thr) > upper threshold; open below lower threshold.
+.subckt fsr555 vcc dis thr out
+Ectl ctl 0 thr 0 {gain:g}
+Sdis dis 0 ctl 0 sw555
+Sout out 0 ctl 0 sw555
+Rout vcc out 1k
+.model sw555 SW(VT={vt:.15g} VH={vh:.15g} RON=1m ROFF=1e12)
+.ends fsr555
+"""
+
+
+@dataclass(frozen=True)
+class SpiceResult:
+    """Edges measured on the ngspice output node.
+
+    Attributes
+    ----------
+    frequency_hz : float
+        Mean frequency over the measured complete periods (NaN: no oscillation seen). [Hz]
+    duty_cycle : float
+        Total high time over total period time. [1]
+    rising_s, falling_s : ndarray
+        Output edge times (after the skipped start-up periods). [s]
+    n_periods : int
+        Complete periods measured.
+    n_points : int
+        Time points ngspice computed.
+    netlist : str
+        The netlist that was run.
+    """
+
+    frequency_hz: float
+    duty_cycle: float
+    rising_s: np.ndarray
+    falling_s: np.ndarray
+    n_periods: int
+    n_points: int
+    netlist: str
+
+
+def ngspice_available() -> bool:
+    """True when an ``ngspice`` executable is on PATH."""
+    return shutil.which("ngspice") is not None
+
+
+def netlist(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: float = 0.0, diode: bool = False,
+            diode_drop_v: float = 0.0, vcc_v: float = 5.0, lower_fraction: float = 1 / 3,
+            upper_fraction: float = 2 / 3, *, t_stop_s: float, t_max_step_s: float,
+            output_file: str = "fsrlab_out.txt") -> str:
+    """ngspice netlist of the astable (paper Figs. 9b, 13, 16) with a ``.control`` block.
+
+    Parameters
+    ----------
+    r_ohm : float
+        R_A = R_B = R. [Ω]
+    r_fsr_ohm : float
+        FSR resistance (``inf``: left out). [Ω]
+    c_fsr_farad : float
+        FSR capacitance. [F]
+    c_off_farad : float
+        Offset capacitor (0: left out). [F]
+    diode : bool
+        D1 in series with R_B.
+    diode_drop_v : float
+        Constant forward drop of D1, as a DC source in series with a near-ideal diode. [V]
+    vcc_v : float
+        Supply. [V]
+    lower_fraction, upper_fraction : float
+        Thresholds as fractions of Vcc. [1]
+    t_stop_s : float
+        Simulated time, starting from a discharged capacitor. [s]
+    t_max_step_s : float
+        Largest time step ngspice may take. [s]
+    output_file : str
+        File ``wrdata`` writes time, V(out), V(thr) into.
+
+    Returns
+    -------
+    str
+        The netlist text.
+    """
+    _check_fractions(lower_fraction, upper_fraction)
+    _check_supply(diode, diode_drop_v, vcc_v)
+    v_lo, v_hi = lower_fraction * vcc_v, upper_fraction * vcc_v
+    lines = [
+        "* fsrlab: LM555 astable with the FSR as timing element (Matute et al. 2018, Figs. 9b/13/16)",
+        SUBCKT_555.format(gain=GAIN, vt=GAIN * (v_lo + v_hi) / 2, vh=GAIN * (v_hi - v_lo) / 2).rstrip(),
+        f"Vcc vcc 0 DC {vcc_v:.15g}",
+        f"RA vcc dis {r_ohm:.15g}",
+    ]
+    if diode:
+        if diode_drop_v > 0:
+            lines += [f"RB dis nb {r_ohm:.15g}", f"Vdrop nb nd DC {diode_drop_v:.15g}", "D1 nd thr dideal"]
+        else:
+            lines += [f"RB dis nb {r_ohm:.15g}", "D1 nb thr dideal"]
+        lines.append(".model dideal D(IS=1e-14 N=1e-4)")
+    else:
+        lines.append(f"RB dis thr {r_ohm:.15g}")
+    if math.isfinite(r_fsr_ohm):
+        lines.append(f"RFSR thr 0 {r_fsr_ohm:.15g}")
+    lines.append(f"CFSR thr 0 {c_fsr_farad:.15g}")
+    if c_off_farad > 0:
+        lines.append(f"COFF thr 0 {c_off_farad:.15g}")
+    lines += [
+        "X555 vcc dis thr out fsr555",
+        ".ic v(thr)=0",
+        ".options reltol=1e-6 vntol=1e-9 abstol=1e-15",
+        ".control",
+        "set wr_singlescale",
+        "set wr_vecnames",
+        "option numdgt=15",
+        f"tran {t_max_step_s:.6g} {t_stop_s:.9g} 0 {t_max_step_s:.6g} uic",
+        f"wrdata {output_file} v(out) v(thr)",
+        "quit",
+        ".endc",
+        ".end",
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def run_ngspice(text: str, output_file: str = "fsrlab_out.txt", timeout_s: float = 300.0) -> np.ndarray:
+    """Run a netlist with ``ngspice -b`` in a temporary directory and read its ``wrdata`` output.
+
+    Parameters
+    ----------
+    text : str
+        Netlist whose ``.control`` block writes ``output_file`` with ``wrdata``.
+    output_file : str
+        Name of that file.
+    timeout_s : float
+        Give up after this long. [s]
+
+    Returns
+    -------
+    ndarray
+        The table (first column time), one row per time point.
+
+    Raises
+    ------
+    FileNotFoundError
+        ngspice is not installed.
+    RuntimeError
+        ngspice failed or wrote no data; the message carries the end of its log.
+    """
+    exe = shutil.which("ngspice")
+    if exe is None:
+        raise FileNotFoundError("ngspice is not installed (`make sysdeps` installs it)")
+    with tempfile.TemporaryDirectory(prefix="fsrlab-spice-") as tmp:
+        cir = Path(tmp) / "circuit.cir"
+        cir.write_text(text, encoding="ascii")
+        proc = subprocess.run([exe, "-b", str(cir)], cwd=tmp, capture_output=True, text=True, timeout=timeout_s)
+        out = Path(tmp) / output_file
+        if proc.returncode != 0 or not out.exists():
+            tail = " | ".join((proc.stdout + proc.stderr).strip().splitlines()[-8:])
+            raise RuntimeError(f"ngspice failed (exit {proc.returncode}): {tail}")
+        return np.loadtxt(out, skiprows=1, ndmin=2)
+
+
+def _crossings(t, v, level, rising):
+    s = v - level
+    idx = np.nonzero((s[:-1] < 0) & (s[1:] >= 0))[0] if rising else np.nonzero((s[:-1] > 0) & (s[1:] <= 0))[0]
+    return t[idx] - s[idx] * (t[idx + 1] - t[idx]) / (s[idx + 1] - s[idx])
+
+
+def edges_from_waveform(t_s, v_out_v, vcc_v: float = 5.0, skip_periods: int = 2):
+    """Output edge times (linear interpolation at Vcc/2), frequency and duty cycle.
+
+    Parameters
+    ----------
+    t_s, v_out_v : array_like
+        Output waveform. [s], [V]
+    vcc_v : float
+        Supply (edges are taken at Vcc/2). [V]
+    skip_periods : int
+        Start-up periods left out (the first charge starts from 0 V).
+
+    Returns
+    -------
+    (rising, falling, frequency_hz, duty_cycle)
+        Edge arrays in [s], mean frequency [Hz] and duty cycle [1] over the complete periods
+        (NaN when fewer than one complete period remains).
+    """
+    t = np.asarray(t_s, dtype=float)
+    v = np.asarray(v_out_v, dtype=float)
+    rising = _crossings(t, v, vcc_v / 2, True)[skip_periods:]
+    falling = _crossings(t, v, vcc_v / 2, False)
+    if rising.size < 2:
+        return rising, falling[:0], math.nan, math.nan
+    falling = falling[(falling > rising[0]) & (falling < rising[-1])]
+    periods = rising.size - 1
+    if falling.size != periods:
+        return rising, falling, math.nan, math.nan
+    total = rising[-1] - rising[0]
+    return rising, falling, periods / total, float(np.sum(falling - rising[:-1]) / total)
+
+
+def simulate_spice(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: float = 0.0,
+                   diode: bool = False, diode_drop_v: float = 0.0, vcc_v: float = 5.0,
+                   lower_fraction: float = 1 / 3, upper_fraction: float = 2 / 3, *, periods: int = 20,
+                   skip_periods: int = 2, steps_per_phase: int = 100, timeout_s: float = 300.0) -> SpiceResult:
+    """Simulate the astable in ngspice and measure frequency and duty cycle on the output.
+
+    Parameters
+    ----------
+    r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction
+        As in :func:`fsrlab.circuits.lm555.astable`. [Ω, Ω, F, F, -, V, V, 1, 1]
+    periods : int
+        Complete periods to measure after the start-up.
+    skip_periods : int
+        Start-up periods to leave out.
+    steps_per_phase : int
+        Largest time step = min(τH, τL)/steps_per_phase from the closed-form estimate (threshold
+        crossings are refined by the switch's own step control regardless).
+    timeout_s : float
+        ngspice time limit. [s]
+
+    Returns
+    -------
+    SpiceResult
+        NaN frequency and duty cycle when no oscillation shows in the simulated time.
+    """
+    if int(periods) < 1 or int(skip_periods) < 0 or int(steps_per_phase) < 10:
+        raise ValueError("periods >= 1, skip_periods >= 0 and steps_per_phase >= 10 are required")
+    est = astable(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction,
+                  upper_fraction, check=False)
+    period = float(est.period_s)
+    shortest = float(min(est.tau_high_s, est.tau_low_s))
+    if not math.isfinite(period):
+        # Does not oscillate by the closed form: simulate a few classic-555 periods and let ngspice show it.
+        period = 3 * math.log(2) * r_ohm * (c_fsr_farad + c_off_farad)
+        shortest = period / 3
+    # Start-up from 0 V takes longer than a steady period; allow for it.
+    t_stop = period * (periods + skip_periods + 2)
+    text = netlist(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction,
+                   upper_fraction, t_stop_s=t_stop, t_max_step_s=shortest / steps_per_phase)
+    data = run_ngspice(text, timeout_s=timeout_s)
+    rising, falling, f, dc = edges_from_waveform(data[:, 0], data[:, 1], vcc_v, skip_periods)
+    if rising.size > periods + 1:
+        rising = rising[: periods + 1]
+        falling = falling[falling < rising[-1]]
+        total = rising[-1] - rising[0]
+        f, dc = periods / total, float(np.sum(falling - rising[:-1]) / total)
+    n = max(rising.size - 1, 0) if math.isfinite(f) else 0
+    return SpiceResult(frequency_hz=f, duty_cycle=dc, rising_s=rising, falling_s=falling, n_periods=n,
+                       n_points=int(data.shape[0]), netlist=text)
