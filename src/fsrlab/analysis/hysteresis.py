@@ -145,7 +145,13 @@ def hysteresis_error_curves(
     if n < 3:
         raise ValueError(f"n must be >= 3, got {n!r}")
     x = np.linspace(0.0, sigma_f_pa, n)
-    diff = np.asarray(q_unload(x), dtype=float) - np.asarray(q_load(x), dtype=float)
+    return _curves_on_grid(x, q_load(x), q_unload(x), q_load, q_unload, refine)
+
+
+def _curves_on_grid(x, ql, qu, q_load, q_unload, refine: bool) -> HysteresisResult:
+    """Eq. (13) from both branches evaluated on the grid ``x`` = [0 … σf]; functions refine σd."""
+    n, sigma_f_pa = x.size, float(x[-1])
+    diff = np.asarray(qu, dtype=float) - np.asarray(ql, dtype=float)
     i = int(np.nanargmax(np.abs(diff)))
     sd, d = float(x[i]), float(diff[i])
     method = f"both branches evaluated on {n} stresses in [0, σf]"
@@ -158,7 +164,7 @@ def hysteresis_error_curves(
         method += ", σd refined by a bounded scalar search"
     full = abs(float(q_load(sigma_f_pa)))
     return HysteresisResult(percent=100 * abs(d) / full, stress_at_max_pa=sd, difference=d,  # Eq. (13)
-                            full_scale=full, sigma_f_pa=float(sigma_f_pa), method=method)
+                            full_scale=full, sigma_f_pa=sigma_f_pa, method=method)
 
 
 @dataclass
@@ -214,8 +220,24 @@ def model_cycle_errors(u_v: float, params: PaperParameters = PAPER, n: int = 400
         return separation_unloading(x, p.sigma_f_pa, p.s0_m, p.modulus_pa, p.k)
 
     _, regime = resistance_per_area(u_v, p.s0_m, p.phi0_j, return_regime=True)
-    he_r = hysteresis_error_curves(lambda x: resistance_per_area(u_v, s_l(x), p.phi0_j),
-                                   lambda x: resistance_per_area(u_v, s_u(x), p.phi0_j), p.sigma_f_pa, n)
-    he_c = hysteresis_error_curves(lambda x: capacitance_per_area(s_l(x), p.eps_r),
-                                   lambda x: capacitance_per_area(s_u(x), p.eps_r), p.sigma_f_pa, n)
+    if n < 3:
+        raise ValueError(f"n must be >= 3, got {n!r}")
+    x = np.linspace(0.0, p.sigma_f_pa, n)
+    sl, su = s_l(x), s_u(x)  # the separations, shared by R_A and C_A
+
+    def r_l(t):
+        return resistance_per_area(u_v, s_l(t), p.phi0_j)
+
+    def r_u(t):
+        return resistance_per_area(u_v, s_u(t), p.phi0_j)
+
+    def c_l(t):
+        return capacitance_per_area(s_l(t), p.eps_r)
+
+    def c_u(t):
+        return capacitance_per_area(s_u(t), p.eps_r)
+
+    he_r = _curves_on_grid(x, resistance_per_area(u_v, sl, p.phi0_j), resistance_per_area(u_v, su, p.phi0_j),
+                           r_l, r_u, refine=True)
+    he_c = _curves_on_grid(x, capacitance_per_area(sl, p.eps_r), capacitance_per_area(su, p.eps_r), c_l, c_u, refine=True)
     return CycleErrors(u_v=float(u_v), resistance=he_r, capacitance=he_c, regime=int(regime))

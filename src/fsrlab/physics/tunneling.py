@@ -134,15 +134,28 @@ def current_density(
     check_positive("phi0_j", phi0_j, "J")
     check_positive("u_v", u_v, "V")
     check_positive("s_m", s_m, "m")
-    u, s = np.broadcast_arrays(np.asarray(u_v, dtype=float), np.asarray(s_m, dtype=float))
+    u_in, s_in = np.asarray(u_v, dtype=float), np.asarray(s_m, dtype=float)
     if regime == "auto":
-        which = np.asarray(tunneling_regime(u, phi0_j, small_u_fraction))
+        which_u = np.asarray(tunneling_regime(u_in, phi0_j, small_u_fraction))  # decided on u alone
     elif regime in (10, 11, 12):
-        which = np.full(u.shape, int(regime))
+        which_u = np.full(u_in.shape, int(regime))
     else:
         raise ValueError(f"regime must be 'auto', 10, 11 or 12, got {regime!r}")
+    equations = {10: _eq10, 11: _eq11, 12: _eq12}
+    present = np.unique(which_u)
     with np.errstate(over="ignore", under="ignore", invalid="ignore", divide="ignore"):
-        j = np.select([which == 10, which == 11], [_eq10(u, s, phi0_j), _eq11(u, s, phi0_j)], _eq12(u, s, phi0_j))
+        if present.size == 1:  # the usual case: one regime, no masking
+            j = equations[int(present[0])](u_in, s_in, phi0_j)
+            which = np.broadcast_to(which_u, j.shape)
+        else:
+            u, s, which = np.broadcast_arrays(u_in, s_in, which_u)
+            j = np.empty(u.shape)
+            for eq in present:
+                mask = which == eq
+                j[mask] = equations[int(eq)](u[mask], s[mask], phi0_j)
+    j = np.asarray(j, dtype=float)
     if j.ndim == 0:
         j, which = float(j), int(which)
+    else:
+        which = np.array(which)
     return (j, which) if return_regime else j

@@ -1,0 +1,48 @@
+"""`fsrlab paper --out DIR`: files, paper.json keys, Table 2 beside the paper's values."""
+
+import json
+
+import pytest
+
+from fsrlab.cli import main
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory):
+    out = tmp_path_factory.mktemp("report")
+    with pytest.raises(SystemExit) as exc:
+        main(["paper", "--out", str(out)])
+    assert exc.value.code == 0
+    return out
+
+
+def test_files_written(report):
+    for name in ["index.html", "paper.json", "fig2a_separation_sigma_f.png", "fig2b_separation_k.png",
+                 "fig4a_current_density.png", "fig4b_resistance_per_area.png", "fig8a_resistance_per_area.png",
+                 "fig8b_capacitance_per_area.png"]:
+        path = report / name
+        assert path.exists() and path.stat().st_size > 1000, name
+    assert (report / "fig2a_separation_sigma_f.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_paper_json_contract(report, paper):
+    # Issue 2's contract, with the paper's printed Table 1 and Table 2 as reference.
+    d = json.loads((report / "paper.json").read_text())
+    p = d["parameters"]
+    t1 = paper["table1_simulation_parameters"]
+    assert p["k"] == 2
+    assert p["M_Pa"] == t1["M_Pa"] and p["sigma_f_Pa"] == t1["sigma_f_Pa"] and p["phi0_eV"] == pytest.approx(t1["phi0_eV"])
+    t2 = d["table2"]
+    assert t2["u_V"] == [3, 2, 1]
+    assert len(t2["resistance_per_area_percent"]) == 3
+    assert t2["capacitance_per_area_percent"] == pytest.approx([1.73] * 3, abs=0.005)
+    assert t2["paper"] == {"resistance_per_area_percent": [2.21, 5.95, 10.58],
+                           "capacitance_per_area_percent": [1.73, 1.73, 1.73]}
+    assert {e["key"] for e in d["errata"]} >= {"P1", "P2", "P3"}
+
+
+def test_index_is_self_contained_and_shows_both_values(report):
+    html = (report / "index.html").read_text()
+    assert "data:image/png;base64," in html and "<img" in html
+    assert "2.21" in html and "1.47" in html  # the paper's value beside ours
+    assert "Errata" in html and "P1" in html
