@@ -82,7 +82,8 @@ class SyntheticRun:
 def synthetic_run(cycles: int = 3, peak_pa: float = 50e3, points_per_ramp: int = 100, dwell_points: int = 0,
                   window_s: float = 0.1, frequency_noise: float = 0.002, stress_noise_pa: float = 0.0,
                   voltage_noise_v: float = 0.002, r_ohm: float = 10e3, c_off_farad: float = 0.0,
-                  diode: bool = True, diode_drop_v: float = 0.0, sensor=None, seed: int = 0) -> SyntheticRun:
+                  diode: bool = True, diode_drop_v: float = 0.0, sensor=None, seed: int = 0,
+                  stress_pa=None) -> SyntheticRun:
     """Make a loading/unloading run through the virtual sensor, the 555 and the timer.
 
     Parameters
@@ -103,6 +104,9 @@ def synthetic_run(cycles: int = 3, peak_pa: float = 50e3, points_per_ramp: int =
         The sensor (default ``VirtualFSR()``).
     seed : int
         Random seed.
+    stress_pa : array_like, optional
+        Any stress history [Pa] instead of the triangles (e.g. minor loops); ``cycle`` and
+        ``direction`` then come from :func:`fsrlab.analysis.cycles.branch_directions`.
 
     Returns
     -------
@@ -120,7 +124,8 @@ def synthetic_run(cycles: int = 3, peak_pa: float = 50e3, points_per_ramp: int =
             raise ValueError(f"{name} must be >= 0, got {v!r}")
     rng = np.random.default_rng(seed)
     fsr = sensor if sensor is not None else VirtualFSR()
-    stress = triangle_stress(cycles, peak_pa, points_per_ramp, dwell_points)
+    stress = (triangle_stress(cycles, peak_pa, points_per_ramp, dwell_points) if stress_pa is None
+              else np.asarray(stress_pa, dtype=float))
     n = stress.size
     resp = fsr.respond(stress)  # 555 swing: ~Vcc/2 across the FSR
     osc = astable(r_ohm, resp.r_fsr_ohm, resp.c_fsr_farad, c_off_farad=c_off_farad, diode=diode,
@@ -141,14 +146,20 @@ def synthetic_run(cycles: int = 3, peak_pa: float = 50e3, points_per_ramp: int =
     v = 20e3 / r5 * 5.0 + voltage_noise_v * rng.standard_normal(n)
     lsb = 5.0 / 1024
     v = np.clip(np.round(v / lsb), 0, 1023) * lsb
-    per_cycle = 2 * points_per_ramp + dwell_points
-    cycle = np.minimum(np.arange(n) // per_cycle, cycles - 1)
-    phase = np.arange(n) - cycle * per_cycle
-    # direction of the move that led to each reading: the peak reading is +1, the dwell 0.
-    direction = np.where(phase <= points_per_ramp, 1, -1)
-    direction[(phase > points_per_ramp) & (phase <= points_per_ramp + dwell_points)] = 0
-    direction[0] = 1
-    direction[-1] = -1
+    if stress_pa is None:
+        per_cycle = 2 * points_per_ramp + dwell_points
+        cycle = np.minimum(np.arange(n) // per_cycle, cycles - 1)
+        phase = np.arange(n) - cycle * per_cycle
+        # direction of the move that led to each reading: the peak reading is +1, the dwell 0.
+        direction = np.where(phase <= points_per_ramp, 1, -1)
+        direction[(phase > points_per_ramp) & (phase <= points_per_ramp + dwell_points)] = 0
+        direction[0] = 1
+        direction[-1] = -1
+    else:
+        from fsrlab.analysis.cycles import branch_directions
+
+        direction = branch_directions(stress)
+        cycle = np.cumsum(np.concatenate([[0], (direction[1:] == 1) & (direction[:-1] == -1)]))
     cols = {
         "time_s": np.arange(n) * window_s,
         "stress_pa": stress + stress_noise_pa * rng.standard_normal(n),
