@@ -1,0 +1,649 @@
+"""Serial protocol v1 between the fsrlab meter (Arduino firmware) and the host: pure framing, no I/O.
+
+The device sends one ASCII frame per line, ``$<TYPE>,<SEQ>[,<field>...]*<CRC>\\r\\n``, where CRC is
+CRC-16/CCITT-FALSE over the bytes strictly between ``$`` and ``*``; the host sends short command
+lines (``WINDOW 100\\n``). ``docs/protocol.md`` is the normative description; this module is its
+one implementation on the host (the firmware in ``firmware/`` and the virtual device match it).
+
+Everything here works on bytes and returns values: the transport (:mod:`fsrlab.acquisition.serial_link`)
+only moves bytes, as in pyserial's ``serial.threaded`` framing classes.
+
+References
+----------
+.. [1] Matute, A., Paredes-Madrid, L., Gutierrez, E., Vargas, C. A. P. (2018). A Novel and
+   Inexpensive Approach for Force Sensing Based on FSR Piezocapacitance Aimed at Hysteresis
+   Error Reduction. Journal of Sensors, 2018, 6561901. doi:10.1155/2018/6561901
+"""
+
+from __future__ import annotations
+
+import binascii
+import math
+from dataclasses import dataclass, field
+
+__all__ = [
+    "PROTOCOL_VERSION", "F_CPU", "TICK_S", "DEFAULT_BAUD", "MAX_LINE", "MAX_COMMAND", "SEQ_MODULO",
+    "WINDOW_MS_MIN", "WINDOW_MS_MAX", "WINDOW_MS_DEFAULT", "DEVICE_NAME", "FRAME_TYPES", "COMMANDS",
+    "ERR_UNKNOWN_COMMAND", "ERR_BAD_VALUE", "ERR_LINE_TOO_LONG",
+    "ProtocolError", "CommandError", "Frame", "Measurement", "Identity", "Ack", "DeviceError",
+    "ParserStats", "FrameParser", "crc16", "encode_frame", "encode_command", "parse_command",
+    "max_frame_rate", "min_frame_length",
+]
+
+PROTOCOL_VERSION = 1
+"""Version sent in the ``ID`` frame; the host refuses any other."""
+F_CPU = 16_000_000
+"""ATmega328P clock of the Arduino Uno. [Hz]"""
+TICK_S = 62.5e-9
+"""One Timer1 tick at prescaler 1 (1/F_CPU); all tick counts on the wire use it. [s]"""
+DEFAULT_BAUD = 115200
+"""Default line rate, 8N1. [bit/s]"""
+MAX_LINE = 96
+"""Longest device frame, from ``$`` to ``\\n`` inclusive. [byte]"""
+MAX_COMMAND = 32
+"""Longest host command line, ``\\n`` included. [byte]"""
+SEQ_MODULO = 65536
+"""Sequence numbers run 0..65535 and wrap."""
+WINDOW_MS_MIN, WINDOW_MS_MAX, WINDOW_MS_DEFAULT = 10, 60000, 100
+"""Allowed and boot values of the measurement window. [ms]"""
+DEVICE_NAME = "fsrlab-meter"
+"""Device name in the ``ID`` frame."""
+
+ERR_UNKNOWN_COMMAND, ERR_BAD_VALUE, ERR_LINE_TOO_LONG = 1, 2, 3
+"""Codes of ``$ERR`` frames."""
+
+_U32 = 0xFFFFFFFF
+# Per type: number of fields after TYPE and SEQ (min, max).
+FRAME_TYPES: dict[str, tuple[int, int]] = {"M": (8, 8), "ID": (4, 4), "ACK": (1, 2), "ERR": (2, 2)}
+"""Frame types of protocol v1 and how many fields follow ``SEQ`` (minimum, maximum)."""
+# Commands and the allowed range of their value (None: takes no value).
+COMMANDS: dict[str, tuple[int, int] | None] = {
+    "ID": None, "START": None, "STOP": None,
+    "WINDOW": (WINDOW_MS_MIN, WINDOW_MS_MAX), "RANGE": (0, 1),
+}
+"""Host commands of protocol v1 and the inclusive range of their value (``None``: no value)."""
+
+_HEX = frozenset(b"0123456789ABCDEF")
+_DOLLAR, _NL, _CR, _STAR = 0x24, 0x0A, 0x0D, 0x2A
+
+
+class ProtocolError(ValueError):
+    """A frame or value that protocol v1 does not allow."""
+
+
+class CommandError(ProtocolError):
+    """A host command the device rejects; ``code`` and ``token`` are what ``$ERR`` reports."""
+
+    def __init__(self, message: str, code: int, token: str) -> None:
+        super().__init__(message)
+        self.code = code
+        self.token = token
+
+
+def crc16(payload: bytes) -> int:
+    """CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF, not reflected, no final xor).
+
+    Parameters
+    ----------
+    payload : bytes
+        The bytes strictly between ``$`` and ``*``.
+
+    Returns
+    -------
+    int
+        The checksum, 0..65535 (``crc16(b"123456789") == 0x29B1``, the catalogue check value).
+    """
+    return binascii.crc_hqx(payload, 0xFFFF)
+
+
+@dataclass(frozen=True, slots=True)
+class Frame:
+    """One intact device frame.
+
+    Attributes
+    ----------
+    kind : str
+        ``M``, ``ID``, ``ACK`` or ``ERR``.
+    seq : int
+        Sequence number 0..65535.
+    fields : tuple of str
+        The fields after ``SEQ``, as sent.
+    gap : int
+        Frames missing from the sequence just before this one (lost or corrupted); not part of equality.
+    reset : bool
+        True when this frame shows that the device restarted (a boot ``ID`` with sequence 0 out of
+        turn, or a backward jump of the sequence).
+    """
+
+    kind: str
+    seq: int
+    fields: tuple[str, ...] = ()
+    gap: int = field(default=0, compare=False)
+    reset: bool = field(default=False, compare=False)
+
+    def encode(self) -> bytes:
+        """The frame's bytes on the wire (``$...*CRC\\r\\n``)."""
+        return encode_frame(self.kind, self.seq, self.fields)
+
+
+def encode_frame(kind: str, seq: int, fields=()) -> bytes:
+    """Build a device frame, checksum and line end included.
+
+    Parameters
+    ----------
+    kind : str
+        Frame type, one of :data:`FRAME_TYPES`.
+    seq : int
+        Sequence number, 0..65535.
+    fields : sequence of int or str
+        Fields after ``SEQ``: integers (written in decimal) or printable ASCII tokens without
+        ``,``, ``*``, ``$``, CR or LF.
+
+    Returns
+    -------
+    bytes
+        ``$<kind>,<seq>[,<field>...]*<CRC>\\r\\n``, at most :data:`MAX_LINE` bytes.
+
+    Raises
+    ------
+    ValueError
+        When ``kind``, ``seq`` or a field is not allowed, or the frame would be too long.
+    """
+    if kind not in FRAME_TYPES:
+        raise ValueError(f"kind must be one of {sorted(FRAME_TYPES)}, got {kind!r}")
+    if isinstance(seq, bool) or not isinstance(seq, int) or not 0 <= seq < SEQ_MODULO:
+        raise ValueError(f"seq must be an integer in 0..65535, got {seq!r}")
+    lo, hi = FRAME_TYPES[kind]
+    if not lo <= len(fields) <= hi:
+        raise ValueError(f"fields: a {kind} frame has {lo}..{hi} fields after SEQ, got {len(fields)}")
+    parts = [kind, str(seq)]
+    for value in fields:
+        if isinstance(value, bool):
+            value = int(value)
+        if isinstance(value, int):
+            if value < 0:
+                raise ValueError(f"fields must be non-negative integers or tokens, got {value}")
+            parts.append(str(value))
+        else:
+            token = str(value)
+            if not token or not token.isascii() or not token.isprintable() or any(c in token for c in ",*$"):
+                raise ValueError(f"fields: token {token!r} must be non-empty printable ASCII without ',', '*', '$'")
+            parts.append(token)
+    payload = ",".join(parts).encode("ascii")
+    line = b"$" + payload + b"*%04X\r\n" % crc16(payload)
+    if len(line) > MAX_LINE:
+        raise ValueError(f"fields: frame is {len(line)} bytes, the maximum line length is {MAX_LINE}")
+    return line
+
+
+def min_frame_length() -> int:
+    """Length of the shortest valid measurement frame (all numbers one digit, window 10 ms). [byte]"""
+    return len(encode_frame("M", 0, (0, WINDOW_MS_MIN, 0, 0, 0, 0, 0, 0)))
+
+
+def max_frame_rate(baud: float, frame_bytes: int | None = None, bits_per_byte: int = 10) -> float:
+    """Highest number of frames per second a serial line can carry.
+
+    Parameters
+    ----------
+    baud : float
+        Line rate. [bit/s]
+    frame_bytes : int, optional
+        Frame length; the shortest valid measurement frame by default. [byte]
+    bits_per_byte : int
+        Bits per byte on the wire: 10 for 8N1 (start + 8 data + stop).
+
+    Returns
+    -------
+    float
+        Frames per second. [1/s]
+    """
+    if not baud > 0:
+        raise ValueError(f"baud must be > 0, got {baud}")
+    n = min_frame_length() if frame_bytes is None else int(frame_bytes)
+    if n <= 0:
+        raise ValueError(f"frame_bytes must be > 0, got {frame_bytes}")
+    return baud / bits_per_byte / n
+
+
+def _uint(text: str, hi: int = _U32) -> int:
+    # Plain decimal only: no sign, no spaces, no underscores (int() would accept those).
+    if not text or len(text) > 10 or not text.isdigit() or not text.isascii():
+        raise ProtocolError(f"not a decimal integer: {text!r}")
+    value = int(text)
+    if value > hi:
+        raise ProtocolError(f"{value} exceeds {hi}")
+    return value
+
+
+def _check_fields(kind: str, fields: tuple[str, ...]) -> None:
+    """Raise ProtocolError when the fields of a known frame type are not valid protocol v1."""
+    lo, hi = FRAME_TYPES[kind]
+    if not lo <= len(fields) <= hi:
+        raise ProtocolError(f"{kind} frame with {len(fields)} fields")
+    if kind == "M":
+        t_ms, window, periods, sum_p, sum_h, missed, adc, rng = (_uint(f) for f in fields)
+        if adc > 1023 or rng > 1 or window == 0 or sum_h > sum_p or (periods > 0 and sum_p == 0):
+            raise ProtocolError("M frame values out of range")
+    elif kind == "ID":
+        _uint(fields[2])
+        _uint(fields[3])
+        if not fields[0] or not fields[1]:
+            raise ProtocolError("empty token")
+    elif kind == "ACK":
+        if not fields[0]:
+            raise ProtocolError("empty token")
+        if len(fields) == 2:
+            _uint(fields[1])
+    else:  # ERR
+        _uint(fields[0])
+        if not fields[1]:
+            raise ProtocolError("empty token")
+
+
+@dataclass(frozen=True, slots=True)
+class ParserStats:
+    """Counters of a :class:`FrameParser` (a snapshot).
+
+    Attributes
+    ----------
+    frames : int
+        Intact frames returned.
+    bad_checksum : int
+        Well-formed lines whose CRC did not match.
+    malformed : int
+        Lines that began with ``$`` but were cut short, too long, or not valid protocol v1.
+    garbage_bytes : int
+        Bytes outside any line that began with ``$`` (noise, a baud mismatch, a partial first line).
+    lost : int
+        Frames missing from the sequence numbers (never arrived, or arrived corrupted).
+    resets : int
+        Device restarts seen (boot ``ID`` frame out of turn, or the sequence jumped backwards).
+    bytes_in : int
+        All bytes fed.
+    """
+
+    frames: int
+    bad_checksum: int
+    malformed: int
+    garbage_bytes: int
+    lost: int
+    resets: int
+    bytes_in: int
+
+    @property
+    def bad_frames(self) -> int:
+        """Lines rejected as corrupt (``bad_checksum + malformed``)."""
+        return self.bad_checksum + self.malformed
+
+
+class FrameParser:
+    """Incremental parser of device frames that survives any byte stream.
+
+    Feed it bytes as they arrive, in chunks of any size; it returns the intact frames and counts
+    everything else. It never raises on input: garbage, partial frames, a device reset in the
+    middle of a line and a wrong baud rate all end up in the counters.
+
+    Notes
+    -----
+    A candidate line starts at ``$`` and ends at the next ``\\n``. It is abandoned (counted as
+    ``malformed``) when another ``$`` arrives first (the device restarted mid-line, or the line
+    end was corrupted) or when it grows beyond :data:`MAX_LINE` bytes. Because of this rule, a
+    frame whose own bytes are intact is always recovered, whatever precedes it. Bytes outside
+    candidates are ``garbage_bytes``. A line is ``bad_checksum`` when it is well formed
+    (``$payload*XXXX\\r\\n``) but its CRC does not match, and ``malformed`` when it is not well
+    formed, or has a valid CRC but is not a valid protocol v1 frame.
+
+    Sequence numbers: each intact frame should carry the previous one's ``seq + 1`` (mod 65536).
+    A forward gap of ``d < 32768`` adds ``d`` to ``lost``. The boot ``ID`` frame (``seq == 0``)
+    when another number was expected, or a backward jump (gap ≥ 32768, this includes a repeated
+    number), counts as a device reset and adds nothing to ``lost`` (frames between the last one
+    seen and the restart cannot be known).
+    """
+
+    __slots__ = ("_buf", "frames", "bad_checksum", "malformed", "garbage_bytes", "lost", "resets",
+                 "bytes_in", "frame_bytes", "bad_bytes", "_expected")
+
+    def __init__(self) -> None:
+        self._buf = b""
+        self.frames = 0
+        self.bad_checksum = 0
+        self.malformed = 0
+        self.garbage_bytes = 0
+        self.lost = 0
+        self.resets = 0
+        self.bytes_in = 0
+        self.frame_bytes = 0  # bytes of intact frames
+        self.bad_bytes = 0  # bytes of rejected candidate lines
+        self._expected: int | None = None
+
+    @property
+    def bad_frames(self) -> int:
+        """Lines rejected as corrupt (``bad_checksum + malformed``)."""
+        return self.bad_checksum + self.malformed
+
+    @property
+    def pending(self) -> int:
+        """Bytes held back: the start of a line whose end has not arrived yet. [byte]"""
+        return len(self._buf)
+
+    def stats(self) -> ParserStats:
+        """A snapshot of the counters."""
+        return ParserStats(self.frames, self.bad_checksum, self.malformed, self.garbage_bytes,
+                           self.lost, self.resets, self.bytes_in)
+
+    def feed(self, data: bytes) -> list[Frame]:
+        """Parse more bytes.
+
+        Parameters
+        ----------
+        data : bytes
+            The next bytes from the link, any length (bytes, bytearray or memoryview).
+
+        Returns
+        -------
+        list of Frame
+            The frames completed by these bytes, in order.
+        """
+        self.bytes_in += len(data)
+        buf = self._buf + bytes(data) if self._buf else bytes(data)
+        n = len(buf)
+        out: list[Frame] = []
+        i = 0
+        find = buf.find
+        while i < n:
+            if buf[i] != _DOLLAR:
+                j = find(b"$", i)
+                if j < 0:
+                    self.garbage_bytes += n - i
+                    i = n
+                    break
+                self.garbage_bytes += j - i
+                i = j
+            limit = i + MAX_LINE
+            nl = find(b"\n", i + 1, limit)
+            dl = find(b"$", i + 1, nl if nl >= 0 else limit)
+            if dl >= 0:  # a new line started before this one ended
+                self.malformed += 1
+                self.bad_bytes += dl - i
+                i = dl
+                continue
+            if nl < 0:
+                if n >= limit:  # too long without an end: abandon it (no '$' inside, so skip all)
+                    self.malformed += 1
+                    self.bad_bytes += MAX_LINE
+                    i = limit
+                    continue
+                break  # wait for the rest
+            frame = self._line(buf, i, nl + 1)
+            if frame is not None:
+                out.append(frame)
+            i = nl + 1
+        self._buf = buf[i:] if i < n else b""
+        return out
+
+    def finish(self) -> None:
+        """End of stream: count a pending, unterminated line as ``malformed``."""
+        if self._buf:
+            self.malformed += 1
+            self.bad_bytes += len(self._buf)
+            self._buf = b""
+
+    def _line(self, buf: bytes, start: int, end: int) -> Frame | None:
+        size = end - start
+        # Well formed: $ payload * H H H H \r \n
+        star = end - 7
+        if size < 9 or buf[end - 2] != _CR or buf[star] != _STAR:
+            return self._bad(size)
+        crc_text = buf[star + 1:end - 2]
+        if not _HEX.issuperset(crc_text):
+            return self._bad(size)
+        payload = buf[start + 1:star]
+        if binascii.crc_hqx(payload, 0xFFFF) != int(crc_text, 16):
+            self.bad_checksum += 1
+            self.bad_bytes += size
+            return None
+        try:
+            text = payload.decode("ascii")
+            if not text.isprintable() or "*" in text:
+                raise ProtocolError("non-printable")
+            parts = text.split(",")
+            kind = parts[0]
+            if kind not in FRAME_TYPES or len(parts) < 2:
+                raise ProtocolError("unknown type")
+            seq = _uint(parts[1], SEQ_MODULO - 1)
+            fields = tuple(parts[2:])
+            _check_fields(kind, fields)
+        except (ProtocolError, UnicodeDecodeError):
+            return self._bad(size)
+        self.frames += 1
+        self.frame_bytes += size
+        gap, reset = 0, False
+        expected = self._expected
+        if expected is not None and seq != expected:
+            d = (seq - expected) % SEQ_MODULO
+            if (seq == 0 and kind == "ID") or d >= SEQ_MODULO // 2:
+                reset = True
+                self.resets += 1
+            else:
+                gap = d
+                self.lost += d
+        self._expected = (seq + 1) % SEQ_MODULO
+        return Frame(kind, seq, fields, gap, reset)
+
+    def _bad(self, size: int) -> None:
+        self.malformed += 1
+        self.bad_bytes += size
+        return None
+
+
+@dataclass(frozen=True, slots=True)
+class Measurement:
+    """One measurement window (an ``M`` frame) in physical units.
+
+    Attributes
+    ----------
+    seq : int
+        Sequence number of the frame.
+    t_ms : int
+        Device time at the end of the window. [ms]
+    window_ms : int
+        Window length. [ms]
+    periods : int
+        Complete periods of the 555 output in the window.
+    sum_period_ticks, sum_high_ticks : int
+        Sums over those periods of the period and of the high time, in 62.5 ns ticks.
+    missed : int
+        Edges missed or rejected by the firmware in the window.
+    adc : int
+        Mean A0 reading, 0..1023 (op-amp output, traditional readout).
+    range : int
+        State of the C_off switch (1 = C_off connected).
+    frequency_hz : float
+        ``periods · F_CPU / sum_period_ticks``; NaN when ``periods == 0`` (no signal). [Hz]
+    duty_cycle : float
+        ``sum_high_ticks / sum_period_ticks``, 0..1; NaN when ``periods == 0``.
+    """
+
+    seq: int
+    t_ms: int
+    window_ms: int
+    periods: int
+    sum_period_ticks: int
+    sum_high_ticks: int
+    missed: int
+    adc: int
+    range: int
+    frequency_hz: float
+    duty_cycle: float
+
+    @classmethod
+    def from_frame(cls, frame: Frame) -> "Measurement":
+        """Decode an ``M`` frame.
+
+        Parameters
+        ----------
+        frame : Frame
+            A frame of kind ``M`` (as returned by :class:`FrameParser`).
+
+        Returns
+        -------
+        Measurement
+
+        Raises
+        ------
+        ProtocolError
+            When the frame is not a valid ``M`` frame.
+        """
+        if frame.kind != "M":
+            raise ProtocolError(f"frame kind must be 'M' for a measurement, got {frame.kind!r}")
+        _check_fields("M", frame.fields)
+        t_ms, window, periods, sum_p, sum_h, missed, adc, rng = (int(f) for f in frame.fields)
+        if periods > 0:
+            f = periods * F_CPU / sum_p
+            duty = sum_h / sum_p
+        else:
+            f = duty = math.nan
+        return cls(frame.seq, t_ms, window, periods, sum_p, sum_h, missed, adc, rng, f, duty)
+
+    @property
+    def adc_v(self) -> float:
+        """A0 voltage for the Uno's 5 V reference (``adc · 5 / 1024``). [V]"""
+        return self.adc * 5.0 / 1024.0
+
+
+@dataclass(frozen=True, slots=True)
+class Identity:
+    """The device's answer to ``ID`` (also sent once at boot)."""
+
+    seq: int
+    name: str
+    firmware_version: str
+    protocol_version: int
+    f_cpu_hz: int
+
+    @classmethod
+    def from_frame(cls, frame: Frame) -> "Identity":
+        """Decode an ``ID`` frame; raises :class:`ProtocolError` for any other kind."""
+        if frame.kind != "ID":
+            raise ProtocolError(f"frame kind must be 'ID', got {frame.kind!r}")
+        _check_fields("ID", frame.fields)
+        name, fw, proto, fcpu = frame.fields
+        return cls(frame.seq, name, fw, int(proto), int(fcpu))
+
+
+@dataclass(frozen=True, slots=True)
+class Ack:
+    """``$ACK``: the device accepted ``command`` (with ``value`` for WINDOW and RANGE)."""
+
+    seq: int
+    command: str
+    value: int | None
+
+    @classmethod
+    def from_frame(cls, frame: Frame) -> "Ack":
+        """Decode an ``ACK`` frame; raises :class:`ProtocolError` for any other kind."""
+        if frame.kind != "ACK":
+            raise ProtocolError(f"frame kind must be 'ACK', got {frame.kind!r}")
+        _check_fields("ACK", frame.fields)
+        return cls(frame.seq, frame.fields[0], int(frame.fields[1]) if len(frame.fields) == 2 else None)
+
+
+@dataclass(frozen=True, slots=True)
+class DeviceError:
+    """``$ERR``: the device rejected a command (code 1 unknown, 2 bad value, 3 line too long)."""
+
+    seq: int
+    code: int
+    token: str
+
+    @classmethod
+    def from_frame(cls, frame: Frame) -> "DeviceError":
+        """Decode an ``ERR`` frame; raises :class:`ProtocolError` for any other kind."""
+        if frame.kind != "ERR":
+            raise ProtocolError(f"frame kind must be 'ERR', got {frame.kind!r}")
+        _check_fields("ERR", frame.fields)
+        return cls(frame.seq, int(frame.fields[0]), frame.fields[1])
+
+
+def encode_command(name: str, value: int | None = None) -> bytes:
+    """Build a host command line.
+
+    Parameters
+    ----------
+    name : str
+        ``ID``, ``START``, ``STOP``, ``WINDOW`` or ``RANGE``.
+    value : int, optional
+        Window length for ``WINDOW`` (10..60000) [ms]; switch state for ``RANGE`` (0 or 1).
+
+    Returns
+    -------
+    bytes
+        E.g. ``encode_command("WINDOW", 100) == b"WINDOW 100\\n"``.
+
+    Raises
+    ------
+    ValueError
+        When the command is unknown or the value is missing, superfluous or out of range.
+    """
+    key = str(name).upper()
+    if key not in COMMANDS:
+        raise ValueError(f"name must be one of {', '.join(COMMANDS)}, got {name!r}")
+    allowed = COMMANDS[key]
+    if allowed is None:
+        if value is not None:
+            raise ValueError(f"value: {key} takes no value, got {value!r}")
+        return key.encode("ascii") + b"\n"
+    if value is None or isinstance(value, bool) or int(value) != value or not allowed[0] <= value <= allowed[1]:
+        raise ValueError(f"value: {key} needs an integer in {allowed[0]}..{allowed[1]}, got {value!r}")
+    return f"{key} {int(value)}\n".encode("ascii")
+
+
+def parse_command(line: bytes) -> tuple[str, int | None]:
+    """Interpret a host command line the way the firmware does.
+
+    Parameters
+    ----------
+    line : bytes
+        One line, with or without its ``\\n``; ``\\r`` bytes are ignored, as are leading and
+        trailing spaces. Command words are case-sensitive (upper case).
+
+    Returns
+    -------
+    (str, int or None)
+        The command and its value.
+
+    Raises
+    ------
+    CommandError
+        With ``code`` 1 (unknown command), 2 (bad or missing value) or 3 (line longer than
+        :data:`MAX_COMMAND` bytes) and the ``token`` the device reports in ``$ERR``.
+    """
+    raw = bytes(line)
+    if raw.endswith(b"\n"):
+        raw = raw[:-1]
+    raw = raw.replace(b"\r", b"")
+    if len(raw) + 1 > MAX_COMMAND:
+        raise CommandError("command line too long", ERR_LINE_TOO_LONG, "LINE")
+    words = raw.decode("ascii", "replace").split()
+    word = words[0] if words else ""
+    token = _token(word)
+    if word not in COMMANDS:
+        raise CommandError(f"unknown command {word!r}", ERR_UNKNOWN_COMMAND, token)
+    allowed = COMMANDS[word]
+    if allowed is None:
+        if len(words) != 1:
+            raise CommandError(f"{word} takes no value", ERR_BAD_VALUE, token)
+        return word, None
+    if len(words) != 2 or not words[1].isdigit() or not words[1].isascii() or len(words[1]) > 5:
+        raise CommandError(f"{word} needs an integer value", ERR_BAD_VALUE, token)
+    value = int(words[1])
+    if not allowed[0] <= value <= allowed[1]:
+        raise CommandError(f"{word} value out of range", ERR_BAD_VALUE, token)
+    return word, value
+
+
+def _token(word: str) -> str:
+    """The command word as reported in ``$ERR``: printable ASCII without ``,*$``, ≤ 12 chars, ``?`` if empty."""
+    safe = "".join(c for c in word if c.isascii() and c.isprintable() and c not in ",*$ ")[:12]
+    return safe or "?"
