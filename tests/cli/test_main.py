@@ -26,3 +26,23 @@ def test_unknown_option_is_one_line_exit_2(capsys):
 def test_version(capsys):
     code, out, _ = run(["--version"], capsys)
     assert code == 0 and out.startswith("fsrlab ")
+
+
+@pytest.mark.parametrize("args, option", [
+    (["--k", "0.5"], "--k"), (["--modulus", "100k"], "--modulus"), (["--s0", "abc"], "--s0"),
+    (["--s0", "-1n"], "--s0"), (["--u", "-1"], "--u"), (["--phi0", "0"], "--phi0"), (["--eps-r", "nan"], "--eps-r"),
+])
+def test_physics_bad_values_one_line_naming_the_option(args, option, capsys):
+    code, out, err = run(["physics", *args], capsys)
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1 and option in err and "Traceback" not in err
+
+
+def test_physics_json_reproduces_table2_capacitance(capsys):
+    # Reference: Table 2 prints 1.73 % for C_A at every u (two decimals).
+    import json
+
+    code, out, _ = run(["physics", "--u", "2", "--json"], capsys)
+    row = json.loads(out)["rows"][0]
+    assert code == 0 and row["tunneling_equation"] == 12
+    assert row["capacitance_per_area_percent"] == pytest.approx(1.73, abs=0.005)

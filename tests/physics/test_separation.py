@@ -120,3 +120,12 @@ def test_history_rejects_bad_stress():
         separation_history([0, 1e3, -5.0])
     with pytest.raises(ValueError, match="stress_pa"):
         separation_history([0, np.nan])
+
+
+@pytest.mark.parametrize("field, value", [("s0_m", 0.0), ("s0_m", -1e-9), ("modulus_pa", 1e5), ("k", 0.9),
+                                          ("u_v", 0.0), ("phi0_j", float("inf")), ("eps_r", float("nan"))])
+def test_parameter_set_is_validated(field, value):
+    import dataclasses
+
+    with pytest.raises(ValueError, match=field):
+        dataclasses.replace(PAPER, **{field: value})

@@ -4,14 +4,16 @@ from __future__ import annotations
 
 import json
 import math
-from typing import Any
+import re
+from contextlib import contextmanager
+from typing import Any, Iterator
 
 import numpy as np
 import typer
 
 from fsrlab.units import parse_eng
 
-__all__ = ["eng", "emit_json", "to_jsonable", "fail"]
+__all__ = ["eng", "emit_json", "to_jsonable", "fail", "option_names"]
 
 
 def eng(text: str | float) -> float:
@@ -19,7 +21,10 @@ def eng(text: str | float) -> float:
 
     Use as ``typer.Option(..., parser=eng)``; a bad value becomes a one-line usage error.
     """
-    return parse_eng(text, name=None)
+    try:
+        return parse_eng(text, name=None)
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc)) from None
 
 
 def to_jsonable(obj: Any) -> Any:
@@ -66,3 +71,21 @@ def fail(message: str, field: str | None = None) -> None:
         The option or argument at fault, e.g. ``"--r"``.
     """
     raise typer.BadParameter(message, param_hint=field)
+
+
+@contextmanager
+def option_names(mapping: dict[str, str]) -> Iterator[None]:
+    """Re-raise a model's ``ValueError`` with its parameter names replaced by the CLI's option names.
+
+    Parameters
+    ----------
+    mapping : dict
+        Model parameter name → option, e.g. ``{"modulus_pa": "--modulus"}``.
+    """
+    try:
+        yield
+    except ValueError as exc:
+        message = str(exc)
+        for name, option in mapping.items():
+            message = re.sub(rf"\b{re.escape(name)}\b", option, message)
+        raise typer.BadParameter(message) from None

@@ -14,6 +14,23 @@ from scipy.constants import electron_volt
 __all__ = ["PaperParameters", "PAPER", "check_positive", "check_finite"]
 
 
+def check_finite(name: str, value) -> None:
+    """Raise ``ValueError`` naming ``name`` unless every element of ``value`` is finite."""
+    import numpy as np
+
+    if not np.all(np.isfinite(np.asarray(value, dtype=float))):
+        raise ValueError(f"{name} must be finite, got {value!r}")
+
+
+def check_positive(name: str, value, unit: str = "") -> None:
+    """Raise ``ValueError`` naming ``name`` unless ``value`` is finite and > 0 (every element)."""
+    import numpy as np
+
+    check_finite(name, value)
+    if not np.all(np.asarray(value, dtype=float) > 0):
+        raise ValueError(f"{name} must be > 0{(' ' + unit) if unit else ''}, got {value!r}")
+
+
 @dataclass(frozen=True)
 class PaperParameters:
     """Simulation parameters of the paper's Table 1 (Figures 4 and 8, Table 2).
@@ -44,6 +61,19 @@ class PaperParameters:
     eps_r: float = 7.0
     k: float = 2.0
 
+    def __post_init__(self) -> None:
+        check_positive("s0_m", self.s0_m, "m")
+        check_positive("sigma_f_pa", self.sigma_f_pa, "Pa")
+        check_positive("modulus_pa", self.modulus_pa, "Pa")
+        check_positive("u_v", self.u_v, "V")
+        check_positive("phi0_j", self.phi0_j, "J")
+        check_positive("eps_r", self.eps_r)
+        check_finite("k", self.k)
+        if not self.modulus_pa > self.sigma_f_pa:
+            raise ValueError(f"modulus_pa must be > sigma_f_pa ({self.sigma_f_pa:g} Pa), got {self.modulus_pa:g}")
+        if not self.k >= 1:
+            raise ValueError(f"k must be >= 1, got {self.k!r}")
+
     def as_dict(self) -> dict:
         """Values keyed by name, plus the barrier height in eV for display."""
         d = asdict(self)
@@ -53,20 +83,3 @@ class PaperParameters:
 
 #: Table 1 of the paper, with k = 2.
 PAPER = PaperParameters()
-
-
-def check_finite(name: str, value) -> None:
-    """Raise ``ValueError`` naming ``name`` unless every element of ``value`` is finite."""
-    import numpy as np
-
-    if not np.all(np.isfinite(np.asarray(value, dtype=float))):
-        raise ValueError(f"{name} must be finite, got {value!r}")
-
-
-def check_positive(name: str, value, unit: str = "") -> None:
-    """Raise ``ValueError`` naming ``name`` unless ``value`` is finite and > 0 (every element)."""
-    import numpy as np
-
-    check_finite(name, value)
-    if not np.all(np.asarray(value, dtype=float) > 0):
-        raise ValueError(f"{name} must be > 0{(' ' + unit) if unit else ''}, got {value!r}")
