@@ -502,3 +502,86 @@ def load_calibration(path: str | os.PathLike) -> Calibration:
                            decode=d.get("decode"), source=d.get("source", ""), extra=extra)
     except (KeyError, TypeError, ValueError) as exc:
         raise ValueError(f"{p}: calibration file incomplete or malformed ({type(exc).__name__}: {exc})") from None
+
+
+def run_groups(stress_pa, cycle=None, direction=None, folds: int = 5, threshold: float = 0.05) -> np.ndarray:
+    """Cross-validation groups for a run: its cycles, kept whole.
+
+    Parameters
+    ----------
+    stress_pa : array_like
+        Reference stress in time order. [Pa]
+    cycle : array_like, optional
+        The run's ``cycle`` column (used when it has ≥ 2 values).
+    direction : array_like, optional
+        The run's ``direction`` column (else branches come from the stress).
+    folds : int
+        Contiguous blocks to use when the run has fewer than 2 cycles.
+    threshold : float
+        Reversal threshold for cycles found from the stress. [1]
+
+    Returns
+    -------
+    ndarray of int
+        Group of each reading: a new group starts at each loading start (unloading → loading).
+    """
+    from fsrlab.analysis.cycles import branch_directions
+
+    x = np.asarray(stress_pa, dtype=float)
+    if cycle is not None and np.unique(np.asarray(cycle, dtype=float)[np.isfinite(cycle)]).size >= 2:
+        return default_groups(x.size, cycle, folds)
+    if direction is not None:
+        lab = np.nan_to_num(np.asarray(direction, dtype=float)).astype(int)
+    else:
+        ok = np.isfinite(x)
+        lab = np.zeros(x.size, dtype=int)
+        if ok.sum() >= 2:
+            lab[ok] = branch_directions(x[ok], threshold)
+    nz = np.flatnonzero(lab != 0)
+    starts = np.zeros(x.size, dtype=int)
+    if nz.size > 1:
+        rise = nz[1:][(lab[nz[1:]] == 1) & (lab[nz[:-1]] == -1)]
+        starts[rise] = 1
+    g = np.cumsum(starts)
+    return g if g.max(initial=0) >= 1 else default_groups(x.size, None, folds)
+
+
+def decode_capacitance(frequency_hz, duty_cycle, r_ohm: float, c_off_farad: float = 0.0, diode: bool = True,
+                       diode_drop_v: float = 0.0) -> np.ndarray:
+    """C_FSR decoded from frequency and duty cycle (physics-informed calibration variable).
+
+    Parameters
+    ----------
+    frequency_hz, duty_cycle : array_like
+        555 readings (NaN where missing).
+    r_ohm : float
+        R of the astable (paper Fig. 16: 10 kΩ). [Ω]
+    c_off_farad : float
+        Offset capacitor in parallel with the FSR. [F]
+    diode : bool
+        D1 present (paper Fig. 16).
+    diode_drop_v : float
+        Forward drop of D1. [V]
+
+    Returns
+    -------
+    ndarray
+        C_FSR [F] by :func:`fsrlab.circuits.lm555.decode`; NaN where a reading is missing.
+
+    Raises
+    ------
+    ValueError
+        If the decoder is not available in this build.
+    """
+    try:
+        from fsrlab.circuits.lm555 import decode
+    except ImportError:
+        raise ValueError("--x c_fsr_farad: decoding C_FSR needs fsrlab.circuits.lm555.decode, not available in this build") from None
+    f = np.asarray(frequency_hz, dtype=float)
+    d = np.asarray(duty_cycle, dtype=float)
+    out = np.full(f.shape, np.nan)
+    ok = np.isfinite(f) & np.isfinite(d)
+    if ok.any():
+        res = decode(f[ok], d[ok], r_ohm, c_off_farad=c_off_farad, diode=diode, diode_drop_v=diode_drop_v)
+        out[ok] = np.asarray(res.c_fsr_farad, dtype=float)
+    return out

@@ -1,0 +1,213 @@
+"""``fsrlab hysteresis``, ``repeatability``, ``calibrate``, ``apply``: what a user does with recorded runs.
+
+Thin commands: the computation lives in :mod:`fsrlab.analysis`; files follow docs/data-format.md.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from fsrlab.cli import app
+from fsrlab.cli._common import emit_json, eng, fail
+
+_DEGREES = ("auto", "1", "2", "3", "4", "5")
+
+
+def _load(path: Path, quantity: str | None = None):
+    from fsrlab.runformat import load_run
+
+    run = load_run(path)
+    if quantity is not None and quantity not in run and quantity != "c_fsr_farad":
+        fail(f"{path}: column {quantity!r} missing (columns: {', '.join(run.columns)})", "--x" if quantity else None)
+    return run
+
+
+@app.command("hysteresis")
+def hysteresis(
+    run_file: Path = typer.Argument(..., metavar="RUN.csv", help="A run (docs/data-format.md) with stress_pa (or force_n) and the quantity."),
+    quantity: str = typer.Option("frequency_hz", "--quantity", "-q", help="Column whose hysteresis is measured (frequency_hz, duty_cycle, voltage_v, ...)."),
+    threshold: float = typer.Option(0.05, "--threshold", parser=eng, help="Stress reversal threshold, fraction of the stress span (0..1), used without a direction column."),
+    json_out: bool = typer.Option(False, "--json", help="Print JSON."),
+) -> None:
+    """Hysteresis error (eq. 13) of a run, per loading-unloading cycle and overall."""
+    from fsrlab.analysis.cycles import run_hysteresis
+
+    run = _load(run_file)
+    if quantity not in run:
+        fail(f"{run_file}: column {quantity!r} missing (columns: {', '.join(run.columns)})", "--quantity")
+    if not 0 < threshold < 1:
+        fail(f"must be a fraction in (0, 1), got {threshold:g}", "--threshold")
+    res = run_hysteresis(run.stress_pa(), run[quantity], run.columns.get("direction"), run.columns.get("cycle"),
+                         threshold)
+    if json_out:
+        emit_json(res.to_dict())
+        return
+    table = Table(title=f"Hysteresis error of {quantity} (eq. 13), {run_file.name}")
+    for col in ("cycle", "HE (%)", "σd (kPa)"):
+        table.add_column(col, justify="right")
+    for n, c in zip(res.cycle_numbers, res.cycles):
+        table.add_row(str(n), f"{c.percent:.2f}", f"{c.stress_at_max_pa / 1e3:.2f}")
+    table.add_row("overall", f"{res.percent:.2f}", f"{res.stress_at_max_pa / 1e3:.2f}")
+    console = Console()
+    console.print(table)
+    console.print(res.method, style="dim")
+
+
+@app.command("repeatability")
+def repeatability(
+    file: Path = typer.Argument(..., metavar="FILE.csv", help="CSV with columns load,sensor,reading (one row per reading)."),
+    ddof: int = typer.Option(1, "--ddof", help="1: sample std (n − 1), reproduces the paper's Tables 4 and 5; 0: divisor n as printed in eq. (39)."),
+    json_out: bool = typer.Option(False, "--json", help="Print JSON."),
+) -> None:
+    """Repeatability errors RE1 and RE2 (eq. 39) per load and sensor, and their means per load."""
+    from fsrlab.analysis.repeatability import grouped_repeatability, load_grouped_csv
+
+    if ddof not in (0, 1):
+        fail(f"must be 0 or 1, got {ddof}", "--ddof")
+    res = grouped_repeatability(*load_grouped_csv(file), ddof=ddof)
+    if json_out:
+        emit_json(res.to_dict())
+        return
+    table = Table(title=f"Repeatability (eq. 39, RE2 with divisor {'n − 1' if ddof else 'n'}), {file.name}")
+    for col in ("load", "sensor", "n", "mean", "RE1 (%)", "RE2 (%)"):
+        table.add_column(col, justify="right")
+    for g in res.groups:
+        table.add_row(str(g.load), str(g.sensor), str(g.n), f"{g.mean:.6g}", f"{g.re1_percent:.2f}", f"{g.re2_percent:.2f}")
+    for m in res.means:
+        table.add_row(str(m.load), "mean", "", "", f"{m.re1_percent:.2f}", f"{m.re2_percent:.2f}")
+    Console().print(table)
+
+
+def _circuit_value(run, key, given, default):
+    if given is not None:
+        return given
+    return (run.metadata.get("circuit") or {}).get(key, default)
+
+
+def _x_values(run, x: str, r_ohm, c_off, diode):
+    """The calibration variable: a column, or C_FSR decoded from frequency and duty cycle."""
+    if x == "c_fsr_farad" and "c_fsr_farad" not in run:
+        from fsrlab.analysis.calibration import decode_capacitance
+
+        run.require("frequency_hz", "duty_cycle")
+        circuit = {"r_ohm": float(_circuit_value(run, "r_ohm", r_ohm, 10e3)),
+                   "c_off_farad": float(_circuit_value(run, "c_off_farad", c_off, 0.0)),
+                   "diode": bool(_circuit_value(run, "diode", diode, True)),
+                   "diode_drop_v": float(_circuit_value(run, "diode_drop_v", None, 0.0))}
+        return decode_capacitance(run["frequency_hz"], run["duty_cycle"], **circuit), circuit
+    return run[x], None
+
+
+@app.command("calibrate")
+def calibrate_cmd(
+    run_file: Path = typer.Argument(..., metavar="RUN.csv", help="A run with the reference stress_pa (or force_n) and the readout."),
+    x: str = typer.Option("frequency_hz", "--x", help="Readout column to calibrate (frequency_hz, duty_cycle, voltage_v), or c_fsr_farad: C_FSR decoded from frequency_hz and duty_cycle (physics-informed)."),
+    degree: str = typer.Option("auto", "--degree", help="Polynomial degree 1..5, or auto (cross-validation keeping whole cycles together)."),
+    compensate: bool = typer.Option(False, "--compensate", help="Also fit the direction-aware hysteresis compensation (extension beyond the paper) and report HE before/after."),
+    folds: int = typer.Option(5, "--folds", help="Cross-validation folds (≥ 2)."),
+    r: float = typer.Option(None, "--r", parser=eng, help="555 R for --x c_fsr_farad [Ω] (default: the run's sidecar, else 10k)."),
+    c_off: float = typer.Option(None, "--c-off", parser=eng, help="C_off for --x c_fsr_farad [F] (default: sidecar, else 0)."),
+    output: Path = typer.Option(None, "--output", "-o", help="Write the calibration to this JSON file."),
+    json_out: bool = typer.Option(False, "--json", help="Print JSON."),
+) -> None:
+    """Calibrate readout → stress with a polynomial of degree 1–5 (paper Figure 17 uses 1 and 3)."""
+    from fsrlab.analysis.calibration import calibrate, run_groups, save_calibration
+    from fsrlab.runformat import KNOWN_COLUMNS
+
+    if degree not in _DEGREES:
+        fail(f"must be auto or 1..5, got {degree!r}", "--degree")
+    if folds < 2:
+        fail(f"must be >= 2, got {folds}", "--folds")
+    run = _load(run_file)
+    if x not in run and x != "c_fsr_farad":
+        fail(f"{run_file}: column {x!r} missing (columns: {', '.join(run.columns)})", "--x")
+    stress = run.stress_pa()
+    xv, circuit = _x_values(run, x, r, c_off, None)
+    groups = run_groups(stress, run.columns.get("cycle"), run.columns.get("direction"), folds)
+    unit = run.units.get(x) or KNOWN_COLUMNS.get(x, "F" if x == "c_fsr_farad" else "")
+    cal = calibrate(xv, stress, degree="auto" if degree == "auto" else int(degree), groups=groups, folds=folds,
+                    x_name=x, y_name="stress_pa", x_unit=unit, y_unit="Pa", source=str(run_file), decode=circuit)
+    out = {"degree": cal.degree, "r2": cal.r2, "rmse_pa": cal.rmse, "max_error_percent_fs": cal.max_error_percent_fs,
+           "coefficients": cal.model.power_coefficients().tolist()}
+    if compensate:
+        from fsrlab.analysis.compensation import compare_compensation
+
+        comp = compare_compensation(xv, stress, degree=cal.degree, direction=run.columns.get("direction"),
+                                    cycle=run.columns.get("cycle"), plain=cal)
+        out["hysteresis_error_before_percent"] = comp.he_before_percent
+        out["hysteresis_error_after_percent"] = comp.he_after_percent
+        cal.extra["compensation"] = comp.compensated.to_dict()
+        cal.extra["compensation"]["hysteresis_error_before_percent"] = comp.he_before_percent
+        cal.extra["compensation"]["hysteresis_error_after_percent"] = comp.he_after_percent
+    if output is not None:
+        save_calibration(cal, output)
+    if json_out:
+        emit_json(out)
+        return
+    console = Console()
+    table = Table(title=f"Calibration stress_pa({x}), {run_file.name}")
+    table.add_column("quantity")
+    table.add_column("value", justify="right")
+    table.add_row("degree", str(cal.degree) + (" (chosen by grouped CV)" if cal.cv else ""))
+    table.add_row("R²", f"{cal.r2:.5f}")
+    table.add_row("RMSE (Pa)", f"{cal.rmse:.4g}")
+    table.add_row("max error (% FS)", f"{cal.max_error_percent_fs:.3f}")
+    if cal.cv:
+        for d, e in zip(cal.cv.degrees, cal.cv.rmse):
+            table.add_row(f"CV RMSE degree {d} (Pa)", f"{e:.4g}")
+    if compensate:
+        table.add_row("HE of calibrated stress, plain (%)", f"{out['hysteresis_error_before_percent']:.3f}")
+        table.add_row("HE with compensation (%)", f"{out['hysteresis_error_after_percent']:.3f}")
+    console.print(table)
+    console.print("coefficients (ascending powers of x): " + ", ".join(f"{c:.6g}" for c in out["coefficients"]))
+    if output is not None:
+        console.print(f"wrote {output}")
+
+
+@app.command("apply")
+def apply_cmd(
+    cal_file: Path = typer.Argument(..., metavar="CAL.json", help="A calibration written by fsrlab calibrate -o."),
+    run_file: Path = typer.Argument(..., metavar="RUN.csv", help="The run to convert."),
+    output: Path = typer.Option(..., "--output", "-o", help="Output run: the input columns plus stress_pa_estimate."),
+    no_compensation: bool = typer.Option(False, "--no-compensation", help="Use the plain polynomial even if the calibration holds a compensation."),
+    json_out: bool = typer.Option(False, "--json", help="Print JSON."),
+) -> None:
+    """Apply a calibration to a run: adds a stress_pa_estimate column [Pa]."""
+    from fsrlab.analysis.calibration import load_calibration
+    from fsrlab.analysis.compensation import DirectionAwareCalibration
+    from fsrlab.runformat import write_run
+
+    cal = load_calibration(cal_file)
+    run = _load(run_file)
+    if cal.x_name not in run and cal.x_name != "c_fsr_farad":
+        fail(f"{run_file}: column {cal.x_name!r} (the calibration's readout) missing (columns: {', '.join(run.columns)})")
+    dec = cal.decode or {}
+    xv, _ = _x_values(run, cal.x_name, dec.get("r_ohm"), dec.get("c_off_farad"), dec.get("diode"))
+    comp = cal.extra.get("compensation")
+    if comp and not no_compensation:
+        est = DirectionAwareCalibration.from_dict(comp)(xv)
+        how = "direction-aware compensation"
+    else:
+        est = cal(xv)
+        how = f"polynomial of degree {cal.degree}"
+    cols = dict(run.columns)
+    cols["stress_pa_estimate"] = est
+    meta = dict(run.metadata)
+    for k in ("complete", "rows", "closed", "created", "format", "version", "columns"):
+        meta.pop(k, None)
+    meta["units"] = dict(run.units, stress_pa_estimate="Pa")
+    meta["calibration"] = {"file": str(cal_file), "x": cal.x_name, "degree": cal.degree, "method": how,
+                           "data_fingerprint": cal.data_fingerprint, "created": cal.created}
+    if output.resolve() == run_file.resolve():
+        fail("must differ from the input run", "--output")
+    write_run(output, cols, meta)
+    n_out = int(np.sum(~np.isfinite(xv)))
+    if json_out:
+        emit_json({"output": str(output), "rows": run.n_rows, "missing": n_out})
+        return
+    typer.echo(f"wrote {output} ({run.n_rows} rows, stress_pa_estimate by {how})")

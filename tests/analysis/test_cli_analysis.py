@@ -1,0 +1,115 @@
+"""Command line of the analysis topic: `fsrlab hysteresis | repeatability | calibrate | apply`.
+
+Through fsrlab.cli.main (exit codes and one-line errors). Data: the paper's Table 4/5 readings
+(real), and synthetic runs from fsrlab.analysis.synthetic.synthetic_run (VirtualFSR ->
+lm555.astable -> 62.5 ns quantization, 0.2 % frequency noise) written in the run format.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from fsrlab.analysis.synthetic import synthetic_run
+from fsrlab.cli import main
+from fsrlab.runformat import load_run
+
+
+def run_cli(args, capsys):
+    with pytest.raises(SystemExit) as info:
+        main([str(a) for a in args])
+    out = capsys.readouterr()
+    return info.value.code, out.out, out.err
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    d = tmp_path_factory.mktemp("runs")
+    synthetic_run(cycles=3, seed=1).write(d / "bench.csv")
+    synthetic_run(cycles=2, seed=7).write(d / "other.csv")
+    return d
+
+
+def test_hysteresis_json_keys(runs, capsys):
+    code, out, _ = run_cli(["hysteresis", runs / "bench.csv", "--json"], capsys)
+    assert code == 0
+    d = json.loads(out)
+    assert set(d) == {"hysteresis_error_percent", "stress_at_max_difference_pa", "cycles"}
+    assert len(d["cycles"]) == 3
+    assert all(set(c) == {"hysteresis_error_percent", "stress_at_max_difference_pa"} for c in d["cycles"])
+    assert 10 < d["hysteresis_error_percent"] < 20  # the virtual sensor's ~14 % (see test_cycles)
+
+
+def test_minimal_csv_works_for_hysteresis_and_calibrate(tmp_path, capsys):
+    # Only stress_pa and one quantity, no sidecar, rows in time order.
+    c = synthetic_run(cycles=2, seed=2).columns
+    lines = ["stress_pa,frequency_hz"] + [f"{float(s)!r},{float(f)!r}" for s, f in zip(c["stress_pa"], c["frequency_hz"])]
+    p = tmp_path / "min.csv"
+    p.write_text("\n".join(lines) + "\n")
+    code, out, _ = run_cli(["hysteresis", p, "--json"], capsys)
+    assert code == 0 and len(json.loads(out)["cycles"]) == 2
+    code, out, _ = run_cli(["calibrate", p, "--x", "frequency_hz", "--json"], capsys)
+    assert code == 0
+    assert set(json.loads(out)) == {"degree", "r2", "rmse_pa", "max_error_percent_fs", "coefficients"}
+
+
+def test_repeatability_cli_reproduces_table5(paper, tmp_path, capsys):
+    t = paper["table5_repeatability_traditional_V"]
+    lines = ["load,sensor,reading"] + [f"{load},{s + 1},{v}" for load in ("200g", "400g")
+                                       for s, row in enumerate(t[load]["readings"]) for v in row]
+    p = tmp_path / "t5.csv"
+    p.write_text("\n".join(lines) + "\n")
+    code, out, _ = run_cli(["repeatability", p, "--json"], capsys)
+    assert code == 0
+    d = json.loads(out)
+    assert set(d) == {"groups", "means"}
+    re2 = [g["re2_percent"] for g in d["groups"]]
+    np.testing.assert_allclose(re2, t["200g"]["RE2_percent"] + t["400g"]["RE2_percent"], atol=0.5)  # printed integers
+    code, out, _ = run_cli(["repeatability", p, "--ddof", "0", "--json"], capsys)
+    assert abs(json.loads(out)["groups"][0]["re2_percent"] - 9) > 0.5  # eq. (39) as printed misses 9 %
+    code, _, err = run_cli(["repeatability", p, "--ddof", "3"], capsys)
+    assert code == 2 and err.count("\n") == 1
+
+
+def test_calibrate_apply_roundtrip_and_compensation(runs, tmp_path, capsys):
+    cal = tmp_path / "cal.json"
+    code, out, _ = run_cli(["calibrate", runs / "bench.csv", "--x", "frequency_hz", "--degree", "3", "--compensate",
+                            "-o", cal, "--json"], capsys)
+    assert code == 0
+    d = json.loads(out)
+    assert set(d) == {"degree", "r2", "rmse_pa", "max_error_percent_fs", "coefficients",
+                      "hysteresis_error_before_percent", "hysteresis_error_after_percent"}
+    assert d["degree"] == 3 and len(d["coefficients"]) == 4
+    assert d["hysteresis_error_before_percent"] / d["hysteresis_error_after_percent"] >= 3
+    out_csv = tmp_path / "est.csv"
+    code, _, _ = run_cli(["apply", cal, runs / "other.csv", "-o", out_csv, "--no-compensation"], capsys)
+    assert code == 0
+    run = load_run(out_csv)
+    # Round trip: the plain estimate equals the printed power-series coefficients evaluated on the readout.
+    f = run["frequency_hz"]
+    np.testing.assert_allclose(run["stress_pa_estimate"], np.polyval(d["coefficients"][::-1], f), rtol=1e-9, atol=1e-6)
+    assert run.units["stress_pa_estimate"] == "Pa" and run.metadata["calibration"]["degree"] == 3
+    code, _, _ = run_cli(["apply", cal, runs / "other.csv", "-o", out_csv], capsys)
+    est = load_run(out_csv)
+    he = lambda col: json.loads(run_cli(["hysteresis", out_csv, "-q", col, "--json"], capsys)[1])["hysteresis_error_percent"]
+    assert he("stress_pa_estimate") < 3  # compensated estimate on a run the calibration never saw
+    assert est.n_rows == run.n_rows
+
+
+@pytest.mark.parametrize("args, needle", [
+    (["hysteresis", "{bad}"], "non-numeric cell"),
+    (["hysteresis", "{bench}", "--quantity", "nope"], "column 'nope' missing"),
+    (["calibrate", "{bench}", "--degree", "7"], "--degree"),
+    (["calibrate", "{bench}", "--x", "nope"], "column 'nope' missing"),
+    (["apply", "{bench}", "{bench}", "-o", "{tmp}/x.csv"], "not a JSON calibration"),
+    (["hysteresis", "{tmp}/does-not-exist.csv"], "does-not-exist.csv"),
+])
+def test_bad_input_one_line_exit_2(runs, tmp_path, capsys, args, needle):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("stress_pa,frequency_hz\n0,1\n1,x\n")
+    sub = {"bad": bad, "bench": runs / "bench.csv", "tmp": tmp_path}
+    code, out, err = run_cli([a.format(**sub) for a in args], capsys)
+    assert code == 2
+    assert err.count("\n") == 1 and needle in err
