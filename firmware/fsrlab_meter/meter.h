@@ -1,0 +1,20 @@
+// fsrlab meter: input-capture frequency and duty-cycle meter for the Arduino Uno (ATmega328P, 16 MHz).
+// Protocol v1: see docs/protocol.md (normative) and /work notes; frames "$TYPE,SEQ,...*CRC\r\n".
+#ifndef FSRLAB_METER_H
+#define FSRLAB_METER_H
+
+#define METER_FW_VERSION "1.0.0"
+#define METER_PROTOCOL_VERSION 1
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+// Runs the meter forever with interrupts disabled (everything is polled, see meter.cpp).
+void meter_run(void) __attribute__((noreturn));
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

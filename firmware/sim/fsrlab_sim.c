@@ -1,0 +1,278 @@
+/*
+ * fsrlab_sim: runs the fsrlab meter firmware (.elf) in simavr as an ATmega328P at 16 MHz.
+ *
+ * It drives D8 (PB0, ICP1) with a square wave made of segments (frequency, duty cycle, edge
+ * jitter), feeds command lines into USART0 at chosen times, sets the A0 voltage, and writes every
+ * byte the firmware transmits to stdout (or --out FILE). Diagnostics go to stderr, one per line,
+ * starting with '#':
+ *   #PD4 <cycle> <level>          each change of the C_off switch output (D4)
+ *   #EDGES <rising> <falling>     edges generated on D8 (at the end)
+ *   #PEEK <addr> <byte>           data memory byte at the end (--peek ADDR, data space address)
+ *   #END <cycles> <pd4>           simulated cycles and final D4 level
+ *
+ * Usage:
+ *   fsrlab_sim FIRMWARE.elf [--time S] [--seg T0:FREQ:DUTY[:JITTER]]... [--cmd T:TEXT]...
+ *              [--adc-mv MV] [--seed N] [--out FILE]
+ *   --seg   from time T0 [s] on: FREQ [Hz] (0: line held low), DUTY (0..1), JITTER: each edge moves
+ *           by a uniform random amount in +-JITTER periods (default 0). Segments in time order.
+ *   --cmd   at time T [s] send TEXT followed by '\n' (bytes spaced 100 us, faster than 115200 baud
+ *           never happens on a real line). '\\n' inside TEXT is not interpreted; use several --cmd.
+ *   --time  simulated time [s] (default 1).
+ *
+ * Edge timing: an edge scheduled at cycle c is seen by the simulated MCU at the end of the
+ * instruction running at c (simavr processes its cycle timers between instructions), so each
+ * captured timestamp lies 0..3 cycles after the ideal edge rounded to a cycle.
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <stdint.h>
+#include <math.h>
+#include <unistd.h>
+
+#include <sim_avr.h>
+#include <sim_elf.h>
+#include <sim_irq.h>
+#include <sim_io.h>
+#include <sim_cycle_timers.h>
+#include <avr_ioport.h>
+#include <avr_uart.h>
+#include <avr_adc.h>
+
+#define F_CPU_HZ 16000000.0
+#define MAX_SEG 64
+#define MAX_CMD 64
+
+typedef struct { double t0, freq, duty, jitter; } seg_t;
+typedef struct { double t; char text[80]; } cmd_t;
+
+static seg_t segs[MAX_SEG];
+static int nseg;
+static cmd_t cmds[MAX_CMD];
+static int ncmd;
+static FILE *out;
+static avr_t *avr;
+static avr_irq_t *pin_irq;
+static avr_irq_t *uart_in;
+static int pd4_level;
+static unsigned peeks[16];
+static int npeek;
+static uint64_t n_rise, n_fall;
+static uint64_t rng_state = 0x9E3779B97F4A7C15ull;
+
+static double urand(void) { /* xorshift64*, uniform in [0, 1) */
+  rng_state ^= rng_state >> 12;
+  rng_state ^= rng_state << 25;
+  rng_state ^= rng_state >> 27;
+  return (double)((rng_state * 2685821657736338717ull) >> 11) / 9007199254740992.0;
+}
+
+/* ------------------------------------------------------------------ square-wave generator */
+static double ideal_rise;   /* cycle of the current period's ideal rising edge */
+static double next_edge;    /* cycle of the next scheduled edge */
+static int next_level;      /* level the next edge sets */
+static int cur_seg = -1;
+static double cur_fall;     /* scheduled falling edge of the current period */
+
+static int seg_at(double cycle) {
+  int s = -1;
+  for (int i = 0; i < nseg; i++)
+    if (segs[i].t0 * F_CPU_HZ <= cycle) s = i;
+  return s;
+}
+
+/* Plan the period that starts with a rising edge at ideal time ideal_rise. */
+static int plan_period(void) {
+  for (;;) {
+    int s = seg_at(ideal_rise);
+    if (s < 0) { /* before the first segment: wait for it */
+      ideal_rise = segs[0].t0 * F_CPU_HZ;
+      continue;
+    }
+    if (segs[s].freq <= 0) { /* line low: jump to the next segment */
+      if (s + 1 >= nseg) return 0;
+      ideal_rise = segs[s + 1].t0 * F_CPU_HZ;
+      continue;
+    }
+    cur_seg = s;
+    double p = F_CPU_HZ / segs[s].freq;
+    double j = segs[s].jitter * p;
+    double r = ideal_rise + (j > 0 ? (2 * urand() - 1) * j : 0);
+    double f = ideal_rise + segs[s].duty * p + (j > 0 ? (2 * urand() - 1) * j : 0);
+    ideal_rise += p;
+    next_edge = r;
+    cur_fall = f;
+    return 1;
+  }
+}
+
+static avr_cycle_count_t edge_cb(struct avr_t *a, avr_cycle_count_t when, void *param) {
+  (void)param; (void)when;
+  avr_raise_irq(pin_irq, next_level);
+  if (next_level) {
+    n_rise++;
+    next_level = 0;
+    next_edge = cur_fall;
+  } else {
+    n_fall++;
+    if (!plan_period()) return 0;
+    next_level = 1;
+  }
+  avr_cycle_count_t c = (avr_cycle_count_t)llround(next_edge);
+  if (c <= a->cycle) c = a->cycle + 1;
+  return c;
+}
+
+/* ------------------------------------------------------------------ UART */
+static void uart_out_cb(struct avr_irq_t *irq, uint32_t value, void *param) {
+  (void)irq; (void)param;
+  fputc((int)(value & 0xFF), out);
+}
+
+static int cmd_idx;
+static int cmd_pos;
+static avr_cycle_count_t cmd_cb(struct avr_t *a, avr_cycle_count_t when, void *param) {
+  (void)param; (void)when;
+  cmd_t *c = &cmds[cmd_idx];
+  size_t n = strlen(c->text);
+  uint8_t b = cmd_pos < (int)n ? (uint8_t)c->text[cmd_pos] : '\n';
+  avr_raise_irq(uart_in, b);
+  cmd_pos++;
+  if (cmd_pos > (int)n) { /* line sent */
+    cmd_idx++;
+    cmd_pos = 0;
+    if (cmd_idx >= ncmd) return 0;
+    avr_cycle_count_t t = (avr_cycle_count_t)llround(cmds[cmd_idx].t * F_CPU_HZ);
+    return t > a->cycle ? t : a->cycle + 1600;
+  }
+  return a->cycle + 1600; /* 100 us per byte */
+}
+
+static avr_cycle_count_t udre_fix_cb(struct avr_t *a, avr_cycle_count_t when, void *param) {
+  (void)when; (void)param;
+  a->data[0xC0] |= 0x20; /* UCSR0A.UDRE0 */
+  return 0;
+}
+
+/* ------------------------------------------------------------------ D4 */
+static void pd4_cb(struct avr_irq_t *irq, uint32_t value, void *param) {
+  (void)irq; (void)param;
+  int v = value ? 1 : 0;
+  if (v != pd4_level) {
+    pd4_level = v;
+    fprintf(stderr, "#PD4 %llu %d\n", (unsigned long long)avr->cycle, v);
+  }
+}
+
+static int cmp_cmd(const void *a, const void *b) {
+  double d = ((const cmd_t *)a)->t - ((const cmd_t *)b)->t;
+  return d < 0 ? -1 : d > 0;
+}
+
+static void usage(void) {
+  fprintf(stderr, "usage: fsrlab_sim FIRMWARE.elf [--time S] [--seg T0:FREQ:DUTY[:JITTER]]... "
+                  "[--cmd T:TEXT]... [--adc-mv MV] [--seed N] [--out FILE]\n");
+  exit(2);
+}
+
+int main(int argc, char **argv) {
+  const char *elf = NULL, *outpath = NULL;
+  double sim_time = 1.0;
+  int adc_mv = 0;
+  for (int i = 1; i < argc; i++) {
+    const char *a = argv[i];
+    if (!strcmp(a, "--time") && i + 1 < argc) sim_time = atof(argv[++i]);
+    else if (!strcmp(a, "--seg") && i + 1 < argc) {
+      if (nseg >= MAX_SEG) usage();
+      seg_t s = {0, 0, 0.5, 0};
+      int n = sscanf(argv[++i], "%lf:%lf:%lf:%lf", &s.t0, &s.freq, &s.duty, &s.jitter);
+      if (n < 3 || s.duty < 0 || s.duty > 1 || s.freq < 0) usage();
+      if (nseg && s.t0 < segs[nseg - 1].t0) usage();
+      segs[nseg++] = s;
+    } else if (!strcmp(a, "--cmd") && i + 1 < argc) {
+      if (ncmd >= MAX_CMD) usage();
+      const char *v = argv[++i];
+      const char *colon = strchr(v, ':');
+      if (!colon) usage();
+      cmds[ncmd].t = atof(v);
+      snprintf(cmds[ncmd].text, sizeof cmds[ncmd].text, "%s", colon + 1);
+      ncmd++;
+    } else if (!strcmp(a, "--adc-mv") && i + 1 < argc) adc_mv = atoi(argv[++i]);
+    else if (!strcmp(a, "--seed") && i + 1 < argc) rng_state ^= strtoull(argv[++i], NULL, 0) * 0x2545F4914F6CDD1Dull;
+    else if (!strcmp(a, "--out") && i + 1 < argc) outpath = argv[++i];
+    else if (!strcmp(a, "--peek") && i + 1 < argc) {
+      if (npeek < 16) peeks[npeek++] = (unsigned)strtoul(argv[++i], NULL, 0);
+    }
+    else if (a[0] != '-' && !elf) elf = a;
+    else usage();
+  }
+  if (!elf) usage();
+  /* simavr prints configuration notes with printf: keep stdout for the firmware's bytes only */
+  if (outpath) out = fopen(outpath, "wb");
+  else {
+    int fd = dup(1);
+    out = fd >= 0 ? fdopen(fd, "wb") : NULL;
+  }
+  dup2(2, 1);
+  if (!out) { perror(outpath); return 2; }
+
+  elf_firmware_t fw;
+  memset(&fw, 0, sizeof fw);
+  if (elf_read_firmware(elf, &fw) != 0) { fprintf(stderr, "cannot read %s\n", elf); return 2; }
+  avr = avr_make_mcu_by_name("atmega328p");
+  if (!avr) { fprintf(stderr, "simavr has no atmega328p\n"); return 2; }
+  avr_init(avr);
+  avr->frequency = 16000000;
+  avr_load_firmware(avr, &fw);
+  avr->frequency = 16000000;
+  avr->vcc = avr->avcc = avr->aref = 5000;
+  avr->log = 0;
+
+  /* USART0: no stdio echo; capture output, prepare input */
+  uint32_t flags = 0;
+  avr_ioctl(avr, AVR_IOCTL_UART_GET_FLAGS('0'), &flags);
+  flags &= ~(uint32_t)(AVR_UART_FLAG_STDIO | AVR_UART_FLAG_POLL_SLEEP);  /* no echo, no usleep */
+  avr_ioctl(avr, AVR_IOCTL_UART_SET_FLAGS('0'), &flags);
+  avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUTPUT), uart_out_cb, NULL);
+  uart_in = avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT);
+  /* UDRE0 is read-only and 1 after a reset (datasheet); simavr 1.6 clears it on any write to
+   * UCSR0A (the firmware sets U2X0) and only sets it again after a byte was sent, so the first
+   * byte would never go. Set it once, 1 ms after reset, when the firmware has set up the USART. */
+  avr_cycle_timer_register(avr, 16000, udre_fix_cb, NULL);
+
+  /* D4 = PD4 watcher, D8 = PB0 driver, A0 voltage */
+  avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 4), pd4_cb, NULL);
+  pin_irq = avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('B'), 0);
+  avr_raise_irq(pin_irq, 0);
+  avr_irq_t *adc0 = avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0);
+  if (adc0) avr_raise_irq(adc0, (uint32_t)adc_mv);
+
+  if (nseg) {
+    ideal_rise = segs[0].t0 * F_CPU_HZ;
+    if (plan_period()) {
+      next_level = 1;
+      avr_cycle_count_t c = (avr_cycle_count_t)llround(next_edge);
+      avr_cycle_timer_register(avr, c > 0 ? c : 1, edge_cb, NULL);
+    }
+  }
+  if (ncmd) {
+    qsort(cmds, (size_t)ncmd, sizeof cmds[0], cmp_cmd);
+    avr_cycle_count_t c = (avr_cycle_count_t)llround(cmds[0].t * F_CPU_HZ);
+    avr_cycle_timer_register(avr, c > 0 ? c : 1, cmd_cb, NULL);
+  }
+
+  avr_cycle_count_t end = (avr_cycle_count_t)llround(sim_time * F_CPU_HZ);
+  int state = cpu_Running;
+  while (avr->cycle < end) {
+    state = avr_run(avr);
+    if (state == cpu_Done || state == cpu_Crashed) break;
+  }
+  fflush(out);
+  fprintf(stderr, "#EDGES %llu %llu\n", (unsigned long long)n_rise, (unsigned long long)n_fall);
+  for (int i = 0; i < npeek; i++)
+    fprintf(stderr, "#PEEK 0x%04x %u\n", peeks[i], peeks[i] < 0x900 ? avr->data[peeks[i]] : 0u);
+  fprintf(stderr, "#PC 0x%x state %d\n", avr->pc, avr->state);
+  fprintf(stderr, "#END %llu %d\n", (unsigned long long)avr->cycle, pd4_level);
+  if (state == cpu_Crashed) { fprintf(stderr, "#CRASHED\n"); return 3; }
+  return 0;
+}
