@@ -1,0 +1,47 @@
+"""The oscillator report section (fsrlab.report.sections.oscillator).
+
+References: the closed forms retyped from the paper (eqs. 32, 37 as printed) and properties of the
+built section (files written, errata keys, data consistent with fsrlab.circuits.lm555).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from fsrlab.circuits.lm555 import tau_ratio
+from fsrlab.report.sections.oscillator import build, paper_eq37_as_printed
+
+
+def test_eq37_as_printed_is_n_times_the_corrected_ratio():
+    # Erratum O2: printed eq. (37) = N × (ratio from eqs. 23 and 34); independent retyping of eq. (37).
+    n = np.array([4.5, 10.0, 100.0])
+    printed = np.log((2 - 2 * n) / (4 - n)) * 2 * n / (math.log(2) * (n + 2))
+    np.testing.assert_allclose(paper_eq37_as_printed(n), printed, rtol=1e-15)
+    np.testing.assert_allclose(paper_eq37_as_printed(n) / n, tau_ratio(n, diode=True), rtol=1e-12)
+
+
+@pytest.fixture(scope="module")
+def section(tmp_path_factory):
+    out = tmp_path_factory.mktemp("osc")
+    return build(out), out
+
+
+def test_section_files_errata_and_data(section):
+    sec, out = section
+    for f in sec.figures:
+        assert (out / f.filename).stat().st_size > 10_000
+    assert [e.key for e in sec.errata] == ["O1", "O2", "O3", "O4", "O5"]
+    data = sec.data["oscillator"]
+    json.dumps(data, allow_nan=False)  # paper.json forbids NaN
+    assert data["duty_cycle_infimum_no_diode"] == pytest.approx(2 / 3)
+    np.testing.assert_allclose(data["tau_ratio_no_diode"], tau_ratio(np.array(data["N"])), rtol=1e-12)
+    # The paper's 24.37 sits just above the oscillation limit N = 4 (erratum O1).
+    assert 4.0 < data["n_where_eq32_equals_24_37"] < 4.001
+    if data["ngspice_available"]:
+        # ngspice columns agree with the closed forms (0.1 %, as in test_spice.py).
+        np.testing.assert_allclose(data["ngspice_diode"]["duty_cycle"], data["duty_cycle_diode"], rtol=1e-3)
+        np.testing.assert_allclose(data["ngspice_no_diode"]["duty_cycle"], data["duty_cycle_no_diode"], rtol=1e-3)
