@@ -21,6 +21,7 @@ from fsrlab.report.model import Section
 #: Section builders in report order. Add yours here.
 SECTION_MODULES = [
     "fsrlab.report.sections.physics",
+    "fsrlab.report.sections.oscillator",
 ]
 
 
