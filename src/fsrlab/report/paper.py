@@ -22,6 +22,7 @@ from fsrlab.report.model import Section
 SECTION_MODULES = [
     "fsrlab.report.sections.physics",
     "fsrlab.report.sections.oscillator",
+    "fsrlab.report.sections.measurements",
 ]
 
 
