@@ -1,0 +1,546 @@
+"""A virtual fsrlab meter: the firmware's protocol over a real pseudo-terminal, fed by the models.
+
+:class:`VirtualDevice` opens a pseudo-terminal pair (``os.openpty``, raw mode), keeps the master
+side and offers the slave's path (``/dev/pts/N``) to any program that opens serial ports. It answers
+``ID``/``START``/``STOP``/``WINDOW``/``RANGE`` as docs/protocol.md prescribes and, while started,
+sends one ``M`` frame per window, in real time.
+
+What the 555 does during a window comes from a *signal source* (:class:`SignalSource`), injectable
+for tests. :class:`PhysicsSource` is the default: a stress profile (:class:`StressProfile`) drives
+:class:`fsrlab.physics.sensor.VirtualFSR` (stress → R_FSR, C_FSR with hysteresis memory) and
+:func:`fsrlab.circuits.lm555.astable` (→ frequency, duty cycle), plus the op-amp readout on A0
+(paper eq. 38). The device then measures like the firmware: rising edges on a continuous phase,
+edge times with jitter quantized to 62.5 ns Timer1 ticks, whole periods per window, the high time
+summed per period. Optional faults (:class:`Faults`) corrupt, drop or add bytes, reset the device
+or unplug it, for tests.
+
+References
+----------
+.. [1] Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901 (§5 Figs. 13–16, §6 eq. 38).
+"""
+
+from __future__ import annotations
+
+import errno
+import math
+import os
+import select
+import threading
+import time
+import tty
+from collections import OrderedDict
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+
+from fsrlab.acquisition.protocol import (
+    DEVICE_NAME, MAX_COMMAND, PROTOCOL_VERSION, SEQ_MODULO, TICK_S, F_CPU, WINDOW_MS_DEFAULT, CommandError,
+    encode_frame, parse_command,
+)
+
+__all__ = ["FIRMWARE_VERSION", "Signal", "SignalSource", "ConstantSource", "StressProfile", "PhysicsSource",
+           "Faults", "VirtualDevice", "PROFILE_KINDS"]
+
+FIRMWARE_VERSION = "1.0.0-virtual"
+"""Firmware version the virtual device reports in its ``ID`` frame."""
+PROFILE_KINDS = ("triangle", "sine", "steps", "hold")
+"""Shapes of :class:`StressProfile`."""
+
+
+@dataclass(frozen=True)
+class Signal:
+    """What the meter's inputs carry during one window.
+
+    Attributes
+    ----------
+    frequency_hz : float
+        Frequency of the 555 output; NaN or 0 when it does not oscillate. [Hz]
+    duty_cycle : float
+        High time over period, 0..1. [1]
+    voltage_v : float
+        Op-amp output on A0. [V]
+    stress_pa : float
+        The applied stress (reference, not sent on the link; NaN if unknown). [Pa]
+    """
+
+    frequency_hz: float
+    duty_cycle: float
+    voltage_v: float = 0.0
+    stress_pa: float = math.nan
+
+
+class SignalSource(Protocol):
+    """Anything that says what the 555 and the op-amp do during a window."""
+
+    def window(self, t0_s: float, t1_s: float, range_: int) -> Signal:
+        """Signal averaged over ``[t0_s, t1_s)`` (time since START [s]) with the C_off switch at ``range_``."""
+        ...
+
+
+@dataclass(frozen=True)
+class ConstantSource:
+    """A fixed square wave (for protocol tests)."""
+
+    frequency_hz: float = 5000.0
+    duty_cycle: float = 0.5
+    voltage_v: float = 1.0
+    stress_pa: float = math.nan
+
+    def window(self, t0_s: float, t1_s: float, range_: int) -> Signal:
+        """The same :class:`Signal` for every window."""
+        return Signal(self.frequency_hz, self.duty_cycle, self.voltage_v, self.stress_pa)
+
+
+@dataclass(frozen=True)
+class StressProfile:
+    """A periodic stress profile σ(t), like the paper's stepper-motor bench (§6.1).
+
+    Parameters
+    ----------
+    kind : str
+        ``triangle`` (linear load and unload), ``sine`` (raised cosine), ``steps`` (5 stairs up, 5
+        down) or ``hold`` (constant ``peak_pa``).
+    peak_pa : float
+        Largest stress (> base_pa). [Pa]
+    period_s : float
+        Duration of one loading-unloading cycle (> 0). [s]
+    base_pa : float
+        Smallest stress (≥ 0). [Pa]
+    """
+
+    kind: str = "triangle"
+    peak_pa: float = 50e3
+    period_s: float = 4.0
+    base_pa: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.kind not in PROFILE_KINDS:
+            raise ValueError(f"profile kind must be one of {', '.join(PROFILE_KINDS)}, got {self.kind!r}")
+        if not self.period_s > 0:
+            raise ValueError(f"period_s must be > 0 s, got {self.period_s!r}")
+        if not self.peak_pa > self.base_pa >= 0:
+            raise ValueError(f"peak_pa must exceed base_pa >= 0 Pa, got {self.peak_pa!r} and {self.base_pa!r}")
+
+    def stress(self, t_s) -> np.ndarray:
+        """Stress at time ``t_s`` [s] since START; returns [Pa], same shape."""
+        t = np.asarray(t_s, dtype=float)
+        x = np.mod(t / self.period_s, 1.0)
+        if self.kind == "triangle":
+            u = 1.0 - np.abs(2.0 * x - 1.0)
+        elif self.kind == "sine":
+            u = 0.5 - 0.5 * np.cos(2.0 * np.pi * x)
+        elif self.kind == "steps":
+            u = np.minimum(np.floor((1.0 - np.abs(2.0 * x - 1.0)) * 5.0 + 1e-9), 5.0) / 5.0
+        else:
+            u = np.ones_like(x)
+        return self.base_pa + (self.peak_pa - self.base_pa) * u
+
+
+class PhysicsSource:
+    """Signal from a stress profile through the virtual FSR, the LM555 astable and the op-amp.
+
+    Parameters
+    ----------
+    profile : StressProfile
+        σ(t).
+    sensor : VirtualFSR, optional
+        Default ``fsrlab.physics.sensor.VirtualFSR()``.
+    r_ohm : float
+        R_A = R_B of the astable (paper Fig. 16: 10 kΩ). [Ω]
+    c_off_farad : float
+        Offset capacitor switched in by ``RANGE 1``. [F]
+    diode : bool
+        D1 in series with R_B (paper Fig. 16).
+    diode_drop_v : float
+        Forward drop of D1 (0: ideal, as in the paper). [V]
+    r_f_ohm : float
+        Feedback resistor of the traditional readout, V = R_F/R_FSR · Vcc (eq. 38; 20 kΩ). [Ω]
+    vcc_v : float
+        Supply (also the op-amp's and ADC's range). [V]
+    dt_s : float
+        Time step on which the stress history is sampled. [s]
+
+    Notes
+    -----
+    The hysteresis memory needs the whole stress history, so R_FSR and C_FSR are computed once for
+    two periods of the profile; from the second period on the response repeats (a periodic
+    profile reaches its steady loop after the first cycle), and later times map into it.
+    """
+
+    def __init__(self, profile: StressProfile | None = None, sensor=None, r_ohm: float = 10e3,
+                 c_off_farad: float = 1e-9, diode: bool = True, diode_drop_v: float = 0.0,
+                 r_f_ohm: float = 20e3, vcc_v: float = 5.0, dt_s: float = 0.005) -> None:
+        from fsrlab.physics.sensor import VirtualFSR
+
+        for name, v in (("r_ohm", r_ohm), ("r_f_ohm", r_f_ohm), ("vcc_v", vcc_v), ("dt_s", dt_s)):
+            if not v > 0:
+                raise ValueError(f"{name} must be > 0, got {v!r}")
+        if not c_off_farad >= 0:
+            raise ValueError(f"c_off_farad must be >= 0 F, got {c_off_farad!r}")
+        self.profile = profile or StressProfile()
+        self.sensor = sensor if sensor is not None else VirtualFSR()
+        self.r_ohm, self.c_off_farad, self.diode, self.diode_drop_v = r_ohm, c_off_farad, diode, diode_drop_v
+        self.r_f_ohm, self.vcc_v = r_f_ohm, vcc_v
+        period = self.profile.period_s
+        self.dt_s = min(dt_s, period / 20)
+        self._t = np.arange(0.0, 2 * period + self.dt_s, self.dt_s)
+        resp = self.sensor.respond(self.profile.stress(self._t), voltage_v=vcc_v / 2)
+        self._stress = np.asarray(resp.stress_pa, dtype=float)
+        self._r = np.asarray(resp.r_fsr_ohm, dtype=float)
+        self._c = np.asarray(resp.c_fsr_farad, dtype=float)
+
+    def circuit(self) -> dict:
+        """Circuit parts for a run's metadata."""
+        return {"r_ohm": self.r_ohm, "c_off_farad": self.c_off_farad, "diode": self.diode,
+                "diode_drop_v": self.diode_drop_v, "r_f_ohm": self.r_f_ohm, "vcc_v": self.vcc_v}
+
+    def _index(self, t_s: np.ndarray) -> np.ndarray:
+        period = self.profile.period_s
+        t = np.where(t_s < 2 * period, t_s, period + np.mod(t_s - period, period))
+        return np.clip(np.round(t / self.dt_s).astype(int), 0, self._t.size - 1)
+
+    def window(self, t0_s: float, t1_s: float, range_: int) -> Signal:
+        """Mean signal over the window (see :class:`SignalSource`)."""
+        from fsrlab.circuits.lm555 import astable
+
+        n = max(2, int(math.ceil((t1_s - t0_s) / self.dt_s)) + 1)
+        idx = self._index(np.linspace(max(t0_s, 0.0), max(t1_s, 0.0), n))
+        r, c = self._r[idx], self._c[idx]
+        osc = astable(self.r_ohm, r, c, c_off_farad=self.c_off_farad if range_ else 0.0, diode=self.diode,
+                      diode_drop_v=self.diode_drop_v, vcc_v=self.vcc_v, check=False)
+        period = np.asarray(osc.tau_high_s) + np.asarray(osc.tau_low_s)
+        if not np.all(np.isfinite(period)):
+            f = duty = math.nan
+        else:
+            # The meter measures whole periods: mean frequency = 1/mean period, duty = ΣτH/ΣT.
+            f = 1.0 / float(np.mean(period))
+            duty = float(np.mean(osc.tau_high_s) / np.mean(period))
+        volts = np.clip(self.r_f_ohm / r * self.vcc_v, 0.0, self.vcc_v)  # Eq. (38): V = R_F/R_FSR·|Vcc|
+        return Signal(f, duty, float(np.mean(volts)), float(np.mean(self._stress[idx])))
+
+
+@dataclass
+class Faults:
+    """Faults the virtual device injects (all off by default).
+
+    Parameters
+    ----------
+    corrupt : float
+        Probability that a frame gets one bit flipped. [1]
+    drop : float
+        Probability that a frame is not sent (its sequence number is used). [1]
+    garbage : float
+        Probability of 1–20 random bytes before a frame. [1]
+    reset_after : int, optional
+        Restart the device (mid-frame) after this many ``M`` frames: the host sees a cut line, the
+        boot ``ID`` with sequence 0, and a stopped device.
+    unplug_after : int, optional
+        Close the pseudo-terminal after this many ``M`` frames (a pulled USB cable).
+    """
+
+    corrupt: float = 0.0
+    drop: float = 0.0
+    garbage: float = 0.0
+    reset_after: int | None = None
+    unplug_after: int | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("corrupt", "drop", "garbage"):
+            v = getattr(self, name)
+            if not 0.0 <= v <= 1.0:
+                raise ValueError(f"{name} must be in 0..1, got {v!r}")
+        for name in ("reset_after", "unplug_after"):
+            v = getattr(self, name)
+            if v is not None and v < 0:
+                raise ValueError(f"{name} must be >= 0 frames, got {v!r}")
+
+
+@dataclass
+class _State:
+    seq: int = 0
+    started: bool = False
+    window_ms: int = WINDOW_MS_DEFAULT
+    current_ms: int = WINDOW_MS_DEFAULT  # length of the window in progress (WINDOW acts on the next one)
+    range_: int = 0
+    window_start: float = 0.0  # device time [s]
+    start_time: float = 0.0
+    phase: float = 0.0  # 555 cycles since START
+    last_edge_tick: int | None = None
+    m_frames: int = 0
+    resets_done: int = 0
+    line: bytearray = field(default_factory=bytearray)
+    overflow: bool = False
+
+
+class VirtualDevice:
+    """The fsrlab meter's protocol on a pseudo-terminal, driven by a signal source.
+
+    Parameters
+    ----------
+    source : SignalSource, optional
+        What the 555 does; default :class:`PhysicsSource` with the default triangle profile.
+    frequency_noise : float
+        Relative standard deviation of the frequency per window (sensor and circuit noise). [1]
+    jitter_s : float
+        Standard deviation of each captured edge time (555 and comparator jitter). [s]
+    adc_noise_v : float
+        Standard deviation of the A0 voltage before 10-bit quantization. [V]
+    faults : Faults, optional
+        Fault injection for tests.
+    seed : int, optional
+        Random seed (noise and faults).
+
+    Notes
+    -----
+    Use as a context manager, or call :meth:`open` (returns the pty path and runs the device in a
+    thread) and :meth:`close`; :meth:`serve` runs it in the calling thread instead. Times: the
+    device clock starts at :meth:`open` (``t_ms``), the profile's clock at ``START``.
+    """
+
+    def __init__(self, source: SignalSource | None = None, frequency_noise: float = 1e-3, jitter_s: float = 20e-9,
+                 adc_noise_v: float = 2e-3, faults: Faults | None = None, seed: int | None = None) -> None:
+        for name, v in (("frequency_noise", frequency_noise), ("jitter_s", jitter_s), ("adc_noise_v", adc_noise_v)):
+            if not v >= 0:
+                raise ValueError(f"{name} must be >= 0, got {v!r}")
+        self.source = source if source is not None else PhysicsSource()
+        self.frequency_noise, self.jitter_s, self.adc_noise_v = frequency_noise, jitter_s, adc_noise_v
+        self.faults = faults or Faults()
+        self._rng = np.random.default_rng(seed)
+        self._master: int | None = None
+        self._slave: int | None = None
+        self.port: str | None = None
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._t0 = 0.0
+        self._st = _State()
+        self._truth: OrderedDict[int, float] = OrderedDict()
+        self.frames_sent = 0
+        self.frames_overflowed = 0
+        self.unplugged = False
+
+    # ------------------------------------------------------------ lifecycle
+    def open(self, thread: bool = True) -> str:
+        """Create the pseudo-terminal, send the boot ``ID`` and (by default) run in a daemon thread.
+
+        Returns
+        -------
+        str
+            Path of the pty slave for ``serial_for_url``.
+        """
+        master, slave = os.openpty()
+        tty.setraw(slave)  # no echo, no newline translation: bytes pass as on a UART
+        os.set_blocking(master, False)
+        self._master, self._slave = master, slave
+        self.port = os.ttyname(slave)
+        self._t0 = time.monotonic()
+        self._boot()
+        if thread:
+            self._thread = threading.Thread(target=self._loop, name="fsrlab-virtual-device", daemon=True)
+            self._thread.start()
+        return self.port
+
+    def serve(self, duration_s: float | None = None) -> None:
+        """Run in the calling thread until :meth:`close`, Ctrl-C, or ``duration_s`` seconds."""
+        if self._master is None:
+            self.open(thread=False)
+        self._loop(None if duration_s is None else time.monotonic() + duration_s)
+
+    def close(self) -> None:
+        """Stop the device and close the pseudo-terminal."""
+        self._stop.set()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join(timeout=2.0)
+        self._close_fds()
+
+    def unplug(self) -> None:
+        """Close the pseudo-terminal now, as a pulled cable: the host's next read fails."""
+        self.unplugged = True
+        self._stop.set()
+        self._close_fds()
+
+    def _close_fds(self) -> None:
+        for name in ("_master", "_slave"):
+            fd = getattr(self, name)
+            if fd is not None:
+                setattr(self, name, None)
+                try:
+                    os.close(fd)
+                except OSError:
+                    pass
+
+    def __enter__(self) -> "VirtualDevice":
+        if self._master is None:
+            self.open()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def reference(self, seq: int) -> float:
+        """Stress [Pa] the device applied during the window sent with sequence number ``seq`` (NaN if unknown)."""
+        return self._truth.get(seq, math.nan)
+
+    # ------------------------------------------------------------ device
+    def _now(self) -> float:
+        return time.monotonic() - self._t0
+
+    def _boot(self) -> None:
+        self._st = _State(resets_done=self._st.resets_done, m_frames=self._st.m_frames)
+        self._send_frame("ID", (DEVICE_NAME, FIRMWARE_VERSION, PROTOCOL_VERSION, F_CPU), faults=False)
+
+    def _send_frame(self, kind: str, fields, faults: bool = True) -> int:
+        st = self._st
+        seq = st.seq
+        st.seq = (st.seq + 1) % SEQ_MODULO
+        data = encode_frame(kind, seq, fields)
+        f, rng = self.faults, self._rng
+        if faults and f.drop and rng.random() < f.drop:
+            return seq
+        if faults and f.corrupt and rng.random() < f.corrupt:
+            b = bytearray(data)
+            b[int(rng.integers(len(b)))] ^= 1 << int(rng.integers(8))
+            data = bytes(b)
+        if faults and f.garbage and rng.random() < f.garbage:
+            data = rng.integers(0, 256, int(rng.integers(1, 21)), dtype=np.uint8).tobytes() + data
+        self._write(data)
+        return seq
+
+    def _write(self, data: bytes) -> None:
+        if self._master is None:
+            return
+        try:
+            os.write(self._master, data)
+            self.frames_sent += 1
+        except BlockingIOError:
+            self.frames_overflowed += 1  # the host does not read: bytes are lost, as on a UART
+        except OSError as exc:
+            if exc.errno not in (errno.EIO, errno.EBADF):
+                raise
+
+    def _handle_line(self, raw: bytes) -> None:
+        st = self._st
+        try:
+            name, value = parse_command(raw)
+        except CommandError as err:
+            self._send_frame("ERR", (err.code, err.token), faults=False)
+            return
+        if name == "ID":
+            self._send_frame("ID", (DEVICE_NAME, FIRMWARE_VERSION, PROTOCOL_VERSION, F_CPU), faults=False)
+            return
+        if name == "START" and not st.started:
+            st.started = True
+            st.window_start = st.start_time = self._now()
+            st.current_ms = st.window_ms
+            st.phase = float(self._rng.random())
+            st.last_edge_tick = None
+        elif name == "STOP":
+            st.started = False
+        elif name == "WINDOW":
+            st.window_ms = int(value)
+            if st.started:  # as the firmware: the window in progress restarts with the new length
+                st.window_start = self._now()
+                st.current_ms = st.window_ms
+                st.last_edge_tick = None
+        elif name == "RANGE":
+            st.range_ = int(value)
+        self._send_frame("ACK", (name,) if value is None else (name, value), faults=False)
+
+    def _feed_commands(self, data: bytes) -> None:
+        st = self._st
+        for byte in data:
+            if byte == 0x0A:
+                if st.overflow:
+                    self._send_frame("ERR", (3, "LINE"), faults=False)
+                else:
+                    self._handle_line(bytes(st.line))
+                st.line.clear()
+                st.overflow = False
+            elif not st.overflow:
+                st.line.append(byte)
+                if len(st.line) > MAX_COMMAND - 1 + st.line.count(b"\r"):
+                    st.overflow = True
+                    st.line.clear()
+
+    def _measure(self, t_end: float) -> None:
+        """Close the current window at device time ``t_end`` and send its ``M`` frame."""
+        st = self._st
+        t0, t1 = st.window_start, t_end
+        sig = self.source.window(t0 - st.start_time, t1 - st.start_time, st.range_)
+        rng = self._rng
+        f = sig.frequency_hz * (1.0 + self.frequency_noise * rng.standard_normal())
+        periods = sum_p = sum_h = 0
+        if math.isfinite(f) and f > 0:
+            phi0 = st.phase
+            phi1 = phi0 + f * (t1 - t0)
+            first, last = math.floor(phi0) + 1, math.floor(phi1)  # rising edges at integer phases
+            edges = last - first + 1
+            if edges > 0:
+                t_last = t0 + (last - phi0) / f + self.jitter_s * rng.standard_normal()
+                tick_last = math.floor(t_last / TICK_S)
+                if st.last_edge_tick is None:  # first edge after START opens the first period
+                    t_first = t0 + (first - phi0) / f + self.jitter_s * rng.standard_normal()
+                    st.last_edge_tick = math.floor(t_first / TICK_S)
+                    edges -= 1
+                periods = edges
+                if periods > 0:
+                    sum_p = max(tick_last - st.last_edge_tick, 1)
+                    duty = min(max(sig.duty_cycle, 0.0), 1.0)
+                    # Each high time is quantized at both ends: ±1 tick, variance 1/6 tick² per period.
+                    sum_h = round(duty * sum_p + math.sqrt(periods / 6.0) * rng.standard_normal())
+                    sum_h = min(max(sum_h, 0), sum_p)
+                st.last_edge_tick = tick_last
+            st.phase = phi1
+        volts = sig.voltage_v + self.adc_noise_v * rng.standard_normal()
+        adc = min(max(int(round(volts / 5.0 * 1024)), 0), 1023)
+        t_ms = int(t1 * 1000) % 2**32
+        fields = (t_ms, st.current_ms, periods, min(sum_p, 2**32 - 1), min(sum_h, 2**32 - 1), 0, adc, st.range_)
+        fault = self.faults
+        st.m_frames += 1
+        if fault.reset_after is not None and st.m_frames > fault.reset_after and st.resets_done == 0:
+            st.resets_done = 1
+            self._write(encode_frame("M", st.seq, fields)[:17])  # cut mid-line by the reset
+            self._boot()
+            return
+        seq = self._send_frame("M", fields)
+        self._truth[seq] = sig.stress_pa
+        while len(self._truth) > 8192:
+            self._truth.popitem(last=False)
+        if fault.unplug_after is not None and st.m_frames >= fault.unplug_after:
+            self.unplug()
+
+    def _loop(self, deadline: float | None = None) -> None:
+        try:
+            while not self._stop.is_set():
+                if deadline is not None and time.monotonic() >= deadline:
+                    return
+                st = self._st
+                now = self._now()
+                wait = 0.05
+                if st.started:
+                    t_end = st.window_start + st.current_ms / 1000.0
+                    if now >= t_end:
+                        self._measure(t_end)
+                        st = self._st
+                        if st.started:
+                            st.window_start = t_end
+                            st.current_ms = st.window_ms
+                        continue
+                    wait = min(wait, t_end - now)
+                master = self._master
+                if master is None:
+                    return
+                try:
+                    ready, _, _ = select.select([master], [], [], max(wait, 0.0))
+                except (OSError, ValueError):
+                    return
+                if ready:
+                    try:
+                        data = os.read(master, 1024)
+                    except BlockingIOError:
+                        continue
+                    except OSError:
+                        return
+                    self._feed_commands(data)
+        except KeyboardInterrupt:
+            return
