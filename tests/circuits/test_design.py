@@ -1,0 +1,50 @@
+"""design(): proposals checked independently with the closed forms on a finer grid (properties)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fsrlab.circuits.lm555 import TIMER_TICK_S, astable, design, minimum_n_ratio
+
+SENSOR = dict(r_fsr_range_ohm=(100e3, 2e6), c_fsr_range_farad=(0.5e-9, 1.5e-9))
+
+
+@pytest.mark.parametrize("band, variant", [((1e3, 20e3), "auto"), ((1e3, 100e3), "auto"),
+                                           ((200.0, 40e3), "diode"), ((1e3, 20e3), "no-diode")])
+def test_proposal_stays_in_band_with_margin(band, variant):
+    d = design(**SENSOR, band_hz=band, variant=variant)
+    if variant != "auto":
+        assert d.diode == (variant == "diode")
+    # Independent check on a 200 × 20 grid of the sensor range (design used 24 × 2 points).
+    rf, cf = np.meshgrid(np.geomspace(100e3, 2e6, 200), np.linspace(0.5e-9, 1.5e-9, 20))
+    f = astable(d.r_ohm, rf, cf, d.c_off_farad, diode=d.diode).frequency_hz
+    assert band[0] <= f.min() and f.max() <= band[1]
+    assert f.min() == pytest.approx(d.frequency_range_hz[0], rel=1e-2)
+    assert 100e3 / d.r_ohm / minimum_n_ratio() - 1 >= 0.25
+    assert d.margin >= 0.25
+    # Uno resolution: one 62.5 ns tick on one period is Δf = f²·q.
+    assert d.resolution_single_hz[1] == pytest.approx(d.frequency_range_hz[1] ** 2 * TIMER_TICK_S, rel=1e-12)
+    assert d.resolution_window_hz[1] < d.resolution_single_hz[1]
+
+
+def test_auto_prefers_the_capacitive_variant():
+    # Without D1, f hardly depends on R_FSR at large N (|S_R| small); with D1, f ≈ 1/(ln2·R_FSR·C).
+    d = design(**SENSOR, band_hz=(1e3, 100e3))
+    assert not d.diode
+    assert {a["diode"] for a in d.alternatives} <= {False, True}
+    assert d.merit == max(a["merit"] for a in d.alternatives)
+
+
+def test_impossible_band_says_why():
+    with pytest.raises(ValueError, match=r"band_hz: no design.*span at least a factor"):
+        design(**SENSOR, band_hz=(9e3, 10e3), variant="diode")
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    (dict(band_hz=(2e3, 1e3)), "band_hz"), (dict(band_hz=(1e3, 2e4), variant="x"), "variant"),
+    (dict(band_hz=(1e3, 2e4), min_margin=-1), "min_margin"),
+])
+def test_validation(kwargs, name):
+    with pytest.raises(ValueError, match=name):
+        design(**SENSOR, **kwargs)
