@@ -161,6 +161,8 @@ class CrossValidation:
         Number of groups (cycles) distributed over the folds.
     best_degree : int
         Degree with the smallest out-of-fold RMSE.
+    moments : tuple of ndarray, optional
+        Whole-data sums (Σ T_0..T_2d, Σ T_k y) in the Chebyshev basis, reused for the final fit.
     """
 
     degrees: list[int]
@@ -168,6 +170,18 @@ class CrossValidation:
     folds: int
     groups: int
     best_degree: int
+    moments: tuple | None = field(default=None, repr=False, compare=False)
+
+    def full_fit(self, degree: int) -> np.ndarray:
+        """Chebyshev coefficients of the least-squares fit on all readings, from the stored sums."""
+        mt, tyt = self.moments
+        return np.linalg.solve(_gram(mt, degree), tyt[: degree + 1])
+
+
+def _gram(mom: np.ndarray, d: int) -> np.ndarray:
+    """Gram matrix Σ T_i T_j = (Σ T_{i+j} + Σ T_{|i-j|}) / 2 of the Chebyshev basis up to degree d."""
+    i = np.arange(d + 1)
+    return 0.5 * (mom[i[:, None] + i[None, :]] + mom[np.abs(i[:, None] - i[None, :])])
 
 
 def default_groups(n: int, cycle=None, folds: int = 5) -> np.ndarray:
@@ -260,10 +274,7 @@ def cross_validate_degrees(x, y, groups, degrees: Sequence[int] = range(1, MAX_D
     yy = np.bincount(fold, weights=y * y, minlength=k)
     mt, tyt, n_tot = m.sum(axis=1), ty.sum(axis=1), m[0].sum()
 
-    def gram(mom, d):
-        i = np.arange(d + 1)
-        return 0.5 * (mom[i[:, None] + i[None, :]] + mom[np.abs(i[:, None] - i[None, :])])
-
+    gram = _gram
     rmse = []
     for d in degrees:
         sse = 0.0
@@ -277,7 +288,7 @@ def cross_validate_degrees(x, y, groups, degrees: Sequence[int] = range(1, MAX_D
             sse += yy[f] - 2 * beta @ ty[: d + 1, f] + beta @ gf @ beta
         rmse.append(float(np.sqrt(max(sse, 0.0) / n_tot)))
     best = degrees[int(np.argmin(rmse))]
-    return CrossValidation(degrees=degrees, rmse=rmse, folds=k, groups=n_groups, best_degree=best)
+    return CrossValidation(degrees=degrees, rmse=rmse, folds=k, groups=n_groups, best_degree=best, moments=(mt, tyt))
 
 
 def fit_metrics(y, y_hat) -> dict[str, float]:
@@ -443,7 +454,10 @@ def calibrate(x, y, degree: int | str = "auto", groups=None, folds: int = 5, x_n
             raise ValueError(f"degree must be an integer from 1 to {MAX_DEGREE} or 'auto', got {degree!r}")
         cv = cross_validate_degrees(xs, ys, g, folds=folds, center=center, half_width=half)
         degree = cv.best_degree
-    model = fit_polynomial(xs, ys, degree, center, half)
+        # Final fit from the same sums (the Chebyshev Gram matrix on [-1, 1] is well conditioned).
+        model = PolynomialModel(coefficients=cv.full_fit(degree), center=center, half_width=half)
+    else:
+        model = fit_polynomial(xs, ys, degree, center, half)
     met = fit_metrics(ys, model(xs))
     return Calibration(model=model, x_name=x_name, y_name=y_name, x_unit=x_unit, y_unit=y_unit, r2=met["r2"],
                        rmse=met["rmse"], max_error_percent_fs=met["max_error_percent_fs"], n=int(xs.size),
