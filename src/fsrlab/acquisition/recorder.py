@@ -99,10 +99,11 @@ class RecordResult:
     identity: Identity | None
 
 
-def _configure(link: SerialLink, window_ms: int, range_: int) -> None:
+def _configure(link: SerialLink, window_ms: int, range_: int) -> int:
+    """Send the settings and START; return the sequence number the first window will carry."""
     link.set_window(window_ms)
     link.set_range(range_)
-    link.start()
+    return (link.start().seq + 1) % 65536
 
 
 def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS_DEFAULT, range_: int = 0,
@@ -160,18 +161,19 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
     path = Path(path)
     ident = link.handshake(timeout_s=handshake_timeout_s)
     link.stop()  # a device left running by a previous session: start from a clean state
-    _configure(link, window_ms, range_)
+    first_seq = _configure(link, window_ms, range_)
     columns = list(COLUMNS) + (["stress_pa"] if reference is not None else [])
     meta = dict(metadata or {})
     meta.setdefault("origin", f"fsrlab acquire from {link.port}")
     meta["acquisition"] = {"port": link.port, "baud": link.baud, "device": ident.name,
                            "firmware_version": ident.firmware_version, "protocol_version": ident.protocol_version,
-                           "window_ms": window_ms, "range": range_, "duration_s": duration_s}
+                           "window_ms": window_ms, "range": range_, "duration_s": duration_s,
+                           "first_seq": first_seq}
     parser = link.parser
     lost0 = parser.lost
     t_start = time.monotonic()
     t_end = t_start + duration_s
-    frames, ended, message = 0, "duration", ""
+    frames, ended, message, dropped = 0, "duration", "", 0
     anchor_ms: int | None = None  # device t_ms at START (start of the first window after it)
     offset_s = 0.0
     last: Measurement | None = None
@@ -230,6 +232,7 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
             ended = "interrupted"
         except DeviceGone as exc:
             ended, message = "disconnected", str(exc)
+        dropped = parser.lost - lost0  # frames sent while recording that never made it
         if ended != "disconnected":
             try:
                 link.command("STOP", timeout_s=0.5)
@@ -239,11 +242,10 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
         duration = time.monotonic() - t_start
         st = parser.stats()
         writer.metadata["acquisition"].update(
-            {"ended": ended, "frames": frames, "dropped": parser.lost - lost0, "resets": st.resets,
+            {"ended": ended, "frames": frames, "dropped": dropped, "resets": st.resets,
              "bad_checksum": st.bad_checksum, "malformed": st.malformed, "garbage_bytes": st.garbage_bytes,
              "recorded_s": round(duration, 3)})
         writer.close()
-    dropped = parser.lost - lost0
     if not message:
         message = {"duration": f"recorded {frames} windows in {duration:.1f} s",
                    "interrupted": f"interrupted: {frames} windows kept",

@@ -1,0 +1,212 @@
+"""Recording through a real pty: the run file, corruption, resets, unplugging, Ctrl-C, SIGKILL, the CLI.
+
+References: the run format (fsrlab.runformat.load_run, docs/data-format.md), the protocol's
+sequence numbers (every lost frame is a gap in ``seq``), and the CLI contract of issue 5.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from contextlib import redirect_stderr, redirect_stdout
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fsrlab.acquisition.recorder import COLUMNS, record
+from fsrlab.acquisition.serial_link import SerialLink
+from fsrlab.acquisition.virtual_device import ConstantSource, Faults, VirtualDevice
+from fsrlab.runformat import load_run
+
+CLI = [sys.executable, "-c", "import sys; from fsrlab.cli import main; main(sys.argv[1:])"]
+
+
+def _run(argv):
+    out, err = io.StringIO(), io.StringIO()
+    with redirect_stdout(out), redirect_stderr(err):
+        try:
+            from fsrlab.cli import main
+            main(argv)
+            code = 0
+        except SystemExit as exc:
+            code = exc.code
+    return code, out.getvalue(), err.getvalue()
+
+
+def _rows(path: Path) -> int:
+    try:
+        return max(path.read_text().count("\n") - 1, 0)
+    except FileNotFoundError:
+        return 0
+
+
+def _wait(predicate, limit_s: float = 30.0) -> None:
+    """Poll until ``predicate()``; the limit only guards against a hang."""
+    end = time.monotonic() + limit_s
+    while not predicate():
+        if time.monotonic() > end:
+            raise AssertionError("condition not reached")
+        time.sleep(0.02)
+
+
+def test_recording_writes_a_valid_run(tmp_path):
+    with VirtualDevice(seed=1) as dev, SerialLink(dev.port) as link:
+        result = record(link, tmp_path / "run.csv", 0.6, window_ms=20, reference=lambda f: dev.reference(f.seq))
+    run = load_run(tmp_path / "run.csv")
+    assert result.ended == "duration" and result.dropped == 0
+    assert run.n_rows == result.frames > 0
+    assert list(run.columns) == list(COLUMNS) + ["stress_pa"]
+    assert np.all(np.diff(run["time_s"]) > 0) and np.all(np.diff(run["seq"]) == 1)
+    assert np.all(run["frequency_hz"] > 0) and np.all((run["duty_cycle"] > 0) & (run["duty_cycle"] < 1))
+    # The triangle profile loads from 0: stress rises, and so does the frequency (paper §5, Fig. 19a).
+    assert np.all(np.diff(run["stress_pa"]) > 0)
+    assert np.corrcoef(run["stress_pa"], run["frequency_hz"])[0, 1] > 0.9
+    meta = run.metadata
+    assert meta["complete"] and meta["rows"] == run.n_rows
+    assert meta["acquisition"]["window_ms"] == 20 and meta["acquisition"]["protocol_version"] == 1
+
+
+def test_corrupted_link_is_counted_and_never_reaches_the_file(tmp_path):
+    """Bit flips, dropped frames and garbage on the link: every row in the file is a valid window,
+    and the gaps in ``seq`` add up exactly to the frames the recorder reports as dropped."""
+    faults = Faults(corrupt=0.2, drop=0.1, garbage=0.2)
+    with VirtualDevice(ConstantSource(4000.0, 0.4), faults=faults, seed=7) as dev, SerialLink(dev.port) as link:
+        result = record(link, tmp_path / "run.csv", 1.0, window_ms=10)
+    run = load_run(tmp_path / "run.csv")
+    seq = run["seq"].astype(int)
+    assert run.n_rows == result.frames > 20
+    assert result.stats.bad_frames > 0 and result.stats.garbage_bytes > 0 and result.dropped > 0
+    first = run.metadata["acquisition"]["first_seq"]  # what the first window after START carries
+    assert (seq[0] - first) + int(np.sum(np.diff(seq) - 1)) == result.dropped
+    assert np.allclose(run["frequency_hz"], 4000.0, rtol=5e-3)  # 1e-3 noise, 5σ
+    assert np.allclose(run["duty_cycle"], 0.4, rtol=5e-3)
+
+
+def test_device_reset_mid_run_is_recovered(tmp_path):
+    with VirtualDevice(ConstantSource(), faults=Faults(reset_after=10), seed=2) as dev, SerialLink(dev.port) as link:
+        result = record(link, tmp_path / "run.csv", 0.8, window_ms=20)
+    run = load_run(tmp_path / "run.csv")
+    assert result.stats.resets == 1 and result.ended == "duration"
+    assert run.n_rows > 12  # recording went on after the reset
+    assert np.all(np.diff(run["time_s"]) > 0)
+    assert np.any(np.diff(run["seq"]) < 0)  # sequence restarted
+
+
+def test_unplug_mid_run_ends_cleanly_with_the_file_intact(tmp_path):
+    with VirtualDevice(ConstantSource(), faults=Faults(unplug_after=8), seed=3) as dev, SerialLink(dev.port) as link:
+        result = record(link, tmp_path / "run.csv", 30.0, window_ms=10)
+    assert result.ended == "disconnected"
+    assert "disconnected" in result.message and "\n" not in result.message
+    run = load_run(tmp_path / "run.csv")
+    # Bytes still in the pty when it closes are lost, as on a pulled cable: at most the 8 frames sent.
+    assert 0 < run.n_rows == result.frames <= 8
+    assert run.metadata["complete"] and run.metadata["acquisition"]["ended"] == "disconnected"
+
+
+def test_device_process_killed_mid_run(tmp_path):
+    """``fsrlab virtual-device`` in another process, killed while we record: a pulled cable."""
+    proc = subprocess.Popen(CLI + ["virtual-device", "--profile", "sine", "--duration", "60"],
+                            stdout=subprocess.PIPE, text=True)
+    try:
+        port = proc.stdout.readline().strip()
+        assert port.startswith("/dev/")
+        with SerialLink(port) as link:
+            import threading
+
+            killer = threading.Timer(0.5, proc.kill)
+            killer.start()
+            result = record(link, tmp_path / "run.csv", 30.0, window_ms=20)
+            killer.cancel()
+    finally:
+        proc.kill()
+        proc.wait()
+    assert result.ended == "disconnected"
+    run = load_run(tmp_path / "run.csv")
+    assert run.n_rows == result.frames > 0 and run.metadata["complete"]
+
+
+def _start_recording(out: Path) -> subprocess.Popen:
+    return subprocess.Popen(CLI + ["acquire", "--virtual", "--duration", "60", "--window", "20", "--out", str(out),
+                                   "--quiet", "--json"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def test_sigkill_of_a_recording_leaves_a_readable_file(tmp_path):
+    out = tmp_path / "run.csv"
+    proc = _start_recording(out)
+    try:
+        _wait(lambda: _rows(out) >= 10 or proc.poll() is not None)
+        os.kill(proc.pid, signal.SIGKILL)
+    finally:
+        proc.wait()
+    assert proc.returncode == -signal.SIGKILL
+    run = load_run(out)
+    assert run.n_rows >= 10
+    assert np.all(np.isfinite(run["frequency_hz"])) and np.all(np.diff(run["seq"]) == 1)
+    assert run.metadata["complete"] is False  # the sidecar says the run was not closed
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_interrupt_of_a_recording_closes_the_file(tmp_path, sig):
+    out = tmp_path / "run.csv"
+    proc = _start_recording(out)
+    try:
+        _wait(lambda: _rows(out) >= 5 or proc.poll() is not None)
+        proc.send_signal(sig)
+        stdout, stderr = proc.communicate(timeout=30)
+    finally:
+        proc.kill()
+    assert proc.returncode == 0, stderr
+    summary = json.loads(stdout)
+    run = load_run(out)
+    assert run.n_rows == summary["frames"] >= 5
+    assert run.metadata["complete"] and run.metadata["acquisition"]["ended"] == "interrupted"
+
+
+def test_cli_json_contract(tmp_path):
+    out = tmp_path / "run.csv"
+    code, stdout, stderr = _run(["acquire", "--virtual", "--duration", "2", "--out", str(out), "--json"])
+    assert code == 0, stderr
+    summary = json.loads(stdout)
+    assert list(summary) == ["frames", "dropped", "duration_s", "file"]
+    assert summary["file"] == str(out) and summary["dropped"] == 0
+    assert summary["duration_s"] >= 2.0
+    run = load_run(out)
+    assert run.n_rows == summary["frames"] >= 10  # 100 ms windows over 2 s
+    for col in ("time_s", "frequency_hz", "duty_cycle", "stress_pa"):
+        assert col in run.columns
+
+
+@pytest.mark.parametrize("argv, field", [
+    (["acquire", "--duration", "1"], "--port"),
+    (["acquire", "--virtual", "--port", "/dev/null", "--duration", "1"], "--port"),
+    (["acquire", "--virtual", "--window", "5"], "--window"),
+    (["acquire", "--virtual", "--range", "2"], "--range"),
+    (["acquire", "--virtual", "--duration", "0"], "--duration"),
+    (["acquire", "--virtual", "--profile", "zigzag"], "--profile"),
+    (["acquire", "--port", "/dev/does-not-exist", "--duration", "1"], "/dev/does-not-exist"),
+    (["virtual-device", "--corrupt", "2"], "--corrupt"),
+])
+def test_cli_bad_input_is_one_line_and_exit_2(tmp_path, argv, field):
+    code, stdout, stderr = _run(argv + ["--out", str(tmp_path / "x.csv")] if argv[0] == "acquire" else argv)
+    assert code == 2
+    assert stderr.count("\n") == 1 and field in stderr
+
+
+def test_cli_unplugged_device_exit_1_with_one_line(tmp_path):
+    proc = subprocess.Popen(CLI + ["virtual-device", "--duration", "1"], stdout=subprocess.PIPE, text=True)
+    try:
+        port = proc.stdout.readline().strip()
+        code, stdout, stderr = _run(["acquire", "--port", port, "--duration", "30", "--window", "20",
+                                     "--out", str(tmp_path / "run.csv"), "--json"])
+    finally:
+        proc.kill()
+        proc.wait()
+    assert code == 1
+    assert stderr.count("\n") == 1 and "disconnected" in stderr
+    assert load_run(tmp_path / "run.csv").n_rows == json.loads(stdout)["frames"] > 0
