@@ -164,3 +164,19 @@ def test_auto_final_fit_from_moments_equals_qr():
     cal = calibrate(x, y, groups=np.arange(x.size) % 7)
     ref = fit_polynomial(x, y, cal.degree)
     np.testing.assert_allclose(cal.model.coefficients, ref.coefficients, rtol=1e-8, atol=1e-8 * np.abs(y).max())
+
+
+def test_physics_informed_calibration_on_decoded_capacitance():
+    """Data: synthetic_run (seed 1; 0.2 % frequency noise, 62.5 ns ticks). Reference 1: the run's
+    noiseless C_FSR from VirtualFSR; tolerance 2 %: the decode amplifies the 0.2 % frequency noise
+    and the duty-cycle quantization by a factor of a few. Reference 2 (property): C_FSR carries only
+    the separation's hysteresis, not R_FSR's, so stress(C_FSR) fits better than stress(f)."""
+    from fsrlab.analysis.calibration import decode_capacitance
+    from fsrlab.analysis.synthetic import synthetic_run
+
+    c = synthetic_run(cycles=3, seed=1).columns
+    cf = decode_capacitance(c["frequency_hz"], c["duty_cycle"], 10e3, diode=True)
+    np.testing.assert_allclose(cf, c["c_fsr_farad"], rtol=0.02)
+    on_c = calibrate(cf, c["stress_pa"], degree=3, x_name="c_fsr_farad", x_unit="F")
+    on_f = calibrate(c["frequency_hz"], c["stress_pa"], degree=3)
+    assert on_c.r2 > on_f.r2 and on_c.rmse < 0.5 * on_f.rmse
