@@ -828,7 +828,7 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
                 span = np.nanmin(np.nanmax(f, axis=2) / np.nanmin(f, axis=2))
             why = (f"the sensor's frequencies span at least a factor {span:.3g}, wider than the band's {fhi / flo:.3g}"
                    if span > fhi / flo else "no E12 R and C_off place the sensor's frequencies inside the band")
-            reasons.append(f"{'diode' if diode else 'no-diode'} variant: {why} (R ≤ {rs.max():.3g} Ω for the margin)")
+            reasons.append(f"{'diode' if diode else 'no-diode'} circuit: {why} (R ≤ {rs.max():.3g} Ω for the margin)")
             continue
         margin_rc = (RF[:, :, 0] * 0 + rlo) / R[:, :, 0] / n_min - 1.0
         score = np.where(ok, merit + 1e-6 * np.minimum(margin_rc, 100.0), -np.inf)

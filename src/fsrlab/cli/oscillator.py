@@ -1,0 +1,170 @@
+"""``fsrlab oscillator``, ``fsrlab decode``, ``fsrlab design``: the LM555 readout (paper §5)."""
+
+from __future__ import annotations
+
+import math
+
+import typer
+
+from fsrlab.cli import app
+from fsrlab.cli._common import emit_json, eng, fail, option_names
+from fsrlab.units import format_eng
+
+_NAMES = {"r_ohm": "--r", "r_fsr_ohm": "--rfsr", "c_fsr_farad": "--cfsr", "c_off_farad": "--coff",
+          "diode_drop_v": "--diode-drop", "vcc_v": "--vcc", "frequency_hz": "--frequency",
+          "duty_cycle": "--duty", "periods": "--periods", "r_fsr_range_ohm": "--rfsr-min/--rfsr-max",
+          "c_fsr_range_farad": "--cfsr-min/--cfsr-max", "band_hz": "--fmin/--fmax", "variant": "--variant",
+          "min_margin": "--margin", "window_s": "--window"}
+
+
+def _variant(diode: bool, diode_drop: float | None) -> tuple[bool, float]:
+    if diode_drop is None:
+        return diode, 0.0
+    if not (math.isfinite(diode_drop) and diode_drop >= 0):
+        fail(f"must be a forward drop >= 0 V, got {diode_drop:g}", "--diode-drop")
+    return True, diode_drop
+
+
+def _diode_text(diode: bool, drop: float) -> str:
+    if not diode:
+        return "no diode"
+    return f"D1 with {drop:g} V drop" if drop > 0 else "ideal D1"
+
+
+@app.command("oscillator")
+def oscillator(
+    r: float = typer.Option(..., "--r", parser=eng, help="R_A = R_B = R [Ω], e.g. 10k."),
+    rfsr: float = typer.Option(..., "--rfsr", parser=eng, help="FSR resistance R_FSR [Ω], e.g. 200k."),
+    cfsr: float = typer.Option(..., "--cfsr", parser=eng, help="FSR capacitance C_FSR [F], e.g. 1n."),
+    coff: float = typer.Option(0.0, "--coff", parser=eng, help="Offset capacitor C_off in parallel [F], e.g. 470p."),
+    diode: bool = typer.Option(False, "--diode", help="Ideal diode D1 in series with R_B (paper Fig. 13)."),
+    diode_drop: float = typer.Option(None, "--diode-drop", parser=eng, help="D1 with this forward drop [V], e.g. 0.6 (implies --diode)."),
+    vcc: float = typer.Option(5.0, "--vcc", parser=eng, help="Supply [V]."),
+    spice: bool = typer.Option(False, "--spice", help="Also simulate the circuit in ngspice and show its frequency and duty cycle."),
+    json_out: bool = typer.Option(False, "--json", help="Print JSON."),
+) -> None:
+    """Frequency, duty cycle and sensitivities of the LM555 astable with the FSR as timing element."""
+    from fsrlab.circuits.lm555 import astable, minimum_n_ratio, sensitivity
+
+    diode, drop = _variant(diode, diode_drop)
+    with option_names(_NAMES):
+        kw = dict(c_off_farad=coff, diode=diode, diode_drop_v=drop, vcc_v=vcc)
+        res = astable(r, rfsr, cfsr, **kw, check=False)
+    if not res.oscillates:
+        # Raises NoOscillationError (a ValueError) saying which condition failed: one line, exit 2.
+        astable(r, rfsr, cfsr, **kw)
+    sens = sensitivity(r, rfsr, cfsr, **kw)
+    out = {"frequency_hz": float(res.frequency_hz), "duty_cycle": float(res.duty_cycle),
+           "tau_high_s": float(res.tau_high_s), "tau_low_s": float(res.tau_low_s), "n_ratio": float(res.n_ratio),
+           "sensitivity_c": float(sens.c_fsr), "sensitivity_r": float(sens.r_fsr)}
+    if spice:
+        from fsrlab.circuits.spice import ngspice_available, simulate_spice
+
+        if not ngspice_available():
+            fail("ngspice is not installed (`make sysdeps` installs it)", "--spice")
+        sim = simulate_spice(r, rfsr, cfsr, **kw, periods=20)
+        out["spice_frequency_hz"] = sim.frequency_hz
+        out["spice_duty_cycle"] = sim.duty_cycle
+    if json_out:
+        emit_json(out)
+        return
+    n_min = minimum_n_ratio(drop, vcc)
+    lines = [
+        f"LM555 astable: R = {format_eng(r, 'Ω')}, R_FSR = {format_eng(rfsr, 'Ω')}, C_FSR = {format_eng(cfsr, 'F')}, "
+        f"C_off = {format_eng(coff, 'F')}, {_diode_text(diode, drop)}, Vcc = {vcc:g} V",
+        f"  frequency        {format_eng(out['frequency_hz'], 'Hz', 5)}",
+        f"  duty cycle       {100 * out['duty_cycle']:.4g} %",
+        f"  τH (output high) {format_eng(out['tau_high_s'], 's')}",
+        f"  τL (output low)  {format_eng(out['tau_low_s'], 's')}",
+        f"  N = R_FSR/R      {out['n_ratio']:.4g} (oscillates for N > {n_min:.4g}; margin {100 * (out['n_ratio'] / n_min - 1):.3g} %)",
+        f"  ∂ln f/∂ln C_FSR  {out['sensitivity_c']:+.4f}",
+        f"  ∂ln f/∂ln R_FSR  {out['sensitivity_r']:+.4f}",
+    ]
+    if spice:
+        lines.append(f"  ngspice          {format_eng(out['spice_frequency_hz'], 'Hz', 5)}, duty cycle "
+                     f"{100 * out['spice_duty_cycle']:.4g} % "
+                     f"(Δf {100 * (out['spice_frequency_hz'] / out['frequency_hz'] - 1):+.3g} %)")
+    typer.echo("\n".join(lines))
+
+
+@app.command("decode")
+def decode_cmd(
+    r: float = typer.Option(..., "--r", parser=eng, help="R_A = R_B = R of the circuit [Ω], e.g. 10k."),
+    frequency: float = typer.Option(..., "--frequency", parser=eng, help="Measured frequency [Hz], e.g. 6478.5 or 6.4785k."),
+    duty: float = typer.Option(..., "--duty", parser=eng, help="Measured duty cycle, 0–1 (output-high fraction)."),
+    coff: float = typer.Option(0.0, "--coff", parser=eng, help="Offset capacitor C_off [F]."),
+    diode: bool = typer.Option(False, "--diode", help="The circuit has the ideal diode D1."),
+    diode_drop: float = typer.Option(None, "--diode-drop", parser=eng, help="D1 with this forward drop [V] (implies --diode)."),
+    vcc: float = typer.Option(5.0, "--vcc", parser=eng, help="Supply [V]."),
+    periods: int = typer.Option(1, "--periods", help="Periods averaged into the measurement (for the uncertainty)."),
+    json_out: bool = typer.Option(False, "--json", help="Print JSON."),
+) -> None:
+    """Recover R_FSR and C_FSR from a measured frequency and duty cycle (uncertainty: 62.5 ns timer ticks)."""
+    from fsrlab.circuits.lm555 import decode
+
+    diode, drop = _variant(diode, diode_drop)
+    with option_names(_NAMES):
+        res = decode(frequency, duty, r, coff, diode=diode, diode_drop_v=drop, vcc_v=vcc, periods=periods)
+    out = {"r_fsr_ohm": float(res.r_fsr_ohm), "c_fsr_farad": float(res.c_fsr_farad),
+           "r_fsr_std_ohm": float(res.r_fsr_std_ohm), "c_fsr_std_farad": float(res.c_fsr_std_farad)}
+    if json_out:
+        emit_json(out)
+        return
+    typer.echo("\n".join([
+        f"Decoded for R = {format_eng(r, 'Ω')}, C_off = {format_eng(coff, 'F')}, {_diode_text(diode, drop)}, "
+        f"{periods} period(s) averaged:",
+        f"  R_FSR = {format_eng(out['r_fsr_ohm'], 'Ω', 6)} ± {format_eng(out['r_fsr_std_ohm'], 'Ω', 3)}",
+        f"  C_FSR = {format_eng(out['c_fsr_farad'], 'F', 6)} ± {format_eng(out['c_fsr_std_farad'], 'F', 3)}",
+        "  (± one standard deviation from 62.5 ns timer quantization)",
+    ]))
+
+
+@app.command("design")
+def design_cmd(
+    rfsr_min: float = typer.Option(..., "--rfsr-min", parser=eng, help="Smallest R_FSR of the sensor (full load) [Ω], e.g. 100k."),
+    rfsr_max: float = typer.Option(..., "--rfsr-max", parser=eng, help="Largest R_FSR (no load) [Ω], e.g. 2M."),
+    cfsr_min: float = typer.Option(..., "--cfsr-min", parser=eng, help="Smallest C_FSR [F], e.g. 0.5n."),
+    cfsr_max: float = typer.Option(..., "--cfsr-max", parser=eng, help="Largest C_FSR [F], e.g. 1.5n."),
+    fmin: float = typer.Option(..., "--fmin", parser=eng, help="Lowest wanted frequency [Hz], e.g. 1k."),
+    fmax: float = typer.Option(..., "--fmax", parser=eng, help="Highest wanted frequency [Hz], e.g. 20k."),
+    variant: str = typer.Option("auto", "--variant", help="auto, diode or no-diode."),
+    diode_drop: float = typer.Option(0.0, "--diode-drop", parser=eng, help="Forward drop of D1 in the diode variant [V]."),
+    vcc: float = typer.Option(5.0, "--vcc", parser=eng, help="Supply [V]."),
+    margin: float = typer.Option(0.25, "--margin", parser=eng, help="Required oscillation margin N/N_min − 1 at the smallest R_FSR."),
+    window: float = typer.Option(0.1, "--window", parser=eng, help="Measurement window for the stated resolution [s], e.g. 100m."),
+    json_out: bool = typer.Option(False, "--json", help="Print JSON."),
+) -> None:
+    """Propose R, C_off and the variant for a sensor's R_FSR/C_FSR ranges and a wanted frequency band."""
+    from dataclasses import asdict
+
+    from fsrlab.circuits.lm555 import design
+
+    with option_names(_NAMES):
+        d = design((rfsr_min, rfsr_max), (cfsr_min, cfsr_max), (fmin, fmax), variant=variant,
+                   diode_drop_v=diode_drop if variant != "no-diode" else 0.0, vcc_v=vcc, min_margin=margin,
+                   window_s=window)
+    if json_out:
+        emit_json(asdict(d))
+        return
+    f0, f1 = d.frequency_range_hz
+    others = [a for a in d.alternatives if a["diode"] != d.diode]
+    lines = [
+        f"Proposal: {'with' if d.diode else 'without'} diode D1, R = {format_eng(d.r_ohm, 'Ω')}, "
+        f"C_off = {format_eng(d.c_off_farad, 'F')}",
+        f"  frequency        {format_eng(f0, 'Hz')} … {format_eng(f1, 'Hz')} "
+        f"(band {format_eng(fmin, 'Hz')} … {format_eng(fmax, 'Hz')})",
+        f"  duty cycle       {100 * d.duty_cycle_range[0]:.3g} … {100 * d.duty_cycle_range[1]:.3g} %",
+        f"  oscillation      N/N_min − 1 ≥ {100 * d.margin:.3g} % over the whole range",
+        f"  ∂ln f/∂ln C_FSR  {d.sensitivity_c_range[0]:+.3f} … {d.sensitivity_c_range[1]:+.3f}",
+        f"  ∂ln f/∂ln R_FSR  {d.sensitivity_r_range[0]:+.3f} … {d.sensitivity_r_range[1]:+.3f}"
+        f"  (capacitive share ≥ {100 * d.capacitive_share:.3g} %)",
+        f"  Uno resolution   one period: {format_eng(d.resolution_single_hz[0], 'Hz')} at {format_eng(f0, 'Hz')}, "
+        f"{format_eng(d.resolution_single_hz[1], 'Hz')} at {format_eng(f1, 'Hz')}; "
+        f"{format_eng(d.window_s, 's')} window: {format_eng(d.resolution_window_hz[0], 'Hz')}, "
+        f"{format_eng(d.resolution_window_hz[1], 'Hz')}",
+    ]
+    for a in others:
+        lines.append(f"  other variant    {'with' if a['diode'] else 'without'} D1: R = {format_eng(a['r_ohm'], 'Ω')}, "
+                     f"C_off = {format_eng(a['c_off_farad'], 'F')}, ∂ln f/∂ln R_FSR "
+                     f"{a['sensitivity_r_range'][0]:+.3f} … {a['sensitivity_r_range'][1]:+.3f}")
+    typer.echo("\n".join(lines))
