@@ -135,3 +135,15 @@ def test_run_hysteresis_on_synthetic_bench_run_matches_noiseless_model():
 def test_run_without_cycle_is_rejected():
     with pytest.raises(ValueError, match="no complete loading-unloading cycle"):
         run_hysteresis(np.linspace(0, 1, 10), np.linspace(1, 2, 10))
+
+
+def test_rows_without_reference_stress_are_skipped():
+    # Acquisition leaves stress_pa empty (NaN) when the reference has no reading: same result without those rows.
+    from fsrlab.analysis.synthetic import synthetic_run
+
+    c = synthetic_run(cycles=2, seed=11).columns
+    s = c["stress_pa"].copy()
+    s[::7] = np.nan
+    full = run_hysteresis(c["stress_pa"][~np.isnan(s)], c["frequency_hz"][~np.isnan(s)])
+    holes = run_hysteresis(s, c["frequency_hz"])
+    assert holes.percent == pytest.approx(full.percent, rel=1e-12)

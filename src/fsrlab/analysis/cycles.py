@@ -336,7 +336,8 @@ def run_hysteresis(stress_pa, q, direction=None, cycle=None, threshold: float = 
     stress_pa : array_like, shape (n,)
         Reference stress in time order. [Pa]
     q : array_like, shape (n,)
-        Readout quantity (frequency [Hz], voltage [V], calibrated stress [Pa], ...); NaN rows are skipped.
+        Readout quantity (frequency [Hz], voltage [V], calibrated stress [Pa], ...); NaN rows are
+        skipped, as are rows whose stress is NaN (no reference reading).
     direction, cycle : array_like, optional
         The run's ``direction`` and ``cycle`` columns (see :func:`split_cycles`).
     threshold : float
@@ -359,6 +360,12 @@ def run_hysteresis(stress_pa, q, direction=None, cycle=None, threshold: float = 
     y = np.asarray(q, dtype=float)
     if y.shape != x.shape:
         raise ValueError("q must have the same length as stress_pa")
+    # Readings without a reference stress (empty cells) take no part.
+    keep = np.isfinite(x)
+    if not keep.all():
+        x, y = x[keep], y[keep]
+        direction = None if direction is None else np.asarray(direction, dtype=float)[keep]
+        cycle = None if cycle is None else np.asarray(cycle, dtype=float)[keep]
     cycles = split_cycles(x, direction, cycle, threshold)
     if not cycles:
         raise ValueError("the run holds no complete loading-unloading cycle (need the stress to rise and fall "
