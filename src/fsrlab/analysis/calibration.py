@@ -316,7 +316,18 @@ def fit_metrics(y, y_hat) -> dict[str, float]:
 
 
 def fingerprint(x, y) -> str:
-    """SHA-256 (first 16 hex digits) of the calibration data as float64 bytes."""
+    """SHA-256 (first 16 hex digits) of the calibration data as float64 bytes.
+
+    Parameters
+    ----------
+    x, y : array_like
+        Readout and reference used for the fit.
+
+    Returns
+    -------
+    str
+        ``"sha256:"`` followed by 16 hex digits.
+    """
     h = hashlib.sha256()
     h.update(np.ascontiguousarray(x, dtype=np.float64).tobytes())
     h.update(np.ascontiguousarray(y, dtype=np.float64).tobytes())
@@ -349,6 +360,8 @@ class Calibration:
         Circuit used to decode C_FSR (physics-informed option).
     source : str
         Where the data came from.
+    extra : dict
+        Further entries kept in the calibration file (e.g. ``compensation``).
     """
 
     model: PolynomialModel
@@ -485,6 +498,15 @@ def save_calibration(cal: Calibration, path: str | os.PathLike) -> Path:
 
 def load_calibration(path: str | os.PathLike) -> Calibration:
     """Read a calibration written by :func:`save_calibration`.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The JSON file.
+
+    Returns
+    -------
+    Calibration
 
     Raises
     ------
