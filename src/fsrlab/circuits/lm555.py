@@ -57,6 +57,13 @@ TIMER_TICK_S = 62.5e-9
 class NoOscillationError(ValueError):
     """The circuit does not oscillate; the message names the failed condition and by how much.
 
+    Parameters
+    ----------
+    message : str
+        One line: which condition failed and by how much.
+    condition, shortfall
+        See Attributes.
+
     Attributes
     ----------
     condition : str
