@@ -94,3 +94,35 @@ def test_validation():
         iso376(F, [CalibrationSeries(0, [1, 2])])
     with pytest.raises(ValueError, match="interpolation_degree"):
         iso376(F, full_calibration(), interpolation_degree=4)
+
+
+def test_csv_loader_and_cli(tmp_path, capsys):
+    import json
+
+    from fsrlab.analysis.iso376 import load_iso376_csv
+    from fsrlab.cli import main
+
+    lines = ["series,rotation_deg,force_n,reading,direction"]
+    for label, s in zip("1235", full_calibration()):
+        lines.append(f"{label},{s.rotation_deg},0,{s.zero_before},1")
+        lines += [f"{label},{s.rotation_deg},{float(f)!r},{float(x)!r},1" for f, x in zip(F, s.increasing)]
+        if s.decreasing is not None:
+            lines += [f"{label},{s.rotation_deg},{float(f)!r},{float(x)!r},-1" for f, x in zip(F, s.decreasing)]
+        lines.append(f"{label},{s.rotation_deg},0,{s.zero_after!r},-1")
+    p = tmp_path / "cal.csv"
+    p.write_text("\n".join(lines) + "\n")
+    forces, series = load_iso376_csv(p)
+    ref = iso376(F, full_calibration())
+    got = iso376(forces, series)
+    np.testing.assert_allclose(got.b, ref.b, rtol=1e-12)
+    assert got.classes == ref.classes
+    with pytest.raises(SystemExit) as info:
+        main(["iso376", str(p), "--json"])
+    assert info.value.code == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["instrument_class"] == "1" and "c" in d["missing"]
+    p.write_text("series,rotation_deg,force_n,reading\n1,0,1000,abc\n")
+    with pytest.raises(SystemExit) as info:
+        main(["iso376", str(p)])
+    err = capsys.readouterr().err
+    assert info.value.code == 2 and "row 1 (line 2), column 'reading'" in err and err.count("\n") == 1

@@ -211,3 +211,43 @@ def apply_cmd(
         emit_json({"output": str(output), "rows": run.n_rows, "missing": n_out})
         return
     typer.echo(f"wrote {output} ({run.n_rows} rows, stress_pa_estimate by {how})")
+
+
+@app.command("iso376")
+def iso376_cmd(
+    file: Path = typer.Argument(..., metavar="FILE.csv", help="Long CSV: series,rotation_deg,force_n,reading[,direction]; force_n = 0 rows are zero readings."),
+    creep: str = typer.Option(None, "--creep", help="Readings 30 s and 300 s after applying the largest force, as 'I30,I300'."),
+    degree: int = typer.Option(3, "--degree", help="Degree 1..3 of the interpolation equation for fc."),
+    json_out: bool = typer.Option(False, "--json", help="Print JSON."),
+) -> None:
+    """ISO 376:2011 quantities (b, b', fc, f0, v, c) and the class they reach (beyond the paper)."""
+    from fsrlab.analysis.iso376 import iso376, load_iso376_csv
+
+    if degree not in (1, 2, 3):
+        fail(f"must be 1, 2 or 3, got {degree}", "--degree")
+    creep_readings = None
+    if creep is not None:
+        try:
+            a, b = (float(v) for v in creep.split(","))
+        except ValueError:
+            fail(f"write two readings as I30,I300, got {creep!r}", "--creep")
+        creep_readings = (a, b)
+    forces, series = load_iso376_csv(file)
+    res = iso376(forces, series, creep_readings, degree)
+    out = {"forces_n": res.forces_n, "b_percent": res.b, "b_prime_percent": res.b_prime, "fc_percent": res.fc,
+           "f0_percent": res.f0, "v_percent": res.v, "c_percent": res.c, "classes": res.classes,
+           "instrument_class": res.instrument_class, "missing": res.missing}
+    if json_out:
+        emit_json(out)
+        return
+    table = Table(title=f"ISO 376:2011 quantities, {file.name}")
+    for col in ("quantity", "worst (%)", "class"):
+        table.add_column(col, justify="right")
+    for name in ("b", "b_prime", "fc", "f0", "v", "c"):
+        w = res.worst(name)
+        table.add_row(name.replace("_prime", "'"), "—" if w is None else f"{w:.4f}", res.classes.get(name, "—"))
+    console = Console()
+    console.print(table)
+    console.print(f"instrument class: {res.instrument_class}")
+    for name, why in res.missing.items():
+        console.print(f"{name}: needs {why}", style="dim")
