@@ -108,7 +108,7 @@ def test_csv_loader_and_cli(tmp_path, capsys):
         lines += [f"{label},{s.rotation_deg},{float(f)!r},{float(x)!r},1" for f, x in zip(F, s.increasing)]
         if s.decreasing is not None:
             lines += [f"{label},{s.rotation_deg},{float(f)!r},{float(x)!r},-1" for f, x in zip(F, s.decreasing)]
-        lines.append(f"{label},{s.rotation_deg},0,{s.zero_after!r},-1")
+        lines.append(f"{label},{s.rotation_deg},0,{float(s.zero_after)!r},-1")
     p = tmp_path / "cal.csv"
     p.write_text("\n".join(lines) + "\n")
     forces, series = load_iso376_csv(p)
