@@ -64,6 +64,7 @@ def test_recording_writes_a_valid_run(tmp_path):
     assert list(run.columns) == list(COLUMNS) + ["stress_pa"]
     assert np.all(np.diff(run["time_s"]) > 0) and np.all(np.diff(run["seq"]) == 1)
     assert np.all(run["frequency_hz"] > 0) and np.all((run["duty_cycle"] > 0) & (run["duty_cycle"] < 1))
+    assert np.all(np.isfinite(run["stress_pa"]))  # every window has its reference stress
     # The triangle profile loads from 0: stress rises, and so does the frequency (paper §5, Fig. 19a).
     assert np.all(np.diff(run["stress_pa"]) > 0)
     assert np.corrcoef(run["stress_pa"], run["frequency_hz"])[0, 1] > 0.9
@@ -179,7 +180,7 @@ def test_cli_json_contract(tmp_path):
     run = load_run(out)
     assert run.n_rows == summary["frames"] >= 10  # 100 ms windows over 2 s
     for col in ("time_s", "frequency_hz", "duty_cycle", "stress_pa"):
-        assert col in run.columns
+        assert col in run.columns and np.all(np.isfinite(run[col]))
 
 
 @pytest.mark.parametrize("argv, field", [

@@ -502,8 +502,8 @@ class VirtualDevice:
             self._write(encode_frame("M", st.seq, fields)[:17])  # cut mid-line by the reset
             self._boot()
             return
-        seq = self._send_frame("M", fields)
-        self._truth[seq] = sig.stress_pa
+        self._truth[st.seq] = sig.stress_pa  # before sending: the host may look it up at once
+        self._send_frame("M", fields)
         while len(self._truth) > 8192:
             self._truth.popitem(last=False)
         if fault.unplug_after is not None and st.m_frames >= fault.unplug_after:
