@@ -72,7 +72,17 @@ class ProtocolError(ValueError):
 
 
 class CommandError(ProtocolError):
-    """A host command the device rejects; ``code`` and ``token`` are what ``$ERR`` reports."""
+    """A host command the device rejects.
+
+    Parameters
+    ----------
+    message : str
+        What is wrong.
+    code : int
+        ``$ERR`` code: 1 unknown command, 2 bad value, 3 line too long.
+    token : str
+        ``$ERR`` token: the command word (``LINE`` for code 3).
+    """
 
     def __init__(self, message: str, code: int, token: str) -> None:
         super().__init__(message)
@@ -514,7 +524,21 @@ class Measurement:
 
 @dataclass(frozen=True, slots=True)
 class Identity:
-    """The device's answer to ``ID`` (also sent once at boot)."""
+    """The device's answer to ``ID`` (also sent once at boot).
+
+    Attributes
+    ----------
+    seq : int
+        Sequence number of the frame.
+    name : str
+        Device name (``fsrlab-meter``).
+    firmware_version : str
+        Firmware version, e.g. ``1.0.0``.
+    protocol_version : int
+        Protocol version (1).
+    f_cpu_hz : int
+        Device clock. [Hz]
+    """
 
     seq: int
     name: str
@@ -534,7 +558,17 @@ class Identity:
 
 @dataclass(frozen=True, slots=True)
 class Ack:
-    """``$ACK``: the device accepted ``command`` (with ``value`` for WINDOW and RANGE)."""
+    """``$ACK``: the device accepted a command.
+
+    Attributes
+    ----------
+    seq : int
+        Sequence number of the frame.
+    command : str
+        The command word.
+    value : int or None
+        The value in force for ``WINDOW`` [ms] and ``RANGE``; None for the others.
+    """
 
     seq: int
     command: str
@@ -551,7 +585,17 @@ class Ack:
 
 @dataclass(frozen=True, slots=True)
 class DeviceError:
-    """``$ERR``: the device rejected a command (code 1 unknown, 2 bad value, 3 line too long)."""
+    """``$ERR``: the device rejected a command.
+
+    Attributes
+    ----------
+    seq : int
+        Sequence number of the frame.
+    code : int
+        1 unknown command, 2 bad value, 3 line too long.
+    token : str
+        The command word as the device read it (``LINE`` for code 3, ``?`` when empty).
+    """
 
     seq: int
     code: int

@@ -25,7 +25,7 @@ from typing import Callable
 from fsrlab.acquisition.protocol import WINDOW_MS_DEFAULT, WINDOW_MS_MAX, WINDOW_MS_MIN, Frame, Identity, Measurement, ParserStats
 from fsrlab.acquisition.serial_link import DeviceGone, LinkError, SerialLink
 
-__all__ = ["COLUMNS", "RecordStatus", "RecordResult", "record"]
+__all__ = ["COLUMNS", "RecordStatus", "RecordResult", "record", "result_dict", "stats_dict"]
 
 COLUMNS = ("time_s", "frequency_hz", "duty_cycle", "voltage_v", "periods", "missed", "range", "seq")
 """Run columns written for every window (``stress_pa`` is added when a reference is given)."""
@@ -256,11 +256,32 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
 
 
 def result_dict(result: RecordResult) -> dict:
-    """The command line's JSON: ``frames``, ``dropped``, ``duration_s``, ``file``."""
+    """The command line's JSON summary.
+
+    Parameters
+    ----------
+    result : RecordResult
+        A finished recording.
+
+    Returns
+    -------
+    dict
+        ``frames``, ``dropped``, ``duration_s`` [s] (rounded to ms) and ``file``, in this order.
+    """
     return {"frames": result.frames, "dropped": result.dropped, "duration_s": round(result.duration_s, 3),
             "file": str(result.file)}
 
 
 def stats_dict(stats: ParserStats) -> dict:
-    """Parser counters as a plain dict."""
+    """Parser counters as a plain dict.
+
+    Parameters
+    ----------
+    stats : ParserStats
+        Counters of a :class:`~fsrlab.acquisition.protocol.FrameParser`.
+
+    Returns
+    -------
+    dict
+    """
     return asdict(stats)

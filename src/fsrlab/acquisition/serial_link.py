@@ -49,7 +49,17 @@ class CommandRejected(LinkError):
 
 @dataclass(frozen=True)
 class UsbPort:
-    """A serial port with its USB identity."""
+    """A serial port with its USB identity.
+
+    Attributes
+    ----------
+    device : str
+        Path or name of the port (``/dev/ttyACM0``, ``COM3``).
+    vid, pid : int or None
+        USB vendor and product id (None for a port that is not USB).
+    description : str
+        What the operating system calls it.
+    """
 
     device: str
     vid: int | None

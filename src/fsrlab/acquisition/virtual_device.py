@@ -71,7 +71,11 @@ class Signal:
 
 
 class SignalSource(Protocol):
-    """Anything that says what the 555 and the op-amp do during a window."""
+    """Anything that says what the 555 and the op-amp do during a window.
+
+    An object with a method ``window(t0_s, t1_s, range_) -> Signal``; see :class:`ConstantSource`
+    and :class:`PhysicsSource`.
+    """
 
     def window(self, t0_s: float, t1_s: float, range_: int) -> Signal:
         """Signal averaged over ``[t0_s, t1_s)`` (time since START [s]) with the C_off switch at ``range_``."""
@@ -80,7 +84,19 @@ class SignalSource(Protocol):
 
 @dataclass(frozen=True)
 class ConstantSource:
-    """A fixed square wave (for protocol tests)."""
+    """A fixed square wave (for protocol tests).
+
+    Parameters
+    ----------
+    frequency_hz : float
+        Frequency of the wave. [Hz]
+    duty_cycle : float
+        High time over period. [1]
+    voltage_v : float
+        Voltage on A0. [V]
+    stress_pa : float
+        Reference stress reported by :meth:`VirtualDevice.reference`. [Pa]
+    """
 
     frequency_hz: float = 5000.0
     duty_cycle: float = 0.5
