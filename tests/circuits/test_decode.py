@@ -104,3 +104,13 @@ def test_sensitivity_limits():
     # Ideal capacitor (R_FSR = inf): f does not depend on R_FSR. Diode variant at large N: f ≈ 1/(ln2·R_FSR·C).
     assert sensitivity(10e3, np.inf, 1e-9).r_fsr == 0.0
     assert sensitivity(10e3, 1e9, 1e-9, diode=True).r_fsr == pytest.approx(-1.0, abs=1e-4)
+
+
+def test_check_false_gives_nan_for_impossible_elements():
+    a = astable(10e3, 200e3, 1e-9)
+    d = decode([a.frequency_hz, 10e3, 1e6], [a.duty_cycle, 0.6, 0.9], 10e3, c_off_farad=0.0, check=False)
+    assert d.r_fsr_ohm[0] == pytest.approx(200e3, rel=1e-9)
+    assert np.isnan(d.r_fsr_ohm[1]) and np.isnan(d.c_fsr_farad[1])  # DC 0.6 < 2/3: impossible
+    assert np.isfinite(d.c_fsr_farad[2])
+    d = decode([1e6], [0.5], 10e3, c_off_farad=1e-9, diode=True, check=False)
+    assert np.isnan(d.c_fsr_farad[0])  # would need C < C_off

@@ -23,8 +23,9 @@ def test_proposal_stays_in_band_with_margin(band, variant):
     assert f.min() == pytest.approx(d.frequency_range_hz[0], rel=1e-2)
     assert 100e3 / d.r_ohm / minimum_n_ratio() - 1 >= 0.25
     assert d.margin >= 0.25
-    # Uno resolution: one 62.5 ns tick on one period is Δf = f²·q.
-    assert d.resolution_single_hz[1] == pytest.approx(d.frequency_range_hz[1] ** 2 * TIMER_TICK_S, rel=1e-12)
+    # Uno resolution: one 62.5 ns tick on one period is Δf = f²·q (band ends and the sensor's range).
+    assert d.resolution_single_hz[1] == pytest.approx(band[1] ** 2 * TIMER_TICK_S, rel=1e-12)
+    assert d.range_resolution_single_hz[1] == pytest.approx(d.frequency_range_hz[1] ** 2 * TIMER_TICK_S, rel=1e-12)
     assert d.resolution_window_hz[1] < d.resolution_single_hz[1]
 
 

@@ -550,7 +550,8 @@ def _invert(f, dc, r, c_off, diode, diode_drop_v, vcc_v, lo, hi):
 
 def decode(frequency_hz, duty_cycle, r_ohm: float, c_off_farad: float = 0.0, diode: bool = False,
            diode_drop_v: float = 0.0, vcc_v: float = 5.0, lower_fraction: float = 1 / 3,
-           upper_fraction: float = 2 / 3, periods=1, timer_resolution_s: float = TIMER_TICK_S) -> DecodeResult:
+           upper_fraction: float = 2 / 3, periods=1, timer_resolution_s: float = TIMER_TICK_S,
+           check: bool = True) -> DecodeResult:
     """Recover R_FSR and C_FSR from a measured frequency and duty cycle (the paper's "dual decoding").
 
     Parameters
@@ -570,6 +571,9 @@ def decode(frequency_hz, duty_cycle, r_ohm: float, c_off_farad: float = 0.0, dio
         protocol ``M`` frame.
     timer_resolution_s : float
         Timer tick (62.5 ns for Timer1 of an Uno at 16 MHz, prescaler 1). [s]
+    check : bool
+        True (default): an impossible (f, DC) pair raises. False: NaN for that element (useful for
+        noisy measured series whose duty cycle can dip below the circuit's limit).
 
     Returns
     -------
@@ -621,7 +625,7 @@ def decode(frequency_hz, duty_cycle, r_ohm: float, c_off_farad: float = 0.0, dio
     n, c_total = _invert(f, dc, *args)
     dc_min, _ = duty_cycle_limits(diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction)
     bad = np.isnan(n)
-    if np.any(bad):
+    if check and np.any(bad):
         i = np.argwhere(bad)[0]
         raise ValueError(
             f"duty_cycle: {float(dc[tuple(i)]):.6g} cannot come from this circuit "
@@ -630,13 +634,13 @@ def decode(frequency_hz, duty_cycle, r_ohm: float, c_off_farad: float = 0.0, dio
     c_fsr = c_total - c_off_farad
     # Rounding of the bisection can leave -1e-16-level negatives when C_FSR is truly 0.
     neg = c_fsr < -1e-12 * c_total
-    if np.any(neg):
+    if check and np.any(neg):
         i = tuple(np.argwhere(neg)[0])
         raise ValueError(
             f"frequency_hz: {float(f[i]):.6g} Hz with duty cycle {float(dc[i]):.6g} needs C = {float(c_total[i]):.4g} F, "
             f"less than c_off_farad = {c_off_farad:.4g} F (C_FSR would be negative)")
-    c_fsr = np.maximum(c_fsr, 0.0)
-    r_fsr = n * r_ohm
+    c_fsr = np.where(neg | bad, np.nan, np.maximum(c_fsr, 0.0))
+    r_fsr = np.where(neg | bad, np.nan, n * r_ohm)
 
     # Quantization uncertainty, propagated with a central-difference Jacobian in (T, H).
     sigma = timer_resolution_s / math.sqrt(12.0)
@@ -705,11 +709,15 @@ class DesignResult:
     merit : float
         Smallest ``|S_C| − |S_R|`` over the range (what the design maximises). [1]
     resolution_single_hz : tuple of float
-        Frequency step of one timer tick in a single-period measurement at the low and high ends,
-        ``f²·q``. [Hz]
+        Frequency step of one timer tick in a single-period measurement at the low and high ends
+        of the wanted band, ``f²·q``. [Hz]
     resolution_window_hz : tuple of float
-        Frequency step of one tick in the period sum of a window of ``window_s`` at the ends,
+        Frequency step of one tick in the period sum of a window of ``window_s`` at the band ends,
         ``f·q/(n/f)`` with ``n = floor(f·window)`` whole periods. [Hz]
+    range_resolution_single_hz, range_resolution_window_hz : tuple of float
+        The same at the ends of the proposal's frequency range. [Hz]
+    band_hz : tuple of float
+        The wanted band. [Hz]
     window_s : float
         Measurement window assumed for ``resolution_window_hz``. [s]
     alternatives : list of dict
@@ -730,6 +738,9 @@ class DesignResult:
     window_s: float
     alternatives: list
     merit: float = math.nan
+    range_resolution_single_hz: tuple = (math.nan, math.nan)
+    range_resolution_window_hz: tuple = (math.nan, math.nan)
+    band_hz: tuple = (math.nan, math.nan)
 
 
 def _e12(lo: float, hi: float) -> np.ndarray:
@@ -855,8 +866,14 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
         raise ValueError("band_hz: no design keeps the sensor inside the band: " + "; ".join(reasons))
     chosen = max(best_per_variant.values(), key=lambda d: (d["merit"], d["margin"]))
     q = timer_resolution_s
-    ends = chosen["frequency_range_hz"]
-    single = tuple(fe**2 * q for fe in ends)
-    window = tuple(fe * q / (max(math.floor(fe * window_s), 1) / fe) for fe in ends)
-    return DesignResult(**chosen, resolution_single_hz=single, resolution_window_hz=window, window_s=window_s,
-                        alternatives=list(best_per_variant.values()))
+
+    def single(ends):
+        return tuple(fe**2 * q for fe in ends)
+
+    def window(ends):
+        return tuple(fe * q / (max(math.floor(fe * window_s), 1) / fe) for fe in ends)
+
+    rng = chosen["frequency_range_hz"]
+    return DesignResult(**chosen, resolution_single_hz=single((flo, fhi)), resolution_window_hz=window((flo, fhi)),
+                        range_resolution_single_hz=single(rng), range_resolution_window_hz=window(rng),
+                        band_hz=(flo, fhi), window_s=window_s, alternatives=list(best_per_variant.values()))

@@ -158,10 +158,13 @@ def design_cmd(
         f"  ∂ln f/∂ln C_FSR  {d.sensitivity_c_range[0]:+.3f} … {d.sensitivity_c_range[1]:+.3f}",
         f"  ∂ln f/∂ln R_FSR  {d.sensitivity_r_range[0]:+.3f} … {d.sensitivity_r_range[1]:+.3f}"
         f"  (capacitive share ≥ {100 * d.capacitive_share:.3g} %)",
-        f"  Uno resolution   one period: {format_eng(d.resolution_single_hz[0], 'Hz')} at {format_eng(f0, 'Hz')}, "
-        f"{format_eng(d.resolution_single_hz[1], 'Hz')} at {format_eng(f1, 'Hz')}; "
-        f"{format_eng(d.window_s, 's')} window: {format_eng(d.resolution_window_hz[0], 'Hz')}, "
-        f"{format_eng(d.resolution_window_hz[1], 'Hz')}",
+        f"  Uno resolution   (62.5 ns ticks) one period: {format_eng(d.resolution_single_hz[0], 'Hz')} at "
+        f"{format_eng(fmin, 'Hz')}, {format_eng(d.resolution_single_hz[1], 'Hz')} at {format_eng(fmax, 'Hz')} "
+        f"(band ends); {format_eng(d.range_resolution_single_hz[0], 'Hz')} at {format_eng(f0, 'Hz')}, "
+        f"{format_eng(d.range_resolution_single_hz[1], 'Hz')} at {format_eng(f1, 'Hz')} (sensor range)",
+        f"                   {format_eng(d.window_s, 's')} window: {format_eng(d.resolution_window_hz[0], 'Hz')}, "
+        f"{format_eng(d.resolution_window_hz[1], 'Hz')} (band ends); {format_eng(d.range_resolution_window_hz[0], 'Hz')}, "
+        f"{format_eng(d.range_resolution_window_hz[1], 'Hz')} (sensor range)",
     ]
     for a in others:
         lines.append(f"  other variant    {'with' if a['diode'] else 'without'} D1: R = {format_eng(a['r_ohm'], 'Ω')}, "
