@@ -160,7 +160,7 @@ class CrossValidation:
     groups : int
         Number of groups (cycles) distributed over the folds.
     best_degree : int
-        Degree with the smallest out-of-fold RMSE.
+        Chosen degree: the lowest whose out-of-fold RMSE is within ``tolerance`` of the smallest.
     moments : tuple of ndarray, optional
         Whole-data sums (Σ T_0..T_2d, Σ T_k y) in the Chebyshev basis, reused for the final fit.
     """
@@ -212,7 +212,8 @@ def default_groups(n: int, cycle=None, folds: int = 5) -> np.ndarray:
 
 
 def cross_validate_degrees(x, y, groups, degrees: Sequence[int] = range(1, MAX_DEGREE + 1), folds: int = 5,
-                           center: float | None = None, half_width: float | None = None) -> CrossValidation:
+                           center: float | None = None, half_width: float | None = None,
+                           tolerance: float = 0.01) -> CrossValidation:
     """Out-of-fold RMSE of each degree, with whole groups held out together.
 
     Parameters
@@ -227,6 +228,9 @@ def cross_validate_degrees(x, y, groups, degrees: Sequence[int] = range(1, MAX_D
         Number of folds, ≥ 2; reduced to the number of groups if there are fewer.
     center, half_width : float, optional
         Mapping of x onto [-1, 1] (default: the data's range).
+    tolerance : float
+        Parsimony: the chosen degree is the lowest whose out-of-fold RMSE is at most
+        ``(1 + tolerance)`` times the smallest (0: plain argmin). [1]
 
     Returns
     -------
@@ -287,7 +291,9 @@ def cross_validate_degrees(x, y, groups, degrees: Sequence[int] = range(1, MAX_D
             gf = gram(m[:, f], d)
             sse += yy[f] - 2 * beta @ ty[: d + 1, f] + beta @ gf @ beta
         rmse.append(float(np.sqrt(max(sse, 0.0) / n_tot)))
-    best = degrees[int(np.argmin(rmse))]
+    if not tolerance >= 0:
+        raise ValueError(f"tolerance must be >= 0, got {tolerance!r}")
+    best = min(d for d, e in zip(degrees, rmse) if e <= (1 + tolerance) * min(rmse))
     return CrossValidation(degrees=degrees, rmse=rmse, folds=k, groups=n_groups, best_degree=best, moments=(mt, tyt))
 
 
@@ -436,7 +442,8 @@ def calibrate(x, y, degree: int | str = "auto", groups=None, folds: int = 5, x_n
     y : array_like
         Reference stress [Pa] (or the readout for an inverse model).
     degree : int or "auto"
-        1..5, or ``"auto"``: the degree with the smallest out-of-fold RMSE.
+        1..5, or ``"auto"``: the lowest degree whose out-of-fold RMSE is within 1 % of the
+        smallest (grouped cross-validation, see :func:`cross_validate_degrees`).
     groups : array_like, optional
         Group (cycle) of each reading for the folds (see :func:`default_groups`); default:
         contiguous blocks in time order.
@@ -528,7 +535,7 @@ def load_calibration(path: str | os.PathLike) -> Calibration:
         met = d.get("metrics", {})
         cvd = d.get("cross_validation")
         cv = None if not cvd else CrossValidation(cvd["degrees"], cvd["rmse"], cvd["folds"], cvd["groups"],
-                                                  cvd["degrees"][int(np.argmin(cvd["rmse"]))])
+                                                  int(d["degree"]))
         known = set(Calibration(model, "", "", "", "", 0, 0, 0, 0, "", "").to_dict())
         extra = {k: v for k, v in d.items() if k not in known}
         return Calibration(model=model, x_name=d["x"], y_name=d["y"], x_unit=d["units"]["x"], y_unit=d["units"]["y"],
