@@ -73,14 +73,23 @@ def test_rejected_commands_answer_err(square, line, code, token):
     assert (e.code, e.token) == (code, token)
 
 
-def test_command_rejected_raises(square):
+def test_host_validates_commands_before_sending(square):
     _, link = square
     link.handshake()
-    link.send(b"WINDOW 5\n")  # bypasses the host's own validation
-    with pytest.raises(ValueError):
-        link.command("WINDOW", 5)  # the host refuses before sending
-    (err,) = _collect(link, 1, kinds=("ERR",))
-    assert DeviceError.from_frame(err).code == P.ERR_BAD_VALUE
+    with pytest.raises(ValueError, match="10..60000"):
+        link.command("WINDOW", 5)
+    assert link.set_window(10).value == 10
+
+
+def test_err_answer_raises_command_rejected():
+    # loop:// hands back what is written: an ERR frame queued before the command is its answer.
+    with SerialLink("loop://") as link:
+        link.serial.write(encode_frame("ERR", 9, (2, "START")))
+        with pytest.raises(CommandRejected, match="error 2"):
+            link.command("START", timeout_s=0.5)
+    with SerialLink("loop://") as link:
+        with pytest.raises(LinkError, match="no answer"):
+            link.command("STOP", timeout_s=0.2)
 
 
 def test_measurements_decode_within_the_quantization_bound(square):
