@@ -180,3 +180,14 @@ def test_physics_informed_calibration_on_decoded_capacitance():
     on_c = calibrate(cf, c["stress_pa"], degree=3, x_name="c_fsr_farad", x_unit="F")
     on_f = calibrate(c["frequency_hz"], c["stress_pa"], degree=3)
     assert on_c.r2 > on_f.r2 and on_c.rmse < 0.5 * on_f.rmse
+
+
+def test_inverse_roundtrip_and_non_monotonic():
+    # Property: inverse(cal(x)) = x inside the calibrated range; NaN outside; error if not monotonic.
+    x = np.linspace(3e3, 10e3, 200)
+    cal = calibrate(x, 1e-4 * (x - 2e3) ** 1.5, degree=3)
+    np.testing.assert_allclose(cal.inverse(cal(x[1:-1])), x[1:-1], rtol=1e-6)
+    assert np.isnan(cal.inverse(cal(x[-1]) * 2))
+    bumpy = calibrate(x, np.sin(x / 1e3), degree=5)
+    with pytest.raises(ValueError, match="not monotonic"):
+        bumpy.inverse(0.0)
