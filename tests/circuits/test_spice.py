@@ -66,3 +66,34 @@ def test_edges_from_waveform_square_wave():
     _, _, f, dc = edges_from_waveform(t, v, 5.0, skip_periods=1)
     assert f == pytest.approx(1e3, rel=1e-4)
     assert dc == pytest.approx(0.25, rel=1e-3)
+
+
+@pytest.mark.parametrize("diode", [False, True])
+def test_ngspice_time_varying_r_fsr_matches_event_driven_simulation(diode):
+    # R_FSR steps down 2M → 100k over 1 ms (20 samples, held constant in between) with C = 100 pF,
+    # from power-up: every output edge of fsrlab's exact transient against ngspice (behavioural
+    # resistor on a stepped PWL source). Tolerance per edge: 2e-3 of the shortest phase (ngspice's
+    # crossing accuracy with a step limit of 1/50 of it) plus 1e-4 of the elapsed time (ngspice's
+    # period error, ~1e-5 in the constant-parts grid above, accumulates over the periods).
+    import numpy as np
+
+    from fsrlab.circuits.spice import _crossings, run_ngspice
+    from fsrlab.circuits.transient import simulate
+
+    require_tool("ngspice")
+    r, c = 10e3, 100e-12
+    t = np.linspace(0, 1e-3, 21)
+    rf = np.geomspace(2e6, 100e3, t.size)
+    ours = simulate(r, rf, c, diode=diode, time_s=t, v_initial_v=0.0)
+    low = np.diff(ours.rising_s) - ours.high_times_s
+    shortest = float(min(ours.high_times_s.min(), low.min()))
+    text = netlist(r, rf, c, diode=diode, time_s=t, t_stop_s=1e-3, t_max_step_s=shortest / 50)
+    data = run_ngspice(text)
+    rising = _crossings(data[:, 0], data[:, 1], 2.5, True)
+    falling = _crossings(data[:, 0], data[:, 1], 2.5, False)
+    assert ours.rising_s.size > 20
+    # An edge within the tolerance of t_stop may fall on either side of it.
+    n_r, n_f = min(rising.size, ours.rising_s.size), min(falling.size, ours.falling_s.size)
+    assert abs(rising.size - ours.rising_s.size) <= 1 and abs(falling.size - ours.falling_s.size) <= 1
+    for got, ref in ((rising[:n_r], ours.rising_s[:n_r]), (falling[:n_f], ours.falling_s[:n_f])):
+        assert np.all(np.abs(got - ref) <= 2e-3 * shortest + 1e-4 * ref)

@@ -95,15 +95,16 @@ def ngspice_available() -> bool:
 def netlist(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: float = 0.0, diode: bool = False,
             diode_drop_v: float = 0.0, vcc_v: float = 5.0, lower_fraction: float = 1 / 3,
             upper_fraction: float = 2 / 3, *, t_stop_s: float, t_max_step_s: float,
-            output_file: str = "fsrlab_out.txt") -> str:
+            output_file: str = "fsrlab_out.txt", time_s=None) -> str:
     """ngspice netlist of the astable (paper Figs. 9b, 13, 16) with a ``.control`` block.
 
     Parameters
     ----------
     r_ohm : float
         R_A = R_B = R. [Ω]
-    r_fsr_ohm : float
-        FSR resistance (``inf``: left out). [Ω]
+    r_fsr_ohm : float or array_like
+        FSR resistance (``inf``: left out); with ``time_s``, its value at each sample, held until
+        the next one (a behavioural resistor driven by a stepped PWL source). [Ω]
     c_fsr_farad : float
         FSR capacitance. [F]
     c_off_farad : float
@@ -122,6 +123,8 @@ def netlist(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: flo
         Largest time step ngspice may take. [s]
     output_file : str
         File ``wrdata`` writes time, V(out), V(thr) into.
+    time_s : array_like, optional
+        Sample times of a time-varying ``r_fsr_ohm`` (strictly increasing, starting at 0). [s]
 
     Returns
     -------
@@ -145,7 +148,21 @@ def netlist(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: flo
         lines.append(".model dideal D(IS=1e-14 N=1e-4)")
     else:
         lines.append(f"RB dis thr {r_ohm:.15g}")
-    if math.isfinite(r_fsr_ohm):
+    if time_s is not None:
+        t = np.asarray(time_s, dtype=float)
+        rs = np.broadcast_to(np.asarray(r_fsr_ohm, dtype=float), t.shape)
+        if t.ndim != 1 or t.size < 2 or t[0] != 0 or np.any(np.diff(t) <= 0) or not np.all(np.isfinite(rs)):
+            raise ValueError("time_s: need strictly increasing sample times from 0 and finite r_fsr_ohm values")
+        # Zero-order hold as in fsrlab.circuits.transient: each value holds until 1e-9 of a step before the next.
+        eps = 1e-9 * float(np.min(np.diff(t)))
+        pts = []
+        for k in range(t.size):
+            pts.append(f"{t[k]:.15g} {rs[k]:.15g}")
+            if k + 1 < t.size:
+                pts.append(f"{t[k + 1] - eps:.15g} {rs[k]:.15g}")
+        lines.append("Vrfsr rctl 0 PWL(" + " ".join(pts) + ")")
+        lines.append("Bfsr thr 0 I=V(thr)/V(rctl)")
+    elif math.isfinite(r_fsr_ohm):
         lines.append(f"RFSR thr 0 {r_fsr_ohm:.15g}")
     lines.append(f"CFSR thr 0 {c_fsr_farad:.15g}")
     if c_off_farad > 0:
