@@ -199,3 +199,16 @@ def test_unplugged_device_raises_device_gone(square):
     with pytest.raises(DeviceGone, match="disconnected"):
         for _ in range(100):
             link.read_frames()
+
+
+def test_frames_after_the_answer_in_the_same_read_are_kept():
+    with SerialLink("loop://") as link:
+        stale = encode_frame("M", 3, (1, 100, 0, 0, 0, 0, 0, 1))
+        ack = encode_frame("ACK", 4, ("START",))
+        fresh = encode_frame("M", 5, (2, 100, 0, 0, 0, 0, 0, 0))
+        link.serial.write(stale + ack + fresh)
+        assert link.start().seq == 4
+        assert [f.seq for f in link.read_frames()] == [5]  # the stale window is dropped, the fresh kept
+        link.serial.write(stale + encode_frame("ACK", 4, ("RANGE", 1)) + fresh)
+        assert link.set_range(1).value == 1
+        assert [f.seq for f in link.read_frames()] == [3, 5]  # other commands keep every window

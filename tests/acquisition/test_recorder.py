@@ -211,3 +211,14 @@ def test_cli_unplugged_device_exit_1_with_one_line(tmp_path):
     assert code == 1
     assert stderr.count("\n") == 1 and "disconnected" in stderr
     assert load_run(tmp_path / "run.csv").n_rows == json.loads(stdout)["frames"] > 0
+
+
+def test_windows_of_a_device_left_running_are_not_recorded(tmp_path):
+    with VirtualDevice(ConstantSource(), seed=4) as dev, SerialLink(dev.port) as link:
+        link.send(b"WINDOW 10\nRANGE 1\nSTART\n")  # someone left it running at range 1 ...
+        time.sleep(0.15)  # ... and its windows wait unread in the port
+        result = record(link, tmp_path / "run.csv", 0.3, window_ms=10, range_=0)
+    run = load_run(tmp_path / "run.csv")
+    assert run.n_rows == result.frames > 0
+    assert np.all(run["range"] == 0)
+    assert run["seq"][0] >= run.metadata["acquisition"]["first_seq"]

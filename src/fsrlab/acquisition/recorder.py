@@ -80,7 +80,8 @@ class RecordResult:
     file : Path
         The run file.
     ended : str
-        ``"duration"``, ``"interrupted"`` (Ctrl-C), ``"stopped"`` (stop event) or ``"disconnected"``.
+        ``"duration"``, ``"interrupted"`` (Ctrl-C), ``"stopped"`` (stop event), ``"disconnected"``
+        (device gone) or ``"error"`` (device stopped answering commands).
     message : str
         One line describing how it ended.
     stats : ParserStats
@@ -232,8 +233,10 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
             ended = "interrupted"
         except DeviceGone as exc:
             ended, message = "disconnected", str(exc)
+        except LinkError as exc:  # no answer while re-configuring after a reset
+            ended, message = "error", str(exc)
         dropped = parser.lost - lost0  # frames sent while recording that never made it
-        if ended != "disconnected":
+        if ended not in ("disconnected", "error"):
             try:
                 link.command("STOP", timeout_s=0.5)
             except (LinkError, KeyboardInterrupt):

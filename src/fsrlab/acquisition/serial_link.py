@@ -178,14 +178,23 @@ class SerialLink:
             return out
         return self.parser.feed(self._read_bytes())
 
-    def _wait_for(self, match, timeout_s: float) -> Frame | None:
-        """Read until ``match(frame)`` is true; keep every other frame in the backlog."""
+    def _wait_for(self, match, timeout_s: float, discard_earlier: bool = False) -> Frame | None:
+        """Read until ``match(frame)`` is true; keep every other frame in the backlog, in order.
+
+        With ``discard_earlier`` the frames received before the match (and the backlog) are
+        dropped instead; frames that arrived after the match in the same read are always kept.
+        """
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:
-            for frame in self.parser.feed(self._read_bytes()):
+            frames = self.parser.feed(self._read_bytes())
+            for i, frame in enumerate(frames):
                 if match(frame):
+                    if discard_earlier:
+                        self._backlog.clear()
+                    self._backlog.extend(frames[i + 1:])
                     return frame
-                self._backlog.append(frame)
+                if not discard_earlier:
+                    self._backlog.append(frame)
         return None
 
     def handshake(self, timeout_s: float = 3.0, retry_s: float = 0.5) -> Identity:
@@ -228,7 +237,8 @@ class SerialLink:
         self.identity = ident
         return ident
 
-    def command(self, name: str, value: int | None = None, timeout_s: float = 1.0) -> Ack:
+    def command(self, name: str, value: int | None = None, timeout_s: float = 1.0,
+                discard_earlier: bool = False) -> Ack:
         """Send a command and wait for its ``ACK``.
 
         Parameters
@@ -239,6 +249,9 @@ class SerialLink:
             Window [ms] or range.
         timeout_s : float
             Longest wait for the answer. [s]
+        discard_earlier : bool
+            Drop every frame received before the answer instead of keeping it for
+            :meth:`read_frames` (used with ``START``: windows from before it are stale).
 
         Returns
         -------
@@ -256,7 +269,8 @@ class SerialLink:
         line = encode_command(name, value)
         key = name.upper()
         self.send(line)
-        frame = self._wait_for(lambda f: (f.kind == "ACK" and f.fields[0] == key) or f.kind == "ERR", timeout_s)
+        frame = self._wait_for(lambda f: (f.kind == "ACK" and f.fields[0] == key) or f.kind == "ERR", timeout_s,
+                               discard_earlier)
         if frame is None:
             raise LinkError(f"{self.port}: no answer to {line.decode().strip()!r} within {timeout_s:g} s")
         if frame.kind == "ERR":
@@ -264,9 +278,15 @@ class SerialLink:
             raise CommandRejected(f"{self.port} rejected {line.decode().strip()!r}: error {err.code} ({err.token})")
         return Ack.from_frame(frame)
 
-    def start(self) -> Ack:
-        """``START``: begin measuring windows."""
-        return self.command("START")
+    def start(self, discard_earlier: bool = True) -> Ack:
+        """``START``: begin measuring windows.
+
+        Parameters
+        ----------
+        discard_earlier : bool
+            Drop frames received before the ``ACK`` (windows of an earlier run), by default.
+        """
+        return self.command("START", discard_earlier=discard_earlier)
 
     def stop(self) -> Ack:
         """``STOP``: stop measuring."""

@@ -163,7 +163,7 @@ def acquire(
     else:
         typer.echo(f"{out}: {result.frames} windows, {result.dropped} dropped, {result.duration_s:.1f} s "
                    f"({result.stats.bad_frames} corrupt lines, {result.stats.resets} device resets)")
-    if result.ended == "disconnected":
+    if result.ended in ("disconnected", "error"):
         print(f"fsrlab: {result.message}", file=sys.stderr)
         raise typer.Exit(1)
 
