@@ -107,11 +107,11 @@ def hysteresis_error(stress_load_pa, q_load, stress_unload_pa, q_unload) -> Hyst
     grid = np.union1d(xl[(xl >= lo) & (xl <= hi)], xu[(xu >= lo) & (xu <= hi)])
     diff = np.interp(grid, xu, yu) - np.interp(grid, xl, yl)
     i = int(np.argmax(np.abs(diff)))
-    full = abs(yl[-1])
+    full = abs(float(yl[-1]))
     if full == 0:
         raise ValueError("q_load is 0 at the largest stress: eq. (13) needs Q(σf) ≠ 0")
     return HysteresisResult(
-        percent=float(100 * abs(diff[i]) / full),  # Eq. (13)
+        percent=100 * abs(float(diff[i])) / full,  # Eq. (13); Python floats: a tiny Q(σf) gives inf, no warning
         stress_at_max_pa=float(grid[i]),
         difference=float(diff[i]),
         full_scale=float(full),
