@@ -90,14 +90,14 @@ class _LiveView:
 def acquire(
     port: str = typer.Option(None, "--port", help="Serial port (/dev/ttyACM0, COM3, a pty) or 'auto' to find an Uno by USB id."),
     virtual: bool = typer.Option(False, "--virtual", help="Record from a virtual device (pty, physics and 555 models) instead of hardware."),
-    duration: float = typer.Option(60.0, "--duration", parser=eng, help="Recording time [s]."),
+    duration: float = typer.Option(60.0, "--duration", parser=eng, help="Recording time (s)."),
     out: Path = typer.Option(Path("run.csv"), "--out", "-o", help="Run file (CSV + NAME.meta.json sidecar, docs/data-format.md)."),
-    window: int = typer.Option(100, "--window", help="Measurement window [ms], 10..60000."),
+    window: int = typer.Option(100, "--window", help="Measurement window (ms), 10..60000."),
     range_: int = typer.Option(0, "--range", help="C_off range switch: 0 (off) or 1 (C_off connected)."),
-    baud: int = typer.Option(115200, "--baud", help="Line rate [bit/s] (protocol v1: 115200)."),
+    baud: int = typer.Option(115200, "--baud", help="Line rate (bit/s; protocol v1: 115200)."),
     profile: str = typer.Option("triangle", "--profile", help=_PROFILE_HELP),
     peak: float = typer.Option(50e3, "--peak", parser=eng, help="Virtual profile: peak stress [Pa], e.g. 50k."),
-    period: float = typer.Option(4.0, "--period", parser=eng, help="Virtual profile: cycle time [s]."),
+    period: float = typer.Option(4.0, "--period", parser=eng, help="Virtual profile: cycle time (s)."),
     c_off: float = typer.Option(1e-9, "--c-off", parser=eng, help="Virtual circuit: C_off switched in by --range 1 [F], e.g. 1n."),
     seed: int = typer.Option(None, "--seed", help="Virtual device: random seed."),
     corrupt: float = typer.Option(0.0, "--corrupt", parser=eng, help="Virtual device: probability that a frame is corrupted (tests)."),
@@ -170,10 +170,10 @@ def acquire(
 
 @app.command("virtual-device")
 def virtual_device(
-    duration: float = typer.Option(None, "--duration", parser=eng, help="Run this long [s]; default until Ctrl-C."),
+    duration: float = typer.Option(None, "--duration", parser=eng, help="Run this long (s); default until Ctrl-C."),
     profile: str = typer.Option("triangle", "--profile", help=_PROFILE_HELP),
     peak: float = typer.Option(50e3, "--peak", parser=eng, help="Peak stress [Pa], e.g. 50k."),
-    period: float = typer.Option(4.0, "--period", parser=eng, help="Cycle time of the profile [s]."),
+    period: float = typer.Option(4.0, "--period", parser=eng, help="Cycle time of the profile (s)."),
     c_off: float = typer.Option(1e-9, "--c-off", parser=eng, help="C_off switched in by RANGE 1 [F], e.g. 1n."),
     seed: int = typer.Option(None, "--seed", help="Random seed."),
     corrupt: float = typer.Option(0.0, "--corrupt", parser=eng, help="Probability that a frame is corrupted."),
