@@ -45,3 +45,13 @@ def test_section_files_errata_and_data(section):
         # ngspice columns agree with the closed forms (0.1 %, as in test_spice.py).
         np.testing.assert_allclose(data["ngspice_diode"]["duty_cycle"], data["duty_cycle_diode"], rtol=1e-3)
         np.testing.assert_allclose(data["ngspice_no_diode"]["duty_cycle"], data["duty_cycle_no_diode"], rtol=1e-3)
+
+
+def test_frequency_vs_stress_decomposition(section):
+    # Circuit properties whatever the sensor model: a growing C_FSR lowers f; with D1 a falling
+    # R_FSR raises f (τL = ln2·R_FSR·C); without D1 R_FSR moves f little (|S_R| < 0.1 here, N > 90).
+    fs = section[0].data["oscillator"]["frequency_vs_stress_virtual_fsr"]
+    assert fs["c_fsr_farad"][1] > fs["c_fsr_farad"][0] and fs["r_fsr_ohm"][1] < fs["r_fsr_ohm"][0]
+    d, nd = fs["diode"], fs["no_diode"]
+    assert d["c_only_hz"][1] < d["c_only_hz"][0] and d["r_only_hz"][1] > d["r_only_hz"][0]
+    assert abs(nd["r_only_hz"][1] / nd["r_only_hz"][0] - 1) < 0.1 * abs(nd["c_only_hz"][1] / nd["c_only_hz"][0] - 1)

@@ -106,6 +106,36 @@ def _sensitivity_figure(outdir: Path) -> None:
     save(fig, outdir / "oscillator_sensitivity.png")
 
 
+def _stress_figure(outdir: Path) -> dict:
+    """f versus stress on the lead's VirtualFSR for both variants, split into C-only and R-only parts."""
+    from fsrlab.physics.sensor import VirtualFSR
+
+    stress = np.linspace(0.0, 10e3, 101)  # the paper's Figure 17 range, 0–10 kPa
+    resp = VirtualFSR().respond(stress)
+    rf, cf = resp.r_fsr_ohm, resp.c_fsr_farad
+    fig, _ = new_figure(11.0, 4.2)
+    fig.clf()
+    axes = fig.subplots(1, 2)
+    out = {"stress_pa": [float(stress[0]), float(stress[-1])], "r_fsr_ohm": [float(rf[0]), float(rf[-1])],
+           "c_fsr_farad": [float(cf[0]), float(cf[-1])]}
+    for ax, diode in zip(axes, (True, False)):
+        both = astable(R_OHM, rf, cf, diode=diode).frequency_hz
+        c_only = astable(R_OHM, rf[0], cf, diode=diode).frequency_hz
+        r_only = astable(R_OHM, rf, cf[0], diode=diode).frequency_hz
+        ax.grid(True, alpha=0.3)
+        ax.plot(stress / 1e3, both / 1e3, "k-", lw=2, label="f (R_FSR and C_FSR change)")
+        ax.plot(stress / 1e3, c_only / 1e3, "C0--", label="only C_FSR changes")
+        ax.plot(stress / 1e3, r_only / 1e3, "C1--", label="only R_FSR changes")
+        ax.set(xlabel="stress σ (kPa)", ylabel="f (kHz)",
+               title=("with D1 (paper's Fig. 16)" if diode else "without D1") + ", R = 10 kΩ, C_off = 0")
+        ax.legend(fontsize=8)
+        out["diode" if diode else "no_diode"] = {
+            "frequency_hz": [float(both[0]), float(both[-1])], "c_only_hz": [float(c_only[0]), float(c_only[-1])],
+            "r_only_hz": [float(r_only[0]), float(r_only[-1])]}
+    save(fig, outdir / "oscillator_frequency_vs_stress.png")
+    return out
+
+
 def build(outdir: Path) -> Section:
     """Build the oscillator section into ``outdir`` (PNGs) and return it."""
     outdir = Path(outdir)
@@ -115,6 +145,7 @@ def build(outdir: Path) -> Section:
     _figure(outdir, "fig12_tau_ratio_no_diode.png", False, spice_nd)
     _figure(outdir, "fig15_tau_ratio_diode.png", True, spice_d)
     _sensitivity_figure(outdir)
+    fs = _stress_figure(outdir)
 
     n = np.array(N_TABLE)
     g_nd, g_d, g_37 = tau_ratio(n), tau_ratio(n, diode=True), paper_eq37_as_printed(n)
@@ -240,6 +271,19 @@ def build(outdir: Path) -> Section:
                "raises f as in Figure 19a. Without the diode it is "
                f"{float(s20_nd.r_fsr):+.3f} at N = 20 (f nearly independent of R_FSR, and it rises with R_FSR). "
                "∂ln f/∂ln C_FSR = −C_FSR/(C_FSR + C_off) in both variants."),
+        Figure("oscillator_frequency_vs_stress.png",
+               "Extension: where the frequency change under load comes from (lead's VirtualFSR, 0–10 kPa)",
+               "Figure 19a: f rises from about 3 to 10 kHz as stress rises, read as a capacitive measurement.",
+               f"On the VirtualFSR (R_FSR {fs['r_fsr_ohm'][0] / 1e6:.2f} → {fs['r_fsr_ohm'][1] / 1e6:.2f} MΩ, C_FSR "
+               f"{fs['c_fsr_farad'][0] * 1e12:.0f} → {fs['c_fsr_farad'][1] * 1e12:.0f} pF) the paper's circuit with D1 "
+               f"rises {fs['diode']['frequency_hz'][0] / 1e3:.2f} → {fs['diode']['frequency_hz'][1] / 1e3:.2f} kHz, "
+               "like Figure 19a; with C_FSR alone it would fall "
+               f"({fs['diode']['c_only_hz'][0] / 1e3:.2f} → {fs['diode']['c_only_hz'][1] / 1e3:.2f} kHz), with R_FSR "
+               f"alone it would rise ({fs['diode']['r_only_hz'][0] / 1e3:.2f} → {fs['diode']['r_only_hz'][1] / 1e3:.2f} kHz): "
+               "the rise is resistive. Without D1 f falls "
+               f"{fs['no_diode']['frequency_hz'][0] / 1e3:.1f} → {fs['no_diode']['frequency_hz'][1] / 1e3:.1f} kHz, "
+               "almost all of it from C_FSR. The sensor model is the lead's extension (fsrlab.physics.sensor), "
+               "not the paper's; the decomposition holds for any sensor whose R_FSR falls under load."),
     ]
 
     data = {
@@ -256,6 +300,7 @@ def build(outdir: Path) -> Section:
             "tau_ratio_infimum_no_diode": 2.0,
             "n_where_eq32_equals_24_37": n_at_2437,
             "sensitivity_r_fsr_at_N20": {"no_diode": float(s20_nd.r_fsr), "diode": float(s20.r_fsr)},
+            "frequency_vs_stress_virtual_fsr": fs,
             "ngspice_available": have_spice,
             "ngspice_no_diode": spice_nd,
             "ngspice_diode": spice_d,
