@@ -155,3 +155,16 @@ def test_properties(r, n, c, vd, lo, hi):
         assert dio.tau_high_s >= plain.tau_high_s * (1 - 1e-12)
     scaled = astable(r, n * r, 2 * c, diode=True, diode_drop_v=vd, **kw)
     assert scaled.frequency_hz == pytest.approx(dio.frequency_hz / 2, rel=1e-12)
+
+
+def test_thresholds_from_control_pin():
+    # LM555 internal divider: open control pin sits at 2/3·Vcc, trigger at half the control voltage.
+    from fsrlab.circuits.lm555 import thresholds_from_control
+
+    assert thresholds_from_control(10 / 3, 5.0) == pytest.approx((1 / 3, 2 / 3), rel=1e-15)
+    lo, hi = thresholds_from_control(4.0, 5.0)
+    assert (lo, hi) == pytest.approx((0.4, 0.8))
+    # The charge must now reach 4 V: N_min = 2·4/(5 − 4) = 8.
+    assert minimum_n_ratio(0.0, 5.0, hi) == pytest.approx(8.0)
+    with pytest.raises(ValueError, match="control_v"):
+        thresholds_from_control(6.0, 5.0)

@@ -104,3 +104,11 @@ def test_design_text_and_json(capsys):
     assert code == 0
     assert 1e3 <= data["frequency_range_hz"][0] <= data["frequency_range_hz"][1] <= 20e3
     assert data["margin"] >= 0.25
+
+
+def test_control_pin_option(capsys):
+    code, out, _ = run(["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1n", "--vctrl", "4", "--json"], capsys)
+    ref = astable(10e3, 200e3, 1e-9, lower_fraction=0.4, upper_fraction=0.8)
+    assert code == 0 and json.loads(out)["frequency_hz"] == pytest.approx(ref.frequency_hz, rel=1e-12)
+    code, _, err = run(["oscillator", "--r", "10k", "--rfsr", "70k", "--cfsr", "1n", "--vctrl", "4"], capsys)
+    assert code == 2 and "must exceed 8" in err  # N = 7 < N_min = 8 with the moved threshold

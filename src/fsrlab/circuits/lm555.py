@@ -42,6 +42,7 @@ __all__ = [
     "tau_ratio",
     "duty_cycle_limits",
     "TIMER_TICK_S",
+    "thresholds_from_control",
     "Sensitivity",
     "sensitivity",
     "DecodeResult",
@@ -116,6 +117,30 @@ class AstableResult:
     def ratio(self):
         """τH/τL (the quantity of the paper's eqs. 32 and 37). [1]"""
         return self.tau_high_s / self.tau_low_s
+
+
+def thresholds_from_control(control_v: float, vcc_v: float = 5.0) -> tuple[float, float]:
+    """Threshold fractions when the control pin (5) is driven to ``control_v``.
+
+    Parameters
+    ----------
+    control_v : float
+        Voltage on the control pin, 0 < control_v < vcc_v (open pin: 2/3·Vcc). [V]
+    vcc_v : float
+        Supply. [V]
+
+    Returns
+    -------
+    (lower_fraction, upper_fraction) : (float, float)
+        The threshold comparator trips at ``control_v`` and the trigger comparator at half of it
+        (the LM555's internal divider), as fractions of Vcc. [1]
+    """
+    if not (np.isfinite(vcc_v) and vcc_v > 0):
+        raise ValueError(f"vcc_v: must be a finite supply voltage > 0 V, got {vcc_v!r}")
+    if not (0 < control_v < vcc_v):
+        raise ValueError(f"control_v: must be between 0 and vcc_v = {vcc_v:g} V, got {control_v!r}")
+    upper = control_v / vcc_v
+    return upper / 2, upper
 
 
 def _check_fractions(lower_fraction: float, upper_fraction: float) -> None:

@@ -10,7 +10,7 @@ from fsrlab.cli import app
 from fsrlab.cli._common import emit_json, eng, fail, option_names
 from fsrlab.units import format_eng
 
-_NAMES = {"r_ohm": "--r", "r_fsr_ohm": "--rfsr", "c_fsr_farad": "--cfsr", "c_off_farad": "--coff",
+_NAMES = {"control_v": "--vctrl", "r_ohm": "--r", "r_fsr_ohm": "--rfsr", "c_fsr_farad": "--cfsr", "c_off_farad": "--coff",
           "diode_drop_v": "--diode-drop", "vcc_v": "--vcc", "frequency_hz": "--frequency",
           "duty_cycle": "--duty", "periods": "--periods", "r_fsr_range_ohm": "--rfsr-min/--rfsr-max",
           "c_fsr_range_farad": "--cfsr-min/--cfsr-max", "band_hz": "--fmin/--fmax", "variant": "--variant",
@@ -40,15 +40,18 @@ def oscillator(
     diode: bool = typer.Option(False, "--diode", help="Ideal diode D1 in series with R_B (paper Fig. 13)."),
     diode_drop: float = typer.Option(None, "--diode-drop", parser=eng, help="D1 with this forward drop [V], e.g. 0.6 (implies --diode)."),
     vcc: float = typer.Option(5.0, "--vcc", parser=eng, help="Supply [V]."),
+    vctrl: float = typer.Option(None, "--vctrl", parser=eng, help="Control-pin voltage [V] (thresholds at Vctrl and Vctrl/2; default: open pin, 2/3·Vcc)."),
     spice: bool = typer.Option(False, "--spice", help="Also simulate the circuit in ngspice and show its frequency and duty cycle."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Frequency, duty cycle and sensitivities of the LM555 astable with the FSR as timing element."""
-    from fsrlab.circuits.lm555 import astable, minimum_n_ratio, sensitivity
+    from fsrlab.circuits.lm555 import astable, minimum_n_ratio, sensitivity, thresholds_from_control
 
     diode, drop = _variant(diode, diode_drop)
     with option_names(_NAMES):
-        kw = dict(c_off_farad=coff, diode=diode, diode_drop_v=drop, vcc_v=vcc)
+        lower, upper = (1 / 3, 2 / 3) if vctrl is None else thresholds_from_control(vctrl, vcc)
+        kw = dict(c_off_farad=coff, diode=diode, diode_drop_v=drop, vcc_v=vcc, lower_fraction=lower,
+                  upper_fraction=upper)
         res = astable(r, rfsr, cfsr, **kw, check=False)
     if not res.oscillates:
         # Raises NoOscillationError (a ValueError) saying which condition failed: one line, exit 2.
@@ -68,7 +71,7 @@ def oscillator(
     if json_out:
         emit_json(out)
         return
-    n_min = minimum_n_ratio(drop, vcc)
+    n_min = minimum_n_ratio(drop, vcc, upper)
     lines = [
         f"LM555 astable: R = {format_eng(r, 'Ω')}, R_FSR = {format_eng(rfsr, 'Ω')}, C_FSR = {format_eng(cfsr, 'F')}, "
         f"C_off = {format_eng(coff, 'F')}, {_diode_text(diode, drop)}, Vcc = {vcc:g} V",
@@ -96,15 +99,18 @@ def decode_cmd(
     diode: bool = typer.Option(False, "--diode", help="The circuit has the ideal diode D1."),
     diode_drop: float = typer.Option(None, "--diode-drop", parser=eng, help="D1 with this forward drop [V] (implies --diode)."),
     vcc: float = typer.Option(5.0, "--vcc", parser=eng, help="Supply [V]."),
+    vctrl: float = typer.Option(None, "--vctrl", parser=eng, help="Control-pin voltage [V] (default: open pin)."),
     periods: int = typer.Option(1, "--periods", help="Periods averaged into the measurement (for the uncertainty)."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Recover R_FSR and C_FSR from a measured frequency and duty cycle (uncertainty: 62.5 ns timer ticks)."""
-    from fsrlab.circuits.lm555 import decode
+    from fsrlab.circuits.lm555 import decode, thresholds_from_control
 
     diode, drop = _variant(diode, diode_drop)
     with option_names(_NAMES):
-        res = decode(frequency, duty, r, coff, diode=diode, diode_drop_v=drop, vcc_v=vcc, periods=periods)
+        lower, upper = (1 / 3, 2 / 3) if vctrl is None else thresholds_from_control(vctrl, vcc)
+        res = decode(frequency, duty, r, coff, diode=diode, diode_drop_v=drop, vcc_v=vcc, periods=periods,
+                     lower_fraction=lower, upper_fraction=upper)
     out = {"r_fsr_ohm": float(res.r_fsr_ohm), "c_fsr_farad": float(res.c_fsr_farad),
            "r_fsr_std_ohm": float(res.r_fsr_std_ohm), "c_fsr_std_farad": float(res.c_fsr_std_farad)}
     if json_out:
