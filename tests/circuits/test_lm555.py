@@ -168,3 +168,13 @@ def test_thresholds_from_control_pin():
     assert minimum_n_ratio(0.0, 5.0, hi) == pytest.approx(8.0)
     with pytest.raises(ValueError, match="control_v"):
         thresholds_from_control(6.0, 5.0)
+
+
+@given(lo=st.floats(0.05, 0.6), width=st.floats(0.02, 0.35), diode=st.booleans(), drop_share=st.floats(0, 0.95))
+def test_tau_ratio_monotone_for_any_thresholds_and_drop(lo, width, diode, drop_share):
+    # decode() inverts DC(N) by bisection: this property (τH/τL strictly falling in N) is what it needs.
+    hi = min(lo + width, 0.95)
+    vd = drop_share * (1 - hi) * 5.0 if diode else 0.0
+    n = minimum_n_ratio(vd, 5.0, hi) * (1 + np.geomspace(1e-6, 1e6, 400))
+    g = tau_ratio(n, diode=diode, diode_drop_v=vd, lower_fraction=lo, upper_fraction=hi)
+    assert np.all(np.diff(g) < 0)
