@@ -441,10 +441,9 @@ class VirtualDevice:
         except CommandError as err:
             self._send_frame("ERR", (err.code, err.token), faults=False)
             return
-        if name == "ID":
+        if name == "ID":  # the ID frame, then the ACK, as the firmware does
             self._send_frame("ID", (DEVICE_NAME, FIRMWARE_VERSION, PROTOCOL_VERSION, F_CPU), faults=False)
-            return
-        if name == "START" and not st.started:
+        elif name == "START" and not st.started:
             st.started = True
             st.window_start = st.start_time = self._now()
             st.current_ms = st.window_ms
@@ -508,7 +507,7 @@ class VirtualDevice:
                 st.last_edge_tick = tick_last
             st.phase = phi1
         volts = sig.voltage_v + self.adc_noise_v * rng.standard_normal()
-        adc = min(max(int(round(volts / 5.0 * 1024)), 0), 1023)
+        adc = min(max(math.floor(volts / 5.0 * 1024), 0), 1023)  # ideal 10-bit ADC: floor(V·1024/Vref)
         t_ms = int(t1 * 1000) % 2**32
         fields = (t_ms, st.current_ms, periods, min(sum_p, 2**32 - 1), min(sum_h, 2**32 - 1), 0, adc, st.range_)
         fault = self.faults

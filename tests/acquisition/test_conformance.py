@@ -1,0 +1,100 @@
+"""The virtual device answers like the real firmware: one command session, played to the firmware
+running in simavr (firmware/build/fsrlab_sim, an ATmega328P at 16 MHz) and to the virtual device on
+a pty, parsed by the same host parser.
+
+Reference: simavr running the firmware's .elf (the firmware engineer's harness). Compared: every
+non-measurement frame (ID, ACK, ERR: type and fields; the firmware version string aside), and
+the measurement frames' window, range, A0 reading and decoded frequency and duty cycle (within
+the 62.5 ns quantization bound of docs/protocol.md).
+"""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+from toolcheck import require_file, require_tool
+
+from fsrlab.acquisition.protocol import FrameParser, Measurement
+from fsrlab.acquisition.serial_link import SerialLink
+from fsrlab.acquisition.virtual_device import ConstantSource, VirtualDevice
+
+FIRMWARE = Path(__file__).resolve().parents[2] / "firmware"
+F_HZ, DUTY, ADC_MV = 5000.0, 0.25, 2000
+
+# (time [s], command line) — the same session for both devices.
+SESSION = [
+    (0.01, "ID"), (0.02, "FOO"), (0.03, "WINDOW 5"), (0.04, "WINDOW 50"), (0.05, "RANGE 1"),
+    (0.06, "START"), (0.07, "START"), (0.25, "STOP"), (0.26, ""), (0.27, "STOP 1"),
+    (0.28, "X" * 40), (0.29, "RANGE 2"), (0.30, "start"), (0.31, "RANGE 0"),
+]
+END_S = 0.4
+
+
+@pytest.fixture(scope="module")
+def simulator() -> tuple[Path, Path]:
+    require_tool("avr-gcc")
+    require_tool("make")
+    require_file("/usr/include/simavr/sim_avr.h", "libsimavr-dev")
+    require_file(FIRMWARE / "Makefile", "the firmware sources")
+    build = subprocess.run(["make", "-s", "-C", str(FIRMWARE), "all-sim"], capture_output=True, text=True)
+    assert build.returncode == 0, build.stderr[-2000:]
+    return FIRMWARE / "build" / "fsrlab_sim", FIRMWARE / "build" / "fsrlab_meter.elf"
+
+
+def _firmware_frames(simulator) -> list:
+    sim, elf = simulator
+    args = [str(sim), str(elf), "--time", str(END_S), "--seg", f"0:{F_HZ}:{DUTY}", "--adc-mv", str(ADC_MV)]
+    for t, line in SESSION:
+        args += ["--cmd", f"{t}:{line}"]
+    out = subprocess.run(args, capture_output=True, check=True).stdout
+    return FrameParser().feed(out)
+
+
+def _virtual_frames() -> list:
+    source = ConstantSource(F_HZ, DUTY, ADC_MV / 1000.0)
+    frames = []
+    with VirtualDevice(source, frequency_noise=0.0, jitter_s=0.0, adc_noise_v=0.0, seed=0) as dev, \
+            SerialLink(dev.port) as link:
+        t0 = time.monotonic()
+        for t, line in SESSION + [(END_S, None)]:
+            while time.monotonic() - t0 < t:
+                frames += link.read_frames()
+            if line is not None:
+                link.send(line.encode() + b"\n")
+        frames += link.read_frames()
+    return frames
+
+
+def _answers(frames) -> list:
+    out = []
+    for f in frames:
+        if f.kind == "M":
+            continue
+        fields = f.fields
+        if f.kind == "ID":
+            fields = (fields[0],) + fields[2:]  # firmware version: "1.0.0" vs "1.0.0-virtual"
+        out.append((f.kind, fields))
+    return out
+
+
+def test_virtual_device_answers_commands_like_the_firmware(simulator):
+    real = _firmware_frames(simulator)
+    virtual = _virtual_frames()
+    assert real[0].kind == "ID" and real[0].seq == 0  # boot announcement (the host's open flushes it)
+    assert _answers(virtual) == _answers(real[1:])
+
+
+def test_virtual_measurements_agree_with_the_firmware(simulator):
+    real = [Measurement.from_frame(f) for f in _firmware_frames(simulator) if f.kind == "M"]
+    virtual = [Measurement.from_frame(f) for f in _virtual_frames() if f.kind == "M"]
+    assert len(real) == 3 and 2 <= len(virtual) <= 4  # 50 ms windows between START and STOP (OS timing ±1)
+    for m in real + virtual:
+        assert (m.window_ms, m.range, m.missed) == (50, 1, 0)
+        assert m.adc == math.floor(ADC_MV / 5000 * 1024)
+        assert abs(m.frequency_hz - F_HZ) <= F_HZ / m.sum_period_ticks + 1e-9  # one tick over the sum
+        # Each high time is quantized at both ends: at worst one tick per period over the sum.
+        assert abs(m.duty_cycle - DUTY) <= m.periods / m.sum_period_ticks
