@@ -222,3 +222,13 @@ def test_windows_of_a_device_left_running_are_not_recorded(tmp_path):
     assert run.n_rows == result.frames > 0
     assert np.all(run["range"] == 0)
     assert run["seq"][0] >= run.metadata["acquisition"]["first_seq"]
+
+
+def test_unwritable_output_is_one_line_exit_2_and_the_device_is_stopped(tmp_path):
+    with VirtualDevice(ConstantSource(), seed=5) as dev, SerialLink(dev.port) as link:
+        with pytest.raises(OSError):
+            record(link, tmp_path / "missing" / "run.csv", 1.0, window_ms=10)
+        time.sleep(0.05)
+        assert not dev._st.started
+    code, _, stderr = _run(["acquire", "--virtual", "--duration", "1", "--out", str(tmp_path / "missing" / "x.csv")])
+    assert code == 2 and stderr.count("\n") == 1 and "missing" in stderr

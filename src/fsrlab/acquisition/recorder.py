@@ -181,7 +181,14 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
     recent: list[float] = []
     next_status = t_start
     next_sync = t_start + sync_interval_s
-    writer = RunWriter(path, columns, meta)
+    try:
+        writer = RunWriter(path, columns, meta)
+    except BaseException:  # e.g. no such directory: do not leave the device running
+        try:
+            link.command("STOP", timeout_s=0.5)
+        except LinkError:
+            pass
+        raise
     try:
         try:
             while True:
