@@ -2,23 +2,29 @@
 //
 // Why polling and not a capture interrupt: at 50 kHz and 5 % (or 95 %) duty cycle one phase lasts
 // 1 us = 16 CPU cycles. After an edge is captured, the edge select ICES1 must be flipped before the
-// next edge arrives, or that edge is lost. An interrupt needs 4 cycles to respond, 3 for the vector
-// jump, up to 4 more to finish the current instruction, plus pushes, before it can flip ICES1 -- and
-// any other interrupt (millis, UART) delays it by tens of cycles. A polling loop with interrupts
-// disabled flips ICES1 at most 11 cycles after the edge (see capture()).
+// next edge arrives, or that edge is lost. An interrupt needs up to 4 cycles to finish the current
+// instruction, 4 to respond and 3 for the vector jump, then pushes before it can flip ICES1, and
+// any other interrupt (millis, UART) delays it by tens of cycles. The polling loop in capture()
+// flips ICES1 at most 11 cycles after the capture flag rises. Interrupts stay disabled.
 //
-// Everything else (1 ms tick, ADC, UART receive/transmit, command parsing, frame formatting) runs
-// as small background "tasks" between edges. Each task has a bound on its length in cycles, and
-// after every edge the scheduler predicts, from the last measured high and low times, when the
-// next edge will come; it starts a task only when the task ends before that edge (with a 1/8
-// margin). When the next phase is long, being late is harmless and one task always runs.
+// Hot path (per edge): capture(), check that no edge went by unseen, add the edge to the window
+// sums, update the last high and low times used for prediction.
+// Everything else is a background task with a bounded length: 1 ms tick (time, ADC, window end),
+// UART receive/transmit, command execution and frame formatting (one character or one decimal
+// digit step per task). After each edge the
+// scheduler knows the length of the phase that just began (last measurement); if the phase after
+// it is short, a task may start only if it ends, with a 1/8 margin, before the next edge, so the
+// capture loop is spinning when that edge arrives. If the phase after it is long, a late service
+// of the next edge is harmless and tasks run freely.
 //
-// Missed edges are detected, not assumed away: after flipping ICES1 the pin level must still be
-// the one the captured edge produced, unless the flag shows that the next edge was captured. If not,
-// an edge went by unseen: it is counted in `missed` and the period it belongs to is not used.
-// Periods longer than 65535 ticks (f < 244 Hz) are extended with the 1 ms tick count (no Timer1
-// overflow flag is used, so nothing depends on how TIFR1 writes clear other flags).
+// Missed edges are detected, not assumed away: after flipping ICES1 the pin must still be at the
+// level the captured edge produced unless the flag shows that the next edge was captured too; if
+// not, an edge went by unseen, it is counted in `missed`, and the periods around it are dropped.
+// Forced (starved) tasks are counted the same way. A window with missed > 0 is
+// not a clean measurement. Periods longer than 65535 ticks (f < 244 Hz) are extended with the 1 ms
+// tick count; no Timer1 overflow flag is used, so nothing depends on how TIFR1 writes clear flags.
 #include <avr/io.h>
+#include <avr/interrupt.h>
 #include <avr/pgmspace.h>
 #include <util/crc16.h>
 #include <stdint.h>
@@ -28,52 +34,71 @@
 // Constants
 #define TCCR_RISE (_BV(CS10) | _BV(ICES1))  // Timer1 normal mode, prescaler 1, capture rising edges
 #define TCCR_FALL (_BV(CS10))               // ... capture falling edges
-#define TICKS_PER_MS 16000u
+#define TICKS_PER_MS 16000L
 #define UBRR_115200 16                      // with U2X0: 16e6 / (8 * 17) = 117647 baud (Arduino's choice)
 #define WINDOW_MIN 10u
 #define WINDOW_MAX 60000u
 #define WINDOW_DEFAULT 100u
 #define CMD_MAX 32u                         // longest command line, '\n' included [bytes]
-#define MAX_GAP_MS 2000u                    // a phase longer than this is not a period of the signal
+#define MAX_PHASE_MS 250u                   // a longer high or low time is a gap, not a period
 
-// Task cost bounds [cycles], including the scheduler's own overhead around one task; the
-// benchmark and the simavr tests check that nothing is missed inside the supported range with them.
-#define COST_SMALL 80u     // tx byte, rx byte, one formatter character or digit step, tick
-#define COST_LARGE 400u    // command execution, window snapshot
-#define SERVICE 24u        // from an edge to ICES1 flipped, worst case, plus the flag check
-#define SAFE_NEXT (COST_SMALL + SERVICE + 16u)  // a next phase this long tolerates one late task
-#define SPIN_TIMEOUT 2300u // capture wait loop iterations (6 cycles each, ~0.86 ms) before giving up
-#define STARVE_EDGES 48u   // edges in a row without any task before tasks are forced
+// Upper bounds of task lengths [cycles] including dispatch, measured with `make PROFILE=1` in
+// simavr (benchmarks/bench_firmware.py prints them); the scheduler starts a task only when its
+// bound fits before the next edge that must be serviced on time.
+#define COST_TICK 110u
+#define COST_RX 120u
+#define COST_TX 70u
+#define COST_FMT 120u
+#define COST_DIV 110u
+#define COST_EXEC 120u
+#define COST_SNAP 120u
+#define COST_START 110u
+#define HOT 110u            // capture + bookkeeping of one edge, worst case [cycles]
+#define SERVICE 20u         // flag check to ICES1 flipped, worst case, with loop exit [cycles]
+#define MARGIN 24u
+#define STARVE_EDGES 64u    // edges in a row without any task before tasks are forced
+
+#ifdef METER_PROFILE
+// Profiling build (make PROFILE=1): longest duration of each task and of the hot path, read
+// from RAM by the simavr harness (--peek). Adds a few cycles around every task.
+extern "C" {
+uint16_t prof_task[16];
+uint16_t prof_hot;      // from the capture returning to the end of the edge bookkeeping
+uint16_t prof_late;     // from the capture timestamp to the capture returning
+uint16_t prof_cnt[4];   // pin-check misses, starvation bursts, timeouts, late (> 11 cycles) services
+}
+#endif
 
 // ---------------------------------------------------------------------------------------------
-// Measurement state (single thread: no interrupt is enabled anywhere)
+// Window accumulators. The sum of periods is kept as a chain: between two breaks (a missed edge,
+// a window end) the periods are contiguous, so their sum is last_rise - chain_start (extended by
+// the number of 16-bit wraps in between), and each rising edge only counts one period.
 struct Acc {
   uint32_t periods, sum_p, sum_h, missed, adc_sum;
   uint16_t adc_cnt;
 };
-static Acc acc;                // live window accumulators
-static uint8_t armed_rise;     // 1: the capture unit waits for a rising edge
-static uint8_t have;           // bit0: last rise valid, bit1: high time of that rise known, bit2: last fall valid
-static uint16_t last_rise, last_fall, ms_rise, ms_fall;
-static uint32_t high_pending;  // high time of the period that started at last_rise [ticks]
-static uint16_t hi_len, lo_len;  // last measured high and low times, saturated to 16 bits [ticks]
-static uint8_t pred;           // bit0: hi_len known, bit1: lo_len known
-static uint16_t ms16;          // free-running ms count (phase extension, gap detection)
-static uint16_t ms_last_edge;
-static uint32_t now_ms;        // device time since boot [ms]
-
+static Acc acc;
+static uint8_t chain;           // 1: last_rise starts or continues a contiguous chain
+static uint8_t have_high;       // 1: the high time of the period begun at last_rise is in sum_h
+static uint16_t chain_start, last_rise, wraps;
+static uint8_t ms_rise;         // low byte of the ms count at last_rise
+static uint32_t high_pending;   // high time added to sum_h for the still open period [ticks]
+static uint16_t idle_ms;        // ms since the last edge
+// Time
+static uint16_t ms16;           // ms since boot, low 16 bits
+static uint16_t ms_hi;          // ... high 16 bits
 // Settings
 static uint8_t running;
 static uint16_t window_ms = WINDOW_DEFAULT;
 static uint16_t win_left;
 static uint8_t range_sel;
 static uint32_t t_last_end;
+static uint8_t snap_stage;      // window end in progress: 1 fold, 2 copy rest
 
-// ---------------------------------------------------------------------------------------------
 // Transmit ring
 static uint8_t txbuf[128];
 static uint8_t tx_head, tx_tail;
-static inline uint8_t tx_free(void) { return (uint8_t)(127u - (uint8_t)((tx_head - tx_tail) & 127u)); }
+static inline uint8_t tx_used(void) { return (uint8_t)((tx_head - tx_tail) & 127u); }
 
 // Frame formatter
 enum { K_NONE = 0, K_ID, K_M, K_ACK, K_ERR };
@@ -86,7 +111,7 @@ struct Resp {
   uint16_t val;
   char tok[13];
 };
-#define RESPQ 4
+#define RESPQ 4u
 static Resp respq[RESPQ];
 static uint8_t rq_head, rq_tail;
 
@@ -96,15 +121,14 @@ struct Snap {
   uint8_t div_bits;
 };
 static Snap snap;
-static uint8_t snap_state;  // 0 none, 1 dividing, 2 ready to format
-static uint8_t snap_due;
+static uint8_t snap_state;  // 0 free, 1 dividing, 2 ready to format, 3 being formatted
 
 static uint8_t f_state, f_kind, f_item, f_started, f_digit, f_pidx;
 static uint16_t f_crc, f_seq, seq_next;
 static uint32_t f_val;
 static const char *f_str;
 static uint8_t f_str_pgm;
-static Resp f_resp;
+static uint8_t f_resp;  // index into respq of the response being formatted
 
 static const uint32_t pow10_tab[10] = {1ul, 10ul, 100ul, 1000ul, 10000ul, 100000ul,
                                        1000000ul, 10000000ul, 100000000ul, 1000000000ul};
@@ -114,19 +138,16 @@ static const char s_M[] PROGMEM = "M";
 static const char s_ACK[] PROGMEM = "ACK";
 static const char s_ERR[] PROGMEM = "ERR";
 static const char s_LINE[] PROGMEM = "LINE";
+static const char s_Q[] = "?";
 
-// Command receiver (incremental parser, one byte per task)
-static uint8_t rx_len, rx_words, rx_inword, rx_overflow;
-static uint8_t rx_w0len, rx_cand, rx_toklen;
-static uint8_t rx_digits_ok, rx_ndig;
-static uint32_t rx_val;
-static char rx_tok[13];
-static uint8_t cmd_ready;
+// Command receiver (incremental parser, one byte per task). While a received line waits for
+// execution (cmd_ready), further bytes stay in the USART.
 static struct {
-  uint8_t overflow, words, cand, w0len, digits_ok, ndig;
+  uint8_t len, words, inword, overflow, w0len, cand, toklen, digits_ok, ndig;
   uint32_t val;
   char tok[13];
-} cmd;
+} rx;
+static uint8_t cmd_ready;
 
 // ---------------------------------------------------------------------------------------------
 static inline void push_tx(uint8_t c) {
@@ -139,26 +160,26 @@ static inline void emit_crc(uint8_t c) {
   push_tx(c);
 }
 
-static void queue_resp(uint8_t kind, uint8_t c, uint8_t code, uint8_t has_val, uint16_t val, const char *tok) {
-  uint8_t next = (uint8_t)((rq_head + 1u) % RESPQ);
-  if (next == rq_tail) return;  // queue full: the host sends faster than 115200 baud can answer
+static uint8_t queue_resp(uint8_t kind, uint8_t c, uint8_t code, uint8_t has_val, uint16_t val) {
+  uint8_t next = (uint8_t)((rq_head + 1u) & (RESPQ - 1u));
+  if (next == rq_tail) return 0xFF;  // full: the host sends faster than 115200 baud can answer
   Resp *r = &respq[rq_head];
   r->kind = kind;
   r->cmd = c;
   r->code = code;
   r->has_val = has_val;
   r->val = val;
-  uint8_t i = 0;
-  if (tok)
-    for (; i < 12 && tok[i]; i++) r->tok[i] = tok[i];
-  r->tok[i] = 0;
+  r->tok[0] = 0;
+  uint8_t i = rq_head;
   rq_head = next;
+  return i;
 }
 
 // Item `idx` of the frame being formatted: 0 end, 1 number (f_val), 2 string (f_str)
 static uint8_t frame_item(uint8_t idx) {
   f_str_pgm = 1;
   if (idx == 1) { f_val = f_seq; return 1; }
+  const Resp *r = &respq[f_resp];
   switch (f_kind) {
     case K_ID:
       switch (idx) {
@@ -185,17 +206,17 @@ static uint8_t frame_item(uint8_t idx) {
     case K_ACK:
       switch (idx) {
         case 0: f_str = s_ACK; return 2;
-        case 2: f_str = cmd_names[f_resp.cmd]; return 2;
-        case 3: if (f_resp.has_val) { f_val = f_resp.val; return 1; } return 0;
+        case 2: f_str = cmd_names[r->cmd]; return 2;
+        case 3: if (r->has_val) { f_val = r->val; return 1; } return 0;
       }
       return 0;
     case K_ERR:
       switch (idx) {
         case 0: f_str = s_ERR; return 2;
-        case 2: f_val = f_resp.code; return 1;
+        case 2: f_val = r->code; return 1;
         case 3:
-          if (f_resp.code == 3) { f_str = s_LINE; return 2; }
-          f_str = f_resp.tok; f_str_pgm = 0; return 2;
+          if (r->code == 3) { f_str = s_LINE; return 2; }
+          f_str = r->tok; f_str_pgm = 0; return 2;
       }
       return 0;
   }
@@ -206,8 +227,8 @@ enum { FS_IDLE = 0, FS_ITEM, FS_STR, FS_NUM, FS_STAR, FS_H0, FS_H1, FS_H2, FS_H3
 
 static inline uint8_t hexdigit(uint8_t v) { v &= 15u; return (uint8_t)(v < 10 ? '0' + v : 'A' - 10 + v); }
 
-// One formatter step: at most one character or one decimal subtraction. Needs tx_free() >= 1.
-static void fmt_step(void) {
+// One formatter step: at most one character or one decimal subtraction. Needs one free byte.
+static void __attribute__((noinline)) fmt_step(void) {
   switch (f_state) {
     case FS_ITEM: {
       uint8_t t = frame_item(f_item);
@@ -243,145 +264,180 @@ static void fmt_step(void) {
       push_tx('\n');
       f_state = FS_IDLE;
       if (f_kind == K_M) snap_state = 0;
+      else rq_tail = (uint8_t)((rq_tail + 1u) & (RESPQ - 1u));
       return;
   }
 }
 
-// Start the next frame (responses before measurements). Cost: small copy, counted as large.
-static uint8_t fmt_start(void) {
+// Start the next frame (responses before measurements).
+static void __attribute__((noinline)) fmt_start(void) {
   if (rq_tail != rq_head) {
-    f_resp = respq[rq_tail];
-    rq_tail = (uint8_t)((rq_tail + 1u) % RESPQ);
-    f_kind = f_resp.kind;
-  } else if (snap_state == 2) {
-    f_kind = K_M;
+    f_resp = rq_tail;
+    f_kind = respq[rq_tail].kind;
   } else {
-    return 0;
+    f_kind = K_M;
+    snap_state = 3;
   }
   f_seq = seq_next++;
   f_crc = 0xFFFF;
   f_item = 0;
   push_tx('$');
   f_state = FS_ITEM;
-  return 1;
 }
 
 // ---------------------------------------------------------------------------------------------
-// Command receiver: one byte per call.
-static inline uint8_t is_space(uint8_t c) { return c == ' ' || c == '\t' || c == '\v' || c == '\f' || (c >= 0x1c && c <= 0x1f); }
+// Command receiver: one byte per call. Matches protocol.parse_command of the host package.
+static inline uint8_t is_space(uint8_t c) { return c == ' ' || (c >= '\t' && c <= '\f' && c != '\n') || (c >= 0x1c && c <= 0x1f); }
 
 static void rx_reset(void) {
-  rx_len = 0; rx_words = 0; rx_inword = 0; rx_overflow = 0;
-  rx_w0len = 0; rx_cand = 0; rx_toklen = 0; rx_digits_ok = 1; rx_ndig = 0; rx_val = 0;
-  rx_tok[0] = 0;
+  rx.len = 0; rx.words = 0; rx.inword = 0; rx.overflow = 0;
+  rx.w0len = 0; rx.cand = 0; rx.toklen = 0; rx.digits_ok = 1; rx.ndig = 0; rx.val = 0;
+  rx.tok[0] = 0;
 }
 
-static void rx_byte(uint8_t c) {
+static void __attribute__((noinline)) rx_byte(uint8_t c) {
   if (c == '\r') return;
-  if (c == '\n') {
-    if (!cmd_ready) {
-      cmd.overflow = rx_overflow; cmd.words = rx_words; cmd.cand = rx_cand; cmd.w0len = rx_w0len;
-      cmd.digits_ok = rx_digits_ok; cmd.ndig = rx_ndig; cmd.val = rx_val;
-      for (uint8_t i = 0; i < 13; i++) cmd.tok[i] = rx_tok[i];
-      cmd_ready = 1;
-    }
-    rx_reset();
-    return;
-  }
-  if (++rx_len >= CMD_MAX) { rx_overflow = 1; return; }
-  if (is_space(c)) { rx_inword = 0; return; }
-  if (!rx_inword) { rx_inword = 1; rx_words++; }
-  if (rx_words == 1) {
-    uint8_t i = rx_w0len++;
+  if (c == '\n') { cmd_ready = 1; return; }
+  if (++rx.len >= CMD_MAX) { rx.overflow = 1; rx.len = CMD_MAX; return; }
+  if (is_space(c)) { rx.inword = 0; return; }
+  if (!rx.inword) { rx.inword = 1; if (rx.words < 3) rx.words++; }
+  if (rx.words == 1) {
+    uint8_t i = rx.w0len++;
     if (i == 0) {
-      rx_cand = c == 'I' ? 1u << C_ID : c == 'S' ? (1u << C_START) | (1u << C_STOP)
+      rx.cand = c == 'I' ? 1u << C_ID : c == 'S' ? (1u << C_START) | (1u << C_STOP)
               : c == 'W' ? 1u << C_WINDOW : c == 'R' ? 1u << C_RANGE : 0;
-    } else if (rx_cand) {
-      for (uint8_t k = 0; k < C_COUNT; k++)
-        if ((rx_cand & (1u << k)) && (i >= cmd_len[k] || pgm_read_byte(&cmd_names[k][i]) != c)) rx_cand &= (uint8_t)~(1u << k);
+    } else if (rx.cand) {
+      uint8_t cand = rx.cand, bit = 1;
+      for (uint8_t k = 0; k < C_COUNT; k++, bit <<= 1)
+        if ((cand & bit) && (i >= cmd_len[k] || pgm_read_byte(&cmd_names[k][i]) != c)) cand &= (uint8_t)~bit;
+      rx.cand = cand;
     }
-    if (rx_toklen < 12 && c > 0x20 && c < 0x7f && c != ',' && c != '*' && c != '$') {
-      rx_tok[rx_toklen++] = (char)c;
-      rx_tok[rx_toklen] = 0;
+    if (rx.toklen < 12 && c > 0x20 && c < 0x7f && c != ',' && c != '*' && c != '$') {
+      rx.tok[rx.toklen++] = (char)c;
+      rx.tok[rx.toklen] = 0;
     }
-  } else if (rx_words == 2) {
-    if (c < '0' || c > '9' || rx_ndig >= 5) rx_digits_ok = 0;
-    else { rx_val = rx_val * 10u + (uint8_t)(c - '0'); rx_ndig++; }
+  } else if (rx.words == 2) {
+    if (c < '0' || c > '9' || rx.ndig >= 5) rx.digits_ok = 0;
+    else { rx.val = rx.val * 10u + (uint8_t)(c - '0'); rx.ndig++; }
   }
 }
 
-static void apply_range(uint8_t r) {
-  range_sel = r;
-  if (r) PORTD |= _BV(PD4); else PORTD &= (uint8_t)~_BV(PD4);
-}
+static inline uint32_t now_ms(void) { return ((uint32_t)ms_hi << 16) | ms16; }
 
-static void reset_acc(void) {
-  acc.periods = 0; acc.sum_p = 0; acc.sum_h = 0; acc.missed = 0; acc.adc_sum = 0; acc.adc_cnt = 0;
-}
-
-static void cmd_exec(void) {
-  cmd_ready = 0;
-  if (cmd.overflow) { queue_resp(K_ERR, 0, 3, 0, 0, 0); return; }
-  const char *tok = cmd.tok[0] ? cmd.tok : "?";
+// Command execution in two tasks: decide (cmd_ready 1 -> 2), then act and answer (2 -> 0).
+static uint8_t ex_cmd, ex_code;  // ex_code: 0 accept, else the ERR code
+static void __attribute__((noinline)) cmd_decide(void) {
+  cmd_ready = 2;
+  ex_code = 0;
+  if (rx.overflow) { ex_code = 3; return; }
   int8_t c = -1;
-  for (uint8_t k = 0; k < C_COUNT; k++)
-    if ((cmd.cand & (1u << k)) && cmd_len[k] == cmd.w0len) c = (int8_t)k;
-  if (c < 0) { queue_resp(K_ERR, 0, 1, 0, 0, tok); return; }
+  uint8_t bit = 1;
+  for (uint8_t k = 0; k < C_COUNT; k++, bit <<= 1)
+    if ((rx.cand & bit) && cmd_len[k] == rx.w0len) c = (int8_t)k;
+  if (c < 0) { ex_code = 1; return; }
+  ex_cmd = (uint8_t)c;
   if (c == C_WINDOW || c == C_RANGE) {
-    uint32_t v = cmd.val;
-    uint8_t ok = cmd.words == 2 && cmd.digits_ok && cmd.ndig > 0;
+    uint32_t v = rx.val;
+    uint8_t ok = rx.words == 2 && rx.digits_ok && rx.ndig > 0;
     if (ok) ok = c == C_WINDOW ? (v >= WINDOW_MIN && v <= WINDOW_MAX) : v <= 1;
-    if (!ok) { queue_resp(K_ERR, 0, 2, 0, 0, tok); return; }
-    if (c == C_WINDOW) {
-      window_ms = (uint16_t)v;
-      win_left = window_ms;  // the current window restarts with the new length
-      t_last_end = now_ms;
-      reset_acc();
-    } else {
-      apply_range((uint8_t)v);
-    }
-    queue_resp(K_ACK, (uint8_t)c, 0, 1, (uint16_t)v, 0);
-    return;
+    if (!ok) ex_code = 2;
+  } else if (rx.words != 1) {
+    ex_code = 2;
   }
-  if (cmd.words != 1) { queue_resp(K_ERR, 0, 2, 0, 0, tok); return; }
-  if (c == C_ID) {
-    queue_resp(K_ID, 0, 0, 0, 0, 0);
-  } else if (c == C_START) {
-    if (!running) {
-      running = 1;
-      win_left = window_ms;
-      t_last_end = now_ms;
-      reset_acc();
-    }
-  } else {
-    running = 0;
-    snap_due = 0;
-  }
-  queue_resp(K_ACK, (uint8_t)c, 0, 0, 0, 0);
 }
+
+static void __attribute__((noinline)) cmd_act(void) {
+  uint8_t c = ex_cmd;
+  if (ex_code) {
+    uint8_t i = queue_resp(K_ERR, 0, ex_code, 0, 0);
+    if (i != 0xFF && ex_code != 3) {
+      const char *t = rx.tok[0] ? rx.tok : s_Q;
+      char *d = respq[i].tok;
+      while ((*d++ = *t++)) {}
+    }
+  } else if (c == C_WINDOW) {
+    window_ms = (uint16_t)rx.val;
+    win_left = window_ms;  // the current window restarts with the new length
+    t_last_end = now_ms();
+    acc.missed = 0;
+    snap_stage = 3;        // discard what the old window accumulated (see take_snapshot)
+    queue_resp(K_ACK, c, 0, 1, window_ms);
+  } else if (c == C_RANGE) {
+    range_sel = (uint8_t)rx.val;
+    if (range_sel) PORTD |= _BV(PD4); else PORTD &= (uint8_t)~_BV(PD4);
+    queue_resp(K_ACK, c, 0, 1, range_sel);
+  } else {
+    if (c == C_ID) {
+      queue_resp(K_ID, 0, 0, 0, 0);
+    } else if (c == C_START) {
+      if (!running) {
+        running = 1;
+        win_left = window_ms;
+        t_last_end = now_ms();
+        snap_stage = 3;
+      }
+    } else {
+      running = 0;
+    }
+    queue_resp(K_ACK, c, 0, 0, 0);
+  }
+  rx_reset();
+  cmd_ready = 0;
+}
+
+static void chain_break(void);
 
 // ---------------------------------------------------------------------------------------------
-static void tick(void) {
+static void __attribute__((noinline)) tick(void) {
   TIFR2 = _BV(OCF2A);
-  ms16++;
-  now_ms++;
-  if (!(ADCSRA & _BV(ADSC))) {  // conversion started one tick ago is done (104 us at clk/128)
+  if (++ms16 == 0) ms_hi++;
+  if (!(ADCSRA & _BV(ADSC))) {  // the conversion started one tick ago is done (104 us at clk/128)
     acc.adc_sum += ADC;
     acc.adc_cnt++;
     ADCSRA |= _BV(ADSC);
   }
-  if ((uint16_t)(ms16 - ms_last_edge) > MAX_GAP_MS) { have = 0; pred = 0; ms_last_edge = ms16 - MAX_GAP_MS; }
-  if (running && --win_left == 0) { snap_due = 1; win_left = window_ms; }
+  if (++idle_ms > MAX_PHASE_MS) { idle_ms = MAX_PHASE_MS; chain_break(); }
+  if (running && --win_left == 0) { snap_stage = 1; win_left = window_ms; }
 }
 
-static void take_snapshot(void) {
-  snap_due = 0;
-  snap.t_ms = now_ms;
-  snap.window = now_ms - t_last_end;
-  t_last_end = now_ms;
-  snap.periods = acc.periods;
-  snap.sum_p = acc.sum_p;
-  snap.sum_h = acc.sum_h;
+// Close the period chain into sum_p (window end or a break).
+static void __attribute__((noinline)) fold_chain(void) {
+  if (chain) {
+    acc.sum_p += ((uint32_t)wraps << 16) + (uint16_t)(last_rise - chain_start) -
+                 (last_rise < chain_start ? 0x10000ul : 0ul);
+    chain_start = last_rise;
+    wraps = 0;
+  }
+}
+
+static void chain_break(void) {
+  fold_chain();
+  if (have_high) acc.sum_h -= high_pending;  // its period will not be counted
+  chain = 0;
+  have_high = 0;
+}
+
+// Window end in two tasks. Stage 1 closes the sums of the ended window (the open period's high
+// time moves on to the next window), stage 2 copies time, missed and ADC. Stage 3 (START,
+// WINDOW) discards instead of reporting.
+static void __attribute__((noinline)) take_snapshot(void) {
+  if (snap_stage == 1 || snap_stage == 3) {
+    fold_chain();
+    uint32_t hp = have_high ? high_pending : 0;
+    snap.periods = acc.periods;
+    snap.sum_p = acc.sum_p;
+    snap.sum_h = acc.sum_h - hp;
+    acc.periods = 0;
+    acc.sum_p = 0;
+    acc.sum_h = hp;
+    if (snap_stage == 3) { acc.missed = 0; acc.adc_sum = 0; acc.adc_cnt = 0; snap_stage = 0; return; }
+    snap_stage = 2;
+    return;
+  }
+  uint32_t t = now_ms();
+  snap.t_ms = t;
+  snap.window = t - t_last_end;
+  t_last_end = t;
   snap.missed = acc.missed;
   snap.adc_sum = acc.adc_sum + (acc.adc_cnt >> 1);  // rounded mean
   snap.adc_cnt = acc.adc_cnt;
@@ -389,108 +445,146 @@ static void take_snapshot(void) {
   snap.adc_q = 0;
   snap.adc_r = 0;
   snap.div_bits = 32;
+  acc.missed = 0;
+  acc.adc_sum = 0;
+  acc.adc_cnt = 0;
   snap_state = snap.adc_cnt ? 1 : 2;
-  reset_acc();
+  snap_stage = 0;
 }
 
-static void div_step(void) {  // two bits of adc_sum / adc_cnt (restoring division)
-  for (uint8_t i = 0; i < 2; i++) {
-    snap.adc_r = (snap.adc_r << 1) | (snap.adc_sum >> 31);
-    snap.adc_sum <<= 1;
-    snap.adc_q <<= 1;
-    if (snap.adc_r >= snap.adc_cnt) { snap.adc_r -= snap.adc_cnt; snap.adc_q |= 1; }
-  }
-  snap.div_bits -= 2;
-  if (!snap.div_bits) {
+static void __attribute__((noinline)) div_step(void) {  // one bit of adc_sum / adc_cnt
+  snap.adc_r = (snap.adc_r << 1) | (snap.adc_sum >> 31);
+  snap.adc_sum <<= 1;
+  snap.adc_q <<= 1;
+  if (snap.adc_r >= snap.adc_cnt) { snap.adc_r -= snap.adc_cnt; snap.adc_q |= 1; }
+  if (!--snap.div_bits) {
     if (snap.adc_q > 1023) snap.adc_q = 1023;
     snap_state = 2;
   }
 }
 
-// One background task whose cost fits `budget` cycles. Returns 1 if something was done.
-static uint8_t task(uint16_t budget) {
-  if (budget < COST_SMALL) return 0;
-  if (TIFR2 & _BV(OCF2A)) { tick(); return 1; }
-  if (UCSR0A & _BV(RXC0)) { rx_byte(UDR0); return 1; }
-  if (tx_head != tx_tail && (UCSR0A & _BV(UDRE0))) {
-    UDR0 = txbuf[tx_tail];
-    tx_tail = (uint8_t)((tx_tail + 1u) & 127u);
-    return 1;
-  }
-  if (f_state != FS_IDLE) {
-    if (tx_free() == 0) return 0;
-    fmt_step();
-    return 1;
-  }
-  if (snap_state == 1) { div_step(); return 1; }
-  if (budget < COST_LARGE) return 0;
-  if (cmd_ready) { cmd_exec(); return 1; }
-  if (snap_due && snap_state == 0) { take_snapshot(); return 1; }
-  if (tx_free() >= 96) return fmt_start();
-  return 0;
-}
-
-static uint8_t work_pending(void) {
-  return (TIFR2 & _BV(OCF2A)) || (UCSR0A & _BV(RXC0)) || tx_head != tx_tail || f_state != FS_IDLE ||
-         snap_state || cmd_ready || snap_due || rq_tail != rq_head;
+// Number of whole 65536-tick turns in a phase of 16-bit length d16 whose ends were seen m >= 2 ms
+// apart: the one k with |k 65536 + d16 - 16000 m| < 32768 (the ms count is off by < 1 ms).
+static uint16_t __attribute__((noinline)) turns(uint16_t d16, uint8_t m) {
+  int32_t k = ((int32_t)TICKS_PER_MS * (int32_t)m - (int32_t)d16 + 32768L) >> 16;
+  return k < 0 ? 0 : (uint16_t)k;
 }
 
 // ---------------------------------------------------------------------------------------------
-// Wait for the armed edge (at most SPIN_TIMEOUT loop turns), then at once arm the other edge, read
-// ICR1, clear ICF1 and sample PINB and TIFR1. Worst case from the flag to ICES1 flipped: 6 cycles
-// between two flag reads + sbic (1) + rjmp (2) + sts (2) = 11 cycles.
+// Background dispatcher: runs the first pending task whose cost bound fits `budget` cycles.
+// Returns its number, 0 if none ran.
+static inline __attribute__((always_inline)) uint8_t task(uint16_t budget) {
+  if (TIFR2 & _BV(OCF2A)) { if (budget >= COST_TICK) { tick(); return 1; } return 0; }
+  if (!cmd_ready && (UCSR0A & _BV(RXC0))) { if (budget >= COST_RX) { rx_byte(UDR0); return 2; } return 0; }
+  if (tx_head != tx_tail && (UCSR0A & _BV(UDRE0))) {
+    if (budget < COST_TX) return 0;
+    UDR0 = txbuf[tx_tail];
+    tx_tail = (uint8_t)((tx_tail + 1u) & 127u);
+    return 3;
+  }
+  if (snap_stage && snap_state == 0) { if (budget >= COST_SNAP) { take_snapshot(); return 4; } return 0; }
+  if (f_state != FS_IDLE) {
+    if (budget < COST_FMT || tx_used() >= 127u) return 0;
+    fmt_step();
+    return 5;
+  }
+  if (snap_state == 1) { if (budget >= COST_DIV) { div_step(); return 6; } return 0; }
+  if (cmd_ready == 1) { if (budget >= COST_EXEC) { cmd_decide(); return 7; } return 0; }
+  if (cmd_ready == 2) { if (budget >= COST_EXEC) { cmd_act(); return 8; } return 0; }
+  if ((rq_tail != rq_head || snap_state == 2) && tx_used() < 32u) {
+    if (budget >= COST_START) { fmt_start(); return 9; }
+  }
+  return 0;
+}
+
+static inline __attribute__((always_inline)) uint8_t run_task(uint16_t budget) {
+#ifdef METER_PROFILE
+  uint16_t t0 = TCNT1;
+  uint8_t id = task(budget);
+  uint16_t d = TCNT1 - t0;
+  if (d > prof_task[id]) prof_task[id] = d;
+  return id;
+#else
+  return task(budget);
+#endif
+}
+
+// ---------------------------------------------------------------------------------------------
+// meter_spin(next_tccr): wait for the armed edge with interrupts enabled for one purpose only, a
+// Timer0 compare match as timeout; then read ICR1, write the other edge into TCCR1B, clear ICF1
+// (this order is the datasheet's: a change of ICES1 may set ICF1), disable interrupts and sample
+// PINB and TIFR1. The wait loop is `sbis; rjmp` (3 cycles), so from the capture flag to ICES1
+// flipped takes at most 3 + 2 (sbis skip) + 4 (lds, lds) + 2 (sts) = 11 cycles, and ICF1 is
+// cleared one cycle later. An edge in that last cycle is lost and seen as missed by the caller.
+// Returns ICR1 << 16 | TIFR1 << 8 | PINB; TIFR1 byte 0xFF (impossible) on timeout.
+// Registers: r18..r21, r30, r31 and r0 are call-clobbered in the avr-gcc ABI.
+extern "C" uint32_t meter_spin(uint8_t next_tccr);
+asm(R"ASM(
+  .section .text.meter_spin,"ax",@progbits
+  .global meter_spin
+  .global meter_spin_timeout
+meter_spin:
+  ldi r21, 0x20          ; 1 << ICF1
+  sei
+1:
+  sbis 0x16, 5           ; TIFR1.ICF1
+  rjmp 1b
+  lds r18, 0x86          ; ICR1L (latches ICR1H)
+  lds r19, 0x87          ; ICR1H
+  sts 0x81, r24          ; TCCR1B: arm the other edge
+  out 0x16, r21          ; clear ICF1
+  cli
+  in r22, 0x03           ; PINB
+  in r23, 0x16           ; TIFR1
+  movw r24, r18
+  ret
+meter_spin_timeout:      ; the Timer0 compare interrupt returns here instead of into the loop
+  cli
+  ldi r23, 0xFF
+  clr r22
+  clr r24
+  clr r25
+  ret
+)ASM");
+
+// Timer0 compare A: the spin timed out. Replace the interrupted address (inside meter_spin's
+// loop, or in its last instructions if an edge came at the same moment: the caller resyncs) by
+// meter_spin_timeout. The return address on the stack is big-endian, high byte on top.
+ISR(TIMER0_COMPA_vect, ISR_NAKED) {
+  asm volatile(
+      "pop r0\n\t"
+      "pop r0\n\t"
+      "ldi r30, lo8(gs(meter_spin_timeout))\n\t"
+      "ldi r31, hi8(gs(meter_spin_timeout))\n\t"
+      "push r30\n\t"
+      "push r31\n\t"
+      "reti\n\t");
+}
+
 struct Cap {
   uint16_t ts;
   uint8_t pin, fl, ok;
 };
 static inline __attribute__((always_inline)) Cap capture(uint8_t next_tccr) {
+  OCR0A = (uint8_t)(TCNT0 + 14u);  // timeout: 14 x 64 us = 0.9 ms
+  TIFR0 = _BV(OCF0A);
+  uint32_t r = meter_spin(next_tccr);
   Cap c;
-  uint16_t n = SPIN_TIMEOUT;
-  uint8_t icf = _BV(ICF1);
-  asm volatile(
-      "1: sbic %[tifr], %[icf1]\n\t"
-      "rjmp 2f\n\t"
-      "sbiw %[n], 1\n\t"
-      "brne 1b\n\t"
-      "clr %[ok]\n\t"
-      "rjmp 3f\n\t"
-      "2: sts %[tccr1b], %[nx]\n\t"
-      "lds %A[ts], %[icr1l]\n\t"
-      "lds %B[ts], %[icr1h]\n\t"
-      "out %[tifr], %[icf]\n\t"
-      "in %[pin], %[pinb]\n\t"
-      "in %[fl], %[tifr]\n\t"
-      "ldi %[ok], 1\n\t"
-      "3:\n\t"
-      : [ts] "=&r"(c.ts), [pin] "=&r"(c.pin), [fl] "=&r"(c.fl), [ok] "=&d"(c.ok), [n] "+w"(n)
-      : [nx] "r"(next_tccr), [icf] "r"(icf), [tifr] "I"(_SFR_IO_ADDR(TIFR1)), [icf1] "I"(ICF1),
-        [tccr1b] "n"(_SFR_MEM_ADDR(TCCR1B)), [icr1l] "n"(_SFR_MEM_ADDR(ICR1L)),
-        [icr1h] "n"(_SFR_MEM_ADDR(ICR1H)), [pinb] "I"(_SFR_IO_ADDR(PINB))
-      : "memory");
+  c.pin = (uint8_t)r;
+  c.fl = (uint8_t)(r >> 8);
+  c.ts = (uint16_t)(r >> 16);
+  c.ok = c.fl != 0xFF;
   return c;
-}
-
-// Length of a phase of 16-bit length d16 whose ends were serviced m ms apart [ticks].
-static inline uint32_t extend(uint16_t d16, uint16_t m) {
-  if (m < 2) return d16;  // less than 3 ms: shorter than 65536 ticks
-  int32_t k = ((int32_t)TICKS_PER_MS * (int32_t)m - (int32_t)d16 + 32768) >> 16;
-  if (k < 0) k = 0;
-  return ((uint32_t)k << 16) + d16;
-}
-
-static inline uint16_t sat16(uint32_t v) { return v > 0xFFFFu ? 0xFFFFu : (uint16_t)v; }
-
-static void resync(void) {
-  uint8_t level = PINB & _BV(PB0);
-  armed_rise = level ? 0 : 1;
-  TCCR1B = level ? TCCR_FALL : TCCR_RISE;
-  TIFR1 = _BV(ICF1);
 }
 
 static void hw_init(void) {
   // Timer0 (Arduino millis) and every interrupt off: the meter is fully polled.
-  TIMSK0 = 0; TIMSK1 = 0; TIMSK2 = 0;
-  TCCR0A = 0; TCCR0B = 0;
+  TIMSK1 = 0; TIMSK2 = 0;
+  // Timer0: normal mode, clk/1024 (64 us); its compare A interrupt is the capture wait timeout,
+  // the only interrupt ever enabled (only while meter_spin waits).
+  TCCR0A = 0;
+  TCCR0B = _BV(CS02) | _BV(CS00);
+  TIMSK0 = _BV(OCIE0A);
   // Timer1: normal mode, prescaler 1, input capture on ICP1 = PB0 = D8, no noise canceller.
   TCCR1A = 0;
   TCCR1C = 0;
@@ -511,129 +605,167 @@ static void hw_init(void) {
   DIDR0 = _BV(ADC0D);
   ADCSRA = _BV(ADEN) | _BV(ADPS2) | _BV(ADPS1) | _BV(ADPS0) | _BV(ADSC);
   // USART0 115200 8N1, polled.
-  UCSR0A |= _BV(U2X0);  // read-modify-write: simavr 1.6 would clear UDRE0 on a plain write
+  UCSR0A |= _BV(U2X0);  // read-modify-write keeps UDRE0 (simavr 1.6 would clear it on a plain write)
   UBRR0 = UBRR_115200;
   UCSR0C = _BV(UCSZ01) | _BV(UCSZ00);
   UCSR0B = _BV(RXEN0) | _BV(TXEN0);
-  TCCR1B = TCCR_RISE;
-  armed_rise = 1;
-  resync();
+}
+
+// Latest time after the edge at ts by which a task must end [ticks since ts], from the current
+// phase (l_cur, just begun) and the next one (l_next), each with a 1/8 margin for jitter:
+// either the task ends before the next edge, or it ends late enough that the next edge, served
+// late, still has its successor armed in time and the backlog (one HOT) is gone before the edge
+// after that. 0xFFFF: no limit (phases long or unknown).
+static uint16_t task_limit(uint16_t l_cur, uint16_t l_next) {
+  if (l_cur >= 0x3000u || l_next >= 0x3000u) return 0xFFFF;
+  uint16_t a = (uint16_t)(l_cur - (l_cur >> 3));
+  a = a > MARGIN ? (uint16_t)(a - MARGIN) : 0;
+  uint16_t s2 = (uint16_t)(l_cur + l_next);
+  s2 = (uint16_t)(s2 - (s2 >> 3));
+  uint16_t s3 = (uint16_t)(s2 + l_cur - (l_cur >> 3));
+  uint16_t b1 = s2 > SERVICE + MARGIN ? (uint16_t)(s2 - SERVICE - MARGIN) : 0;
+  uint16_t b2 = s3 > HOT + 2 * SERVICE + MARGIN ? (uint16_t)(s3 - HOT - 2 * SERVICE - MARGIN) : 0;
+  uint16_t b = b1 < b2 ? b1 : b2;
+  return a > b ? a : b;
 }
 
 void meter_run(void) {
   asm volatile("cli");
   hw_init();
   rx_reset();
-  queue_resp(K_ID, 0, 0, 0, 0, 0);  // boot identification, SEQ 0
+  queue_resp(K_ID, 0, 0, 0, 0);  // boot identification, SEQ 0
 
-  uint16_t t_edge = 0;
-  uint16_t limit = 0xFFFF;  // 0xFFFF: no prediction, tasks may run until an edge is pending
-  uint8_t late_ok = 1;      // one task may run even past the limit (the next phase is long)
+  uint8_t armed;            // 1: the capture unit waits for a rising edge
+  uint16_t ts = 0;          // last captured edge [ticks]
+  uint8_t ms_prev = 0;      // ms count (low byte) at that edge
+  uint16_t l_hi = 0, l_lo = 0;  // last measured high and low times [ticks], 0xFFFF if >= 1 ms
+  uint8_t pk = 0;           // bit0: l_hi valid, bit1: l_lo valid, bit2: ts is the previous edge
+  uint16_t lim = 0xFFFF;    // tasks must end before TCNT1 - ts reaches lim
   uint8_t starve = 0;
 
+  {  // arm for the edge opposite to the present level
+    uint8_t level = PINB & _BV(PB0);
+    armed = level ? 0 : 1;
+    TCCR1B = level ? TCCR_FALL : TCCR_RISE;
+    TIFR1 = _BV(ICF1);
+  }
+
   for (;;) {
-    // ---- background tasks while the next edge is far enough away
+    // ---- background tasks while the next edges allow
     for (;;) {
       if (TIFR1 & _BV(ICF1)) break;
-      uint16_t budget;
-      if (limit == 0xFFFF) {
-        budget = 0xFFFF;
-      } else {
-        uint16_t el = TCNT1 - t_edge;
-        budget = el < limit ? (uint16_t)(limit - el) : 0;
-        if (budget < COST_SMALL && late_ok) budget = COST_SMALL;
+      uint16_t budget = 0xFFFF;
+      if (lim != 0xFFFF) {
+        uint16_t el = TCNT1 - ts;
+        budget = el < lim ? (uint16_t)(lim - el) : 0;
       }
-      if (budget < COST_SMALL) break;
-      starve = 0;
-      if (task(budget)) late_ok = 0;
-      else if (limit != 0xFFFF && budget != 0xFFFF && !late_ok) break;  // nothing fits: wait for the edge
+      if (run_task(budget)) { starve = 0; continue; }
+      if (lim != 0xFFFF) break;  // nothing fits: wait for the edge in the capture loop
     }
 
-    // ---- wait for the edge and capture it
-    uint8_t was_rise = armed_rise;
+    // ---- capture
+    uint8_t was_rise = armed;
     Cap c = capture(was_rise ? TCCR_FALL : TCCR_RISE);
-    if (!c.ok) {  // no edge for ~0.9 ms although one was predicted: the signal changed or stopped
-      limit = 0xFFFF;
-      pred = 0;
+#ifdef METER_PROFILE
+    uint16_t t_ret = TCNT1;
+    if (c.ok) {
+      uint16_t d = t_ret - c.ts;
+      if (d > prof_late) prof_late = d;
+    } else {
+      prof_cnt[2]++;
+    }
+#endif
+    if (!c.ok) {  // no edge for ~0.9 ms although one was predicted soon
+      lim = 0xFFFF;
+      pk = 0;
       continue;
     }
-    armed_rise = (uint8_t)!was_rise;
-    uint16_t ts = c.ts;
     uint8_t level = c.pin & _BV(PB0);
+    uint8_t ms = (uint8_t)ms16;
+    idle_ms = 0;
     if (!(c.fl & _BV(ICF1)) && (was_rise ? !level : level)) {
-      // the next edge passed before ICES1 was flipped: it is lost, and with it this period
-      acc.missed++;
-      have = 0;
-      armed_rise = was_rise;
+      // the next edge passed before ICES1 was flipped: it is lost; stay armed for this polarity
+#ifdef METER_PROFILE
+      prof_cnt[0]++;
+#endif
       TCCR1B = was_rise ? TCCR_RISE : TCCR_FALL;
       TIFR1 = _BV(ICF1);
-      limit = 0xFFFF;
+      acc.missed++;
+      chain_break();
+      pk &= 3;
+      lim = 0xFFFF;
       continue;
     }
-    uint16_t ms = ms16;
-    ms_last_edge = ms;
+    armed = (uint8_t)!was_rise;
+    uint16_t d16 = c.ts - ts;
+    uint8_t m = (uint8_t)(ms - ms_prev);
     uint16_t l_cur, l_next;
+    uint16_t phase = m >= 2 ? 0xFFFF : d16;
     if (was_rise) {
-      if (have & 4) {
-        uint16_t m = ms - ms_fall;
-        if (m > MAX_GAP_MS) have = 0;
-        else { lo_len = sat16(extend(ts - last_fall, m)); pred |= 2; }
+      // period bookkeeping: a rising edge closes the period begun at last_rise
+      if (chain) {
+        uint8_t mr = (uint8_t)(ms - ms_rise);
+        if (c.ts < last_rise) wraps++;
+        if (mr >= 2) wraps += turns((uint16_t)(c.ts - last_rise), mr);
+        if (have_high) acc.periods++;
+        else { chain_break(); chain = 1; chain_start = c.ts; wraps = 0; }
+      } else {
+        chain = 1;
+        chain_start = c.ts;
+        wraps = 0;
       }
-      if ((have & 3) == 3) {
-        uint16_t m = ms - ms_rise;
-        if (m <= MAX_GAP_MS) {
-          acc.sum_p += extend(ts - last_rise, m);
-          acc.sum_h += high_pending;
-          acc.periods++;
-        }
-      }
-      last_rise = ts;
+      last_rise = c.ts;
       ms_rise = ms;
-      have = (uint8_t)((have & 4) | 1);
-      l_cur = hi_len;
-      l_next = lo_len;
+      have_high = 0;
+      if (pk & 4) { l_lo = phase; pk |= 2; }
+      l_cur = l_hi;
+      l_next = l_lo;
     } else {
-      if (have & 1) {
-        uint16_t m = ms - ms_rise;
-        if (m > MAX_GAP_MS) have = 0;
-        else {
-          high_pending = extend(ts - last_rise, m);
-          hi_len = sat16(high_pending);
-          have |= 2;
-          pred |= 1;
-        }
+      if (chain && !have_high) {
+        uint16_t h16 = (uint16_t)(c.ts - last_rise);
+        uint8_t mr = (uint8_t)(ms - ms_rise);
+        uint32_t h = h16;
+        if (mr >= 2) h += (uint32_t)turns(h16, mr) << 16;
+        acc.sum_h += h;
+        high_pending = h;
+        have_high = 1;
       }
-      last_fall = ts;
-      ms_fall = ms;
-      have |= 4;
-      l_cur = lo_len;
-      l_next = hi_len;
+      if (pk & 4) { l_hi = phase; pk |= 1; }
+      l_cur = l_lo;
+      l_next = l_hi;
     }
-    t_edge = ts;
-    if (pred != 3) {
-      limit = 0xFFFF;
-      late_ok = 1;
-    } else {
-      uint16_t l = (uint16_t)(l_cur - (l_cur >> 3));
-      limit = l > SERVICE ? (uint16_t)(l - SERVICE) : 0;  // tasks must end before this (since t_edge)
-      if (limit == 0xFFFF) limit = 0xFFFE;
-      late_ok = l_next >= SAFE_NEXT;
+    pk |= 4;
+    ts = c.ts;
+    ms_prev = ms;
+    lim = (pk & 3) == 3 ? task_limit(l_cur, l_next) : 0xFFFF;
+#ifdef METER_PROFILE
+    {
+      uint16_t d = TCNT1 - t_ret;
+      if (d > prof_hot) prof_hot = d;
     }
+#endif
 
     // ---- starvation: edges too fast for any task; run some blind and count what went by
-    if (++starve >= STARVE_EDGES && work_pending()) {
+    if (++starve >= STARVE_EDGES) {
       starve = 0;
+#ifdef METER_PROFILE
+      prof_cnt[1]++;
+#endif
       uint16_t t0 = TCNT1;
       uint8_t p0 = PINB & _BV(PB0);
-      for (uint8_t i = 0; i < 16; i++) task(0xFFFF);
+      for (uint8_t i = 0; i < 8; i++) task(0xFFFF);
       uint16_t blind = TCNT1 - t0;
       if ((TIFR1 & _BV(ICF1)) || (PINB & _BV(PB0)) != p0) {
-        uint16_t per = hi_len + lo_len;
-        uint32_t est = (pred == 3 && per) ? (2u * (uint32_t)blind) / per : 1u;
+        uint16_t per = (pk & 3) == 3 ? (uint16_t)(l_hi + l_lo) : 0;
+        uint16_t est = per ? (uint16_t)((2u * (uint32_t)blind) / per) : 1u;
         acc.missed += est ? est : 1u;
-        have = 0;
-        resync();
-        limit = 0xFFFF;
+        chain_break();
+        uint8_t lv = PINB & _BV(PB0);
+        armed = lv ? 0 : 1;
+        TCCR1B = lv ? TCCR_FALL : TCCR_RISE;
+        TIFR1 = _BV(ICF1);
+        pk &= 3;
+        lim = 0xFFFF;
       }
     }
   }

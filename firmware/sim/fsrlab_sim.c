@@ -7,7 +7,8 @@
  * starting with '#':
  *   #PD4 <cycle> <level>          each change of the C_off switch output (D4)
  *   #EDGES <rising> <falling>     edges generated on D8 (at the end)
- *   #PEEK <addr> <byte>           data memory byte at the end (--peek ADDR, data space address)
+ *   #PEEK <addr> <byte> <word>    data memory byte and little-endian 16-bit word at the end
+ *                                (--peek ADDR, data space address, e.g. from avr-nm minus 0x800000)
  *   #END <cycles> <pd4>           simulated cycles and final D4 level
  *
  * Usage:
@@ -270,7 +271,8 @@ int main(int argc, char **argv) {
   fflush(out);
   fprintf(stderr, "#EDGES %llu %llu\n", (unsigned long long)n_rise, (unsigned long long)n_fall);
   for (int i = 0; i < npeek; i++)
-    fprintf(stderr, "#PEEK 0x%04x %u\n", peeks[i], peeks[i] < 0x900 ? avr->data[peeks[i]] : 0u);
+    fprintf(stderr, "#PEEK 0x%04x %u %u\n", peeks[i], peeks[i] < 0x8ff ? avr->data[peeks[i]] : 0u,
+            peeks[i] < 0x8ff ? (unsigned)(avr->data[peeks[i]] | (avr->data[peeks[i] + 1] << 8)) : 0u);
   fprintf(stderr, "#PC 0x%x state %d\n", avr->pc, avr->state);
   fprintf(stderr, "#END %llu %d\n", (unsigned long long)avr->cycle, pd4_level);
   if (state == cpu_Crashed) { fprintf(stderr, "#CRASHED\n"); return 3; }
