@@ -114,3 +114,14 @@ def test_check_false_gives_nan_for_impossible_elements():
     assert np.isfinite(d.c_fsr_farad[2])
     d = decode([1e6], [0.5], 10e3, c_off_farad=1e-9, diode=True, check=False)
     assert np.isnan(d.c_fsr_farad[0])  # would need C < C_off
+
+
+def test_round_trip_and_sensitivity_with_discharge_resistance():
+    r, rf, cf, rd, h = 10e3, 300e3, 1e-9, 80.0, 1e-5
+    a = astable(r, rf, cf, discharge_ohm=rd)
+    d = decode(a.frequency_hz, a.duty_cycle, r, discharge_ohm=rd)
+    assert d.r_fsr_ohm == pytest.approx(rf, rel=1e-9) and d.c_fsr_farad == pytest.approx(cf, rel=1e-9)
+    s = sensitivity(r, rf, cf, discharge_ohm=rd)
+    lnf = lambda x: np.log(astable(r, x, cf, discharge_ohm=rd).frequency_hz)  # noqa: E731
+    num = (lnf(rf * (1 + h)) - lnf(rf * (1 - h))) / (np.log1p(h) - np.log1p(-h))
+    assert s.r_fsr == pytest.approx(num, rel=1e-6)

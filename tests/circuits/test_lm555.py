@@ -178,3 +178,21 @@ def test_tau_ratio_monotone_for_any_thresholds_and_drop(lo, width, diode, drop_s
     n = minimum_n_ratio(vd, 5.0, hi) * (1 + np.geomspace(1e-6, 1e6, 400))
     g = tau_ratio(n, diode=diode, diode_drop_v=vd, lower_fraction=lo, upper_fraction=hi)
     assert np.all(np.diff(g) < 0)
+
+
+def test_discharge_resistance_closed_form():
+    # Independent derivation: pin 7 = Vcc·Rd/(R + Rd) behind R∥Rd; C discharges through
+    # (R + R∥Rd)∥R_FSR toward that source divided by R_FSR. With D1 nothing changes (D1 blocks R_B).
+    r, rf, c, rd, vcc = 10e3, 200e3, 1e-9, 50.0, 5.0
+    vt, rt = vcc * rd / (r + rd), r * rd / (r + rd)
+    vinf = vt * rf / (r + rt + rf)
+    rth = (r + rt) * rf / (r + rt + rf)
+    tl = c * rth * math.log((2 * vcc / 3 - vinf) / (vcc / 3 - vinf))
+    res = astable(r, rf, c, discharge_ohm=rd)
+    assert res.tau_low_s == pytest.approx(tl, rel=1e-12)
+    assert res.tau_high_s == astable(r, rf, c).tau_high_s
+    assert astable(r, rf, c, diode=True, discharge_ohm=rd).tau_low_s == astable(r, rf, c, diode=True).tau_low_s
+    # A huge on-resistance keeps C above Vcc/3: no oscillation, condition "discharge".
+    with pytest.raises(NoOscillationError, match="discharge transistor") as err:
+        astable(r, rf, c, discharge_ohm=20e3)
+    assert err.value.condition == "discharge"

@@ -25,6 +25,8 @@ from fsrlab.circuits.transient import simulate
     dict(r_fsr_ohm=80e3, c_fsr_farad=1.5e-9, diode=True, diode_drop_v=0.6),
     dict(r_fsr_ohm=np.inf, c_fsr_farad=1e-9),
     dict(r_fsr_ohm=500e3, c_fsr_farad=1e-9, lower_fraction=0.3, upper_fraction=0.75, vcc_v=3.3),
+    dict(r_fsr_ohm=150e3, c_fsr_farad=1e-9, discharge_ohm=60.0),
+    dict(r_fsr_ohm=np.inf, c_fsr_farad=1e-9, discharge_ohm=60.0),
 ])
 def test_constant_parts_match_closed_form(kw):
     # Issue 3: constant parts agree with the closed forms to 1e-9 relative, every period.

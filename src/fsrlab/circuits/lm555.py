@@ -15,7 +15,9 @@ Model (what is kept, what is neglected)
 * Discharge (output low, pin 7 at ground): without the diode C discharges through ``R ∥ R_FSR``;
   with the diode D1 blocks R_B and C discharges through R_FSR alone. The diode drop does not enter
   the discharge: D1 is reverse biased.
-* Neglected: discharge-transistor saturation resistance and voltage, comparator delay and offset,
+* Optional (``discharge_ohm``, an extension): the discharge transistor's on-resistance; it only
+  matters without D1 (a 50 Ω on-resistance lowers f by ~0.45 % at R = 10 kΩ).
+* Neglected: discharge-transistor offset voltage, comparator delay and offset,
   output edge times, threshold/trigger input currents, diode reverse leakage, the diode's
   current-dependent drop (a constant drop is used), leakage of C_off.
 
@@ -191,7 +193,17 @@ def minimum_n_ratio(diode_drop_v: float = 0.0, vcc_v: float = 5.0, upper_fractio
     return 2.0 * upper_fraction * vcc_v / headroom
 
 
-def _timing_per_rc(n, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction):
+def _discharge_source(rd_rel, vcc_v):
+    """Pin 7 during the discharge, seen from R_B: Thevenin source and resistance (in units of R).
+
+    The discharge transistor (on-resistance R_d) and R_A form a divider: ``V_T = Vcc·R_d/(R + R_d)``
+    behind ``R_T = R ∥ R_d``.
+    """
+    rd = np.asarray(rd_rel, dtype=float)
+    return vcc_v * rd / (1.0 + rd), rd / (1.0 + rd)
+
+
+def _timing_per_rc(n, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, rd_rel=0.0):
     """τH/(R·C) and τL/(R·C) as functions of N (arrays; NaN/inf outside the oscillating domain)."""
     n = np.asarray(n, dtype=float)
     vs = vcc_v - diode_drop_v
@@ -207,10 +219,18 @@ def _timing_per_rc(n, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction
         if diode:
             # D1 blocks R_B: C discharges through R_FSR alone.                               # Eq. (34)
             r_dis = np.where(finite, nn, np.inf)
-        else:
+            tl = r_dis * math.log(upper_fraction / lower_fraction)
+        elif np.all(np.asarray(rd_rel) == 0):
             # C discharges through R ∥ R_FSR.                                                 # Eq. (26)
             r_dis = np.where(finite, nn / (nn + 1.0), 1.0)
-        tl = r_dis * math.log(upper_fraction / lower_fraction)
+            tl = r_dis * math.log(upper_fraction / lower_fraction)
+        else:
+            # Extension: C discharges through R_B + R_T toward V_T, with R_FSR to ground.
+            v_t, r_t = _discharge_source(rd_rel, vcc_v)
+            a = 1.0 + r_t
+            r_dis = np.where(finite, a * nn / (a + nn), a)
+            v_dis = np.where(finite, v_t * nn / (a + nn), v_t)
+            tl = np.where(v_dis < v_lo, r_dis * np.log((v_hi - v_dis) / (v_lo - v_dis)), np.inf)
     return th, tl
 
 
@@ -313,7 +333,7 @@ def _drop_message(diode_drop_v, vcc_v, upper_fraction):
 
 def astable(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad=0.0, diode: bool = False, diode_drop_v: float = 0.0,
             vcc_v: float = 5.0, lower_fraction: float = 1 / 3, upper_fraction: float = 2 / 3,
-            check: bool = True) -> AstableResult:
+            check: bool = True, discharge_ohm=0.0) -> AstableResult:
     """Closed-form steady-state τH, τL, frequency and duty cycle of the FSR-timed LM555 astable.
 
     Parameters
@@ -340,6 +360,10 @@ def astable(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad=0.0, diode: bool = False,
         True (default): raise :class:`NoOscillationError` if any element does not oscillate.
         False: return NaN for frequency and duty cycle (and for the affected τ) where the circuit
         does not oscillate, with ``oscillates`` False there.
+    discharge_ohm : float or array_like
+        On-resistance of the discharge transistor (pin 7), ≥ 0; 0 (default) is the paper's ideal
+        switch. An extension: it only matters without D1 (with D1 the diode blocks R_B during the
+        discharge). A real LM555 saturates at some tens of ohms at sub-mA currents. [Ω]
 
     Returns
     -------
@@ -358,7 +382,7 @@ def astable(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad=0.0, diode: bool = False,
     Notes
     -----
     With ``N = R_FSR/R``, ``Vs = Vcc − V_D``, ``V∞ = Vs·N/(N + 2)``, thresholds ``V_ℓ = ℓ·Vcc`` and
-    ``V_u = u·Vcc``::
+    ``V_u = u·Vcc`` (ideal discharge switch)::
 
         τH = C·(2R ∥ R_FSR)·ln((V∞ − V_ℓ)/(V∞ − V_u))     # Eq. (23) for V_D = 0, ℓ = 1/3, u = 2/3
         τL = C·(R ∥ R_FSR)·ln(u/ℓ)                         # Eq. (26), no diode
@@ -370,6 +394,11 @@ def astable(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad=0.0, diode: bool = False,
     As ``R_FSR → ∞`` without diode this tends to the classic ``f = 1/(3 ln 2·R·C) ≈ 1.44/(3RC)``
     (eq. 19 with R_A = R_B = R).
 
+    With a discharge on-resistance R_d and no diode, pin 7 is a source ``V_T = Vcc·R_d/(R + R_d)``
+    behind ``R_T = R ∥ R_d``; C discharges toward ``V_T·R_FSR/(R + R_T + R_FSR)`` through
+    ``(R + R_T) ∥ R_FSR``, ``τL = C·((R + R_T) ∥ R_FSR)·ln((V_u − V∞,dis)/(V_ℓ − V∞,dis))``, and the
+    discharge must end below the lower threshold (``V∞,dis < V_ℓ``).
+
     References
     ----------
     Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901.
@@ -380,6 +409,9 @@ def astable(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad=0.0, diode: bool = False,
     rf = np.asarray(r_fsr_ohm, dtype=float)
     cf = np.asarray(c_fsr_farad, dtype=float)
     co = np.asarray(c_off_farad, dtype=float)
+    rd = np.asarray(discharge_ohm, dtype=float)
+    if np.any(~np.isfinite(rd)) or np.any(rd < 0):
+        raise ValueError(f"discharge_ohm: must be finite and >= 0 Ω, got {discharge_ohm!r}")
     if np.any(~np.isfinite(r)) or np.any(r <= 0):
         raise ValueError(f"r_ohm: must be finite and > 0 Ω, got {r_ohm!r}")
     if np.any(np.isnan(rf)) or np.any(rf <= 0):
@@ -391,17 +423,18 @@ def astable(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad=0.0, diode: bool = False,
     c = cf + co
     if np.any(c <= 0):
         raise ValueError("c_fsr_farad + c_off_farad: the timing capacitance must be > 0 F")
-    r, rf, c = np.broadcast_arrays(r, rf, c)
+    r, rf, c, rd = np.broadcast_arrays(r, rf, c, rd)
     n = rf / r
     n_min = minimum_n_ratio(diode_drop_v, vcc_v, upper_fraction)
-    th_rc, tl_rc = _timing_per_rc(n, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction)
+    th_rc, tl_rc = _timing_per_rc(n, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, rd / r)
     # A relative guard of 1e-12 keeps N = N_min (e.g. exactly 4, eq. 30) on the non-oscillating side
     # despite rounding of the thresholds; there τH would be infinite anyway.
     ok_charge = (n > n_min * (1.0 + 1e-12)) & np.isfinite(th_rc)
     ok_discharge = np.isfinite(tl_rc)
     ok = ok_charge & ok_discharge
     if check and not np.all(ok):
-        _raise_no_oscillation(n, n_min, ok_charge, ok_discharge, diode_drop_v, vcc_v, upper_fraction)
+        _raise_no_oscillation(n, n_min, ok_charge, ok_discharge, diode_drop_v, vcc_v, upper_fraction, diode,
+                              lower_fraction)
     rc = r * c
     with np.errstate(invalid="ignore"):
         th = np.where(ok_charge, th_rc * rc, np.nan)
@@ -417,7 +450,8 @@ def astable(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad=0.0, diode: bool = False,
                          n_ratio=out(n), oscillates=out(ok))
 
 
-def _raise_no_oscillation(n, n_min, ok_charge, ok_discharge, diode_drop_v, vcc_v, upper_fraction):
+def _raise_no_oscillation(n, n_min, ok_charge, ok_discharge, diode_drop_v, vcc_v, upper_fraction, diode=True,
+                          lower_fraction=1 / 3):
     bad = ~(ok_charge & ok_discharge)
     count, total = int(np.count_nonzero(bad)), int(bad.size)
     where = "" if total == 1 else f" ({count} of {total} elements; first at index {np.argwhere(bad)[0].tolist()})"
@@ -432,9 +466,13 @@ def _raise_no_oscillation(n, n_min, ok_charge, ok_discharge, diode_drop_v, vcc_v
             f"no oscillation: the charge target stays below the upper threshold {upper_fraction * vcc_v:.4g} V; "
             f"N = R_FSR/R = {worst:.4g} must exceed {n_min:.4g} (short by {100 * short:.3g} %; "
             f"make R < R_FSR/{n_min:.4g}){where}", "charge", short)
+    if diode:
+        raise NoOscillationError(
+            f"no oscillation: with the diode C can discharge only through R_FSR, which is infinite{where}",
+            "discharge", math.inf)
     raise NoOscillationError(
-        f"no oscillation: with the diode C can discharge only through R_FSR, which is infinite{where}",
-        "discharge", math.inf)
+        f"no oscillation: the discharge transistor's resistance holds the capacitor above the lower threshold "
+        f"{lower_fraction * vcc_v:.4g} V{where}", "discharge", math.nan)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -463,13 +501,15 @@ class Sensitivity:
 
 def sensitivity(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad=0.0, diode: bool = False, diode_drop_v: float = 0.0,
                 vcc_v: float = 5.0, lower_fraction: float = 1 / 3, upper_fraction: float = 2 / 3,
-                check: bool = True) -> Sensitivity:
+                check: bool = True, discharge_ohm=0.0) -> Sensitivity:
     """How much of a frequency change comes from C_FSR and how much from R_FSR.
 
     Parameters
     ----------
     r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, check
         As in :func:`astable`. [Ω, Ω, F, F, -, V, V, 1, 1, -]
+    discharge_ohm : float or array_like
+        Discharge-transistor on-resistance, as in :func:`astable`. [Ω]
 
     Returns
     -------
@@ -482,12 +522,14 @@ def sensitivity(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad=0.0, diode: bool = Fa
 
         x ∂τH/∂x = τH·2R/(2R + x) + C·a·V∞·(2R/(2R + x))·(V_ℓ − V_u)/((V∞ − V_ℓ)(V∞ − V_u))
         x ∂τL/∂x = τL·R/(R + x)   (no diode, eq. 26);   = τL   (diode, eq. 34)
+        with R_d > 0 and no diode (b = R + R_T, V∞d = V_T·x/(b + x), R_th = b∥x):
+        x ∂τL/∂x = τL·b/(b + x) + C·R_th·V∞d·(b/(b + x))·(V_u − V_ℓ)/((V_u − V∞d)(V_ℓ − V∞d))
         ∂ln f/∂ln x = −(x ∂τH/∂x + x ∂τL/∂x)/(τH + τL)
 
     f is proportional to 1/C with ``C = C_FSR + C_off``, hence ``∂ln f/∂ln C_FSR = −C_FSR/C``.
     """
     res = astable(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction,
-                  upper_fraction, check=check)
+                  upper_fraction, check=check, discharge_ohm=discharge_ohm)
     r = np.asarray(r_ohm, dtype=float)
     x = np.asarray(r_fsr_ohm, dtype=float)
     cf = np.asarray(c_fsr_farad, dtype=float)
@@ -502,7 +544,15 @@ def sensitivity(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad=0.0, diode: bool = Fa
         a = np.where(finite, 2 * r * xf / (2 * r + xf), 2 * r)
         vinf = np.where(finite, vs * xf / (2 * r + xf), vs)
         dth = th * w2 + c * a * vinf * w2 * (v_lo - v_hi) / ((vinf - v_lo) * (vinf - v_hi))
-        dtl = tl if diode else tl * np.where(finite, r / (r + xf), 0.0)
+        if diode:
+            dtl = tl
+        else:
+            v_t, r_t = _discharge_source(np.asarray(discharge_ohm, dtype=float) / r, vcc_v)
+            b = r * (1.0 + r_t)  # R_B + R_T [Ω]
+            wb = np.where(finite, b / (b + xf), 0.0)
+            r_th = np.where(finite, b * xf / (b + xf), b)
+            v_d = np.where(finite, v_t * xf / (b + xf), v_t)
+            dtl = tl * wb + c * r_th * v_d * wb * (v_hi - v_lo) / ((v_hi - v_d) * (v_lo - v_d))
         s_r = -(dth + dtl) / (th + tl)
         s_dc = dth / th - (dth + dtl) / (th + tl)
         s_c = -cf / c
@@ -543,7 +593,7 @@ class DecodeResult:
     n_ratio: np.ndarray | float
 
 
-def _invert(f, dc, r, c_off, diode, diode_drop_v, vcc_v, lo, hi):
+def _invert(f, dc, r, c_off, diode, diode_drop_v, vcc_v, lo, hi, rd_rel=0.0):
     """Vectorised inversion; returns (N, C_total) with NaN where (f, DC) is impossible."""
     rho = dc / (1.0 - dc)
     n_min = minimum_n_ratio(diode_drop_v, vcc_v, hi)
@@ -552,7 +602,7 @@ def _invert(f, dc, r, c_off, diode, diode_drop_v, vcc_v, lo, hi):
     def g(u):
         with np.errstate(divide="ignore"):
             n = np.where(u > 0, 1.0 / np.where(u > 0, u, 1.0), np.inf)
-        th, tl = _timing_per_rc(n, diode, diode_drop_v, vcc_v, lo, hi)
+        th, tl = _timing_per_rc(n, diode, diode_drop_v, vcc_v, lo, hi, rd_rel)
         with np.errstate(invalid="ignore", divide="ignore"):
             return np.where(u > 0, th / tl, 0.0 if diode else th / tl)
 
@@ -568,15 +618,15 @@ def _invert(f, dc, r, c_off, diode, diode_drop_v, vcc_v, lo, hi):
     with np.errstate(divide="ignore"):
         n = np.where(u > 0, 1.0 / np.where(u > 0, u, 1.0), np.inf)
     n = np.where(rho > g0, n, np.nan)
-    th, tl = _timing_per_rc(n, diode, diode_drop_v, vcc_v, lo, hi)
+    th, tl = _timing_per_rc(n, diode, diode_drop_v, vcc_v, lo, hi, rd_rel)
     c_total = 1.0 / (f * r * (th + tl))
-    return n, c_total
+    return n, c_total, float(g0 / (1.0 + g0))
 
 
 def decode(frequency_hz, duty_cycle, r_ohm: float, c_off_farad: float = 0.0, diode: bool = False,
            diode_drop_v: float = 0.0, vcc_v: float = 5.0, lower_fraction: float = 1 / 3,
            upper_fraction: float = 2 / 3, periods=1, timer_resolution_s: float = TIMER_TICK_S,
-           check: bool = True) -> DecodeResult:
+           check: bool = True, discharge_ohm: float = 0.0) -> DecodeResult:
     """Recover R_FSR and C_FSR from a measured frequency and duty cycle (the paper's "dual decoding").
 
     Parameters
@@ -599,6 +649,8 @@ def decode(frequency_hz, duty_cycle, r_ohm: float, c_off_farad: float = 0.0, dio
     check : bool
         True (default): an impossible (f, DC) pair raises. False: NaN for that element (useful for
         noisy measured series whose duty cycle can dip below the circuit's limit).
+    discharge_ohm : float
+        Discharge-transistor on-resistance, as in :func:`astable`. [Ω]
 
     Returns
     -------
@@ -646,9 +698,10 @@ def decode(frequency_hz, duty_cycle, r_ohm: float, c_off_farad: float = 0.0, dio
         raise NoOscillationError(_drop_message(diode_drop_v, vcc_v, upper_fraction), "diode_drop",
                                  diode_drop_v / ((1 - upper_fraction) * vcc_v) - 1.0)
     f, dc, n_per = np.broadcast_arrays(f, dc, n_per)
-    args = (r_ohm, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction)
-    n, c_total = _invert(f, dc, *args)
-    dc_min, _ = duty_cycle_limits(diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction)
+    if not (math.isfinite(discharge_ohm) and discharge_ohm >= 0):
+        raise ValueError(f"discharge_ohm: must be finite and >= 0 Ω, got {discharge_ohm!r}")
+    args = (r_ohm, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, discharge_ohm / r_ohm)
+    n, c_total, dc_min = _invert(f, dc, *args)
     bad = np.isnan(n)
     if check and np.any(bad):
         i = np.argwhere(bad)[0]
@@ -678,7 +731,7 @@ def decode(frequency_hz, duty_cycle, r_ohm: float, c_off_farad: float = 0.0, dio
 
     def parts(tt, hh):
         with np.errstate(invalid="ignore", divide="ignore"):
-            nn, cc = _invert(1.0 / tt, hh / tt, *args)
+            nn, cc, _ = _invert(1.0 / tt, hh / tt, *args)
         return nn * r_ohm, cc - c_off_farad
 
     rp_t, cp_t = parts(t_per + step, h)

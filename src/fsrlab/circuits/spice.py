@@ -50,10 +50,11 @@ SUBCKT_555 = """\
 * Switch closed (discharge on, output low) once V(thr) > upper threshold; open below lower threshold.
 .subckt fsr555 vcc dis thr out
 Ectl ctl 0 thr 0 {gain:g}
-Sdis dis 0 ctl 0 sw555
+Sdis dis 0 ctl 0 swdis
 Sout out 0 ctl 0 sw555
 Rout vcc out 1k
 .model sw555 SW(VT={vt:.15g} VH={vh:.15g} RON=1m ROFF=1e12)
+.model swdis SW(VT={vt:.15g} VH={vh:.15g} RON={ron:.15g} ROFF=1e12)
 .ends fsr555
 """
 
@@ -95,7 +96,7 @@ def ngspice_available() -> bool:
 def netlist(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: float = 0.0, diode: bool = False,
             diode_drop_v: float = 0.0, vcc_v: float = 5.0, lower_fraction: float = 1 / 3,
             upper_fraction: float = 2 / 3, *, t_stop_s: float, t_max_step_s: float,
-            output_file: str = "fsrlab_out.txt", time_s=None) -> str:
+            output_file: str = "fsrlab_out.txt", time_s=None, discharge_ohm: float = 1e-3) -> str:
     """ngspice netlist of the astable (paper Figs. 9b, 13, 16) with a ``.control`` block.
 
     Parameters
@@ -125,6 +126,9 @@ def netlist(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: flo
         File ``wrdata`` writes time, V(out), V(thr) into.
     time_s : array_like, optional
         Sample times of a time-varying ``r_fsr_ohm`` (strictly increasing, starting at 0). [s]
+    discharge_ohm : float
+        On-resistance of the discharge transistor (pin 7); 1 mΩ is practically ideal, as in the
+        closed forms. A real LM555 saturates at a few tens of ohms at these currents. [Ω]
 
     Returns
     -------
@@ -136,7 +140,8 @@ def netlist(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: flo
     v_lo, v_hi = lower_fraction * vcc_v, upper_fraction * vcc_v
     lines = [
         "* fsrlab: LM555 astable with the FSR as timing element (Matute et al. 2018, Figs. 9b/13/16)",
-        SUBCKT_555.format(gain=GAIN, vt=GAIN * (v_lo + v_hi) / 2, vh=GAIN * (v_hi - v_lo) / 2).rstrip(),
+        SUBCKT_555.format(gain=GAIN, vt=GAIN * (v_lo + v_hi) / 2, vh=GAIN * (v_hi - v_lo) / 2,
+                          ron=discharge_ohm).rstrip(),
         f"Vcc vcc 0 DC {vcc_v:.15g}",
         f"RA vcc dis {r_ohm:.15g}",
     ]
@@ -263,7 +268,8 @@ def edges_from_waveform(t_s, v_out_v, vcc_v: float = 5.0, skip_periods: int = 2)
 def simulate_spice(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: float = 0.0,
                    diode: bool = False, diode_drop_v: float = 0.0, vcc_v: float = 5.0,
                    lower_fraction: float = 1 / 3, upper_fraction: float = 2 / 3, *, periods: int = 20,
-                   skip_periods: int = 2, steps_per_phase: int = 100, timeout_s: float = 300.0) -> SpiceResult:
+                   skip_periods: int = 2, steps_per_phase: int = 50, timeout_s: float = 300.0,
+                   discharge_ohm: float = 1e-3) -> SpiceResult:
     """Simulate the astable in ngspice and measure frequency and duty cycle on the output.
 
     Parameters
@@ -279,6 +285,8 @@ def simulate_spice(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_far
         crossings are refined by the switch's own step control regardless).
     timeout_s : float
         ngspice time limit. [s]
+    discharge_ohm : float
+        On-resistance of the discharge transistor (see :func:`netlist`). [Ω]
 
     Returns
     -------
@@ -298,7 +306,8 @@ def simulate_spice(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_far
     # Start-up from 0 V takes longer than a steady period; allow for it.
     t_stop = period * (periods + skip_periods + 2)
     text = netlist(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction,
-                   upper_fraction, t_stop_s=t_stop, t_max_step_s=shortest / steps_per_phase)
+                   upper_fraction, t_stop_s=t_stop, t_max_step_s=shortest / steps_per_phase,
+                   discharge_ohm=discharge_ohm)
     data = run_ngspice(text, timeout_s=timeout_s)
     rising, falling, f, dc = edges_from_waveform(data[:, 0], data[:, 1], vcc_v, skip_periods)
     if rising.size > periods + 1:

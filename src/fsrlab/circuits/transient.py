@@ -113,7 +113,8 @@ def simulate(r_ohm: float, r_fsr_ohm, c_fsr_farad, c_off_farad: float = 0.0, dio
              diode_drop_v: float = 0.0, vcc_v: float = 5.0, lower_fraction: float = 1 / 3,
              upper_fraction: float = 2 / 3, *, periods: int | None = None, t_stop_s: float | None = None,
              time_s=None, v_initial_v: float | None = None, waveform: bool = False,
-             points_per_segment: int = 16, capacitance_step: str = "charge") -> TransientResult:
+             points_per_segment: int = 16, capacitance_step: str = "charge",
+             discharge_ohm: float = 0.0) -> TransientResult:
     """Simulate the astable event by event with closed-form RC segments.
 
     Parameters
@@ -150,6 +151,9 @@ def simulate(r_ohm: float, r_fsr_ohm, c_fsr_farad, c_off_farad: float = 0.0, dio
         Waveform points per segment (≥ 2), segment ends included.
     capacitance_step : {"charge", "voltage"}
         What is conserved when the capacitance steps between samples.
+    discharge_ohm : float
+        Discharge-transistor on-resistance (0: ideal switch, as in the paper); see
+        :func:`fsrlab.circuits.lm555.astable`. [Ω]
 
     Returns
     -------
@@ -165,7 +169,9 @@ def simulate(r_ohm: float, r_fsr_ohm, c_fsr_farad, c_off_farad: float = 0.0, dio
     Charge (output high): ``V∞ = (Vcc − V_D)·R_FSR/(2R + R_FSR)``, ``τ = C·(2R ∥ R_FSR)`` (eq. 21);
     if the capacitor sits above ``Vcc − V_D`` D1 is off and C decays through R_FSR until it
     conducts again. Discharge (output low): ``V∞ = 0``, ``τ = C·(R ∥ R_FSR)`` without D1 (eq. 24)
-    or ``τ = C·R_FSR`` with D1 (eq. 33). A circuit that does not oscillate simply produces no more
+    or ``τ = C·R_FSR`` with D1 (eq. 33); with a discharge on-resistance R_d and no D1, the discharge
+    heads for ``V_T·R_FSR/(R + R_T + R_FSR)`` through ``(R + R_T) ∥ R_FSR`` (``V_T = Vcc·R_d/(R + R_d)``,
+    ``R_T = R ∥ R_d``). A circuit that does not oscillate simply produces no more
     edges (the capacitor settles below the upper threshold).
     """
     _check_fractions(lower_fraction, upper_fraction)
@@ -174,6 +180,8 @@ def simulate(r_ohm: float, r_fsr_ohm, c_fsr_farad, c_off_farad: float = 0.0, dio
         raise ValueError(f"r_ohm: must be finite and > 0 Ω, got {r_ohm!r}")
     if not (math.isfinite(c_off_farad) and c_off_farad >= 0):
         raise ValueError(f"c_off_farad: must be finite and >= 0 F, got {c_off_farad!r}")
+    if not (math.isfinite(discharge_ohm) and discharge_ohm >= 0):
+        raise ValueError(f"discharge_ohm: must be finite and >= 0 Ω, got {discharge_ohm!r}")
     if capacitance_step not in ("charge", "voltage"):
         raise ValueError(f"capacitance_step: must be 'charge' or 'voltage', got {capacitance_step!r}")
     if int(points_per_segment) < 2:
@@ -213,6 +221,9 @@ def simulate(r_ohm: float, r_fsr_ohm, c_fsr_farad, c_off_farad: float = 0.0, dio
 
     r = float(r_ohm)
     vs = vcc_v - diode_drop_v
+    # Pin 7 during the discharge (Thevenin of R_A and the transistor's on-resistance).
+    v_t = vcc_v * discharge_ohm / (r + discharge_ohm)
+    b = r + r * discharge_ohm / (r + discharge_ohm)  # R_B + R_A ∥ R_d
     v_lo, v_hi = lower_fraction * vcc_v, upper_fraction * vcc_v
     max_rising = None if periods is None else int(periods) + 1
     npts = int(points_per_segment)
@@ -253,12 +264,14 @@ def simulate(r_ohm: float, r_fsr_ohm, c_fsr_farad, c_off_farad: float = 0.0, dio
         # Closed-form segment constants for this sample interval.
         if math.isinf(rfk):
             charge_vinf, charge_tau = vs, 2.0 * r * ck
-            dis_tau = math.inf if diode else r * ck
+            dis_tau = math.inf if diode else b * ck
+            dis_vinf = 0.0 if diode else v_t
             leak_tau = math.inf
         else:
             charge_vinf = vs * rfk / (2.0 * r + rfk)
             charge_tau = 2.0 * r * rfk / (2.0 * r + rfk) * ck
-            dis_tau = rfk * ck if diode else r * rfk / (r + rfk) * ck
+            dis_tau = rfk * ck if diode else b * rfk / (b + rfk) * ck
+            dis_vinf = 0.0 if diode else v_t * rfk / (b + rfk)
             leak_tau = rfk * ck
         while True:
             # A step of C (or the start) may already sit beyond a threshold: switch now.
@@ -278,7 +291,7 @@ def simulate(r_ohm: float, r_fsr_ohm, c_fsr_farad, c_off_farad: float = 0.0, dio
                 else:
                     vinf, tau, target, edge = charge_vinf, charge_tau, v_hi, True
             else:
-                vinf, tau, target, edge = 0.0, dis_tau, v_lo, True
+                vinf, tau, target, edge = dis_vinf, dis_tau, v_lo, True
             if math.isinf(tau):
                 dt = math.inf
             else:

@@ -10,7 +10,7 @@ from fsrlab.cli import app
 from fsrlab.cli._common import emit_json, eng, fail, option_names
 from fsrlab.units import format_eng
 
-_NAMES = {"control_v": "--vctrl", "r_ohm": "--r", "r_fsr_ohm": "--rfsr", "c_fsr_farad": "--cfsr", "c_off_farad": "--coff",
+_NAMES = {"control_v": "--vctrl", "discharge_ohm": "--rdis", "r_ohm": "--r", "r_fsr_ohm": "--rfsr", "c_fsr_farad": "--cfsr", "c_off_farad": "--coff",
           "diode_drop_v": "--diode-drop", "vcc_v": "--vcc", "frequency_hz": "--frequency",
           "duty_cycle": "--duty", "periods": "--periods", "r_fsr_range_ohm": "--rfsr-min/--rfsr-max",
           "c_fsr_range_farad": "--cfsr-min/--cfsr-max", "band_hz": "--fmin/--fmax", "variant": "--variant",
@@ -41,6 +41,7 @@ def oscillator(
     diode_drop: float = typer.Option(None, "--diode-drop", parser=eng, help="D1 with this forward drop [V], e.g. 0.6 (implies --diode)."),
     vcc: float = typer.Option(5.0, "--vcc", parser=eng, help="Supply [V]."),
     vctrl: float = typer.Option(None, "--vctrl", parser=eng, help="Control-pin voltage [V] (thresholds at Vctrl and Vctrl/2; default: open pin, 2/3·Vcc)."),
+    rdis: float = typer.Option(0.0, "--rdis", parser=eng, help="Discharge-transistor on-resistance [Ω] (default 0: ideal, as in the paper)."),
     spice: bool = typer.Option(False, "--spice", help="Also simulate the circuit in ngspice and show its frequency and duty cycle."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
@@ -51,7 +52,7 @@ def oscillator(
     with option_names(_NAMES):
         lower, upper = (1 / 3, 2 / 3) if vctrl is None else thresholds_from_control(vctrl, vcc)
         kw = dict(c_off_farad=coff, diode=diode, diode_drop_v=drop, vcc_v=vcc, lower_fraction=lower,
-                  upper_fraction=upper)
+                  upper_fraction=upper, discharge_ohm=rdis)
         res = astable(r, rfsr, cfsr, **kw, check=False)
     if not res.oscillates:
         # Raises NoOscillationError (a ValueError) saying which condition failed: one line, exit 2.
@@ -100,6 +101,7 @@ def decode_cmd(
     diode_drop: float = typer.Option(None, "--diode-drop", parser=eng, help="D1 with this forward drop [V] (implies --diode)."),
     vcc: float = typer.Option(5.0, "--vcc", parser=eng, help="Supply [V]."),
     vctrl: float = typer.Option(None, "--vctrl", parser=eng, help="Control-pin voltage [V] (default: open pin)."),
+    rdis: float = typer.Option(0.0, "--rdis", parser=eng, help="Discharge-transistor on-resistance [Ω] (default 0)."),
     periods: int = typer.Option(1, "--periods", help="Periods averaged into the measurement (for the uncertainty)."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
@@ -110,7 +112,7 @@ def decode_cmd(
     with option_names(_NAMES):
         lower, upper = (1 / 3, 2 / 3) if vctrl is None else thresholds_from_control(vctrl, vcc)
         res = decode(frequency, duty, r, coff, diode=diode, diode_drop_v=drop, vcc_v=vcc, periods=periods,
-                     lower_fraction=lower, upper_fraction=upper)
+                     lower_fraction=lower, upper_fraction=upper, discharge_ohm=rdis)
     out = {"r_fsr_ohm": float(res.r_fsr_ohm), "c_fsr_farad": float(res.c_fsr_farad),
            "r_fsr_std_ohm": float(res.r_fsr_std_ohm), "c_fsr_std_farad": float(res.c_fsr_std_farad)}
     if json_out:
