@@ -232,3 +232,19 @@ def test_unwritable_output_is_one_line_exit_2_and_the_device_is_stopped(tmp_path
         assert not dev._st.started
     code, _, stderr = _run(["acquire", "--virtual", "--duration", "1", "--out", str(tmp_path / "missing" / "x.csv")])
     assert code == 2 and stderr.count("\n") == 1 and "missing" in stderr
+
+
+def test_a_virtual_recording_is_analysable(tmp_path):
+    """Contract with the analysis capability: two loading-unloading cycles recorded from the virtual
+    device give a hysteresis error per cycle through ``fsrlab hysteresis`` (property: HE > 0 for
+    the hysteretic sensor model, and the two steady cycles agree within 2 percentage points)."""
+    out = tmp_path / "run.csv"
+    code, _, err = _run(["acquire", "--virtual", "--duration", "2.05", "--period", "1", "--window", "20",
+                         "--out", str(out), "--quiet", "--seed", "1"])
+    assert code == 0, err
+    code, stdout, err = _run(["hysteresis", str(out), "--json"])
+    assert code == 0, err
+    result = json.loads(stdout)
+    per_cycle = [c["hysteresis_error_percent"] for c in result["cycles"]]
+    assert len(per_cycle) == 2 and all(he > 0 for he in per_cycle)
+    assert abs(per_cycle[0] - per_cycle[1]) < 2.0
