@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fsrlab.circuits.lm555 import astable, duty_cycle_limits, sensitivity, tau_ratio
+from fsrlab.circuits.lm555 import astable, duty_cycle_limits, minimum_n_ratio, sensitivity, tau_ratio
 from fsrlab.circuits.spice import ngspice_available, simulate_spice
 from fsrlab.report.figures import new_figure, save
 from fsrlab.report.model import Erratum, Figure, Section, Table
@@ -312,7 +312,14 @@ def build(outdir: Path) -> Section:
         "oscillates only for N > 4 (eq. 30; with a diode drop V_D, N > 2uVcc/(Vcc − V_D − uVcc)).\n\n"
         "Closed forms: fsrlab.circuits.lm555; exact event-driven simulation: fsrlab.circuits.transient; "
         "independent check: ngspice with fsrlab's behavioural 555 (fsrlab.circuits.spice), which agrees with the "
-        "closed forms to better than 1e-4 over N = 4.5–1000 with and without D1 and C_off (tests/circuits/test_spice.py)."
+        "closed forms to better than 1e-4 over N = 4.5–1000 with and without D1 and C_off (tests/circuits/test_spice.py).\n\n"
+        "Beyond the paper's ideal parts, fsrlab models a diode forward drop (0.6 V raises the oscillation limit to "
+        f"N > {minimum_n_ratio(0.6):.4g}), thresholds moved by the control pin, and the discharge transistor's "
+        "on-resistance (50 Ω changes f by "
+        f"{100 * (float(astable(R_OHM, 200e3, C_FARAD, discharge_ohm=50.0).frequency_hz) / float(astable(R_OHM, 200e3, C_FARAD).frequency_hz) - 1):+.2f} % "
+        "without D1 at R = 10 kΩ, R_FSR = 200 kΩ, and not at all with D1, which blocks R_B during the discharge). "
+        "Neglected: comparator delay and offset, output edge times, input currents of pins 2 and 6, diode leakage "
+        "and the current dependence of its drop."
     )
     return Section(key="oscillator", title="LM555 oscillator (§5)", intro=intro, figures=figures, tables=[table],
                    errata=errata, data=data)
