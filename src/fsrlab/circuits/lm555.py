@@ -926,7 +926,7 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
                    if span > fhi / flo else "no E12 R and C_off place the sensor's frequencies inside the band")
             reasons.append(f"{'diode' if diode else 'no-diode'} circuit: {why} (R ≤ {rs.max():.3g} Ω for the margin)")
             continue
-        margin_rc = (RF[:, :, 0] * 0 + rlo) / R[:, :, 0] / n_min - 1.0
+        margin_rc = rlo / R[:, :, 0] / n_min - 1.0  # the smallest R_FSR is the worst case
         score = np.where(ok, merit + 1e-6 * np.minimum(margin_rc, 100.0), -np.inf)
         i, j = np.unravel_index(np.argmax(score), score.shape)
         fi = f[i, j]
