@@ -151,3 +151,18 @@ def test_validation():
         simulate(10e3, [1e5, 2e5], 1e-9, periods=3)
     with pytest.raises(ValueError, match="capacitance_step"):
         simulate(10e3, 200e3, 1e-9, periods=3, capacitance_step="x")
+
+
+def test_oscillation_stops_and_resumes_when_n_dips_below_4():
+    # R_FSR dips to 30 kΩ (N = 3 < 4) between 0.5 and 1 ms: the output stays high there (the
+    # capacitor settles toward 3 V < 10/3 V) and oscillation resumes afterwards; every edge agrees
+    # with the independent solve_ivp integration.
+    t = np.array([0.0, 0.5e-3, 1.0e-3, 1.5e-3])
+    rf = np.array([200e3, 30e3, 200e3, 200e3])
+    cf = np.full(t.size, 1e-9)
+    sim = simulate(10e3, rf, cf, time_s=t)
+    rising, falling = _reference_ode(10e3, t, rf, cf, False, 5 / 3)
+    assert not np.any((sim.falling_s > 0.5e-3 + 1e-4) & (sim.falling_s < 1.0e-3))
+    assert np.any(sim.falling_s > 1.0e-3)
+    np.testing.assert_allclose(sim.rising_s, rising, rtol=1e-8, atol=1e-14)
+    np.testing.assert_allclose(sim.falling_s, falling, rtol=1e-8, atol=1e-14)
