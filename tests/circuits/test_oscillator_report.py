@@ -55,3 +55,15 @@ def test_frequency_vs_stress_decomposition(section):
     d, nd = fs["diode"], fs["no_diode"]
     assert d["c_only_hz"][1] < d["c_only_hz"][0] and d["r_only_hz"][1] > d["r_only_hz"][0]
     assert abs(nd["r_only_hz"][1] / nd["r_only_hz"][0] - 1) < 0.1 * abs(nd["c_only_hz"][1] / nd["c_only_hz"][0] - 1)
+
+
+def test_paper_24_37_is_the_minimum_of_n_times_eq32():
+    # Erratum O1: N × eq. (32) (eq. 32 retyped here) has its minimum 24.3796 at N ≈ 6.03; the paper
+    # prints 24.37 (truncated) and DC = 24.37/25.37 = 0.96.
+    from fsrlab.report.sections.oscillator import paper_min_24_37
+
+    n, value = paper_min_24_37()
+    assert value == pytest.approx(24.37, abs=0.01)
+    assert n == pytest.approx(6.03, abs=0.01)
+    eq32 = math.log((2 * n - 2) / (n - 4)) * 2 * (n + 1) / ((n + 2) * math.log(2))
+    assert n * eq32 == pytest.approx(value, rel=1e-9)

@@ -37,6 +37,26 @@ def paper_eq37_as_printed(n):
     return np.log((2 - 2 * n) / (4 - n)) * 2 * n / (math.log(2) * (n + 2))
 
 
+def paper_ratio_as_computed(n, diode: bool = False):
+    """τH/τL as the paper's numbers and Figures 12/15 behave: N × the ratio of eqs. (23) and (26)/(34).
+
+    Both the quoted minimum 24.37 (no diode) and the printed eq. (37) (diode) are N times the ratio
+    that follows from the paper's own τH and τL, as if τL had been divided by N (R_FSR replaced by R
+    in the numerators of eqs. 26 and 34).
+    """
+    n = np.asarray(n, dtype=float)
+    return n * tau_ratio(n, diode=diode)
+
+
+def paper_min_24_37() -> tuple[float, float]:
+    """(N, value) of the minimum of N × eq. (32) for N > 4: where the paper's 24.37 comes from."""
+    from scipy.optimize import minimize_scalar
+
+    res = minimize_scalar(lambda x: float(paper_ratio_as_computed(x)), bounds=(4.2, 20.0), method="bounded",
+                          options={"xatol": 1e-10})
+    return float(res.x), float(res.fun)
+
+
 def _spice_points(diode: bool) -> dict | None:
     if not ngspice_available():
         return None
@@ -63,7 +83,10 @@ def _figure(outdir: Path, name: str, diode: bool, spice: dict | None) -> None:
         ax1.axhline(2.0, color="C3", ls=":", lw=1, label="printed eq. (37) → 2 (paper: DC ≥ 66.6 %)")
         ax1.axhline(0.0, color="C0", ls=":", lw=1, label="corrected → 0 as N → ∞")
     else:
-        ax1.axhline(PAPER_CLAIMS["min_tau_ratio_no_diode"], color="C3", ls="--", lw=1.2,
+        n_p, v_p = paper_min_24_37()
+        ax1.plot(n, paper_ratio_as_computed(n), "C3--", lw=1.4,
+                 label=f"N × eq. (32): the paper's numbers (min {v_p:.2f} at N = {n_p:.2f})")
+        ax1.axhline(PAPER_CLAIMS["min_tau_ratio_no_diode"], color="C3", ls=":", lw=1,
                     label="paper: “minimal value 24.37”")
         ax1.axhline(2.0, color="C0", ls=":", lw=1, label="infimum 2 (N → ∞), never reached")
     if spice:
@@ -154,6 +177,7 @@ def build(outdir: Path) -> Section:
     from scipy.optimize import brentq
 
     n_at_2437 = brentq(lambda x: tau_ratio(x) - PAPER_CLAIMS["min_tau_ratio_no_diode"], 4 + 1e-9, 5)
+    n_min_paper, min_paper = paper_min_24_37()
     s20 = sensitivity(R_OHM, 20 * R_OHM, C_FARAD, diode=True)
     s20_nd = sensitivity(R_OHM, 20 * R_OHM, C_FARAD)
 
@@ -204,12 +228,16 @@ def build(outdir: Path) -> Section:
             "Eq. (32), τH/τL = ln((2N − 2)/(N − 4))·2(N + 1)/((N + 2)·ln 2), falls monotonically for N > 4 from "
             f"+∞ to its infimum 2 (N → ∞), which it never reaches: there is no minimum. τH/τL = {g_nd[i10]:.3f} "
             f"at N = 10 (DC {100 * dc_nd[i10]:.1f} %), {g_nd[i100]:.3f} at N = 100 (DC {100 * dc_nd[i100]:.2f} %). "
-            f"Every duty cycle in ({100 * dc_inf_nd:.2f} %, 100 %) is reachable; 24.37 is the value of eq. (32) at "
-            f"N = {n_at_2437:.5f}, just above the oscillation limit N = 4. Still, the paper's point that DC stays "
-            "high without the diode holds (always above 2/3).",
+            f"Every duty cycle in ({100 * dc_inf_nd:.2f} %, 100 %) is reachable. The quoted 24.37 is the minimum of "
+            f"N × eq. (32): {min_paper:.4f} at N = {n_min_paper:.3f} (24.37 truncated; DC {100 * min_paper / (1 + min_paper):.2f} %), "
+            "the same extra factor N as in the printed eq. (37) (O2), as if τL had been divided by N (R_FSR "
+            "replaced by R in the numerators of eqs. 26 and 34). Figure 12's axes (up to 60 at N ≤ 20, where eq. (32) "
+            f"stays below 6.5 for N ≥ 4.5) fit N × eq. (32) too ({20 * g_nd[N_TABLE.index(20.0)]:.1f} at N = 20). Eq. (32) itself reaches 24.37 only at N = {n_at_2437:.5f}. "
+            "The paper's point that DC stays high without the diode holds (always above 2/3).",
             "Derivation from eqs. (23), (26): as N → ∞, τH → 2RC·ln 2 and τL → RC·ln 2, ratio 2 (the classic "
             "555); the 1/N term of the expansion, 2(3/ln 2 − 1)/N, is positive, and a dense evaluation over "
-            "N ∈ (4, 10⁷) is strictly decreasing (tests/circuits/test_lm555.py)." + ev_spice,
+            "N ∈ (4, 10⁷) is strictly decreasing (tests/circuits/test_lm555.py). The minimum of N × eq. (32) is "
+            "found numerically (bounded minimisation)." + ev_spice,
         ),
         Erratum(
             "O2", "Eq. (37) as printed carries an extra factor N",
@@ -256,6 +284,8 @@ def build(outdir: Path) -> Section:
                "Figure 12 plots eq. (32) for N from 0 to 20 (y from −10 to 60); the text says its minimum for N > 4 "
                "is 24.37, so DC ≥ 96 %.",
                f"Eq. (32) decreases monotonically toward 2; no minimum. At N = 20 τH/τL = {g_nd[N_TABLE.index(20.0)]:.3f}. "
+               f"Red dashed: N × eq. (32), which has the paper's minimum ({min_paper:.2f} at N = {n_min_paper:.2f}) and "
+               "fits Figure 12's axes: the printed figure and number appear to carry the extra N of eq. (37). "
                + ("ngspice points lie on the curve (within 0.01 %)." if have_spice else "ngspice not installed: "
                   "no simulator points.") + " Right: the duty cycle stays above 66.7 %, not 96 % (O1)."),
         Figure("fig15_tau_ratio_diode.png", "Figure 15: τH/τL versus N with the diode D1 (eq. 37)",
@@ -299,6 +329,7 @@ def build(outdir: Path) -> Section:
             "duty_cycle_infimum_diode": 0.0,
             "tau_ratio_infimum_no_diode": 2.0,
             "n_where_eq32_equals_24_37": n_at_2437,
+            "paper_24_37_explained": {"expression": "N * eq. (32)", "minimum": min_paper, "at_N": n_min_paper},
             "sensitivity_r_fsr_at_N20": {"no_diode": float(s20_nd.r_fsr), "diode": float(s20.r_fsr)},
             "frequency_vs_stress_virtual_fsr": fs,
             "ngspice_available": have_spice,
