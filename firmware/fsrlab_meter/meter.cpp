@@ -56,7 +56,7 @@
 #define HOT 110u            // capture + bookkeeping of one edge, worst case [cycles]
 #define SERVICE 20u         // flag check to ICES1 flipped, worst case, with loop exit [cycles]
 #define MARGIN 24u
-#define STARVE_EDGES 64u    // edges in a row without any task before tasks are forced
+#define BURST 4000u         // longest forced run of tasks [cycles]
 
 #ifdef METER_PROFILE
 // Profiling build (make PROFILE=1): longest duration of each task and of the hot path, read
@@ -94,6 +94,10 @@ static uint16_t win_left;
 static uint8_t range_sel;
 static uint32_t t_last_end;
 static uint8_t snap_stage;      // window end in progress: 1 fold, 2 copy rest
+// Starvation: edges so fast that no task fits. Detected by the 1 ms tick (no task but the tick
+// ran for 2 ms although work waits) or by the main loop (the tick itself waited 0.5 ms); the
+// main loop then runs tasks blind for up to BURST cycles and counts the edges that went by.
+static uint8_t progress, stall, force;
 
 // Transmit ring
 static uint8_t txbuf[128];
@@ -388,8 +392,16 @@ static void __attribute__((noinline)) cmd_act(void) {
 static void chain_break(void);
 
 // ---------------------------------------------------------------------------------------------
+static uint8_t work_waiting(void);
+
 static void __attribute__((noinline)) tick(void) {
   TIFR2 = _BV(OCF2A);
+  if (!progress && work_waiting()) {
+    if (++stall >= 2) force = 1;
+  } else {
+    stall = 0;
+  }
+  progress = 0;
   if (++ms16 == 0) ms_hi++;
   if (!(ADCSRA & _BV(ADSC))) {  // the conversion started one tick ago is done (104 us at clk/128)
     acc.adc_sum += ADC;
@@ -475,6 +487,7 @@ static uint16_t __attribute__((noinline)) turns(uint16_t d16, uint8_t m) {
 // Returns its number, 0 if none ran.
 static inline __attribute__((always_inline)) uint8_t task(uint16_t budget) {
   if (TIFR2 & _BV(OCF2A)) { if (budget >= COST_TICK) { tick(); return 1; } return 0; }
+  progress = 1;
   if (!cmd_ready && (UCSR0A & _BV(RXC0))) { if (budget >= COST_RX) { rx_byte(UDR0); return 2; } return 0; }
   if (tx_head != tx_tail && (UCSR0A & _BV(UDRE0))) {
     if (budget < COST_TX) return 0;
@@ -495,6 +508,11 @@ static inline __attribute__((always_inline)) uint8_t task(uint16_t budget) {
     if (budget >= COST_START) { fmt_start(); return 9; }
   }
   return 0;
+}
+
+static uint8_t work_waiting(void) {
+  return tx_head != tx_tail || f_state != FS_IDLE || snap_stage || snap_state == 1 || cmd_ready ||
+         (UCSR0A & _BV(RXC0)) || ((rq_tail != rq_head || snap_state == 2));
 }
 
 static inline __attribute__((always_inline)) uint8_t run_task(uint16_t budget) {
@@ -641,7 +659,6 @@ void meter_run(void) {
   uint16_t l_hi = 0, l_lo = 0;  // last measured high and low times [ticks], 0xFFFF if >= 1 ms
   uint8_t pk = 0;           // bit0: l_hi valid, bit1: l_lo valid, bit2: ts is the previous edge
   uint16_t lim = 0xFFFF;    // tasks must end before TCNT1 - ts reaches lim
-  uint8_t starve = 0;
 
   {  // arm for the edge opposite to the present level
     uint8_t level = PINB & _BV(PB0);
@@ -651,6 +668,34 @@ void meter_run(void) {
   }
 
   for (;;) {
+    // ---- starvation: edges too fast for the tasks; run some blind and count what went by
+    // (TCNT2 counts 4 us steps since OCF2A rose: a tick waiting for 0.5 ms forces the tasks)
+    if ((TIFR2 & _BV(OCF2A)) && TCNT2 >= 125u) force = 1;
+    if (force) {
+      force = 0;
+#ifdef METER_PROFILE
+      prof_cnt[1]++;
+#endif
+      uint16_t t0 = TCNT1;
+      uint8_t p0 = PINB & _BV(PB0);
+      do {  // up to 1/4 ms: the USART needs wall time, 87 us per byte
+        if (!task(0xFFFF) && !work_waiting()) break;
+      } while ((uint16_t)(TCNT1 - t0) < BURST);
+      uint16_t blind = TCNT1 - t0;
+      if ((TIFR1 & _BV(ICF1)) || (PINB & _BV(PB0)) != p0) {
+        uint16_t per = (pk & 3) == 3 ? (uint16_t)(l_hi + l_lo) : 0;
+        uint16_t est = per ? (uint16_t)((2u * (uint32_t)blind) / per) : 1u;
+        acc.missed += est ? est : 1u;
+        chain_break();
+        uint8_t lv = PINB & _BV(PB0);
+        armed = lv ? 0 : 1;
+        TCCR1B = lv ? TCCR_FALL : TCCR_RISE;
+        TIFR1 = _BV(ICF1);
+        pk &= 3;
+        lim = 0xFFFF;
+      }
+    }
+
     // ---- background tasks while the next edges allow
     for (;;) {
       if (TIFR1 & _BV(ICF1)) break;
@@ -659,7 +704,7 @@ void meter_run(void) {
         uint16_t el = TCNT1 - ts;
         budget = el < lim ? (uint16_t)(lim - el) : 0;
       }
-      if (run_task(budget)) { starve = 0; continue; }
+      if (run_task(budget)) continue;
       if (lim != 0xFFFF) break;  // nothing fits: wait for the edge in the capture loop
     }
 
@@ -745,28 +790,5 @@ void meter_run(void) {
     }
 #endif
 
-    // ---- starvation: edges too fast for any task; run some blind and count what went by
-    if (++starve >= STARVE_EDGES) {
-      starve = 0;
-#ifdef METER_PROFILE
-      prof_cnt[1]++;
-#endif
-      uint16_t t0 = TCNT1;
-      uint8_t p0 = PINB & _BV(PB0);
-      for (uint8_t i = 0; i < 8; i++) task(0xFFFF);
-      uint16_t blind = TCNT1 - t0;
-      if ((TIFR1 & _BV(ICF1)) || (PINB & _BV(PB0)) != p0) {
-        uint16_t per = (pk & 3) == 3 ? (uint16_t)(l_hi + l_lo) : 0;
-        uint16_t est = per ? (uint16_t)((2u * (uint32_t)blind) / per) : 1u;
-        acc.missed += est ? est : 1u;
-        chain_break();
-        uint8_t lv = PINB & _BV(PB0);
-        armed = lv ? 0 : 1;
-        TCCR1B = lv ? TCCR_FALL : TCCR_RISE;
-        TIFR1 = _BV(ICF1);
-        pk &= 3;
-        lim = 0xFFFF;
-      }
-    }
   }
 }

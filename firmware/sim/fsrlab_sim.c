@@ -107,6 +107,13 @@ static int plan_period(void) {
   }
 }
 
+/* Cycle for an edge at ideal time x [cycles], never before `after` + 1 (jitter may ask for the past). */
+static avr_cycle_count_t to_cycle(double x, avr_cycle_count_t after) {
+  double r = floor(x + 0.5);
+  if (r <= (double)after) return after + 1;
+  return (avr_cycle_count_t)r;
+}
+
 static avr_cycle_count_t edge_cb(struct avr_t *a, avr_cycle_count_t when, void *param) {
   (void)param; (void)when;
   avr_raise_irq(pin_irq, next_level);
@@ -119,9 +126,7 @@ static avr_cycle_count_t edge_cb(struct avr_t *a, avr_cycle_count_t when, void *
     if (!plan_period()) return 0;
     next_level = 1;
   }
-  avr_cycle_count_t c = (avr_cycle_count_t)llround(next_edge);
-  if (c <= a->cycle) c = a->cycle + 1;
-  return c;
+  return to_cycle(next_edge, a->cycle);
 }
 
 /* ------------------------------------------------------------------ UART */
@@ -252,8 +257,7 @@ int main(int argc, char **argv) {
     ideal_rise = segs[0].t0 * F_CPU_HZ;
     if (plan_period()) {
       next_level = 1;
-      avr_cycle_count_t c = (avr_cycle_count_t)llround(next_edge);
-      avr_cycle_timer_register(avr, c > 0 ? c : 1, edge_cb, NULL);
+      avr_cycle_timer_register(avr, to_cycle(next_edge, 0), edge_cb, NULL);
     }
   }
   if (ncmd) {

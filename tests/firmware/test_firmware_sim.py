@@ -1,0 +1,212 @@
+"""The real firmware (firmware/fsrlab_meter) running in simavr as an ATmega328P at 16 MHz.
+
+Reference: simavr (the C harness firmware/sim/fsrlab_sim.c drives D8 with exact square waves and
+feeds USART0); frames are decoded with the host's own parser (fsrlab.acquisition.protocol), so
+firmware and host are checked against each other and against protocol v1 (docs/protocol.md).
+
+Tolerance: quantization. A captured timestamp in the simulation lies within -0.5..+3.5 ticks of
+the ideal edge (the edge is rounded to a cycle and applied at the end of the running
+instruction), so any difference of two timestamps is off by at most 4 ticks (62.5 ns each). The
+sum of periods of a window telescopes (last minus first rising edge), so it is off by <= 4 ticks;
+each high time is off by <= 4 ticks. On real hardware the same argument gives +-1 tick per edge.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+
+import pytest
+
+from toolcheck import require_file, require_tool
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "firmware" / "sim"))
+import simrun  # noqa: E402
+from simrun import Segment  # noqa: E402
+
+from fsrlab.acquisition.protocol import (  # noqa: E402
+    CommandError, FrameParser, parse_command,
+)
+
+# Supported range checked here: every edge captured (missed == 0) and values within the bound.
+# The upper limits are the ones measured with benchmarks/bench_firmware.py (docs/performance.md).
+GRID = [
+    (10.0, 0.05), (10.0, 0.5), (10.0, 0.95),
+    (1000.0, 0.05), (1000.0, 0.95),
+    (10_000.0, 0.05), (10_000.0, 0.5), (10_000.0, 0.95),
+    (20_000.0, 0.5),
+]
+
+
+@pytest.fixture(scope="module")
+def fw():
+    require_tool("avr-gcc")
+    require_tool("make")
+    require_file("/usr/include/simavr/sim_avr.h", "libsimavr-dev (simavr headers)")
+    require_file("/usr/share/arduino/hardware/arduino/avr/cores/arduino/Arduino.h", "arduino-core-avr")
+    simrun.build()
+    return simrun
+
+
+def _steady(ms, skip=1):
+    """Measurement windows after the first `skip` ones (the first may start mid-period)."""
+    return ms[skip:]
+
+
+def _check_window(m, f, duty):
+    df, dd = simrun.bounds(f, duty, m)
+    assert m.missed == 0, m
+    assert m.periods > 0, m
+    assert abs(m.frequency_hz - f) <= df, (m, df)
+    assert abs(m.duty_cycle - duty) <= dd, (m, dd)
+
+
+def test_boot_id_frame_and_clean_stream(fw):
+    r = fw.run(time_s=0.05)
+    assert r.frames, r.raw
+    first = r.frames[0]
+    assert (first.kind, first.seq) == ("ID", 0)
+    assert first.fields == ("fsrlab-meter", "1.0.0", "1", "16000000")
+    assert r.parser.bad_checksum == 0 and r.parser.malformed == 0 and r.parser.garbage_bytes == 0
+    assert not r.of_kind("M"), "windows run only after START"
+
+
+@pytest.mark.parametrize("f,duty", GRID)
+def test_frequency_and_duty_within_quantization(fw, f, duty):
+    window = 1000 if f < 100 else 100
+    n_windows = 3
+    cmds = [(0.005, f"WINDOW {window}"), (0.01, "START")]
+    t = 0.012 + window / 1000 * (n_windows + 1) + 0.05
+    r = fw.run([Segment(0.0, f, duty)], cmds, time_s=t)
+    ms = _steady(r.measurements())
+    assert len(ms) >= n_windows - 1
+    for m in ms:
+        assert m.window_ms == window
+        expected_periods = f * window / 1000
+        assert abs(m.periods - expected_periods) <= 1, m
+        _check_window(m, f, duty)
+    assert r.parser.lost == 0 and r.parser.bad_frames == 0
+
+
+def test_frequency_steps(fw):
+    # 2 kHz -> 15 kHz -> 500 Hz, steps inside windows; every window exact for the periods it holds
+    segs = [Segment(0.0, 2000, 0.5), Segment(0.2551, 15000, 0.3), Segment(0.5557, 500, 0.7)]
+    r = fw.run(segs, [(0.01, "START")], time_s=0.9)
+    ms = r.measurements()
+    assert len(ms) >= 7
+    for m in ms:
+        assert m.missed == 0, m
+    by_end = {m.t_ms: m for m in ms}
+    # windows entirely inside one segment (end times at 110, 210, ... ms after START at ~10 ms)
+    for m in ms:
+        start = (m.t_ms - m.window_ms) / 1000
+        end = m.t_ms / 1000
+        for s, nxt in zip(segs, segs[1:] + [Segment(9.0, 0)]):
+            if s.t0_s + 0.002 <= start and end <= nxt.t0_s:
+                _check_window(m, s.freq_hz, s.duty)
+    assert any(s.t0_s < m.t_ms / 1000 - m.window_ms / 1000 for s in segs for m in by_end.values())
+    # across the step the mean period lies between the two
+    step = [m for m in ms if (m.t_ms - m.window_ms) / 1000 < 0.2551 < m.t_ms / 1000][0]
+    assert 2000 < step.frequency_hz < 15000
+
+
+def test_edge_jitter_keeps_every_edge(fw):
+    # uniform jitter of +-2 % of the period on every edge, 5 kHz, 40 % duty
+    f, duty, j = 5000.0, 0.4, 0.02
+    r = fw.run([Segment(0.0, f, duty, j)], [(0.01, "START")], time_s=0.55, seed=7)
+    ms = _steady(r.measurements())
+    assert len(ms) >= 4
+    p = 16e6 / f
+    for m in ms:
+        assert m.missed == 0, m
+        assert abs(m.periods - f * m.window_ms / 1000) <= 1
+        # telescoped period sum: first and last rising edge jitter; highs: each edge's jitter
+        assert abs(m.sum_period_ticks - m.periods * p) <= 2 * j * p + simrun.EDGE_ERROR_TICKS
+        assert abs(m.sum_high_ticks - m.periods * duty * p) <= m.periods * (2 * j * p + simrun.EDGE_ERROR_TICKS)
+
+
+@pytest.mark.parametrize("f,duty", [(200_000.0, 0.5), (120_000.0, 0.5), (50_000.0, 0.02), (500_000.0, 0.5)])
+def test_beyond_the_limit_missed_edges_are_reported(fw, f, duty):
+    r = fw.run([Segment(0.0, f, duty)], [(0.01, "START")], time_s=0.35)
+    ms = _steady(r.measurements())
+    assert ms, "frames keep coming when edges are too fast"
+    assert r.parser.bad_frames == 0
+    assert sum(m.missed for m in ms) > 0
+    for m in ms:
+        # honesty: a window that claims no missed edge must be right
+        if m.missed == 0 and m.periods > 0:
+            _check_window(m, f, duty)
+
+
+def test_no_signal_gives_zero_periods(fw):
+    r = fw.run([], [(0.01, "START")], time_s=0.35)
+    ms = r.measurements()
+    assert len(ms) >= 3
+    for m in ms:
+        assert m.periods == 0 and m.missed == 0 and math.isnan(m.frequency_hz)
+
+
+def _expected_reply(line: str):
+    """What protocol v1 says the device answers to `line` (from the host's parse_command)."""
+    try:
+        word, value = parse_command(line.encode("ascii"))
+    except CommandError as e:
+        return ("ERR", (str(e.code), e.token))
+    return ("ACK", (word,) if value is None else (word, str(value)))
+
+
+LINES = ["ID", "START", "WINDOW 50", "RANGE 1", "RANGE 0", "STOP", "FOO", "WINDOW 5", "WINDOW 60001",
+         "WINDOW abc", "WINDOW", "RANGE 2", "START 1", "WINDOW 50 7", "start", "ID\r", "  RANGE   1  ",
+         "X" * 40, "", "WINDOW 000010", "WINDOW 010", "IDX", "S", "WINDOWS 10", "$*,A"]
+
+
+def test_commands_answer_like_the_host_parser(fw):
+    cmds = [(0.01 + 0.01 * i, line) for i, line in enumerate(LINES)]
+    r = fw.run([Segment(0.0, 1000, 0.5)], cmds, time_s=0.01 + 0.01 * len(LINES) + 0.02)
+    replies = [f for f in r.frames if f.kind in ("ACK", "ERR")]
+    assert len(replies) == len(LINES), [f.kind + ",".join(f.fields) for f in replies]
+    for line, f in zip(LINES, replies):
+        kind, fields = _expected_reply(line)
+        assert (f.kind, f.fields) == (kind, fields), line
+    ids = r.of_kind("ID")
+    n_id = sum(1 for line in LINES if _expected_reply(line) == ("ACK", ("ID",)))
+    assert len(ids) == 1 + n_id and all(f.fields == ids[0].fields for f in ids)  # boot + answers
+    seqs = [f.seq for f in r.frames]
+    assert seqs == list(range(len(seqs)))
+    assert r.parser.lost == 0 and r.parser.bad_frames == 0
+
+
+def test_window_range_and_stop(fw):
+    # START at 10 ms, WINDOW 50 at 250 ms, RANGE 1 at 320 ms, RANGE 0 at 420 ms, STOP at 500 ms
+    cmds = [(0.01, "START"), (0.25, "WINDOW 50"), (0.32, "RANGE 1"), (0.42, "RANGE 0"), (0.5, "STOP")]
+    r = fw.run([Segment(0.0, 4000, 0.25)], cmds, time_s=0.65, adc_mv=2500)
+    ms = r.measurements()
+    # the D4 pin (C_off switch) followed RANGE (commands take ~1 ms on the line)
+    assert [lvl for _, lvl in r.pd4] == [1, 0]
+    (c1, _), (c0, _) = r.pd4
+    assert 0.32 < c1 / 16e6 < 0.325 and 0.42 < c0 / 16e6 < 0.425
+    assert ms and max(m.t_ms for m in ms) <= 500, "no window ends after STOP"
+    before = [m for m in ms if m.t_ms <= 250]
+    after = [m for m in ms if m.t_ms > 251]
+    assert [m.t_ms for m in before] == [110, 210] and all(m.window_ms == 100 for m in before)
+    assert len(after) >= 4 and all(m.window_ms == 50 for m in after)
+    ends = [m.t_ms for m in after]
+    assert all(b - a == 50 for a, b in zip(ends, ends[1:]))
+    assert {m.range for m in after if 322 < m.t_ms - m.window_ms and m.t_ms < 420} == {1}
+    assert {m.range for m in ms if m.t_ms < 320} == {0}
+    for m in ms[1:]:
+        _check_window(m, 4000, 0.25)
+        # A0 at 2.5 V with AVcc = 5 V: 2500 / 5000 * 1024 = 512 (simavr's conversion), +-1 LSB
+        assert abs(m.adc - 512) <= 1
+
+
+def test_firmware_frames_survive_the_host_parser_in_chunks(fw):
+    r = fw.run([Segment(0.0, 3000, 0.5)], [(0.01, "START")], time_s=0.35)
+    p = FrameParser()
+    frames = []
+    for i in range(0, len(r.raw), 7):
+        frames += p.feed(r.raw[i:i + 7])
+    assert [f.encode() for f in frames] == [f.encode() for f in r.frames]
+    assert all(len(f.encode()) <= 96 for f in frames)
