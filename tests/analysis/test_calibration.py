@@ -191,3 +191,15 @@ def test_inverse_roundtrip_and_non_monotonic():
     bumpy = calibrate(x, np.sin(x / 1e3), degree=5)
     with pytest.raises(ValueError, match="not monotonic"):
         bumpy.inverse(0.0)
+
+
+def test_decode_capacitance_gives_nan_for_an_impossible_reading_not_an_error():
+    # Property: without the diode the duty cycle cannot fall below 2/3 (erratum O1's limit), so a
+    # reading of 0.5 is impossible; it becomes NaN while its neighbours decode.
+    from fsrlab.analysis.calibration import decode_capacitance
+    from fsrlab.circuits.lm555 import astable
+
+    good = astable(10e3, 200e3, 1e-9)
+    c = decode_capacitance([good.frequency_hz, good.frequency_hz, np.nan], [good.duty_cycle, 0.5, 0.8], 10e3, diode=False)
+    assert c[0] == pytest.approx(1e-9, rel=1e-6)
+    assert np.isnan(c[1]) and np.isnan(c[2])
