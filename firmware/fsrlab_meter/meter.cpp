@@ -45,15 +45,16 @@
 // Upper bounds of task lengths [cycles] including dispatch, measured with `make PROFILE=1` in
 // simavr (benchmarks/bench_firmware.py prints them); the scheduler starts a task only when its
 // bound fits before the next edge that must be serviced on time.
-#define COST_TICK 110u
-#define COST_RX 120u
-#define COST_TX 70u
-#define COST_FMT 120u
-#define COST_DIV 110u
-#define COST_EXEC 120u
-#define COST_SNAP 120u
-#define COST_START 110u
-#define HOT 110u            // capture + bookkeeping of one edge, worst case [cycles]
+#define COST_TICK 145u
+#define COST_RX 250u
+#define COST_TX 60u
+#define COST_FMT 270u
+#define COST_DIV 190u
+#define COST_EXEC 265u
+#define COST_SNAP 400u
+#define COST_START 175u
+#define COST_PRED 200u
+#define HOT 260u            // capture + bookkeeping of one edge, worst case [cycles]
 #define SERVICE 20u         // flag check to ICES1 flipped, worst case, with loop exit [cycles]
 #define MARGIN 24u
 #define BURST 4000u         // longest forced run of tasks [cycles]
@@ -62,7 +63,7 @@
 // Profiling build (make PROFILE=1): longest duration of each task and of the hot path, read
 // from RAM by the simavr harness (--peek). Adds a few cycles around every task.
 extern "C" {
-uint16_t prof_task[16];
+uint16_t prof_task[16];  // by task number, see task()
 uint16_t prof_hot;      // from the capture returning to the end of the edge bookkeeping
 uint16_t prof_late;     // from the capture timestamp to the capture returning
 uint16_t prof_cnt[4];   // pin-check misses, starvation bursts, timeouts, late (> 11 cycles) services
@@ -74,18 +75,52 @@ uint16_t prof_cnt[4];   // pin-check misses, starvation bursts, timeouts, late (
 // a window end) the periods are contiguous, so their sum is last_rise - chain_start (extended by
 // the number of 16-bit wraps in between), and each rising edge only counts one period.
 struct Acc {
-  uint32_t periods, sum_p, sum_h, missed, adc_sum;
+  uint32_t periods, sum_p, sum_h, missed, adc_sum;  // offsets 0, 4, 8, 12, 16 (used by meter_edge)
   uint16_t adc_cnt;
 };
-static Acc acc;
-static uint8_t chain;           // 1: last_rise starts or continues a contiguous chain
-static uint8_t have_high;       // 1: the high time of the period begun at last_rise is in sum_h
-static uint16_t chain_start, last_rise, wraps;
-static uint8_t ms_rise;         // low byte of the ms count at last_rise
-static uint32_t high_pending;   // high time added to sum_h for the still open period [ticks]
-static uint16_t idle_ms;        // ms since the last edge
+// Hot-path state, shared with the assembly fast path meter_edge (offsets are fixed there).
+struct Hot {
+  uint16_t ts_prev;    //  0 last captured edge [ticks]
+  uint16_t l_hi;       //  2 last high time [ticks], 0xFFFF if >= 1 ms
+  uint16_t l_lo;       //  4 last low time
+  uint16_t lim;        //  6 tasks must end before TCNT1 - ts_prev reaches lim (0xFFFF: no limit)
+  uint16_t lim_r;      //  8 ... after a rising edge (computed by the pred task)
+  uint16_t lim_f;      // 10 ... after a falling edge
+  uint16_t last_rise;  // 12 rising edge that began the open period
+  uint16_t sumh16;     // 14 high times not yet added to acc.sum_h (carries go there at once)
+  uint16_t periods16;  // 16 periods not yet added to acc.periods (carries go there at once)
+  uint16_t hp16;       // 18 high time of the open period, low 16 bits (already in the sums)
+  uint8_t flags;       // 20 HF_* below
+  uint8_t ms_prev;     // 21 ms count (low byte) at ts_prev
+  uint8_t ms_rise;     // 22 ms count (low byte) at last_rise
+  uint8_t pad;         // 23
+  uint16_t wraps;      // 24 16-bit timestamp wraps between chain_start and last_rise
+  uint16_t hp_hi;      // 26 high time of the open period, high 16 bits
+  uint16_t cap_ts;     // 28 capture handed to the C slow path
+  uint8_t cap_ms;      // 30
+};
+enum {
+  HF_ARMED_RISE = 1, HF_PREV = 2, HF_PK_HI = 4, HF_PK_LO = 8, HF_CHAIN = 16, HF_HIGH = 32,
+  HF_LIMS = 64, HF_TASKED = 128,
+};
+extern "C" {
+Acc meter_acc;
+Hot meter_hs;
+uint16_t meter_idle_ms;  // ms since the last edge
+uint8_t meter_edge(void);
+}
+#define acc meter_acc
+#define hs meter_hs
+#define idle_ms meter_idle_ms
+static_assert(__builtin_offsetof(Hot, flags) == 20 && __builtin_offsetof(Hot, wraps) == 24 &&
+              __builtin_offsetof(Hot, cap_ms) == 30 && __builtin_offsetof(Acc, sum_h) == 8,
+              "meter_edge offsets");
+static uint16_t chain_start;
+static uint8_t pred_due;       // the prediction limits should be recomputed
 // Time
-static uint16_t ms16;           // ms since boot, low 16 bits
+extern "C" uint16_t meter_ms16;  // ms since boot, low 16 bits (read by meter_edge)
+uint16_t meter_ms16;
+#define ms16 meter_ms16
 static uint16_t ms_hi;          // ... high 16 bits
 // Settings
 static uint8_t running;
@@ -409,24 +444,35 @@ static void __attribute__((noinline)) tick(void) {
     ADCSRA |= _BV(ADSC);
   }
   if (++idle_ms > MAX_PHASE_MS) { idle_ms = MAX_PHASE_MS; chain_break(); }
+  pred_due = 1;
   if (running && --win_left == 0) { snap_stage = 1; win_left = window_ms; }
 }
 
+// Move the 16-bit partial sums of the hot path into the window sums.
+static void flush_partials(void) {
+  acc.periods += hs.periods16;
+  hs.periods16 = 0;
+  acc.sum_h += hs.sumh16;
+  hs.sumh16 = 0;
+}
+
+static inline uint32_t high_pending(void) { return ((uint32_t)hs.hp_hi << 16) | hs.hp16; }
+
 // Close the period chain into sum_p (window end or a break).
 static void __attribute__((noinline)) fold_chain(void) {
-  if (chain) {
-    acc.sum_p += ((uint32_t)wraps << 16) + (uint16_t)(last_rise - chain_start) -
-                 (last_rise < chain_start ? 0x10000ul : 0ul);
-    chain_start = last_rise;
-    wraps = 0;
+  if (hs.flags & HF_CHAIN) {
+    uint16_t lr = hs.last_rise;
+    acc.sum_p += ((uint32_t)hs.wraps << 16) + (uint16_t)(lr - chain_start) - (lr < chain_start ? 0x10000ul : 0ul);
+    chain_start = lr;
+    hs.wraps = 0;
   }
 }
 
 static void chain_break(void) {
+  flush_partials();
   fold_chain();
-  if (have_high) acc.sum_h -= high_pending;  // its period will not be counted
-  chain = 0;
-  have_high = 0;
+  if (hs.flags & HF_HIGH) acc.sum_h -= high_pending();  // its period will not be counted
+  hs.flags &= (uint8_t)~(HF_CHAIN | HF_HIGH);
 }
 
 // Window end in two tasks. Stage 1 closes the sums of the ended window (the open period's high
@@ -434,8 +480,9 @@ static void chain_break(void) {
 // WINDOW) discards instead of reporting.
 static void __attribute__((noinline)) take_snapshot(void) {
   if (snap_stage == 1 || snap_stage == 3) {
+    flush_partials();
     fold_chain();
-    uint32_t hp = have_high ? high_pending : 0;
+    uint32_t hp = (hs.flags & HF_HIGH) ? high_pending() : 0;
     snap.periods = acc.periods;
     snap.sum_p = acc.sum_p;
     snap.sum_h = acc.sum_h - hp;
@@ -475,6 +522,25 @@ static void __attribute__((noinline)) div_step(void) {  // one bit of adc_sum / 
   }
 }
 
+static uint16_t task_limit(uint16_t l_cur, uint16_t l_next);
+
+// Recompute the task limits after a rising and after a falling edge from the last high and low
+// times (the hot path only copies them); one of the two per run.
+static uint8_t pred_which;
+static void __attribute__((noinline)) pred_step(void) {
+  uint8_t f = hs.flags;
+  if ((f & (HF_PK_HI | HF_PK_LO)) != (HF_PK_HI | HF_PK_LO)) { pred_due = 0; return; }
+  uint16_t hi = hs.l_hi, lo = hs.l_lo;
+  if (pred_which) {
+    hs.lim_f = task_limit(lo, hi);
+    hs.flags |= HF_LIMS;
+    pred_due = 0;
+  } else {
+    hs.lim_r = task_limit(hi, lo);
+  }
+  pred_which ^= 1;
+}
+
 // Number of whole 65536-tick turns in a phase of 16-bit length d16 whose ends were seen m >= 2 ms
 // apart: the one k with |k 65536 + d16 - 16000 m| < 32768 (the ms count is off by < 1 ms).
 static uint16_t __attribute__((noinline)) turns(uint16_t d16, uint8_t m) {
@@ -494,6 +560,12 @@ static inline __attribute__((always_inline)) uint8_t task(uint16_t budget) {
     UDR0 = txbuf[tx_tail];
     tx_tail = (uint8_t)((tx_tail + 1u) & 127u);
     return 3;
+  }
+  if (pred_due || !(hs.flags & HF_LIMS)) {
+    if ((hs.flags & (HF_PK_HI | HF_PK_LO)) == (HF_PK_HI | HF_PK_LO)) {
+      if (budget >= COST_PRED) { pred_step(); return 10; }
+      return 0;
+    }
   }
   if (snap_stage && snap_state == 0) { if (budget >= COST_SNAP) { take_snapshot(); return 4; } return 0; }
   if (f_state != FS_IDLE) {
@@ -528,71 +600,256 @@ static inline __attribute__((always_inline)) uint8_t run_task(uint16_t budget) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// meter_spin(next_tccr): wait for the armed edge with interrupts enabled for one purpose only, a
-// Timer0 compare match as timeout; then read ICR1, write the other edge into TCCR1B, clear ICF1
-// (this order is the datasheet's: a change of ICES1 may set ICF1), disable interrupts and sample
-// PINB and TIFR1. The wait loop is `sbis; rjmp` (3 cycles), so from the capture flag to ICES1
-// flipped takes at most 3 + 2 (sbis skip) + 4 (lds, lds) + 2 (sts) = 11 cycles, and ICF1 is
-// cleared one cycle later. An edge in that last cycle is lost and seen as missed by the caller.
-// Returns ICR1 << 16 | TIFR1 << 8 | PINB; TIFR1 byte 0xFF (impossible) on timeout.
-// Registers: r18..r21, r30, r31 and r0 are call-clobbered in the avr-gcc ABI.
-extern "C" uint32_t meter_spin(uint8_t next_tccr);
+// meter_edge(): wait for the armed edge and do the common bookkeeping, in assembly because every
+// cycle counts at 50 kHz. Interrupts are enabled only while waiting, for one purpose: a Timer0
+// compare match as timeout (TIMER0_COMPA_vect below makes the wait return 1).
+// Capture: the wait loop is `sbis; rjmp` (3 cycles); on the flag, read ICR1, write the other edge
+// into TCCR1B, clear ICF1 (the datasheet's order: a change of ICES1 may set ICF1). From the flag
+// to ICES1 flipped: at most 3 + 2 (sbis skip) + 4 (lds, lds) + 2 (sts) = 11 cycles; ICF1 is
+// cleared one cycle later (an edge in that cycle is lost and caught by the pin check below).
+// Then: pin check (the pin must still show the captured edge unless the next edge was captured
+// too), latency check (only if a task ran: a capture served later than one full period may hide
+// an edge pair), and for the common case (a chain of periods, phases < 2 ms) the period count,
+// high time, wrap count, the last high/low times and the task limit for the next phase.
+// Returns 0 done, 1 timeout, 2 missed edge (pin check), 3 slow path (C finishes, capture in
+// cap_ts/cap_ms), 4 rejected (late capture). Uses only call-clobbered registers.
 asm(R"ASM(
-  .section .text.meter_spin,"ax",@progbits
-  .global meter_spin
-  .global meter_spin_timeout
-meter_spin:
-  ldi r21, 0x20          ; 1 << ICF1
+  .section .text.meter_edge,"ax",@progbits
+  .global meter_edge
+  .global meter_edge_timeout
+meter_edge:
+  in r18, 0x26            ; timeout: OCR0A = TCNT0 + 14 (14 x 64 us = 0.9 ms)
+  subi r18, 0xF2
+  out 0x27, r18
+  ldi r18, 0x02
+  out 0x15, r18           ; TIFR0 = 1 << OCF0A
+  ldi r30, lo8(meter_hs)
+  ldi r31, hi8(meter_hs)
+  ldd r20, Z+20           ; flags
+  ldi r24, 0x41           ; TCCR1B for a rising edge
+  sbrc r20, 0             ; armed for rising: the next one is falling
+  ldi r24, 0x01
+  ldi r21, 0x20           ; 1 << ICF1
   sei
 1:
-  sbis 0x16, 5           ; TIFR1.ICF1
+  sbis 0x16, 5            ; TIFR1.ICF1
   rjmp 1b
-  lds r18, 0x86          ; ICR1L (latches ICR1H)
-  lds r19, 0x87          ; ICR1H
-  sts 0x81, r24          ; TCCR1B: arm the other edge
-  out 0x16, r21          ; clear ICF1
+  lds r18, 0x86           ; ICR1L (latches ICR1H)
+  lds r19, 0x87           ; ICR1H
+  sts 0x81, r24           ; TCCR1B: arm the other edge
+  out 0x16, r21           ; clear ICF1
   cli
-  in r22, 0x03           ; PINB
-  in r23, 0x16           ; TIFR1
-  movw r24, r18
-  ret
-meter_spin_timeout:      ; the Timer0 compare interrupt returns here instead of into the loop
-  cli
-  ldi r23, 0xFF
-  clr r22
+  in r22, 0x03            ; PINB
+  in r23, 0x16            ; TIFR1
+  sbrc r23, 5             ; next edge already captured: nothing was lost
+  rjmp 2f
+  eor r22, r20            ; PB0 must equal "captured a rising edge" = armed bit
+  sbrc r22, 0
+  rjmp edge_miss
+2:
+  ldi r21, 1
+  eor r20, r21            ; armed toggles; bit 0 now set <=> a falling edge was captured
+  std Z+20, r20
+  sts meter_idle_ms, r1
+  sts meter_idle_ms+1, r1
+  sbrs r20, 7             ; HF_TASKED: a task ran since the last capture
+  rjmp 3f
+  andi r20, 0x7F
+  lds r26, 0x84           ; TCNT1L
+  lds r27, 0x85
+  sub r26, r18
+  sbc r27, r19            ; latency
+  brpl .+2        ; >= 0x8000: a timestamp from the future (torn read in simulation)
+  rjmp edge_reject
+  mov r21, r20
+  andi r21, 0x0C
+  cpi r21, 0x0C
+  brne 3f
+  ldd r24, Z+2
+  ldd r25, Z+3
+  ldd r22, Z+4
+  ldd r23, Z+5
+  add r24, r22
+  adc r25, r23            ; l_hi + l_lo
+  brcs 3f
+  cp r26, r24
+  cpc r27, r25
+  brlo .+2
+  rjmp edge_reject
+3:
+  lds r26, meter_ms16     ; ms count, low byte
+  ldd r27, Z+21           ; ms_prev
+  mov r21, r26
+  sub r21, r27
+  cpi r21, 2
+  brlo .+2          ; >= 1 ms since the last edge: C extends the phase
+  rjmp edge_slow
+  sbrc r20, 0
+  rjmp edge_fall
+  ; ---- rising edge: closes the period begun at last_rise
+  sbrs r20, 4             ; HF_CHAIN
+  rjmp edge_slow
+  sbrs r20, 5             ; HF_HIGH
+  rjmp edge_slow
+  ldd r21, Z+22           ; ms_rise
+  mov r22, r26
+  sub r22, r21
+  cpi r22, 2
+  brlo .+2
+  rjmp edge_slow
+  ldd r22, Z+26
+  ldd r23, Z+27
+  or r22, r23
+  breq .+2          ; high time >= 65536 ticks
+  rjmp edge_slow
+  ldd r24, Z+12
+  ldd r25, Z+13
+  movw r22, r18
+  sub r22, r24
+  sbc r23, r25            ; period = ts - last_rise, carry = the timestamp wrapped
+  clr r21
+  adc r21, r1
+  ldd r24, Z+18
+  ldd r25, Z+19           ; high time
+  cp r24, r22
+  cpc r25, r23
+  brlo .+2          ; high >= period: C rejects the period
+  rjmp edge_slow
+  tst r21
+  breq 4f
+  ldd r24, Z+24
+  ldd r25, Z+25
+  adiw r24, 1
+  std Z+24, r24
+  std Z+25, r25
+4:
+  ldd r24, Z+16
+  ldd r25, Z+17
+  adiw r24, 1             ; periods16++
+  std Z+16, r24
+  std Z+17, r25
+  brne 5f
+  lds r24, meter_acc+2    ; carry into acc.periods
+  lds r25, meter_acc+3
+  adiw r24, 1
+  sts meter_acc+2, r24
+  sts meter_acc+3, r25
+5:
+  std Z+12, r18           ; last_rise = ts
+  std Z+13, r19
+  std Z+22, r26           ; ms_rise
+  andi r20, 0xDF          ; HF_HIGH = 0
+  ldd r24, Z+0
+  ldd r25, Z+1
+  movw r22, r18
+  sub r22, r24
+  sbc r23, r25            ; low time just ended
+  sbrs r20, 1             ; HF_PREV
+  rjmp 6f
+  std Z+4, r22
+  std Z+5, r23
+  ori r20, 0x08           ; HF_PK_LO
+6:
+  ldd r24, Z+8            ; lim_r
+  ldd r25, Z+9
+  rjmp edge_done
+edge_fall:
+  sbrs r20, 4             ; no chain: nothing to add
+  rjmp 7f
+  sbrc r20, 5             ; high time already known (cannot happen without a miss)
+  rjmp 7f
+  ldd r21, Z+22
+  mov r22, r26
+  sub r22, r21
+  cpi r22, 2
+  brlo .+2
+  rjmp edge_slow
+  ldd r24, Z+12
+  ldd r25, Z+13
+  movw r22, r18
+  sub r22, r24
+  sbc r23, r25            ; high time
+  std Z+18, r22
+  std Z+19, r23
+  std Z+26, r1
+  std Z+27, r1
+  ldd r24, Z+14
+  ldd r25, Z+15
+  add r24, r22
+  adc r25, r23            ; sumh16 += high
+  std Z+14, r24
+  std Z+15, r25
+  brcc 8f
+  lds r24, meter_acc+10   ; carry into acc.sum_h
+  lds r25, meter_acc+11
+  adiw r24, 1
+  sts meter_acc+10, r24
+  sts meter_acc+11, r25
+8:
+  ori r20, 0x20           ; HF_HIGH
+7:
+  ldd r24, Z+0
+  ldd r25, Z+1
+  movw r22, r18
+  sub r22, r24
+  sbc r23, r25            ; high time just ended (for the prediction)
+  sbrs r20, 1
+  rjmp 9f
+  std Z+2, r22
+  std Z+3, r23
+  ori r20, 0x04           ; HF_PK_HI
+9:
+  ldd r24, Z+10           ; lim_f
+  ldd r25, Z+11
+edge_done:
+  mov r21, r20
+  andi r21, 0x4C          ; limits valid and both phases known?
+  cpi r21, 0x4C
+  breq 10f
+  ldi r24, 0xFF
+  ldi r25, 0xFF
+10:
+  std Z+6, r24
+  std Z+7, r25
+  ori r20, 0x02           ; HF_PREV
+  std Z+20, r20
+  std Z+0, r18            ; ts_prev
+  std Z+1, r19
+  std Z+21, r26           ; ms_prev
   clr r24
-  clr r25
+  ret
+edge_slow:
+  std Z+20, r20
+  std Z+28, r18
+  std Z+29, r19
+  std Z+30, r26
+  ldi r24, 3
+  ret
+edge_reject:
+  std Z+20, r20
+  ldi r24, 4
+  ret
+edge_miss:
+  ldi r24, 2
+  ret
+meter_edge_timeout:       ; the Timer0 compare interrupt returns here instead of into the wait
+  cli
+  ldi r24, 1
   ret
 )ASM");
 
-// Timer0 compare A: the spin timed out. Replace the interrupted address (inside meter_spin's
-// loop, or in its last instructions if an edge came at the same moment: the caller resyncs) by
-// meter_spin_timeout. The return address on the stack is big-endian, high byte on top.
+// Timer0 compare A: the wait timed out. Replace the interrupted address (inside meter_edge's
+// loop, or in its next instructions if an edge came at the same moment: the caller resyncs) by
+// meter_edge_timeout. The return address on the stack is big-endian, high byte on top.
 ISR(TIMER0_COMPA_vect, ISR_NAKED) {
   asm volatile(
       "pop r0\n\t"
       "pop r0\n\t"
-      "ldi r30, lo8(gs(meter_spin_timeout))\n\t"
-      "ldi r31, hi8(gs(meter_spin_timeout))\n\t"
+      "ldi r30, lo8(gs(meter_edge_timeout))\n\t"
+      "ldi r31, hi8(gs(meter_edge_timeout))\n\t"
       "push r30\n\t"
       "push r31\n\t"
       "reti\n\t");
-}
-
-struct Cap {
-  uint16_t ts;
-  uint8_t pin, fl, ok;
-};
-static inline __attribute__((always_inline)) Cap capture(uint8_t next_tccr) {
-  OCR0A = (uint8_t)(TCNT0 + 14u);  // timeout: 14 x 64 us = 0.9 ms
-  TIFR0 = _BV(OCF0A);
-  uint32_t r = meter_spin(next_tccr);
-  Cap c;
-  c.pin = (uint8_t)r;
-  c.fl = (uint8_t)(r >> 8);
-  c.ts = (uint16_t)(r >> 16);
-  c.ok = c.fl != 0xFF;
-  return c;
 }
 
 static void hw_init(void) {
@@ -647,25 +904,93 @@ static uint16_t task_limit(uint16_t l_cur, uint16_t l_next) {
   return a > b ? a : b;
 }
 
+// Arm for the edge opposite to the present level (after a break).
+static void resync(void) {
+  uint8_t lv = PINB & _BV(PB0);
+  TCCR1B = lv ? TCCR_FALL : TCCR_RISE;
+  TIFR1 = _BV(ICF1);
+  hs.flags = (uint8_t)((hs.flags & ~(HF_ARMED_RISE | HF_PREV)) | (lv ? 0 : HF_ARMED_RISE));
+  hs.lim = 0xFFFF;
+}
+
+// The rare cases of meter_edge (codes 1..4), and the slow path of the bookkeeping.
+static void __attribute__((noinline)) edge_rare(uint8_t code) {
+  if (code == 1) {  // no edge for ~0.9 ms although one was predicted soon
+#ifdef METER_PROFILE
+    prof_cnt[2]++;
+#endif
+    hs.flags &= (uint8_t)~(HF_PK_HI | HF_PK_LO | HF_LIMS);
+    resync();
+    return;
+  }
+  if (code == 2 || code == 4) {  // an edge went by unseen, or a capture may hide a pair
+#ifdef METER_PROFILE
+    prof_cnt[code == 2 ? 0 : 3]++;
+#endif
+    acc.missed++;
+    chain_break();
+    resync();
+    return;
+  }
+  // code 3: phases >= 1 ms, a chain starting, or a period to reject
+  uint16_t ts = hs.cap_ts;
+  uint8_t ms = hs.cap_ms;
+  uint8_t f = hs.flags;
+  uint8_t rise = !(f & HF_ARMED_RISE);
+  uint16_t d16 = (uint16_t)(ts - hs.ts_prev);
+  uint16_t phase = (uint8_t)(ms - hs.ms_prev) >= 2 ? 0xFFFF : d16;
+  if (rise) {
+    if (f & HF_CHAIN) {
+      uint16_t p16 = (uint16_t)(ts - hs.last_rise);
+      uint8_t mr = (uint8_t)(ms - hs.ms_rise);
+      uint32_t hp = high_pending();
+      if (!(f & HF_HIGH) || (mr < 2 && hp >= p16)) {
+        // no high time, or not shorter than the period: this period is rejected
+        if (f & HF_HIGH) acc.missed++;
+        chain_break();
+        chain_start = ts;
+        hs.wraps = 0;
+      } else {
+        if (ts < hs.last_rise) hs.wraps++;
+        if (mr >= 2) hs.wraps += turns(p16, mr);
+        acc.periods++;
+      }
+    } else {
+      chain_start = ts;
+      hs.wraps = 0;
+    }
+    hs.flags |= HF_CHAIN;
+    hs.flags &= (uint8_t)~HF_HIGH;
+    hs.last_rise = ts;
+    hs.ms_rise = ms;
+    if (f & HF_PREV) { hs.l_lo = phase; hs.flags |= HF_PK_LO; }
+  } else {
+    if ((f & HF_CHAIN) && !(f & HF_HIGH)) {
+      uint16_t h16 = (uint16_t)(ts - hs.last_rise);
+      uint8_t mr = (uint8_t)(ms - hs.ms_rise);
+      uint16_t turns_hi = mr >= 2 ? turns(h16, mr) : 0;
+      acc.sum_h += ((uint32_t)turns_hi << 16) + h16;
+      hs.hp16 = h16;
+      hs.hp_hi = turns_hi;
+      hs.flags |= HF_HIGH;
+    }
+    if (f & HF_PREV) { hs.l_hi = phase; hs.flags |= HF_PK_HI; }
+  }
+  hs.flags |= HF_PREV;
+  hs.ts_prev = ts;
+  hs.ms_prev = ms;
+  f = hs.flags;
+  hs.lim = (f & (HF_LIMS | HF_PK_HI | HF_PK_LO)) == (HF_LIMS | HF_PK_HI | HF_PK_LO)
+               ? (rise ? hs.lim_r : hs.lim_f) : 0xFFFF;
+}
+
 void meter_run(void) {
   asm volatile("cli");
   hw_init();
   rx_reset();
   queue_resp(K_ID, 0, 0, 0, 0);  // boot identification, SEQ 0
-
-  uint8_t armed;            // 1: the capture unit waits for a rising edge
-  uint16_t ts = 0;          // last captured edge [ticks]
-  uint8_t ms_prev = 0;      // ms count (low byte) at that edge
-  uint16_t l_hi = 0, l_lo = 0;  // last measured high and low times [ticks], 0xFFFF if >= 1 ms
-  uint8_t pk = 0;           // bit0: l_hi valid, bit1: l_lo valid, bit2: ts is the previous edge
-  uint16_t lim = 0xFFFF;    // tasks must end before TCNT1 - ts reaches lim
-
-  {  // arm for the edge opposite to the present level
-    uint8_t level = PINB & _BV(PB0);
-    armed = level ? 0 : 1;
-    TCCR1B = level ? TCCR_FALL : TCCR_RISE;
-    TIFR1 = _BV(ICF1);
-  }
+  hs.flags = 0;
+  resync();
 
   for (;;) {
     // ---- starvation: edges too fast for the tasks; run some blind and count what went by
@@ -683,112 +1008,39 @@ void meter_run(void) {
       } while ((uint16_t)(TCNT1 - t0) < BURST);
       uint16_t blind = TCNT1 - t0;
       if ((TIFR1 & _BV(ICF1)) || (PINB & _BV(PB0)) != p0) {
-        uint16_t per = (pk & 3) == 3 ? (uint16_t)(l_hi + l_lo) : 0;
+        uint8_t f = hs.flags;
+        uint16_t per = (f & (HF_PK_HI | HF_PK_LO)) == (HF_PK_HI | HF_PK_LO) ? (uint16_t)(hs.l_hi + hs.l_lo) : 0;
         uint16_t est = per ? (uint16_t)((2u * (uint32_t)blind) / per) : 1u;
         acc.missed += est ? est : 1u;
         chain_break();
-        uint8_t lv = PINB & _BV(PB0);
-        armed = lv ? 0 : 1;
-        TCCR1B = lv ? TCCR_FALL : TCCR_RISE;
-        TIFR1 = _BV(ICF1);
-        pk &= 3;
-        lim = 0xFFFF;
+        resync();
       }
     }
 
     // ---- background tasks while the next edges allow
+    uint16_t lim = hs.lim;
     for (;;) {
       if (TIFR1 & _BV(ICF1)) break;
       uint16_t budget = 0xFFFF;
       if (lim != 0xFFFF) {
-        uint16_t el = TCNT1 - ts;
+        uint16_t el = TCNT1 - hs.ts_prev;
         budget = el < lim ? (uint16_t)(lim - el) : 0;
       }
-      if (run_task(budget)) continue;
+      if (run_task(budget)) { hs.flags |= HF_TASKED; continue; }
       if (lim != 0xFFFF) break;  // nothing fits: wait for the edge in the capture loop
     }
 
-    // ---- capture
-    uint8_t was_rise = armed;
-    Cap c = capture(was_rise ? TCCR_FALL : TCCR_RISE);
+    // ---- capture and bookkeeping
 #ifdef METER_PROFILE
+    uint8_t code = meter_edge();
     uint16_t t_ret = TCNT1;
-    if (c.ok) {
-      uint16_t d = t_ret - c.ts;
-      if (d > prof_late) prof_late = d;
-    } else {
-      prof_cnt[2]++;
-    }
-#endif
-    if (!c.ok) {  // no edge for ~0.9 ms although one was predicted soon
-      lim = 0xFFFF;
-      pk = 0;
-      continue;
-    }
-    uint8_t level = c.pin & _BV(PB0);
-    uint8_t ms = (uint8_t)ms16;
-    idle_ms = 0;
-    if (!(c.fl & _BV(ICF1)) && (was_rise ? !level : level)) {
-      // the next edge passed before ICES1 was flipped: it is lost; stay armed for this polarity
-#ifdef METER_PROFILE
-      prof_cnt[0]++;
-#endif
-      TCCR1B = was_rise ? TCCR_RISE : TCCR_FALL;
-      TIFR1 = _BV(ICF1);
-      acc.missed++;
-      chain_break();
-      pk &= 3;
-      lim = 0xFFFF;
-      continue;
-    }
-    armed = (uint8_t)!was_rise;
-    uint16_t d16 = c.ts - ts;
-    uint8_t m = (uint8_t)(ms - ms_prev);
-    uint16_t l_cur, l_next;
-    uint16_t phase = m >= 2 ? 0xFFFF : d16;
-    if (was_rise) {
-      // period bookkeeping: a rising edge closes the period begun at last_rise
-      if (chain) {
-        uint8_t mr = (uint8_t)(ms - ms_rise);
-        if (c.ts < last_rise) wraps++;
-        if (mr >= 2) wraps += turns((uint16_t)(c.ts - last_rise), mr);
-        if (have_high) acc.periods++;
-        else { chain_break(); chain = 1; chain_start = c.ts; wraps = 0; }
-      } else {
-        chain = 1;
-        chain_start = c.ts;
-        wraps = 0;
-      }
-      last_rise = c.ts;
-      ms_rise = ms;
-      have_high = 0;
-      if (pk & 4) { l_lo = phase; pk |= 2; }
-      l_cur = l_hi;
-      l_next = l_lo;
-    } else {
-      if (chain && !have_high) {
-        uint16_t h16 = (uint16_t)(c.ts - last_rise);
-        uint8_t mr = (uint8_t)(ms - ms_rise);
-        uint32_t h = h16;
-        if (mr >= 2) h += (uint32_t)turns(h16, mr) << 16;
-        acc.sum_h += h;
-        high_pending = h;
-        have_high = 1;
-      }
-      if (pk & 4) { l_hi = phase; pk |= 1; }
-      l_cur = l_lo;
-      l_next = l_hi;
-    }
-    pk |= 4;
-    ts = c.ts;
-    ms_prev = ms;
-    lim = (pk & 3) == 3 ? task_limit(l_cur, l_next) : 0xFFFF;
-#ifdef METER_PROFILE
-    {
-      uint16_t d = TCNT1 - t_ret;
+    if (code == 0) {
+      uint16_t d = t_ret - hs.ts_prev;
       if (d > prof_hot) prof_hot = d;
     }
+#else
+    uint8_t code = meter_edge();
 #endif
-
+    if (code) edge_rare(code);
   }
 }
