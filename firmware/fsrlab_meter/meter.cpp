@@ -45,15 +45,15 @@
 // Upper bounds of task lengths [cycles] including dispatch, measured with `make PROFILE=1` in
 // simavr (benchmarks/bench_firmware.py prints them); the scheduler starts a task only when its
 // bound fits before the next edge that must be serviced on time.
-#define COST_TICK 145u
-#define COST_RX 250u
-#define COST_TX 60u
-#define COST_FMT 270u
-#define COST_DIV 190u
-#define COST_EXEC 265u
-#define COST_SNAP 400u
-#define COST_START 175u
-#define COST_PRED 200u
+#define COST_TICK 170u
+#define COST_RX 240u
+#define COST_TX 55u
+#define COST_FMT 235u
+#define COST_DIV 185u
+#define COST_EXEC 250u
+#define COST_SNAP 365u
+#define COST_START 170u
+#define COST_PRED 195u
 #define HOT 260u            // capture + bookkeeping of one edge, worst case [cycles]
 #define SERVICE 20u         // flag check to ICES1 flipped, worst case, with loop exit [cycles]
 #define MARGIN 24u
@@ -66,7 +66,8 @@ extern "C" {
 uint16_t prof_task[16];  // by task number, see task()
 uint16_t prof_hot;      // from the capture returning to the end of the edge bookkeeping
 uint16_t prof_late;     // from the capture timestamp to the capture returning
-uint16_t prof_cnt[4];   // pin-check misses, starvation bursts, timeouts, late (> 11 cycles) services
+uint16_t prof_cnt[4];
+uint16_t prof_fmt[12];  // formatter step by state   // pin-check misses, starvation bursts, timeouts, late (> 11 cycles) services
 }
 #endif
 
@@ -103,8 +104,12 @@ enum {
   HF_ARMED_RISE = 1, HF_PREV = 2, HF_PK_HI = 4, HF_PK_LO = 8, HF_CHAIN = 16, HF_HIGH = 32,
   HF_LIMS = 64, HF_TASKED = 128,
 };
+struct Carry {
+  uint16_t periods_hi, sumh_hi;  // carries of periods16 and sumh16 (units of 65536)
+};
 extern "C" {
 Acc meter_acc;
+Carry meter_carry;
 Hot meter_hs;
 uint16_t meter_idle_ms;  // ms since the last edge
 uint8_t meter_edge(void);
@@ -128,7 +133,8 @@ static uint16_t window_ms = WINDOW_DEFAULT;
 static uint16_t win_left;
 static uint8_t range_sel;
 static uint32_t t_last_end;
-static uint8_t snap_stage;      // window end in progress: 1 fold, 2 copy rest
+static uint8_t snap_stage;      // window end in progress (see take_snapshot)
+static uint32_t snap_hp;
 // Starvation: edges so fast that no task fits. Detected by the 1 ms tick (no task but the tick
 // ran for 2 ms although work waits) or by the main loop (the tick itself waited 0.5 ms); the
 // main loop then runs tasks blind for up to BURST cycles and counts the edges that went by.
@@ -262,49 +268,81 @@ static uint8_t frame_item(uint8_t idx) {
   return 0;
 }
 
-enum { FS_IDLE = 0, FS_ITEM, FS_STR, FS_NUM, FS_STAR, FS_H0, FS_H1, FS_H2, FS_H3, FS_CR, FS_LF };
+enum { FS_IDLE = 0, FS_ITEM, FS_COMMA, FS_STR, FS_NUM, FS_TAIL };
 
 static inline uint8_t hexdigit(uint8_t v) { v &= 15u; return (uint8_t)(v < 10 ? '0' + v : 'A' - 10 + v); }
 
-// One formatter step: at most one character or one decimal subtraction. Needs one free byte.
-static void __attribute__((noinline)) fmt_step(void) {
+// Formatter steps, one small function per state so that each costs only what it does: at most
+// one character or one decimal subtraction per step. Each needs one free byte in txbuf.
+static uint8_t f_next_num;  // kind of the item fetched by FS_ITEM (1 number, 2 string)
+static uint32_t f_pow;      // power of ten of the digit being found
+static uint8_t f_tail[7], f_tail_i;
+
+static void __attribute__((noinline)) fmt_item(void) {
+  uint8_t t = frame_item(f_item);
+  if (t == 0) {  // '*', CRC in 4 hex digits, CR, LF
+    uint16_t c = f_crc;
+    f_tail[0] = '*';
+    f_tail[1] = hexdigit((uint8_t)(c >> 12));
+    f_tail[2] = hexdigit((uint8_t)(c >> 8));
+    f_tail[3] = hexdigit((uint8_t)(c >> 4));
+    f_tail[4] = hexdigit((uint8_t)c);
+    f_tail[5] = '\r';
+    f_tail[6] = '\n';
+    f_tail_i = 0;
+    f_state = FS_TAIL;
+    return;
+  }
+  f_next_num = t;
+  f_state = f_item++ ? FS_COMMA : FS_STR;  // item 0 (the type) is a string without a comma
+}
+
+static void __attribute__((noinline)) fmt_comma(void) {
+  emit_crc(',');
+  if (f_next_num == 1) {
+    f_pidx = 9;
+    f_pow = 1000000000ul;
+    f_digit = 0;
+    f_started = 0;
+    f_state = FS_NUM;
+  } else {
+    f_state = FS_STR;
+  }
+}
+
+static void __attribute__((noinline)) fmt_str(void) {
+  uint8_t c = f_str_pgm ? pgm_read_byte(f_str) : (uint8_t)*f_str;
+  if (!c) { f_state = FS_ITEM; return; }
+  f_str++;
+  emit_crc(c);
+}
+
+static void __attribute__((noinline)) fmt_num(void) {
+  if (f_val >= f_pow) { f_val -= f_pow; f_digit++; return; }
+  uint8_t i = f_pidx;
+  if (f_digit || f_started || i == 0) { emit_crc((uint8_t)('0' + f_digit)); f_started = 1; }
+  f_digit = 0;
+  if (i == 0) { f_state = FS_ITEM; return; }
+  f_pidx = --i;
+  f_pow = pow10_tab[i];
+}
+
+static void __attribute__((noinline)) fmt_tail(void) {
+  uint8_t i = f_tail_i;
+  push_tx(f_tail[i]);
+  if (++i < 7) { f_tail_i = i; return; }
+  f_state = FS_IDLE;
+  if (f_kind == K_M) snap_state = 0;
+  else rq_tail = (uint8_t)((rq_tail + 1u) & (RESPQ - 1u));
+}
+
+static inline __attribute__((always_inline)) void fmt_step(void) {
   switch (f_state) {
-    case FS_ITEM: {
-      uint8_t t = frame_item(f_item);
-      if (t == 0) { f_state = FS_STAR; return; }
-      if (f_item) emit_crc(',');
-      f_item++;
-      if (t == 1) { f_pidx = 9; f_digit = 0; f_started = 0; f_state = FS_NUM; }
-      else f_state = FS_STR;
-      return;
-    }
-    case FS_STR: {
-      uint8_t c = f_str_pgm ? pgm_read_byte(f_str) : (uint8_t)*f_str;
-      if (!c) { f_state = FS_ITEM; return; }
-      f_str++;
-      emit_crc(c);
-      return;
-    }
-    case FS_NUM: {
-      uint32_t p = pow10_tab[f_pidx];
-      if (f_val >= p) { f_val -= p; f_digit++; return; }
-      if (f_digit || f_started || f_pidx == 0) { emit_crc((uint8_t)('0' + f_digit)); f_started = 1; }
-      f_digit = 0;
-      if (f_pidx == 0) f_state = FS_ITEM; else f_pidx--;
-      return;
-    }
-    case FS_STAR: push_tx('*'); f_state = FS_H0; return;
-    case FS_H0: push_tx(hexdigit((uint8_t)(f_crc >> 12))); f_state = FS_H1; return;
-    case FS_H1: push_tx(hexdigit((uint8_t)(f_crc >> 8))); f_state = FS_H2; return;
-    case FS_H2: push_tx(hexdigit((uint8_t)(f_crc >> 4))); f_state = FS_H3; return;
-    case FS_H3: push_tx(hexdigit((uint8_t)f_crc)); f_state = FS_CR; return;
-    case FS_CR: push_tx('\r'); f_state = FS_LF; return;
-    case FS_LF:
-      push_tx('\n');
-      f_state = FS_IDLE;
-      if (f_kind == K_M) snap_state = 0;
-      else rq_tail = (uint8_t)((rq_tail + 1u) & (RESPQ - 1u));
-      return;
+    case FS_ITEM: fmt_item(); break;
+    case FS_COMMA: fmt_comma(); break;
+    case FS_STR: fmt_str(); break;
+    case FS_NUM: fmt_num(); break;
+    default: fmt_tail(); break;
   }
 }
 
@@ -427,11 +465,11 @@ static void __attribute__((noinline)) cmd_act(void) {
 static void chain_break(void);
 
 // ---------------------------------------------------------------------------------------------
-static uint8_t work_waiting(void);
+static uint8_t stall_waiting(void);
 
 static void __attribute__((noinline)) tick(void) {
   TIFR2 = _BV(OCF2A);
-  if (!progress && work_waiting()) {
+  if (!progress && stall_waiting()) {
     if (++stall >= 2) force = 1;
   } else {
     stall = 0;
@@ -445,15 +483,20 @@ static void __attribute__((noinline)) tick(void) {
   }
   if (++idle_ms > MAX_PHASE_MS) { idle_ms = MAX_PHASE_MS; chain_break(); }
   pred_due = 1;
-  if (running && --win_left == 0) { snap_stage = 1; win_left = window_ms; }
+  if (running && --win_left == 0) {
+    win_left = window_ms;
+    if (!snap_stage) snap_stage = 1;  // else the previous end is still being taken: one longer window
+  }
 }
 
 // Move the 16-bit partial sums of the hot path into the window sums.
 static void flush_partials(void) {
-  acc.periods += hs.periods16;
+  acc.periods += ((uint32_t)meter_carry.periods_hi << 16) + hs.periods16;
+  acc.sum_h += ((uint32_t)meter_carry.sumh_hi << 16) + hs.sumh16;
   hs.periods16 = 0;
-  acc.sum_h += hs.sumh16;
   hs.sumh16 = 0;
+  meter_carry.periods_hi = 0;
+  meter_carry.sumh_hi = 0;
 }
 
 static inline uint32_t high_pending(void) { return ((uint32_t)hs.hp_hi << 16) | hs.hp16; }
@@ -468,29 +511,47 @@ static void __attribute__((noinline)) fold_chain(void) {
   }
 }
 
+static void take_snapshot(void);
+
 static void chain_break(void) {
+  // between stage 1 and stage 4 of a window end acc must hold exactly the ended window
+  if (snap_stage == 4 || snap_stage == 5) take_snapshot();
   flush_partials();
   fold_chain();
   if (hs.flags & HF_HIGH) acc.sum_h -= high_pending();  // its period will not be counted
   hs.flags &= (uint8_t)~(HF_CHAIN | HF_HIGH);
 }
 
-// Window end in two tasks. Stage 1 closes the sums of the ended window (the open period's high
-// time moves on to the next window), stage 2 copies time, missed and ADC. Stage 3 (START,
-// WINDOW) discards instead of reporting.
+// Window end in three tasks. Stage 1 moves the hot path's partial sums into acc and closes the
+// period chain; from then on the hot path only touches its partial sums, so acc holds exactly the
+// ended window until stage 4 copies it (the open period's high time moves on to the next window)
+// and stage 2 copies time, missed and ADC. After START or WINDOW (stage 3) the sums are
+// discarded instead (stage 5).
 static void __attribute__((noinline)) take_snapshot(void) {
-  if (snap_stage == 1 || snap_stage == 3) {
+  uint8_t st = snap_stage;
+  if (st == 1 || st == 3) {
     flush_partials();
     fold_chain();
-    uint32_t hp = (hs.flags & HF_HIGH) ? high_pending() : 0;
-    snap.periods = acc.periods;
-    snap.sum_p = acc.sum_p;
-    snap.sum_h = acc.sum_h - hp;
+    snap_hp = (hs.flags & HF_HIGH) ? high_pending() : 0;  // in acc.sum_h, its period is still open
+    snap_stage = st == 1 ? 4 : 5;
+    return;
+  }
+  if (st == 4 || st == 5) {
+    uint32_t hp = snap_hp;
+    if (st == 4) {
+      snap.periods = acc.periods;
+      snap.sum_p = acc.sum_p;
+      snap.sum_h = acc.sum_h - hp;
+      snap_stage = 2;
+    } else {
+      acc.missed = 0;
+      acc.adc_sum = 0;
+      acc.adc_cnt = 0;
+      snap_stage = 0;
+    }
     acc.periods = 0;
     acc.sum_p = 0;
     acc.sum_h = hp;
-    if (snap_stage == 3) { acc.missed = 0; acc.adc_sum = 0; acc.adc_cnt = 0; snap_stage = 0; return; }
-    snap_stage = 2;
     return;
   }
   uint32_t t = now_ms();
@@ -553,7 +614,6 @@ static uint16_t __attribute__((noinline)) turns(uint16_t d16, uint8_t m) {
 // Returns its number, 0 if none ran.
 static inline __attribute__((always_inline)) uint8_t task(uint16_t budget) {
   if (TIFR2 & _BV(OCF2A)) { if (budget >= COST_TICK) { tick(); return 1; } return 0; }
-  progress = 1;
   if (!cmd_ready && (UCSR0A & _BV(RXC0))) { if (budget >= COST_RX) { rx_byte(UDR0); return 2; } return 0; }
   if (tx_head != tx_tail && (UCSR0A & _BV(UDRE0))) {
     if (budget < COST_TX) return 0;
@@ -582,6 +642,12 @@ static inline __attribute__((always_inline)) uint8_t task(uint16_t budget) {
   return 0;
 }
 
+// Work that a task must do (the transmitter drains by itself, one byte per 87 us).
+static uint8_t stall_waiting(void) {
+  return f_state != FS_IDLE || snap_stage || snap_state == 1 || cmd_ready ||
+         (UCSR0A & _BV(RXC0)) || ((rq_tail != rq_head || snap_state == 2) && tx_used() < 32u);
+}
+
 static uint8_t work_waiting(void) {
   return tx_head != tx_tail || f_state != FS_IDLE || snap_stage || snap_state == 1 || cmd_ready ||
          (UCSR0A & _BV(RXC0)) || ((rq_tail != rq_head || snap_state == 2));
@@ -589,14 +655,17 @@ static uint8_t work_waiting(void) {
 
 static inline __attribute__((always_inline)) uint8_t run_task(uint16_t budget) {
 #ifdef METER_PROFILE
+  uint8_t fs = f_state;
   uint16_t t0 = TCNT1;
   uint8_t id = task(budget);
   uint16_t d = TCNT1 - t0;
   if (d > prof_task[id]) prof_task[id] = d;
-  return id;
+  if (id == 5 && d > prof_fmt[fs]) prof_fmt[fs] = d;
 #else
-  return task(budget);
+  uint8_t id = task(budget);
 #endif
+  if (id == 2 || (id >= 4 && id < 10)) progress = 1;  // not tick, transmit, prediction
+  return id;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -729,11 +798,11 @@ meter_edge:
   std Z+16, r24
   std Z+17, r25
   brne 5f
-  lds r24, meter_acc+2    ; carry into acc.periods
-  lds r25, meter_acc+3
+  lds r24, meter_carry    ; carry of periods16
+  lds r25, meter_carry+1
   adiw r24, 1
-  sts meter_acc+2, r24
-  sts meter_acc+3, r25
+  sts meter_carry, r24
+  sts meter_carry+1, r25
 5:
   std Z+12, r18           ; last_rise = ts
   std Z+13, r19
@@ -780,11 +849,11 @@ edge_fall:
   std Z+14, r24
   std Z+15, r25
   brcc 8f
-  lds r24, meter_acc+10   ; carry into acc.sum_h
-  lds r25, meter_acc+11
+  lds r24, meter_carry+2  ; carry of sumh16
+  lds r25, meter_carry+3
   adiw r24, 1
-  sts meter_acc+10, r24
-  sts meter_acc+11, r25
+  sts meter_carry+2, r24
+  sts meter_carry+3, r25
 8:
   ori r20, 0x20           ; HF_HIGH
 7:
@@ -915,11 +984,14 @@ static void resync(void) {
 
 // The rare cases of meter_edge (codes 1..4), and the slow path of the bookkeeping.
 static void __attribute__((noinline)) edge_rare(uint8_t code) {
+  // the slow path writes acc: finish a window end that is half taken (see take_snapshot)
+  if (snap_stage == 4 || snap_stage == 5) take_snapshot();
   if (code == 1) {  // no edge for ~0.9 ms although one was predicted soon
 #ifdef METER_PROFILE
     prof_cnt[2]++;
 #endif
     hs.flags &= (uint8_t)~(HF_PK_HI | HF_PK_LO | HF_LIMS);
+    chain_break();
     resync();
     return;
   }

@@ -56,7 +56,7 @@ static avr_t *avr;
 static avr_irq_t *pin_irq;
 static avr_irq_t *uart_in;
 static int pd4_level;
-static unsigned peeks[16];
+static unsigned peeks[64];
 static int npeek;
 static uint64_t n_rise, n_fall;
 static uint64_t rng_state = 0x9E3779B97F4A7C15ull;
@@ -207,7 +207,8 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--seed") && i + 1 < argc) rng_state ^= strtoull(argv[++i], NULL, 0) * 0x2545F4914F6CDD1Dull;
     else if (!strcmp(a, "--out") && i + 1 < argc) outpath = argv[++i];
     else if (!strcmp(a, "--peek") && i + 1 < argc) {
-      if (npeek < 16) peeks[npeek++] = (unsigned)strtoul(argv[++i], NULL, 0);
+      unsigned a = (unsigned)strtoul(argv[++i], NULL, 0);
+      if (npeek < 64) peeks[npeek++] = a;
     }
     else if (a[0] != '-' && !elf) elf = a;
     else usage();
