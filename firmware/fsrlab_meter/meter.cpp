@@ -54,6 +54,7 @@
 #define COST_SNAP 365u
 #define COST_START 170u
 #define COST_PRED 195u
+#define COST_MAX 365u       // the largest of the above
 #define HOT 260u            // capture + bookkeeping of one edge, worst case [cycles]
 #define SERVICE 20u         // flag check to ICES1 flipped, worst case, with loop exit [cycles]
 #define MARGIN 24u
@@ -67,7 +68,11 @@ uint16_t prof_task[16];  // by task number, see task()
 uint16_t prof_hot;      // from the capture returning to the end of the edge bookkeeping
 uint16_t prof_late;     // from the capture timestamp to the capture returning
 uint16_t prof_cnt[4];
-uint16_t prof_fmt[12];  // formatter step by state   // pin-check misses, starvation bursts, timeouts, late (> 11 cycles) services
+uint16_t prof_fmt[12];  // formatter step by state
+// Cycles from one meter_edge return to the next when the next edge was already waiting and no
+// task ran in between: main-loop overhead + capture + bookkeeping of one edge. [0] a falling
+// edge, [1] a rising edge. Minimum over the run (the common path).
+uint16_t prof_edge_cyc[2] = {0xFFFF, 0xFFFF};   // pin-check misses, starvation bursts, timeouts, late (> 11 cycles) services
 }
 #endif
 
@@ -1099,16 +1104,28 @@ void meter_run(void) {
         budget = el < lim ? (uint16_t)(lim - el) : 0;
       }
       if (run_task(budget)) { hs.flags |= HF_TASKED; continue; }
-      if (lim != 0xFFFF) break;  // nothing fits: wait for the edge in the capture loop
+      // near the next edge (nothing fits): wait for it in the capture loop; far from it, keep
+      // polling here so that the 1 ms tick is never held up by a long wait
+      if (budget < COST_MAX) break;
     }
 
     // ---- capture and bookkeeping
 #ifdef METER_PROFILE
+    uint8_t tasked = hs.flags & HF_TASKED;
     uint8_t code = meter_edge();
     uint16_t t_ret = TCNT1;
     if (code == 0) {
       uint16_t d = t_ret - hs.ts_prev;
       if (d > prof_hot) prof_hot = d;
+      static uint16_t prev_ret;
+      static uint8_t prev_pending;
+      if (prev_pending && !tasked) {
+        uint8_t rise = !(hs.flags & HF_ARMED_RISE);
+        uint16_t e = t_ret - prev_ret;
+        if (e < prof_edge_cyc[rise]) prof_edge_cyc[rise] = e;
+      }
+      prev_ret = t_ret;
+      prev_pending = TIFR1 & _BV(ICF1);
     }
 #else
     uint8_t code = meter_edge();
