@@ -117,6 +117,9 @@ Acc meter_acc;
 Carry meter_carry;
 Hot meter_hs;
 uint16_t meter_idle_ms;  // ms since the last edge
+// After lost edges the old prediction may be wrong (the signal got faster): no task runs until
+// two consecutive phases are measured again (or the capture wait times out).
+uint8_t meter_probe;
 uint8_t meter_edge(void);
 }
 #define acc meter_acc
@@ -880,8 +883,13 @@ edge_done:
   andi r21, 0x4C          ; limits valid and both phases known?
   cpi r21, 0x4C
   breq 10f
-  ldi r24, 0xFF
+  ldi r24, 0xFF           ; no prediction: tasks may run freely ...
   ldi r25, 0xFF
+  lds r21, meter_probe    ; ... unless edges were just lost: then none until the phases are known
+  tst r21
+  breq 10f
+  clr r24
+  clr r25
 10:
   std Z+6, r24
   std Z+7, r25
@@ -978,13 +986,19 @@ static uint16_t task_limit(uint16_t l_cur, uint16_t l_next) {
   return a > b ? a : b;
 }
 
+// Edges were lost: forget the phases, run no task until they are measured again.
+static void lose_prediction(void) {
+  hs.flags &= (uint8_t)~(HF_PK_HI | HF_PK_LO | HF_LIMS);
+  meter_probe = 1;
+}
+
 // Arm for the edge opposite to the present level (after a break).
 static void resync(void) {
   uint8_t lv = PINB & _BV(PB0);
   TCCR1B = lv ? TCCR_FALL : TCCR_RISE;
   TIFR1 = _BV(ICF1);
   hs.flags = (uint8_t)((hs.flags & ~(HF_ARMED_RISE | HF_PREV)) | (lv ? 0 : HF_ARMED_RISE));
-  hs.lim = 0xFFFF;
+  hs.lim = meter_probe ? 0 : 0xFFFF;
 }
 
 // The rare cases of meter_edge (codes 1..4), and the slow path of the bookkeeping.
@@ -996,6 +1010,7 @@ static void __attribute__((noinline)) edge_rare(uint8_t code) {
     prof_cnt[2]++;
 #endif
     hs.flags &= (uint8_t)~(HF_PK_HI | HF_PK_LO | HF_LIMS);
+    meter_probe = 0;
     chain_break();
     resync();
     return;
@@ -1006,6 +1021,7 @@ static void __attribute__((noinline)) edge_rare(uint8_t code) {
 #endif
     acc.missed++;
     chain_break();
+    lose_prediction();
     resync();
     return;
   }
@@ -1058,7 +1074,7 @@ static void __attribute__((noinline)) edge_rare(uint8_t code) {
   hs.ms_prev = ms;
   f = hs.flags;
   hs.lim = (f & (HF_LIMS | HF_PK_HI | HF_PK_LO)) == (HF_LIMS | HF_PK_HI | HF_PK_LO)
-               ? (rise ? hs.lim_r : hs.lim_f) : 0xFFFF;
+               ? (rise ? hs.lim_r : hs.lim_f) : (meter_probe ? 0 : 0xFFFF);
 }
 
 void meter_run(void) {
@@ -1090,6 +1106,7 @@ void meter_run(void) {
         uint16_t est = per ? (uint16_t)((2u * (uint32_t)blind) / per) : 1u;
         acc.missed += est ? est : 1u;
         chain_break();
+        lose_prediction();
         resync();
       }
     }
@@ -1131,5 +1148,12 @@ void meter_run(void) {
     uint8_t code = meter_edge();
 #endif
     if (code) edge_rare(code);
+    if (meter_probe && (hs.flags & (HF_PK_HI | HF_PK_LO)) == (HF_PK_HI | HF_PK_LO)) {
+      // phases measured again: limits now (two prediction steps), then tasks may run
+      pred_step();
+      pred_step();
+      meter_probe = 0;
+      hs.lim = (hs.flags & HF_ARMED_RISE) ? hs.lim_f : hs.lim_r;
+    }
   }
 }
