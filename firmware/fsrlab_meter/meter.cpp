@@ -51,10 +51,10 @@
 #define COST_FMT 235u
 #define COST_DIV 185u
 #define COST_EXEC 250u
-#define COST_SNAP 365u
+#define COST_SNAP 310u
 #define COST_START 170u
 #define COST_PRED 195u
-#define COST_MAX 365u       // the largest of the above
+#define COST_MAX 310u       // the largest of the above
 #define HOT 260u            // capture + bookkeeping of one edge, worst case [cycles]
 #define SERVICE 20u         // flag check to ICES1 flipped, worst case, with loop exit [cycles]
 #define MARGIN 24u
@@ -69,6 +69,7 @@ uint16_t prof_hot;      // from the capture returning to the end of the edge boo
 uint16_t prof_late;     // from the capture timestamp to the capture returning
 uint16_t prof_cnt[4];
 uint16_t prof_fmt[12];  // formatter step by state
+uint16_t prof_snap[6];  // window-end task by stage
 // Cycles from one meter_edge return to the next when the next edge was already waiting and no
 // task ran in between: main-loop overhead + capture + bookkeeping of one edge. [0] a falling
 // edge, [1] a rising edge. Minimum over the run (the common path).
@@ -93,8 +94,8 @@ struct Hot {
   uint16_t lim_r;      //  8 ... after a rising edge (computed by the pred task)
   uint16_t lim_f;      // 10 ... after a falling edge
   uint16_t last_rise;  // 12 rising edge that began the open period
-  uint16_t sumh16;     // 14 high times not yet added to acc.sum_h (carries go there at once)
-  uint16_t periods16;  // 16 periods not yet added to acc.periods (carries go there at once)
+  uint16_t unused14;   // 14
+  uint16_t unused16;   // 16
   uint16_t hp16;       // 18 high time of the open period, low 16 bits (already in the sums)
   uint8_t flags;       // 20 HF_* below
   uint8_t ms_prev;     // 21 ms count (low byte) at ts_prev
@@ -104,17 +105,16 @@ struct Hot {
   uint16_t hp_hi;      // 26 high time of the open period, high 16 bits
   uint16_t cap_ts;     // 28 capture handed to the C slow path
   uint8_t cap_ms;      // 30
+  uint8_t pad31;       // 31
+  uint32_t periods_part;  // 32 periods not yet added to acc.periods
+  uint32_t sumh_part;     // 36 high times not yet added to acc.sum_h
 };
 enum {
   HF_ARMED_RISE = 1, HF_PREV = 2, HF_PK_HI = 4, HF_PK_LO = 8, HF_CHAIN = 16, HF_HIGH = 32,
   HF_LIMS = 64, HF_TASKED = 128,
 };
-struct Carry {
-  uint16_t periods_hi, sumh_hi;  // carries of periods16 and sumh16 (units of 65536)
-};
 extern "C" {
 Acc meter_acc;
-Carry meter_carry;
 Hot meter_hs;
 uint16_t meter_idle_ms;  // ms since the last edge
 // After lost edges the old prediction may be wrong (the signal got faster): no task runs until
@@ -126,8 +126,8 @@ uint8_t meter_edge(void);
 #define hs meter_hs
 #define idle_ms meter_idle_ms
 static_assert(__builtin_offsetof(Hot, flags) == 20 && __builtin_offsetof(Hot, wraps) == 24 &&
-              __builtin_offsetof(Hot, cap_ms) == 30 && __builtin_offsetof(Acc, sum_h) == 8,
-              "meter_edge offsets");
+              __builtin_offsetof(Hot, cap_ms) == 30 && __builtin_offsetof(Hot, periods_part) == 32 &&
+              __builtin_offsetof(Hot, sumh_part) == 36, "meter_edge offsets");
 static uint16_t chain_start;
 static uint8_t pred_due;       // the prediction limits should be recomputed
 // Time
@@ -499,12 +499,10 @@ static void __attribute__((noinline)) tick(void) {
 
 // Move the 16-bit partial sums of the hot path into the window sums.
 static void flush_partials(void) {
-  acc.periods += ((uint32_t)meter_carry.periods_hi << 16) + hs.periods16;
-  acc.sum_h += ((uint32_t)meter_carry.sumh_hi << 16) + hs.sumh16;
-  hs.periods16 = 0;
-  hs.sumh16 = 0;
-  meter_carry.periods_hi = 0;
-  meter_carry.sumh_hi = 0;
+  acc.periods += hs.periods_part;
+  acc.sum_h += hs.sumh_part;
+  hs.periods_part = 0;
+  hs.sumh_part = 0;
 }
 
 static inline uint32_t high_pending(void) { return ((uint32_t)hs.hp_hi << 16) | hs.hp16; }
@@ -535,33 +533,32 @@ static void chain_break(void) {
 // ended window until stage 4 copies it (the open period's high time moves on to the next window)
 // and stage 2 copies time, missed and ADC. After START or WINDOW (stage 3) the sums are
 // discarded instead (stage 5).
-static void __attribute__((noinline)) take_snapshot(void) {
-  uint8_t st = snap_stage;
-  if (st == 1 || st == 3) {
-    flush_partials();
-    fold_chain();
-    snap_hp = (hs.flags & HF_HIGH) ? high_pending() : 0;  // in acc.sum_h, its period is still open
-    snap_stage = st == 1 ? 4 : 5;
-    return;
+static void __attribute__((noinline)) snap_fold(void) {  // stage 1 (report) or 3 (discard)
+  flush_partials();
+  fold_chain();
+  snap_hp = (hs.flags & HF_HIGH) ? high_pending() : 0;  // in acc.sum_h, its period is still open
+  snap_stage = snap_stage == 1 ? 4 : 5;
+}
+
+static void __attribute__((noinline)) snap_copy(void) {  // stage 4 (report) or 5 (discard)
+  uint32_t hp = snap_hp;
+  if (snap_stage == 4) {
+    snap.periods = acc.periods;
+    snap.sum_p = acc.sum_p;
+    snap.sum_h = acc.sum_h - hp;
+    snap_stage = 2;
+  } else {
+    acc.missed = 0;
+    acc.adc_sum = 0;
+    acc.adc_cnt = 0;
+    snap_stage = 0;
   }
-  if (st == 4 || st == 5) {
-    uint32_t hp = snap_hp;
-    if (st == 4) {
-      snap.periods = acc.periods;
-      snap.sum_p = acc.sum_p;
-      snap.sum_h = acc.sum_h - hp;
-      snap_stage = 2;
-    } else {
-      acc.missed = 0;
-      acc.adc_sum = 0;
-      acc.adc_cnt = 0;
-      snap_stage = 0;
-    }
-    acc.periods = 0;
-    acc.sum_p = 0;
-    acc.sum_h = hp;
-    return;
-  }
+  acc.periods = 0;
+  acc.sum_p = 0;
+  acc.sum_h = hp;
+}
+
+static void __attribute__((noinline)) snap_meta(void) {  // stage 2
   uint32_t t = now_ms();
   snap.t_ms = t;
   snap.window = t - t_last_end;
@@ -578,6 +575,13 @@ static void __attribute__((noinline)) take_snapshot(void) {
   acc.adc_cnt = 0;
   snap_state = snap.adc_cnt ? 1 : 2;
   snap_stage = 0;
+}
+
+static void take_snapshot(void) {
+  uint8_t st = snap_stage;
+  if (st == 1 || st == 3) snap_fold();
+  else if (st == 4 || st == 5) snap_copy();
+  else snap_meta();
 }
 
 static void __attribute__((noinline)) div_step(void) {  // one bit of adc_sum / adc_cnt
@@ -663,12 +667,13 @@ static uint8_t work_waiting(void) {
 
 static inline __attribute__((always_inline)) uint8_t run_task(uint16_t budget) {
 #ifdef METER_PROFILE
-  uint8_t fs = f_state;
+  uint8_t fs = f_state, ss = snap_stage;
   uint16_t t0 = TCNT1;
   uint8_t id = task(budget);
   uint16_t d = TCNT1 - t0;
   if (d > prof_task[id]) prof_task[id] = d;
   if (id == 5 && d > prof_fmt[fs]) prof_fmt[fs] = d;
+  if (id == 4 && ss < 6 && d > prof_snap[ss]) prof_snap[ss] = d;
 #else
   uint8_t id = task(budget);
 #endif
@@ -800,17 +805,17 @@ meter_edge:
   std Z+24, r24
   std Z+25, r25
 4:
-  ldd r24, Z+16
-  ldd r25, Z+17
-  adiw r24, 1             ; periods16++
-  std Z+16, r24
-  std Z+17, r25
+  ldd r24, Z+32
+  ldd r25, Z+33
+  adiw r24, 1             ; periods_part++ (low half; carry below)
+  std Z+32, r24
+  std Z+33, r25
   brne 5f
-  lds r24, meter_carry    ; carry of periods16
-  lds r25, meter_carry+1
+  ldd r24, Z+34
+  ldd r25, Z+35
   adiw r24, 1
-  sts meter_carry, r24
-  sts meter_carry+1, r25
+  std Z+34, r24
+  std Z+35, r25
 5:
   std Z+12, r18           ; last_rise = ts
   std Z+13, r19
@@ -850,18 +855,18 @@ edge_fall:
   std Z+19, r23
   std Z+26, r1
   std Z+27, r1
-  ldd r24, Z+14
-  ldd r25, Z+15
+  ldd r24, Z+36
+  ldd r25, Z+37
   add r24, r22
-  adc r25, r23            ; sumh16 += high
-  std Z+14, r24
-  std Z+15, r25
+  adc r25, r23            ; sumh_part += high (low half; carry below)
+  std Z+36, r24
+  std Z+37, r25
   brcc 8f
-  lds r24, meter_carry+2  ; carry of sumh16
-  lds r25, meter_carry+3
+  ldd r24, Z+38
+  ldd r25, Z+39
   adiw r24, 1
-  sts meter_carry+2, r24
-  sts meter_carry+3, r25
+  std Z+38, r24
+  std Z+39, r25
 8:
   ori r20, 0x20           ; HF_HIGH
 7:
