@@ -232,3 +232,17 @@ def test_dense_sweep_inside_the_supported_range(fw, duty):
         for m in ms:
             assert abs(m.periods - f * m.window_ms / 1000) <= PERIOD_SLACK, (f, m)
             _check_window(m, f, duty)
+
+
+@pytest.mark.parametrize("duty", [0.05, 0.5, 0.95])
+def test_above_the_limit_a_window_without_missed_edges_is_right(fw, duty):
+    # honesty across 20 kHz .. 500 kHz: either the window reports missed edges, or its values are
+    # within the quantization bound; and the frames stay valid protocol v1
+    for f in [20e3 * (500e3 / 20e3) ** (i / 11) for i in range(12)]:
+        r = fw.run([Segment(0.0, f, duty)], [(0.01, "START")], time_s=0.25)
+        assert r.parser.bad_frames == 0 and r.parser.lost == 0, f
+        ms = _steady(r.measurements())
+        assert ms, f
+        for m in ms:
+            if m.missed == 0 and m.periods > 0:
+                _check_window(m, f, duty)
