@@ -114,12 +114,14 @@ enum {
   HF_LIMS = 64, HF_TASKED = 128,
 };
 extern "C" {
+// Symbols used by the assembly below: kept visible under -flto (the Arduino IDE's default).
+#define ASM_VISIBLE __attribute__((used, externally_visible))
 Acc meter_acc;
-Hot meter_hs;
-uint16_t meter_idle_ms;  // ms since the last edge
+ASM_VISIBLE Hot meter_hs;
+ASM_VISIBLE uint16_t meter_idle_ms;  // ms since the last edge
 // After lost edges the old prediction may be wrong (the signal got faster): no task runs until
 // two consecutive phases are measured again (or the capture wait times out).
-uint8_t meter_probe;
+ASM_VISIBLE uint8_t meter_probe;
 uint8_t meter_edge(void);
 }
 #define acc meter_acc
@@ -132,7 +134,7 @@ static uint16_t chain_start;
 static uint8_t pred_due;       // the prediction limits should be recomputed
 // Time
 extern "C" uint16_t meter_ms16;  // ms since boot, low 16 bits (read by meter_edge)
-uint16_t meter_ms16;
+ASM_VISIBLE uint16_t meter_ms16;
 #define ms16 meter_ms16
 static uint16_t ms_hi;          // ... high 16 bits
 // Settings

@@ -246,3 +246,16 @@ def test_above_the_limit_a_window_without_missed_edges_is_right(fw, duty):
         for m in ms:
             if m.missed == 0 and m.periods > 0:
                 _check_window(m, f, duty)
+
+
+def test_arduino_ide_style_build_with_lto_works(fw):
+    # the Arduino IDE compiles and links with -flto; the assembly's symbols must survive it
+    import subprocess
+
+    subprocess.run(["make", "-s", "-C", str(fw.FIRMWARE_DIR), "LTO=1"], check=True, capture_output=True)
+    elf = fw.BUILD / "lto" / "fsrlab_meter.elf"
+    r = fw.run([Segment(0.0, 4000, 0.3)], [(0.01, "START")], time_s=0.35, elf=elf)
+    ms = _steady(r.measurements())
+    assert r.frames[0].kind == "ID" and len(ms) >= 2
+    for m in ms:
+        _check_window(m, 4000, 0.3)
