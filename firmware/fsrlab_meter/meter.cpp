@@ -1127,6 +1127,7 @@ void meter_run(void) {
         uint16_t el = TCNT1 - hs.ts_prev;
         budget = el < lim ? (uint16_t)(lim - el) : 0;
       }
+      if (budget < COST_TX) break;  // not even the shortest task fits
       if (run_task(budget)) { hs.flags |= HF_TASKED; continue; }
       // near the next edge (nothing fits): wait for it in the capture loop; far from it, keep
       // polling here so that the 1 ms tick is never held up by a long wait
