@@ -55,7 +55,7 @@
 #define COST_START 170u
 #define COST_PRED 195u
 #define COST_MAX 310u       // the largest of the above
-#define HOT 260u            // capture + bookkeeping of one edge, worst case [cycles]
+#define HOT 210u            // capture + bookkeeping + main loop for one edge, worst case [cycles]
 #define SERVICE 20u         // flag check to ICES1 flipped, worst case, with loop exit [cycles]
 #define MARGIN 24u
 #define BURST 4000u         // longest forced run of tasks [cycles]
