@@ -70,6 +70,7 @@ uint16_t prof_late;     // from the capture timestamp to the capture returning
 uint16_t prof_cnt[4];
 uint16_t prof_fmt[12];  // formatter step by state
 uint16_t prof_snap[6];  // window-end task by stage
+uint16_t prof_why[8];   // forced runs: 0 tick waited, 1 no progress; what was pending (2..7)
 // Cycles from one meter_edge return to the next when the next edge was already waiting and no
 // task ran in between: main-loop overhead + capture + bookkeeping of one edge. [0] a falling
 // edge, [1] a rising edge. Minimum over the run (the common path).
@@ -635,12 +636,6 @@ static inline __attribute__((always_inline)) uint8_t task(uint16_t budget) {
     tx_tail = (uint8_t)((tx_tail + 1u) & 127u);
     return 3;
   }
-  if (pred_due || !(hs.flags & HF_LIMS)) {
-    if ((hs.flags & (HF_PK_HI | HF_PK_LO)) == (HF_PK_HI | HF_PK_LO)) {
-      if (budget >= COST_PRED) { pred_step(); return 10; }
-      return 0;
-    }
-  }
   if (snap_stage && snap_state == 0) { if (budget >= COST_SNAP) { take_snapshot(); return 4; } return 0; }
   if (f_state != FS_IDLE) {
     if (budget < COST_FMT || tx_used() >= 127u) return 0;
@@ -652,6 +647,11 @@ static inline __attribute__((always_inline)) uint8_t task(uint16_t budget) {
   if (cmd_ready == 2) { if (budget >= COST_EXEC) { cmd_act(); return 8; } return 0; }
   if ((rq_tail != rq_head || snap_state == 2) && tx_used() < 32u) {
     if (budget >= COST_START) { fmt_start(); return 9; }
+    return 0;
+  }
+  // last: the limits change slowly, stale ones for a while are harmless
+  if ((pred_due || !(hs.flags & HF_LIMS)) && (hs.flags & (HF_PK_HI | HF_PK_LO)) == (HF_PK_HI | HF_PK_LO)) {
+    if (budget >= COST_PRED) { pred_step(); return 10; }
   }
   return 0;
 }
@@ -1095,12 +1095,19 @@ void meter_run(void) {
   for (;;) {
     // ---- starvation: edges too fast for the tasks; run some blind and count what went by
     // (TCNT2 counts 4 us steps since OCF2A rose: a tick waiting for 0.5 ms forces the tasks)
-    if ((TIFR2 & _BV(OCF2A)) && TCNT2 >= 125u) force = 1;
+    if ((TIFR2 & _BV(OCF2A)) && TCNT2 >= 125u) force = 2;
     if (force) {
-      force = 0;
 #ifdef METER_PROFILE
       prof_cnt[1]++;
+      prof_why[force == 2 ? 0 : 1]++;
+      if (snap_stage) prof_why[2]++;
+      if (f_state) prof_why[3]++;
+      if (snap_state == 1) prof_why[4]++;
+      if (pred_due) prof_why[5]++;
+      if (cmd_ready) prof_why[6]++;
+      if (rq_tail != rq_head || snap_state == 2) prof_why[7]++;
 #endif
+      force = 0;
       uint16_t t0 = TCNT1;
       uint8_t p0 = PINB & _BV(PB0);
       do {  // up to 1/4 ms: the USART needs wall time, 87 us per byte
