@@ -45,7 +45,7 @@
 // Upper bounds of task lengths [cycles] including dispatch, measured with `make PROFILE=1` in
 // simavr (benchmarks/bench_firmware.py prints them); the scheduler starts a task only when its
 // bound fits before the next edge that must be serviced on time.
-#define COST_TICK 170u
+#define COST_TICK 180u
 #define COST_RX 240u
 #define COST_TX 55u
 #define COST_FMT 235u
@@ -53,7 +53,7 @@
 #define COST_EXEC 250u
 #define COST_SNAP 310u
 #define COST_START 170u
-#define COST_PRED 195u
+#define COST_PRED 225u
 #define COST_MAX 310u       // the largest of the above
 #define HOT 210u            // capture + bookkeeping + main loop for one edge, worst case [cycles]
 #define SERVICE 20u         // flag check to ICES1 flipped, worst case, with loop exit [cycles]
