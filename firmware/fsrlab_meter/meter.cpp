@@ -1,28 +1,30 @@
 // fsrlab meter core: polled Timer1 input capture with a cycle-budgeted background scheduler.
+// Matute et al. 2018, J. Sensors 6561901, doi:10.1155/2018/6561901, section 5.
 //
 // Why polling and not a capture interrupt: at 50 kHz and 5 % (or 95 %) duty cycle one phase lasts
 // 1 us = 16 CPU cycles. After an edge is captured, the edge select ICES1 must be flipped before the
 // next edge arrives, or that edge is lost. An interrupt needs up to 4 cycles to finish the current
 // instruction, 4 to respond and 3 for the vector jump, then pushes before it can flip ICES1, and
-// any other interrupt (millis, UART) delays it by tens of cycles. The polling loop in capture()
-// flips ICES1 at most 11 cycles after the capture flag rises. Interrupts stay disabled.
+// any other interrupt (millis, UART) delays it by tens of cycles. The wait loop in meter_edge
+// (assembly) flips ICES1 at most 11 cycles after the capture flag rises. Interrupts stay disabled
+// except Timer0's compare interrupt, the wait's timeout, while waiting.
 //
-// Hot path (per edge): capture(), check that no edge went by unseen, add the edge to the window
-// sums, update the last high and low times used for prediction.
-// Everything else is a background task with a bounded length: 1 ms tick (time, ADC, window end),
-// UART receive/transmit, command execution and frame formatting (one character or one decimal
-// digit step per task). After each edge the
-// scheduler knows the length of the phase that just began (last measurement); if the phase after
-// it is short, a task may start only if it ends, with a 1/8 margin, before the next edge, so the
-// capture loop is spinning when that edge arrives. If the phase after it is long, a late service
-// of the next edge is harmless and tasks run freely.
+// Hot path (per edge, meter_edge): capture, check that no edge went by unseen, count the period
+// (rising edge) or add the high time (falling edge), keep the last high and low times.
+// Everything else is a background task of bounded length: 1 ms tick (time, ADC, window end),
+// USART receive/transmit, command decision and action, frame formatting (one character or one
+// decimal digit step per task), window end (three stages), ADC mean, prediction limits. After each
+// edge the scheduler knows the phase that began and the next one (last measurement) and starts a
+// task only if its bound ends before the limit from task_limit(): either before the next edge, or
+// late enough for that edge but with its successor still armed in time.
 //
 // Missed edges are detected, not assumed away: after flipping ICES1 the pin must still be at the
 // level the captured edge produced unless the flag shows that the next edge was captured too; if
 // not, an edge went by unseen, it is counted in `missed`, and the periods around it are dropped.
-// Forced (starved) tasks are counted the same way. A window with missed > 0 is
-// not a clean measurement. Periods longer than 65535 ticks (f < 244 Hz) are extended with the 1 ms
-// tick count; no Timer1 overflow flag is used, so nothing depends on how TIFR1 writes clear flags.
+// Late captures that could hide a pair and blind (starved) task runs are counted the same way. A
+// window with missed > 0 is not a clean measurement. Periods longer than 65535 ticks
+// (f < 244 Hz) are extended with the 1 ms tick count; no Timer1 overflow flag is used, so nothing
+// depends on how TIFR1 writes clear other flags (simavr 1.6 clears them all).
 #include <avr/io.h>
 #include <avr/interrupt.h>
 #include <avr/pgmspace.h>
@@ -62,11 +64,10 @@
 
 #ifdef METER_PROFILE
 // Profiling build (make PROFILE=1): longest duration of each task and of the hot path, read
-// from RAM by the simavr harness (--peek). Adds a few cycles around every task.
+// from RAM by the simavr harness (--peek). Adds about 20 cycles around every task.
 extern "C" {
 uint16_t prof_task[16];  // by task number, see task()
-uint16_t prof_hot;      // from the capture returning to the end of the edge bookkeeping
-uint16_t prof_late;     // from the capture timestamp to the capture returning
+uint16_t prof_hot;      // from an edge's timestamp to meter_edge returning (fast path)
 uint16_t prof_cnt[4];
 uint16_t prof_fmt[12];  // formatter step by state
 uint16_t prof_snap[6];  // window-end task by stage
