@@ -68,7 +68,7 @@
 extern "C" {
 uint16_t prof_task[16];  // by task number, see task()
 uint16_t prof_hot;      // from an edge's timestamp to meter_edge returning (fast path)
-uint16_t prof_cnt[4];
+uint16_t prof_cnt[4];   // pin-check misses, forced task runs, wait timeouts, rejected late captures
 uint16_t prof_fmt[12];  // formatter step by state
 uint16_t prof_snap[6];  // window-end task by stage
 uint16_t prof_why[8];   // forced runs: 0 tick waited, 1 no progress; what was pending (2..7)
