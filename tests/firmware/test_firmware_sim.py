@@ -31,7 +31,9 @@ from fsrlab.acquisition.protocol import (  # noqa: E402
 )
 
 # Supported range checked here: every edge captured (missed == 0) and values within the bound.
-# The upper limits are the ones measured with benchmarks/bench_firmware.py (docs/performance.md).
+# The upper limits stay below the ones measured with benchmarks/bench_firmware.py (21 kHz at 5 and
+# 95 %, 27 kHz at 50 %, docs/performance.md): the limit moves by about 10 % with the alignment of
+# edges, ticks and window ends.
 # Periods per window: f x window +- PERIOD_SLACK, because a window's end is taken by background
 # tasks that may run a little late at high frequency (those periods count in the next window;
 # the sum over consecutive windows shows that none is lost).
