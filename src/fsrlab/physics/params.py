@@ -15,7 +15,15 @@ __all__ = ["PaperParameters", "PAPER", "check_positive", "check_finite"]
 
 
 def check_finite(name: str, value) -> None:
-    """Raise ``ValueError`` naming ``name`` unless every element of ``value`` is finite."""
+    """Raise ``ValueError`` naming ``name`` unless every element of ``value`` is finite.
+
+    Parameters
+    ----------
+    name : str
+        Parameter name for the message.
+    value : float or array_like
+        The value to check.
+    """
     import numpy as np
 
     if not np.all(np.isfinite(np.asarray(value, dtype=float))):
@@ -23,7 +31,17 @@ def check_finite(name: str, value) -> None:
 
 
 def check_positive(name: str, value, unit: str = "") -> None:
-    """Raise ``ValueError`` naming ``name`` unless ``value`` is finite and > 0 (every element)."""
+    """Raise ``ValueError`` naming ``name`` unless ``value`` is finite and > 0 (every element).
+
+    Parameters
+    ----------
+    name : str
+        Parameter name for the message.
+    value : float or array_like
+        The value to check.
+    unit : str
+        Unit shown in the message.
+    """
     import numpy as np
 
     check_finite(name, value)

@@ -9,6 +9,8 @@ from pathlib import Path
 from fsrlab import __version__
 from fsrlab.report.model import Section, Table
 
+__all__ = ["render_html"]
+
 _CSS = """
 body{font-family:system-ui,-apple-system,Segoe UI,sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;color:#222;line-height:1.45}
 h1{font-size:1.6em}h2{border-bottom:2px solid #ddd;padding-bottom:.2em;margin-top:2em}

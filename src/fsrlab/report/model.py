@@ -10,6 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+__all__ = ["Figure", "Table", "Erratum", "Section"]
+
 
 @dataclass
 class Figure:

@@ -18,6 +18,8 @@ from fsrlab import __version__
 from fsrlab.report.html import render_html
 from fsrlab.report.model import Section
 
+__all__ = ["SECTION_MODULES", "ReportResult", "build_sections", "write_report"]
+
 #: Section builders in report order. Add yours here.
 SECTION_MODULES = [
     "fsrlab.report.sections.physics",
@@ -51,7 +53,19 @@ class ReportResult:
 
 
 def build_sections(outdir: Path, progress: Callable[[str], None] | None = None) -> list[Section]:
-    """Run every section builder of :data:`SECTION_MODULES` into ``outdir``."""
+    """Run every section builder of :data:`SECTION_MODULES` into ``outdir``.
+
+    Parameters
+    ----------
+    outdir : Path
+        Directory the builders write their PNGs into.
+    progress : callable, optional
+        Called with each section's name before it is built.
+
+    Returns
+    -------
+    list of Section
+    """
     sections = []
     for name in SECTION_MODULES:
         if progress:
