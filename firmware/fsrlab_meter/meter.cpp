@@ -5,18 +5,26 @@
 // 1 us = 16 CPU cycles. After an edge is captured, the edge select ICES1 must be flipped before the
 // next edge arrives, or that edge is lost. An interrupt needs up to 4 cycles to finish the current
 // instruction, 4 to respond and 3 for the vector jump, then pushes before it can flip ICES1, and
-// any other interrupt (millis, UART) delays it by tens of cycles. The wait loop in meter_edge
+// any other interrupt (millis, UART) delays it by tens of cycles. The wait loop in meter_loop
 // (assembly) flips ICES1 at most 11 cycles after the capture flag rises. Interrupts stay disabled
 // except Timer0's compare interrupt, the wait's timeout, while waiting.
 //
-// Hot path (per edge, meter_edge): capture, check that no edge went by unseen, count the period
-// (rising edge) or add the high time (falling edge), keep the last high and low times.
-// Everything else is a background task of bounded length: 1 ms tick (time, ADC, window end),
-// USART receive/transmit, command decision and action, frame formatting (one character or one
-// decimal digit step per task), window end (three stages), ADC mean, prediction limits. After each
-// edge the scheduler knows the phase that began and the next one (last measurement) and starts a
-// task only if its bound ends before the limit from task_limit(): either before the next edge, or
-// late enough for that edge but with its successor still armed in time.
+// Measuring loop (meter_loop, assembly): the hot state (last edge, last rising edge, period
+// count, high-time sum, last high time, task limit, flags) lives in call-saved registers; per
+// edge it captures, checks that no edge went by unseen, counts the period (rising edge) or adds
+// the high time (falling edge), keeps the phase just ended for the prediction, and loads the task
+// limit for the phase that began (about 65 cycles for a rising, 50 for a falling edge, loop
+// included). Between edges it calls the C dispatcher meter_task(budget), which runs one background
+// task of bounded length: 1 ms tick, ADC sample, USART receive (byte, then word step) / transmit,
+// command decision, effect and answer, frame formatting (one character, one decimal subtraction
+// or one digit per step), window end (several small stages), ADC mean (one bit per step). The
+// prediction of the task limits and the window end's hand-over of the register sums are small
+// assembly routines in the loop itself. The budget is the task limit minus the time since the
+// last edge minus the call overhead; the limit (task_limit) lets a task end either before the
+// next edge, or late enough for that edge but with its successor still armed in time. No call
+// in a slot below COST_MIN: a small slot would only keep the edges served late.
+// The loop returns to C only for the rare cases: a missed edge, a phase >= 1 ms (extended with the
+// 1 ms tick count), a rejected period, a timeout, starvation.
 //
 // Missed edges are detected, not assumed away: after flipping ICES1 the pin must still be at the
 // level the captured edge produced unless the flag shows that the next edge was captured too; if
@@ -47,19 +55,22 @@
 // Upper bounds of task lengths [cycles] including dispatch, measured with `make PROFILE=1` in
 // simavr (benchmarks/bench_firmware.py prints them); the scheduler starts a task only when its
 // bound fits before the next edge that must be serviced on time.
-#define COST_TICK 180u
-#define COST_RX 240u
-#define COST_TX 55u
-#define COST_FMT 235u
-#define COST_DIV 185u
-#define COST_EXEC 250u
-#define COST_SNAP 310u
-#define COST_START 170u
-#define COST_PRED 225u
-#define COST_MAX 310u       // the largest of the above
-#define HOT 210u            // capture + bookkeeping + main loop for one edge, worst case [cycles]
-#define SERVICE 20u         // flag check to ICES1 flipped, worst case, with loop exit [cycles]
-#define MARGIN 24u
+#define COST_TICK 135
+#define COST_RX 180
+#define COST_TX 56
+#define COST_FMT 178
+#define COST_DIV 172
+#define COST_EXEC 166
+#define COST_SNAP 172
+#define COST_FLUSH 130     // ml_flush in meter_loop (window end stage 1/3), with its dispatch
+#define COST_START 170
+#define COST_PRED 125      // ml_pred_r or ml_pred_f (assembly, static count ~115) with its call
+#define COST_MAX 180        // the largest of the above
+#define COST_MIN 120        // no task call in a smaller slot: it would keep the edges served late
+#define CALL_OVH 60         // meter_loop's part of a task call: budget check, call, return, loop
+#define HOT 90             // capture + bookkeeping + main loop for one edge, worst case [cycles]
+#define SERVICE 14         // flag check to ICES1 flipped, worst case, with loop exit [cycles]
+#define MARGIN 16
 #define BURST 4000u         // longest forced run of tasks [cycles]
 
 #ifdef METER_PROFILE
@@ -67,15 +78,16 @@
 // from RAM by the simavr harness (--peek). Adds about 20 cycles around every task.
 extern "C" {
 uint16_t prof_task[16];  // by task number, see task()
-uint16_t prof_hot;      // from an edge's timestamp to meter_edge returning (fast path)
 uint16_t prof_cnt[4];   // pin-check misses, forced task runs, wait timeouts, rejected late captures
-uint16_t prof_fmt[12];  // formatter step by state
-uint16_t prof_snap[6];  // window-end task by stage
+uint16_t prof_fmt[16];  // formatter step by state
+uint16_t prof_snap[16];  // window-end task by stage
 uint16_t prof_why[8];   // forced runs: 0 tick waited, 1 no progress; what was pending (2..7)
-// Cycles from one meter_edge return to the next when the next edge was already waiting and no
+// Cycles from one meter_loop top to the next when the edge was already waiting and no
 // task ran in between: main-loop overhead + capture + bookkeeping of one edge. [0] a falling
 // edge, [1] a rising edge. Minimum over the run (the common path).
-uint16_t prof_edge_cyc[2] = {0xFFFF, 0xFFFF};   // pin-check misses, starvation bursts, timeouts, late (> 11 cycles) services
+__attribute__((used, externally_visible)) uint16_t prof_edge_cyc[2] = {0xFFFF, 0xFFFF};
+__attribute__((used, externally_visible)) uint16_t prof_prev;
+__attribute__((used, externally_visible)) uint8_t prof_ok;  // the edge was waiting at the last loop top
 }
 #endif
 
@@ -84,10 +96,12 @@ uint16_t prof_edge_cyc[2] = {0xFFFF, 0xFFFF};   // pin-check misses, starvation 
 // a window end) the periods are contiguous, so their sum is last_rise - chain_start (extended by
 // the number of 16-bit wraps in between), and each rising edge only counts one period.
 struct Acc {
-  uint32_t periods, sum_p, sum_h, missed, adc_sum;  // offsets 0, 4, 8, 12, 16 (used by meter_edge)
+  uint32_t periods, sum_p, sum_h, missed, adc_sum;  // offsets 0, 4, 8, 12, 16 (used by meter_loop)
   uint16_t adc_cnt;
 };
-// Hot-path state, shared with the assembly fast path meter_edge (offsets are fixed there).
+// Hot-path state, shared with meter_loop (assembly; offsets are fixed there). While meter_loop
+// runs, ts_prev, lim, last_rise, hp16, flags, ms_rise, periods_part (low half) and sumh_part live
+// in its registers; it writes them back here when it returns to C.
 struct Hot {
   uint16_t ts_prev;    //  0 last captured edge [ticks]
   uint16_t l_hi;       //  2 last high time [ticks], 0xFFFF if >= 1 ms
@@ -124,18 +138,32 @@ ASM_VISIBLE uint16_t meter_idle_ms;  // ms since the last edge
 // After lost edges the old prediction may be wrong (the signal got faster): no task runs until
 // two consecutive phases are measured again (or the capture wait times out).
 ASM_VISIBLE uint8_t meter_probe;
-uint8_t meter_edge(void);
+uint8_t meter_loop(void);
+ASM_VISIBLE uint8_t meter_force;
+ASM_VISIBLE uint8_t meter_snap_stage;
+ASM_VISIBLE uint16_t ml_budget;
+ASM_VISIBLE uint16_t meter_chain_start;
+ASM_VISIBLE uint8_t meter_pred_due;
+// Chain state handed over by meter_loop with the sums at a window end (stage 10/12)
+ASM_VISIBLE uint16_t meter_fold_lr, meter_fold_hp, meter_fold_wraps;
+ASM_VISIBLE uint8_t meter_fold_flags;
+ASM_VISIBLE uint8_t meter_rearm;  // meter_loop arms for the edge opposite to the pin level
+ASM_VISIBLE uint8_t meter_fold_ok = 1;  // the sums are in RAM (meter_loop not running, or it flushed)
 }
 #define acc meter_acc
 #define hs meter_hs
 #define idle_ms meter_idle_ms
 static_assert(__builtin_offsetof(Hot, flags) == 20 && __builtin_offsetof(Hot, wraps) == 24 &&
               __builtin_offsetof(Hot, cap_ms) == 30 && __builtin_offsetof(Hot, periods_part) == 32 &&
-              __builtin_offsetof(Hot, sumh_part) == 36, "meter_edge offsets");
-static uint16_t chain_start;
-static uint8_t pred_due;       // the prediction limits should be recomputed
+              __builtin_offsetof(Hot, sumh_part) == 36, "meter_loop offsets");
+#define chain_start meter_chain_start  // first rising edge of the period chain
+#define fold_lr meter_fold_lr
+#define fold_hp meter_fold_hp
+#define fold_wraps meter_fold_wraps
+#define fold_flags meter_fold_flags
+#define pred_due meter_pred_due  // the prediction limits should be recomputed
 // Time
-extern "C" uint16_t meter_ms16;  // ms since boot, low 16 bits (read by meter_edge)
+extern "C" uint16_t meter_ms16;  // ms since boot, low 16 bits (read by meter_loop)
 ASM_VISIBLE uint16_t meter_ms16;
 #define ms16 meter_ms16
 static uint16_t ms_hi;          // ... high 16 bits
@@ -145,22 +173,23 @@ static uint16_t window_ms = WINDOW_DEFAULT;
 static uint16_t win_left;
 static uint8_t range_sel;
 static uint32_t t_last_end;
-static uint8_t snap_stage;      // window end in progress (see take_snapshot)
+#define snap_stage meter_snap_stage  // window end in progress (see take_snapshot)
 static uint32_t snap_hp;
 // Starvation: edges so fast that no task fits. Detected by the 1 ms tick (no task but the tick
 // ran for 2 ms although work waits) or by the main loop (the tick itself waited 0.5 ms); the
 // main loop then runs tasks blind for up to BURST cycles and counts the edges that went by.
-static uint8_t progress, stall, force;
+static uint8_t progress, stall;
+#define force meter_force
 
 // Transmit ring
 static uint8_t txbuf[128];
 static uint8_t tx_head, tx_tail;
-static inline uint8_t tx_used(void) { return (uint8_t)((tx_head - tx_tail) & 127u); }
+static inline __attribute__((always_inline)) uint8_t tx_used(void) { return (uint8_t)((tx_head - tx_tail) & 127u); }
 
 // Frame formatter
 enum { K_NONE = 0, K_ID, K_M, K_ACK, K_ERR };
 enum { C_ID = 0, C_START, C_STOP, C_WINDOW, C_RANGE, C_COUNT };
-static const char cmd_names[C_COUNT][7] PROGMEM = {"ID", "START", "STOP", "WINDOW", "RANGE"};
+static const char cmd_names[C_COUNT][8] PROGMEM = {"ID", "START", "STOP", "WINDOW", "RANGE"};
 static const uint8_t cmd_len[C_COUNT] = {2, 5, 4, 6, 5};
 
 struct Resp {
@@ -173,8 +202,8 @@ static Resp respq[RESPQ];
 static uint8_t rq_head, rq_tail;
 
 struct Snap {
-  uint32_t t_ms, window, periods, sum_p, sum_h, missed, adc_sum, adc_cnt, range;
-  uint32_t adc_q, adc_r;  // bit-serial division state
+  uint32_t t_ms, window, periods, sum_p, sum_h, missed, adc_sum, range;
+  uint16_t adc_cnt, adc_q, adc_r, adc_lo;  // bit-serial division state (adc_cnt <= 60000)
   uint8_t div_bits;
 };
 static Snap snap;
@@ -201,7 +230,7 @@ static const char s_Q[] = "?";
 // execution (cmd_ready), further bytes stay in the USART.
 static struct {
   uint8_t len, words, inword, overflow, w0len, cand, toklen, digits_ok, ndig;
-  uint32_t val;
+  uint16_t val;  // saturates at 0xFFFF (every value > 60000 is rejected anyway)
   char tok[13];
 } rx;
 static uint8_t cmd_ready;
@@ -280,7 +309,7 @@ static uint8_t frame_item(uint8_t idx) {
   return 0;
 }
 
-enum { FS_IDLE = 0, FS_ITEM, FS_COMMA, FS_STR, FS_NUM, FS_TAIL };
+enum { FS_IDLE = 0, FS_ITEM, FS_COMMA, FS_STR, FS_NUM, FS_TAIL, FS_CRC, FS_DIGIT, FS_POW, FS_NUMINIT };
 
 static inline uint8_t hexdigit(uint8_t v) { v &= 15u; return (uint8_t)(v < 10 ? '0' + v : 'A' - 10 + v); }
 
@@ -292,7 +321,16 @@ static uint8_t f_tail[7], f_tail_i;
 
 static void __attribute__((noinline)) fmt_item(void) {
   uint8_t t = frame_item(f_item);
-  if (t == 0) {  // '*', CRC in 4 hex digits, CR, LF
+  if (t == 0) {
+    f_state = FS_CRC;
+    return;
+  }
+  f_next_num = t;
+  f_state = f_item++ ? FS_COMMA : FS_STR;  // item 0 (the type) is a string without a comma
+}
+
+static void __attribute__((noinline)) fmt_crc(void) {  // '*', CRC in 4 hex digits, CR, LF
+  {
     uint16_t c = f_crc;
     f_tail[0] = '*';
     f_tail[1] = hexdigit((uint8_t)(c >> 12));
@@ -303,14 +341,15 @@ static void __attribute__((noinline)) fmt_item(void) {
     f_tail[6] = '\n';
     f_tail_i = 0;
     f_state = FS_TAIL;
-    return;
   }
-  f_next_num = t;
-  f_state = f_item++ ? FS_COMMA : FS_STR;  // item 0 (the type) is a string without a comma
 }
 
 static void __attribute__((noinline)) fmt_comma(void) {
   emit_crc(',');
+  f_state = FS_NUMINIT;
+}
+
+static void __attribute__((noinline)) fmt_numinit(void) {
   if (f_next_num == 1) {
     f_pidx = 9;
     f_pow = 1000000000ul;
@@ -331,9 +370,18 @@ static void __attribute__((noinline)) fmt_str(void) {
 
 static void __attribute__((noinline)) fmt_num(void) {
   if (f_val >= f_pow) { f_val -= f_pow; f_digit++; return; }
-  uint8_t i = f_pidx;
-  if (f_digit || f_started || i == 0) { emit_crc((uint8_t)('0' + f_digit)); f_started = 1; }
+  f_state = FS_DIGIT;
+}
+
+static void __attribute__((noinline)) fmt_digit(void) {
+  f_state = FS_POW;
+  if (f_digit || f_started || f_pidx == 0) { emit_crc((uint8_t)('0' + f_digit)); f_started = 1; }
   f_digit = 0;
+}
+
+static void __attribute__((noinline)) fmt_pow(void) {
+  f_state = FS_NUM;
+  uint8_t i = f_pidx;
   if (i == 0) { f_state = FS_ITEM; return; }
   f_pidx = --i;
   f_pow = pow10_tab[i];
@@ -354,6 +402,10 @@ static inline __attribute__((always_inline)) void fmt_step(void) {
     case FS_COMMA: fmt_comma(); break;
     case FS_STR: fmt_str(); break;
     case FS_NUM: fmt_num(); break;
+    case FS_DIGIT: fmt_digit(); break;
+    case FS_POW: fmt_pow(); break;
+    case FS_NUMINIT: fmt_numinit(); break;
+    case FS_CRC: fmt_crc(); break;
     default: fmt_tail(); break;
   }
 }
@@ -384,49 +436,77 @@ static void rx_reset(void) {
   rx.tok[0] = 0;
 }
 
+// Receive in two steps per byte: rx_byte classifies it, rx_word (rx_c pending) handles the
+// character of the first (command) or second (value) word.
+static uint8_t rx_c, rx_step;
 static void __attribute__((noinline)) rx_byte(uint8_t c) {
   if (c == '\r') return;
   if (c == '\n') { cmd_ready = 1; return; }
   if (++rx.len >= CMD_MAX) { rx.overflow = 1; rx.len = CMD_MAX; return; }
   if (is_space(c)) { rx.inword = 0; return; }
   if (!rx.inword) { rx.inword = 1; if (rx.words < 3) rx.words++; }
+  if (rx.words < 3) { rx_c = c; rx_step = 1; }
+}
+
+static void __attribute__((noinline)) rx_word(void) {
+  uint8_t c = rx_c;
+  rx_step = 0;
   if (rx.words == 1) {
     uint8_t i = rx.w0len++;
     if (i == 0) {
       rx.cand = c == 'I' ? 1u << C_ID : c == 'S' ? (1u << C_START) | (1u << C_STOP)
               : c == 'W' ? 1u << C_WINDOW : c == 'R' ? 1u << C_RANGE : 0;
     } else if (rx.cand) {
-      uint8_t cand = rx.cand, bit = 1;
-      for (uint8_t k = 0; k < C_COUNT; k++, bit <<= 1)
-        if ((cand & bit) && (i >= cmd_len[k] || pgm_read_byte(&cmd_names[k][i]) != c)) cand &= (uint8_t)~bit;
-      rx.cand = cand;
+      uint8_t cand = rx.cand, keep = 0, bit = 1;
+      for (uint8_t k = 0; cand; k++, bit <<= 1) {  // at most two candidates (START, STOP)
+        if (!(cand & bit)) continue;
+        cand &= (uint8_t)~bit;
+        if (i < cmd_len[k] && pgm_read_byte(&cmd_names[k][i]) == c) keep |= bit;
+      }
+      rx.cand = keep;
     }
+    rx_step = 2;  // the token character next (rx_tok)
+  } else if (rx.words == 2) {
+    if (c < '0' || c > '9' || rx.ndig >= 5) rx.digits_ok = 0;
+    else {
+      uint16_t v = rx.val;
+      v = v >= 6553u ? 0xFFFFu : (uint16_t)((v << 3) + (v << 1) + (uint8_t)(c - '0'));
+      rx.val = v;
+      rx.ndig++;
+    }
+  }
+}
+
+static void __attribute__((noinline)) rx_tok(void) {  // rx_step 2: the command word's token
+  uint8_t c = rx_c;
+  rx_step = 0;
+  {
     if (rx.toklen < 12 && c > 0x20 && c < 0x7f && c != ',' && c != '*' && c != '$') {
       rx.tok[rx.toklen++] = (char)c;
       rx.tok[rx.toklen] = 0;
     }
-  } else if (rx.words == 2) {
-    if (c < '0' || c > '9' || rx.ndig >= 5) rx.digits_ok = 0;
-    else { rx.val = rx.val * 10u + (uint8_t)(c - '0'); rx.ndig++; }
   }
 }
 
 static inline uint32_t now_ms(void) { return ((uint32_t)ms_hi << 16) | ms16; }
 
 // Command execution in two tasks: decide (cmd_ready 1 -> 2), then act and answer (2 -> 0).
-static uint8_t ex_cmd, ex_code;  // ex_code: 0 accept, else the ERR code
+static uint8_t ex_cmd, ex_code, ex_resp;  // ex_code: 0 accept, else the ERR code
 static void __attribute__((noinline)) cmd_decide(void) {
   cmd_ready = 2;
   ex_code = 0;
   if (rx.overflow) { ex_code = 3; return; }
   int8_t c = -1;
-  uint8_t bit = 1;
-  for (uint8_t k = 0; k < C_COUNT; k++, bit <<= 1)
-    if ((rx.cand & bit) && cmd_len[k] == rx.w0len) c = (int8_t)k;
+  uint8_t cand = rx.cand, n = rx.w0len;
+  if ((cand & (1u << C_ID)) && n == 2) c = C_ID;
+  else if ((cand & (1u << C_START)) && n == 5) c = C_START;
+  else if ((cand & (1u << C_STOP)) && n == 4) c = C_STOP;
+  else if ((cand & (1u << C_WINDOW)) && n == 6) c = C_WINDOW;
+  else if ((cand & (1u << C_RANGE)) && n == 5) c = C_RANGE;
   if (c < 0) { ex_code = 1; return; }
   ex_cmd = (uint8_t)c;
   if (c == C_WINDOW || c == C_RANGE) {
-    uint32_t v = rx.val;
+    uint16_t v = rx.val;
     uint8_t ok = rx.words == 2 && rx.digits_ok && rx.ndig > 0;
     if (ok) ok = c == C_WINDOW ? (v >= WINDOW_MIN && v <= WINDOW_MAX) : v <= 1;
     if (!ok) ex_code = 2;
@@ -435,41 +515,69 @@ static void __attribute__((noinline)) cmd_decide(void) {
   }
 }
 
+// cmd_ready 2: the command's effect; 5: its answer (queued in a step of its own).
+static uint8_t ex_kind, ex_hasval;
+static uint16_t ex_val;
 static void __attribute__((noinline)) cmd_act(void) {
   uint8_t c = ex_cmd;
+  cmd_ready = 5;
+  ex_kind = K_ACK;
+  ex_hasval = 0;
   if (ex_code) {
-    uint8_t i = queue_resp(K_ERR, 0, ex_code, 0, 0);
-    if (i != 0xFF && ex_code != 3) {
-      const char *t = rx.tok[0] ? rx.tok : s_Q;
-      char *d = respq[i].tok;
-      while ((*d++ = *t++)) {}
-    }
+    ex_kind = K_ERR;
   } else if (c == C_WINDOW) {
-    window_ms = (uint16_t)rx.val;
+    window_ms = rx.val;
     win_left = window_ms;  // the current window restarts with the new length
     t_last_end = now_ms();
-    acc.missed = 0;
     snap_stage = 3;        // discard what the old window accumulated (see take_snapshot)
-    queue_resp(K_ACK, c, 0, 1, window_ms);
+    ex_hasval = 1;
+    ex_val = window_ms;
   } else if (c == C_RANGE) {
     range_sel = (uint8_t)rx.val;
     if (range_sel) PORTD |= _BV(PD4); else PORTD &= (uint8_t)~_BV(PD4);
-    queue_resp(K_ACK, c, 0, 1, range_sel);
-  } else {
-    if (c == C_ID) {
-      queue_resp(K_ID, 0, 0, 0, 0);
-    } else if (c == C_START) {
-      if (!running) {
-        running = 1;
-        win_left = window_ms;
-        t_last_end = now_ms();
-        snap_stage = 3;
-      }
-    } else {
-      running = 0;
+    ex_hasval = 1;
+    ex_val = range_sel;
+  } else if (c == C_ID) {
+    cmd_ready = 6;  // the ID frame first, then the ACK
+  } else if (c == C_START) {
+    if (!running) {
+      running = 1;
+      win_left = window_ms;
+      t_last_end = now_ms();
+      snap_stage = 3;
     }
-    queue_resp(K_ACK, c, 0, 0, 0);
+  } else {
+    running = 0;
   }
+}
+
+static void __attribute__((noinline)) cmd_answer(void) {  // cmd_ready 5 (or 6 for ID)
+  if (cmd_ready == 6) {
+    queue_resp(K_ID, 0, 0, 0, 0);
+    cmd_ready = 5;
+    return;
+  }
+  if (ex_kind == K_ERR) {
+    uint8_t i = queue_resp(K_ERR, 0, ex_code, 0, 0);
+    if (i != 0xFF && ex_code != 3) {
+      ex_resp = i;
+      cmd_ready = 3;  // the token is copied in the next step, before the answer is formatted
+      return;
+    }
+  } else {
+    queue_resp(K_ACK, ex_cmd, 0, ex_hasval, ex_val);
+  }
+  cmd_ready = 4;
+}
+
+static void __attribute__((noinline)) cmd_tok(void) {  // cmd_ready 3: the ERR token
+  const char *t = rx.tok[0] ? rx.tok : s_Q;
+  char *d = respq[ex_resp].tok;
+  while ((*d++ = *t++)) {}
+  cmd_ready = 4;
+}
+
+static void __attribute__((noinline)) cmd_done(void) {  // cmd_ready 4
   rx_reset();
   cmd_ready = 0;
 }
@@ -478,6 +586,16 @@ static void chain_break(void);
 
 // ---------------------------------------------------------------------------------------------
 static uint8_t stall_waiting(void);
+
+static uint8_t adc_due;
+static void __attribute__((noinline)) adc_take(void) {  // once per ms, after the tick
+  adc_due = 0;
+  if (!(ADCSRA & _BV(ADSC))) {  // the conversion started one tick ago is done (104 us at clk/128)
+    acc.adc_sum += ADC;
+    acc.adc_cnt++;
+    ADCSRA |= _BV(ADSC);
+  }
+}
 
 static void __attribute__((noinline)) tick(void) {
   TIFR2 = _BV(OCF2A);
@@ -488,12 +606,10 @@ static void __attribute__((noinline)) tick(void) {
   }
   progress = 0;
   if (++ms16 == 0) ms_hi++;
-  if (!(ADCSRA & _BV(ADSC))) {  // the conversion started one tick ago is done (104 us at clk/128)
-    acc.adc_sum += ADC;
-    acc.adc_cnt++;
-    ADCSRA |= _BV(ADSC);
-  }
-  if (++idle_ms > MAX_PHASE_MS) { idle_ms = MAX_PHASE_MS; chain_break(); }
+  adc_due = 1;
+  // no edge for MAX_PHASE_MS: a gap, not a period (the hot state is in meter_loop's registers:
+  // C breaks the chain, see meter_run)
+  if ((uint8_t)((uint8_t)ms16 - hs.ms_prev) == (uint8_t)(MAX_PHASE_MS + 1u)) force = 3;
   pred_due = 1;
   if (running && --win_left == 0) {
     win_left = window_ms;
@@ -522,10 +638,11 @@ static void __attribute__((noinline)) fold_chain(void) {
 }
 
 static void take_snapshot(void);
+static void snap_settle(void);
 
 static void chain_break(void) {
   // between stage 1 and stage 4 of a window end acc must hold exactly the ended window
-  if (snap_stage == 4 || snap_stage == 5) take_snapshot();
+  snap_settle();
   flush_partials();
   fold_chain();
   if (hs.flags & HF_HIGH) acc.sum_h -= high_pending();  // its period will not be counted
@@ -549,8 +666,10 @@ static void __attribute__((noinline)) snap_copy(void) {  // stage 4 (report) or 
   if (snap_stage == 4) {
     snap.periods = acc.periods;
     snap.sum_p = acc.sum_p;
-    snap.sum_h = acc.sum_h - hp;
-    snap_stage = 2;
+    acc.periods = 0;
+    acc.sum_p = 0;
+    snap_stage = 8;
+    return;
   } else {
     acc.missed = 0;
     acc.adc_sum = 0;
@@ -562,37 +681,97 @@ static void __attribute__((noinline)) snap_copy(void) {  // stage 4 (report) or 
   acc.sum_h = hp;
 }
 
+static void __attribute__((noinline)) snap_copy_h(void) {  // stage 8
+  uint32_t hp = snap_hp;
+  snap.sum_h = acc.sum_h - hp;
+  acc.sum_h = hp;
+  snap_stage = 2;
+}
+
 static void __attribute__((noinline)) snap_meta(void) {  // stage 2
   uint32_t t = now_ms();
   snap.t_ms = t;
   snap.window = t - t_last_end;
   t_last_end = t;
-  snap.missed = acc.missed;
-  snap.adc_sum = acc.adc_sum + (acc.adc_cnt >> 1);  // rounded mean
-  snap.adc_cnt = acc.adc_cnt;
-  snap.range = range_sel;
-  snap.adc_q = 0;
-  snap.adc_r = 0;
-  snap.div_bits = 32;
-  acc.missed = 0;
+  snap_stage = 7;
+}
+
+static void __attribute__((noinline)) snap_adc(void) {  // stage 7
+  uint16_t n = acc.adc_cnt;
+  snap.adc_sum = acc.adc_sum + (n >> 1);  // rounded mean
+  snap.adc_cnt = n;
   acc.adc_sum = 0;
   acc.adc_cnt = 0;
-  snap_state = snap.adc_cnt ? 1 : 2;
+  snap_stage = 6;
+}
+
+static void __attribute__((noinline)) snap_meta2(void) {  // stage 6
+  snap.missed = acc.missed;
+  acc.missed = 0;
+  snap.range = range_sel;
+  // the mean is < 2048, so the remainder starts as the sum's bits above the 11 quotient bits
+  snap.adc_q = 0;
+  snap.div_bits = 11;
+  snap_state = snap.adc_cnt ? 4 : 2;  // 4: div_init next
   snap_stage = 0;
+}
+
+// The division's start: the remainder is the sum's bits above the 11 quotient bits (byte moves,
+// no shift loops), the low 11 bits are brought down one per div_step.
+static void __attribute__((noinline)) div_init(void) {
+  uint32_t s = snap.adc_sum;
+  uint8_t b1 = (uint8_t)(s >> 8), b2 = (uint8_t)(s >> 16), b3 = (uint8_t)(s >> 24);
+  uint16_t hi = (uint16_t)((b3 << 8) | b2);  // s >> 16
+  uint16_t r = (uint16_t)(hi << 5);
+  r |= (uint8_t)(b1 >> 3);
+  snap.adc_r = r;
+  uint16_t lo = (uint16_t)(((uint16_t)b1 << 8) | (uint8_t)s);  // s & 0xFFFF
+  snap.adc_lo = (uint16_t)(lo << 5);  // bit 10 of s at bit 15
+  snap_state = 1;
+}
+
+// Stage 10 (report) or 12 (discard): meter_loop moved the sums into acc and handed over the
+// chain state at that moment (fold_*); close the chain there.
+static void __attribute__((noinline)) snap_fold_loop(void) {
+  if (fold_flags & HF_CHAIN) {
+    uint16_t lr = fold_lr;
+    acc.sum_p += ((uint32_t)fold_wraps << 16) + (uint16_t)(lr - chain_start) - (lr < chain_start ? 0x10000ul : 0ul);
+    chain_start = lr;
+  }
+  snap_stage = (uint8_t)(snap_stage + 4);  // 10 -> 14, 12 -> 16
+}
+
+static void __attribute__((noinline)) snap_fold_hp(void) {  // stage 14 or 16
+  snap_hp = (fold_flags & HF_HIGH) ? (((uint32_t)hs.hp_hi << 16) | fold_hp) : 0;
+  snap_stage = snap_stage == 14 ? 4 : 5;
 }
 
 static void take_snapshot(void) {
   uint8_t st = snap_stage;
   if (st == 1 || st == 3) snap_fold();
+  else if (st >= 14) snap_fold_hp();
+  else if (st >= 10) snap_fold_loop();
   else if (st == 4 || st == 5) snap_copy();
+  else if (st == 8) snap_copy_h();
+  else if (st == 7) snap_adc();
+  else if (st == 6) snap_meta2();
   else snap_meta();
 }
 
+// Before C writes acc (slow path, breaks): finish a window end whose sums are being taken.
+static void snap_settle(void) {
+  while (snap_stage >= 4 && snap_stage != 2) take_snapshot();
+}
+
 static void __attribute__((noinline)) div_step(void) {  // one bit of adc_sum / adc_cnt
-  snap.adc_r = (snap.adc_r << 1) | (snap.adc_sum >> 31);
-  snap.adc_sum <<= 1;
+  uint16_t r = snap.adc_r;
+  uint8_t top = (uint8_t)(r >> 15);
+  uint16_t lo = snap.adc_lo;
+  r = (uint16_t)((r << 1) | (uint8_t)(lo >> 15));
+  snap.adc_lo = (uint16_t)(lo << 1);
   snap.adc_q <<= 1;
-  if (snap.adc_r >= snap.adc_cnt) { snap.adc_r -= snap.adc_cnt; snap.adc_q |= 1; }
+  if (top || r >= snap.adc_cnt) { r = (uint16_t)(r - snap.adc_cnt); snap.adc_q |= 1; }
+  snap.adc_r = r;
   if (!--snap.div_bits) {
     if (snap.adc_q > 1023) snap.adc_q = 1023;
     snap_state = 2;
@@ -605,12 +784,9 @@ static uint16_t task_limit(uint16_t l_cur, uint16_t l_next);
 // times (the hot path only copies them); one of the two per run.
 static uint8_t pred_which;
 static void __attribute__((noinline)) pred_step(void) {
-  uint8_t f = hs.flags;
-  if ((f & (HF_PK_HI | HF_PK_LO)) != (HF_PK_HI | HF_PK_LO)) { pred_due = 0; return; }
-  uint16_t hi = hs.l_hi, lo = hs.l_lo;
+  uint16_t hi = hs.l_hi, lo = hs.l_lo;  // 0xFFFF: unknown (task_limit gives no limit)
   if (pred_which) {
     hs.lim_f = task_limit(lo, hi);
-    hs.flags |= HF_LIMS;
     pred_due = 0;
   } else {
     hs.lim_r = task_limit(hi, lo);
@@ -630,6 +806,12 @@ static uint16_t __attribute__((noinline)) turns(uint16_t d16, uint8_t m) {
 // Returns its number, 0 if none ran.
 static inline __attribute__((always_inline)) uint8_t task(uint16_t budget) {
   if (TIFR2 & _BV(OCF2A)) { if (budget >= COST_TICK) { tick(); return 1; } return 0; }
+  if (adc_due) { if (budget >= COST_TICK) { adc_take(); return 11; } return 0; }
+  if (rx_step) {
+    if (budget < COST_RX) return 0;
+    if (rx_step == 1) rx_word(); else rx_tok();
+    return 12;
+  }
   if (!cmd_ready && (UCSR0A & _BV(RXC0))) { if (budget >= COST_RX) { rx_byte(UDR0); return 2; } return 0; }
   if (tx_head != tx_tail && (UCSR0A & _BV(UDRE0))) {
     if (budget < COST_TX) return 0;
@@ -637,34 +819,39 @@ static inline __attribute__((always_inline)) uint8_t task(uint16_t budget) {
     tx_tail = (uint8_t)((tx_tail + 1u) & 127u);
     return 3;
   }
-  if (snap_stage && snap_state == 0) { if (budget >= COST_SNAP) { take_snapshot(); return 4; } return 0; }
+  if (snap_stage && snap_state == 0 && (meter_fold_ok || (snap_stage & 0xFDu) != 1u)) {
+    if (budget >= COST_SNAP) { take_snapshot(); return 4; }
+    return 0;
+  }
   if (f_state != FS_IDLE) {
     if (budget < COST_FMT || tx_used() >= 127u) return 0;
     fmt_step();
     return 5;
   }
   if (snap_state == 1) { if (budget >= COST_DIV) { div_step(); return 6; } return 0; }
+  if (snap_state == 4) { if (budget >= COST_DIV) { div_init(); return 6; } return 0; }
   if (cmd_ready == 1) { if (budget >= COST_EXEC) { cmd_decide(); return 7; } return 0; }
   if (cmd_ready == 2) { if (budget >= COST_EXEC) { cmd_act(); return 8; } return 0; }
+  if (cmd_ready >= 5) { if (budget >= COST_EXEC) { cmd_answer(); return 8; } return 0; }
+  if (cmd_ready == 3) { if (budget >= COST_EXEC) { cmd_tok(); return 8; } return 0; }
+  if (cmd_ready == 4) { if (budget >= COST_EXEC) { cmd_done(); return 8; } return 0; }
   if ((rq_tail != rq_head || snap_state == 2) && tx_used() < 32u) {
     if (budget >= COST_START) { fmt_start(); return 9; }
     return 0;
   }
   // last: the limits change slowly, stale ones for a while are harmless
-  if ((pred_due || !(hs.flags & HF_LIMS)) && (hs.flags & (HF_PK_HI | HF_PK_LO)) == (HF_PK_HI | HF_PK_LO)) {
-    if (budget >= COST_PRED) { pred_step(); return 10; }
-  }
+
   return 0;
 }
 
 // Work that a task must do (the transmitter drains by itself, one byte per 87 us).
 static uint8_t stall_waiting(void) {
-  return f_state != FS_IDLE || snap_stage || snap_state == 1 || cmd_ready ||
+  return f_state != FS_IDLE || snap_stage || snap_state == 1 || snap_state == 4 || cmd_ready || rx_step ||
          (UCSR0A & _BV(RXC0)) || ((rq_tail != rq_head || snap_state == 2) && tx_used() < 32u);
 }
 
 static uint8_t work_waiting(void) {
-  return tx_head != tx_tail || f_state != FS_IDLE || snap_stage || snap_state == 1 || cmd_ready ||
+  return tx_head != tx_tail || f_state != FS_IDLE || snap_stage || snap_state == 1 || snap_state == 4 || cmd_ready || rx_step || adc_due ||
          (UCSR0A & _BV(RXC0)) || ((rq_tail != rq_head || snap_state == 2));
 }
 
@@ -676,267 +863,643 @@ static inline __attribute__((always_inline)) uint8_t run_task(uint16_t budget) {
   uint16_t d = TCNT1 - t0;
   if (d > prof_task[id]) prof_task[id] = d;
   if (id == 5 && d > prof_fmt[fs]) prof_fmt[fs] = d;
-  if (id == 4 && ss < 6 && d > prof_snap[ss]) prof_snap[ss] = d;
+  if (id == 4 && ss < 16 && d > prof_snap[ss]) prof_snap[ss] = d;
 #else
   uint8_t id = task(budget);
 #endif
-  if (id == 2 || (id >= 4 && id < 10)) progress = 1;  // not tick, transmit, prediction
+  if (id == 2 || id == 12 || (id >= 4 && id < 10)) progress = 1;  // not tick, transmit, prediction
   return id;
 }
 
+// One background task for meter_loop (assembly): the first pending one if it fits `budget`.
+extern "C" ASM_VISIBLE __attribute__((noinline)) uint8_t meter_task(uint16_t budget) {
+  return run_task(budget);
+}
+
 // ---------------------------------------------------------------------------------------------
-// meter_edge(): wait for the armed edge and do the common bookkeeping, in assembly because every
-// cycle counts at 50 kHz. Interrupts are enabled only while waiting, for one purpose: a Timer0
-// compare match as timeout (TIMER0_COMPA_vect below makes the wait return 1).
+// meter_loop(): the measuring loop, in assembly because every cycle counts at 50 kHz: wait for
+// the armed edge, capture it, do the common bookkeeping with the hot state in registers, and
+// between edges call the background dispatcher meter_task(budget) (C) while the prediction leaves
+// room. It returns to C only for the rare cases (the hot state is then written back to meter_hs).
+// Interrupts are enabled only while waiting, for one purpose: a Timer0 compare match as timeout
+// (TIMER0_COMPA_vect below makes the wait return 1).
 // Capture: the wait loop is `sbis; rjmp` (3 cycles); on the flag, read ICR1, write the other edge
 // into TCCR1B, clear ICF1 (the datasheet's order: a change of ICES1 may set ICF1). From the flag
 // to ICES1 flipped: at most 3 + 2 (sbis skip) + 4 (lds, lds) + 2 (sts) = 11 cycles; ICF1 is
 // cleared one cycle later (an edge in that cycle is lost and caught by the pin check below).
 // Then: pin check (the pin must still show the captured edge unless the next edge was captured
 // too), latency check (only if a task ran: a capture served later than one full period may hide
-// an edge pair), and for the common case (a chain of periods, phases < 2 ms) the period count,
-// high time, wrap count, the last high/low times and the task limit for the next phase.
-// Returns 0 done, 1 timeout, 2 missed edge (pin check), 3 slow path (C finishes, capture in
-// cap_ts/cap_ms), 4 rejected (late capture). Uses only call-clobbered registers.
+// an edge pair), and for the common case (a chain of periods, the open period < 2 ms) the period
+// count, high time, wrap count, the last high/low times and the task limit for the next phase.
+// Returns 1 timeout, 2 missed edge (pin check), 3 slow path (C finishes, capture in
+// cap_ts/cap_ms), 4 rejected (late capture), 5 tasks starve or the tick asks for C (meter_force),
+// 6 phases measured again after a loss (C computes the limits).
+// Registers (call-saved, so the C tasks keep them; written back to meter_hs on exit):
+//   r2:r3 ts_prev, r4:r5 last_rise, r6:r7 periods_part (low half), r8..r11 sumh_part,
+//   r12:r13 hp16 (= last high time), r14:r15 lim, r16 TCCR1B value for the edge after the armed
+//   one, r17 ms_rise, r28 flags, r29 = 1 << ICF1.
+#define ML_STR2(x) #x
+#define ML_STR(x) ML_STR2(x)
+#if defined(METER_PROFILE) && !defined(ML_NO_PROF_TOP)
+// min cycles from one loop top to the next when the edge was already waiting and no task ran
+// (prof_edge_cyc[0] after a falling edge, [1] after a rising one); adds ~30 cycles per edge
+#define ML_PROF_TOP \
+  "  lds r22, 0x84\n" \
+  "  lds r23, 0x85\n" \
+  "  lds r24, prof_prev\n" \
+  "  lds r25, prof_prev+1\n" \
+  "  sts prof_prev, r22\n" \
+  "  sts prof_prev+1, r23\n" \
+  "  sub r22, r24\n" \
+  "  sbc r23, r25\n" \
+  "  lds r21, prof_ok\n" \
+  "  sts prof_ok, r1\n" \
+  "  sbic 0x16, 5\n" \
+  "  sts prof_ok, r29\n" \
+  "  tst r21\n" \
+  "  breq 71f\n" \
+  "  ldi r30, lo8(prof_edge_cyc)\n" \
+  "  ldi r31, hi8(prof_edge_cyc)\n" \
+  "  sbrs r28, 0\n" \
+  "  adiw r30, 2\n" \
+  "  ld r24, Z\n" \
+  "  ldd r25, Z+1\n" \
+  "  cp r22, r24\n" \
+  "  cpc r23, r25\n" \
+  "  brsh 71f\n" \
+  "  st Z, r22\n" \
+  "  std Z+1, r23\n" \
+  "71:\n"
+#define ML_PROF_TASKED "  sts prof_ok, r1\n"
+#else
+#define ML_PROF_TOP ""
+#define ML_PROF_TASKED ""
+#endif
 asm(R"ASM(
-  .section .text.meter_edge,"ax",@progbits
-  .global meter_edge
-  .global meter_edge_timeout
-meter_edge:
+  .section .text.meter_loop,"ax",@progbits
+  .global meter_loop
+  .global meter_loop_timeout
+meter_loop:
+  push r2
+  push r3
+  push r4
+  push r5
+  push r6
+  push r7
+  push r8
+  push r9
+  push r10
+  push r11
+  push r12
+  push r13
+  push r14
+  push r15
+  push r16
+  push r17
+  push r28
+  push r29
+  lds r2, meter_hs+0
+  lds r3, meter_hs+1
+  lds r4, meter_hs+12
+  lds r5, meter_hs+13
+  lds r6, meter_hs+32
+  lds r7, meter_hs+33
+  lds r8, meter_hs+36
+  lds r9, meter_hs+37
+  lds r10, meter_hs+38
+  lds r11, meter_hs+39
+  lds r12, meter_hs+18
+  lds r13, meter_hs+19
+  lds r14, meter_hs+6
+  lds r15, meter_hs+7
+  lds r17, meter_hs+22
+  lds r28, meter_hs+20
+  ldi r29, 0x20           ; 1 << ICF1
+  lds r24, meter_rearm    ; after a break: arm for the edge opposite to the present level
+  tst r24
+  breq 1f
+  sts meter_rearm, r1
+  in r25, 0x03            ; PINB
+  ldi r24, 0x01           ; high: falling edge next
+  sbrs r25, 0
+  ldi r24, 0x41           ; low: rising edge next
+  sts 0x81, r24
+  out 0x16, r29           ; clear ICF1
+  andi r28, 0xFE
+  sbrs r25, 0
+  ori r28, 0x01           ; HF_ARMED_RISE
+1:
+  ldi r16, 0x41           ; TCCR1B for a rising edge
+  sbrc r28, 0             ; armed for rising: the next one is falling
+  ldi r16, 0x01
+ml_top:
+)ASM" ML_PROF_TOP R"ASM(
+  sbic 0x17, 1            ; TIFR2.OCF2A: a tick is due
+  rjmp ml_tickdue
+ml_top2:
+  sbic 0x16, 5            ; the edge is waiting already
+  rjmp ml_cap
+  movw r24, r14           ; lim: tasks must end before TCNT1 - ts_prev reaches it
+  adiw r24, 1
+  brne .+2            ; 0xFFFF: no limit
+  rjmp ml_free
+  sbiw r24, 1
+  lds r22, 0x84           ; TCNT1
+  lds r23, 0x85
+  sub r22, r2
+  sbc r23, r3             ; elapsed since the last edge
+  sub r24, r22
+  sbc r25, r23
+  brcc .+2                ; past the limit
+  rjmp ml_wait
+  subi r24, lo8()ASM" ML_STR(CALL_OVH) R"ASM()
+  sbci r25, hi8()ASM" ML_STR(CALL_OVH) R"ASM()
+  brcc .+2                ; budget = lim - elapsed - call overhead
+  rjmp ml_wait
+  cpi r24, )ASM" ML_STR(COST_MIN) R"ASM(
+  cpc r25, r1
+  brsh .+2
+  rjmp ml_wait
+ml_call:
+  sts ml_budget, r24
+  sts ml_budget+1, r25
+  lds r23, meter_pred_due ; the task limits are due for an update (every ms): in assembly
+  tst r23
+  breq 2f
+  cpi r24, lo8()ASM" ML_STR(COST_PRED) R"ASM()
+  ldi r22, hi8()ASM" ML_STR(COST_PRED) R"ASM()
+  cpc r25, r22
+  brlo 2f
+  cpi r23, 1
+  brne 3f
+  ldi r22, 2              ; one limit per call: lim_r now, lim_f next time
+  sts meter_pred_due, r22
+  rcall ml_pred_r
+  rjmp 4f
+3:
+  sts meter_pred_due, r1
+  rcall ml_pred_f
+4:
+  ori r28, 0x80           ; HF_TASKED
+  rjmp ml_top
+2:
+  lds r22, meter_snap_stage ; a window end begins (stage 1 or 3): hand the sums over first,
+  andi r22, 0xFD          ; if the flush and that stage fit, else tell the dispatcher to skip it
+  cpi r22, 1
+  brne 1f
+  sts meter_fold_ok, r1   ; (the dispatcher must not take stage 1/3: the sums are here)
+  cpi r24, lo8()ASM" ML_STR(COST_FLUSH) R"ASM()
+  ldi r22, hi8()ASM" ML_STR(COST_FLUSH) R"ASM()
+  cpc r25, r22
+  brlo 1f
+  rcall ml_flush
+  ori r28, 0x80           ; HF_TASKED
+  rjmp ml_top
+1:
+  lds r24, ml_budget
+  lds r25, ml_budget+1
+  call meter_task
+  tst r24
+  brne .+2
+  rjmp ml_none
+  ori r28, 0x80           ; HF_TASKED
+)ASM" ML_PROF_TASKED R"ASM(
+  lds r24, meter_force    ; the tick asks for C (starvation, a long gap)
+  tst r24
+  brne .+2
+  rjmp ml_top
+  ldi r24, 5
+  rjmp ml_exit
+ml_tickdue:
+  lds r24, 0xB2           ; TCNT2 counts 4 us since OCF2A rose: 0.5 ms late, the tasks starve
+  cpi r24, 125
+  brsh .+2
+  rjmp ml_top2
+  ldi r24, 5
+  rjmp ml_exit
+ml_free:
+  ldi r24, 0xFF
+  ldi r25, 0xFF
+  rjmp ml_call
+ml_none:                  ; nothing ran: far from the edge keep polling here (the tick stays on time)
+  lds r24, ml_budget
+  lds r25, ml_budget+1
+  cpi r24, lo8()ASM" ML_STR(COST_MAX) R"ASM()
+  ldi r22, hi8()ASM" ML_STR(COST_MAX) R"ASM()
+  cpc r25, r22
+  brsh .+2
+  rjmp ml_wait
+  rjmp ml_top
+ml_wait:
+  lds r24, meter_probe    ; after a loss, waiting for both phases: are they known now?
+  tst r24
+  breq 1f
+  mov r24, r28
+  andi r24, 0x0C
+  cpi r24, 0x0C
+  brne 1f
+  rcall ml_probed
+1:
   in r18, 0x26            ; timeout: OCR0A = TCNT0 + 14 (14 x 64 us = 0.9 ms)
   subi r18, 0xF2
   out 0x27, r18
   ldi r18, 0x02
   out 0x15, r18           ; TIFR0 = 1 << OCF0A
-  ldi r30, lo8(meter_hs)
-  ldi r31, hi8(meter_hs)
-  ldd r20, Z+20           ; flags
-  ldi r24, 0x41           ; TCCR1B for a rising edge
-  sbrc r20, 0             ; armed for rising: the next one is falling
-  ldi r24, 0x01
-  ldi r21, 0x20           ; 1 << ICF1
   sei
-1:
+2:
   sbis 0x16, 5            ; TIFR1.ICF1
-  rjmp 1b
+  rjmp 2b
+ml_cap:
   lds r18, 0x86           ; ICR1L (latches ICR1H)
   lds r19, 0x87           ; ICR1H
-  sts 0x81, r24           ; TCCR1B: arm the other edge
-  out 0x16, r21           ; clear ICF1
+  sts 0x81, r16           ; TCCR1B: arm the other edge
+  out 0x16, r29           ; clear ICF1
   cli
   in r22, 0x03            ; PINB
   in r23, 0x16            ; TIFR1
   sbrc r23, 5             ; next edge already captured: nothing was lost
   rjmp 2f
-  eor r22, r20            ; PB0 must equal "captured a rising edge" = armed bit
+  eor r22, r28            ; PB0 must equal "captured a rising edge" = armed bit
   sbrc r22, 0
-  rjmp edge_miss
+  rjmp ml_miss
 2:
+  ldi r21, 0x40
+  eor r16, r21            ; TCCR1B for the edge after the one now armed
   ldi r21, 1
-  eor r20, r21            ; armed toggles; bit 0 now set <=> a falling edge was captured
-  std Z+20, r20
-  sts meter_idle_ms, r1
-  sts meter_idle_ms+1, r1
-  sbrs r20, 7             ; HF_TASKED: a task ran since the last capture
-  rjmp 3f
-  andi r20, 0x7F
+  eor r28, r21            ; armed toggles; bit 0 now set <=> a falling edge was captured
+  sbrc r28, 7             ; HF_TASKED: a task ran since the last capture
+  rjmp ml_tasked
+3:
+  lds r26, meter_ms16     ; ms count, low byte
+  sbrs r28, 4             ; HF_CHAIN
+  rjmp ml_nochain
+  mov r27, r26
+  sub r27, r17            ; - ms_rise
+  cpi r27, 2              ; >= 1 ms since the rising edge that opened the period: C extends it
+  brlo .+2
+  rjmp ml_slow
+  sbrc r28, 0
+  rjmp ml_fall
+  ; ---- rising edge: closes the period begun at last_rise
+  sbrs r28, 5             ; HF_HIGH
+  rjmp ml_slow
+  movw r22, r18
+  sub r22, r4
+  sbc r23, r5             ; period = ts - last_rise (< 2 ms)
+  cp r12, r22
+  cpc r13, r23
+  brlo .+2            ; high >= period: C rejects the period
+  rjmp ml_slow
+  cp r18, r4
+  cpc r19, r5
+  brsh .+2            ; the 16-bit timestamp wrapped since last_rise
+  rjmp ml_wrap
+4:
+  inc r6                  ; periods_part++
+  brne 5f
+  inc r7
+  brne 5f
+  rcall ml_pcarry
+5:
+  movw r4, r18            ; last_rise = ts
+  mov r17, r26            ; ms_rise
+  andi r28, 0xDF          ; HF_HIGH = 0
+  movw r22, r18
+  sub r22, r2
+  sbc r23, r3             ; low time just ended
+  sts meter_hs+4, r22     ; l_lo
+  sts meter_hs+5, r23
+  ori r28, 0x0A           ; HF_PK_LO | HF_PREV
+  lds r14, meter_hs+8     ; lim = lim_r
+  lds r15, meter_hs+9
+  movw r2, r18            ; ts_prev
+  sts meter_hs+21, r26    ; ms_prev
+  rjmp ml_top
+ml_fall:                  ; chained, so the previous edge was last_rise
+  sbrc r28, 5             ; high time already known (cannot happen without a miss)
+  rjmp ml_slow
+  movw r12, r18
+  sub r12, r4
+  sbc r13, r5             ; high time
+  sts meter_hs+2, r12     ; l_hi
+  sts meter_hs+3, r13
+  add r8, r12             ; sumh_part += high
+  adc r9, r13
+  adc r10, r1
+  adc r11, r1
+  ori r28, 0x26           ; HF_HIGH | HF_PK_HI | HF_PREV
+  lds r14, meter_hs+10    ; lim = lim_f
+  lds r15, meter_hs+11
+  movw r2, r18            ; ts_prev
+  sts meter_hs+21, r26    ; ms_prev
+  rjmp ml_top
+ml_nochain:               ; no period open (after a break): a rising edge starts the chain
+  lds r24, meter_hs+21    ; ms_prev
+  mov r27, r26
+  sub r27, r24            ; ms since the last edge
+  movw r22, r18
+  sub r22, r2
+  sbc r23, r3             ; the phase that just ended
+  ldi r24, 0
+  sbrs r28, 1             ; HF_PREV: the last edge was seen
+  rjmp 51f
+  cpi r27, 2
+  brsh 51f
+  ldi r24, 0x04           ; HF_PK_HI after a falling edge ...
+  sbrs r28, 0
+  ldi r24, 0x08           ; ... HF_PK_LO after a rising one
+  rjmp 52f
+51:
+  ldi r22, 0xFF           ; unknown
+  ldi r23, 0xFF
+52:
+  or r28, r24
+  ori r28, 0x02           ; HF_PREV
+  movw r2, r18            ; ts_prev
+  sts meter_hs+21, r26    ; ms_prev
+  sbrc r28, 0
+  rjmp 53f
+  sts meter_hs+4, r22     ; l_lo
+  sts meter_hs+5, r23
+  movw r4, r18            ; last_rise = chain_start = ts
+  mov r17, r26            ; ms_rise
+  sts meter_chain_start, r18
+  sts meter_chain_start+1, r19
+  sts meter_hs+24, r1     ; wraps = 0
+  sts meter_hs+25, r1
+  sts meter_hs+26, r1     ; hp_hi = 0
+  sts meter_hs+27, r1
+  ori r28, 0x10           ; HF_CHAIN
+  andi r28, 0xDF          ; HF_HIGH = 0
+  lds r14, meter_hs+8     ; lim = lim_r
+  lds r15, meter_hs+9
+  rjmp ml_top
+53:
+  sts meter_hs+2, r22     ; l_hi
+  sts meter_hs+3, r23
+  lds r14, meter_hs+10    ; lim = lim_f
+  lds r15, meter_hs+11
+  rjmp ml_top
+; The task limits of task_limit() (same formula, in assembly: no C round trip blinds the
+; capture). ml_probed: both phases measured again after a loss; ml_pred_r/ml_pred_f: the
+; prediction task, one limit per call, every ms (pred_due 1, 2).
+ml_probed:
+  sts meter_probe, r1
+  rcall ml_pred_r
+ml_pred_f:                ; lim_f: after a falling edge (the low time begins)
+  rcall ml_s2
+  brcc 67f
+  movw r24, r22
+  rcall ml_lim_one
+67:
+  sts meter_hs+10, r24
+  sts meter_hs+11, r25
+  sbrc r28, 0
+  movw r14, r24           ; the current phase follows a falling edge
+  ret
+ml_pred_r:                ; lim_r: after a rising edge (the high time begins)
+  rcall ml_s2
+  brcc 68f
+  movw r24, r20
+  rcall ml_lim_one
+68:
+  sts meter_hs+8, r24
+  sts meter_hs+9, r25
+  sbrs r28, 0
+  movw r14, r24
+  ret
+ml_s2:                    ; r20:r21 = l_hi, r22:r23 = l_lo, r26:r27 = 15/16 (l_hi + l_lo);
+  lds r20, meter_hs+2     ; carry clear and r24:r25 = 0xFFFF (no limit) if a phase >= 0x3000
+  lds r21, meter_hs+3
+  lds r22, meter_hs+4
+  lds r23, meter_hs+5
+  ldi r24, 0xFF
+  ldi r25, 0xFF
+  cpi r21, 0x30
+  brsh 69f
+  cpi r23, 0x30
+  brsh 69f
+  movw r26, r20
+  add r26, r22
+  adc r27, r23
+  movw r24, r26
+  rcall ml_div16
+  sub r26, r30
+  sbc r27, r31
+  sec
+  ret
+69:
+  clc
+  ret
+ml_div16:                 ; r30:r31 = r24:r25 / 16
+  movw r30, r24
+  lsr r31
+  ror r30
+  lsr r31
+  ror r30
+  lsr r31
+  ror r30
+  lsr r31
+  ror r30
+  ret
+ml_lim_one:               ; r24:r25 = l_cur, r26:r27 = s2 -> r24:r25 = limit (see task_limit)
+  rcall ml_div16
+  sub r24, r30
+  sbc r25, r31            ; c = 15/16 l_cur
+  movw r30, r26
+  add r30, r24
+  adc r31, r25
+  subi r30, lo8()ASM" ML_STR(HOT + 2 * SERVICE + MARGIN) R"ASM()
+  sbci r31, hi8()ASM" ML_STR(HOT + 2 * SERVICE + MARGIN) R"ASM()
+  brcc 61f
+  clr r30
+  clr r31
+61:                        ; b2 = s2 + c - HOT - 2 SERVICE - MARGIN
+  movw r18, r26
+  subi r18, lo8()ASM" ML_STR(SERVICE + MARGIN) R"ASM()
+  sbci r19, hi8()ASM" ML_STR(SERVICE + MARGIN) R"ASM()
+  brcc 62f
+  clr r18
+  clr r19
+62:                        ; b1 = s2 - SERVICE - MARGIN
+  cp r30, r18
+  cpc r31, r19
+  brsh 63f
+  movw r18, r30           ; b = min(b1, b2)
+63:
+  subi r24, lo8()ASM" ML_STR(MARGIN) R"ASM()
+  sbci r25, hi8()ASM" ML_STR(MARGIN) R"ASM()
+  brcc 64f
+  clr r24
+  clr r25
+64:                        ; a = c - MARGIN
+  cp r24, r18
+  cpc r25, r19
+  brsh 65f
+  movw r24, r18           ; max(a, b)
+65:
+  ret
+ml_wrap:
+  lds r24, meter_hs+24
+  lds r25, meter_hs+25
+  adiw r24, 1
+  sts meter_hs+24, r24
+  sts meter_hs+25, r25
+  rjmp 4b
+ml_pcarry:
+  lds r24, meter_hs+34
+  lds r25, meter_hs+35
+  adiw r24, 1
+  sts meter_hs+34, r24
+  sts meter_hs+35, r25
+  ret
+ml_tasked:
+  andi r28, 0x7F
   lds r26, 0x84           ; TCNT1L
   lds r27, 0x85
   sub r26, r18
   sbc r27, r19            ; latency
-  brpl .+2        ; >= 0x8000: a timestamp from the future (torn read in simulation)
-  rjmp edge_reject
-  mov r21, r20
+  brpl .+2          ; >= 0x8000: a timestamp from the future (torn read in simulation)
+  rjmp ml_reject
+  mov r21, r28
   andi r21, 0x0C
   cpi r21, 0x0C
-  brne 3f
-  ldd r24, Z+2
-  ldd r25, Z+3
-  ldd r22, Z+4
-  ldd r23, Z+5
+  breq .+2
+  rjmp 3b
+  lds r24, meter_hs+2
+  lds r25, meter_hs+3
+  lds r22, meter_hs+4
+  lds r23, meter_hs+5
   add r24, r22
   adc r25, r23            ; l_hi + l_lo
-  brcs 3f
+  brcc .+2
+  rjmp 3b
   cp r26, r24
   cpc r27, r25
-  brlo .+2
-  rjmp edge_reject
-3:
-  lds r26, meter_ms16     ; ms count, low byte
-  ldd r27, Z+21           ; ms_prev
-  mov r21, r26
-  sub r21, r27
-  cpi r21, 2
-  brlo .+2          ; >= 1 ms since the last edge: C extends the phase
-  rjmp edge_slow
-  sbrc r20, 0
-  rjmp edge_fall
-  ; ---- rising edge: closes the period begun at last_rise
-  sbrs r20, 4             ; HF_CHAIN
-  rjmp edge_slow
-  sbrs r20, 5             ; HF_HIGH
-  rjmp edge_slow
-  ldd r21, Z+22           ; ms_rise
-  mov r22, r26
-  sub r22, r21
-  cpi r22, 2
-  brlo .+2
-  rjmp edge_slow
-  ldd r22, Z+26
-  ldd r23, Z+27
-  or r22, r23
-  breq .+2          ; high time >= 65536 ticks
-  rjmp edge_slow
-  ldd r24, Z+12
-  ldd r25, Z+13
-  movw r22, r18
-  sub r22, r24
-  sbc r23, r25            ; period = ts - last_rise, carry = the timestamp wrapped
-  clr r21
-  adc r21, r1
-  ldd r24, Z+18
-  ldd r25, Z+19           ; high time
-  cp r24, r22
-  cpc r25, r23
-  brlo .+2          ; high >= period: C rejects the period
-  rjmp edge_slow
-  tst r21
-  breq 4f
-  ldd r24, Z+24
-  ldd r25, Z+25
-  adiw r24, 1
-  std Z+24, r24
-  std Z+25, r25
-4:
-  ldd r24, Z+32
-  ldd r25, Z+33
-  adiw r24, 1             ; periods_part++ (low half; carry below)
-  std Z+32, r24
-  std Z+33, r25
-  brne 5f
-  ldd r24, Z+34
-  ldd r25, Z+35
-  adiw r24, 1
-  std Z+34, r24
-  std Z+35, r25
-5:
-  std Z+12, r18           ; last_rise = ts
-  std Z+13, r19
-  std Z+22, r26           ; ms_rise
-  andi r20, 0xDF          ; HF_HIGH = 0
-  ldd r24, Z+0
-  ldd r25, Z+1
-  movw r22, r18
-  sub r22, r24
-  sbc r23, r25            ; low time just ended
-  sbrs r20, 1             ; HF_PREV
-  rjmp 6f
-  std Z+4, r22
-  std Z+5, r23
-  ori r20, 0x08           ; HF_PK_LO
-6:
-  ldd r24, Z+8            ; lim_r
-  ldd r25, Z+9
-  rjmp edge_done
-edge_fall:
-  sbrs r20, 4             ; no chain: nothing to add
-  rjmp 7f
-  sbrc r20, 5             ; high time already known (cannot happen without a miss)
-  rjmp 7f
-  ldd r21, Z+22
-  mov r22, r26
-  sub r22, r21
-  cpi r22, 2
-  brlo .+2
-  rjmp edge_slow
-  ldd r24, Z+12
-  ldd r25, Z+13
-  movw r22, r18
-  sub r22, r24
-  sbc r23, r25            ; high time
-  std Z+18, r22
-  std Z+19, r23
-  std Z+26, r1
-  std Z+27, r1
-  ldd r24, Z+36
-  ldd r25, Z+37
-  add r24, r22
-  adc r25, r23            ; sumh_part += high (low half; carry below)
-  std Z+36, r24
-  std Z+37, r25
-  brcc 8f
-  ldd r24, Z+38
-  ldd r25, Z+39
-  adiw r24, 1
-  std Z+38, r24
-  std Z+39, r25
-8:
-  ori r20, 0x20           ; HF_HIGH
-7:
-  ldd r24, Z+0
-  ldd r25, Z+1
-  movw r22, r18
-  sub r22, r24
-  sbc r23, r25            ; high time just ended (for the prediction)
-  sbrs r20, 1
-  rjmp 9f
-  std Z+2, r22
-  std Z+3, r23
-  ori r20, 0x04           ; HF_PK_HI
-9:
-  ldd r24, Z+10           ; lim_f
-  ldd r25, Z+11
-edge_done:
-  mov r21, r20
-  andi r21, 0x4C          ; limits valid and both phases known?
-  cpi r21, 0x4C
-  breq 10f
-  ldi r24, 0xFF           ; no prediction: tasks may run freely ...
-  ldi r25, 0xFF
-  lds r21, meter_probe    ; ... unless edges were just lost: then none until the phases are known
-  tst r21
-  breq 10f
-  clr r24
-  clr r25
-10:
-  std Z+6, r24
-  std Z+7, r25
-  ori r20, 0x02           ; HF_PREV
-  std Z+20, r20
-  std Z+0, r18            ; ts_prev
-  std Z+1, r19
-  std Z+21, r26           ; ms_prev
-  clr r24
-  ret
-edge_slow:
-  std Z+20, r20
-  std Z+28, r18
-  std Z+29, r19
-  std Z+30, r26
-  ldi r24, 3
-  ret
-edge_reject:
-  std Z+20, r20
+  brsh .+2
+  rjmp 3b
+ml_reject:
   ldi r24, 4
-  ret
-edge_miss:
+  rjmp ml_exit
+ml_slow:
+  sts meter_hs+28, r18
+  sts meter_hs+29, r19
+  sts meter_hs+30, r26
+  ldi r24, 3
+  rjmp ml_exit
+ml_miss:
+  sts meter_hs+28, r18
+  sts meter_hs+29, r19
+  sts meter_hs+30, r22
+  sts meter_hs+31, r23
   ldi r24, 2
+  rjmp ml_exit
+; Window end: move periods_part and sumh_part into the window sums (meter_acc) and write back
+; what the C window-end task reads (flags, last_rise, hp16).
+ml_flush:
+  lds r22, meter_acc+0
+  lds r23, meter_acc+1
+  lds r24, meter_acc+2
+  lds r25, meter_acc+3
+  lds r18, meter_hs+34
+  lds r19, meter_hs+35
+  add r22, r6
+  adc r23, r7
+  adc r24, r18
+  adc r25, r19
+  sts meter_acc+0, r22
+  sts meter_acc+1, r23
+  sts meter_acc+2, r24
+  sts meter_acc+3, r25
+  lds r22, meter_acc+8
+  lds r23, meter_acc+9
+  lds r24, meter_acc+10
+  lds r25, meter_acc+11
+  add r22, r8
+  adc r23, r9
+  adc r24, r10
+  adc r25, r11
+  sts meter_acc+8, r22
+  sts meter_acc+9, r23
+  sts meter_acc+10, r24
+  sts meter_acc+11, r25
+  clr r6
+  clr r7
+  movw r8, r6
+  movw r10, r6
+  sts meter_hs+32, r1
+  sts meter_hs+33, r1
+  sts meter_hs+34, r1
+  sts meter_hs+35, r1
+  sts meter_hs+36, r1
+  sts meter_hs+37, r1
+  sts meter_hs+38, r1
+  sts meter_hs+39, r1
+  sts meter_fold_flags, r28  ; the chain at this moment, for stage 10/12
+  sts meter_fold_lr, r4
+  sts meter_fold_lr+1, r5
+  sts meter_fold_hp, r12
+  sts meter_fold_hp+1, r13
+  lds r22, meter_hs+24
+  lds r23, meter_hs+25
+  sts meter_fold_wraps, r22
+  sts meter_fold_wraps+1, r23
+  sts meter_hs+24, r1     ; wraps = 0
+  sts meter_hs+25, r1
+  lds r22, meter_snap_stage
+  subi r22, -9            ; 1 -> 10, 3 -> 12
+  sts meter_snap_stage, r22
   ret
-meter_edge_timeout:       ; the Timer0 compare interrupt returns here instead of into the wait
+meter_loop_timeout:       ; the Timer0 compare interrupt returns here instead of into the wait
   cli
   ldi r24, 1
+ml_exit:
+  sts meter_hs+0, r2
+  sts meter_hs+1, r3
+  sts meter_hs+12, r4
+  sts meter_hs+13, r5
+  sts meter_hs+32, r6
+  sts meter_hs+33, r7
+  sts meter_hs+36, r8
+  sts meter_hs+37, r9
+  sts meter_hs+38, r10
+  sts meter_hs+39, r11
+  sts meter_hs+18, r12
+  sts meter_hs+19, r13
+  sts meter_hs+6, r14
+  sts meter_hs+7, r15
+  sts meter_hs+22, r17
+  sts meter_hs+20, r28
+  pop r29
+  pop r28
+  pop r17
+  pop r16
+  pop r15
+  pop r14
+  pop r13
+  pop r12
+  pop r11
+  pop r10
+  pop r9
+  pop r8
+  pop r7
+  pop r6
+  pop r5
+  pop r4
+  pop r3
+  pop r2
   ret
 )ASM");
 
-// Timer0 compare A: the wait timed out. Replace the interrupted address (inside meter_edge's
+// Timer0 compare A: the wait timed out. Replace the interrupted address (inside meter_loop's
 // loop, or in its next instructions if an edge came at the same moment: the caller resyncs) by
-// meter_edge_timeout. The return address on the stack is big-endian, high byte on top.
+// meter_loop_timeout. The return address on the stack is big-endian, high byte on top.
 ISR(TIMER0_COMPA_vect, ISR_NAKED) {
   asm volatile(
       "pop r0\n\t"
       "pop r0\n\t"
-      "ldi r30, lo8(gs(meter_edge_timeout))\n\t"
-      "ldi r31, hi8(gs(meter_edge_timeout))\n\t"
+      "ldi r30, lo8(gs(meter_loop_timeout))\n\t"
+      "ldi r31, hi8(gs(meter_loop_timeout))\n\t"
       "push r30\n\t"
       "push r31\n\t"
       "reti\n\t");
@@ -983,11 +1546,11 @@ static void hw_init(void) {
 // after that. 0xFFFF: no limit (phases long or unknown).
 static uint16_t task_limit(uint16_t l_cur, uint16_t l_next) {
   if (l_cur >= 0x3000u || l_next >= 0x3000u) return 0xFFFF;
-  uint16_t a = (uint16_t)(l_cur - (l_cur >> 3));
+  uint16_t a = (uint16_t)(l_cur - (l_cur >> 4));
   a = a > MARGIN ? (uint16_t)(a - MARGIN) : 0;
   uint16_t s2 = (uint16_t)(l_cur + l_next);
-  s2 = (uint16_t)(s2 - (s2 >> 3));
-  uint16_t s3 = (uint16_t)(s2 + l_cur - (l_cur >> 3));
+  s2 = (uint16_t)(s2 - (s2 >> 4));
+  uint16_t s3 = (uint16_t)(s2 + l_cur - (l_cur >> 4));
   uint16_t b1 = s2 > SERVICE + MARGIN ? (uint16_t)(s2 - SERVICE - MARGIN) : 0;
   uint16_t b2 = s3 > HOT + 2 * SERVICE + MARGIN ? (uint16_t)(s3 - HOT - 2 * SERVICE - MARGIN) : 0;
   uint16_t b = b1 < b2 ? b1 : b2;
@@ -997,27 +1560,31 @@ static uint16_t task_limit(uint16_t l_cur, uint16_t l_next) {
 // Edges were lost: forget the phases, run no task until they are measured again.
 static void lose_prediction(void) {
   hs.flags &= (uint8_t)~(HF_PK_HI | HF_PK_LO | HF_LIMS);
+  hs.l_hi = hs.l_lo = 0xFFFF;
+  hs.lim_r = hs.lim_f = 0;
   meter_probe = 1;
 }
 
 // Arm for the edge opposite to the present level (after a break).
+// meter_loop does it on entry (meter_rearm), so that the wait begins right after the arming: an
+// edge pair between arming and waiting would be one more missed edge.
 static void resync(void) {
-  uint8_t lv = PINB & _BV(PB0);
-  TCCR1B = lv ? TCCR_FALL : TCCR_RISE;
-  TIFR1 = _BV(ICF1);
-  hs.flags = (uint8_t)((hs.flags & ~(HF_ARMED_RISE | HF_PREV)) | (lv ? 0 : HF_ARMED_RISE));
+  hs.flags &= (uint8_t)~HF_PREV;
+  meter_rearm = 1;
   hs.lim = meter_probe ? 0 : 0xFFFF;
 }
 
-// The rare cases of meter_edge (codes 1..4), and the slow path of the bookkeeping.
+// The rare cases of meter_loop (codes 1..4), and the slow path of the bookkeeping.
 static void __attribute__((noinline)) edge_rare(uint8_t code) {
   // the slow path writes acc: finish a window end that is half taken (see take_snapshot)
-  if (snap_stage == 4 || snap_stage == 5) take_snapshot();
+  snap_settle();
   if (code == 1) {  // no edge for ~0.9 ms although one was predicted soon
 #ifdef METER_PROFILE
     prof_cnt[2]++;
 #endif
     hs.flags &= (uint8_t)~(HF_PK_HI | HF_PK_LO | HF_LIMS);
+    hs.l_hi = hs.l_lo = 0xFFFF;
+    hs.lim_r = hs.lim_f = 0xFFFF;
     meter_probe = 0;
     chain_break();
     resync();
@@ -1062,6 +1629,7 @@ static void __attribute__((noinline)) edge_rare(uint8_t code) {
     }
     hs.flags |= HF_CHAIN;
     hs.flags &= (uint8_t)~HF_HIGH;
+    hs.hp_hi = 0;  // the fast path of the next falling edge writes only hp16
     hs.last_rise = ts;
     hs.ms_rise = ms;
     if (f & HF_PREV) { hs.l_lo = phase; hs.flags |= HF_PK_LO; }
@@ -1081,8 +1649,7 @@ static void __attribute__((noinline)) edge_rare(uint8_t code) {
   hs.ts_prev = ts;
   hs.ms_prev = ms;
   f = hs.flags;
-  hs.lim = (f & (HF_LIMS | HF_PK_HI | HF_PK_LO)) == (HF_LIMS | HF_PK_HI | HF_PK_LO)
-               ? (rise ? hs.lim_r : hs.lim_f) : (meter_probe ? 0 : 0xFFFF);
+  hs.lim = meter_probe ? 0 : (rise ? hs.lim_r : hs.lim_f);
 }
 
 void meter_run(void) {
@@ -1091,11 +1658,16 @@ void meter_run(void) {
   rx_reset();
   queue_resp(K_ID, 0, 0, 0, 0);  // boot identification, SEQ 0
   hs.flags = 0;
+  hs.l_hi = hs.l_lo = hs.lim_r = hs.lim_f = 0xFFFF;
   resync();
 
   for (;;) {
     // ---- starvation: edges too fast for the tasks; run some blind and count what went by
     // (TCNT2 counts 4 us steps since OCF2A rose: a tick waiting for 0.5 ms forces the tasks)
+    if (force == 3) {  // the tick saw no edge for MAX_PHASE_MS
+      force = 0;
+      chain_break();
+    }
     if ((TIFR2 & _BV(OCF2A)) && TCNT2 >= 125u) force = 2;
     if (force) {
 #ifdef METER_PROFILE
@@ -1126,43 +1698,14 @@ void meter_run(void) {
       }
     }
 
-    // ---- background tasks while the next edges allow
-    uint16_t lim = hs.lim;
-    for (;;) {
-      if (TIFR1 & _BV(ICF1)) break;
-      uint16_t budget = 0xFFFF;
-      if (lim != 0xFFFF) {
-        uint16_t el = TCNT1 - hs.ts_prev;
-        budget = el < lim ? (uint16_t)(lim - el) : 0;
-      }
-      if (budget < COST_TX) break;  // not even the shortest task fits
-      if (run_task(budget)) { hs.flags |= HF_TASKED; continue; }
-      // near the next edge (nothing fits): wait for it in the capture loop; far from it, keep
-      // polling here so that the 1 ms tick is never held up by a long wait
-      if (budget < COST_MAX) break;
+    // ---- capture, bookkeeping and background tasks until a rare case
+    uint8_t code = meter_loop();
+    meter_fold_ok = 1;
+    if (code == 5) {  // the tasks starve
+      if (!force) force = 2;
+      continue;
     }
-
-    // ---- capture and bookkeeping
-#ifdef METER_PROFILE
-    uint8_t tasked = hs.flags & HF_TASKED;
-    uint8_t code = meter_edge();
-    uint16_t t_ret = TCNT1;
-    if (code == 0) {
-      uint16_t d = t_ret - hs.ts_prev;
-      if (d > prof_hot) prof_hot = d;
-      static uint16_t prev_ret;
-      static uint8_t prev_pending;
-      if (prev_pending && !tasked) {
-        uint8_t rise = !(hs.flags & HF_ARMED_RISE);
-        uint16_t e = t_ret - prev_ret;
-        if (e < prof_edge_cyc[rise]) prof_edge_cyc[rise] = e;
-      }
-      prev_ret = t_ret;
-      prev_pending = TIFR1 & _BV(ICF1);
-    }
-#else
-    uint8_t code = meter_edge();
-#endif
+    if (code == 6) code = 0;  // phases measured again after a loss: limits below
     if (code) edge_rare(code);
     if (meter_probe && (hs.flags & (HF_PK_HI | HF_PK_LO)) == (HF_PK_HI | HF_PK_LO)) {
       // phases measured again: limits now (two prediction steps), then tasks may run
