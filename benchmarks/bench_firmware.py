@@ -37,7 +37,7 @@ PROF_TOP_CYCLES = 35
 """Periods per window may differ from f x window by this much: a window's end is taken by
 background tasks (1 ms tick, then the window-end task), which may run a little late at high
 frequencies; the periods then count in the next window, none is lost (tests/firmware checks)."""
-TASKS = {1: "1 ms tick", 11: "ADC sample", 2: "receive byte", 12: "receive (word step)", 3: "transmit byte",
+TASKS = {1: "1 ms tick", 11: "tick part 2 (ADC, checks)", 2: "receive byte", 12: "receive (word step)", 3: "transmit byte",
          4: "window end (stage)", 5: "frame step", 6: "ADC mean (1 bit)", 7: "command decide",
          8: "command act/answer", 9: "frame start"}
 """Background tasks (C) by the number the dispatcher gives them (``prof_task`` in the profiling build).

@@ -55,22 +55,24 @@
 // Upper bounds of task lengths [cycles] including dispatch, measured with `make PROFILE=1` in
 // simavr (benchmarks/bench_firmware.py prints them); the scheduler starts a task only when its
 // bound fits before the next edge that must be serviced on time.
-#define COST_TICK 135
+#define COST_TICK 115
+#define COST_TICK2 132
 #define COST_RX 180
 #define COST_TX 56
-#define COST_FMT 178
+#define COST_FMT 186       // the largest step; the dispatcher checks each state's own (fmt_cost)
 #define COST_DIV 172
 #define COST_EXEC 166
 #define COST_SNAP 172
 #define COST_FLUSH 130     // ml_flush in meter_loop (window end stage 1/3), with its dispatch
 #define COST_START 170
 #define COST_PRED 125      // ml_pred_r or ml_pred_f (assembly, static count ~115) with its call
-#define COST_MAX 180        // the largest of the above
-#define COST_MIN 120        // no task call in a smaller slot: it would keep the edges served late
-#define CALL_OVH 60         // meter_loop's part of a task call: budget check, call, return, loop
+#define COST_MAX 186        // the largest of the above
+#define COST_MIN 140        // no task call in a smaller slot: it would keep the edges served late
+#define CALL_OVH 45         // meter_loop's part of a task call: 27 cycles from reading TCNT1 to the
+                            // dispatcher, 19 after the task beyond SERVICE (static count)
 #define HOT 90             // capture + bookkeeping + main loop for one edge, worst case [cycles]
 #define SERVICE 14         // flag check to ICES1 flipped, worst case, with loop exit [cycles]
-#define MARGIN 16
+#define MARGIN 8
 #define BURST 4000u         // longest forced run of tasks [cycles]
 
 #ifdef METER_PROFILE
@@ -141,9 +143,9 @@ ASM_VISIBLE uint8_t meter_probe;
 uint8_t meter_loop(void);
 ASM_VISIBLE uint8_t meter_force;
 ASM_VISIBLE uint8_t meter_snap_stage;
-ASM_VISIBLE uint16_t ml_budget;
 ASM_VISIBLE uint16_t meter_chain_start;
 ASM_VISIBLE uint8_t meter_pred_due;
+ASM_VISIBLE uint8_t meter_asm_job;  // for meter_loop: 1 lim_r due, 4 lim_f due, 2 window end's hand-over
 // Chain state handed over by meter_loop with the sums at a window end (stage 10/12)
 ASM_VISIBLE uint16_t meter_fold_lr, meter_fold_hp, meter_fold_wraps;
 ASM_VISIBLE uint8_t meter_fold_flags;
@@ -175,6 +177,7 @@ static uint8_t range_sel;
 static uint32_t t_last_end;
 #define snap_stage meter_snap_stage  // window end in progress (see take_snapshot)
 static uint32_t snap_hp;
+static uint32_t snap_t;          // time of the window's end [ms]
 // Starvation: edges so fast that no task fits. Detected by the 1 ms tick (no task but the tick
 // ran for 2 ms although work waits) or by the main loop (the tick itself waited 0.5 ms); the
 // main loop then runs tasks blind for up to BURST cycles and counts the edges that went by.
@@ -396,6 +399,10 @@ static void __attribute__((noinline)) fmt_tail(void) {
   else rq_tail = (uint8_t)((rq_tail + 1u) & (RESPQ - 1u));
 }
 
+// Bound of each formatter step by state [cycles], dispatch included (profiling build, +8).
+static const uint8_t fmt_cost[10] = {0, 183, 169, 182, 147, 156, 183, 186, 143, 137};
+static_assert(FS_NUMINIT == 9, "fmt_cost by state");
+
 static inline __attribute__((always_inline)) void fmt_step(void) {
   switch (f_state) {
     case FS_ITEM: fmt_item(); break;
@@ -530,6 +537,7 @@ static void __attribute__((noinline)) cmd_act(void) {
     win_left = window_ms;  // the current window restarts with the new length
     t_last_end = now_ms();
     snap_stage = 3;        // discard what the old window accumulated (see take_snapshot)
+    meter_asm_job |= 2;
     ex_hasval = 1;
     ex_val = window_ms;
   } else if (c == C_RANGE) {
@@ -545,6 +553,7 @@ static void __attribute__((noinline)) cmd_act(void) {
       win_left = window_ms;
       t_last_end = now_ms();
       snap_stage = 3;
+      meter_asm_job |= 2;
     }
   } else {
     running = 0;
@@ -595,25 +604,30 @@ static void __attribute__((noinline)) adc_take(void) {  // once per ms, after th
     acc.adc_cnt++;
     ADCSRA |= _BV(ADSC);
   }
-}
-
-static void __attribute__((noinline)) tick(void) {
-  TIFR2 = _BV(OCF2A);
+  // starvation: work waited a whole ms without any progress, twice
   if (!progress && stall_waiting()) {
     if (++stall >= 2) force = 1;
   } else {
     stall = 0;
   }
   progress = 0;
-  if (++ms16 == 0) ms_hi++;
-  adc_due = 1;
   // no edge for MAX_PHASE_MS: a gap, not a period (the hot state is in meter_loop's registers:
   // C breaks the chain, see meter_run)
   if ((uint8_t)((uint8_t)ms16 - hs.ms_prev) == (uint8_t)(MAX_PHASE_MS + 1u)) force = 3;
-  pred_due = 1;
+}
+
+static void __attribute__((noinline)) tick(void) {
+  TIFR2 = _BV(OCF2A);
+  if (++ms16 == 0) ms_hi++;
+  adc_due = 1;  // the tick's second half: ADC, starvation and gap checks (adc_take)
+  meter_asm_job |= 5;  // task limits from the latest phases
   if (running && --win_left == 0) {
     win_left = window_ms;
-    if (!snap_stage) snap_stage = 1;  // else the previous end is still being taken: one longer window
+    if (!snap_stage) {  // else the previous end is still being taken: one longer window
+      snap_stage = 1;
+      snap_t = now_ms();  // the window's end (its sums are taken a few periods later)
+      meter_asm_job |= 2;
+    }
   }
 }
 
@@ -655,6 +669,7 @@ static void chain_break(void) {
 // and stage 2 copies time, missed and ADC. After START or WINDOW (stage 3) the sums are
 // discarded instead (stage 5).
 static void __attribute__((noinline)) snap_fold(void) {  // stage 1 (report) or 3 (discard)
+  meter_asm_job &= (uint8_t)~2u;  // done here (meter_loop not running): no hand-over
   flush_partials();
   fold_chain();
   snap_hp = (hs.flags & HF_HIGH) ? high_pending() : 0;  // in acc.sum_h, its period is still open
@@ -689,7 +704,7 @@ static void __attribute__((noinline)) snap_copy_h(void) {  // stage 8
 }
 
 static void __attribute__((noinline)) snap_meta(void) {  // stage 2
-  uint32_t t = now_ms();
+  uint32_t t = snap_t;
   snap.t_ms = t;
   snap.window = t - t_last_end;
   t_last_end = t;
@@ -806,7 +821,7 @@ static uint16_t __attribute__((noinline)) turns(uint16_t d16, uint8_t m) {
 // Returns its number, 0 if none ran.
 static inline __attribute__((always_inline)) uint8_t task(uint16_t budget) {
   if (TIFR2 & _BV(OCF2A)) { if (budget >= COST_TICK) { tick(); return 1; } return 0; }
-  if (adc_due) { if (budget >= COST_TICK) { adc_take(); return 11; } return 0; }
+  if (adc_due) { if (budget >= COST_TICK2) { adc_take(); return 11; } return 0; }
   if (rx_step) {
     if (budget < COST_RX) return 0;
     if (rx_step == 1) rx_word(); else rx_tok();
@@ -824,7 +839,7 @@ static inline __attribute__((always_inline)) uint8_t task(uint16_t budget) {
     return 0;
   }
   if (f_state != FS_IDLE) {
-    if (budget < COST_FMT || tx_used() >= 127u) return 0;
+    if (budget < fmt_cost[f_state] || tx_used() >= 127u) return 0;
     fmt_step();
     return 5;
   }
@@ -1021,43 +1036,42 @@ ml_top2:
   brsh .+2
   rjmp ml_wait
 ml_call:
-  sts ml_budget, r24
-  sts ml_budget+1, r25
-  lds r23, meter_pred_due ; the task limits are due for an update (every ms): in assembly
+  lds r23, meter_asm_job  ; assembly jobs: window end's hand-over (bit 1), task limits (bits 0, 2)
   tst r23
-  breq 2f
-  cpi r24, lo8()ASM" ML_STR(COST_PRED) R"ASM()
-  ldi r22, hi8()ASM" ML_STR(COST_PRED) R"ASM()
-  cpc r25, r22
-  brlo 2f
-  cpi r23, 1
-  brne 3f
-  ldi r22, 2              ; one limit per call: lim_r now, lim_f next time
-  sts meter_pred_due, r22
-  rcall ml_pred_r
-  rjmp 4f
-3:
-  sts meter_pred_due, r1
-  rcall ml_pred_f
-4:
-  ori r28, 0x80           ; HF_TASKED
-  rjmp ml_top
-2:
-  lds r22, meter_snap_stage ; a window end begins (stage 1 or 3): hand the sums over first,
-  andi r22, 0xFD          ; if the flush and that stage fit, else tell the dispatcher to skip it
-  cpi r22, 1
-  brne 1f
+  breq ml_callc
+  sbrs r23, 1
+  rjmp 5f
   sts meter_fold_ok, r1   ; (the dispatcher must not take stage 1/3: the sums are here)
   cpi r24, lo8()ASM" ML_STR(COST_FLUSH) R"ASM()
   ldi r22, hi8()ASM" ML_STR(COST_FLUSH) R"ASM()
   cpc r25, r22
-  brlo 1f
+  brlo 5f
+  andi r23, 0xFD
+  sts meter_asm_job, r23
   rcall ml_flush
+  rjmp 6f
+5:
+  mov r22, r23
+  andi r22, 0x05
+  breq ml_callc
+  cpi r24, lo8()ASM" ML_STR(COST_PRED) R"ASM()
+  ldi r22, hi8()ASM" ML_STR(COST_PRED) R"ASM()
+  cpc r25, r22
+  brlo ml_callc
+  sbrs r23, 0
+  rjmp 7f
+  andi r23, 0xFE          ; lim_r now, lim_f next time
+  sts meter_asm_job, r23
+  rcall ml_pred_r
+  rjmp 6f
+7:
+  andi r23, 0xFB
+  sts meter_asm_job, r23
+  rcall ml_pred_f
+6:
   ori r28, 0x80           ; HF_TASKED
   rjmp ml_top
-1:
-  lds r24, ml_budget
-  lds r25, ml_budget+1
+ml_callc:
   call meter_task
   tst r24
   brne .+2
@@ -1082,10 +1096,21 @@ ml_free:
   ldi r25, 0xFF
   rjmp ml_call
 ml_none:                  ; nothing ran: far from the edge keep polling here (the tick stays on time)
-  lds r24, ml_budget
-  lds r25, ml_budget+1
-  cpi r24, lo8()ASM" ML_STR(COST_MAX) R"ASM()
-  ldi r22, hi8()ASM" ML_STR(COST_MAX) R"ASM()
+  movw r24, r14
+  adiw r24, 1
+  brne .+2
+  rjmp ml_top             ; no limit
+  sbiw r24, 1
+  lds r22, 0x84
+  lds r23, 0x85
+  sub r22, r2
+  sbc r23, r3
+  sub r24, r22
+  sbc r25, r23
+  brcc .+2
+  rjmp ml_wait
+  cpi r24, lo8()ASM" ML_STR(COST_MAX + CALL_OVH) R"ASM()
+  ldi r22, hi8()ASM" ML_STR(COST_MAX + CALL_OVH) R"ASM()
   cpc r25, r22
   brsh .+2
   rjmp ml_wait
@@ -1245,6 +1270,9 @@ ml_nochain:               ; no period open (after a break): a rising edge starts
 ; prediction task, one limit per call, every ms (pred_due 1, 2).
 ml_probed:
   sts meter_probe, r1
+  lds r24, meter_asm_job
+  andi r24, 0xFA          ; both limits now
+  sts meter_asm_job, r24
   rcall ml_pred_r
 ml_pred_f:                ; lim_f: after a falling edge (the low time begins)
   rcall ml_s2
