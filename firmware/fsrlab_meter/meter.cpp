@@ -134,7 +134,7 @@ enum {
 extern "C" {
 // Symbols used by the assembly below: kept visible under -flto (the Arduino IDE's default).
 #define ASM_VISIBLE __attribute__((used, externally_visible))
-Acc meter_acc;
+ASM_VISIBLE Acc meter_acc;
 ASM_VISIBLE Hot meter_hs;
 ASM_VISIBLE uint16_t meter_idle_ms;  // ms since the last edge
 // After lost edges the old prediction may be wrong (the signal got faster): no task runs until
