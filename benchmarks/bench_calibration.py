@@ -46,16 +46,14 @@ def fsrlab_run(f, s, g):
 def sklearn_run(f, s, g, scaled=False):
     from sklearn.linear_model import LinearRegression
     from sklearn.model_selection import GroupKFold, cross_val_score
-    from sklearn.pipeline import make_pipeline
+    from sklearn.pipeline import make_pipeline as sk_make_pipeline
     from sklearn.preprocessing import PolynomialFeatures, StandardScaler
 
     X = f[:, None]
     scores = []
 
     def make_pipeline(*steps):
-        from sklearn.pipeline import make_pipeline as mk
-
-        return mk(StandardScaler(), *steps) if scaled else mk(*steps)
+        return sk_make_pipeline(StandardScaler(), *steps) if scaled else sk_make_pipeline(*steps)
 
     for d in range(1, 6):
         model = make_pipeline(PolynomialFeatures(d), LinearRegression())

@@ -17,7 +17,6 @@ import io
 import json
 import math
 import os
-import time
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path

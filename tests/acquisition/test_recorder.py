@@ -6,14 +6,12 @@ sequence numbers (every lost frame is a gap in ``seq``), and the CLI contract of
 
 from __future__ import annotations
 
-import io
 import json
 import os
 import signal
 import subprocess
 import sys
 import time
-from contextlib import redirect_stderr, redirect_stdout
 from pathlib import Path
 
 import numpy as np
@@ -23,20 +21,9 @@ from fsrlab.acquisition.recorder import COLUMNS, record
 from fsrlab.acquisition.serial_link import SerialLink
 from fsrlab.acquisition.virtual_device import ConstantSource, Faults, VirtualDevice
 from fsrlab.runformat import load_run
+from clirun import run_cli
 
 CLI = [sys.executable, "-c", "import sys; from fsrlab.cli import main; main(sys.argv[1:])"]
-
-
-def _run(argv):
-    out, err = io.StringIO(), io.StringIO()
-    with redirect_stdout(out), redirect_stderr(err):
-        try:
-            from fsrlab.cli import main
-            main(argv)
-            code = 0
-        except SystemExit as exc:
-            code = exc.code
-    return code, out.getvalue(), err.getvalue()
 
 
 def _rows(path: Path) -> int:
@@ -171,7 +158,7 @@ def test_interrupt_of_a_recording_closes_the_file(tmp_path, sig):
 
 def test_cli_json_contract(tmp_path):
     out = tmp_path / "run.csv"
-    code, stdout, stderr = _run(["acquire", "--virtual", "--duration", "2", "--out", str(out), "--json"])
+    code, stdout, stderr = run_cli(["acquire", "--virtual", "--duration", "2", "--out", str(out), "--json"])
     assert code == 0, stderr
     summary = json.loads(stdout)
     assert list(summary) == ["frames", "dropped", "duration_s", "file"]
@@ -194,7 +181,7 @@ def test_cli_json_contract(tmp_path):
     (["virtual-device", "--corrupt", "2"], "--corrupt"),
 ])
 def test_cli_bad_input_is_one_line_and_exit_2(tmp_path, argv, field):
-    code, stdout, stderr = _run(argv + ["--out", str(tmp_path / "x.csv")] if argv[0] == "acquire" else argv)
+    code, stdout, stderr = run_cli(argv + ["--out", str(tmp_path / "x.csv")] if argv[0] == "acquire" else argv)
     assert code == 2
     assert stderr.count("\n") == 1 and field in stderr
 
@@ -203,7 +190,7 @@ def test_cli_unplugged_device_exit_1_with_one_line(tmp_path):
     proc = subprocess.Popen(CLI + ["virtual-device", "--duration", "1"], stdout=subprocess.PIPE, text=True)
     try:
         port = proc.stdout.readline().strip()
-        code, stdout, stderr = _run(["acquire", "--port", port, "--duration", "30", "--window", "20",
+        code, stdout, stderr = run_cli(["acquire", "--port", port, "--duration", "30", "--window", "20",
                                      "--out", str(tmp_path / "run.csv"), "--json"])
     finally:
         proc.kill()
@@ -230,7 +217,7 @@ def test_unwritable_output_is_one_line_exit_2_and_the_device_is_stopped(tmp_path
             record(link, tmp_path / "missing" / "run.csv", 1.0, window_ms=10)
         time.sleep(0.05)
         assert not dev._st.started
-    code, _, stderr = _run(["acquire", "--virtual", "--duration", "1", "--out", str(tmp_path / "missing" / "x.csv")])
+    code, _, stderr = run_cli(["acquire", "--virtual", "--duration", "1", "--out", str(tmp_path / "missing" / "x.csv")])
     assert code == 2 and stderr.count("\n") == 1 and "missing" in stderr
 
 
@@ -239,10 +226,10 @@ def test_a_virtual_recording_is_analysable(tmp_path):
     device give a hysteresis error per cycle through ``fsrlab hysteresis`` (property: HE > 0 for
     the hysteretic sensor model, and the two steady cycles agree within 2 percentage points)."""
     out = tmp_path / "run.csv"
-    code, _, err = _run(["acquire", "--virtual", "--duration", "2.05", "--period", "1", "--window", "20",
+    code, _, err = run_cli(["acquire", "--virtual", "--duration", "2.05", "--period", "1", "--window", "20",
                          "--out", str(out), "--quiet", "--seed", "1"])
     assert code == 0, err
-    code, stdout, err = _run(["hysteresis", str(out), "--json"])
+    code, stdout, err = run_cli(["hysteresis", str(out), "--json"])
     assert code == 0, err
     result = json.loads(stdout)
     per_cycle = [c["hysteresis_error_percent"] for c in result["cycles"]]

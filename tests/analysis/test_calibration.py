@@ -55,7 +55,7 @@ def test_cv_sufficient_statistics_equal_explicit_refits():
 
 
 def test_cv_matches_sklearn_group_kfold():
-    sk = pytest.importorskip("sklearn")
+    pytest.importorskip("sklearn")
     from sklearn.linear_model import LinearRegression
     from sklearn.model_selection import GroupKFold, cross_val_predict
     from sklearn.pipeline import make_pipeline

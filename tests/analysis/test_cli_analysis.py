@@ -13,15 +13,8 @@ import numpy as np
 import pytest
 
 from fsrlab.analysis.synthetic import synthetic_run
-from fsrlab.cli import main
+from clirun import run_cli
 from fsrlab.runformat import load_run
-
-
-def run_cli(args, capsys):
-    with pytest.raises(SystemExit) as info:
-        main([str(a) for a in args])
-    out = capsys.readouterr()
-    return info.value.code, out.out, out.err
 
 
 @pytest.fixture(scope="module")

@@ -2,29 +2,22 @@
 
 import pytest
 
-from fsrlab.cli import main
-
-
-def run(argv, capsys):
-    with pytest.raises(SystemExit) as exc:
-        main(argv)
-    out, err = capsys.readouterr()
-    return exc.value.code, out, err
+from clirun import run_cli
 
 
 def test_unknown_command_is_one_line_exit_2(capsys):
-    code, out, err = run(["no-such-command"], capsys)
+    code, out, err = run_cli(["no-such-command"], capsys)
     assert code == 2
     assert err.count("\n") == 1 and "no-such-command" in err
 
 
 def test_unknown_option_is_one_line_exit_2(capsys):
-    code, _, err = run(["paper", "--bogus"], capsys)
+    code, _, err = run_cli(["paper", "--bogus"], capsys)
     assert code == 2 and err.strip().count("\n") == 0 and "--bogus" in err
 
 
 def test_version(capsys):
-    code, out, _ = run(["--version"], capsys)
+    code, out, _ = run_cli(["--version"], capsys)
     assert code == 0 and out.startswith("fsrlab ")
 
 
@@ -33,7 +26,7 @@ def test_version(capsys):
     (["--s0", "-1n"], "--s0"), (["--u", "-1"], "--u"), (["--phi0", "0"], "--phi0"), (["--eps-r", "nan"], "--eps-r"),
 ])
 def test_physics_bad_values_one_line_naming_the_option(args, option, capsys):
-    code, out, err = run(["physics", *args], capsys)
+    code, out, err = run_cli(["physics", *args], capsys)
     assert code == 2 and out == ""
     assert err.count("\n") == 1 and option in err and "Traceback" not in err
 
@@ -42,7 +35,7 @@ def test_physics_json_reproduces_table2_capacitance(capsys):
     # Reference: Table 2 prints 1.73 % for C_A at every u (two decimals).
     import json
 
-    code, out, _ = run(["physics", "--u", "2", "--json"], capsys)
+    code, out, _ = run_cli(["physics", "--u", "2", "--json"], capsys)
     row = json.loads(out)["rows"][0]
     assert code == 0 and row["tunneling_equation"] == 12
     assert row["capacitance_per_area_percent"] == pytest.approx(1.73, abs=0.005)

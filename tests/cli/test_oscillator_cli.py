@@ -12,18 +12,11 @@ import pytest
 from toolcheck import require_tool
 
 from fsrlab.circuits.lm555 import astable, decode
-from fsrlab.cli import main
-
-
-def run(args, capsys):
-    with pytest.raises(SystemExit) as exc:
-        main(args)
-    out, err = capsys.readouterr()
-    return exc.value.code, out, err
+from clirun import run_cli
 
 
 def test_oscillator_json_keys_and_values(capsys):
-    code, out, _ = run(["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1n", "--coff", "470p",
+    code, out, _ = run_cli(["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1n", "--coff", "470p",
                         "--diode", "--json"], capsys)
     assert code == 0
     data = json.loads(out)
@@ -36,7 +29,7 @@ def test_oscillator_json_keys_and_values(capsys):
 
 
 def test_oscillator_diode_drop_implies_diode(capsys):
-    code, out, _ = run(["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1n", "--diode-drop", "0.6",
+    code, out, _ = run_cli(["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1n", "--diode-drop", "0.6",
                         "--json"], capsys)
     assert code == 0
     ref = astable(10e3, 200e3, 1e-9, diode=True, diode_drop_v=0.6)
@@ -45,20 +38,20 @@ def test_oscillator_diode_drop_implies_diode(capsys):
 
 def test_oscillator_spice_keys(capsys):
     require_tool("ngspice")
-    code, out, _ = run(["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1n", "--spice", "--json"], capsys)
+    code, out, _ = run_cli(["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1n", "--spice", "--json"], capsys)
     data = json.loads(out)
     assert code == 0 and {"spice_frequency_hz", "spice_duty_cycle"} <= set(data)
     assert data["spice_frequency_hz"] == pytest.approx(data["frequency_hz"], rel=1e-3)  # as tests/circuits/test_spice.py
 
 
 def test_oscillator_text_output(capsys):
-    code, out, _ = run(["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1n", "--diode"], capsys)
+    code, out, _ = run_cli(["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1n", "--diode"], capsys)
     assert code == 0
     assert "6.4785 kHz" in out and "10.19 %" in out and "oscillates for N > 4" in out
 
 
 def test_no_oscillation_exits_2_with_one_line(capsys):
-    code, out, err = run(["oscillator", "--r", "10k", "--rfsr", "35k", "--cfsr", "1n"], capsys)
+    code, out, err = run_cli(["oscillator", "--r", "10k", "--rfsr", "35k", "--cfsr", "1n"], capsys)
     assert code == 2 and out == ""
     assert err.count("\n") == 1 and "no oscillation" in err and "N = R_FSR/R = 3.5 must exceed 4" in err
 
@@ -75,7 +68,7 @@ def test_no_oscillation_exits_2_with_one_line(capsys):
       "--fmin", "1k", "--fmax", "20k", "--variant", "maybe"], "--variant"),
 ])
 def test_bad_input_one_line_exit_2(args, needle, capsys):
-    code, out, err = run(args, capsys)
+    code, out, err = run_cli(args, capsys)
     assert code == 2 and out == ""
     assert err.count("\n") == 1 and needle in err
 
@@ -83,7 +76,7 @@ def test_bad_input_one_line_exit_2(args, needle, capsys):
 def test_decode_json_round_trip(capsys):
     # The example: f = 6478.5 Hz, DC = 0.10189 with D1 and R = 10k is R_FSR ≈ 200k, C ≈ 1n
     # (to the 5 printed digits: 1e-4 relative).
-    code, out, _ = run(["decode", "--r", "10k", "--frequency", "6478.5", "--duty", "0.10189", "--diode",
+    code, out, _ = run_cli(["decode", "--r", "10k", "--frequency", "6478.5", "--duty", "0.10189", "--diode",
                         "--json"], capsys)
     data = json.loads(out)
     assert code == 0
@@ -97,9 +90,9 @@ def test_decode_json_round_trip(capsys):
 def test_design_text_and_json(capsys):
     args = ["design", "--rfsr-min", "100k", "--rfsr-max", "2M", "--cfsr-min", "0.5n", "--cfsr-max", "1.5n",
             "--fmin", "1k", "--fmax", "20k"]
-    code, out, _ = run(args, capsys)
+    code, out, _ = run_cli(args, capsys)
     assert code == 0 and "Proposal:" in out and "Uno resolution" in out
-    code, out, _ = run(args + ["--json"], capsys)
+    code, out, _ = run_cli(args + ["--json"], capsys)
     data = json.loads(out)
     assert code == 0
     assert 1e3 <= data["frequency_range_hz"][0] <= data["frequency_range_hz"][1] <= 20e3
@@ -107,8 +100,8 @@ def test_design_text_and_json(capsys):
 
 
 def test_control_pin_option(capsys):
-    code, out, _ = run(["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1n", "--vctrl", "4", "--json"], capsys)
+    code, out, _ = run_cli(["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1n", "--vctrl", "4", "--json"], capsys)
     ref = astable(10e3, 200e3, 1e-9, lower_fraction=0.4, upper_fraction=0.8)
     assert code == 0 and json.loads(out)["frequency_hz"] == pytest.approx(ref.frequency_hz, rel=1e-12)
-    code, _, err = run(["oscillator", "--r", "10k", "--rfsr", "70k", "--cfsr", "1n", "--vctrl", "4"], capsys)
+    code, _, err = run_cli(["oscillator", "--r", "10k", "--rfsr", "70k", "--cfsr", "1n", "--vctrl", "4"], capsys)
     assert code == 2 and "must exceed 8" in err  # N = 7 < N_min = 8 with the moved threshold

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsrlab.analysis.calibration import PolynomialModel, calibrate, fit_polynomial
+from fsrlab.analysis.calibration import PolynomialModel, calibrate
 from fsrlab.analysis.cycles import turning_points
 
 __all__ = ["DirectionAwareCalibration", "fit_direction_aware", "CompensationResult", "compare_compensation",

@@ -162,6 +162,20 @@ def _check_supply(diode: bool, diode_drop_v: float, vcc_v: float) -> None:
         raise ValueError("diode_drop_v: a forward drop needs diode=True (the drop belongs to D1 in series with R_B)")
 
 
+
+def _check_circuit(r_ohm, c_off_farad, diode: bool, diode_drop_v: float, vcc_v: float,
+                   lower_fraction: float, upper_fraction: float, discharge_ohm=0.0) -> None:
+    """The parameter checks shared by every model of this circuit (scalars or arrays)."""
+    _check_fractions(lower_fraction, upper_fraction)
+    _check_supply(diode, diode_drop_v, vcc_v)
+    for name, value, unit in (("discharge_ohm", discharge_ohm, "Ω"), ("c_off_farad", c_off_farad, "F")):
+        v = np.asarray(value, dtype=float)
+        if np.any(~np.isfinite(v)) or np.any(v < 0):
+            raise ValueError(f"{name}: must be finite and >= 0 {unit}, got {value!r}")
+    r = np.asarray(r_ohm, dtype=float)
+    if np.any(~np.isfinite(r)) or np.any(r <= 0):
+        raise ValueError(f"r_ohm: must be finite and > 0 Ω, got {r_ohm!r}")
+
 def minimum_n_ratio(diode_drop_v: float = 0.0, vcc_v: float = 5.0, upper_fraction: float = 2 / 3) -> float:
     """Smallest ``N = R_FSR/R`` for which the charge phase reaches the upper threshold.
 
@@ -403,23 +417,16 @@ def astable(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad=0.0, diode: bool = False,
     ----------
     Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901.
     """
-    _check_fractions(lower_fraction, upper_fraction)
-    _check_supply(diode, diode_drop_v, vcc_v)
+    _check_circuit(r_ohm, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, discharge_ohm)
     r = np.asarray(r_ohm, dtype=float)
     rf = np.asarray(r_fsr_ohm, dtype=float)
     cf = np.asarray(c_fsr_farad, dtype=float)
     co = np.asarray(c_off_farad, dtype=float)
     rd = np.asarray(discharge_ohm, dtype=float)
-    if np.any(~np.isfinite(rd)) or np.any(rd < 0):
-        raise ValueError(f"discharge_ohm: must be finite and >= 0 Ω, got {discharge_ohm!r}")
-    if np.any(~np.isfinite(r)) or np.any(r <= 0):
-        raise ValueError(f"r_ohm: must be finite and > 0 Ω, got {r_ohm!r}")
     if np.any(np.isnan(rf)) or np.any(rf <= 0):
         raise ValueError(f"r_fsr_ohm: must be > 0 Ω (inf allowed), got {r_fsr_ohm!r}")
     if np.any(~np.isfinite(cf)) or np.any(cf < 0):
         raise ValueError(f"c_fsr_farad: must be finite and >= 0 F, got {c_fsr_farad!r}")
-    if np.any(~np.isfinite(co)) or np.any(co < 0):
-        raise ValueError(f"c_off_farad: must be finite and >= 0 F, got {c_off_farad!r}")
     c = cf + co
     if np.any(c <= 0):
         raise ValueError("c_fsr_farad + c_off_farad: the timing capacitance must be > 0 F")
@@ -677,12 +684,7 @@ def decode(frequency_hz, duty_cycle, r_ohm: float, c_off_farad: float = 0.0, dio
     to one clock phase and spread less (a Monte-Carlo with one random phase per window gave 0.6× the
     stated σ for R = 10 kΩ, R_FSR = 200 kΩ, C = 1 nF, 4 periods), so the stated σ is conservative.
     """
-    _check_fractions(lower_fraction, upper_fraction)
-    _check_supply(diode, diode_drop_v, vcc_v)
-    if not (math.isfinite(r_ohm) and r_ohm > 0):
-        raise ValueError(f"r_ohm: must be finite and > 0 Ω, got {r_ohm!r}")
-    if not (math.isfinite(c_off_farad) and c_off_farad >= 0):
-        raise ValueError(f"c_off_farad: must be finite and >= 0 F, got {c_off_farad!r}")
+    _check_circuit(r_ohm, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, discharge_ohm)
     if not (math.isfinite(timer_resolution_s) and timer_resolution_s >= 0):
         raise ValueError(f"timer_resolution_s: must be >= 0 s, got {timer_resolution_s!r}")
     f = np.asarray(frequency_hz, dtype=float)

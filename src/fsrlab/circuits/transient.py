@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsrlab.circuits.lm555 import _check_fractions, _check_supply
+from fsrlab.circuits.lm555 import _check_circuit
 
 __all__ = ["TransientResult", "simulate"]
 
@@ -174,14 +174,7 @@ def simulate(r_ohm: float, r_fsr_ohm, c_fsr_farad, c_off_farad: float = 0.0, dio
     ``R_T = R ∥ R_d``). A circuit that does not oscillate simply produces no more
     edges (the capacitor settles below the upper threshold).
     """
-    _check_fractions(lower_fraction, upper_fraction)
-    _check_supply(diode, diode_drop_v, vcc_v)
-    if not (math.isfinite(r_ohm) and r_ohm > 0):
-        raise ValueError(f"r_ohm: must be finite and > 0 Ω, got {r_ohm!r}")
-    if not (math.isfinite(c_off_farad) and c_off_farad >= 0):
-        raise ValueError(f"c_off_farad: must be finite and >= 0 F, got {c_off_farad!r}")
-    if not (math.isfinite(discharge_ohm) and discharge_ohm >= 0):
-        raise ValueError(f"discharge_ohm: must be finite and >= 0 Ω, got {discharge_ohm!r}")
+    _check_circuit(r_ohm, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, discharge_ohm)
     if capacitance_step not in ("charge", "voltage"):
         raise ValueError(f"capacitance_step: must be 'charge' or 'voltage', got {capacitance_step!r}")
     if int(points_per_segment) < 2:

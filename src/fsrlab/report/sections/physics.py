@@ -225,7 +225,7 @@ def build(outdir: Path) -> Section:
     intro = (
         "Interparticle separation on loading, eq. (1), and unloading, eq. (9); Simmons tunnelling, eqs. (10)–(12); "
         "resistance and capacitance per unit area, eqs. (14)–(18); hysteresis error, eq. (13). Parameters: "
-        f"Table 1 (M = 4.73 MPa, σf = 322 kPa, U = 2 V, s0 = 4.418 nm, φ0 = 0.223 eV, ε_r = 7) with k = 2, "
+        "Table 1 (M = 4.73 MPa, σf = 322 kPa, U = 2 V, s0 = 4.418 nm, φ0 = 0.223 eV, ε_r = 7) with k = 2, "
         "which the paper does not print.\n\n"
         "The tunnelling regimes do not join: near u = 0 eq. (10) is 3/2 of eq. (11), and at u = φ0/e eq. (11) is "
         "about half of eq. (12). fsrlab reports the equation it used; at u = 1, 2, 3 V it is eq. (12).\n\n"
