@@ -37,12 +37,18 @@ PROF_TOP_CYCLES = 35
 """Periods per window may differ from f x window by this much: a window's end is taken by
 background tasks (1 ms tick, then the window-end task), which may run a little late at high
 frequencies; the periods then count in the next window, none is lost (tests/firmware checks)."""
-TASKS = {1: "1 ms tick", 11: "tick part 2 (ADC, checks)", 2: "receive byte", 12: "receive (word step)", 3: "transmit byte",
-         4: "window end (stage)", 5: "frame step", 6: "ADC mean (1 bit)", 7: "command decide",
-         8: "command act/answer", 9: "frame start"}
-"""Background tasks (C) by the number the dispatcher gives them (``prof_task`` in the profiling build).
-The prediction (task limits, 2 x ~115 cycles) and the window end's hand-over of the sums (~115
-cycles) are assembly in ``meter_loop``; their bounds are static counts (COST_PRED, COST_FLUSH)."""
+TASKS = {1: "1 ms tick", 11: "tick part 2 (ADC sample or checks)", 2: "receive byte", 3: "transmit byte",
+         13: "selection of the next step (the dispatcher's chain)"}
+"""Background tasks (C) run by the dispatcher ``meter_task``, by the number it returns (``prof_task``
+in the profiling build, dispatch included). The prediction (task limits, ~115 cycles each) and the
+window end's hand-over of the sums (~115 cycles) are assembly in ``meter_loop``; their bounds are
+static counts (COST_PRED, COST_FLUSH)."""
+JOBS = {"formatter step with the chain to the next": range(1, 10), "window-end stage": range(10, 18), "ADC mean bit": [20],
+        "ADC mean start": [21], "command decide": [22], "command act": [23], "command answer": [24],
+        "ERR token copy": [25], "command done": [26], "frame start": [27], "receive word": [28],
+        "receive token char": [29], "receive candidate": [30]}
+"""Selected steps (jobs) that ``meter_loop`` calls directly, by job id (``prof_job``: from before the
+call to after the return, with ~11 cycles of profiling and call)."""
 
 
 def clean(freq: float, duty: float) -> bool:
@@ -88,7 +94,9 @@ def profile() -> tuple[int, int, dict[int, int]]:
     syms = _symbols(elf)
     edge = syms["prof_edge_cyc"]
     task = syms["prof_task"]
-    peeks = [edge, edge + 2] + [task + 2 * i for i in TASKS]
+    job = syms["prof_job"]
+    job_ids = sorted({i for ids in JOBS.values() for i in ids})
+    peeks = [edge, edge + 2] + [task + 2 * i for i in TASKS] + [job + 2 * i for i in job_ids]
     cmds = [(0.005, "WINDOW 100"), (0.01, "START"), (0.2, "ID"), (0.25, "RANGE 1"), (0.27, "FOO"),
             (0.3, "WINDOW 65539")]
     # edges back to back without tasks: a signal a little faster than the clean limit
@@ -96,14 +104,16 @@ def profile() -> tuple[int, int, dict[int, int]]:
     fall, rise = r.peeks[edge][1], r.peeks[edge + 2][1]
     r2 = simrun.run([Segment(0.0, 2_000.0, 0.5)], cmds, time_s=0.35, elf=elf, sim=sim, peeks=peeks)
     costs = {i: max(r.peeks[task + 2 * i][1], r2.peeks[task + 2 * i][1]) for i in TASKS}
-    return rise, fall, costs
+    jobs = {name: max(max(r.peeks[job + 2 * i][1], r2.peeks[job + 2 * i][1]) for i in ids)
+            for name, ids in JOBS.items()}
+    return rise, fall, costs, jobs
 
 
 def run() -> str:
     t0 = time.perf_counter()
     simrun.build()
     simrun.build(profile=True)
-    rise, fall, costs = profile()
+    rise, fall, costs, jobs = profile()
     bound = simrun.F_CPU / (rise + fall)
     net = rise + fall - 2 * PROF_TOP_CYCLES
     bound_net = simrun.F_CPU / net
@@ -134,8 +144,10 @@ def run() -> str:
         "",
         "Longest run of each background task (C, dispatch included), profiling build [cycles]: "
         + ", ".join(f"{TASKS[i]} {c}" for i, c in costs.items())
-        + "; in assembly (static count with the call): one task limit ~115, the window end's "
-        "hand-over of the sums ~115.",
+        + "; selected steps called by the loop (call included): "
+        + ", ".join(f"{name} {c}" for name, c in jobs.items())
+        + " (the chain is 62 of a formatter step, static count); in assembly (static "
+        "count with the call): one task limit ~115, the window end's hand-over of the sums ~115.",
         "",
         f"_Search and profile took {time.perf_counter() - t0:.1f} s of host time._",
     ]

@@ -14,15 +14,20 @@
 // edge it captures, checks that no edge went by unseen, counts the period (rising edge) or adds
 // the high time (falling edge), keeps the phase just ended for the prediction, and loads the task
 // limit for the phase that began (about 65 cycles for a rising, 50 for a falling edge, loop
-// included). Between edges it calls the C dispatcher meter_task(budget), which runs one background
-// task of bounded length: 1 ms tick, ADC sample, USART receive (byte, then word step) / transmit,
-// command decision, effect and answer, frame formatting (one character, one decimal subtraction
-// or one digit per step), window end (several small stages), ADC mean (one bit per step). The
-// prediction of the task limits and the window end's hand-over of the register sums are small
-// assembly routines in the loop itself. The budget is the task limit minus the time since the
-// last edge minus the call overhead; the limit (task_limit) lets a task end either before the
-// next edge, or late enough for that edge but with its successor still armed in time. No call
-// in a slot below COST_MIN: a small slot would only keep the edges served late.
+// included). Between edges it calls the C dispatcher meter_task(budget), which runs one short
+// task itself (1 ms tick, ADC sample or checks, USART receive byte / transmit byte) or selects the
+// next step of the longer work as a job (meter_job): command receiver (word, candidate, token
+// steps), command decision, effect and answer, window end (several small stages), ADC mean (one
+// bit per step), frame start and frame formatting (one character, one decimal subtraction or one
+// digit per step). The loop calls a selected job directly (icall) in a later slot that fits the
+// job's own bound (job_cost), so that no slot has to hold the dispatcher's chain of checks and
+// the longest step at once; a formatter step selects the next one itself unless other work waits
+// (fmt_job), and a step selected with budget to spare runs at once. The prediction of the task
+// limits and the window end's hand-over of the register sums are small assembly routines in the
+// loop itself. The budget is the task limit minus the time since the last edge minus the call
+// overhead; the limit (task_limit) lets a task end either before the next edge, or late enough
+// for that edge but with its successor still armed in time. No call in a slot below COST_MIN
+// (the longest selection, with the loop's checks): a small slot would only keep the edges late.
 // The loop returns to C only for the rare cases: a missed edge, a phase >= 1 ms (extended with the
 // 1 ms tick count), a rejected period, a timeout, starvation.
 //
@@ -55,24 +60,28 @@
 // Upper bounds of task lengths [cycles] including dispatch, measured with `make PROFILE=1` in
 // simavr (benchmarks/bench_firmware.py prints them); the scheduler starts a task only when its
 // bound fits before the next edge that must be serviced on time.
-#define COST_TICK 115
-#define COST_TICK2 132
-#define COST_RX 180
-#define COST_TX 56
-#define COST_FMT 186       // the largest step; the dispatcher checks each state's own (fmt_cost)
-#define COST_DIV 172
-#define COST_EXEC 166
-#define COST_SNAP 172
+// The selected steps (jobs) have their own bounds (job_cost below).
+#define COST_TICK 115      // profiled 108
+#define COST_TICK2 92      // adc_take or adc_check, profiled 85
+#define COST_RX 98         // profiled 90
+#define COST_TX 64         // profiled 60
 #define COST_FLUSH 130     // ml_flush in meter_loop (window end stage 1/3), with its dispatch
-#define COST_START 170
 #define COST_PRED 125      // ml_pred_r or ml_pred_f (assembly, static count ~115) with its call
-#define COST_MAX 186        // the largest of the above
-#define COST_MIN 140        // no task call in a smaller slot: it would keep the edges served late
+#define COST_MAX 130        // the largest of the above (COST_FLUSH)
+#define COST_MIN 140        // no dispatcher call in a smaller slot: the selection (profiled 104) and
+                            // the loop's checks of pending assembly jobs (up to ~30) must fit; 118
+                            // was measured too small (an edge missed every few windows)
 #define CALL_OVH 45         // meter_loop's part of a task call: 27 cycles from reading TCNT1 to the
                             // dispatcher, 19 after the task beyond SERVICE (static count)
 #define HOT 90             // capture + bookkeeping + main loop for one edge, worst case [cycles]
 #define SERVICE 14         // flag check to ICES1 flipped, worst case, with loop exit [cycles]
 #define MARGIN 8
+#define JOB_OVH 4           // a job's bound over its profiled length (prof_job counts ~11 cycles of
+                            // profiling and call; meter_loop's job path costs ~1 more than CALL_OVH covers)
+#define JOB_B(body) ((body) + JOB_OVH)
+#define RUN_NOW 60          // meter_task: a selected step runs at once if the budget holds COST_MIN + RUN_NOW + its bound
+#define LONG_PHASE 0x200    // lim_f of a low time of >= 32 us ends before the rising edge (multiple of 256)
+#define PRED_SHIFT 5        // the prediction keeps 1/32 of the predicted phases as margin (ml_div16 too)
 #define BURST 4000u         // longest forced run of tasks [cycles]
 
 #ifdef METER_PROFILE
@@ -84,6 +93,8 @@ uint16_t prof_cnt[4];   // pin-check misses, forced task runs, wait timeouts, re
 uint16_t prof_fmt[16];  // formatter step by state
 uint16_t prof_snap[16];  // window-end task by stage
 uint16_t prof_why[8];   // forced runs: 0 tick waited, 1 no progress; what was pending (2..7)
+__attribute__((used, externally_visible)) uint16_t prof_job[32];
+  // selected steps run by meter_loop, by job id
 // Cycles from one meter_loop top to the next when the edge was already waiting and no
 // task ran in between: main-loop overhead + capture + bookkeeping of one edge. [0] a falling
 // edge, [1] a rising edge. Minimum over the run (the common path).
@@ -151,6 +162,12 @@ ASM_VISIBLE uint16_t meter_fold_lr, meter_fold_hp, meter_fold_wraps;
 ASM_VISIBLE uint8_t meter_fold_flags;
 ASM_VISIBLE uint8_t meter_rearm;  // meter_loop arms for the edge opposite to the pin level
 ASM_VISIBLE uint8_t meter_fold_ok = 1;  // the sums are in RAM (meter_loop not running, or it flushed)
+// Selected background step (see task()): meter_loop calls it directly (icall) in a slot of at
+// least meter_job_cost cycles; 0 none. Cleared when meter_loop returns to C.
+typedef void (*job_fn)(void);
+ASM_VISIBLE job_fn meter_job;
+ASM_VISIBLE uint8_t meter_job_cost;
+ASM_VISIBLE uint8_t meter_job_id;  // which step (job_cost[], prof_job[])
 }
 #define acc meter_acc
 #define hs meter_hs
@@ -181,7 +198,10 @@ static uint32_t snap_t;          // time of the window's end [ms]
 // Starvation: edges so fast that no task fits. Detected by the 1 ms tick (no task but the tick
 // ran for 2 ms although work waits) or by the main loop (the tick itself waited 0.5 ms); the
 // main loop then runs tasks blind for up to BURST cycles and counts the edges that went by.
-static uint8_t progress, stall;
+static uint8_t stall;
+extern "C" uint8_t meter_progress;  // a task made progress since the last check
+ASM_VISIBLE uint8_t meter_progress;
+#define progress meter_progress
 #define force meter_force
 
 // Transmit ring
@@ -373,6 +393,12 @@ static void __attribute__((noinline)) fmt_str(void) {
 
 static void __attribute__((noinline)) fmt_num(void) {
   if (f_val >= f_pow) { f_val -= f_pow; f_digit++; return; }
+  uint8_t i = f_pidx;
+  if (!f_digit && !f_started && i) {  // a leading zero: the next power at once (one step, not three)
+    f_pidx = --i;
+    f_pow = pow10_tab[i];
+    return;
+  }
   f_state = FS_DIGIT;
 }
 
@@ -399,9 +425,6 @@ static void __attribute__((noinline)) fmt_tail(void) {
   else rq_tail = (uint8_t)((rq_tail + 1u) & (RESPQ - 1u));
 }
 
-// Bound of each formatter step by state [cycles], dispatch included (profiling build, +8).
-static const uint8_t fmt_cost[10] = {0, 183, 169, 182, 147, 156, 183, 186, 143, 137};
-static_assert(FS_NUMINIT == 9, "fmt_cost by state");
 
 static inline __attribute__((always_inline)) void fmt_step(void) {
   switch (f_state) {
@@ -445,7 +468,7 @@ static void rx_reset(void) {
 
 // Receive in two steps per byte: rx_byte classifies it, rx_word (rx_c pending) handles the
 // character of the first (command) or second (value) word.
-static uint8_t rx_c, rx_step;
+static uint8_t rx_c, rx_step, rx_i, rx_rest, rx_keep;
 static void __attribute__((noinline)) rx_byte(uint8_t c) {
   if (c == '\r') return;
   if (c == '\n') { cmd_ready = 1; return; }
@@ -464,13 +487,11 @@ static void __attribute__((noinline)) rx_word(void) {
       rx.cand = c == 'I' ? 1u << C_ID : c == 'S' ? (1u << C_START) | (1u << C_STOP)
               : c == 'W' ? 1u << C_WINDOW : c == 'R' ? 1u << C_RANGE : 0;
     } else if (rx.cand) {
-      uint8_t cand = rx.cand, keep = 0, bit = 1;
-      for (uint8_t k = 0; cand; k++, bit <<= 1) {  // at most two candidates (START, STOP)
-        if (!(cand & bit)) continue;
-        cand &= (uint8_t)~bit;
-        if (i < cmd_len[k] && pgm_read_byte(&cmd_names[k][i]) == c) keep |= bit;
-      }
-      rx.cand = keep;
+      rx_i = i;
+      rx_rest = rx.cand;
+      rx_keep = 0;
+      rx_step = 3;  // the candidates next, one per step (rx_filt)
+      return;
     }
     rx_step = 2;  // the token character next (rx_tok)
   } else if (rx.words == 2) {
@@ -481,6 +502,19 @@ static void __attribute__((noinline)) rx_word(void) {
       rx.val = v;
       rx.ndig++;
     }
+  }
+}
+
+// rx_step 3: does candidate command k (the lowest left in rx_rest) have c at position rx_i?
+static const uint8_t bit_k[17] = {0, 0, 1, 0, 2, 0, 0, 0, 3, 0, 0, 0, 0, 0, 0, 0, 4};
+static void __attribute__((noinline)) rx_filt(void) {
+  uint8_t rest = rx_rest, bit = (uint8_t)(rest & (uint8_t)-rest), k = bit_k[bit], i = rx_i;
+  if (i < cmd_len[k] && pgm_read_byte(&cmd_names[k][i]) == rx_c) rx_keep |= bit;
+  rest &= (uint8_t)~bit;
+  rx_rest = rest;
+  if (!rest) {
+    rx.cand = rx_keep;
+    rx_step = 2;  // the token character next (rx_tok)
   }
 }
 
@@ -597,13 +631,17 @@ static void chain_break(void);
 static uint8_t stall_waiting(void);
 
 static uint8_t adc_due;
-static void __attribute__((noinline)) adc_take(void) {  // once per ms, after the tick
-  adc_due = 0;
+static void __attribute__((noinline)) adc_take(void) {  // once per ms, after the tick (adc_due 1)
+  adc_due = 2;  // the checks next (adc_check)
   if (!(ADCSRA & _BV(ADSC))) {  // the conversion started one tick ago is done (104 us at clk/128)
     acc.adc_sum += ADC;
     acc.adc_cnt++;
     ADCSRA |= _BV(ADSC);
   }
+}
+
+static void __attribute__((noinline)) adc_check(void) {  // adc_due 2
+  adc_due = 0;
   // starvation: work waited a whole ms without any progress, twice
   if (!progress && stall_waiting()) {
     if (++stall >= 2) force = 1;
@@ -734,14 +772,15 @@ static void __attribute__((noinline)) snap_meta2(void) {  // stage 6
 // The division's start: the remainder is the sum's bits above the 11 quotient bits (byte moves,
 // no shift loops), the low 11 bits are brought down one per div_step.
 static void __attribute__((noinline)) div_init(void) {
-  uint32_t s = snap.adc_sum;
-  uint8_t b1 = (uint8_t)(s >> 8), b2 = (uint8_t)(s >> 16), b3 = (uint8_t)(s >> 24);
-  uint16_t hi = (uint16_t)((b3 << 8) | b2);  // s >> 16
-  uint16_t r = (uint16_t)(hi << 5);
-  r |= (uint8_t)(b1 >> 3);
-  snap.adc_r = r;
-  uint16_t lo = (uint16_t)(((uint16_t)b1 << 8) | (uint8_t)s);  // s & 0xFFFF
-  snap.adc_lo = (uint16_t)(lo << 5);  // bit 10 of s at bit 15
+  uint32_t s = snap.adc_sum;  // < 2^26
+  uint8_t b0 = (uint8_t)s, b1 = (uint8_t)(s >> 8), b2 = (uint8_t)(s >> 16), b3 = (uint8_t)(s >> 24);
+  // r = s >> 11 and lo = (s << 5) & 0xFFFF (bit 10 of s at bit 15), in 8-bit operations
+  uint8_t rl = (uint8_t)((uint8_t)(b1 >> 3) | (uint8_t)(b2 << 5));
+  uint8_t rh = (uint8_t)((uint8_t)(b2 >> 3) | (uint8_t)(b3 << 5));
+  snap.adc_r = (uint16_t)(((uint16_t)rh << 8) | rl);
+  uint8_t ll = (uint8_t)(b0 << 5);
+  uint8_t lh = (uint8_t)((uint8_t)(b1 << 5) | (uint8_t)(b0 >> 3));
+  snap.adc_lo = (uint16_t)(((uint16_t)lh << 8) | ll);
   snap_state = 1;
 }
 
@@ -793,7 +832,7 @@ static void __attribute__((noinline)) div_step(void) {  // one bit of adc_sum / 
   }
 }
 
-static uint16_t task_limit(uint16_t l_cur, uint16_t l_next);
+static uint16_t task_limit(uint16_t l_cur, uint16_t l_next, uint8_t through);
 
 // Recompute the task limits after a rising and after a falling edge from the last high and low
 // times (the hot path only copies them); one of the two per run.
@@ -801,10 +840,10 @@ static uint8_t pred_which;
 static void __attribute__((noinline)) pred_step(void) {
   uint16_t hi = hs.l_hi, lo = hs.l_lo;  // 0xFFFF: unknown (task_limit gives no limit)
   if (pred_which) {
-    hs.lim_f = task_limit(lo, hi);
+    hs.lim_f = task_limit(lo, hi, 0);
     pred_due = 0;
   } else {
-    hs.lim_r = task_limit(hi, lo);
+    hs.lim_r = task_limit(hi, lo, 1);
   }
   pred_which ^= 1;
 }
@@ -817,15 +856,70 @@ static uint16_t __attribute__((noinline)) turns(uint16_t d16, uint8_t m) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Background dispatcher: runs the first pending task whose cost bound fits `budget` cycles.
-// Returns its number, 0 if none ran.
-static inline __attribute__((always_inline)) uint8_t task(uint16_t budget) {
+// Selected steps (jobs): the dispatcher below only picks the next step of the window end, the
+// formatter, the ADC mean, the command receiver and the command execution; meter_loop calls it
+// in a later slot that fits its own bound (job_cost, by job id: formatter state 1..9, window-end
+// stage functions 10..17, others 20..29). Cheap for the loop: the long chain of checks runs as a
+// task of its own (COST_SEL), the step itself only with the call.
+#define JOB_SNAP0 10
+static const job_fn fmt_jobs[10] = {0, fmt_item, fmt_comma, fmt_str, fmt_num, fmt_tail, fmt_crc,
+                                    fmt_digit, fmt_pow, fmt_numinit};
+static_assert(FS_ITEM == 1 && FS_COMMA == 2 && FS_STR == 3 && FS_NUM == 4 && FS_TAIL == 5 &&
+              FS_CRC == 6 && FS_DIGIT == 7 && FS_POW == 8 && FS_NUMINIT == 9, "fmt_jobs by state");
+// window-end stage -> job id (take_snapshot's choice)
+static const uint8_t snap_job[17] = {17, 10, 17, 10, 13, 13, 16, 15, 14, 17, 12, 12, 12, 12, 11, 11, 11};
+static const job_fn snap_jobs[8] = {snap_fold, snap_fold_hp, snap_fold_loop, snap_copy, snap_copy_h,
+                                    snap_adc, snap_meta2, snap_meta};
+enum { J_DIV = 20, J_DIVINIT, J_DECIDE, J_ACT, J_ANSWER, J_TOK, J_DONE, J_START, J_RXWORD, J_RXTOK, J_RXFILT };
+// Bound of each job [cycles]: meter_loop's job path beyond CALL_OVH (JOB_OVH) + the function
+// (profiling build, prof_job, + the profiling read).
+static const uint8_t job_cost[32] = {  // by job id
+  0, JOB_B(89), JOB_B(75), JOB_B(88), JOB_B(85), JOB_B(64), JOB_B(89), JOB_B(92),
+  JOB_B(49), JOB_B(43), JOB_B(130), JOB_B(56), JOB_B(101), JOB_B(74), JOB_B(56), JOB_B(73),
+  JOB_B(71), JOB_B(74), 0, 0, JOB_B(81), JOB_B(100), JOB_B(80), JOB_B(99),
+  JOB_B(105), JOB_B(82), JOB_B(52), JOB_B(83), JOB_B(74), JOB_B(48), JOB_B(83), 0,
+};
+
+// The formatter as a job of meter_loop: one step, then the next step is selected at once unless
+// other work waits (the dispatcher's chain would pick something else first; meter_loop itself
+// checks the 1 ms tick before it calls a job), so that a frame costs one slot per step.
+#define FMT_CHAIN 66        // fmt_job beyond the step itself [cycles] (static count 62)
+static void __attribute__((noinline)) fmt_job(void) {
+  fmt_jobs[f_state]();
+  uint8_t st = f_state;
+  if (!st || (uint8_t)(adc_due | rx_step)) return;
+  uint8_t a = UCSR0A, h = tx_head, t = tx_tail;
+  if (a & _BV(RXC0)) return;
+  if (h != t && ((a & _BV(UDRE0)) || (uint8_t)((h - t) & 127u) == 127u)) return;
+  meter_job = fmt_job;
+  meter_job_cost = (uint8_t)(job_cost[st] + FMT_CHAIN);
+  meter_job_id = st;
+}
+
+// Background dispatcher: runs the first pending task whose cost bound fits `budget` cycles, or,
+// for meter_loop (sel), selects the step of the long tasks as meter_job. Returns its number
+// (13: a step selected), 0 if none ran.
+#define SEL_JOB(fn, id)                                                           \
+  do {                                                                            \
+    if (sel) {                                                                    \
+      meter_job = (fn); meter_job_cost = job_cost[(id)]; meter_job_id = (id);     \
+      return 13;                                                                  \
+    }                                                                             \
+    (fn)();                                                                       \
+    return 5;                                                                     \
+  } while (0)
+static inline __attribute__((always_inline)) uint8_t task(uint16_t budget, uint8_t sel) {
   if (TIFR2 & _BV(OCF2A)) { if (budget >= COST_TICK) { tick(); return 1; } return 0; }
-  if (adc_due) { if (budget >= COST_TICK2) { adc_take(); return 11; } return 0; }
+  if (adc_due) {
+    if (budget < COST_TICK2) return 0;
+    if (adc_due == 1) adc_take(); else adc_check();
+    return 11;
+  }
   if (rx_step) {
-    if (budget < COST_RX) return 0;
-    if (rx_step == 1) rx_word(); else rx_tok();
-    return 12;
+    if (meter_job) return 0;  // (the selected step is this one, or runs first)
+    if (rx_step == 1) SEL_JOB(rx_word, J_RXWORD);
+    if (rx_step == 3) SEL_JOB(rx_filt, J_RXFILT);
+    SEL_JOB(rx_tok, J_RXTOK);
   }
   if (!cmd_ready && (UCSR0A & _BV(RXC0))) { if (budget >= COST_RX) { rx_byte(UDR0); return 2; } return 0; }
   if (tx_head != tx_tail && (UCSR0A & _BV(UDRE0))) {
@@ -834,28 +928,34 @@ static inline __attribute__((always_inline)) uint8_t task(uint16_t budget) {
     tx_tail = (uint8_t)((tx_tail + 1u) & 127u);
     return 3;
   }
+  if (meter_job) return 0;  // a step is selected: meter_loop runs it when it fits
   if (snap_stage && snap_state == 0 && (meter_fold_ok || (snap_stage & 0xFDu) != 1u)) {
-    if (budget >= COST_SNAP) { take_snapshot(); return 4; }
-    return 0;
+    uint8_t j = snap_job[snap_stage < 17 ? snap_stage : 16];
+    SEL_JOB(snap_jobs[j - JOB_SNAP0], j);
   }
   if (f_state != FS_IDLE) {
-    if (budget < fmt_cost[f_state] || tx_used() >= 127u) return 0;
-    fmt_step();
+    if (tx_used() >= 127u) return 0;
+    uint8_t st = f_state;
+    if (sel) {
+      meter_job = fmt_job;
+      meter_job_cost = (uint8_t)(job_cost[st] + FMT_CHAIN);
+      meter_job_id = st;
+      return 13;
+    }
+    fmt_jobs[st]();
     return 5;
   }
-  if (snap_state == 1) { if (budget >= COST_DIV) { div_step(); return 6; } return 0; }
-  if (snap_state == 4) { if (budget >= COST_DIV) { div_init(); return 6; } return 0; }
-  if (cmd_ready == 1) { if (budget >= COST_EXEC) { cmd_decide(); return 7; } return 0; }
-  if (cmd_ready == 2) { if (budget >= COST_EXEC) { cmd_act(); return 8; } return 0; }
-  if (cmd_ready >= 5) { if (budget >= COST_EXEC) { cmd_answer(); return 8; } return 0; }
-  if (cmd_ready == 3) { if (budget >= COST_EXEC) { cmd_tok(); return 8; } return 0; }
-  if (cmd_ready == 4) { if (budget >= COST_EXEC) { cmd_done(); return 8; } return 0; }
-  if ((rq_tail != rq_head || snap_state == 2) && tx_used() < 32u) {
-    if (budget >= COST_START) { fmt_start(); return 9; }
-    return 0;
+  if (snap_state == 1) SEL_JOB(div_step, J_DIV);
+  if (snap_state == 4) SEL_JOB(div_init, J_DIVINIT);
+  {
+    uint8_t c = cmd_ready;
+    if (c == 1) SEL_JOB(cmd_decide, J_DECIDE);
+    if (c == 2) SEL_JOB(cmd_act, J_ACT);
+    if (c >= 5) SEL_JOB(cmd_answer, J_ANSWER);
+    if (c == 3) SEL_JOB(cmd_tok, J_TOK);
+    if (c == 4) SEL_JOB(cmd_done, J_DONE);
   }
-  // last: the limits change slowly, stale ones for a while are harmless
-
+  if ((rq_tail != rq_head || snap_state == 2) && tx_used() < 32u) SEL_JOB(fmt_start, J_START);
   return 0;
 }
 
@@ -874,21 +974,31 @@ static inline __attribute__((always_inline)) uint8_t run_task(uint16_t budget) {
 #ifdef METER_PROFILE
   uint8_t fs = f_state, ss = snap_stage;
   uint16_t t0 = TCNT1;
-  uint8_t id = task(budget);
+  uint8_t id = task(budget, 1);
   uint16_t d = TCNT1 - t0;
   if (d > prof_task[id]) prof_task[id] = d;
   if (id == 5 && d > prof_fmt[fs]) prof_fmt[fs] = d;
   if (id == 4 && ss < 16 && d > prof_snap[ss]) prof_snap[ss] = d;
 #else
-  uint8_t id = task(budget);
+  uint8_t id = task(budget, 1);
 #endif
   if (id == 2 || id == 12 || (id >= 4 && id < 10)) progress = 1;  // not tick, transmit, prediction
   return id;
 }
 
 // One background task for meter_loop (assembly): the first pending one if it fits `budget`.
+// A step selected with budget to spare runs at once.
 extern "C" ASM_VISIBLE __attribute__((noinline)) uint8_t meter_task(uint16_t budget) {
-  return run_task(budget);
+  uint8_t id = run_task(budget);
+#ifndef METER_PROFILE  // (there every step runs from meter_loop: prof_job)
+  if (id == 13 && budget >= (uint16_t)(COST_MIN + RUN_NOW + meter_job_cost)) {
+    job_fn f = meter_job;
+    meter_job = 0;
+    f();
+    progress = 1;
+  }
+#endif
+  return id;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -946,7 +1056,35 @@ extern "C" ASM_VISIBLE __attribute__((noinline)) uint8_t meter_task(uint16_t bud
   "  std Z+1, r23\n" \
   "71:\n"
 #define ML_PROF_TASKED "  sts prof_ok, r1\n"
+// longest selected step by job id (prof_job), TCNT1 around the icall
+#define ML_PROF_JOB0 \
+  "  lds r22, 0x84\n" \
+  "  lds r23, 0x85\n" \
+  "  push r22\n" \
+  "  push r23\n"
+#define ML_PROF_JOB1 \
+  "  lds r24, 0x84\n" \
+  "  lds r25, 0x85\n" \
+  "  pop r23\n" \
+  "  pop r22\n" \
+  "  sub r24, r22\n" \
+  "  sbc r25, r23\n" \
+  "  lds r30, meter_job_id\n" \
+  "  ldi r31, 0\n" \
+  "  lsl r30\n" \
+  "  subi r30, lo8(-(prof_job))\n" \
+  "  sbci r31, hi8(-(prof_job))\n" \
+  "  ld r22, Z\n" \
+  "  ldd r23, Z+1\n" \
+  "  cp r22, r24\n" \
+  "  cpc r23, r25\n" \
+  "  brsh 72f\n" \
+  "  st Z, r24\n" \
+  "  std Z+1, r25\n" \
+  "72:\n"
 #else
+#define ML_PROF_JOB0 ""
+#define ML_PROF_JOB1 
 #define ML_PROF_TOP ""
 #define ML_PROF_TASKED ""
 #endif
@@ -1072,6 +1210,27 @@ ml_call:
   ori r28, 0x80           ; HF_TASKED
   rjmp ml_top
 ml_callc:
+  lds r30, meter_job      ; a selected step: call it directly if it fits
+  lds r31, meter_job+1
+  mov r22, r30
+  or r22, r31
+  breq ml_disp
+  lds r22, meter_job_cost
+  cp r24, r22
+  cpc r25, r1
+  brlo ml_disp            ; too long for this slot: the dispatcher may run the tick, USART
+  sbic 0x17, 1            ; the 1 ms tick first (TIFR2.OCF2A)
+  rjmp ml_disp
+  sts meter_job, r1
+  sts meter_job+1, r1
+)ASM" ML_PROF_JOB0 R"ASM(
+  icall
+)ASM" ML_PROF_JOB1 R"ASM(
+  sts meter_progress, r29 ; (nonzero)
+  ori r28, 0x80           ; HF_TASKED
+)ASM" ML_PROF_TASKED R"ASM(
+  rjmp ml_top
+ml_disp:
   call meter_task
   tst r24
   brne .+2
@@ -1268,17 +1427,34 @@ ml_nochain:               ; no period open (after a break): a rising edge starts
 ; The task limits of task_limit() (same formula, in assembly: no C round trip blinds the
 ; capture). ml_probed: both phases measured again after a loss; ml_pred_r/ml_pred_f: the
 ; prediction task, one limit per call, every ms (pred_due 1, 2).
-ml_probed:
-  sts meter_probe, r1
+ml_probed:                ; only the limit of the phase now running (one fits before the next
+  sts meter_probe, r1     ; edge at 50 kHz, two do not); the other is an assembly job (COST_PRED)
   lds r24, meter_asm_job
-  andi r24, 0xFA          ; both limits now
+  sbrs r28, 0
+  rjmp 66f
+  andi r24, 0xFB          ; after a falling edge: lim_f now, lim_r due
+  ori r24, 0x01
   sts meter_asm_job, r24
-  rcall ml_pred_r
-ml_pred_f:                ; lim_f: after a falling edge (the low time begins)
-  rcall ml_s2
+  rjmp ml_pred_f
+66:
+  andi r24, 0xFE          ; after a rising edge: lim_r now, lim_f due
+  ori r24, 0x04
+  sts meter_asm_job, r24
+  rjmp ml_pred_r
+ml_pred_f:                ; lim_f: after a falling edge (the low time begins); a long one
+  rcall ml_s2             ; (>= LONG_PHASE): end before the rising edge (see task_limit)
   brcc 67f
   movw r24, r22
+  cpi r23, hi8()ASM" ML_STR(LONG_PHASE) R"ASM()
+  brsh 69f
   rcall ml_lim_one
+  rjmp 67f
+69:
+  rcall ml_div16
+  sub r24, r30
+  sbc r25, r31
+  subi r24, lo8()ASM" ML_STR(MARGIN) R"ASM()
+  sbci r25, hi8()ASM" ML_STR(MARGIN) R"ASM()
 67:
   sts meter_hs+10, r24
   sts meter_hs+11, r25
@@ -1319,8 +1495,10 @@ ml_s2:                    ; r20:r21 = l_hi, r22:r23 = l_lo, r26:r27 = 15/16 (l_h
 69:
   clc
   ret
-ml_div16:                 ; r30:r31 = r24:r25 / 16
+ml_div16:                 ; r30:r31 = r24:r25 / 32 (PRED_SHIFT)
   movw r30, r24
+  lsr r31
+  ror r30
   lsr r31
   ror r30
   lsr r31
@@ -1482,6 +1660,8 @@ meter_loop_timeout:       ; the Timer0 compare interrupt returns here instead of
   cli
   ldi r24, 1
 ml_exit:
+  sts meter_job, r1       ; C may change the state: the step is selected again
+  sts meter_job+1, r1
   sts meter_hs+0, r2
   sts meter_hs+1, r3
   sts meter_hs+12, r4
@@ -1572,13 +1752,18 @@ static void hw_init(void) {
 // either the task ends before the next edge, or it ends late enough that the next edge, served
 // late, still has its successor armed in time and the backlog (one HOT) is gone before the edge
 // after that. 0xFFFF: no limit (phases long or unknown).
-static uint16_t task_limit(uint16_t l_cur, uint16_t l_next) {
+// through = 0 (lim_f, the phase that ends with a rising edge) and a long phase (>= LONG_PHASE, so
+// that the slot before the edge is ample): the task ends before that edge, so that the rising
+// edges, which delimit the period sums, are met by the wait loop (in simavr a capture is taken at
+// the end of the running instruction: up to 3 ticks late during a task).
+static uint16_t task_limit(uint16_t l_cur, uint16_t l_next, uint8_t through) {
   if (l_cur >= 0x3000u || l_next >= 0x3000u) return 0xFFFF;
-  uint16_t a = (uint16_t)(l_cur - (l_cur >> 4));
+  uint16_t a = (uint16_t)(l_cur - (l_cur >> PRED_SHIFT));
   a = a > MARGIN ? (uint16_t)(a - MARGIN) : 0;
+  if (!through && (l_cur >> 8) >= (LONG_PHASE >> 8)) return a;
   uint16_t s2 = (uint16_t)(l_cur + l_next);
-  s2 = (uint16_t)(s2 - (s2 >> 4));
-  uint16_t s3 = (uint16_t)(s2 + l_cur - (l_cur >> 4));
+  s2 = (uint16_t)(s2 - (s2 >> PRED_SHIFT));
+  uint16_t s3 = (uint16_t)(s2 + l_cur - (l_cur >> PRED_SHIFT));
   uint16_t b1 = s2 > SERVICE + MARGIN ? (uint16_t)(s2 - SERVICE - MARGIN) : 0;
   uint16_t b2 = s3 > HOT + 2 * SERVICE + MARGIN ? (uint16_t)(s3 - HOT - 2 * SERVICE - MARGIN) : 0;
   uint16_t b = b1 < b2 ? b1 : b2;
@@ -1712,7 +1897,7 @@ void meter_run(void) {
       uint16_t t0 = TCNT1;
       uint8_t p0 = PINB & _BV(PB0);
       do {  // up to 1/4 ms: the USART needs wall time, 87 us per byte
-        if (!task(0xFFFF) && !work_waiting()) break;
+        if (!task(0xFFFF, 0) && !work_waiting()) break;
       } while ((uint16_t)(TCNT1 - t0) < BURST);
       uint16_t blind = TCNT1 - t0;
       if ((TIFR1 & _BV(ICF1)) || (PINB & _BV(PB0)) != p0) {
