@@ -25,6 +25,8 @@ from typing import Any, Iterable, Mapping, Sequence
 import numpy as np
 
 __all__ = [
+    "read_table",
+    "where",
     "FORMAT",
     "VERSION",
     "KNOWN_COLUMNS",
@@ -370,10 +372,64 @@ def _load_metadata(path: Path) -> dict | None:
     return meta
 
 
-def _where(path: Path, row: int, column: str | None) -> str:
-    # row: 1-based data row; the file line is row + 1 (the header is line 1).
+def where(path: Path, row: int, column: str | None) -> str:
+    """Where in a table a problem is, for one-line errors: ``"FILE: row R (line L), column 'C'"``.
+
+    Parameters
+    ----------
+    path : Path
+        The file.
+    row : int
+        1-based data row; the file line is row + 1 (the header is line 1).
+    column : str or None
+        The column, if the problem is in one cell.
+
+    Returns
+    -------
+    str
+    """
     col = f", column {column!r}" if column is not None else ""
     return f"{path}: row {row} (line {row + 1}){col}"
+
+
+def read_table(path: str | os.PathLike, required: Sequence[str], hint: str = "") -> tuple[dict[str, int], list[tuple[int, list[str]]], Path]:
+    """Read a small CSV table that is not a run (grouped readings, ISO 376 series).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The CSV file, with a header row.
+    required : sequence of str
+        Columns that must be present.
+    hint : str
+        Appended to the message for an empty file, e.g. ``"header load,sensor,reading needed"``.
+
+    Returns
+    -------
+    columns : dict
+        Column name → index in each row.
+    rows : list of (int, list of str)
+        Non-blank data rows with their 1-based row number (the file line is row + 1).
+    path : Path
+        The path, for messages (see :func:`where`).
+
+    Raises
+    ------
+    ValueError
+        One line naming the file for an empty file or a missing column.
+    """
+    p = Path(path)
+    with open(p, newline="", encoding="utf-8-sig") as fh:
+        table = list(csv.reader(fh))
+    if not table:
+        raise ValueError(f"{p}: empty file" + (f" ({hint})" if hint else ""))
+    header = [h.strip() for h in table[0]]
+    for col in required:
+        if col not in header:
+            raise ValueError(f"{p}: column {col!r} missing (columns: {', '.join(header)})")
+    rows = [(k, row) for k, row in enumerate(table[1:], start=1) if any(c.strip() for c in row)]
+    return {c: i for i, c in enumerate(header)}, rows, p
+
 
 
 def load_run(path: str | os.PathLike, require: Sequence[str] = ()) -> Run:
@@ -447,22 +503,22 @@ def load_run(path: str | os.PathLike, require: Sequence[str] = ()) -> Run:
             if textual.any():
                 r, c = np.argwhere(textual)[0]
                 cell = next(csv.reader([body[r]]))[c].strip()
-                raise RunFormatError(f"{_where(p, r + 1, header[c])}: {cell!r} is not a finite number (leave the cell empty for a missing value)")
+                raise RunFormatError(f"{where(p, r + 1, header[c])}: {cell!r} is not a finite number (leave the cell empty for a missing value)")
     columns = {h: data[:, j].copy() for j, h in enumerate(header)}
     if "time_s" in columns:
         t = columns["time_s"]
         nan = np.flatnonzero(np.isnan(t))
         if nan.size:
-            raise RunFormatError(f"{_where(p, nan[0] + 1, 'time_s')}: empty time cell")
+            raise RunFormatError(f"{where(p, nan[0] + 1, 'time_s')}: empty time cell")
         back = np.flatnonzero(np.diff(t) < 0)
         if back.size:
             i = back[0] + 1
-            raise RunFormatError(f"{_where(p, i + 1, 'time_s')}: time goes backwards ({t[i]!r} s after {t[i - 1]!r} s); rows must be in time order")
+            raise RunFormatError(f"{where(p, i + 1, 'time_s')}: time goes backwards ({t[i]!r} s after {t[i - 1]!r} s); rows must be in time order")
     if "direction" in columns:
         d = columns["direction"]
         badd = np.flatnonzero(~np.isnan(d) & ~np.isin(d, (-1.0, 0.0, 1.0)))
         if badd.size:
-            raise RunFormatError(f"{_where(p, badd[0] + 1, 'direction')}: {d[badd[0]]!r} is not -1 (unloading), 0 (hold) or +1 (loading)")
+            raise RunFormatError(f"{where(p, badd[0] + 1, 'direction')}: {d[badd[0]]!r} is not -1 (unloading), 0 (hold) or +1 (loading)")
     if meta is None:
         meta = _default_metadata(header)
     return Run(path=p, columns=columns, metadata=meta, truncated=truncated)
@@ -502,10 +558,10 @@ def _parse_slow(p: Path, body: list[str], header: list[str]) -> np.ndarray:
     out = np.full((len(body), ncol), np.nan)
     for i, row in enumerate(csv.reader(body)):
         if len(row) < ncol:
-            raise RunFormatError(f"{_where(p, i + 1, header[len(row)])}: missing ({len(row)} cells, the header has {ncol})")
+            raise RunFormatError(f"{where(p, i + 1, header[len(row)])}: missing ({len(row)} cells, the header has {ncol})")
         if len(row) > ncol:
             if any(c.strip() for c in row[ncol:]):
-                raise RunFormatError(f"{_where(p, i + 1, None)}: {len(row)} cells, the header has {ncol}")
+                raise RunFormatError(f"{where(p, i + 1, None)}: {len(row)} cells, the header has {ncol}")
         for j in range(ncol):
             cell = row[j].strip()
             if not cell:
@@ -513,5 +569,5 @@ def _parse_slow(p: Path, body: list[str], header: list[str]) -> np.ndarray:
             try:
                 out[i, j] = float(cell)
             except ValueError:
-                raise RunFormatError(f"{_where(p, i + 1, header[j])}: non-numeric cell {cell!r}") from None
+                raise RunFormatError(f"{where(p, i + 1, header[j])}: non-numeric cell {cell!r}") from None
     return out

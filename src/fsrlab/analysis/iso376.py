@@ -52,6 +52,8 @@ from typing import Sequence
 
 import numpy as np
 
+from fsrlab.runformat import read_table, where
+
 __all__ = ["CLASS_LIMITS", "CalibrationSeries", "ISO376Result", "iso376", "class_reached", "load_iso376_csv"]
 
 #: ISO 376:2011 class limits [%] for b, b', fc (±), f0 (±), v, c; best class first.
@@ -296,23 +298,9 @@ def load_iso376_csv(path) -> tuple[np.ndarray, list[CalibrationSeries]]:
         One line naming the file, row and column for a missing column or a non-numeric cell, or
         naming the series whose forces differ from the first series'.
     """
-    import csv
-    from pathlib import Path
-
-    p = Path(path)
-    with open(p, newline="", encoding="utf-8-sig") as fh:
-        rows = list(csv.reader(fh))
-    if not rows:
-        raise ValueError(f"{p}: empty file")
-    header = [h.strip() for h in rows[0]]
-    for col in ("series", "rotation_deg", "force_n", "reading"):
-        if col not in header:
-            raise ValueError(f"{p}: column {col!r} missing (columns: {', '.join(header)})")
-    ix = {c: header.index(c) for c in header}
+    ix, rows, p = read_table(path, ("series", "rotation_deg", "force_n", "reading"))
     data: dict[str, dict] = {}
-    for k, row in enumerate(rows[1:], start=1):
-        if not any(c.strip() for c in row):
-            continue
+    for k, row in rows:
         vals = {}
         for col in ("rotation_deg", "force_n", "reading", "direction"):
             if col not in ix:
@@ -324,10 +312,10 @@ def load_iso376_csv(path) -> tuple[np.ndarray, list[CalibrationSeries]]:
             try:
                 vals[col] = float(cell)
             except ValueError:
-                raise ValueError(f"{p}: row {k} (line {k + 1}), column {col!r}: non-numeric cell {cell!r}") from None
+                raise ValueError(f"{where(p, k, col)}: non-numeric cell {cell!r}") from None
         d = vals.get("direction", 1.0)
         if d not in (1.0, -1.0):
-            raise ValueError(f"{p}: row {k} (line {k + 1}), column 'direction': must be +1 or -1, got {d:g}")
+            raise ValueError(f"{where(p, k, 'direction')}: must be +1 or -1, got {d:g}")
         label = row[ix["series"]].strip()
         s = data.setdefault(label, {"rot": vals["rotation_deg"], "inc": {}, "dec": {}, "z0": None, "z1": None})
         if vals["force_n"] == 0:

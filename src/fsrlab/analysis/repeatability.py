@@ -15,13 +15,13 @@ doi:10.1155/2018/6561901, eq. (39), Tables 4 and 5.
 
 from __future__ import annotations
 
-import csv
 import os
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any, Sequence
 
 import numpy as np
+
+from fsrlab.runformat import read_table, where
 
 __all__ = [
     "RepeatabilityResult",
@@ -264,29 +264,19 @@ def load_grouped_csv(path: str | os.PathLike) -> tuple[list, list, np.ndarray]:
         One line naming the file, the row and the column for a missing column, an empty or
         non-numeric reading.
     """
-    p = Path(path)
-    with open(p, newline="", encoding="utf-8-sig") as fh:
-        rows = list(csv.reader(fh))
-    if not rows:
-        raise ValueError(f"{p}: empty file (header load,sensor,reading needed)")
-    header = [h.strip() for h in rows[0]]
-    for col in ("load", "sensor", "reading"):
-        if col not in header:
-            raise ValueError(f"{p}: column {col!r} missing (columns: {', '.join(header)})")
-    il, isn, ir = header.index("load"), header.index("sensor"), header.index("reading")
+    ix, rows, p = read_table(path, ("load", "sensor", "reading"), hint="header load,sensor,reading needed")
+    il, isn, ir = ix["load"], ix["sensor"], ix["reading"]
     loads, sensors, values = [], [], []
-    for k, row in enumerate(rows[1:], start=1):
-        if not any(c.strip() for c in row):
-            continue
+    for k, row in rows:
         for name, j in (("load", il), ("sensor", isn), ("reading", ir)):
             if j >= len(row) or not row[j].strip():
-                raise ValueError(f"{p}: row {k} (line {k + 1}), column {name!r}: empty cell")
+                raise ValueError(f"{where(p, k, name)}: empty cell")
         try:
             v = float(row[ir])
         except ValueError:
-            raise ValueError(f"{p}: row {k} (line {k + 1}), column 'reading': non-numeric cell {row[ir].strip()!r}") from None
+            raise ValueError(f"{where(p, k, 'reading')}: non-numeric cell {row[ir].strip()!r}") from None
         if not np.isfinite(v):
-            raise ValueError(f"{p}: row {k} (line {k + 1}), column 'reading': {row[ir].strip()!r} is not a finite number")
+            raise ValueError(f"{where(p, k, 'reading')}: {row[ir].strip()!r} is not a finite number")
         loads.append(_label(row[il].strip()))
         sensors.append(_label(row[isn].strip()))
         values.append(v)
