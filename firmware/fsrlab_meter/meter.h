@@ -1,5 +1,5 @@
 // fsrlab meter: input-capture frequency and duty-cycle meter for the Arduino Uno (ATmega328P, 16 MHz).
-// Protocol v1: see docs/protocol.md (normative) and /work notes; frames "$TYPE,SEQ,...*CRC\r\n".
+// Protocol v1: docs/protocol.md (normative); frames "$TYPE,SEQ,...*CRC\r\n".
 #ifndef FSRLAB_METER_H
 #define FSRLAB_METER_H
 
@@ -10,7 +10,7 @@
 extern "C" {
 #endif
 
-// Runs the meter forever with interrupts disabled (everything is polled, see meter.cpp).
+// Runs the meter forever: the edge handlers (capture.S) by interrupt, the protocol in the background.
 void meter_run(void) __attribute__((noreturn));
 
 #ifdef __cplusplus
