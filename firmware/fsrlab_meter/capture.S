@@ -103,8 +103,9 @@ __vector_11:
         ENTER
         rjmp wait0
 ; Wait for the capture flag, at most 128 us (Timer0 at clk/8 reaches OCR0A = 255). The flag is
-; seen at most 3 cycles after it rises and reaches `got` 3 cycles later (2 from the last check);
-; ICES1 is written 4 cycles after that.
+; checked at cycles 0, 2, 4 and 8 of each 11-cycle turn and reaches `got` at most 6 cycles after it
+; rises (3 after a sbic, 2 after the sbis); ICES1 is written 4 cycles later: at most 10 cycles
+; after the flag, so a phase of 11 cycles or more that begins while the handler polls is caught.
 wait:
         in r24, CNT
         cpi r24, EDGE_LIMIT

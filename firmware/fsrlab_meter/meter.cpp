@@ -24,10 +24,10 @@
 
 // ---------------------------------------------------------------------------------------------
 // Time: Timer2 free-running at clk/128 (8 us per count, wraps every 2.048 ms), polled, with its
-// overflow flag: polls up to 4 ms apart lose nothing. A gap of 1 ms or more between two polls means
+// overflow flag: polls up to 4 ms apart lose nothing. A gap of 2 ms or more between two polls means
 // the edge handlers leave the background (almost) no time: it raises F_STARVE (the handlers then
 // step aside for 128 us at a time and report the edges that go by as missed) until its polls come
-// less than 0.5 ms apart again.
+// less than 1 ms apart again. (service() runs every few hundred cycles of background work.)
 #define T2_PER_MS 125u
 static uint8_t t2_last;
 static uint32_t now8;    // [8 us] since boot
@@ -48,8 +48,8 @@ static void clock_poll(void) {
     if (t >= t2_last) d += 256u;  // a whole wrap more than the counts show
   }
   t2_last = t;
-  if (d >= T2_PER_MS) capture_starving();
-  else if (d < T2_PER_MS / 2u && (GPIOR0 & _BV(F_STARVE))) capture_fed();
+  if (d >= 2u * T2_PER_MS) capture_starving();
+  else if (d < T2_PER_MS && (GPIOR0 & _BV(F_STARVE))) capture_fed();
   now8 += d;
   static uint16_t frac;
   frac += d;
@@ -72,8 +72,7 @@ static void tx_poll(void) {
 static char line[CMD_MAX];
 static uint8_t line_len, line_over, line_ready;
 
-static void rx_poll(void) {
-  if (line_ready || !(UCSR0A & _BV(RXC0))) return;  // a line waits: the host waits for its answer
+static void rx_byte(void) {
   uint8_t c = UDR0;
   if (c == '\r') return;
   if (c == '\n') {
@@ -82,6 +81,12 @@ static void rx_poll(void) {
   }
   if (line_len >= CMD_MAX - 1u) line_over = 1;
   else line[line_len++] = (char)c;
+}
+
+// Cheap enough to call between any two steps of long work (a line waits: the host waits for its
+// answer, so nothing more comes).
+static inline void rx_poll(void) {
+  if (!line_ready && (UCSR0A & _BV(RXC0))) rx_byte();
 }
 
 // The duties that must not wait long: called from the main loop and from inside long work.
@@ -107,20 +112,19 @@ static void put_P(const char *s) {
 }
 
 static void put_u32(uint32_t v) {
-  uint8_t started = 0;
-  for (int8_t i = 9; i >= 0; i--) {
+  int8_t i = 9;
+  while (i > 0 && v < pow10_tab[i]) i--;
+  for (; i >= 0; i--) {
     uint32_t p = pow10_tab[i];
     char d = '0';
     while (v >= p) {
       v -= p;
       d++;
     }
-    if (d != '0' || started || i == 0) {
-      put_c(d);
-      started = 1;
-    }
-    service();
+    put_c(d);
+    rx_poll();
   }
+  service();
 }
 
 static void field_u32(uint32_t v) {
@@ -144,7 +148,8 @@ static void frame_end(void) {
   uint16_t crc = 0xFFFF;
   for (uint8_t i = 1; i < fl; i++) {
     crc = _crc_xmodem_update(crc, (uint8_t)fb[i]);
-    if (!(i & 15)) service();
+    if (i & 15) rx_poll();
+    else service();
   }
   put_c('*');
   for (int8_t s = 12; s >= 0; s -= 4) {
@@ -156,7 +161,7 @@ static void frame_end(void) {
   while ((uint8_t)(tx_tail - tx_head - 1u) < fl) service();  // room in the ring (255 usable)
   for (uint8_t i = 0; i < fl; i++) {
     txbuf[tx_head++] = (uint8_t)fb[i];
-    if (!(i & 15)) service();
+    rx_poll();
   }
   seq_next++;
 }
