@@ -42,9 +42,9 @@ edge at or after its due time (8 us clock), so each boundary moves by up to a pe
 F_PROFILE = 20_000.0
 """Frequency at which the handler's cycles per period are measured [Hz]."""
 F_TARGET = 50_000.0
-FLIP_CYCLES = 10
+FLIP_CYCLES = 12
 """Capture flag to edge select written, worst case while polling (capture.S: the flag is seen at
-most 4 cycles late and reaches ``got`` 2 later; ``lds ICR1L`` and ``sts TCCR1B`` take 4)."""
+most 4 cycles late and reaches ``got`` 2 later; reading ICR1 and ``sts TCCR1B`` take 6)."""
 
 
 def clean(freq: float, duty: float) -> bool:

@@ -104,8 +104,8 @@ __vector_11:
         rjmp wait0
 ; Wait for the capture flag, at most 128 us (Timer0 at clk/8 reaches OCR0A = 255). The flag is
 ; checked at cycles 0, 2, 4 and 8 of each 11-cycle turn and reaches `got` at most 6 cycles after it
-; rises (3 after a sbic, 2 after the sbis); ICES1 is written 4 cycles later: at most 10 cycles
-; after the flag, so a phase of 11 cycles or more that begins while the handler polls is caught.
+; rises (3 after a sbic, 2 after the sbis); ICES1 is written 6 cycles later: at most 12 cycles
+; after the flag, so a phase of 13 cycles or more that begins while the handler polls is caught.
 wait:
         in r24, CNT
         cpi r24, EDGE_LIMIT
@@ -127,10 +127,11 @@ w:      sbic IO(TIFR1), ICF1
         rjmp timeout
         sbis IO(TIFR1), ICF1
         rjmp w
-got:    lds r24, MEM(ICR1L)             ; (reading the low byte latches the high byte)
+got:    lds r24, MEM(ICR1L)
+        lds r25, MEM(ICR1H)             ; (both bytes before the flip: the next capture may come
+                                        ; right after it; simavr has no TEMP latch for ICR1)
         sts MEM(TCCR1B), r26            ; the opposite edge from now on
         out IO(TIFR1), r27
-        lds r25, MEM(ICR1H)
         ldi r27, _BV(ICES1)
         eor r26, r27                    ; r26: the polarity just captured (ICES1 set: rising)
         out NXT, r26

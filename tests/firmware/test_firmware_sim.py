@@ -137,6 +137,25 @@ def test_edge_jitter_keeps_every_edge(fw):
         assert abs(m.sum_high_ticks - m.periods * duty * p) <= m.periods * (2 * j * p + simrun.EDGE_ERROR_TICKS)
 
 
+def test_highs_below_the_capture_limit_are_missed_and_the_rest_stays_whole(fw):
+    # 10 kHz, 5 %, edge jitter +-2 % of the period: high times of 80 +- 64 cycles, some shorter than
+    # the 13 cycles the capture needs. Those edges are reported missed; the periods that are summed
+    # are whole ones: per window the mean period is off by at most one timestamp error per chain of
+    # periods (missed + 1 chains), and the mean high time by the quantization plus the jitter of a
+    # mean of ~1000 highs (sd of one: 2jp/sqrt(6) = 26 ticks; 10 ticks is ~12 sd of the mean).
+    f, duty, j = 10_000.0, 0.05, 0.02
+    p = 16e6 / f
+    r = fw.run([Segment(0.0, f, duty, j)], [(0.01, "START")], time_s=0.55, seed=3)
+    ms = _steady(r.measurements())
+    assert len(ms) >= 4 and r.parser.bad_frames == 0
+    assert sum(m.missed for m in ms) > 0
+    for m in ms:
+        assert m.periods >= f * m.window_ms / 1000 - 2 * m.missed - PERIOD_SLACK, m
+        err = (m.missed + 1) * (2 * j * p + simrun.EDGE_ERROR_TICKS)
+        assert abs(m.sum_period_ticks - m.periods * p) <= err, m
+        assert abs(m.sum_high_ticks / m.periods - duty * p) <= 10, m
+
+
 @pytest.mark.parametrize("f,duty", [(200_000.0, 0.5), (120_000.0, 0.5), (50_000.0, 0.02), (500_000.0, 0.5)])
 def test_beyond_the_limit_missed_edges_are_reported(fw, f, duty):
     r = fw.run([Segment(0.0, f, duty)], [(0.01, "START")], time_s=0.35)
