@@ -208,6 +208,7 @@ static void snap_request(uint8_t why, uint32_t due8) {
 }
 
 static void window_restart(void) {
+  clock_poll();  // now, not when the command's line was complete (parsing it takes a while)
   win_end_ms = now_ms + window_ms;
   win_end8 = now8 + (uint32_t)window_ms * T2_PER_MS;
   snap_request(SNAP_BASE, now8);
