@@ -272,14 +272,21 @@ arm_wake:
         eor r26, r27
         lsr r27
         ror r26
+        subi r26, lo8(-WAKE_LEAD)
+        sbci r27, hi8(-WAKE_LEAD)       ; P/32 + WAKE_LEAD
+        sub r26, r24
+        sbc r27, r25                    ; minus P: the wake's offset from prev, negated
+        lds r24, S+CS_PREV
+        lds r25, S+CS_PREV+1
         sub r24, r26
-        sbc r25, r27
-        subi r24, lo8(WAKE_LEAD)
-        sbci r25, hi8(WAKE_LEAD)
-        lds r26, S+CS_PREV
-        lds r27, S+CS_PREV+1
-        add r24, r26
-        adc r25, r27                    ; the wake
+        sbc r25, r27                    ; the wake
+        tst r25                         ; never 0..SMALL_OCR-1: simavr 1.6 loses compare matches
+        brne 7f                         ; just after Timer1 wraps (the hardware does not); wake at
+        cpi r24, SMALL_OCR              ; 0xFFFF instead, a little earlier
+        brsh 7f
+        ldi r24, 0xFF
+        ldi r25, 0xFF
+7:
         lds r26, MEM(TCNT1L)
         lds r27, MEM(TCNT1H)
         sts MEM(OCR1AH), r25            ; high byte first (TEMP)
@@ -320,7 +327,11 @@ leave1: sts MEM(TIMSK1), r24
         subi r24, 0x80
         sts MEM(OCR1BH), r24
         lds r24, S+CS_PREV
-        sts MEM(OCR1BL), r24
+        brne 8f                         ; (Z from subi: the high byte is 0) compare B never below
+        cpi r24, SMALL_OCR              ; SMALL_OCR (simavr, see arm_wake); later is harmless here
+        brsh 8f
+        ldi r24, SMALL_OCR
+8:      sts MEM(OCR1BL), r24
         clr r24
         out CNT, r24
 5:      pop r27
@@ -407,7 +418,11 @@ __vector_12:
 2:      lds r24, MEM(OCR1BL)            ; OCR1B += 32768
         lds r25, MEM(OCR1BH)
         subi r25, 0x80
-        sts MEM(OCR1BH), r25
+        brne 4f
+        cpi r24, SMALL_OCR              ; (simavr, see arm_wake; later is harmless here)
+        brsh 4f
+        ldi r24, SMALL_OCR
+4:      sts MEM(OCR1BH), r25
         sts MEM(OCR1BL), r24
 3:      pop r26
         pop r25

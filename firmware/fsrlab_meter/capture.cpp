@@ -137,7 +137,8 @@ extern "C" void capture_init(void) {
   GPIOR2 = 0;
   S.half = 0;
   resync();
-  OCR1B = TCNT1 + 0x8000u;
+  uint16_t b = TCNT1 + 0x8000u;
+  OCR1B = b < SMALL_OCR ? SMALL_OCR : b;
   TIFR1 = _BV(OCF1B);
   TIMSK1 = TIMSK_CAPT;
 }

@@ -60,6 +60,7 @@
 #define CAPT_SHORT 48    // a phase shorter than this must begin while the handler polls
 #define EXIT_MIN 48      // leave the handler only if the wake is at least this far ahead
 #define EDGE_LIMIT 48    // edges served in one visit before the handler steps aside (starvation)
+#define SMALL_OCR 16     // compare values 0..15 are avoided: simavr 1.6 loses matches just after a wrap
 #define HALF_GAP 123     // half-wraps (2.048 ms each) that make a phase a gap (> 250 ms), not a phase
 
 #ifndef __ASSEMBLER__

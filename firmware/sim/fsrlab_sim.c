@@ -8,6 +8,7 @@
  *   #PD4 <cycle> <level>          each change of the C_off switch output (D4)
  *   #EDGES <rising> <falling>     edges generated on D8 (at the end)
  *   #PEEK <addr> <byte> <word>    data memory byte and little-endian 16-bit word at the end
+ *   #OCR_SMALL <a> <b>            times OCR1A / OCR1B were set to a value below 16 (see main loop)
  *                                (--peek ADDR, data space address, e.g. from avr-nm minus 0x800000)
  *   #END <cycles> <pd4>           simulated cycles and final D4 level
  *
@@ -160,6 +161,15 @@ static avr_cycle_count_t udre_fix_cb(struct avr_t *a, avr_cycle_count_t when, vo
   return 0;
 }
 
+/* ------------------------------------------------------------------ compare registers */
+static unsigned small_a, small_b;
+static void ocr_write_cb(struct avr_irq_t *irq, uint32_t value, void *param) {
+  (void)irq;
+  unsigned addr = param == &small_a ? 0x88 : 0x8A;
+  unsigned v = (value & 0xFF) | (avr->data[addr + 1] << 8);
+  if (v < 16) (*(unsigned *)param)++;
+}
+
 /* ------------------------------------------------------------------ D4 */
 static void pd4_cb(struct avr_irq_t *irq, uint32_t value, void *param) {
   (void)irq; (void)param;
@@ -267,6 +277,12 @@ int main(int argc, char **argv) {
     avr_cycle_timer_register(avr, c > 0 ? c : 1, cmd_cb, NULL);
   }
 
+  /* compare values the firmware writes below 16: simavr 1.6 loses Timer1 compare matches just
+   * after the wrap, so the firmware must never arm one there (firmware/README.md). A 16-bit
+   * write ends with its low byte; the high byte is in place by then. */
+  avr_irq_register_notify(avr_iomem_getirq(avr, 0x88, "ocr1al", AVR_IOMEM_IRQ_ALL), ocr_write_cb, &small_a);
+  avr_irq_register_notify(avr_iomem_getirq(avr, 0x8A, "ocr1bl", AVR_IOMEM_IRQ_ALL), ocr_write_cb, &small_b);
+
   avr_cycle_count_t end = (avr_cycle_count_t)llround(sim_time * F_CPU_HZ);
   int state = cpu_Running;
   while (avr->cycle < end) {
@@ -278,6 +294,7 @@ int main(int argc, char **argv) {
   for (int i = 0; i < npeek; i++)
     fprintf(stderr, "#PEEK 0x%04x %u %u\n", peeks[i], peeks[i] < 0x8ff ? avr->data[peeks[i]] : 0u,
             peeks[i] < 0x8ff ? (unsigned)(avr->data[peeks[i]] | (avr->data[peeks[i] + 1] << 8)) : 0u);
+  fprintf(stderr, "#OCR_SMALL %u %u\n", small_a, small_b);
   fprintf(stderr, "#PC 0x%x state %d\n", avr->pc, avr->state);
   fprintf(stderr, "#END %llu %d\n", (unsigned long long)avr->cycle, pd4_level);
   if (state == cpu_Crashed) { fprintf(stderr, "#CRASHED\n"); return 3; }

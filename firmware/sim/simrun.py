@@ -58,6 +58,7 @@ class SimResult:
     pd4: list[tuple[int, int]] = field(default_factory=list)  # (cycle, level) changes of D4
     edges: tuple[int, int] = (0, 0)  # rising, falling edges generated on D8
     peeks: dict[int, tuple[int, int]] = field(default_factory=dict)  # addr -> (byte, word)
+    small_ocr: tuple[int, int] = (0, 0)  # OCR1A, OCR1B set below 16 (simavr loses those matches)
     cycles: int = 0
 
     def of_kind(self, kind: str) -> list:
@@ -104,6 +105,8 @@ def run(segments=(), commands=(), time_s: float = 1.0, adc_mv: int = 0, seed: in
             continue
         if parts[0] == "#PD4":
             res.pd4.append((int(parts[1]), int(parts[2])))
+        elif parts[0] == "#OCR_SMALL":
+            res.small_ocr = (int(parts[1]), int(parts[2]))
         elif parts[0] == "#EDGES":
             res.edges = (int(parts[1]), int(parts[2]))
         elif parts[0] == "#PEEK":
