@@ -3,8 +3,9 @@ beside the bounds set by the edge handler's cycle counts.
 
 The real firmware (``firmware/fsrlab_meter``) runs in simavr as an ATmega328P at 16 MHz
 (``firmware/sim/fsrlab_sim``); a frequency is *clean* when every measurement window after the
-first reports ``missed == 0``, the expected number of periods (+-PERIOD_SLACK) and frequency and duty
-cycle within the quantization bound (``firmware/sim/simrun.py``). The search goes up in 4 % steps
+first reports ``missed == 0``, the expected number of periods (+-3: a window ends at the first
+rising edge at or after its due time) and frequency and duty cycle within the quantization bound
+(``firmware/sim/stress.py``, ``check``). The search goes up in 4 % steps
 from 1 kHz and stops at the first frequency that is not clean.
 
 Two bounds, both from the handler's cycle counts (``firmware/fsrlab_meter/capture.S``):
@@ -32,13 +33,11 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "firmware" / "sim"))
 import simrun  # noqa: E402
+import stress  # noqa: E402
 from simrun import Segment  # noqa: E402
 
 TITLE = "Firmware input capture (simavr, ATmega328P at 16 MHz)"
 DUTIES = (0.05, 0.5, 0.95)
-PERIOD_SLACK = 3
-"""Periods per window may differ from f x window by this much: a window ends at the first rising
-edge at or after its due time (8 us clock), so each boundary moves by up to a period and 8 us."""
 F_PROFILE = 20_000.0
 """Frequency at which the handler's cycles per period are measured [Hz]."""
 F_TARGET = 50_000.0
@@ -48,18 +47,8 @@ most 4 cycles late and reaches ``got`` 2 later; reading ICR1 and ``sts TCCR1B`` 
 
 
 def clean(freq: float, duty: float) -> bool:
-    """True when every window after the first is complete and right (see module doc)."""
-    r = simrun.run([Segment(0.0, freq, duty)], [(0.01, "START")], time_s=0.33)
-    ms = r.measurements()[1:]
-    if len(ms) < 2 or r.parser.bad_frames or r.parser.lost:
-        return False
-    for m in ms:
-        if m.missed or m.periods == 0 or abs(m.periods - freq * m.window_ms / 1000) > PERIOD_SLACK:
-            return False
-        df, dd = simrun.bounds(freq, duty, m)
-        if abs(m.frequency_hz - freq) > df or abs(m.duty_cycle - duty) > dd:
-            return False
-    return True
+    """True when every window after the first is complete and right (``firmware/sim/stress.py``)."""
+    return stress.check(freq, duty, time_s=0.33) is None
 
 
 def highest_clean(duty: float) -> float:
