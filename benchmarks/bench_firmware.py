@@ -25,7 +25,6 @@ The background's share at 50 kHz (the issue's target) shows the margin left ther
 
 from __future__ import annotations
 
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -62,20 +61,11 @@ def highest_clean(duty: float) -> float:
     return good
 
 
-def _symbol(elf: Path, name: str) -> int:
-    out = subprocess.run(["avr-nm", str(elf)], capture_output=True, text=True, check=True).stdout
-    for line in out.splitlines():
-        p = line.split()
-        if len(p) == 3 and p[2] == name:
-            return int(p[0], 16) - 0x800000
-    raise KeyError(name)
-
-
 def background_share(freq: float, duty: float) -> float:
     """The background's share of the CPU at ``freq``, from the profiling build's loop count."""
     elf = simrun.BUILD / "profile" / "fsrlab_meter.elf"
     sim = simrun.BUILD / "profile" / "fsrlab_sim"
-    addr = _symbol(elf, "prof_loops")
+    addr = simrun.symbol_address("prof_loops", elf)
 
     def turns(f: float) -> int:
         segs = [Segment(0.0, f, duty)] if f else []

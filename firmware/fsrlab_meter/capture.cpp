@@ -5,7 +5,7 @@
 #include "capture.h"
 
 static_assert(offsetof(CaptureState, prev) == CS_PREV && offsetof(CaptureState, ph_hi) == CS_PHHI &&
-                  offsetof(CaptureState, ph_lo) == CS_PHLO && offsetof(CaptureState, hp16) == CS_HP16 && offsetof(CaptureState, hp32) == CS_HP32 &&
+                  offsetof(CaptureState, ph_lo) == CS_PHLO && offsetof(CaptureState, hp32) == CS_HP32 &&
                   offsetof(CaptureState, half) == CS_HALF && offsetof(CaptureState, snap_t2) == CS_SNAPT && offsetof(CaptureState, acc) == CS_ACC && offsetof(CaptureState, snap) == CS_SNAP &&
                   sizeof(CaptureState) == CS_SIZE,
               "capture_state layout must match capture.h's offsets (used by capture.S)");

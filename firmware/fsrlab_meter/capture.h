@@ -21,15 +21,14 @@
 #define CS_PREV 0    // u16 capture time of the last served edge [ticks]
 #define CS_PHHI 2    // u16 last measured high time [ticks]
 #define CS_PHLO 4    // u16 last measured low time
-#define CS_HP16 6    // unused (kept for the layout)
-#define CS_HP32 8    // u32 the open period's high time when it was 2 ms or longer (ph_hi = 0xFFFF);
+#define CS_HP32 6    // u32 the open period's high time when it was 2 ms or longer (ph_hi = 0xFFFF);
                      // else it is ph_hi (in sum_high already, its period not yet complete)
-#define CS_HALF 12   // u8 half-wraps (32768 ticks) of Timer1 since CS_PREV (valid with F_HALF)
-#define CS_SNAPT 13  // u8 TCNT2 at which a requested snapshot is due (taken at the first rising
+#define CS_HALF 10   // u8 half-wraps (32768 ticks) of Timer1 since CS_PREV (valid with F_HALF)
+#define CS_SNAPT 11  // u8 TCNT2 at which a requested snapshot is due (taken at the first rising
                      // edge at or after it, within 127 counts of 8 us)
-#define CS_ACC 14    // sums, 4 x u32: periods, sum_low, sum_high, missed
-#define CS_SNAP 30   // the same, copied at a snapshot
-#define CS_SIZE 46
+#define CS_ACC 12    // sums, 4 x u32: periods, sum_low, sum_high, missed
+#define CS_SNAP 28   // the same, copied at a snapshot
+#define CS_SIZE 44
 #define SUM_N 0
 #define SUM_LOW 4
 #define SUM_HIGH 8
@@ -74,7 +73,7 @@ struct CaptureSums {
 };
 
 struct CaptureState {
-  uint16_t prev, ph_hi, ph_lo, hp16;
+  uint16_t prev, ph_hi, ph_lo;
   uint32_t hp32;
   uint8_t half, snap_t2;
   CaptureSums acc, snap;

@@ -5,7 +5,8 @@
 // The edges are served by the interrupt handlers of capture.S / capture.cpp (see capture.h). This
 // code is ordinary C that they interrupt anywhere; it keeps only two duties short: the receiver is
 // polled at least every few hundred cycles of its own time (the USART holds two bytes, 174 us at
-// 115200 baud), so long work (a frame's decimal digits) calls service() in between; and interrupts
+// 115200 baud), so long work calls rx_poll() between digits and bytes and service() between
+// fields; and interrupts
 // are never disabled longer than capture_snapshot_now() (~100 cycles, only without fast edges).
 #include <avr/io.h>
 #include <avr/interrupt.h>
@@ -32,7 +33,6 @@
 static uint8_t t2_last;
 static uint32_t now8;    // [8 us] since boot
 static uint32_t now_ms;  // now8 / 125
-static uint8_t t2_base;  // TCNT2 when now8 was 0: TCNT2 = (now8 + t2_base) mod 256
 
 static void clock_poll(void) {
   uint8_t t = TCNT2;
@@ -204,7 +204,7 @@ static uint16_t adc_n;
 static void snap_request(uint8_t why, uint32_t due8) {
   snap_want = why;
   snap_due8 = due8;
-  capture_request((uint8_t)(due8 + t2_base));
+  capture_request((uint8_t)(t2_last + (due8 - now8)));  // TCNT2 at due8 (t2_last was read at now8)
 }
 
 static void window_restart(void) {
@@ -237,30 +237,25 @@ static void snap_poll(void) {
     capture_snapshot_now();
   if (!capture_ready()) return;
   // the handler does not touch snap until the next request
-  CaptureSums s = *(const CaptureSums *)&capture_state.snap;
-  CaptureSums b = base;
-  uint8_t why = snap_want;
-  uint32_t t = fr_t;
-  uint16_t win = fr_window;
-  uint8_t range = fr_range;
+  const CaptureSums &n = *(const CaptureSums *)&capture_state.snap;
   uint16_t adc = adc_n ? (uint16_t)((adc_sum + adc_n / 2u) / adc_n) : 0;
   adc_sum = 0;
   adc_n = 0;
-  base = s;
-  snap_want = SNAP_NONE;
-  if (why == SNAP_FRAME) {
-    uint32_t high = s.sum_high - b.sum_high;
+  if (snap_want == SNAP_FRAME) {
+    uint32_t high = n.sum_high - base.sum_high;
     frame_begin(s_M);
-    field_u32(t);
-    field_u32(win);
-    field_u32(s.periods - b.periods);
-    field_u32(s.sum_low - b.sum_low + high);
+    field_u32(fr_t);
+    field_u32(fr_window);
+    field_u32(n.periods - base.periods);
+    field_u32(n.sum_low - base.sum_low + high);
     field_u32(high);
-    field_u32(s.missed - b.missed);
+    field_u32(n.missed - base.missed);
     field_u32(adc);
-    field_u32(range);
+    field_u32(fr_range);
     frame_end();
   }
+  base = n;
+  snap_want = SNAP_NONE;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -375,6 +370,8 @@ static void hw_init(void) {
   TIMSK2 = 0;
   TCCR2A = 0;
   TCCR2B = _BV(CS22) | _BV(CS20);
+  TIFR2 = _BV(TOV2) | _BV(OCF2A) | _BV(OCF2B);  // Arduino's init() ran it: a stale overflow flag
+                                                // would add a wrap (2 ms) to the first clock poll
   // C_off range switch on D4 = PD4, low at boot (range 0)
   DDRD |= _BV(PD4);
   PORTD &= (uint8_t)~_BV(PD4);
@@ -401,7 +398,6 @@ void meter_run(void) {
   hw_init();
   capture_init();
   t2_last = TCNT2;
-  t2_base = t2_last;
   send_id();  // boot identification, SEQ 0
   sei();
   for (;;) {
