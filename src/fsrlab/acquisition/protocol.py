@@ -22,7 +22,7 @@ import math
 from dataclasses import dataclass, field
 
 __all__ = [
-    "PROTOCOL_VERSION", "F_CPU", "TICK_S", "DEFAULT_BAUD", "MAX_LINE", "MAX_COMMAND", "SEQ_MODULO",
+    "PROTOCOL_VERSION", "F_CPU", "TICK_S", "ADC_BITS", "ADC_COUNTS", "ADC_VREF_V", "ADC_V_PER_COUNT", "DEFAULT_BAUD", "MAX_LINE", "MAX_COMMAND", "SEQ_MODULO",
     "WINDOW_MS_MIN", "WINDOW_MS_MAX", "WINDOW_MS_DEFAULT", "DEVICE_NAME", "FRAME_TYPES", "COMMANDS",
     "ERR_UNKNOWN_COMMAND", "ERR_BAD_VALUE", "ERR_LINE_TOO_LONG",
     "ProtocolError", "CommandError", "Frame", "Measurement", "Identity", "Ack", "DeviceError",
@@ -36,6 +36,14 @@ F_CPU = 16_000_000
 """ATmega328P clock of the Arduino Uno. [Hz]"""
 TICK_S = 62.5e-9
 """One Timer1 tick at prescaler 1 (1/F_CPU); all tick counts on the wire use it. [s]"""
+ADC_BITS = 10
+"""Resolution of the Uno's ADC (the ``adc`` field of an ``M`` frame). [bit]"""
+ADC_COUNTS = 2**ADC_BITS
+"""Number of ADC codes, 0..1023."""
+ADC_VREF_V = 5.0
+"""ADC reference: the Uno's default AVcc reference. [V]"""
+ADC_V_PER_COUNT = ADC_VREF_V / ADC_COUNTS
+"""One ADC step, ``Vref/1024`` (code = floor(V·1024/Vref)). [V]"""
 DEFAULT_BAUD = 115200
 """Default line rate, 8N1. [bit/s]"""
 MAX_LINE = 96
@@ -518,8 +526,8 @@ class Measurement:
 
     @property
     def adc_v(self) -> float:
-        """A0 voltage for the Uno's 5 V reference (``adc · 5 / 1024``). [V]"""
-        return self.adc * 5.0 / 1024.0
+        """A0 voltage for the Uno's 5 V reference (``adc · ADC_V_PER_COUNT``). [V]"""
+        return self.adc * ADC_V_PER_COUNT
 
 
 @dataclass(frozen=True, slots=True)

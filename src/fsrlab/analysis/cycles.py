@@ -27,6 +27,7 @@ __all__ = [
     "Cycle",
     "turning_points",
     "branch_directions",
+    "cycle_numbers",
     "split_cycles",
     "RunHysteresis",
     "run_hysteresis",
@@ -156,6 +157,28 @@ def branch_directions(stress_pa, threshold: float = 0.05) -> np.ndarray:
     if x.size > 1:
         out[0] = out[1]
     return out
+
+
+def cycle_numbers(direction) -> np.ndarray:
+    """Number the cycles of a labelled run: a new cycle starts where loading follows unloading.
+
+    Parameters
+    ----------
+    direction : array_like, shape (n,)
+        +1 loading, -1 unloading, 0 hold (NaN is taken as 0); holds between branches are skipped.
+
+    Returns
+    -------
+    ndarray of int, shape (n,)
+        0 for the first cycle, then 1, 2, ... from each reading that starts a loading branch after
+        an unloading one.
+    """
+    lab = np.nan_to_num(np.asarray(direction, dtype=float)).astype(int)
+    nz = np.flatnonzero(lab != 0)
+    starts = np.zeros(lab.size, dtype=int)
+    if nz.size > 1:
+        starts[nz[1:][(lab[nz[1:]] == 1) & (lab[nz[:-1]] == -1)]] = 1
+    return np.cumsum(starts)
 
 
 def _runs(labels: np.ndarray) -> list[tuple[int, int, int]]:

@@ -35,6 +35,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fsrlab.circuits.circuit import check_fractions as _check_fractions
+from fsrlab.circuits.circuit import check_lm555 as _check_circuit
+from fsrlab.circuits.circuit import check_supply as _check_supply
+
 __all__ = [
     "NoOscillationError",
     "AstableResult",
@@ -144,37 +148,6 @@ def thresholds_from_control(control_v: float, vcc_v: float = 5.0) -> tuple[float
     upper = control_v / vcc_v
     return upper / 2, upper
 
-
-def _check_fractions(lower_fraction: float, upper_fraction: float) -> None:
-    if not (0.0 < lower_fraction < upper_fraction < 1.0):
-        raise ValueError(
-            "lower_fraction and upper_fraction: need 0 < lower_fraction < upper_fraction < 1, got "
-            f"{lower_fraction!r} and {upper_fraction!r}"
-        )
-
-
-def _check_supply(diode: bool, diode_drop_v: float, vcc_v: float) -> None:
-    if not (np.isfinite(vcc_v) and vcc_v > 0):
-        raise ValueError(f"vcc_v: must be a finite supply voltage > 0 V, got {vcc_v!r}")
-    if not (np.isfinite(diode_drop_v) and diode_drop_v >= 0):
-        raise ValueError(f"diode_drop_v: must be a finite forward drop >= 0 V, got {diode_drop_v!r}")
-    if diode_drop_v > 0 and not diode:
-        raise ValueError("diode_drop_v: a forward drop needs diode=True (the drop belongs to D1 in series with R_B)")
-
-
-
-def _check_circuit(r_ohm, c_off_farad, diode: bool, diode_drop_v: float, vcc_v: float,
-                   lower_fraction: float, upper_fraction: float, discharge_ohm=0.0) -> None:
-    """The parameter checks shared by every model of this circuit (scalars or arrays)."""
-    _check_fractions(lower_fraction, upper_fraction)
-    _check_supply(diode, diode_drop_v, vcc_v)
-    for name, value, unit in (("discharge_ohm", discharge_ohm, "Ω"), ("c_off_farad", c_off_farad, "F")):
-        v = np.asarray(value, dtype=float)
-        if np.any(~np.isfinite(v)) or np.any(v < 0):
-            raise ValueError(f"{name}: must be finite and >= 0 {unit}, got {value!r}")
-    r = np.asarray(r_ohm, dtype=float)
-    if np.any(~np.isfinite(r)) or np.any(r <= 0):
-        raise ValueError(f"r_ohm: must be finite and > 0 Ω, got {r_ohm!r}")
 
 def minimum_n_ratio(diode_drop_v: float = 0.0, vcc_v: float = 5.0, upper_fraction: float = 2 / 3) -> float:
     """Smallest ``N = R_FSR/R`` for which the charge phase reaches the upper threshold.

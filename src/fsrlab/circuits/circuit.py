@@ -1,0 +1,266 @@
+"""The readout circuits as values: the LM555 astable and the op-amp (eq. 38), validated once.
+
+A circuit is a frozen dataclass: what a run's sidecar and a saved calibration store
+(:meth:`LM555Circuit.to_dict`), what the meter model, the synthetic runs, the virtual device and the
+calibration pipeline pass along, and what the model functions of :mod:`fsrlab.circuits.lm555`,
+:mod:`fsrlab.circuits.decode` and :mod:`fsrlab.circuits.transient` are evaluated for
+(:meth:`LM555Circuit.kwargs`). The model functions themselves stay pure and vectorised (a design
+sweep passes an array of R), so they take the same parameters as keywords; this module holds the
+one check of those parameters (:func:`check_lm555`).
+
+The paper's circuit is :data:`fsrlab.physics.params.PAPER_CIRCUIT`.
+
+References
+----------
+Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, §5 (Figs. 9b, 13, 16), §6 (eq. 38).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, fields, replace
+
+import numpy as np
+
+__all__ = ["LM555Circuit", "OpAmpReadout", "check_lm555", "check_fractions", "check_supply"]
+
+
+def check_fractions(lower_fraction: float, upper_fraction: float) -> None:
+    """Raise ``ValueError`` unless ``0 < lower_fraction < upper_fraction < 1``.
+
+    Parameters
+    ----------
+    lower_fraction, upper_fraction : float
+        Comparator thresholds as fractions of Vcc. [1]
+    """
+    if not (0.0 < lower_fraction < upper_fraction < 1.0):
+        raise ValueError(
+            "lower_fraction and upper_fraction: need 0 < lower_fraction < upper_fraction < 1, got "
+            f"{lower_fraction!r} and {upper_fraction!r}"
+        )
+
+
+def check_supply(diode: bool, diode_drop_v: float, vcc_v: float) -> None:
+    """Raise ``ValueError`` for a bad supply or diode drop (a drop needs the diode).
+
+    Parameters
+    ----------
+    diode : bool
+        D1 present.
+    diode_drop_v : float
+        Forward drop of D1 (≥ 0). [V]
+    vcc_v : float
+        Supply (> 0). [V]
+    """
+    if not (np.isfinite(vcc_v) and vcc_v > 0):
+        raise ValueError(f"vcc_v: must be a finite supply voltage > 0 V, got {vcc_v!r}")
+    if not (np.isfinite(diode_drop_v) and diode_drop_v >= 0):
+        raise ValueError(f"diode_drop_v: must be a finite forward drop >= 0 V, got {diode_drop_v!r}")
+    if diode_drop_v > 0 and not diode:
+        raise ValueError("diode_drop_v: a forward drop needs diode=True (the drop belongs to D1 in series with R_B)")
+
+
+def check_lm555(r_ohm, c_off_farad, diode: bool, diode_drop_v: float, vcc_v: float,
+                lower_fraction: float, upper_fraction: float, discharge_ohm=0.0) -> None:
+    """The parameter checks shared by every model of the LM555 readout (scalars or arrays).
+
+    Parameters
+    ----------
+    r_ohm : float or array_like
+        R_A = R_B = R (> 0). [Ω]
+    c_off_farad : float or array_like
+        Offset capacitor (≥ 0). [F]
+    diode : bool
+        D1 in series with R_B.
+    diode_drop_v : float
+        Forward drop of D1 (≥ 0, needs ``diode``). [V]
+    vcc_v : float
+        Supply (> 0). [V]
+    lower_fraction, upper_fraction : float
+        Comparator thresholds as fractions of Vcc. [1]
+    discharge_ohm : float or array_like
+        Discharge-transistor on-resistance (≥ 0). [Ω]
+    """
+    check_fractions(lower_fraction, upper_fraction)
+    check_supply(diode, diode_drop_v, vcc_v)
+    for name, value, unit in (("discharge_ohm", discharge_ohm, "Ω"), ("c_off_farad", c_off_farad, "F")):
+        v = np.asarray(value, dtype=float)
+        if np.any(~np.isfinite(v)) or np.any(v < 0):
+            raise ValueError(f"{name}: must be finite and >= 0 {unit}, got {value!r}")
+    r = np.asarray(r_ohm, dtype=float)
+    if np.any(~np.isfinite(r)) or np.any(r <= 0):
+        raise ValueError(f"r_ohm: must be finite and > 0 Ω, got {r_ohm!r}")
+
+
+def _from_dict(cls, d: dict, kind: str):
+    if not isinstance(d, dict):
+        raise ValueError(f"circuit: expected a mapping of {kind} parts, got {type(d).__name__}")
+    names = {f.name for f in fields(cls)}
+    unknown = sorted(set(d) - names - {"topology"})
+    if unknown:
+        raise ValueError(f"circuit: unknown {kind} part(s) {', '.join(unknown)} (known: {', '.join(sorted(names))})")
+    return cls(**{k: v for k, v in d.items() if k in names})
+
+
+@dataclass(frozen=True)
+class LM555Circuit:
+    """The LM555 astable with the FSR as timing element (paper Figs. 9b, 13, 16).
+
+    Parameters
+    ----------
+    r_ohm : float
+        R_A = R_B = R (> 0). [Ω]
+    c_off_farad : float
+        Offset capacitor in parallel with the FSR (≥ 0); the meter switches it in on range 1. [F]
+    diode : bool
+        D1 in series with R_B (paper Figs. 13 and 16).
+    diode_drop_v : float
+        Constant forward drop of D1 during the charge (0: the paper's ideal diode; needs ``diode``). [V]
+    vcc_v : float
+        Supply (> 0). [V]
+    lower_fraction, upper_fraction : float
+        Trigger and threshold levels as fractions of Vcc (1/3 and 2/3; a voltage on the control pin
+        moves both, see :meth:`with_control`). [1]
+    discharge_ohm : float
+        On-resistance of the discharge transistor (≥ 0; 0 is the paper's ideal switch). [Ω]
+    """
+
+    r_ohm: float = 10e3
+    c_off_farad: float = 0.0
+    diode: bool = True
+    diode_drop_v: float = 0.0
+    vcc_v: float = 5.0
+    lower_fraction: float = 1 / 3
+    upper_fraction: float = 2 / 3
+    discharge_ohm: float = 0.0
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if f.name == "diode":
+                if not isinstance(v, (bool, np.bool_)):
+                    raise ValueError(f"diode: must be true or false, got {v!r}")
+                object.__setattr__(self, "diode", bool(v))
+            else:
+                try:
+                    object.__setattr__(self, f.name, float(v))
+                except (TypeError, ValueError):
+                    raise ValueError(f"{f.name}: must be a number, got {v!r}") from None
+        check_lm555(self.r_ohm, self.c_off_farad, self.diode, self.diode_drop_v, self.vcc_v,
+                    self.lower_fraction, self.upper_fraction, self.discharge_ohm)
+
+    @classmethod
+    def with_control(cls, control_v: float, **parts) -> "LM555Circuit":
+        """A circuit whose control pin (5) is driven to ``control_v``.
+
+        Parameters
+        ----------
+        control_v : float
+            Voltage on the control pin, 0 < control_v < vcc_v. [V]
+        **parts
+            The other fields (``vcc_v`` default 5 V).
+
+        Returns
+        -------
+        LM555Circuit
+            Thresholds ``control_v`` and half of it (the LM555's internal divider).
+        """
+        vcc = float(parts.get("vcc_v", 5.0))
+        if not (np.isfinite(vcc) and vcc > 0):
+            raise ValueError(f"vcc_v: must be a finite supply voltage > 0 V, got {vcc!r}")
+        if not (0 < control_v < vcc):
+            raise ValueError(f"control_v: must be between 0 and vcc_v = {vcc:g} V, got {control_v!r}")
+        upper = control_v / vcc
+        return cls(**{**parts, "lower_fraction": upper / 2, "upper_fraction": upper})
+
+    def replace(self, **changes) -> "LM555Circuit":
+        """A copy with some parts changed (validated again)."""
+        return replace(self, **changes)
+
+    def on_range(self, range_) -> "LM555Circuit":
+        """The circuit as the meter runs it on ``range_`` (0: FSR alone, 1: C_off switched in)."""
+        return self if range_ else self.replace(c_off_farad=0.0)
+
+    def kwargs(self) -> dict:
+        """Keyword arguments for the model functions (``astable``, ``decode``, ``simulate``...)."""
+        return asdict(self)
+
+    def astable(self, r_fsr_ohm, c_fsr_farad, check: bool = True):
+        """Steady-state timing for an FSR state (:func:`fsrlab.circuits.lm555.astable`)."""
+        from fsrlab.circuits.lm555 import astable
+
+        return astable(r_fsr_ohm=r_fsr_ohm, c_fsr_farad=c_fsr_farad, check=check, **self.kwargs())
+
+    def decode(self, frequency_hz, duty_cycle, periods=1, check: bool = True):
+        """R_FSR and C_FSR from a reading (:func:`fsrlab.circuits.decode.decode`)."""
+        from fsrlab.circuits.decode import decode
+
+        return decode(frequency_hz, duty_cycle, periods=periods, check=check, **self.kwargs())
+
+    def to_dict(self) -> dict:
+        """JSON-ready parts, with ``topology`` naming the circuit (for sidecars and calibrations)."""
+        return {"topology": "lm555-astable", **asdict(self)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "LM555Circuit":
+        """Inverse of :meth:`to_dict` (missing parts take the defaults; unknown parts are an error)."""
+        return _from_dict(cls, d, "LM555")
+
+
+@dataclass(frozen=True)
+class OpAmpReadout:
+    """The traditional readout: an inverting amplifier with the FSR as input resistor (paper Fig. 18).
+
+    Parameters
+    ----------
+    r_f_ohm : float
+        Feedback resistor (> 0; 20 kΩ in the paper). [Ω]
+    vcc_v : float
+        Drive voltage at the FSR's input (finite, not 0; −5 V in the paper, so that V_out > 0). [V]
+
+    Notes
+    -----
+    ``V_out = −(R_F/R_FSR)·Vcc`` (eq. 38). The FSR sits between ``Vcc`` and the virtual ground, so it
+    sees ``|Vcc|`` whatever its resistance: its resistance is the one at ``|Vcc|``
+    (:attr:`fsr_voltage_v`).
+    """
+
+    r_f_ohm: float = 20e3
+    vcc_v: float = -5.0
+
+    def __post_init__(self) -> None:
+        for name in ("r_f_ohm", "vcc_v"):
+            try:
+                object.__setattr__(self, name, float(getattr(self, name)))
+            except (TypeError, ValueError):
+                raise ValueError(f"{name}: must be a number, got {getattr(self, name)!r}") from None
+        if not (math.isfinite(self.r_f_ohm) and self.r_f_ohm > 0):
+            raise ValueError(f"r_f_ohm: must be finite and > 0 Ω, got {self.r_f_ohm!r}")
+        if not (math.isfinite(self.vcc_v) and self.vcc_v != 0):
+            raise ValueError(f"vcc_v: must be a finite non-zero voltage, got {self.vcc_v!r}")
+
+    @property
+    def fsr_voltage_v(self) -> float:
+        """Voltage across the FSR, ``|Vcc|``. [V]"""
+        return abs(self.vcc_v)
+
+    def output_v(self, r_fsr_ohm):
+        """Output voltage for an FSR resistance taken at :attr:`fsr_voltage_v` (eq. 38). [V]"""
+        from fsrlab.circuits.opamp import inverting_amplifier
+
+        return inverting_amplifier(r_fsr_ohm, self.r_f_ohm, self.vcc_v).v_out_v
+
+    def conductance_s(self, v_out_v):
+        """FSR conductance from the output voltage, ``G = −V_out/(R_F·Vcc)`` (eq. 38 inverted). [S]"""
+        v = np.asarray(v_out_v, dtype=float)
+        g = -v / (self.r_f_ohm * self.vcc_v)
+        return g[()] if g.ndim == 0 else g
+
+    def to_dict(self) -> dict:
+        """JSON-ready parts, with ``topology``."""
+        return {"topology": "opamp-inverting", **asdict(self)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "OpAmpReadout":
+        """Inverse of :meth:`to_dict`."""
+        return _from_dict(cls, d, "op-amp")
