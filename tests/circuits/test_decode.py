@@ -1,4 +1,4 @@
-"""Dual decoding and sensitivities (fsrlab.circuits.lm555.decode / sensitivity).
+"""Dual decoding and sensitivities (fsrlab.circuits.decode.decode / sensitivity).
 
 References: round trips through the closed forms and through the independent event-driven
 simulation (decode(simulate(parts)) = parts, issue 3), a Monte-Carlo of timer quantization for the
@@ -13,7 +13,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from fsrlab.circuits.lm555 import TIMER_TICK_S, astable, decode, sensitivity
+from fsrlab.circuits.lm555 import astable, sensitivity
+from fsrlab.circuits.decode import decode
+from fsrlab.acquisition.protocol import TICK_S as TIMER_TICK_S
 from fsrlab.circuits.transient import simulate
 
 

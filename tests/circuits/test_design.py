@@ -5,7 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fsrlab.circuits.lm555 import TIMER_TICK_S, astable, design, minimum_n_ratio
+from fsrlab.circuits.lm555 import astable, minimum_n_ratio
+from fsrlab.circuits.design import design
+from fsrlab.acquisition.protocol import TICK_S as TIMER_TICK_S
 
 SENSOR = dict(r_fsr_range_ohm=(100e3, 2e6), c_fsr_range_farad=(0.5e-9, 1.5e-9))
 

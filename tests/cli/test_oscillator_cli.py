@@ -11,7 +11,8 @@ import json
 import pytest
 from toolcheck import require_tool
 
-from fsrlab.circuits.lm555 import astable, decode
+from fsrlab.circuits.lm555 import astable
+from fsrlab.circuits.decode import decode
 from clirun import run_cli
 
 

@@ -14,7 +14,7 @@ equations of every degree and every fold follow from per-group sums of ``T_0 .. 
 least squares (``numpy.linalg.lstsq``) on all readings.
 
 A physics-informed option calibrates on C_FSR decoded from frequency and duty cycle
-(:func:`fsrlab.circuits.lm555.decode`) instead of on raw frequency.
+(:func:`fsrlab.circuits.decode.decode`) instead of on raw frequency.
 
 References
 ----------
@@ -646,11 +646,11 @@ def decode_capacitance(frequency_hz, duty_cycle, r_ohm: float, c_off_farad: floa
     Returns
     -------
     ndarray
-        C_FSR [F] by :func:`fsrlab.circuits.lm555.decode`; NaN where a reading is missing or is
+        C_FSR [F] by :func:`fsrlab.circuits.decode.decode`; NaN where a reading is missing or is
         impossible for the circuit (e.g. one noisy duty cycle outside the reachable range), so that
         one bad window does not stop a whole run.
     """
-    from fsrlab.circuits.lm555 import decode
+    from fsrlab.circuits.decode import decode
     f = np.asarray(frequency_hz, dtype=float)
     d = np.asarray(duty_cycle, dtype=float)
     out = np.full(f.shape, np.nan)

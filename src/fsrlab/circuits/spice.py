@@ -35,7 +35,8 @@ from pathlib import Path
 
 import numpy as np
 
-from fsrlab.circuits.lm555 import _check_fractions, _check_supply, astable
+from fsrlab.circuits.circuit import check_fractions as _check_fractions, check_supply as _check_supply
+from fsrlab.circuits.lm555 import astable
 
 __all__ = ["SUBCKT_555", "SpiceResult", "netlist", "run_ngspice", "simulate_spice", "ngspice_available",
            "edges_from_waveform"]

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsrlab.circuits.lm555 import _check_circuit
+from fsrlab.circuits.circuit import check_lm555 as _check_circuit
 
 __all__ = ["TransientResult", "simulate"]
 

@@ -106,7 +106,8 @@ def decode_cmd(
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Recover R_FSR and C_FSR from a measured frequency and duty cycle (uncertainty: 62.5 ns timer ticks)."""
-    from fsrlab.circuits.lm555 import decode, thresholds_from_control
+    from fsrlab.circuits.lm555 import thresholds_from_control
+    from fsrlab.circuits.decode import decode
 
     diode, drop = _variant(diode, diode_drop)
     with option_names(_NAMES):
@@ -145,7 +146,7 @@ def design_cmd(
     """Propose R, C_off and the variant for a sensor's R_FSR/C_FSR ranges and a wanted frequency band."""
     from dataclasses import asdict
 
-    from fsrlab.circuits.lm555 import design
+    from fsrlab.circuits.design import design
 
     with option_names(_NAMES):
         d = design((rfsr_min, rfsr_max), (cfsr_min, cfsr_max), (fmin, fmax), variant=variant,

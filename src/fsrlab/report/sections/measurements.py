@@ -235,7 +235,7 @@ def build(outdir: Path) -> Section:
               note="fsrlab calibrate on a synthetic run (VirtualFSR, R = 10 kΩ, ideal D1, 100 ms windows, 62.5 ns "
                    "quantization, 0.2 % frequency noise). With ~14 % hysteresis in the data, no single-valued curve "
                    "reaches the paper's cubic R² on both branches; on one branch the cubic does. Physics-informed "
-                   "row: C_FSR decoded from frequency and duty cycle (fsrlab.circuits.lm555.decode) carries only "
+                   "row: C_FSR decoded from frequency and duty cycle (fsrlab.circuits.decode.decode) carries only "
                    f"the separation's hysteresis: HE of its calibrated stress {he_c:.2f} % versus "
                    f"{comp.he_before_percent:.2f} % for the cubic on raw frequency."),
     ]
