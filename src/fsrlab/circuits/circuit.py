@@ -22,7 +22,7 @@ from dataclasses import asdict, dataclass, fields, replace
 
 import numpy as np
 
-__all__ = ["LM555Circuit", "OpAmpReadout", "check_lm555", "check_fractions", "check_supply"]
+__all__ = ["LM555Circuit", "OpAmpReadout", "readout_from_metadata", "check_lm555", "check_fractions", "check_supply"]
 
 
 def check_fractions(lower_fraction: float, upper_fraction: float) -> None:
@@ -264,3 +264,36 @@ class OpAmpReadout:
     def from_dict(cls, d: dict) -> "OpAmpReadout":
         """Inverse of :meth:`to_dict`."""
         return _from_dict(cls, d, "op-amp")
+
+
+def readout_from_metadata(metadata: dict) -> tuple[LM555Circuit | None, OpAmpReadout | None]:
+    """The readout circuits a run's sidecar (or a calibration) describes.
+
+    Parameters
+    ----------
+    metadata : dict
+        Sidecar content: ``circuit`` (an :meth:`LM555Circuit.to_dict`) and ``opamp`` (an
+        :meth:`OpAmpReadout.to_dict`). Earlier sidecars are read too: op-amp parts as
+        ``circuit.traditional`` or as ``r_f_ohm`` beside the LM555's parts (with the FSR driven
+        from ``−vcc_v``), and a free-text ``topology``.
+
+    Returns
+    -------
+    (LM555Circuit or None, OpAmpReadout or None)
+        None where the sidecar says nothing of that circuit.
+
+    Raises
+    ------
+    ValueError
+        A part out of range or unknown (the message names it).
+    """
+    raw = dict((metadata or {}).get("circuit") or {})
+    opamp = (metadata or {}).get("opamp")
+    legacy = raw.pop("traditional", None)
+    if "r_f_ohm" in raw:
+        legacy = {"r_f_ohm": raw.pop("r_f_ohm"), "vcc_v": -abs(float(raw.get("vcc_v", 5.0)))}
+    if opamp is None and legacy is not None:
+        opamp = legacy
+    raw.pop("topology", None)
+    circuit = LM555Circuit.from_dict(raw) if raw else None
+    return circuit, (OpAmpReadout.from_dict(opamp) if opamp is not None else None)
