@@ -20,7 +20,7 @@ Two bounds, both from the handler's cycle counts (``firmware/fsrlab_meter/captur
   so a phase shorter than that is lost whatever the CPU load: at duty cycle ``d`` the shorter phase
   is ``min(d, 1 - d) * 16 MHz / f`` cycles.
 
-The background's share at 50 kHz (the issue's target) shows the margin left there.
+The background's share at 50 kHz (the supported range's top) shows the margin left there.
 """
 
 from __future__ import annotations

@@ -65,7 +65,7 @@ def run() -> str:
         f"{vec_rate / calls_rate:.0f}× faster |\n"
         f"| hand-written `math` loop | {t_loop * 1e3:.0f} ms for {N_LOOP:,} | {loop_rate:.3g} | "
         f"{vec_rate / loop_rate:.0f}× faster |\n\n"
-        f"Aim (issue 2): ≥ 10⁷ points/s: {'met' if vec_rate >= 1e7 else 'NOT met'}; ≥ 100× the loop: "
+        f"Target: ≥ 10⁷ points/s: {'met' if vec_rate >= 1e7 else 'NOT met'}; ≥ 100× the loop: "
         f"{'met' if vec_rate / calls_rate >= 100 else 'NOT met'} against the loop over fsrlab's functions, "
         f"{'met' if vec_rate / loop_rate >= 100 else 'not met'} against the hand-written `math` loop, which needs no "
         f"array bookkeeping: 100× of it would be ≈ {100 * loop_rate:.2g} points/s, about "

@@ -31,7 +31,7 @@ from fsrlab.acquisition.protocol import (  # noqa: E402
     CommandError, FrameParser, parse_command,
 )
 
-# Supported range checked here (the issue's): every edge captured (missed == 0) and values within
+# Supported range checked here: every edge captured (missed == 0) and values within
 # the bound from 10 Hz to 50 kHz at 5, 50 and 95 % duty cycle. benchmarks/bench_firmware.py measures
 # how far above it the firmware stays clean (docs/performance.md).
 # Periods per window: f x window +- PERIOD_SLACK: a window ends at the first rising edge at or after
