@@ -27,6 +27,7 @@ __all__ = [
     "Cycle",
     "turning_points",
     "branch_directions",
+    "readout_directions",
     "cycle_numbers",
     "split_cycles",
     "RunHysteresis",
@@ -157,6 +158,40 @@ def branch_directions(stress_pa, threshold: float = 0.05) -> np.ndarray:
     if x.size > 1:
         out[0] = out[1]
     return out
+
+
+def readout_directions(x, sign: float = 1.0, threshold: float = 0.05) -> np.ndarray:
+    """Label readings +1 (loading) / -1 (unloading) from a readout sequence alone, gaps included.
+
+    Parameters
+    ----------
+    x : array_like, shape (n,)
+        Readout in time order (frequency [Hz], ...); NaN readings get the label of the previous
+        valid one (the first valid one's before it).
+    sign : {+1, -1}
+        +1 if the readout grows with stress, -1 if it falls.
+    threshold : float
+        Reversal threshold as a fraction of the readout span (see :func:`turning_points`). [1]
+
+    Returns
+    -------
+    ndarray of int, shape (n,)
+        +1 or -1 for every reading: :func:`branch_directions` of ``sign * x`` over the valid
+        readings, where a sequence that never moves beyond the threshold counts as loading.
+    """
+    x = np.asarray(x, dtype=float)
+    ok = np.flatnonzero(np.isfinite(x))
+    lab = np.ones(x.size, dtype=int)
+    if ok.size == 0:
+        return lab
+    sub = branch_directions(sign * x[ok], threshold)
+    lab[ok] = np.where(sub == 0, 1, sub)
+    # NaN readings: carry the last label forward (and the first backward).
+    idx = np.where(np.isfinite(x), np.arange(x.size), 0)
+    np.maximum.accumulate(idx, out=idx)
+    lab = lab[idx]
+    lab[: ok[0]] = lab[ok[0]]
+    return lab
 
 
 def cycle_numbers(direction) -> np.ndarray:
