@@ -65,7 +65,8 @@ def repeatability(
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Repeatability errors RE1 and RE2 (eq. 39) per load and sensor, and their means per load."""
-    from fsrlab.analysis.repeatability import grouped_repeatability, load_grouped_csv
+    from fsrlab.analysis.repeatability import grouped_repeatability
+    from fsrlab.tables import load_grouped_csv
 
     if ddof not in (0, 1):
         fail(f"must be 0 or 1, got {ddof}", "--ddof")
@@ -221,7 +222,8 @@ def iso376_cmd(
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """ISO 376:2011 quantities (b, b', fc, f0, v, c) and the class they reach (beyond the paper)."""
-    from fsrlab.analysis.iso376 import iso376, load_iso376_csv
+    from fsrlab.analysis.iso376 import iso376
+    from fsrlab.tables import load_iso376_csv
 
     if degree not in (1, 2, 3):
         fail(f"must be 1, 2 or 3, got {degree}", "--degree")
