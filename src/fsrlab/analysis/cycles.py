@@ -7,6 +7,10 @@ has moved back from its running extremum by more than a threshold (a fraction of
 span), which ignores noise smaller than the threshold. A cycle is a loading branch followed by an
 unloading branch; the turning-point reading belongs to both, so each branch spans the full range.
 
+:func:`row_directions` and :func:`row_cycles` are the one rule for a run's branches and cycles
+(its columns when present, else from the stress), used alike by :func:`split_cycles`, by the
+calibration's cross-validation groups and by :mod:`fsrlab.analysis.pipeline`.
+
 The hysteresis error itself is eq. (13) as implemented by
 :func:`fsrlab.analysis.hysteresis.hysteresis_error` (branches interpolated onto a common stress
 axis); this module only feeds it the branches, per cycle and for the run as a whole.
@@ -194,6 +198,60 @@ def readout_directions(x, sign: float = 1.0, threshold: float = 0.05) -> np.ndar
     return lab
 
 
+def row_directions(stress_pa, direction=None, cycle=None, threshold: float = 0.05) -> np.ndarray:
+    """Direction of every reading of a run: its ``direction`` column, else found from the stress.
+
+    Parameters
+    ----------
+    stress_pa : array_like, shape (n,)
+        Reference stress in time order (NaN where a reading has none). [Pa]
+    direction : array_like, optional
+        The run's ``direction`` column (+1 loading, -1 unloading, 0 hold, NaN unknown); when given
+        it decides and the stress is not examined.
+    cycle : array_like, optional
+        The run's ``cycle`` column; without a direction column, the branches are then found within
+        each recorded cycle (its own stress span sets the threshold).
+    threshold : float
+        Reversal threshold as a fraction of the stress span (see :func:`turning_points`). [1]
+
+    Returns
+    -------
+    ndarray of int, shape (n,)
+        +1, -1 or 0: the direction column with NaN as 0, or :func:`branch_directions` of the
+        readings that have a stress (0 for those that have none, or no cycle number).
+
+    Raises
+    ------
+    ValueError
+        A column of the wrong length, or a direction other than -1, 0, +1.
+    """
+    x = np.asarray(stress_pa, dtype=float)
+    if x.ndim != 1:
+        raise ValueError("stress_pa must be 1-D")
+    n = x.size
+    if direction is not None:
+        dirn = np.asarray(direction, dtype=float)
+        if dirn.shape != (n,):
+            raise ValueError("direction must have the same length as stress_pa")
+        dirn = np.nan_to_num(dirn, nan=0.0)
+        if not np.all(np.isin(dirn, (-1, 0, 1))):
+            raise ValueError("direction must hold -1 (unloading), 0 (hold) or +1 (loading)")
+        return dirn.astype(int)
+    ok = np.isfinite(x)
+    if cycle is not None:
+        cyc = np.asarray(cycle, dtype=float)
+        if cyc.shape != (n,):
+            raise ValueError("cycle must have the same length as stress_pa")
+        groups = [np.flatnonzero(ok & (cyc == v)) for v in dict.fromkeys(cyc[~np.isnan(cyc)].tolist())]
+    else:
+        groups = [np.flatnonzero(ok)]
+    labels = np.zeros(n, dtype=int)
+    for rows in groups:
+        if rows.size:
+            labels[rows] = branch_directions(x[rows], threshold)
+    return labels
+
+
 def cycle_numbers(direction) -> np.ndarray:
     """Number the cycles of a labelled run: a new cycle starts where loading follows unloading.
 
@@ -214,6 +272,32 @@ def cycle_numbers(direction) -> np.ndarray:
     if nz.size > 1:
         starts[nz[1:][(lab[nz[1:]] == 1) & (lab[nz[:-1]] == -1)]] = 1
     return np.cumsum(starts)
+
+
+def row_cycles(stress_pa, direction=None, cycle=None, threshold: float = 0.05) -> np.ndarray:
+    """Cycle number of every reading of a run: its ``cycle`` column, else numbered from its directions.
+
+    Parameters
+    ----------
+    stress_pa : array_like, shape (n,)
+        Reference stress in time order. [Pa]
+    direction, cycle : array_like, optional
+        The run's ``direction`` and ``cycle`` columns (see :func:`row_directions`).
+    threshold : float
+        Reversal threshold as a fraction of the stress span. [1]
+
+    Returns
+    -------
+    ndarray of float, shape (n,)
+        The cycle column as given (NaN where empty), or :func:`cycle_numbers` of
+        :func:`row_directions`.
+    """
+    if cycle is not None:
+        cyc = np.asarray(cycle, dtype=float)
+        if cyc.shape != np.shape(stress_pa):
+            raise ValueError("cycle must have the same length as stress_pa")
+        return cyc
+    return cycle_numbers(row_directions(stress_pa, direction, None, threshold)).astype(float)
 
 
 def _runs(labels: np.ndarray) -> list[tuple[int, int, int]]:
@@ -281,32 +365,15 @@ def split_cycles(stress_pa, direction=None, cycle=None, threshold: float = 0.05)
         A run that starts while unloading or ends while loading has that part left out.
     """
     x = np.asarray(stress_pa, dtype=float)
-    if x.ndim != 1:
-        raise ValueError("stress_pa must be 1-D")
-    n = x.size
-    if direction is not None:
-        dirn = np.asarray(direction, dtype=float)
-        if dirn.shape != (n,):
-            raise ValueError("direction must have the same length as stress_pa")
-        dirn = np.nan_to_num(dirn, nan=0.0)
-        if not np.all(np.isin(dirn, (-1, 0, 1))):
-            raise ValueError("direction must hold -1 (unloading), 0 (hold) or +1 (loading)")
-        labels = dirn.astype(int)
-    else:
-        labels = None
+    labels = row_directions(x, direction, cycle, threshold)
     if cycle is not None:
         cyc = np.asarray(cycle, dtype=float)
-        if cyc.shape != (n,):
-            raise ValueError("cycle must have the same length as stress_pa")
         out = []
         for value in dict.fromkeys(cyc[~np.isnan(cyc)].tolist()):
             rows = np.flatnonzero(cyc == value)
-            lab = labels[rows] if labels is not None else branch_directions(x[rows], threshold)
-            for c in _pair(lab, x[rows], 0, rows):
+            for c in _pair(labels[rows], x[rows], 0, rows):
                 out.append(Cycle(int(value) if float(value).is_integer() else len(out), c.load_index, c.unload_index))
         return out
-    if labels is None:
-        labels = branch_directions(x, threshold)
     return _pair(labels, x)
 
 
@@ -334,7 +401,6 @@ class RunHysteresis:
     cycles: list = field(default_factory=list)
     cycle_numbers: list = field(default_factory=list)
     method: str = ""
-
     def to_dict(self) -> dict[str, Any]:
         """The CLI's JSON shape."""
         return {
