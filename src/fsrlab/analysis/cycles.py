@@ -394,6 +394,8 @@ class RunHysteresis:
         The cycles' numbers.
     method : str
         How the branches were found and combined.
+    overall : HysteresisResult or None
+        Eq. (13) on the mean curves, with those curves (for :meth:`plot`).
     """
 
     percent: float
@@ -401,6 +403,42 @@ class RunHysteresis:
     cycles: list = field(default_factory=list)
     cycle_numbers: list = field(default_factory=list)
     method: str = ""
+    overall: Any = field(default=None, repr=False, compare=False)
+
+    def plot(self, ax=None, label: str = "Q", cycles: bool = True):
+        """Draw the mean loading and unloading branches, the largest difference and each cycle's branches.
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Where to draw (default: a new figure).
+        label : str
+            Name of the quantity, for the axis label.
+        cycles : bool
+            Also draw every cycle's own branches, faintly, before the mean curves.
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+            The last three lines are the mean loading branch, the mean unloading branch and the
+            difference at σd (see :meth:`HysteresisResult.plot`).
+        """
+        from fsrlab.analysis.hysteresis import _draw_branches
+
+        if self.overall is None or self.overall.stress_pa is None:
+            raise ValueError("this result holds no branches to plot")
+        if ax is None:
+            import matplotlib.pyplot as plt
+
+            _, ax = plt.subplots()
+        if cycles:
+            for c in self.cycles:
+                ax.plot(c.stress_pa, c.q_load, "-", color="tab:blue", alpha=0.25, lw=0.8)
+                ax.plot(c.stress_pa, c.q_unload, "-", color="tab:orange", alpha=0.25, lw=0.8)
+        _draw_branches(ax, self.overall, label)
+        ax.set_title(f"hysteresis error (eq. 13): {self.percent:.2f} % over {len(self.cycles)} cycles")
+        return ax
+
     def to_dict(self) -> dict[str, Any]:
         """The CLI's JSON shape."""
         return {
@@ -505,4 +543,5 @@ def run_hysteresis(stress_pa, q, direction=None, cycle=None, threshold: float = 
     method = (f"branches from {how}; per cycle: eq. (13) via hysteresis_error ({overall.method}); "
               f"overall: eq. (13) on the mean of the {len(cycles)} cycles' branches on a common stress grid")
     return RunHysteresis(percent=float(overall.percent), stress_at_max_pa=float(overall.stress_at_max_pa),
-                         cycles=results, cycle_numbers=[c.number for c in cycles], method=method)
+                         cycles=results, cycle_numbers=[c.number for c in cycles], method=method,
+                         overall=overall)
