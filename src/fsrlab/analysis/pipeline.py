@@ -14,10 +14,13 @@ hysteresis error.
 
 Examples
 --------
->>> from fsrlab.runformat import load_run                      # doctest: +SKIP
->>> from fsrlab.analysis.pipeline import calibrate_run, apply_calibration
->>> cal = calibrate_run(load_run("bench.csv"), x="frequency_hz", compensate=True)
->>> est = apply_calibration(cal, load_run("other.csv"))["stress_pa_estimate"]
+Calibrate one run and estimate the stress of another (``bench.csv`` and ``other.csv`` are runs
+in the format of docs/data-format.md)::
+
+    from fsrlab.runformat import load_run
+    from fsrlab.analysis.pipeline import calibrate_run, apply_calibration
+    cal = calibrate_run(load_run("bench.csv"), x="frequency_hz", compensate=True)
+    est = apply_calibration(cal, load_run("other.csv"))["stress_pa_estimate"]
 
 References
 ----------
