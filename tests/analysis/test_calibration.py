@@ -1,4 +1,4 @@
-"""Calibration (fsrlab.analysis.calibration): polynomial fits, grouped cross-validation, files.
+"""Calibration (fsrlab.analysis.calibration, calibration_io): polynomial fits, grouped cross-validation, files.
 
 References: numpy.polyfit (an independent least-squares implementation) for the fits; explicit
 refits per fold for the sufficient-statistics cross-validation; exact polynomials for recovery.
@@ -14,10 +14,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from fsrlab.analysis.calibration import (
-    calibrate, cross_validate_degrees, default_groups, fit_metrics, fit_polynomial, load_calibration,
-    save_calibration,
-)
+from fsrlab.analysis.calibration import calibrate, cross_validate_degrees, default_groups, fit_metrics, fit_polynomial
+from fsrlab.analysis.calibration_io import load_calibration, save_calibration
 
 
 def test_fit_matches_numpy_polyfit_and_power_coefficients():
@@ -171,11 +169,12 @@ def test_physics_informed_calibration_on_decoded_capacitance():
     noiseless C_FSR from VirtualFSR; tolerance 2 %: the decode amplifies the 0.2 % frequency noise
     and the duty-cycle quantization by a factor of a few. Reference 2 (property): C_FSR carries only
     the separation's hysteresis, not R_FSR's, so stress(C_FSR) fits better than stress(f)."""
-    from fsrlab.analysis.calibration import decode_capacitance
+    from fsrlab.analysis.pipeline import decode_capacitance
     from fsrlab.analysis.synthetic import synthetic_run
+    from fsrlab.circuits.circuit import LM555Circuit
 
     c = synthetic_run(cycles=3, seed=1).columns
-    cf = decode_capacitance(c["frequency_hz"], c["duty_cycle"], 10e3, diode=True)
+    cf = decode_capacitance(c["frequency_hz"], c["duty_cycle"], LM555Circuit(r_ohm=10e3, diode=True))
     np.testing.assert_allclose(cf, c["c_fsr_farad"], rtol=0.02)
     on_c = calibrate(cf, c["stress_pa"], degree=3, x_name="c_fsr_farad", x_unit="F")
     on_f = calibrate(c["frequency_hz"], c["stress_pa"], degree=3)
@@ -196,10 +195,15 @@ def test_inverse_roundtrip_and_non_monotonic():
 def test_decode_capacitance_gives_nan_for_an_impossible_reading_not_an_error():
     # Property: without the diode the duty cycle cannot fall below 2/3 (erratum O1's limit), so a
     # reading of 0.5 is impossible; it becomes NaN while its neighbours decode.
-    from fsrlab.analysis.calibration import decode_capacitance
+    from fsrlab.analysis.calibration import decode_capacitance as by_parts
+    from fsrlab.analysis.pipeline import decode_capacitance
+    from fsrlab.circuits.circuit import LM555Circuit
     from fsrlab.circuits.lm555 import astable
 
     good = astable(10e3, 200e3, 1e-9)
-    c = decode_capacitance([good.frequency_hz, good.frequency_hz, np.nan], [good.duty_cycle, 0.5, 0.8], 10e3, diode=False)
+    f, dc = [good.frequency_hz, good.frequency_hz, np.nan], [good.duty_cycle, 0.5, 0.8]
+    c = decode_capacitance(f, dc, LM555Circuit(r_ohm=10e3, diode=False))
     assert c[0] == pytest.approx(1e-9, rel=1e-6)
     assert np.isnan(c[1]) and np.isnan(c[2])
+    # The circuit given by its parts is the same decoding.
+    np.testing.assert_array_equal(by_parts(f, dc, 10e3, diode=False), c)

@@ -17,14 +17,6 @@ from clirun import run_cli
 from fsrlab.runformat import load_run
 
 
-@pytest.fixture(scope="module")
-def runs(tmp_path_factory):
-    d = tmp_path_factory.mktemp("runs")
-    synthetic_run(cycles=3, seed=1).write(d / "bench.csv")
-    synthetic_run(cycles=2, seed=7).write(d / "other.csv")
-    return d
-
-
 def test_hysteresis_json_keys(runs, capsys):
     code, out, _ = run_cli(["hysteresis", runs / "bench.csv", "--json"], capsys)
     assert code == 0
@@ -106,3 +98,23 @@ def test_bad_input_one_line_exit_2(runs, tmp_path, capsys, args, needle):
     code, out, err = run_cli([a.format(**sub) for a in args], capsys)
     assert code == 2
     assert err.count("\n") == 1 and needle in err
+
+
+def test_calibrate_on_decoded_capacitance_stores_the_circuit_and_apply_reuses_it(runs, tmp_path, capsys):
+    # Reference: the pipeline called directly on the same run (the CLI only renders), and the
+    # circuit the options name (--r over the sidecar's R = 10 kΩ).
+    from fsrlab.analysis.pipeline import apply_calibration, calibrate_run
+    from fsrlab.circuits.circuit import LM555Circuit
+
+    cal = tmp_path / "calc.json"
+    code, out, _ = run_cli(["calibrate", runs / "bench.csv", "--x", "c_fsr_farad", "--r", "10k", "-o", cal, "--json"],
+                           capsys)
+    assert code == 0
+    stored = json.loads(cal.read_text())["circuit"]
+    assert LM555Circuit.from_dict(stored) == LM555Circuit(r_ohm=10e3, diode=True)
+    ref = calibrate_run(runs / "bench.csv", x="c_fsr_farad")
+    assert json.loads(out)["coefficients"] == ref.model.power_coefficients().tolist()
+    code, _, _ = run_cli(["apply", cal, runs / "other.csv", "-o", tmp_path / "est.csv"], capsys)
+    assert code == 0
+    np.testing.assert_allclose(load_run(tmp_path / "est.csv")["stress_pa_estimate"],
+                               apply_calibration(ref, runs / "other.csv")["stress_pa_estimate"], rtol=1e-12)

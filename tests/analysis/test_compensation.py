@@ -11,10 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fsrlab.analysis.compensation import (
-    DirectionAwareCalibration, compare_compensation, fit_direction_aware, readout_directions,
-)
-from fsrlab.analysis.cycles import run_hysteresis
+from fsrlab.analysis.compensation import DirectionAwareCalibration, compare_compensation, fit_direction_aware
+from fsrlab.analysis.cycles import readout_directions, run_hysteresis
 from fsrlab.analysis.synthetic import synthetic_run
 
 

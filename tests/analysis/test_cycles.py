@@ -147,3 +147,19 @@ def test_rows_without_reference_stress_are_skipped():
     full = run_hysteresis(c["stress_pa"][~np.isnan(s)], c["frequency_hz"][~np.isnan(s)])
     holes = run_hysteresis(s, c["frequency_hz"])
     assert holes.percent == pytest.approx(full.percent, rel=1e-12)
+
+
+def test_readout_directions_are_branch_directions_with_gaps_filled():
+    # Reference: branch_directions on the valid readings (the one labeller); NaN readings take the
+    # previous label, leading NaNs the first one; a flat sequence counts as loading.
+    x = triangle(2, 20)
+    holes = x.copy()
+    holes[[0, 1, 7, 20, 21, 55]] = np.nan
+    from fsrlab.analysis.cycles import readout_directions
+
+    lab = readout_directions(holes)
+    ok = np.isfinite(holes)
+    np.testing.assert_array_equal(lab[ok], branch_directions(holes[ok]))
+    assert lab[0] == lab[1] == lab[2] and lab[7] == lab[6] and lab[21] == lab[20] == lab[19]
+    np.testing.assert_array_equal(readout_directions(-holes, sign=-1), lab)
+    np.testing.assert_array_equal(readout_directions(np.full(5, 3.0)), np.ones(5))

@@ -99,7 +99,7 @@ def test_validation():
 def test_csv_loader_and_cli(tmp_path, capsys):
     import json
 
-    from fsrlab.analysis.iso376 import load_iso376_csv
+    from fsrlab.tables import load_iso376_csv
     from fsrlab.cli import main
 
     lines = ["series,rotation_deg,force_n,reading,direction"]

@@ -4,7 +4,9 @@ The paper fits stress against frequency with a straight line (R² = 0.9432) and 
 (R² = 0.9974) (§5, Figure 17). fsrlab fits degrees 1 to 5 and chooses the degree by
 cross-validation in which whole loading-unloading cycles stay together (grouped folds), so a
 degree is judged on cycles it has not seen; it reports R², RMSE and the largest error in percent of
-full scale, saves the calibration to a JSON file and applies it to other runs.
+full scale. This module holds the computation on arrays; the calibration file is
+:mod:`fsrlab.analysis.calibration_io`, and calibrating a recorded run (its cycles, its circuit,
+the compensation) and applying the result to another run is :mod:`fsrlab.analysis.pipeline`.
 
 Numerics: the readout is mapped onto [-1, 1] and the polynomial is written in Chebyshev
 polynomials T_k, which keeps the least-squares problem well conditioned up to degree 5. Cross-
@@ -14,7 +16,7 @@ equations of every degree and every fold follow from per-group sums of ``T_0 .. 
 least squares (``numpy.linalg.lstsq``) on all readings.
 
 A physics-informed option calibrates on C_FSR decoded from frequency and duty cycle
-(:func:`fsrlab.circuits.decode.decode`) instead of on raw frequency.
+(:func:`fsrlab.analysis.pipeline.decode_capacitance`) instead of on raw frequency.
 
 References
 ----------
@@ -24,15 +26,17 @@ A. Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, §5, Figur
 from __future__ import annotations
 
 import hashlib
-import json
-import os
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 from numpy.polynomial import chebyshev as C
+
+if TYPE_CHECKING:
+    from fsrlab.analysis.compensation import DirectionAwareCalibration
+    from fsrlab.circuits.circuit import LM555Circuit
 
 __all__ = [
     "MAX_DEGREE",
@@ -44,16 +48,11 @@ __all__ = [
     "Calibration",
     "calibrate",
     "fit_metrics",
-    "save_calibration",
-    "load_calibration",
     "fingerprint",
-    "CALIBRATION_FORMAT",
 ]
 
 #: Highest polynomial degree offered.
 MAX_DEGREE = 5
-#: Value of the calibration file's ``"format"`` key.
-CALIBRATION_FORMAT = "fsrlab-calibration"
 
 
 @dataclass(frozen=True)
@@ -354,20 +353,28 @@ class Calibration:
         Units of x and y.
     r2, rmse, max_error_percent_fs : float
         In-sample fit quality on all readings (RMSE in the unit of y).
-    cv : CrossValidation or None
-        The degree selection, when ``degree="auto"``.
     n : int
         Readings used.
     data_fingerprint : str
         See :func:`fingerprint`.
     created : str
         UTC time, ISO 8601.
-    decode : dict or None
-        Circuit used to decode C_FSR (physics-informed option).
+    cv : CrossValidation or None
+        The degree selection, when ``degree="auto"``.
+    circuit : LM555Circuit or None
+        Circuit through which C_FSR was decoded (physics-informed option).
     source : str
         Where the data came from.
     extra : dict
-        Further entries kept in the calibration file (e.g. ``compensation``).
+        Further entries kept in the calibration file.
+    compensation : DirectionAwareCalibration or None
+        Direction-aware hysteresis compensation fitted on the same data (an extension, see
+        :mod:`fsrlab.analysis.compensation`).
+    compensation_he_percent : (float, float) or None
+        Hysteresis error (eq. 13) of the calibrated stress on the calibration data, plain
+        polynomial and compensated. [%]
+    path : Path or None
+        The file the calibration was read from (not stored in the file).
     """
 
     model: PolynomialModel
@@ -382,17 +389,25 @@ class Calibration:
     data_fingerprint: str
     created: str
     cv: CrossValidation | None = None
-    decode: dict | None = None
+    circuit: "LM555Circuit | None" = None
     source: str = ""
     extra: dict = field(default_factory=dict)
+    compensation: "DirectionAwareCalibration | None" = None
+    compensation_he_percent: tuple[float, float] | None = None
+    path: Path | None = None
 
     @property
     def degree(self) -> int:
         """Polynomial degree."""
         return self.model.degree
 
+    @property
+    def x_range(self) -> tuple[float, float]:
+        """Calibrated readout range (lowest, highest). [unit of x]"""
+        return (self.model.center - self.model.half_width, self.model.center + self.model.half_width)
+
     def __call__(self, x) -> np.ndarray:
-        """y estimated from readout ``x``."""
+        """y estimated from readout ``x`` by the polynomial."""
         return self.model(x)
 
     def inverse(self, y, points: int = 8193) -> np.ndarray:
@@ -421,7 +436,7 @@ class Calibration:
         linear interpolation; with 8193 points the interpolation error is below 1e-7 of the range
         for a degree-5 polynomial.
         """
-        xs = np.linspace(self.model.center - self.model.half_width, self.model.center + self.model.half_width, points)
+        xs = np.linspace(*self.x_range, points)
         ys = self.model(xs)
         d = np.diff(ys)
         if not (np.all(d > 0) or np.all(d < 0)):
@@ -433,30 +448,46 @@ class Calibration:
         return np.interp(yv, ys, xs, left=np.nan, right=np.nan)
 
     def to_dict(self) -> dict[str, Any]:
-        """The calibration file's content."""
-        d = {
-            "format": CALIBRATION_FORMAT,
-            "version": 1,
-            "model": "polynomial",
-            "basis": "chebyshev",
-            "x": self.x_name, "y": self.y_name,
-            "units": {"x": self.x_unit, "y": self.y_unit},
-            "degree": self.degree,
-            "chebyshev_coefficients": self.model.coefficients.tolist(),
-            "x_center": self.model.center,
-            "x_half_width": self.model.half_width,
-            "coefficients": self.model.power_coefficients().tolist(),
-            "coefficients_note": "y = sum(coefficients[k] * x**k); evaluation uses the Chebyshev form (better conditioned)",
-            "metrics": {"r2": self.r2, "rmse": self.rmse, "max_error_percent_fs": self.max_error_percent_fs, "n": self.n},
-            "cross_validation": None if self.cv is None else {
-                "degrees": self.cv.degrees, "rmse": self.cv.rmse, "folds": self.cv.folds, "groups": self.cv.groups},
-            "data_fingerprint": self.data_fingerprint,
-            "created": self.created,
-            "decode": self.decode,
-            "source": self.source,
-        }
-        d.update(self.extra)
-        return d
+        """The calibration file's content (see :func:`fsrlab.analysis.calibration_io.calibration_to_dict`)."""
+        from fsrlab.analysis.calibration_io import calibration_to_dict
+
+        return calibration_to_dict(self)
+
+    def plot(self, ax=None, x=None, y=None, points: int = 200):
+        """Draw the calibration curve over its calibrated readout range, with the data if given.
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Where to draw (default: a new figure).
+        x, y : array_like, optional
+            Readings to show as points: readout [unit of x] and reference [unit of y].
+        points : int
+            Points of the drawn curve.
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+            The data (when given) first, then the polynomial, then the compensation's loading and
+            unloading curves (when the calibration holds one).
+        """
+        if (x is None) != (y is None):
+            raise ValueError("x and y: give both (the data) or neither")
+        if ax is None:
+            import matplotlib.pyplot as plt
+
+            _, ax = plt.subplots()
+        grid = np.linspace(*self.x_range, points)
+        if x is not None:
+            ax.plot(np.asarray(x, dtype=float), np.asarray(y, dtype=float), ".", ms=3, alpha=0.5, label="data")
+        ax.plot(grid, self(grid), "-", color="k", label=f"degree {self.degree}, R² = {self.r2:.4f}")
+        if self.compensation is not None:
+            ax.plot(grid, self.compensation.load_model(grid), "--", label="compensation: loading")
+            ax.plot(grid, self.compensation.unload_model(grid), "--", label="compensation: unloading")
+        ax.set_xlabel(f"{self.x_name} [{self.x_unit}]")
+        ax.set_ylabel(f"{self.y_name} [{self.y_unit}]")
+        ax.legend()
+        return ax
 
 
 def _finite_pairs(x, y):
@@ -469,7 +500,7 @@ def _finite_pairs(x, y):
 
 def calibrate(x, y, degree: int | str = "auto", groups=None, folds: int = 5, x_name: str = "frequency_hz",
               y_name: str = "stress_pa", x_unit: str = "Hz", y_unit: str = "Pa", source: str = "",
-              decode: dict | None = None) -> Calibration:
+              circuit: "LM555Circuit | None" = None) -> Calibration:
     """Fit y(x) as a polynomial, choosing the degree by grouped cross-validation.
 
     Parameters
@@ -490,8 +521,8 @@ def calibrate(x, y, degree: int | str = "auto", groups=None, folds: int = 5, x_n
         Names and units recorded in the calibration.
     source : str
         Provenance recorded in the calibration.
-    decode : dict, optional
-        Circuit used to decode x (physics-informed option), recorded as is.
+    circuit : LM555Circuit, optional
+        Circuit through which x was decoded (physics-informed option), recorded with the calibration.
 
     Returns
     -------
@@ -520,122 +551,19 @@ def calibrate(x, y, degree: int | str = "auto", groups=None, folds: int = 5, x_n
                        rmse=met["rmse"], max_error_percent_fs=met["max_error_percent_fs"], n=int(xs.size),
                        data_fingerprint=fingerprint(xs, ys),
                        created=datetime.now(timezone.utc).isoformat(timespec="seconds").replace("+00:00", "Z"),
-                       cv=cv, decode=decode, source=source)
-
-
-def save_calibration(cal: Calibration, path: str | os.PathLike) -> Path:
-    """Write a calibration to a JSON file.
-
-    Parameters
-    ----------
-    cal : Calibration
-    path : str or path-like
-
-    Returns
-    -------
-    Path
-    """
-    p = Path(path)
-    p.write_text(json.dumps(cal.to_dict(), indent=2, allow_nan=False) + "\n", encoding="utf-8")
-    return p
-
-
-def load_calibration(path: str | os.PathLike) -> Calibration:
-    """Read a calibration written by :func:`save_calibration`.
-
-    Parameters
-    ----------
-    path : str or path-like
-        The JSON file.
-
-    Returns
-    -------
-    Calibration
-
-    Raises
-    ------
-    ValueError
-        One line naming the file and what is wrong.
-    """
-    p = Path(path)
-    try:
-        d = json.loads(p.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise ValueError(f"{p}: not a JSON calibration file ({exc})") from None
-    if not isinstance(d, dict) or d.get("format") != CALIBRATION_FORMAT:
-        raise ValueError(f"{p}: not an fsrlab calibration (\"format\" must be {CALIBRATION_FORMAT!r})")
-    if d.get("version") != 1:
-        raise ValueError(f"{p}: calibration version {d.get('version')!r} not supported (version 1 is)")
-    try:
-        model = PolynomialModel(np.asarray(d["chebyshev_coefficients"], dtype=float), float(d["x_center"]),
-                                float(d["x_half_width"]))
-        met = d.get("metrics", {})
-        cvd = d.get("cross_validation")
-        cv = None if not cvd else CrossValidation(cvd["degrees"], cvd["rmse"], cvd["folds"], cvd["groups"],
-                                                  int(d["degree"]))
-        known = set(Calibration(model, "", "", "", "", 0, 0, 0, 0, "", "").to_dict())
-        extra = {k: v for k, v in d.items() if k not in known}
-        return Calibration(model=model, x_name=d["x"], y_name=d["y"], x_unit=d["units"]["x"], y_unit=d["units"]["y"],
-                           r2=met.get("r2", float("nan")), rmse=met.get("rmse", float("nan")),
-                           max_error_percent_fs=met.get("max_error_percent_fs", float("nan")), n=met.get("n", 0),
-                           data_fingerprint=d.get("data_fingerprint", ""), created=d.get("created", ""), cv=cv,
-                           decode=d.get("decode"), source=d.get("source", ""), extra=extra)
-    except (KeyError, TypeError, ValueError) as exc:
-        raise ValueError(f"{p}: calibration file incomplete or malformed ({type(exc).__name__}: {exc})") from None
-
-
-def run_groups(stress_pa, cycle=None, direction=None, folds: int = 5, threshold: float = 0.05) -> np.ndarray:
-    """Cross-validation groups for a run: its cycles, kept whole.
-
-    Parameters
-    ----------
-    stress_pa : array_like
-        Reference stress in time order. [Pa]
-    cycle : array_like, optional
-        The run's ``cycle`` column (used when it has ≥ 2 values).
-    direction : array_like, optional
-        The run's ``direction`` column (else branches come from the stress).
-    folds : int
-        Contiguous blocks to use when the run has fewer than 2 cycles.
-    threshold : float
-        Reversal threshold for cycles found from the stress. [1]
-
-    Returns
-    -------
-    ndarray of int
-        Group of each reading: a new group starts at each loading start (unloading → loading).
-    """
-    from fsrlab.analysis.cycles import branch_directions
-
-    x = np.asarray(stress_pa, dtype=float)
-    if cycle is not None and np.unique(np.asarray(cycle, dtype=float)[np.isfinite(cycle)]).size >= 2:
-        return default_groups(x.size, cycle, folds)
-    if direction is not None:
-        lab = np.nan_to_num(np.asarray(direction, dtype=float)).astype(int)
-    else:
-        ok = np.isfinite(x)
-        lab = np.zeros(x.size, dtype=int)
-        if ok.sum() >= 2:
-            lab[ok] = branch_directions(x[ok], threshold)
-    nz = np.flatnonzero(lab != 0)
-    starts = np.zeros(x.size, dtype=int)
-    if nz.size > 1:
-        rise = nz[1:][(lab[nz[1:]] == 1) & (lab[nz[:-1]] == -1)]
-        starts[rise] = 1
-    g = np.cumsum(starts)
-    return g if g.max(initial=0) >= 1 else default_groups(x.size, None, folds)
+                       cv=cv, circuit=circuit, source=source)
 
 
 def decode_capacitance(frequency_hz, duty_cycle, r_ohm: float, c_off_farad: float = 0.0, diode: bool = True,
                        diode_drop_v: float = 0.0) -> np.ndarray:
-    """C_FSR decoded from frequency and duty cycle (physics-informed calibration variable).
+    """C_FSR decoded from frequency and duty cycle, the circuit given by its parts.
 
     Parameters
     ----------
     frequency_hz, duty_cycle : array_like
         555 readings (NaN where missing).
     r_ohm : float
-        R of the astable (paper Fig. 16: 10 kΩ). [Ω]
+        R of the astable. [Ω]
     c_off_farad : float
         Offset capacitor in parallel with the FSR. [F]
     diode : bool
@@ -646,16 +574,13 @@ def decode_capacitance(frequency_hz, duty_cycle, r_ohm: float, c_off_farad: floa
     Returns
     -------
     ndarray
-        C_FSR [F] by :func:`fsrlab.circuits.decode.decode`; NaN where a reading is missing or is
-        impossible for the circuit (e.g. one noisy duty cycle outside the reachable range), so that
-        one bad window does not stop a whole run.
+        C_FSR [F]; NaN where a reading is missing or impossible for the circuit. The same as
+        :func:`fsrlab.analysis.pipeline.decode_capacitance` with
+        ``LM555Circuit(r_ohm, c_off_farad, diode, diode_drop_v)``, which also honours a run's
+        ``range`` column.
     """
-    from fsrlab.circuits.decode import decode
-    f = np.asarray(frequency_hz, dtype=float)
-    d = np.asarray(duty_cycle, dtype=float)
-    out = np.full(f.shape, np.nan)
-    ok = np.isfinite(f) & np.isfinite(d)
-    if ok.any():
-        res = decode(f[ok], d[ok], r_ohm, c_off_farad=c_off_farad, diode=diode, diode_drop_v=diode_drop_v, check=False)
-        out[ok] = np.asarray(res.c_fsr_farad, dtype=float)
-    return out
+    from fsrlab.analysis.pipeline import decode_capacitance as decode_run
+    from fsrlab.circuits.circuit import LM555Circuit
+
+    circuit = LM555Circuit(r_ohm=r_ohm, c_off_farad=c_off_farad, diode=diode, diode_drop_v=diode_drop_v)
+    return decode_run(frequency_hz, duty_cycle, circuit)

@@ -4,7 +4,7 @@
 (Figure 17); a single-valued curve cannot follow a hysteretic sensor, so the calibrated force keeps
 the sensor's hysteresis error. Here the loading and the unloading branches get their own
 polynomial, and the branch in use is found from the readout sequence itself (its reversals beyond
-a threshold, :func:`fsrlab.analysis.cycles.turning_points`), so no reference is needed when the
+a threshold, :func:`fsrlab.analysis.cycles.readout_directions`), so no reference is needed when the
 calibration is applied.
 
 Turning-point memory: a branch that starts at a reversal starts from the estimate reached there
@@ -34,46 +34,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsrlab.analysis.calibration import PolynomialModel, calibrate
-from fsrlab.analysis.cycles import turning_points
+from fsrlab.analysis.cycles import readout_directions
 
-__all__ = ["DirectionAwareCalibration", "fit_direction_aware", "CompensationResult", "compare_compensation",
-           "readout_directions"]
-
-
-def readout_directions(x, sign: float = 1.0, threshold: float = 0.05) -> np.ndarray:
-    """Label readings +1 (loading) / -1 (unloading) from the readout alone.
-
-    Parameters
-    ----------
-    x : array_like
-        Readout in time order; NaN readings get the label of the previous valid one.
-    sign : {+1, -1}
-        +1 if the readout grows with stress, -1 if it falls.
-    threshold : float
-        Reversal threshold as a fraction of the readout span (see :func:`~fsrlab.analysis.cycles.turning_points`). [1]
-
-    Returns
-    -------
-    ndarray of int
-    """
-    x = np.asarray(x, dtype=float)
-    ok = np.flatnonzero(np.isfinite(x))
-    lab = np.zeros(x.size, dtype=int)
-    if ok.size < 2:
-        return lab + 1
-    xs = sign * x[ok]
-    piv = turning_points(xs, threshold)
-    sub = np.zeros(xs.size, dtype=int)
-    for a, b in zip(piv[:-1], piv[1:]):
-        sub[a + 1:b + 1] = 1 if xs[b] >= xs[a] else -1
-    sub[0] = sub[1] if sub.size > 1 else 1
-    lab[ok] = sub
-    # NaN readings: carry the last label forward (and the first backward).
-    idx = np.where(np.isfinite(x), np.arange(x.size), 0)
-    np.maximum.accumulate(idx, out=idx)
-    lab = lab[idx]
-    lab[: ok[0]] = lab[ok[0]]
-    return lab
+__all__ = ["DirectionAwareCalibration", "fit_direction_aware", "CompensationResult", "compare_compensation"]
 
 
 @dataclass(frozen=True)

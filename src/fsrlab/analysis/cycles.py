@@ -7,6 +7,10 @@ has moved back from its running extremum by more than a threshold (a fraction of
 span), which ignores noise smaller than the threshold. A cycle is a loading branch followed by an
 unloading branch; the turning-point reading belongs to both, so each branch spans the full range.
 
+:func:`row_directions` and :func:`row_cycles` are the one rule for a run's branches and cycles
+(its columns when present, else from the stress), used alike by :func:`split_cycles`, by the
+calibration's cross-validation groups and by :mod:`fsrlab.analysis.pipeline`.
+
 The hysteresis error itself is eq. (13) as implemented by
 :func:`fsrlab.analysis.hysteresis.hysteresis_error` (branches interpolated onto a common stress
 axis); this module only feeds it the branches, per cycle and for the run as a whole.
@@ -27,6 +31,7 @@ __all__ = [
     "Cycle",
     "turning_points",
     "branch_directions",
+    "readout_directions",
     "cycle_numbers",
     "split_cycles",
     "RunHysteresis",
@@ -159,6 +164,94 @@ def branch_directions(stress_pa, threshold: float = 0.05) -> np.ndarray:
     return out
 
 
+def readout_directions(x, sign: float = 1.0, threshold: float = 0.05) -> np.ndarray:
+    """Label readings +1 (loading) / -1 (unloading) from a readout sequence alone, gaps included.
+
+    Parameters
+    ----------
+    x : array_like, shape (n,)
+        Readout in time order (frequency [Hz], ...); NaN readings get the label of the previous
+        valid one (the first valid one's before it).
+    sign : {+1, -1}
+        +1 if the readout grows with stress, -1 if it falls.
+    threshold : float
+        Reversal threshold as a fraction of the readout span (see :func:`turning_points`). [1]
+
+    Returns
+    -------
+    ndarray of int, shape (n,)
+        +1 or -1 for every reading: :func:`branch_directions` of ``sign * x`` over the valid
+        readings, where a sequence that never moves beyond the threshold counts as loading.
+    """
+    x = np.asarray(x, dtype=float)
+    ok = np.flatnonzero(np.isfinite(x))
+    lab = np.ones(x.size, dtype=int)
+    if ok.size == 0:
+        return lab
+    sub = branch_directions(sign * x[ok], threshold)
+    lab[ok] = np.where(sub == 0, 1, sub)
+    # NaN readings: carry the last label forward (and the first backward).
+    idx = np.where(np.isfinite(x), np.arange(x.size), 0)
+    np.maximum.accumulate(idx, out=idx)
+    lab = lab[idx]
+    lab[: ok[0]] = lab[ok[0]]
+    return lab
+
+
+def row_directions(stress_pa, direction=None, cycle=None, threshold: float = 0.05) -> np.ndarray:
+    """Direction of every reading of a run: its ``direction`` column, else found from the stress.
+
+    Parameters
+    ----------
+    stress_pa : array_like, shape (n,)
+        Reference stress in time order (NaN where a reading has none). [Pa]
+    direction : array_like, optional
+        The run's ``direction`` column (+1 loading, -1 unloading, 0 hold, NaN unknown); when given
+        it decides and the stress is not examined.
+    cycle : array_like, optional
+        The run's ``cycle`` column; without a direction column, the branches are then found within
+        each recorded cycle (its own stress span sets the threshold).
+    threshold : float
+        Reversal threshold as a fraction of the stress span (see :func:`turning_points`). [1]
+
+    Returns
+    -------
+    ndarray of int, shape (n,)
+        +1, -1 or 0: the direction column with NaN as 0, or :func:`branch_directions` of the
+        readings that have a stress (0 for those that have none, or no cycle number).
+
+    Raises
+    ------
+    ValueError
+        A column of the wrong length, or a direction other than -1, 0, +1.
+    """
+    x = np.asarray(stress_pa, dtype=float)
+    if x.ndim != 1:
+        raise ValueError("stress_pa must be 1-D")
+    n = x.size
+    if direction is not None:
+        dirn = np.asarray(direction, dtype=float)
+        if dirn.shape != (n,):
+            raise ValueError("direction must have the same length as stress_pa")
+        dirn = np.nan_to_num(dirn, nan=0.0)
+        if not np.all(np.isin(dirn, (-1, 0, 1))):
+            raise ValueError("direction must hold -1 (unloading), 0 (hold) or +1 (loading)")
+        return dirn.astype(int)
+    ok = np.isfinite(x)
+    if cycle is not None:
+        cyc = np.asarray(cycle, dtype=float)
+        if cyc.shape != (n,):
+            raise ValueError("cycle must have the same length as stress_pa")
+        groups = [np.flatnonzero(ok & (cyc == v)) for v in dict.fromkeys(cyc[~np.isnan(cyc)].tolist())]
+    else:
+        groups = [np.flatnonzero(ok)]
+    labels = np.zeros(n, dtype=int)
+    for rows in groups:
+        if rows.size:
+            labels[rows] = branch_directions(x[rows], threshold)
+    return labels
+
+
 def cycle_numbers(direction) -> np.ndarray:
     """Number the cycles of a labelled run: a new cycle starts where loading follows unloading.
 
@@ -179,6 +272,32 @@ def cycle_numbers(direction) -> np.ndarray:
     if nz.size > 1:
         starts[nz[1:][(lab[nz[1:]] == 1) & (lab[nz[:-1]] == -1)]] = 1
     return np.cumsum(starts)
+
+
+def row_cycles(stress_pa, direction=None, cycle=None, threshold: float = 0.05) -> np.ndarray:
+    """Cycle number of every reading of a run: its ``cycle`` column, else numbered from its directions.
+
+    Parameters
+    ----------
+    stress_pa : array_like, shape (n,)
+        Reference stress in time order. [Pa]
+    direction, cycle : array_like, optional
+        The run's ``direction`` and ``cycle`` columns (see :func:`row_directions`).
+    threshold : float
+        Reversal threshold as a fraction of the stress span. [1]
+
+    Returns
+    -------
+    ndarray of float, shape (n,)
+        The cycle column as given (NaN where empty), or :func:`cycle_numbers` of
+        :func:`row_directions`.
+    """
+    if cycle is not None:
+        cyc = np.asarray(cycle, dtype=float)
+        if cyc.shape != np.shape(stress_pa):
+            raise ValueError("cycle must have the same length as stress_pa")
+        return cyc
+    return cycle_numbers(row_directions(stress_pa, direction, None, threshold)).astype(float)
 
 
 def _runs(labels: np.ndarray) -> list[tuple[int, int, int]]:
@@ -246,32 +365,15 @@ def split_cycles(stress_pa, direction=None, cycle=None, threshold: float = 0.05)
         A run that starts while unloading or ends while loading has that part left out.
     """
     x = np.asarray(stress_pa, dtype=float)
-    if x.ndim != 1:
-        raise ValueError("stress_pa must be 1-D")
-    n = x.size
-    if direction is not None:
-        dirn = np.asarray(direction, dtype=float)
-        if dirn.shape != (n,):
-            raise ValueError("direction must have the same length as stress_pa")
-        dirn = np.nan_to_num(dirn, nan=0.0)
-        if not np.all(np.isin(dirn, (-1, 0, 1))):
-            raise ValueError("direction must hold -1 (unloading), 0 (hold) or +1 (loading)")
-        labels = dirn.astype(int)
-    else:
-        labels = None
+    labels = row_directions(x, direction, cycle, threshold)
     if cycle is not None:
         cyc = np.asarray(cycle, dtype=float)
-        if cyc.shape != (n,):
-            raise ValueError("cycle must have the same length as stress_pa")
         out = []
         for value in dict.fromkeys(cyc[~np.isnan(cyc)].tolist()):
             rows = np.flatnonzero(cyc == value)
-            lab = labels[rows] if labels is not None else branch_directions(x[rows], threshold)
-            for c in _pair(lab, x[rows], 0, rows):
+            for c in _pair(labels[rows], x[rows], 0, rows):
                 out.append(Cycle(int(value) if float(value).is_integer() else len(out), c.load_index, c.unload_index))
         return out
-    if labels is None:
-        labels = branch_directions(x, threshold)
     return _pair(labels, x)
 
 
@@ -292,6 +394,8 @@ class RunHysteresis:
         The cycles' numbers.
     method : str
         How the branches were found and combined.
+    overall : HysteresisResult or None
+        Eq. (13) on the mean curves, with those curves (for :meth:`plot`).
     """
 
     percent: float
@@ -299,6 +403,41 @@ class RunHysteresis:
     cycles: list = field(default_factory=list)
     cycle_numbers: list = field(default_factory=list)
     method: str = ""
+    overall: Any = field(default=None, repr=False, compare=False)
+
+    def plot(self, ax=None, label: str = "Q", cycles: bool = True):
+        """Draw the mean loading and unloading branches, the largest difference and each cycle's branches.
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Where to draw (default: a new figure).
+        label : str
+            Name of the quantity, for the axis label.
+        cycles : bool
+            Also draw every cycle's own branches, faintly, before the mean curves.
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+            The last three lines are the mean loading branch, the mean unloading branch and the
+            difference at σd (see :meth:`HysteresisResult.plot`).
+        """
+        from fsrlab.analysis.hysteresis import _draw_branches
+
+        if self.overall is None or self.overall.stress_pa is None:
+            raise ValueError("this result holds no branches to plot")
+        if ax is None:
+            import matplotlib.pyplot as plt
+
+            _, ax = plt.subplots()
+        if cycles:
+            for c in self.cycles:
+                ax.plot(c.stress_pa, c.q_load, "-", color="tab:blue", alpha=0.25, lw=0.8)
+                ax.plot(c.stress_pa, c.q_unload, "-", color="tab:orange", alpha=0.25, lw=0.8)
+        _draw_branches(ax, self.overall, label)
+        ax.set_title(f"hysteresis error (eq. 13): {self.percent:.2f} % over {len(self.cycles)} cycles")
+        return ax
 
     def to_dict(self) -> dict[str, Any]:
         """The CLI's JSON shape."""
@@ -404,4 +543,5 @@ def run_hysteresis(stress_pa, q, direction=None, cycle=None, threshold: float = 
     method = (f"branches from {how}; per cycle: eq. (13) via hysteresis_error ({overall.method}); "
               f"overall: eq. (13) on the mean of the {len(cycles)} cycles' branches on a common stress grid")
     return RunHysteresis(percent=float(overall.percent), stress_at_max_pa=float(overall.stress_at_max_pa),
-                         cycles=results, cycle_numbers=[c.number for c in cycles], method=method)
+                         cycles=results, cycle_numbers=[c.number for c in cycles], method=method,
+                         overall=overall)

@@ -7,7 +7,7 @@ Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, eq. (13), Tab
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
@@ -44,6 +44,9 @@ class HysteresisResult:
         σf, the largest stress. [Pa]
     method : str
         How the branches were compared.
+    stress_pa, q_load, q_unload : ndarray or None
+        The stresses the branches were compared at [Pa] and both branches there (the quantity's
+        unit), for :meth:`plot`.
     """
 
     percent: float
@@ -52,6 +55,47 @@ class HysteresisResult:
     full_scale: float
     sigma_f_pa: float
     method: str
+    stress_pa: np.ndarray | None = field(default=None, repr=False, compare=False)
+    q_load: np.ndarray | None = field(default=None, repr=False, compare=False)
+    q_unload: np.ndarray | None = field(default=None, repr=False, compare=False)
+
+    def plot(self, ax=None, label: str = "Q"):
+        """Draw the loading and unloading branches and the largest difference, σd, of eq. (13).
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Where to draw (default: a new figure).
+        label : str
+            Name of the quantity, for the axis label.
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+            Lines in order: loading branch, unloading branch, the difference at σd (a vertical
+            segment from the loading to the unloading branch).
+        """
+        if self.stress_pa is None:
+            raise ValueError("this result holds no branches to plot")
+        if ax is None:
+            import matplotlib.pyplot as plt
+
+            _, ax = plt.subplots()
+        _draw_branches(ax, self, label)
+        ax.set_title(f"hysteresis error (eq. 13): {self.percent:.2f} %")
+        return ax
+
+
+def _draw_branches(ax, res: HysteresisResult, label: str = "Q", **style) -> None:
+    """Draw a result's loading and unloading branches and its difference at σd on ``ax``."""
+    at = float(np.interp(res.stress_at_max_pa, res.stress_pa, res.q_load))
+    ax.plot(res.stress_pa, res.q_load, "-", color="tab:blue", label="loading", **style)
+    ax.plot(res.stress_pa, res.q_unload, "-", color="tab:orange", label="unloading", **style)
+    ax.plot([res.stress_at_max_pa] * 2, [at, at + res.difference], "k-", lw=2,
+            label=f"largest difference, HE {res.percent:.2f} %", **style)
+    ax.set_xlabel("stress [Pa]")
+    ax.set_ylabel(label)
+    ax.legend()
 
 
 def _branch(stress, q, name: str) -> tuple[np.ndarray, np.ndarray]:
@@ -105,7 +149,8 @@ def hysteresis_error(stress_load_pa, q_load, stress_unload_pa, q_unload) -> Hyst
         raise ValueError(f"the branches share no stress range (loading {xl[0]:g}–{xl[-1]:g} Pa, "
                          f"unloading {xu[0]:g}–{xu[-1]:g} Pa)")
     grid = np.union1d(xl[(xl >= lo) & (xl <= hi)], xu[(xu >= lo) & (xu <= hi)])
-    diff = np.interp(grid, xu, yu) - np.interp(grid, xl, yl)
+    q_l, q_u = np.interp(grid, xl, yl), np.interp(grid, xu, yu)
+    diff = q_u - q_l
     i = int(np.argmax(np.abs(diff)))
     full = abs(float(yl[-1]))
     if full == 0:
@@ -118,6 +163,7 @@ def hysteresis_error(stress_load_pa, q_load, stress_unload_pa, q_unload) -> Hyst
         sigma_f_pa=float(xl[-1]),
         method=f"linear interpolation of both branches onto the union of their {grid.size} stresses "
                f"in the shared range {lo:g}–{hi:g} Pa",
+        stress_pa=grid, q_load=q_l, q_unload=q_u,
     )
 
 
@@ -164,7 +210,8 @@ def _curves_on_grid(x, ql, qu, q_load, q_unload, refine: bool) -> HysteresisResu
         method += ", σd refined by a bounded scalar search"
     full = abs(float(q_load(sigma_f_pa)))
     return HysteresisResult(percent=100 * abs(d) / full, stress_at_max_pa=sd, difference=d,  # Eq. (13)
-                            full_scale=full, sigma_f_pa=sigma_f_pa, method=method)
+                            full_scale=full, sigma_f_pa=sigma_f_pa, method=method,
+                            stress_pa=x, q_load=np.asarray(ql, dtype=float), q_unload=np.asarray(qu, dtype=float))
 
 
 @dataclass

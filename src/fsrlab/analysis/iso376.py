@@ -52,9 +52,7 @@ from typing import Sequence
 
 import numpy as np
 
-from fsrlab.runformat import read_table, where
-
-__all__ = ["CLASS_LIMITS", "CalibrationSeries", "ISO376Result", "iso376", "class_reached", "load_iso376_csv"]
+__all__ = ["CLASS_LIMITS", "CalibrationSeries", "ISO376Result", "iso376", "class_reached"]
 
 #: ISO 376:2011 class limits [%] for b, b', fc (±), f0 (±), v, c; best class first.
 CLASS_LIMITS: dict[str, dict[str, float]] = {
@@ -271,67 +269,3 @@ def iso376(forces_n, series: Sequence[CalibrationSeries], creep_readings: tuple[
     else:
         res.instrument_class = "incomplete"
     return res
-
-
-def load_iso376_csv(path) -> tuple[np.ndarray, list[CalibrationSeries]]:
-    """Read ISO 376 calibration readings from a long CSV.
-
-    Columns: ``series`` (label), ``rotation_deg`` [°], ``force_n`` [N], ``reading``, and optional
-    ``direction`` (+1 increasing, default; -1 decreasing). A row with ``force_n`` = 0 is a zero
-    reading: direction +1 is the zero before the series, -1 the zero after it.
-
-    Parameters
-    ----------
-    path : str or path-like
-        The CSV file.
-
-    Returns
-    -------
-    forces_n : ndarray
-        The calibration forces (those of the first series). [N]
-    series : list of CalibrationSeries
-        In order of first appearance.
-
-    Raises
-    ------
-    ValueError
-        One line naming the file, row and column for a missing column or a non-numeric cell, or
-        naming the series whose forces differ from the first series'.
-    """
-    ix, rows, p = read_table(path, ("series", "rotation_deg", "force_n", "reading"))
-    data: dict[str, dict] = {}
-    for k, row in rows:
-        vals = {}
-        for col in ("rotation_deg", "force_n", "reading", "direction"):
-            if col not in ix:
-                continue
-            cell = row[ix[col]].strip() if ix[col] < len(row) else ""
-            if not cell and col == "direction":
-                vals[col] = 1.0
-                continue
-            try:
-                vals[col] = float(cell)
-            except ValueError:
-                raise ValueError(f"{where(p, k, col)}: non-numeric cell {cell!r}") from None
-        d = vals.get("direction", 1.0)
-        if d not in (1.0, -1.0):
-            raise ValueError(f"{where(p, k, 'direction')}: must be +1 or -1, got {d:g}")
-        label = row[ix["series"]].strip()
-        s = data.setdefault(label, {"rot": vals["rotation_deg"], "inc": {}, "dec": {}, "z0": None, "z1": None})
-        if vals["force_n"] == 0:
-            s["z0" if d > 0 else "z1"] = vals["reading"]
-        else:
-            s["inc" if d > 0 else "dec"][vals["force_n"]] = vals["reading"]
-    if not data:
-        raise ValueError(f"{p}: no readings")
-    first = next(iter(data.values()))
-    forces = np.array(sorted(first["inc"]))
-    series = []
-    for label, s in data.items():
-        if sorted(s["inc"]) != forces.tolist():
-            raise ValueError(f"{p}: series {label!r} has increasing forces {sorted(s['inc'])}, not those of the first series {forces.tolist()}")
-        dec = None
-        if s["dec"]:
-            dec = [s["dec"].get(f, np.nan) for f in forces]
-        series.append(CalibrationSeries(s["rot"], [s["inc"][f] for f in forces], dec, s["z0"], s["z1"]))
-    return forces, series

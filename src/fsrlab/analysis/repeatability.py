@@ -15,13 +15,10 @@ doi:10.1155/2018/6561901, eq. (39), Tables 4 and 5.
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
 from typing import Any, Sequence
 
 import numpy as np
-
-from fsrlab.runformat import read_table, where
 
 __all__ = [
     "RepeatabilityResult",
@@ -30,7 +27,6 @@ __all__ = [
     "GroupedRepeatability",
     "repeatability",
     "grouped_repeatability",
-    "load_grouped_csv",
 ]
 
 
@@ -233,53 +229,3 @@ def grouped_repeatability(load: Sequence, sensor: Sequence, reading, ddof: int =
         means.append(LoadMean(ld, float(np.mean([g.re1_percent for g in gs])),
                               float(np.mean([g.re2_percent for g in gs])), len(gs)))
     return GroupedRepeatability(groups=groups, means=means, ddof=ddof)
-
-
-def _label(cell: str) -> Any:
-    try:
-        v = float(cell)
-    except ValueError:
-        return cell
-    return int(v) if v.is_integer() else v
-
-
-def load_grouped_csv(path: str | os.PathLike) -> tuple[list, list, np.ndarray]:
-    """Read a CSV with columns ``load,sensor,reading`` (any order, other columns ignored).
-
-    Parameters
-    ----------
-    path : str or path-like
-        The file. ``load`` and ``sensor`` are labels (numbers or text); ``reading`` is numeric.
-
-    Returns
-    -------
-    load, sensor : list
-        Labels (numbers when the cell is numeric).
-    reading : ndarray
-        The readings.
-
-    Raises
-    ------
-    ValueError
-        One line naming the file, the row and the column for a missing column, an empty or
-        non-numeric reading.
-    """
-    ix, rows, p = read_table(path, ("load", "sensor", "reading"), hint="header load,sensor,reading needed")
-    il, isn, ir = ix["load"], ix["sensor"], ix["reading"]
-    loads, sensors, values = [], [], []
-    for k, row in rows:
-        for name, j in (("load", il), ("sensor", isn), ("reading", ir)):
-            if j >= len(row) or not row[j].strip():
-                raise ValueError(f"{where(p, k, name)}: empty cell")
-        try:
-            v = float(row[ir])
-        except ValueError:
-            raise ValueError(f"{where(p, k, 'reading')}: non-numeric cell {row[ir].strip()!r}") from None
-        if not np.isfinite(v):
-            raise ValueError(f"{where(p, k, 'reading')}: {row[ir].strip()!r} is not a finite number")
-        loads.append(_label(row[il].strip()))
-        sensors.append(_label(row[isn].strip()))
-        values.append(v)
-    if not values:
-        raise ValueError(f"{p}: no readings")
-    return loads, sensors, np.array(values)

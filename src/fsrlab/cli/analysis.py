@@ -1,6 +1,7 @@
 """``fsrlab hysteresis``, ``repeatability``, ``calibrate``, ``apply``: what a user does with recorded runs.
 
-Thin commands: the computation lives in :mod:`fsrlab.analysis`; files follow docs/data-format.md.
+Thin commands: they parse options and render; runs are calibrated, converted and measured by
+:mod:`fsrlab.analysis.pipeline`; files follow docs/data-format.md.
 """
 
 from __future__ import annotations
@@ -18,13 +19,14 @@ from fsrlab.cli._common import emit_json, eng, fail
 _DEGREES = ("auto", "1", "2", "3", "4", "5")
 
 
-def _load(path: Path, quantity: str | None = None):
+def _load(path: Path):
     from fsrlab.runformat import load_run
 
-    run = load_run(path)
-    if quantity is not None and quantity not in run and quantity != "c_fsr_farad":
-        fail(f"{path}: column {quantity!r} missing (columns: {', '.join(run.columns)})", "--x" if quantity else None)
-    return run
+    return load_run(path)
+
+
+def _missing(path: Path, run, column: str, what: str = "", option: str | None = None) -> None:
+    fail(f"{path}: column {column!r}{what} missing (columns: {', '.join(run.columns)})", option)
 
 
 @app.command("hysteresis")
@@ -35,15 +37,14 @@ def hysteresis(
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Hysteresis error (eq. 13) of a run, per loading-unloading cycle and overall."""
-    from fsrlab.analysis.cycles import run_hysteresis
+    from fsrlab.analysis.pipeline import hysteresis_of_run
 
     run = _load(run_file)
     if quantity not in run:
-        fail(f"{run_file}: column {quantity!r} missing (columns: {', '.join(run.columns)})", "--quantity")
+        _missing(run_file, run, quantity, option="--quantity")
     if not 0 < threshold < 1:
         fail(f"must be a fraction in (0, 1), got {threshold:g}", "--threshold")
-    res = run_hysteresis(run.stress_pa(), run[quantity], run.columns.get("direction"), run.columns.get("cycle"),
-                         threshold)
+    res = hysteresis_of_run(run, quantity, threshold)
     if json_out:
         emit_json(res.to_dict())
         return
@@ -65,7 +66,8 @@ def repeatability(
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Repeatability errors RE1 and RE2 (eq. 39) per load and sensor, and their means per load."""
-    from fsrlab.analysis.repeatability import grouped_repeatability, load_grouped_csv
+    from fsrlab.analysis.repeatability import grouped_repeatability
+    from fsrlab.tables import load_grouped_csv
 
     if ddof not in (0, 1):
         fail(f"must be 0 or 1, got {ddof}", "--ddof")
@@ -83,26 +85,6 @@ def repeatability(
     Console().print(table)
 
 
-def _circuit_value(run, key, given, default):
-    if given is not None:
-        return given
-    return (run.metadata.get("circuit") or {}).get(key, default)
-
-
-def _x_values(run, x: str, r_ohm, c_off, diode):
-    """The calibration variable: a column, or C_FSR decoded from frequency and duty cycle."""
-    if x == "c_fsr_farad" and "c_fsr_farad" not in run:
-        from fsrlab.analysis.calibration import decode_capacitance
-
-        run.require("frequency_hz", "duty_cycle")
-        circuit = {"r_ohm": float(_circuit_value(run, "r_ohm", r_ohm, 10e3)),
-                   "c_off_farad": float(_circuit_value(run, "c_off_farad", c_off, 0.0)),
-                   "diode": bool(_circuit_value(run, "diode", diode, True)),
-                   "diode_drop_v": float(_circuit_value(run, "diode_drop_v", None, 0.0))}
-        return decode_capacitance(run["frequency_hz"], run["duty_cycle"], **circuit), circuit
-    return run[x], None
-
-
 @app.command("calibrate")
 def calibrate_cmd(
     run_file: Path = typer.Argument(..., metavar="RUN.csv", help="A run with the reference stress_pa (or force_n) and the readout."),
@@ -116,8 +98,8 @@ def calibrate_cmd(
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Calibrate readout → stress with a polynomial of degree 1–5 (paper Figure 17 uses 1 and 3)."""
-    from fsrlab.analysis.calibration import calibrate, run_groups, save_calibration
-    from fsrlab.runformat import KNOWN_COLUMNS
+    from fsrlab.analysis.calibration_io import save_calibration
+    from fsrlab.analysis.pipeline import calibrate_run, run_circuit
 
     if degree not in _DEGREES:
         fail(f"must be auto or 1..5, got {degree!r}", "--degree")
@@ -125,25 +107,17 @@ def calibrate_cmd(
         fail(f"must be >= 2, got {folds}", "--folds")
     run = _load(run_file)
     if x not in run and x != "c_fsr_farad":
-        fail(f"{run_file}: column {x!r} missing (columns: {', '.join(run.columns)})", "--x")
-    stress = run.stress_pa()
-    xv, circuit = _x_values(run, x, r, c_off, None)
-    groups = run_groups(stress, run.columns.get("cycle"), run.columns.get("direction"), folds)
-    unit = run.units.get(x) or KNOWN_COLUMNS.get(x, "F" if x == "c_fsr_farad" else "")
-    cal = calibrate(xv, stress, degree="auto" if degree == "auto" else int(degree), groups=groups, folds=folds,
-                    x_name=x, y_name="stress_pa", x_unit=unit, y_unit="Pa", source=str(run_file), decode=circuit)
+        _missing(run_file, run, x, option="--x")
+    circuit = None
+    parts = {k: v for k, v in (("r_ohm", r), ("c_off_farad", c_off)) if v is not None}
+    if x == "c_fsr_farad" and parts:
+        circuit = run_circuit(run).replace(**parts)
+    cal = calibrate_run(run, x=x, degree="auto" if degree == "auto" else int(degree), compensate=compensate,
+                        folds=folds, circuit=circuit)
     out = {"degree": cal.degree, "r2": cal.r2, "rmse_pa": cal.rmse, "max_error_percent_fs": cal.max_error_percent_fs,
            "coefficients": cal.model.power_coefficients().tolist()}
     if compensate:
-        from fsrlab.analysis.compensation import compare_compensation
-
-        comp = compare_compensation(xv, stress, degree=cal.degree, direction=run.columns.get("direction"),
-                                    cycle=run.columns.get("cycle"), plain=cal)
-        out["hysteresis_error_before_percent"] = comp.he_before_percent
-        out["hysteresis_error_after_percent"] = comp.he_after_percent
-        cal.extra["compensation"] = comp.compensated.to_dict()
-        cal.extra["compensation"]["hysteresis_error_before_percent"] = comp.he_before_percent
-        cal.extra["compensation"]["hysteresis_error_after_percent"] = comp.he_after_percent
+        out["hysteresis_error_before_percent"], out["hysteresis_error_after_percent"] = cal.compensation_he_percent
     if output is not None:
         save_calibration(cal, output)
     if json_out:
@@ -178,35 +152,20 @@ def apply_cmd(
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Apply a calibration to a run: adds a stress_pa_estimate column [Pa]."""
-    from fsrlab.analysis.calibration import load_calibration
-    from fsrlab.analysis.compensation import DirectionAwareCalibration
+    from fsrlab.analysis.calibration_io import load_calibration
+    from fsrlab.analysis.pipeline import ESTIMATE_COLUMN, apply_calibration
     from fsrlab.runformat import write_run
 
     cal = load_calibration(cal_file)
     run = _load(run_file)
     if cal.x_name not in run and cal.x_name != "c_fsr_farad":
-        fail(f"{run_file}: column {cal.x_name!r} (the calibration's readout) missing (columns: {', '.join(run.columns)})")
-    dec = cal.decode or {}
-    xv, _ = _x_values(run, cal.x_name, dec.get("r_ohm"), dec.get("c_off_farad"), dec.get("diode"))
-    comp = cal.extra.get("compensation")
-    if comp and not no_compensation:
-        est = DirectionAwareCalibration.from_dict(comp)(xv)
-        how = "direction-aware compensation"
-    else:
-        est = cal(xv)
-        how = f"polynomial of degree {cal.degree}"
-    cols = dict(run.columns)
-    cols["stress_pa_estimate"] = est
-    meta = dict(run.metadata)
-    for k in ("complete", "rows", "closed", "created", "format", "version", "columns"):
-        meta.pop(k, None)
-    meta["units"] = dict(run.units, stress_pa_estimate="Pa")
-    meta["calibration"] = {"file": str(cal_file), "x": cal.x_name, "degree": cal.degree, "method": how,
-                           "data_fingerprint": cal.data_fingerprint, "created": cal.created}
+        _missing(run_file, run, cal.x_name, " (the calibration's readout)")
+    est = apply_calibration(cal, run, compensation=not no_compensation)
+    how = est.metadata["calibration"]["method"]
     if output.resolve() == run_file.resolve():
         fail("must differ from the input run", "--output")
-    write_run(output, cols, meta)
-    n_out = int(np.sum(~np.isfinite(xv)))
+    write_run(output, est.columns, est.metadata)
+    n_out = int(np.sum(~np.isfinite(est[ESTIMATE_COLUMN])))
     if json_out:
         emit_json({"output": str(output), "rows": run.n_rows, "missing": n_out})
         return
@@ -221,7 +180,8 @@ def iso376_cmd(
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """ISO 376:2011 quantities (b, b', fc, f0, v, c) and the class they reach (beyond the paper)."""
-    from fsrlab.analysis.iso376 import iso376, load_iso376_csv
+    from fsrlab.analysis.iso376 import iso376
+    from fsrlab.tables import load_iso376_csv
 
     if degree not in (1, 2, 3):
         fail(f"must be 1, 2 or 3, got {degree}", "--degree")

@@ -1,0 +1,173 @@
+"""The calibration file: a :class:`~fsrlab.analysis.calibration.Calibration` as JSON, and back.
+
+One JSON object (``"format": "fsrlab-calibration"``, ``"version": 1``) holding the polynomial in
+its Chebyshev form (what is evaluated) and as plain power coefficients (for other tools), the fit
+quality, the cross-validation, the data fingerprint, the circuit through which C_FSR was decoded
+(:meth:`fsrlab.circuits.circuit.LM555Circuit.to_dict`) and, when fitted, the direction-aware
+compensation. Files written before the circuit objects stored the decoding circuit as
+``"decode": {"r_ohm", "c_off_farad", "diode", "diode_drop_v"}``; they are read as that circuit.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from fsrlab.analysis.calibration import Calibration, CrossValidation, PolynomialModel
+
+__all__ = ["CALIBRATION_FORMAT", "calibration_to_dict", "calibration_from_dict", "save_calibration",
+           "load_calibration"]
+
+#: Value of the calibration file's ``"format"`` key.
+CALIBRATION_FORMAT = "fsrlab-calibration"
+
+# Keys this module writes or reads; any other key of a file is kept in ``Calibration.extra``.
+_KNOWN = {"format", "version", "model", "basis", "x", "y", "units", "degree", "chebyshev_coefficients", "x_center",
+          "x_half_width", "coefficients", "coefficients_note", "metrics", "cross_validation", "data_fingerprint",
+          "created", "circuit", "decode", "source", "compensation"}
+
+
+def calibration_to_dict(cal: Calibration) -> dict[str, Any]:
+    """The calibration file's content.
+
+    Parameters
+    ----------
+    cal : Calibration
+
+    Returns
+    -------
+    dict
+        JSON-ready; ``circuit`` is :meth:`LM555Circuit.to_dict` or None; ``compensation`` (only
+        when fitted) is :meth:`DirectionAwareCalibration.to_dict` with the hysteresis errors
+        before and after; the entries of ``cal.extra`` follow.
+    """
+    d = {
+        "format": CALIBRATION_FORMAT,
+        "version": 1,
+        "model": "polynomial",
+        "basis": "chebyshev",
+        "x": cal.x_name, "y": cal.y_name,
+        "units": {"x": cal.x_unit, "y": cal.y_unit},
+        "degree": cal.degree,
+        "chebyshev_coefficients": cal.model.coefficients.tolist(),
+        "x_center": cal.model.center,
+        "x_half_width": cal.model.half_width,
+        "coefficients": cal.model.power_coefficients().tolist(),
+        "coefficients_note": "y = sum(coefficients[k] * x**k); evaluation uses the Chebyshev form (better conditioned)",
+        "metrics": {"r2": cal.r2, "rmse": cal.rmse, "max_error_percent_fs": cal.max_error_percent_fs, "n": cal.n},
+        "cross_validation": None if cal.cv is None else {
+            "degrees": cal.cv.degrees, "rmse": cal.cv.rmse, "folds": cal.cv.folds, "groups": cal.cv.groups},
+        "data_fingerprint": cal.data_fingerprint,
+        "created": cal.created,
+        "circuit": None if cal.circuit is None else cal.circuit.to_dict(),
+        "source": cal.source,
+    }
+    if cal.compensation is not None:
+        d["compensation"] = cal.compensation.to_dict()
+        if cal.compensation_he_percent is not None:
+            before, after = cal.compensation_he_percent
+            d["compensation"]["hysteresis_error_before_percent"] = before
+            d["compensation"]["hysteresis_error_after_percent"] = after
+    d.update(cal.extra)
+    return d
+
+
+def _model(m: dict) -> PolynomialModel:
+    return PolynomialModel(np.asarray(m["chebyshev_coefficients"], dtype=float), float(m["x_center"]),
+                           float(m["x_half_width"]))
+
+
+def calibration_from_dict(d: dict) -> Calibration:
+    """Inverse of :func:`calibration_to_dict`, for the current and the earlier layout.
+
+    Parameters
+    ----------
+    d : dict
+        A calibration file's content (format and version already checked).
+
+    Returns
+    -------
+    Calibration
+
+    Raises
+    ------
+    KeyError, TypeError, ValueError
+        An entry missing or malformed.
+    """
+    from fsrlab.analysis.compensation import DirectionAwareCalibration
+    from fsrlab.circuits.circuit import LM555Circuit
+
+    met = d.get("metrics", {})
+    cvd = d.get("cross_validation")
+    cv = None if not cvd else CrossValidation(cvd["degrees"], cvd["rmse"], cvd["folds"], cvd["groups"],
+                                              int(d["degree"]))
+    # Earlier files: the decoding circuit's parts under "decode" (all of them LM555Circuit fields).
+    parts = d.get("circuit") if "circuit" in d else d.get("decode")
+    comp = d.get("compensation")
+    he = None
+    if comp and "hysteresis_error_before_percent" in comp:
+        he = (float(comp["hysteresis_error_before_percent"]), float(comp["hysteresis_error_after_percent"]))
+    return Calibration(
+        model=_model(d), x_name=d["x"], y_name=d["y"], x_unit=d["units"]["x"], y_unit=d["units"]["y"],
+        r2=met.get("r2", float("nan")), rmse=met.get("rmse", float("nan")),
+        max_error_percent_fs=met.get("max_error_percent_fs", float("nan")), n=met.get("n", 0),
+        data_fingerprint=d.get("data_fingerprint", ""), created=d.get("created", ""), cv=cv,
+        circuit=None if not parts else LM555Circuit.from_dict(parts), source=d.get("source", ""),
+        extra={k: v for k, v in d.items() if k not in _KNOWN},
+        compensation=DirectionAwareCalibration.from_dict(comp) if comp else None, compensation_he_percent=he)
+
+
+def save_calibration(cal: Calibration, path: str | os.PathLike) -> Path:
+    """Write a calibration to a JSON file.
+
+    Parameters
+    ----------
+    cal : Calibration
+    path : str or path-like
+
+    Returns
+    -------
+    Path
+    """
+    p = Path(path)
+    p.write_text(json.dumps(calibration_to_dict(cal), indent=2, allow_nan=False) + "\n", encoding="utf-8")
+    return p
+
+
+def load_calibration(path: str | os.PathLike) -> Calibration:
+    """Read a calibration written by :func:`save_calibration` (or by an earlier fsrlab).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The JSON file.
+
+    Returns
+    -------
+    Calibration
+        With ``path`` set to the file.
+
+    Raises
+    ------
+    ValueError
+        One line naming the file and what is wrong.
+    """
+    p = Path(path)
+    try:
+        d = json.loads(p.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{p}: not a JSON calibration file ({exc})") from None
+    if not isinstance(d, dict) or d.get("format") != CALIBRATION_FORMAT:
+        raise ValueError(f"{p}: not an fsrlab calibration (\"format\" must be {CALIBRATION_FORMAT!r})")
+    if d.get("version") != 1:
+        raise ValueError(f"{p}: calibration version {d.get('version')!r} not supported (version 1 is)")
+    try:
+        cal = calibration_from_dict(d)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ValueError(f"{p}: calibration file incomplete or malformed ({type(exc).__name__}: {exc})") from None
+    cal.path = p
+    return cal

@@ -1,0 +1,132 @@
+"""Readers of the small CSV tables that are not runs: grouped repeatability readings, ISO 376 series.
+
+Reading files is kept apart from the computations that use the tables
+(:mod:`fsrlab.analysis.repeatability`, :mod:`fsrlab.analysis.iso376`); the CSV dialect and the
+one-line error messages (file, row, column) are those of :mod:`fsrlab.runformat`.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import numpy as np
+
+from fsrlab.analysis.iso376 import CalibrationSeries
+from fsrlab.runformat import read_table, where
+
+__all__ = ["load_grouped_csv", "load_iso376_csv"]
+
+
+def _label(cell: str) -> Any:
+    try:
+        v = float(cell)
+    except ValueError:
+        return cell
+    return int(v) if v.is_integer() else v
+
+
+def load_grouped_csv(path: str | os.PathLike) -> tuple[list, list, np.ndarray]:
+    """Read a CSV with columns ``load,sensor,reading`` (any order, other columns ignored).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file. ``load`` and ``sensor`` are labels (numbers or text); ``reading`` is numeric.
+
+    Returns
+    -------
+    load, sensor : list
+        Labels (numbers when the cell is numeric).
+    reading : ndarray
+        The readings.
+
+    Raises
+    ------
+    ValueError
+        One line naming the file, the row and the column for a missing column, an empty or
+        non-numeric reading.
+    """
+    ix, rows, p = read_table(path, ("load", "sensor", "reading"), hint="header load,sensor,reading needed")
+    il, isn, ir = ix["load"], ix["sensor"], ix["reading"]
+    loads, sensors, values = [], [], []
+    for k, row in rows:
+        for name, j in (("load", il), ("sensor", isn), ("reading", ir)):
+            if j >= len(row) or not row[j].strip():
+                raise ValueError(f"{where(p, k, name)}: empty cell")
+        try:
+            v = float(row[ir])
+        except ValueError:
+            raise ValueError(f"{where(p, k, 'reading')}: non-numeric cell {row[ir].strip()!r}") from None
+        if not np.isfinite(v):
+            raise ValueError(f"{where(p, k, 'reading')}: {row[ir].strip()!r} is not a finite number")
+        loads.append(_label(row[il].strip()))
+        sensors.append(_label(row[isn].strip()))
+        values.append(v)
+    if not values:
+        raise ValueError(f"{p}: no readings")
+    return loads, sensors, np.array(values)
+
+
+def load_iso376_csv(path) -> tuple[np.ndarray, list[CalibrationSeries]]:
+    """Read ISO 376 calibration readings from a long CSV.
+
+    Columns: ``series`` (label), ``rotation_deg`` [°], ``force_n`` [N], ``reading``, and optional
+    ``direction`` (+1 increasing, default; -1 decreasing). A row with ``force_n`` = 0 is a zero
+    reading: direction +1 is the zero before the series, -1 the zero after it.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The CSV file.
+
+    Returns
+    -------
+    forces_n : ndarray
+        The calibration forces (those of the first series). [N]
+    series : list of CalibrationSeries
+        In order of first appearance.
+
+    Raises
+    ------
+    ValueError
+        One line naming the file, row and column for a missing column or a non-numeric cell, or
+        naming the series whose forces differ from the first series'.
+    """
+    ix, rows, p = read_table(path, ("series", "rotation_deg", "force_n", "reading"))
+    data: dict[str, dict] = {}
+    for k, row in rows:
+        vals = {}
+        for col in ("rotation_deg", "force_n", "reading", "direction"):
+            if col not in ix:
+                continue
+            cell = row[ix[col]].strip() if ix[col] < len(row) else ""
+            if not cell and col == "direction":
+                vals[col] = 1.0
+                continue
+            try:
+                vals[col] = float(cell)
+            except ValueError:
+                raise ValueError(f"{where(p, k, col)}: non-numeric cell {cell!r}") from None
+        d = vals.get("direction", 1.0)
+        if d not in (1.0, -1.0):
+            raise ValueError(f"{where(p, k, 'direction')}: must be +1 or -1, got {d:g}")
+        label = row[ix["series"]].strip()
+        s = data.setdefault(label, {"rot": vals["rotation_deg"], "inc": {}, "dec": {}, "z0": None, "z1": None})
+        if vals["force_n"] == 0:
+            s["z0" if d > 0 else "z1"] = vals["reading"]
+        else:
+            s["inc" if d > 0 else "dec"][vals["force_n"]] = vals["reading"]
+    if not data:
+        raise ValueError(f"{p}: no readings")
+    first = next(iter(data.values()))
+    forces = np.array(sorted(first["inc"]))
+    series = []
+    for label, s in data.items():
+        if sorted(s["inc"]) != forces.tolist():
+            raise ValueError(f"{p}: series {label!r} has increasing forces {sorted(s['inc'])}, not those of the first series {forces.tolist()}")
+        dec = None
+        if s["dec"]:
+            dec = [s["dec"].get(f, np.nan) for f in forces]
+        series.append(CalibrationSeries(s["rot"], [s["inc"][f] for f in forces], dec, s["z0"], s["z1"]))
+    return forces, series
