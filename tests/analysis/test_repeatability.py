@@ -11,7 +11,8 @@ import pytest
 from hypothesis import given, strategies as st
 from hypothesis.extra.numpy import arrays
 
-from fsrlab.analysis.repeatability import grouped_repeatability, load_grouped_csv, repeatability
+from fsrlab.analysis.repeatability import grouped_repeatability, repeatability
+from fsrlab.tables import load_grouped_csv
 
 TABLES = ["table4_repeatability_capacitive_kHz", "table5_repeatability_traditional_V"]
 LOADS = ["200g", "400g"]
