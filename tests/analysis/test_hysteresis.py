@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import assume, given, strategies as st
 from hypothesis.extra.numpy import arrays
 
 from fsrlab.analysis.hysteresis import hysteresis_error, hysteresis_error_curves
@@ -46,6 +46,7 @@ def test_properties(ql, qu, scale):
         with pytest.raises(ValueError, match="q_load"):
             hysteresis_error(xl, ql, xu, qu)
         return
+    assume(scale * ql[-1] != 0)  # a subnormal Q(σf) times a small scale underflows to 0
     r = hysteresis_error(xl, ql, xu, qu)
     assert r.percent >= 0
     assert hysteresis_error(xl, ql, xl, ql).percent == 0
