@@ -9,6 +9,7 @@ from __future__ import annotations
 import importlib
 import inspect
 import os
+import re
 import sys
 
 import typer
@@ -93,4 +94,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _one_line(message: str) -> str:
-    return " ".join(message.split())
+    from fsrlab.cli._common import plain_numbers
+
+    # click quotes the option it found ("'--r'"), fail() and option_names do not: one spelling.
+    message = re.sub(r"^Invalid value for '(-[^']*)'", r"Invalid value for \1", message.strip())
+    return " ".join(plain_numbers(message).split())
