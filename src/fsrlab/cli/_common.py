@@ -24,7 +24,7 @@ import json
 import math
 import re
 from contextlib import contextmanager
-from typing import Any, Iterator
+from typing import Any, Callable, Iterator
 
 import numpy as np
 import typer
@@ -46,61 +46,30 @@ def eng(text: str | float) -> float:
         raise typer.BadParameter(str(exc)) from None
 
 
-def _quantity(text: str | float, quantity: str) -> float:
-    try:
-        return parse_quantity(text, quantity)
-    except ValueError as exc:
-        raise typer.BadParameter(str(exc)) from None
+def _parser(name: str, quantity: str, doc: str) -> Callable[[str | float], float]:
+    """An option parser for one quantity of :data:`fsrlab.units.QUANTITIES`."""
+
+    def parse(text: str | float) -> float:
+        try:
+            return parse_quantity(text, quantity)
+        except ValueError as exc:
+            raise typer.BadParameter(str(exc)) from None
+
+    parse.__name__ = parse.__qualname__ = name
+    parse.__doc__ = doc
+    return parse
 
 
-def ohms(text: str | float) -> float:
-    """Resistance [Ω]: ``10k``, ``10kΩ``, ``10kohm``, ``4k7``, ``1M``, ``1meg``; ``1m`` is refused as ambiguous."""
-    return _quantity(text, "resistance")
-
-
-def farads(text: str | float) -> float:
-    """Capacitance [F]: ``4.7n``, ``4.7nF``, ``470p``, ``4n7``; ``1m`` is refused as ambiguous."""
-    return _quantity(text, "capacitance")
-
-
-def volts(text: str | float) -> float:
-    """Voltage [V]: ``5``, ``5V``, ``600mV``; another quantity's unit is refused."""
-    return _quantity(text, "voltage")
-
-
-def hertz(text: str | float) -> float:
-    """Frequency [Hz]: ``6478.5``, ``6.4785k``, ``6.4785kHz``; another quantity's unit is refused."""
-    return _quantity(text, "frequency")
-
-
-def pascals(text: str | float) -> float:
-    """Stress [Pa]: ``322k``, ``322kPa``, ``4.73MPa``; another quantity's unit is refused."""
-    return _quantity(text, "stress")
-
-
-def metres(text: str | float) -> float:
-    """Length [m]: ``4.418n``, ``4.418nm``; ``5m`` is refused (5 m or 5 mm?)."""
-    return _quantity(text, "length")
-
-
-def electronvolts(text: str | float) -> float:
-    """Energy in electronvolts [eV]: ``0.223``, ``0.223eV``, ``223meV``."""
-    return _quantity(text, "energy")
-
-
-def seconds(text: str | float) -> float:
-    """Duration [s]: ``90``, ``90s``, ``1.5min``, ``2h``, ``500ms``, ``250us``; ``1m`` is refused."""
-    return _quantity(text, "duration")
-
-
-def fraction(text: str | float) -> float:
-    """Fraction: ``0.1`` or ``10%``; a value above 1 without ``%`` is refused, never read as percent."""
-    return _quantity(text, "fraction")
-
-
-def number(text: str | float) -> float:
-    """A plain finite number (``2``, ``7.5``, ``1e3``), without unit letters or prefixes."""
-    return _quantity(text, "number")
+ohms = _parser("ohms", "resistance", "Resistance [Ω]: 10k, 10kΩ, 10kohm, 4k7, 1M, 1meg; 1m is refused as ambiguous.")
+farads = _parser("farads", "capacitance", "Capacitance [F]: 4.7n, 4.7nF, 470p, 4n7; 1m is refused as ambiguous.")
+volts = _parser("volts", "voltage", "Voltage [V]: 5, 5V, 600mV; another quantity's unit is refused.")
+hertz = _parser("hertz", "frequency", "Frequency [Hz]: 6478.5, 6.4785k, 6.4785kHz; another quantity's unit is refused.")
+pascals = _parser("pascals", "stress", "Stress [Pa]: 322k, 322kPa, 4.73MPa; another quantity's unit is refused.")
+metres = _parser("metres", "length", "Length [m]: 4.418n, 4.418nm; 5m is refused (5 m or 5 mm?).")
+electronvolts = _parser("electronvolts", "energy", "Energy in electronvolts [eV]: 0.223, 0.223eV, 223meV.")
+seconds = _parser("seconds", "duration", "Duration [s]: 90, 90s, 1.5min, 2h, 500ms, 250us; 1m is refused (minutes or milli?).")
+fraction = _parser("fraction", "fraction", "Fraction: 0.1 or 10%; a value above 1 without % is refused, never read as percent.")
+number = _parser("number", "number", "A plain finite number (2, 7.5, 1e3), without unit letters or prefixes.")
 
 
 def to_jsonable(obj: Any) -> Any:
