@@ -1,7 +1,8 @@
 """Shared pieces of the command modules: option parsers, JSON output, one-line errors.
 
 Option parsers, for ``typer.Option(..., parser=...)``; each turns a bad value into a usage error
-that names the option ("Invalid value for '--r': ..."), and none accepts ``nan`` or ``inf``:
+that :func:`fsrlab.cli.main` prints as one line naming the option ("fsrlab: error: Invalid value
+for --r: '1m' is ambiguous: ..."), exit code 2; none accepts ``nan`` or ``inf``:
 
 ========================  ==================================================================
 ``ohms``                  resistance: 10k, 10kΩ, 10kohm, 4k7, 1M, 1meg; ``1m`` refused
