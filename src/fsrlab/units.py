@@ -126,7 +126,6 @@ QUANTITIES = {
     "number": Quantity("a plain number", "", {"": 1.0}, prefixed=False, examples="2, 7.5, 1e3"),
 }
 
-_PREFIX_NAMES = sorted((p for p in PREFIXES if p), key=len, reverse=True)
 _NUMBER_AND_SUFFIX = re.compile(rf"^({_NUMBER})(.*)$")
 _RKM_ANY = re.compile(r"^(\d+)(meg|MEG|Meg|[fpnuµμmkKMGTR])(\d+)(.*)$")
 _NOT_FINITE = re.compile(r"^[+-]?(nan|inf|infinity)$", re.IGNORECASE)
