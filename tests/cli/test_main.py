@@ -39,3 +39,46 @@ def test_physics_json_reproduces_table2_capacitance(capsys):
     row = json.loads(out)["rows"][0]
     assert code == 0 and row["tunneling_equation"] == 12
     assert row["capacitance_per_area_percent"] == pytest.approx(1.73, abs=0.005)
+
+
+def test_no_arguments_prints_the_help_and_exits_0(capsys):
+    # Reference: the usual command-line convention (git, pip): a bare program name shows its help.
+    code, out, err = run_cli([], capsys)
+    assert code == 0 and err == ""
+    assert "Usage: fsrlab" in out and "physics" in out
+
+
+def test_physics_help_shows_the_units_of_its_options(capsys):
+    # Reference: the options' own help strings in cli/physics.py; rich markup used to drop "[m]", "[eV]".
+    code, out, _ = run_cli(["physics", "--help"], capsys)
+    assert code == 0
+    for unit in ("[V]", "[m]", "[Pa]", "[eV]"):
+        assert unit in out
+    assert "<bool>" not in out
+
+
+def _bracketed(text):
+    import re
+
+    return re.findall(r"\[[^\]\s]+\]", text or "")
+
+
+def test_every_command_help_keeps_the_bracketed_text_of_its_options(capsys):
+    # Reference: each option's help string, as written in the command modules.
+    import typer
+
+    from fsrlab.cli import app
+
+    group = typer.main.get_command(app)
+    for name, command in group.commands.items():
+        code, out, _ = run_cli([name, "--help"], capsys)
+        assert code == 0, name
+        for param in command.params:
+            for token in _bracketed(getattr(param, "help", None)):
+                assert token in out, f"fsrlab {name} --help lost {token}"
+
+
+def test_command_list_shows_whole_first_sentences(capsys):
+    # Reference: the commands' docstrings; "(eq. 13)" must not end the summary at "eq.".
+    code, out, _ = run_cli(["--help"], capsys)
+    assert code == 0 and "Hysteresis error (eq. 13) of R_A and C_A" in " ".join(out.split())

@@ -7,7 +7,9 @@ names the field and what is allowed, and exit code 2 (see :func:`main`).
 from __future__ import annotations
 
 import importlib
+import inspect
 import os
+import re
 import sys
 
 import typer
@@ -20,6 +22,9 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
+    # Plain help: rich markup would read the units in option help ("[m]", "[eV]", "[s]") as style
+    # tags and drop them, and it shows a "<bool>" value placeholder after every flag.
+    rich_markup_mode=None,
 )
 
 # Topic modules that add commands to ``app``; a topic not written yet is simply absent.
@@ -30,6 +35,13 @@ for _name in COMMAND_MODULES:
     except ModuleNotFoundError as _err:
         if _err.name != f"{__name__}.{_name}":
             raise
+
+# The command list shows each command's first paragraph whole: click's default cuts it at the
+# first ". ", which in "Hysteresis error (eq. 13) of ..." is inside the equation number.
+for _info in app.registered_commands:
+    if _info.short_help is None:
+        _doc = _info.help or inspect.getdoc(_info.callback) or ""
+        _info.short_help = " ".join(_doc.split("\n\n")[0].split()) or None
 
 
 def _version(value: bool) -> None:
@@ -59,6 +71,8 @@ def main(argv: list[str] | None = None) -> int:
         The exit code (also raised as ``SystemExit``).
     """
     args = sys.argv[1:] if argv is None else list(argv)
+    if not args:  # bare ``fsrlab``: the help, as a successful command
+        args = ["--help"]
     command = typer.main.get_command(app)
     try:
         # In non-standalone mode typer returns an explicit Exit's code, or the command's value.
@@ -80,4 +94,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _one_line(message: str) -> str:
-    return " ".join(message.split())
+    from fsrlab.cli._common import plain_numbers
+
+    # click quotes the option it found ("'--r'"), fail() and option_names do not: one spelling.
+    message = re.sub(r"^Invalid value for '(-[^']*)'", r"Invalid value for \1", message.strip())
+    return " ".join(plain_numbers(message).split())

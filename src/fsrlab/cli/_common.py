@@ -1,4 +1,23 @@
-"""Shared pieces of the command modules: engineering-notation values and JSON output."""
+"""Shared pieces of the command modules: option parsers, JSON output, one-line errors.
+
+Option parsers, for ``typer.Option(..., parser=...)``; each turns a bad value into a usage error
+that :func:`fsrlab.cli.main` prints as one line naming the option ("fsrlab: error: Invalid value
+for --r: '1m' is ambiguous: ..."), exit code 2; none accepts ``nan`` or ``inf``:
+
+========================  ==================================================================
+``ohms``                  resistance: 10k, 10kΩ, 10kohm, 4k7, 1M, 1meg; ``1m`` refused
+``farads``                capacitance: 4.7n, 4.7nF, 470p, 4n7; ``1m`` refused
+``volts``                 voltage: 5, 5V, 600mV
+``hertz``                 frequency: 6478.5, 6.4785k, 6.4785kHz
+``pascals``               stress: 322k, 322kPa, 4.73MPa
+``metres``                length: 4.418n, 4.418nm; ``5m`` refused (metres or milli?)
+``electronvolts``         energy in eV: 0.223, 0.223eV, 223meV
+``seconds``               duration: 90, 90s, 1.5min, 2h, 500ms, 250us; ``1m`` refused
+``fraction``              0.1 or 10%; a value above 1 without ``%`` is refused
+``number``                a plain number without unit or prefix
+``eng``                   any engineering notation, unit letters ignored (lenient, older)
+========================  ==================================================================
+"""
 
 from __future__ import annotations
 
@@ -6,14 +25,15 @@ import json
 import math
 import re
 from contextlib import contextmanager
-from typing import Any, Iterator
+from typing import Any, Callable, Iterator
 
 import numpy as np
 import typer
 
-from fsrlab.units import parse_eng
+from fsrlab.units import parse_eng, parse_quantity
 
-__all__ = ["eng", "emit_json", "to_jsonable", "fail", "option_names"]
+__all__ = ["eng", "ohms", "farads", "volts", "hertz", "pascals", "metres", "electronvolts", "seconds",
+           "fraction", "number", "emit_json", "to_jsonable", "fail", "option_names", "plain_numbers"]
 
 
 def eng(text: str | float) -> float:
@@ -25,6 +45,32 @@ def eng(text: str | float) -> float:
         return parse_eng(text, name=None)
     except ValueError as exc:
         raise typer.BadParameter(str(exc)) from None
+
+
+def _parser(name: str, quantity: str, doc: str) -> Callable[[str | float], float]:
+    """An option parser for one quantity of :data:`fsrlab.units.QUANTITIES`."""
+
+    def parse(text: str | float) -> float:
+        try:
+            return parse_quantity(text, quantity)
+        except ValueError as exc:
+            raise typer.BadParameter(str(exc)) from None
+
+    parse.__name__ = parse.__qualname__ = name
+    parse.__doc__ = doc
+    return parse
+
+
+ohms = _parser("ohms", "resistance", "Resistance [Ω]: 10k, 10kΩ, 10kohm, 4k7, 1M, 1meg; 1m is refused as ambiguous.")
+farads = _parser("farads", "capacitance", "Capacitance [F]: 4.7n, 4.7nF, 470p, 4n7; 1m is refused as ambiguous.")
+volts = _parser("volts", "voltage", "Voltage [V]: 5, 5V, 600mV; another quantity's unit is refused.")
+hertz = _parser("hertz", "frequency", "Frequency [Hz]: 6478.5, 6.4785k, 6.4785kHz; another quantity's unit is refused.")
+pascals = _parser("pascals", "stress", "Stress [Pa]: 322k, 322kPa, 4.73MPa; another quantity's unit is refused.")
+metres = _parser("metres", "length", "Length [m]: 4.418n, 4.418nm; 5m is refused (5 m or 5 mm?).")
+electronvolts = _parser("electronvolts", "energy", "Energy in electronvolts [eV]: 0.223, 0.223eV, 223meV.")
+seconds = _parser("seconds", "duration", "Duration [s]: 90, 90s, 1.5min, 2h, 500ms, 250us; 1m is refused (minutes or milli?).")
+fraction = _parser("fraction", "fraction", "Fraction: 0.1 or 10%; a value above 1 without % is refused, never read as percent.")
+number = _parser("number", "number", "A plain finite number (2, 7.5, 1e3), without unit letters or prefixes.")
 
 
 def to_jsonable(obj: Any) -> Any:
@@ -70,12 +116,37 @@ def fail(message: str, field: str | None = None) -> None:
     field : str, optional
         The option or argument at fault, e.g. ``"--r"``.
     """
-    raise typer.BadParameter(message, param_hint=field)
+    raise typer.BadParameter(plain_numbers(message), param_hint=field)
+
+
+# numpy >= 2 prints scalars as np.float64(37.8); arrays as array([1., 2.]).
+_NUMPY_SCALAR = re.compile(r"\b(?:np|numpy)\.(?:float|int|uint|complex|bool|str)_?\d*\(([^()]*)\)")
+_NUMPY_ARRAY = re.compile(r"\barray\((\[[^()]*\])(?:,\s*dtype=[\w.]+)?\)")
+
+
+def plain_numbers(message: str) -> str:
+    """``message`` with numpy reprs replaced by the plain values: ``np.float64(37.8)`` → ``37.8``.
+
+    Parameters
+    ----------
+    message : str
+        An error message, e.g. one a model wrote with ``{value!r}``.
+
+    Returns
+    -------
+    str
+        The message as a user should read it.
+    """
+    message = _NUMPY_SCALAR.sub(lambda m: m.group(1).strip("'\""), message)
+    return _NUMPY_ARRAY.sub(lambda m: " ".join(m.group(1).split()), message)
 
 
 @contextmanager
 def option_names(mapping: dict[str, str]) -> Iterator[None]:
     """Re-raise a model's ``ValueError`` with its parameter names replaced by the CLI's option names.
+
+    Numpy reprs in the message become plain numbers (:func:`plain_numbers`); a message that starts
+    with an option is reported as that option's invalid value.
 
     Parameters
     ----------
@@ -85,7 +156,11 @@ def option_names(mapping: dict[str, str]) -> Iterator[None]:
     try:
         yield
     except ValueError as exc:
-        message = str(exc)
-        for name, option in mapping.items():
-            message = re.sub(rf"\b{re.escape(name)}\b", option, message)
+        message = plain_numbers(str(exc))
+        # Longest names first, so that "sigma_f_pa" is replaced before a shorter name inside it.
+        for name in sorted(mapping, key=len, reverse=True):
+            message = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])", mapping[name], message)
+        lead = re.match(r"^(--[\w-]+(?:/--[\w-]+)*)(?::\s*|\s+)(.+)$", message, re.DOTALL)
+        if lead and lead.group(1) in mapping.values():
+            raise typer.BadParameter(lead.group(2), param_hint=lead.group(1)) from None
         raise typer.BadParameter(message) from None

@@ -46,7 +46,8 @@ def resistance_per_area(
     -------
     R_A : float or ndarray
         Resistance per unit area; inf where J underflows to 0 (or below the smallest float), NaN
-        where J is NaN. [Ω·m²]
+        where J is NaN (with ``"auto"``, from u = :func:`fsrlab.physics.tunneling.voltage_limit`
+        on). [Ω·m²]
     regime : int or ndarray of int
         Only with ``return_regime``.
 

@@ -33,9 +33,9 @@ def _check_cycle(sigma_f_pa: float, modulus_pa: float, k: float) -> None:
     check_positive("sigma_f_pa", sigma_f_pa, "Pa")
     check_finite("k", k)
     if not modulus_pa > sigma_f_pa:
-        raise ValueError(f"modulus_pa must be > sigma_f_pa ({sigma_f_pa!r} Pa), got {modulus_pa!r}")
+        raise ValueError(f"modulus_pa must be > sigma_f_pa ({float(sigma_f_pa):g} Pa), got {float(modulus_pa):g}")
     if not k >= 1:
-        raise ValueError(f"k must be >= 1, got {k!r}")
+        raise ValueError(f"k must be >= 1, got {float(k):g}")
 
 
 def separation_loading(stress_pa, s0_m: float = PAPER.s0_m, modulus_pa: float = PAPER.modulus_pa):
@@ -191,7 +191,7 @@ def separation_history(
     _check_material(s0_m, modulus_pa)
     check_finite("k", k)
     if not k >= 1:
-        raise ValueError(f"k must be >= 1, got {k!r}")
+        raise ValueError(f"k must be >= 1, got {float(k):g}")
     stress = np.asarray(stress_pa, dtype=float).ravel()
     check_finite("stress_pa", stress)
     if stress.size and (stress.min() < 0 or stress.max() >= modulus_pa):

@@ -9,12 +9,15 @@ separated by a thin insulating film", J. Appl. Phys. 34, 1793 (1963), doi:10.106
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.constants import e, h, m_e
+from scipy.optimize import brentq
 
 from fsrlab.physics.params import PAPER, check_positive
 
-__all__ = ["REGIMES", "SMALL_U_FRACTION", "tunneling_regime", "current_density"]
+__all__ = ["REGIMES", "SMALL_U_FRACTION", "tunneling_regime", "current_density", "voltage_limit"]
 
 #: Regimes by the paper's equation number.
 REGIMES = {10: "u ≈ 0 (eq. 10)", 11: "u ≤ φ0/e (eq. 11)", 12: "u > φ0/e (eq. 12)"}
@@ -110,10 +113,10 @@ def current_density(
     -------
     J : float or ndarray
         Current density. NaN where eq. (11) is forced beyond its domain (e·u > 2φ0, or a negative
-        result on very thin films) and where eq.
-        (12)'s bracket is not positive (thin films at high voltage, B < ln r / (√r − 1): Simmons'
-        high-voltage formula no longer describes tunnelling); 0 where eq. (12) underflows (forced at
-        tiny u). [A/m²]
+        result on very thin films) and where eq. (12)'s bracket is not positive (thin films at high
+        voltage, B < ln r / (√r − 1): Simmons' high-voltage formula no longer describes tunnelling);
+        :func:`voltage_limit` gives the voltage where that starts. 0 where eq. (12) underflows
+        (forced at tiny u). [A/m²]
     regime : int or ndarray of int
         Only with ``return_regime``: 10, 11 or 12 for each element.
 
@@ -159,3 +162,72 @@ def current_density(
     else:
         which = np.array(which)
     return (j, which) if return_regime else j
+
+
+def _eq12_limit_r(q: float) -> float:
+    """r = 1 + 2eu/φ0 at which eq. (12)'s bracket reaches 0: the root of (√r + 1) ln r = q."""
+    return brentq(lambda r: (math.sqrt(r) + 1) * math.log(r) - q, 1.0, max(4.0, q * q), xtol=1e-15, rtol=1e-15)
+
+
+def _eq11_limit_t(c: float, t_lo: float, t_hi: float) -> float:
+    """Largest t = eu/(2φ0) in [t_lo, t_hi] with c (√(1+t) − √(1−t)) ≥ ln((1+t)/(1−t)): eq. (11) ≥ 0."""
+
+    def margin(t):
+        return c * (math.sqrt(1 + t) - math.sqrt(1 - t)) - math.log((1 + t) / (1 - t))
+
+    if margin(t_hi) >= 0:
+        return t_hi
+    if t_lo <= 0 or margin(t_lo) < 0:
+        return t_lo
+    return brentq(margin, t_lo, t_hi, xtol=1e-15, rtol=1e-15)
+
+
+def voltage_limit(s_m, phi0_j: float = PAPER.phi0_j, small_u_fraction: float = SMALL_U_FRACTION):
+    """Largest voltage up to which the paper's equations give a current density at separation ``s_m``.
+
+    Parameters
+    ----------
+    s_m : float or array_like
+        Interparticle separation s, > 0; for a stress cycle, the smallest separation of the cycle. [m]
+    phi0_j : float
+        Barrier height φ0. [J]
+    small_u_fraction : float
+        Threshold of u ≈ 0, as in :func:`tunneling_regime`. [-]
+
+    Returns
+    -------
+    float or ndarray
+        u_max: for 0 < u < u_max, :func:`current_density` with ``regime="auto"`` is a number (not NaN)
+        at ``s_m`` and at every larger separation; just above u_max it is NaN at ``s_m``. [V]
+
+    Notes
+    -----
+    With ``r = 1 + 2eu/φ0`` and ``B`` of eq. (12), the bracket ``exp(−B) − r exp(−B√r)`` is positive
+    exactly when ``(√r + 1) ln r < 16π s √(2mφ0) / (2.96 h)``; the left side grows with u, the right
+    side with s. So eq. (12) holds for u below the root of that equation, at s and every thicker
+    film. Eq. (11) stays ≥ 0 while ``c (√(1+t) − √(1−t)) ≥ ln((1+t)/(1−t))`` with ``t = eu/(2φ0)``
+    and ``c = (4πs/h)√(2mφ0)``; its right side over ``√(1+t) − √(1−t)`` rises from 2 at t → 0, so
+    it fails only on films thinner than about 0.44 nm at φ0 = 0.223 eV. Eq. (10) is always positive.
+    The limit is where the first of these fails along u, with the regimes the paper's thresholds pick.
+
+    References
+    ----------
+    Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, eqs. (10)–(12).
+    Simmons, J. Appl. Phys. 34, 1793 (1963), doi:10.1063/1.1702682.
+    """
+    check_positive("phi0_j", phi0_j, "J")
+    check_positive("s_m", s_m, "m")
+    if not 0 <= small_u_fraction < 1:
+        raise ValueError(f"small_u_fraction must be in [0, 1), got {small_u_fraction:g}")
+    root = math.sqrt(2 * m_e * phi0_j)
+
+    def one(s: float) -> float:
+        q = 16 * math.pi * s * root / (2.96 * h)
+        if q > (math.sqrt(3) + 1) * math.log(3):  # eq. (12) holds just above u = φ0/e
+            return (_eq12_limit_r(q) - 1) * phi0_j / (2 * e)
+        c = 4 * math.pi * s / h * root
+        return 2 * phi0_j / e * _eq11_limit_t(c, small_u_fraction / 2, 0.5)
+
+    s = np.asarray(s_m, dtype=float)
+    limits = np.vectorize(one, otypes=[float])(s)
+    return float(limits) if limits.ndim == 0 else limits
