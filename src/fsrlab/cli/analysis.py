@@ -14,7 +14,7 @@ from rich.console import Console
 from rich.table import Table
 
 from fsrlab.cli import app
-from fsrlab.cli._common import emit_json, eng, fail
+from fsrlab.cli._common import emit_json, fail, farads, fraction, ohms
 
 _DEGREES = ("auto", "1", "2", "3", "4", "5")
 
@@ -33,7 +33,7 @@ def _missing(path: Path, run, column: str, what: str = "", option: str | None = 
 def hysteresis(
     run_file: Path = typer.Argument(..., metavar="RUN.csv", help="A run (docs/data-format.md) with stress_pa (or force_n) and the quantity."),
     quantity: str = typer.Option("frequency_hz", "--quantity", "-q", help="Column whose hysteresis is measured (frequency_hz, duty_cycle, voltage_v, ...)."),
-    threshold: float = typer.Option(0.05, "--threshold", parser=eng, help="Stress reversal threshold, fraction of the stress span (0..1), used without a direction column."),
+    threshold: float = typer.Option(0.05, "--threshold", parser=fraction, help="Stress reversal threshold, fraction of the stress span (0..1 or %, e.g. 0.05 or 5%), used without a direction column."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Hysteresis error (eq. 13) of a run, per loading-unloading cycle and overall."""
@@ -92,8 +92,8 @@ def calibrate_cmd(
     degree: str = typer.Option("auto", "--degree", help="Polynomial degree 1..5, or auto (cross-validation keeping whole cycles together)."),
     compensate: bool = typer.Option(False, "--compensate", help="Also fit the direction-aware hysteresis compensation (extension beyond the paper) and report HE before/after."),
     folds: int = typer.Option(5, "--folds", help="Cross-validation folds (≥ 2)."),
-    r: float = typer.Option(None, "--r", parser=eng, help="555 R for --x c_fsr_farad [Ω] (default: the run's sidecar, else 10k)."),
-    c_off: float = typer.Option(None, "--c-off", parser=eng, help="C_off for --x c_fsr_farad [F] (default: sidecar, else 0)."),
+    r: float = typer.Option(None, "--r", parser=ohms, help="555 R for --x c_fsr_farad [Ω] (default: the run's sidecar, else 10k)."),
+    c_off: float = typer.Option(None, "--c-off", parser=farads, help="C_off for --x c_fsr_farad [F] (default: sidecar, else 0)."),
     output: Path = typer.Option(None, "--output", "-o", help="Write the calibration to this JSON file."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
