@@ -33,4 +33,4 @@ def test_repeatability_tables_have_five_readings_for_four_sensors():
 def test_each_call_returns_an_independent_copy():
     a = paper_values()
     a["table2_hysteresis_error_percent"]["resistance_per_area"][0] = -1.0
-    assert paper_values()["table2_hysteresis_error_percent"]["resistance_per_area"][0] == 2.21
+    assert paper_values() != a

@@ -92,6 +92,6 @@ def test_fit_recovers_a_barrier_height_from_the_brute_force():
 
 def test_fit_errors():
     with pytest.raises(ValueError, match="one value per voltage"):
-        fit_barrier_height([2.21, 5.95], U)
+        fit_barrier_height([2.0, 6.0], U)
     with pytest.raises(ValueError, match="bounds_ev"):
-        fit_barrier_height([2.21, 5.95, 10.58], U, bounds_ev=(0.24, 0.23))
+        fit_barrier_height([2.0, 6.0, 10.0], U, bounds_ev=(0.24, 0.23))
