@@ -1,27 +1,19 @@
 """The oscillator report section (fsrlab.report.sections.oscillator).
 
-References: the closed forms retyped from the paper (eqs. 32, 37 as printed) and properties of the
-built section (files written, errata keys, data consistent with fsrlab.circuits.lm555).
+References: the paper's §5 statements as printed (fsrlab/data/paper.json) and properties of the
+built section (files written, errata keys, data consistent with fsrlab.circuits.lm555). The
+computations it renders are tested in test_paper_ratio.py and test_decomposition.py.
 """
 
 from __future__ import annotations
 
 import json
-import math
 
 import numpy as np
 import pytest
 
 from fsrlab.circuits.lm555 import tau_ratio
-from fsrlab.report.sections.oscillator import build, paper_eq37_as_printed
-
-
-def test_eq37_as_printed_is_n_times_the_corrected_ratio():
-    # Erratum O2: printed eq. (37) = N × (ratio from eqs. 23 and 34); independent retyping of eq. (37).
-    n = np.array([4.5, 10.0, 100.0])
-    printed = np.log((2 - 2 * n) / (4 - n)) * 2 * n / (math.log(2) * (n + 2))
-    np.testing.assert_allclose(paper_eq37_as_printed(n), printed, rtol=1e-15)
-    np.testing.assert_allclose(paper_eq37_as_printed(n) / n, tau_ratio(n, diode=True), rtol=1e-12)
+from fsrlab.report.sections.oscillator import build
 
 
 @pytest.fixture(scope="module")
@@ -30,13 +22,15 @@ def section(tmp_path_factory):
     return build(out), out
 
 
-def test_section_files_errata_and_data(section):
+def test_section_files_errata_and_data(section, paper):
     sec, out = section
     for f in sec.figures:
         assert (out / f.filename).stat().st_size > 10_000
     assert [e.key for e in sec.errata] == ["O1", "O2", "O3", "O4", "O5"]
     data = sec.data["oscillator"]
     json.dumps(data, allow_nan=False)  # paper.json forbids NaN
+    claims = {k: v for k, v in paper["section5_tau_ratio_claims"].items() if k != "note"}
+    assert data["paper_claims"] == claims  # quoted from the one transcription
     assert data["duty_cycle_infimum_no_diode"] == pytest.approx(2 / 3)
     np.testing.assert_allclose(data["tau_ratio_no_diode"], tau_ratio(np.array(data["N"])), rtol=1e-12)
     # The paper's 24.37 sits just above the oscillation limit N = 4 (erratum O1).
@@ -55,15 +49,3 @@ def test_frequency_vs_stress_decomposition(section):
     d, nd = fs["diode"], fs["no_diode"]
     assert d["c_only_hz"][1] < d["c_only_hz"][0] and d["r_only_hz"][1] > d["r_only_hz"][0]
     assert abs(nd["r_only_hz"][1] / nd["r_only_hz"][0] - 1) < 0.1 * abs(nd["c_only_hz"][1] / nd["c_only_hz"][0] - 1)
-
-
-def test_paper_24_37_is_the_minimum_of_n_times_eq32():
-    # Erratum O1: N × eq. (32) (eq. 32 retyped here) has its minimum 24.3796 at N ≈ 6.03; the paper
-    # prints 24.37 (truncated) and DC = 24.37/25.37 = 0.96.
-    from fsrlab.report.sections.oscillator import paper_min_24_37
-
-    n, value = paper_min_24_37()
-    assert value == pytest.approx(24.37, abs=0.01)
-    assert n == pytest.approx(6.03, abs=0.01)
-    eq32 = math.log((2 * n - 2) / (n - 4)) * 2 * (n + 1) / ((n + 2) * math.log(2))
-    assert n * eq32 == pytest.approx(value, rel=1e-9)

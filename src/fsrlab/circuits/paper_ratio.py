@@ -1,0 +1,304 @@
+"""τH/τL versus N = R_FSR/R as the paper prints it and as its own equations give it (errata O1–O3).
+
+The paper's §5 derives τH/τL of the FSR-timed LM555 without the diode, eq. (32), and with the diode
+D1, eq. (37). Eq. (32) follows from eqs. (23) and (26) and falls monotonically toward 2; the paper
+nevertheless states a minimum of 24.37 for N > 4. Eq. (37) as printed carries an extra factor N over
+the ratio that follows from eqs. (23) and (34). Both printed results are N times the ratio of the
+paper's own τH and τL, as if τL had been divided by N. This module gives the printed forms, the
+"N times" ratio and its minimum, the corrected columns over N (via
+:func:`fsrlab.circuits.lm555.tau_ratio`) and an ngspice check of them (docs/errata.md, O1–O3).
+
+References
+----------
+Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, eqs. (23), (26), (32), (34),
+(37), Figures 12 and 15.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+from scipy.optimize import brentq, minimize_scalar
+
+from fsrlab.circuits.lm555 import tau_ratio
+from fsrlab.circuits.spice import simulate_spice
+
+__all__ = [
+    "tau_ratio_eq37_as_printed",
+    "tau_ratio_times_n",
+    "RatioMinimum",
+    "minimum_tau_ratio_times_n",
+    "n_where_eq32_equals",
+    "TauRatioTable",
+    "tau_ratio_table",
+    "SimulatedRatios",
+    "simulate_tau_ratios",
+]
+
+
+def tau_ratio_eq37_as_printed(n_ratio):
+    """The paper's eq. (37) exactly as printed: ``ln((2 − 2N)/(4 − N))·2N/(ln 2·(N + 2))``.
+
+    Parameters
+    ----------
+    n_ratio : float or array_like
+        ``N = R_FSR / R``, > 4 for a real value. [1]
+
+    Returns
+    -------
+    float or ndarray
+        The printed expression; NaN for 1 < N ≤ 4 where the logarithm's argument is negative. [1]
+
+    Notes
+    -----
+    This is N times the ratio that follows from eqs. (23) and (34),
+    ``2·ln((2N − 2)/(N − 4))/(ln 2·(N + 2))``; the printed form tends to 2 as N → ∞, the
+    corrected one to 0 (docs/errata.md, O2).
+    """
+    n = np.asarray(n_ratio, dtype=float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = np.log((2 - 2 * n) / (4 - n)) * 2 * n / (math.log(2) * (n + 2))  # Eq. (37) as printed
+    return out[()] if out.ndim == 0 else out
+
+
+def tau_ratio_times_n(n_ratio, diode: bool = False):
+    """``N × τH/τL``: how the paper's quoted numbers and Figures 12 and 15 behave.
+
+    Parameters
+    ----------
+    n_ratio : float or array_like
+        ``N = R_FSR / R``. [1]
+    diode : bool
+        With the ideal diode D1 (eqs. 23 and 34); without it, eqs. (23) and (26), i.e. eq. (32).
+
+    Returns
+    -------
+    float or ndarray
+        N times :func:`fsrlab.circuits.lm555.tau_ratio`; NaN where the circuit does not
+        oscillate (N ≤ 4). [1]
+
+    Notes
+    -----
+    Both the quoted minimum 24.37 (no diode) and the printed eq. (37) (diode) equal this product,
+    as if τL had been divided by N (R_FSR replaced by R in the numerators of eqs. 26 and 34).
+    """
+    n = np.asarray(n_ratio, dtype=float)
+    return n * tau_ratio(n, diode=diode)
+
+
+@dataclass(frozen=True)
+class RatioMinimum:
+    """The minimum of N × eq. (32) over N > 4.
+
+    Parameters
+    ----------
+    n_ratio : float
+        N where the minimum lies. [1]
+    value : float
+        The minimum of N × eq. (32). [1]
+    """
+
+    n_ratio: float
+    value: float
+
+    @property
+    def duty_cycle(self) -> float:
+        """The duty cycle this ratio would give, ``value/(1 + value)`` (the paper's 24.37/25.37). [1]"""
+        return self.value / (1.0 + self.value)
+
+    def to_dict(self) -> dict:
+        """The report's JSON shape: ``expression``, ``minimum`` and ``at_N``."""
+        return {"expression": "N * eq. (32)", "minimum": self.value, "at_N": self.n_ratio}
+
+
+def minimum_tau_ratio_times_n(bounds: tuple[float, float] = (4.2, 20.0), xatol: float = 1e-10) -> RatioMinimum:
+    """Minimum of N × eq. (32) for N > 4: where the paper's "minimal value 24.37" comes from.
+
+    Parameters
+    ----------
+    bounds : (float, float)
+        Search interval for N; the default holds the single minimum (N × eq. (32) grows without
+        bound as N → 4 and as N → ∞). [1]
+    xatol : float
+        Absolute tolerance in N. [1]
+
+    Returns
+    -------
+    RatioMinimum
+
+    Raises
+    ------
+    ValueError
+        If the bounds are not 4 < low < high.
+
+    Notes
+    -----
+    Bounded scalar minimisation of :func:`tau_ratio_times_n` without the diode. Eq. (32) itself
+    has no minimum for N > 4: it falls monotonically toward 2 (docs/errata.md, O1).
+    """
+    lo, hi = bounds
+    if not 4.0 < lo < hi:
+        raise ValueError(f"bounds must satisfy 4 < low < high (the circuit oscillates for N > 4), got {bounds!r}")
+    res = minimize_scalar(lambda x: float(tau_ratio_times_n(x)), bounds=(lo, hi), method="bounded",
+                          options={"xatol": xatol})
+    return RatioMinimum(n_ratio=float(res.x), value=float(res.fun))
+
+
+def n_where_eq32_equals(value: float) -> float:
+    """The N > 4 at which eq. (32), τH/τL without the diode, equals ``value``.
+
+    Parameters
+    ----------
+    value : float
+        A ratio τH/τL, > 2 (eq. 32's infimum) and at most eq. (32) at N = 4 + 1e-9 (about 54). [1]
+
+    Returns
+    -------
+    float
+        N = R_FSR / R. [1]
+
+    Raises
+    ------
+    ValueError
+        If ``value`` is outside that range.
+
+    Notes
+    -----
+    Eq. (32) falls monotonically from +∞ at N = 4 to 2 as N → ∞, so the root is unique; it is
+    bracketed between 4 + 1e-9 and an upper N doubled from 5 until eq. (32) falls below ``value``.
+    """
+    lo = 4.0 + 1e-9
+    if not 2.0 < value <= float(tau_ratio(lo)):
+        raise ValueError(f"value must be in (2, {float(tau_ratio(lo)):.4g}] (eq. 32 for N > 4 + 1e-9), got {value!r}")
+    hi = 5.0
+    while tau_ratio(hi) > value:
+        hi = 4.0 + 2.0 * (hi - 4.0)
+    return float(brentq(lambda x: tau_ratio(x) - value, lo, hi))
+
+
+@dataclass(frozen=True)
+class TauRatioTable:
+    """τH/τL and duty cycle versus N, with and without D1, beside eq. (37) as printed.
+
+    Parameters
+    ----------
+    n_ratio : tuple of float
+        N = R_FSR / R. [1]
+    no_diode : ndarray
+        τH/τL without the diode, eq. (32). [1]
+    diode : ndarray
+        τH/τL with the ideal diode, from eqs. (23) and (34). [1]
+    eq37_as_printed : ndarray
+        The paper's eq. (37) as printed (N times ``diode``). [1]
+    """
+
+    n_ratio: tuple
+    no_diode: np.ndarray
+    diode: np.ndarray
+    eq37_as_printed: np.ndarray
+
+    @property
+    def duty_cycle_no_diode(self) -> np.ndarray:
+        """``τH/(τH + τL)`` without the diode, eq. (28). [1]"""
+        return self.no_diode / (1 + self.no_diode)
+
+    @property
+    def duty_cycle_diode(self) -> np.ndarray:
+        """``τH/(τH + τL)`` with the diode, eq. (36). [1]"""
+        return self.diode / (1 + self.diode)
+
+    def to_dict(self) -> dict:
+        """The columns as lists of floats, keyed as in the report's ``paper.json`` (``oscillator``)."""
+        return {
+            "N": list(self.n_ratio),
+            "tau_ratio_no_diode": [float(v) for v in self.no_diode],
+            "tau_ratio_diode": [float(v) for v in self.diode],
+            "paper_eq37_as_printed": [float(v) for v in self.eq37_as_printed],
+            "duty_cycle_no_diode": [float(v) for v in self.duty_cycle_no_diode],
+            "duty_cycle_diode": [float(v) for v in self.duty_cycle_diode],
+        }
+
+
+def tau_ratio_table(n_ratio: Sequence[float]) -> TauRatioTable:
+    """τH/τL with and without D1 and eq. (37) as printed at each N (ideal parts, default thresholds).
+
+    Parameters
+    ----------
+    n_ratio : sequence of float
+        N = R_FSR / R, each > 4. [1]
+
+    Returns
+    -------
+    TauRatioTable
+
+    Raises
+    ------
+    ValueError
+        If an N is not > 4 (the circuit would not oscillate, eq. 30).
+    """
+    n = np.array(n_ratio, dtype=float)
+    if n.ndim != 1 or not np.all(n > 4):
+        raise ValueError(f"n_ratio must be a sequence of values > 4 (eq. 30), got {n_ratio!r}")
+    return TauRatioTable(n_ratio=tuple(n_ratio), no_diode=tau_ratio(n), diode=tau_ratio(n, diode=True),
+                         eq37_as_printed=tau_ratio_eq37_as_printed(n))
+
+
+@dataclass(frozen=True)
+class SimulatedRatios:
+    """τH/τL and duty cycle versus N from ngspice transients.
+
+    Parameters
+    ----------
+    n_ratio : tuple of float
+        N = R_FSR / R. [1]
+    tau_ratio : tuple of float
+        ``DC/(1 − DC)`` from the simulated output edges. [1]
+    duty_cycle : tuple of float
+        Output high time over period. [1]
+    """
+
+    n_ratio: tuple
+    tau_ratio: tuple
+    duty_cycle: tuple
+
+    def to_dict(self) -> dict:
+        """The report's JSON shape: ``N``, ``tau_ratio`` and ``duty_cycle`` lists."""
+        return {"N": list(self.n_ratio), "tau_ratio": list(self.tau_ratio), "duty_cycle": list(self.duty_cycle)}
+
+
+def simulate_tau_ratios(n_ratio: Sequence[float], diode: bool, r_ohm: float = 10e3, c_farad: float = 1e-9,
+                        periods: int = 5) -> SimulatedRatios:
+    """τH/τL and duty cycle at each N by an independent simulator (ngspice, fsrlab's behavioural 555).
+
+    Parameters
+    ----------
+    n_ratio : sequence of float
+        N = R_FSR / R, each > 4. [1]
+    diode : bool
+        With the ideal diode D1.
+    r_ohm : float
+        R_A = R_B = R; τH/τL and DC depend on N alone, so any R will do. [Ω]
+    c_farad : float
+        C_FSR (no C_off); any value will do, as for ``r_ohm``. [F]
+    periods : int
+        Periods measured after the start-up.
+
+    Returns
+    -------
+    SimulatedRatios
+
+    Raises
+    ------
+    FileNotFoundError, RuntimeError
+        As :func:`fsrlab.circuits.spice.simulate_spice` when ngspice is missing or fails; check
+        :func:`fsrlab.circuits.spice.ngspice_available` first.
+    """
+    ratio, dc = [], []
+    for n in n_ratio:
+        s = simulate_spice(r_ohm, n * r_ohm, c_farad, diode=diode, periods=periods)
+        ratio.append(s.duty_cycle / (1 - s.duty_cycle))
+        dc.append(s.duty_cycle)
+    return SimulatedRatios(n_ratio=tuple(n_ratio), tau_ratio=tuple(ratio), duty_cycle=tuple(dc))
