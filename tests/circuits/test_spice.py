@@ -87,7 +87,7 @@ def test_ngspice_time_varying_r_fsr_matches_event_driven_simulation(diode):
     # period error, ~1e-5 in the constant-parts grid above, accumulates over the periods).
     import numpy as np
 
-    from fsrlab.circuits.spice import _crossings, run_ngspice
+    from fsrlab.circuits.spice import level_crossings, run_ngspice
     from fsrlab.circuits.transient import simulate
 
     require_tool("ngspice")
@@ -99,8 +99,8 @@ def test_ngspice_time_varying_r_fsr_matches_event_driven_simulation(diode):
     shortest = float(min(ours.high_times_s.min(), low.min()))
     text = netlist(r, rf, c, diode=diode, time_s=t, t_stop_s=1e-3, t_max_step_s=shortest / 50)
     data = run_ngspice(text)
-    rising = _crossings(data[:, 0], data[:, 1], 2.5, True)
-    falling = _crossings(data[:, 0], data[:, 1], 2.5, False)
+    rising = level_crossings(data[:, 0], data[:, 1], 2.5, True)
+    falling = level_crossings(data[:, 0], data[:, 1], 2.5, False)
     assert ours.rising_s.size > 20
     # An edge within the tolerance of t_stop may fall on either side of it.
     n_r, n_f = min(rising.size, ours.rising_s.size), min(falling.size, ours.falling_s.size)
