@@ -48,6 +48,31 @@ class DecodeResult:
     c_fsr_std_farad: np.ndarray | float
     n_ratio: np.ndarray | float
 
+    def plot(self, ax=None, x=None, xlabel: str | None = None):
+        """R_FSR and C_FSR with their ±1σ bands versus ``x`` (default the sample index), C_FSR on a twin y axis.
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Axes for R_FSR (default: a new figure).
+        x : array_like, optional
+            Abscissa, one value per element of a 1-D result, e.g. the readings' times or the
+            reference force (default: the index 0, 1, ...).
+        xlabel : str, optional
+            Label of the x axis (default: ``"sample"`` for the default ``x``).
+
+        Returns
+        -------
+        (matplotlib.axes.Axes, matplotlib.axes.Axes)
+            The R_FSR axes and the C_FSR axes. NaN (an impossible reading) leaves gaps.
+        """
+        from fsrlab.circuits.plotting import plot_twin
+
+        if x is None:
+            x, xlabel = np.arange(np.size(self.r_fsr_ohm)), "sample" if xlabel is None else xlabel
+        return plot_twin(x, (self.r_fsr_ohm, self.r_fsr_std_ohm, "R_FSR", "Ω"),
+                         (self.c_fsr_farad, self.c_fsr_std_farad, "C_FSR", "F"), ax=ax, xlabel=xlabel)
+
 
 def _invert(f, dc, r, c_off, diode, diode_drop_v, vcc_v, lo, hi, rd_rel=0.0):
     """Vectorised inversion; returns (N, C_total) with NaN where (f, DC) is impossible."""

@@ -144,6 +144,30 @@ class AstableResult:
         """τH/τL (the quantity of the paper's eqs. 32 and 37). [1]"""
         return self.tau_high_s / self.tau_low_s
 
+    def plot(self, ax=None, x=None, xlabel: str | None = None):
+        """Frequency and duty cycle versus ``x`` (default N), the duty cycle on a twin y axis.
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Axes for the frequency (default: a new figure).
+        x : array_like, optional
+            Abscissa, one value per element of a 1-D result (default: :attr:`n_ratio`).
+        xlabel : str, optional
+            Label of the x axis (default: ``"N = R_FSR/R"`` for the default ``x``).
+
+        Returns
+        -------
+        (matplotlib.axes.Axes, matplotlib.axes.Axes)
+            The frequency axes and the duty-cycle axes. NaN (no oscillation) leaves gaps.
+        """
+        from fsrlab.circuits.plotting import plot_twin
+
+        if x is None:
+            x, xlabel = self.n_ratio, "N = R_FSR/R" if xlabel is None else xlabel
+        return plot_twin(x, (self.frequency_hz, None, "frequency", "Hz"), (self.duty_cycle, None, "duty cycle", "%"),
+                         ax=ax, xlabel=xlabel)
+
 
 def thresholds_from_control(control_v: float, vcc_v: float = 5.0) -> tuple[float, float]:
     """Threshold fractions when the control pin (5) is driven to ``control_v``.
