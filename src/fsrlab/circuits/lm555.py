@@ -4,6 +4,11 @@ Decoding a reading back to R_FSR and C_FSR is :mod:`fsrlab.circuits.decode`; pro
 a sensor is :mod:`fsrlab.circuits.design`; the Thevenin equivalents of the two phases, which every
 model here builds on, are :mod:`fsrlab.circuits.phases`.
 
+:func:`astable` and :func:`sensitivity` take every part of an
+:class:`~fsrlab.circuits.circuit.LM555Circuit` as keywords (``astable(r_fsr_ohm=..., c_fsr_farad=...,
+**circuit.kwargs())``); the functions of N alone (:func:`tau_ratio`, :func:`duty_cycle_limits`,
+:func:`minimum_n_ratio`, :func:`oscillation_margin`) take only the parts they depend on.
+
 The FSR is electrically ``R_FSR ∥ C_FSR``; it replaces the timing capacitor of a 555 astable with
 ``R_A = R_B = R`` (paper Fig. 9b), an offset capacitor ``C_off`` sits in parallel (Fig. 16), and
 optionally a diode D1 is in series with ``R_B`` (Figs. 13, 16). The timing capacitance is
