@@ -1,7 +1,7 @@
 """Dual decoding and sensitivities (fsrlab.circuits.decode.decode / sensitivity).
 
 References: round trips through the closed forms and through the independent event-driven
-simulation (decode(simulate(parts)) = parts, issue 3), a Monte-Carlo of timer quantization for the
+simulation (decode(simulate(parts)) = parts), a Monte-Carlo of timer quantization for the
 uncertainty, central finite differences for the analytic sensitivities, and the impossible-pair limits
 of duty_cycle_limits.
 """
@@ -36,7 +36,7 @@ def test_round_trip_closed_form(n, c, coff, variant):
 @pytest.mark.parametrize("variant", [dict(), dict(diode=True), dict(diode=True, diode_drop_v=0.6)])
 @pytest.mark.parametrize("rf, cf", [(200e3, 1e-9), (2e6, 0.5e-9), (100e3, 1.5e-9)])
 def test_decode_of_transient_simulation_returns_the_parts(variant, rf, cf):
-    # Issue 3 "done when": decode(simulate(parts)) returns the parts (exact simulation: 1e-8).
+    # decode(simulate(parts)) returns the parts (exact simulation: 1e-8).
     sim = simulate(10e3, rf, cf, 470e-12, periods=50, **variant)
     d = decode(sim.frequency_hz, sim.duty_cycle, 10e3, 470e-12, periods=50, **variant)
     assert d.r_fsr_ohm == pytest.approx(rf, rel=1e-8)

@@ -48,8 +48,8 @@ def test_paper_equations_default_thresholds():
     assert res_d.frequency_hz == pytest.approx(1 / (paper_eq23(r, rf, c) + LN2 * rf * c), rel=1e-12)
 
 
-def test_issue_example_decode_values():
-    # Issue 3 quotes `fsrlab decode --frequency 6478.5 --duty 0.10189` for R = 10k with the diode;
+def test_readme_example_decode_values():
+    # The README's `fsrlab decode --frequency 6478.5 --duty 0.10189` for R = 10k with the diode:
     # that pair is R_FSR = 200k, C = 1n (rounding of the printed values: 1e-5 relative).
     res = astable(10e3, 200e3, 1e-9, diode=True)
     assert res.frequency_hz == pytest.approx(6478.5, rel=1e-5)
@@ -189,3 +189,18 @@ def test_discharge_resistance_closed_form():
     with pytest.raises(NoOscillationError, match="discharge transistor") as err:
         astable(r, rf, c, discharge_ohm=20e3)
     assert err.value.condition == "discharge"
+
+
+def test_diode_drop_without_headroom_is_one_error_everywhere():
+    # Vcc − V_D must exceed the upper threshold 2/3·5 V: a 2 V drop leaves 3 V, short by 1/3 V.
+    from fsrlab.circuits.decode import decode
+
+    err = NoOscillationError.for_diode_drop(2.0, 5.0, 2 / 3)
+    assert err.condition == "diode_drop" and err.shortfall == pytest.approx(2.0 / (5 / 3) - 1, rel=1e-15)
+    assert "leaves Vcc − V_D = 3 V" in str(err) and "below 1.667 V" in str(err)
+    for call in (lambda: astable(10e3, 200e3, 1e-9, diode=True, diode_drop_v=2.0),
+                 lambda: duty_cycle_limits(diode=True, diode_drop_v=2.0),
+                 lambda: decode(5e3, 0.5, 10e3, diode=True, diode_drop_v=2.0)):
+        with pytest.raises(NoOscillationError) as raised:
+            call()
+        assert raised.value.condition == "diode_drop" and str(raised.value).startswith(str(err))

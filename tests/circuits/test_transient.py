@@ -1,6 +1,6 @@
 """Event-driven transient (fsrlab.circuits.transient).
 
-References: the closed forms of fsrlab.circuits.lm555 (which the issue requires to be matched to
+References: the closed forms of fsrlab.circuits.lm555 (which an exact simulation must match to
 1e-9 relative for constant parts), an independent numerical ODE integration with scipy's
 solve_ivp (for time-varying parts), and properties (Q = C·V across a capacitance step).
 """
@@ -29,7 +29,7 @@ from fsrlab.circuits.transient import simulate
     dict(r_fsr_ohm=np.inf, c_fsr_farad=1e-9, discharge_ohm=60.0),
 ])
 def test_constant_parts_match_closed_form(kw):
-    # Issue 3: constant parts agree with the closed forms to 1e-9 relative, every period.
+    # Constant parts agree with the closed forms to 1e-9 relative, every period.
     sim = simulate(10e3, periods=200, **kw)
     ref = astable(10e3, **kw)
     assert sim.periods_s.size == 200

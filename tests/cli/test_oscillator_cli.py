@@ -1,7 +1,7 @@
 """`fsrlab oscillator`, `fsrlab decode`, `fsrlab design` through fsrlab.cli.main.
 
 References: the library functions they wrap (fsrlab.circuits.lm555; each of those is tested against
-independent closed forms and ngspice in tests/circuits/), and the issue's required JSON keys.
+independent closed forms and ngspice in tests/circuits/), and the JSON keys the commands document.
 """
 
 from __future__ import annotations
@@ -61,6 +61,10 @@ def test_no_oscillation_exits_2_with_one_line(capsys):
     (["oscillator", "--r", "ten", "--rfsr", "200k", "--cfsr", "1n"], "--r"),
     (["oscillator", "--r", "-10k", "--rfsr", "200k", "--cfsr", "1n"], "--r"),
     (["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1n", "--diode-drop", "-1"], "--diode-drop"),
+    (["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1n", "--rdis", "-5"], "--rdis"),
+    (["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1n", "--coff", "-1n"], "--coff"),
+    (["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1n", "--vctrl", "6"], "--vctrl"),
+    (["decode", "--r", "10k", "--frequency", "6k", "--duty", "0.9", "--vcc", "-1"], "--vcc"),
     (["decode", "--r", "10k", "--frequency", "6478.5", "--duty", "0.5"], "--duty"),
     (["decode", "--r", "10k", "--frequency", "1M", "--duty", "0.5", "--coff", "1n", "--diode"], "--coff"),
     (["design", "--rfsr-min", "100k", "--rfsr-max", "2M", "--cfsr-min", "0.5n", "--cfsr-max", "1.5n",
@@ -75,7 +79,7 @@ def test_bad_input_one_line_exit_2(args, needle, capsys):
 
 
 def test_decode_json_round_trip(capsys):
-    # The issue's example: f = 6478.5 Hz, DC = 0.10189 with D1 and R = 10k is R_FSR ≈ 200k, C ≈ 1n
+    # The README's example: f = 6478.5 Hz, DC = 0.10189 with D1 and R = 10k is R_FSR ≈ 200k, C ≈ 1n
     # (to the 5 printed digits: 1e-4 relative).
     code, out, _ = run_cli(["decode", "--r", "10k", "--frequency", "6478.5", "--duty", "0.10189", "--diode",
                         "--json"], capsys)

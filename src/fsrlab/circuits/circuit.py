@@ -3,10 +3,13 @@
 A circuit is a frozen dataclass: what a run's sidecar and a saved calibration store
 (:meth:`LM555Circuit.to_dict`), what the meter model, the synthetic runs, the virtual device and the
 calibration pipeline pass along, and what the model functions of :mod:`fsrlab.circuits.lm555`,
-:mod:`fsrlab.circuits.decode` and :mod:`fsrlab.circuits.transient` are evaluated for
-(:meth:`LM555Circuit.kwargs`). The model functions themselves stay pure and vectorised (a design
+:mod:`fsrlab.circuits.phases`, :mod:`fsrlab.circuits.decode`, :mod:`fsrlab.circuits.transient` and
+:mod:`fsrlab.circuits.spice` are evaluated for (:meth:`LM555Circuit.kwargs`: every one of them
+accepts ``**circuit.kwargs()``). The model functions themselves stay pure and vectorised (a design
 sweep passes an array of R), so they take the same parameters as keywords; this module holds the
-one check of those parameters (:func:`check_lm555`).
+one check of those parameters (:func:`check_lm555`). The methods :meth:`LM555Circuit.astable`,
+:meth:`~LM555Circuit.sensitivity`, :meth:`~LM555Circuit.decode`, :meth:`~LM555Circuit.simulate` and
+:meth:`~LM555Circuit.simulate_spice` are thin delegations to those functions.
 
 The paper's circuit is :data:`fsrlab.physics.params.PAPER_CIRCUIT`.
 
@@ -191,11 +194,56 @@ class LM555Circuit:
 
         return astable(r_fsr_ohm=r_fsr_ohm, c_fsr_farad=c_fsr_farad, check=check, **self.kwargs())
 
+    def sensitivity(self, r_fsr_ohm, c_fsr_farad, check: bool = True):
+        """Logarithmic sensitivities of f and DC to the FSR's parts (:func:`fsrlab.circuits.lm555.sensitivity`)."""
+        from fsrlab.circuits.lm555 import sensitivity
+
+        return sensitivity(r_fsr_ohm=r_fsr_ohm, c_fsr_farad=c_fsr_farad, check=check, **self.kwargs())
+
     def decode(self, frequency_hz, duty_cycle, periods=1, check: bool = True):
         """R_FSR and C_FSR from a reading (:func:`fsrlab.circuits.decode.decode`)."""
         from fsrlab.circuits.decode import decode
 
         return decode(frequency_hz, duty_cycle, periods=periods, check=check, **self.kwargs())
+
+    def simulate(self, r_fsr_ohm, c_fsr_farad, **options):
+        """Event-driven transient of this circuit (:func:`fsrlab.circuits.transient.simulate`).
+
+        Parameters
+        ----------
+        r_fsr_ohm, c_fsr_farad : float or array_like
+            The FSR's parts, constant or one value per ``time_s`` sample. [Ω], [F]
+        **options
+            ``periods``, ``t_stop_s``, ``time_s``, ``v_initial_v``, ``waveform``,
+            ``points_per_segment``, ``capacitance_step``, as in the function.
+
+        Returns
+        -------
+        fsrlab.circuits.transient.TransientResult
+        """
+        from fsrlab.circuits.transient import simulate
+
+        return simulate(r_fsr_ohm=r_fsr_ohm, c_fsr_farad=c_fsr_farad, **options, **self.kwargs())
+
+    def simulate_spice(self, r_fsr_ohm, c_fsr_farad, **options):
+        """This circuit in ngspice (:func:`fsrlab.circuits.spice.simulate_spice`; needs ngspice).
+
+        Parameters
+        ----------
+        r_fsr_ohm, c_fsr_farad : float
+            The FSR's parts. [Ω], [F]
+        **options
+            ``periods``, ``skip_periods``, ``steps_per_phase``, ``timeout_s``, as in the function.
+
+        Returns
+        -------
+        fsrlab.circuits.spice.SpiceResult
+            Run with this circuit's ``discharge_ohm`` (0 by default: an ideal switch, where the
+            function's own default is 1 mΩ).
+        """
+        from fsrlab.circuits.spice import simulate_spice
+
+        return simulate_spice(r_fsr_ohm=r_fsr_ohm, c_fsr_farad=c_fsr_farad, **options, **self.kwargs())
 
     def to_dict(self) -> dict:
         """JSON-ready parts, with ``topology`` naming the circuit (for sidecars and calibrations)."""

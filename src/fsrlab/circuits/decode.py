@@ -18,7 +18,8 @@ import numpy as np
 
 from fsrlab.acquisition.protocol import TICK_S
 from fsrlab.circuits.circuit import check_lm555
-from fsrlab.circuits.lm555 import NoOscillationError, _drop_message, _timing_per_rc, minimum_n_ratio
+from fsrlab.circuits.lm555 import NoOscillationError, minimum_n_ratio
+from fsrlab.circuits.phases import timing_per_rc
 
 __all__ = ["DecodeResult", "decode"]
 
@@ -47,6 +48,31 @@ class DecodeResult:
     c_fsr_std_farad: np.ndarray | float
     n_ratio: np.ndarray | float
 
+    def plot(self, ax=None, x=None, xlabel: str | None = None):
+        """R_FSR and C_FSR with their ±1σ bands versus ``x`` (default the sample index), C_FSR on a twin y axis.
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Axes for R_FSR (default: a new figure).
+        x : array_like, optional
+            Abscissa, one value per element of a 1-D result, e.g. the readings' times or the
+            reference force (default: the index 0, 1, ...).
+        xlabel : str, optional
+            Label of the x axis (default: ``"sample"`` for the default ``x``).
+
+        Returns
+        -------
+        (matplotlib.axes.Axes, matplotlib.axes.Axes)
+            The R_FSR axes and the C_FSR axes. NaN (an impossible reading) leaves gaps.
+        """
+        from fsrlab.circuits.plotting import plot_twin
+
+        if x is None:
+            x, xlabel = np.arange(np.size(self.r_fsr_ohm)), "sample" if xlabel is None else xlabel
+        return plot_twin(x, (self.r_fsr_ohm, self.r_fsr_std_ohm, "R_FSR", "Ω"),
+                         (self.c_fsr_farad, self.c_fsr_std_farad, "C_FSR", "F"), ax=ax, xlabel=xlabel)
+
 
 def _invert(f, dc, r, c_off, diode, diode_drop_v, vcc_v, lo, hi, rd_rel=0.0):
     """Vectorised inversion; returns (N, C_total) with NaN where (f, DC) is impossible."""
@@ -57,7 +83,7 @@ def _invert(f, dc, r, c_off, diode, diode_drop_v, vcc_v, lo, hi, rd_rel=0.0):
     def g(u):
         with np.errstate(divide="ignore"):
             n = np.where(u > 0, 1.0 / np.where(u > 0, u, 1.0), np.inf)
-        th, tl = _timing_per_rc(n, diode, diode_drop_v, vcc_v, lo, hi, rd_rel)
+        th, tl = timing_per_rc(n, diode, diode_drop_v, vcc_v, lo, hi, rd_rel)
         with np.errstate(invalid="ignore", divide="ignore"):
             return np.where(u > 0, th / tl, 0.0 if diode else th / tl)
 
@@ -72,8 +98,10 @@ def _invert(f, dc, r, c_off, diode, diode_drop_v, vcc_v, lo, hi, rd_rel=0.0):
     u = 0.5 * (a + b)
     with np.errstate(divide="ignore"):
         n = np.where(u > 0, 1.0 / np.where(u > 0, u, 1.0), np.inf)
-    n = np.where(rho > g0, n, np.nan)
-    th, tl = _timing_per_rc(n, diode, diode_drop_v, vcc_v, lo, hi, rd_rel)
+    possible = rho > g0
+    n = np.where(possible, n, np.nan)
+    # Impossible pairs (NaN N) are masked by the caller; C is taken at the N → ∞ limit there.
+    th, tl = timing_per_rc(np.where(possible, n, np.inf), diode, diode_drop_v, vcc_v, lo, hi, rd_rel)
     c_total = 1.0 / (f * r * (th + tl))
     return n, c_total, float(g0 / (1.0 + g0))
 
@@ -145,8 +173,7 @@ def decode(frequency_hz, duty_cycle, r_ohm: float, c_off_farad: float = 0.0, dio
     if np.any(~np.isfinite(n_per)) or np.any(n_per < 1):
         raise ValueError(f"periods: must be >= 1, got {periods!r}")
     if math.isinf(minimum_n_ratio(diode_drop_v, vcc_v, upper_fraction)):
-        raise NoOscillationError(_drop_message(diode_drop_v, vcc_v, upper_fraction), "diode_drop",
-                                 diode_drop_v / ((1 - upper_fraction) * vcc_v) - 1.0)
+        raise NoOscillationError.for_diode_drop(diode_drop_v, vcc_v, upper_fraction)
     f, dc, n_per = np.broadcast_arrays(f, dc, n_per)
     if not (math.isfinite(discharge_ohm) and discharge_ohm >= 0):
         raise ValueError(f"discharge_ohm: must be finite and >= 0 Ω, got {discharge_ohm!r}")

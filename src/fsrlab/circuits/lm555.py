@@ -1,7 +1,13 @@
 """LM555 astable with the FSR as timing element: closed forms, oscillation condition, sensitivity.
 
 Decoding a reading back to R_FSR and C_FSR is :mod:`fsrlab.circuits.decode`; proposing a circuit for
-a sensor is :mod:`fsrlab.circuits.design`.
+a sensor is :mod:`fsrlab.circuits.design`; the Thevenin equivalents of the two phases, which every
+model here builds on, are :mod:`fsrlab.circuits.phases`.
+
+:func:`astable` and :func:`sensitivity` take every part of an
+:class:`~fsrlab.circuits.circuit.LM555Circuit` as keywords (``astable(r_fsr_ohm=..., c_fsr_farad=...,
+**circuit.kwargs())``); the functions of N alone (:func:`tau_ratio`, :func:`duty_cycle_limits`,
+:func:`minimum_n_ratio`, :func:`oscillation_margin`) take only the parts they depend on.
 
 The FSR is electrically ``R_FSR ∥ C_FSR``; it replaces the timing capacitor of a 555 astable with
 ``R_A = R_B = R`` (paper Fig. 9b), an offset capacitor ``C_off`` sits in parallel (Fig. 16), and
@@ -38,9 +44,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsrlab.circuits.circuit import check_fractions as _check_fractions
-from fsrlab.circuits.circuit import check_lm555 as _check_circuit
-from fsrlab.circuits.circuit import check_supply as _check_supply
+from fsrlab.circuits.circuit import check_fractions, check_lm555, check_supply
+from fsrlab.circuits.phases import thevenin, timing_per_rc
 
 __all__ = [
     "NoOscillationError",
@@ -80,6 +85,32 @@ class NoOscillationError(ValueError):
         self.condition = condition
         self.shortfall = shortfall
 
+    @classmethod
+    def for_diode_drop(cls, diode_drop_v: float, vcc_v: float, upper_fraction: float,
+                       where: str = "") -> "NoOscillationError":
+        """The error for a diode drop that leaves the charge no headroom (condition ``"diode_drop"``).
+
+        Parameters
+        ----------
+        diode_drop_v : float
+            Forward drop of D1. [V]
+        vcc_v : float
+            Supply. [V]
+        upper_fraction : float
+            Upper threshold as a fraction of Vcc. [1]
+        where : str
+            Appended to the message (e.g. which array elements).
+
+        Returns
+        -------
+        NoOscillationError
+            To be raised when ``Vcc − V_D ≤ u·Vcc`` (:func:`minimum_n_ratio` is ``inf``).
+        """
+        return cls(f"no oscillation: the diode drop {diode_drop_v:.4g} V leaves Vcc − V_D = "
+                   f"{vcc_v - diode_drop_v:.4g} V, not above the upper threshold {upper_fraction * vcc_v:.4g} V; "
+                   f"the drop must stay below {(1 - upper_fraction) * vcc_v:.4g} V{where}", "diode_drop",
+                   diode_drop_v / ((1 - upper_fraction) * vcc_v) - 1.0)
+
 
 @dataclass(frozen=True)
 class AstableResult:
@@ -117,6 +148,30 @@ class AstableResult:
     def ratio(self):
         """τH/τL (the quantity of the paper's eqs. 32 and 37). [1]"""
         return self.tau_high_s / self.tau_low_s
+
+    def plot(self, ax=None, x=None, xlabel: str | None = None):
+        """Frequency and duty cycle versus ``x`` (default N), the duty cycle on a twin y axis.
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Axes for the frequency (default: a new figure).
+        x : array_like, optional
+            Abscissa, one value per element of a 1-D result (default: :attr:`n_ratio`).
+        xlabel : str, optional
+            Label of the x axis (default: ``"N = R_FSR/R"`` for the default ``x``).
+
+        Returns
+        -------
+        (matplotlib.axes.Axes, matplotlib.axes.Axes)
+            The frequency axes and the duty-cycle axes. NaN (no oscillation) leaves gaps.
+        """
+        from fsrlab.circuits.plotting import plot_twin
+
+        if x is None:
+            x, xlabel = self.n_ratio, "N = R_FSR/R" if xlabel is None else xlabel
+        return plot_twin(x, (self.frequency_hz, None, "frequency", "Hz"), (self.duty_cycle, None, "duty cycle", "%"),
+                         ax=ax, xlabel=xlabel)
 
 
 def thresholds_from_control(control_v: float, vcc_v: float = 5.0) -> tuple[float, float]:
@@ -174,47 +229,6 @@ def minimum_n_ratio(diode_drop_v: float = 0.0, vcc_v: float = 5.0, upper_fractio
     return 2.0 * upper_fraction * vcc_v / headroom
 
 
-def _discharge_source(rd_rel, vcc_v):
-    """Pin 7 during the discharge, seen from R_B: Thevenin source and resistance (in units of R).
-
-    The discharge transistor (on-resistance R_d) and R_A form a divider: ``V_T = Vcc·R_d/(R + R_d)``
-    behind ``R_T = R ∥ R_d``.
-    """
-    rd = np.asarray(rd_rel, dtype=float)
-    return vcc_v * rd / (1.0 + rd), rd / (1.0 + rd)
-
-
-def _timing_per_rc(n, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, rd_rel=0.0):
-    """τH/(R·C) and τL/(R·C) as functions of N (arrays; NaN/inf outside the oscillating domain)."""
-    n = np.asarray(n, dtype=float)
-    vs = vcc_v - diode_drop_v
-    v_lo, v_hi = lower_fraction * vcc_v, upper_fraction * vcc_v
-    finite = np.isfinite(n)
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        nn = np.where(finite, n, 1.0)
-        # Thevenin of the charge path: 2R ∥ R_FSR and the divider Vs·R_FSR/(2R + R_FSR).   # Eq. (21)
-        r_charge = np.where(finite, 2.0 * nn / (nn + 2.0), 2.0)
-        v_inf = np.where(finite, vs * nn / (nn + 2.0), vs)
-        arg = (v_inf - v_lo) / (v_inf - v_hi)
-        th = np.where(v_inf > v_hi, r_charge * np.log(arg), np.nan)                        # Eq. (23)
-        if diode:
-            # D1 blocks R_B: C discharges through R_FSR alone.                               # Eq. (34)
-            r_dis = np.where(finite, nn, np.inf)
-            tl = r_dis * math.log(upper_fraction / lower_fraction)
-        elif np.all(np.asarray(rd_rel) == 0):
-            # C discharges through R ∥ R_FSR.                                                 # Eq. (26)
-            r_dis = np.where(finite, nn / (nn + 1.0), 1.0)
-            tl = r_dis * math.log(upper_fraction / lower_fraction)
-        else:
-            # Extension: C discharges through R_B + R_T toward V_T, with R_FSR to ground.
-            v_t, r_t = _discharge_source(rd_rel, vcc_v)
-            a = 1.0 + r_t
-            r_dis = np.where(finite, a * nn / (a + nn), a)
-            v_dis = np.where(finite, v_t * nn / (a + nn), v_t)
-            tl = np.where(v_dis < v_lo, r_dis * np.log((v_hi - v_dis) / (v_lo - v_dis)), np.inf)
-    return th, tl
-
-
 def tau_ratio(n_ratio, diode: bool = False, diode_drop_v: float = 0.0, vcc_v: float = 5.0,
               lower_fraction: float = 1 / 3, upper_fraction: float = 2 / 3):
     """τH/τL as a function of ``N = R_FSR/R`` (independent of R and C).
@@ -244,9 +258,7 @@ def tau_ratio(n_ratio, diode: bool = False, diode_drop_v: float = 0.0, vcc_v: fl
     N = 4 to 2 as N → ∞. With an ideal diode it is ``2·ln((2N − 2)/(N − 4))/((N + 2)·ln 2)``,
     which falls to 0; the paper's printed eq. (37) has an extra factor N (see docs/errata.md, O2).
     """
-    _check_fractions(lower_fraction, upper_fraction)
-    _check_supply(diode, diode_drop_v, vcc_v)
-    th, tl = _timing_per_rc(n_ratio, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction)
+    th, tl = timing_per_rc(n_ratio, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction)
     with np.errstate(invalid="ignore", divide="ignore"):
         out = th / tl
     return out[()] if np.ndim(out) == 0 else out
@@ -269,11 +281,10 @@ def duty_cycle_limits(diode: bool = False, diode_drop_v: float = 0.0, vcc_v: flo
         (2/3 for the default thresholds) and 0 with the diode (τL = ln(u/ℓ)·R_FSR·C grows without
         bound while τH stays finite). Neither limit is attained. [1]
     """
-    _check_fractions(lower_fraction, upper_fraction)
-    _check_supply(diode, diode_drop_v, vcc_v)
+    check_fractions(lower_fraction, upper_fraction)
+    check_supply(diode, diode_drop_v, vcc_v)
     if math.isinf(minimum_n_ratio(diode_drop_v, vcc_v, upper_fraction)):
-        raise NoOscillationError(_drop_message(diode_drop_v, vcc_v, upper_fraction), "diode_drop",
-                                 diode_drop_v / ((1 - upper_fraction) * vcc_v) - 1.0)
+        raise NoOscillationError.for_diode_drop(diode_drop_v, vcc_v, upper_fraction)
     if diode:
         return 0.0, 1.0
     vs = vcc_v - diode_drop_v
@@ -304,12 +315,6 @@ def oscillation_margin(r_ohm, r_fsr_ohm, diode_drop_v: float = 0.0, vcc_v: float
     n_min = minimum_n_ratio(diode_drop_v, vcc_v, upper_fraction)
     out = np.full(np.shape(n), -1.0) if math.isinf(n_min) else n / n_min - 1.0
     return out[()] if np.ndim(out) == 0 else out
-
-
-def _drop_message(diode_drop_v, vcc_v, upper_fraction):
-    return (f"no oscillation: the diode drop {diode_drop_v:.4g} V leaves Vcc − V_D = {vcc_v - diode_drop_v:.4g} V, "
-            f"not above the upper threshold {upper_fraction * vcc_v:.4g} V; the drop must stay below "
-            f"{(1 - upper_fraction) * vcc_v:.4g} V")
 
 
 def astable(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad=0.0, diode: bool = False, diode_drop_v: float = 0.0,
@@ -384,7 +389,7 @@ def astable(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad=0.0, diode: bool = False,
     ----------
     Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901.
     """
-    _check_circuit(r_ohm, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, discharge_ohm)
+    check_lm555(r_ohm, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, discharge_ohm)
     r = np.asarray(r_ohm, dtype=float)
     rf = np.asarray(r_fsr_ohm, dtype=float)
     cf = np.asarray(c_fsr_farad, dtype=float)
@@ -400,7 +405,7 @@ def astable(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad=0.0, diode: bool = False,
     r, rf, c, rd = np.broadcast_arrays(r, rf, c, rd)
     n = rf / r
     n_min = minimum_n_ratio(diode_drop_v, vcc_v, upper_fraction)
-    th_rc, tl_rc = _timing_per_rc(n, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, rd / r)
+    th_rc, tl_rc = timing_per_rc(n, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, rd / r)
     # A relative guard of 1e-12 keeps N = N_min (e.g. exactly 4, eq. 30) on the non-oscillating side
     # despite rounding of the thresholds; there τH would be infinite anyway.
     ok_charge = (n > n_min * (1.0 + 1e-12)) & np.isfinite(th_rc)
@@ -430,8 +435,7 @@ def _raise_no_oscillation(n, n_min, ok_charge, ok_discharge, diode_drop_v, vcc_v
     count, total = int(np.count_nonzero(bad)), int(bad.size)
     where = "" if total == 1 else f" ({count} of {total} elements; first at index {np.argwhere(bad)[0].tolist()})"
     if math.isinf(n_min):
-        raise NoOscillationError(_drop_message(diode_drop_v, vcc_v, upper_fraction) + where, "diode_drop",
-                                 diode_drop_v / ((1 - upper_fraction) * vcc_v) - 1.0)
+        raise NoOscillationError.for_diode_drop(diode_drop_v, vcc_v, upper_fraction, where)
     if not np.all(ok_charge):
         idx = np.unravel_index(np.argmin(np.where(ok_charge, np.inf, n)), n.shape)
         worst = float(n[idx])
@@ -504,28 +508,25 @@ def sensitivity(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad=0.0, diode: bool = Fa
     """
     res = astable(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction,
                   upper_fraction, check=check, discharge_ohm=discharge_ohm)
-    r = np.asarray(r_ohm, dtype=float)
     x = np.asarray(r_fsr_ohm, dtype=float)
     cf = np.asarray(c_fsr_farad, dtype=float)
     c = cf + np.asarray(c_off_farad, dtype=float)
     th, tl = np.asarray(res.tau_high_s), np.asarray(res.tau_low_s)
-    vs = vcc_v - diode_drop_v
+    charge, discharge = thevenin(r_ohm, x, diode, diode_drop_v, vcc_v, discharge_ohm)
     v_lo, v_hi = lower_fraction * vcc_v, upper_fraction * vcc_v
     with np.errstate(invalid="ignore", divide="ignore"):
         finite = np.isfinite(x)
         xf = np.where(finite, x, 1.0)
-        w2 = np.where(finite, 2 * r / (2 * r + xf), 0.0)           # x/(2R+x)' share, 0 when x = inf
-        a = np.where(finite, 2 * r * xf / (2 * r + xf), 2 * r)
-        vinf = np.where(finite, vs * xf / (2 * r + xf), vs)
+        # x·∂V∞/∂x = V∞·w and x·∂R_th/∂x = R_th·w with w = R_drive/(R_drive + x) (0 when x = inf).
+        w2 = np.where(finite, charge.drive_ohm / (charge.drive_ohm + xf), 0.0)
+        a, vinf = charge.resistance_ohm, charge.source_v
         dth = th * w2 + c * a * vinf * w2 * (v_lo - v_hi) / ((vinf - v_lo) * (vinf - v_hi))
         if diode:
             dtl = tl
         else:
-            v_t, r_t = _discharge_source(np.asarray(discharge_ohm, dtype=float) / r, vcc_v)
-            b = r * (1.0 + r_t)  # R_B + R_T [Ω]
+            b = discharge.drive_ohm  # R_B + R_T [Ω]
             wb = np.where(finite, b / (b + xf), 0.0)
-            r_th = np.where(finite, b * xf / (b + xf), b)
-            v_d = np.where(finite, v_t * xf / (b + xf), v_t)
+            r_th, v_d = discharge.resistance_ohm, discharge.source_v
             dtl = tl * wb + c * r_th * v_d * wb * (v_hi - v_lo) / ((v_hi - v_d) * (v_lo - v_d))
         s_r = -(dth + dtl) / (th + tl)
         s_dc = dth / th - (dth + dtl) / (th + tl)

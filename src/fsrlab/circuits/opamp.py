@@ -7,7 +7,7 @@ resistance falls as the voltage rises). The inverting amplifier of eq. (38) hold
 voltage ``|Vcc|`` (its other end is the virtual ground), so β only matters through the supply; a
 divider lets the FSR's voltage follow its own resistance, which feeds back on the reading.
 
-β can be given directly, or taken from the lead's tunnelling model with
+β can be given directly, or taken from fsrlab's tunnelling model with
 :func:`voltage_coefficient` (``fsrlab.physics.electrical.resistance_per_area``).
 
 References
@@ -136,7 +136,7 @@ def voltage_divider(r_fsr_ohm, r_m_ohm: float, vcc_v: float = 5.0, voltage_coeff
 
 
 def voltage_coefficient(u_v, s_m, phi0_j: float | None = None, rel_step: float = 1e-4):
-    """``β = ∂ln R_A/∂ln u`` from the tunnelling model (lead's ``fsrlab.physics.electrical``).
+    """``β = ∂ln R_A/∂ln u`` from fsrlab's tunnelling model (``fsrlab.physics.electrical``).
 
     Parameters
     ----------

@@ -16,7 +16,13 @@ is a DC source in series with it, matching the constant-drop model of
 :mod:`fsrlab.circuits.lm555`.
 
 The netlist is independent of fsrlab's closed forms; only the simulated duration uses the closed
-form's period estimate, so that a run covers the requested number of periods.
+form's period estimate (:func:`fsrlab.circuits.lm555.astable`, or the phases of
+:func:`fsrlab.circuits.phases.timing_per_rc` with R_FSR = ∞ when the closed form does not
+oscillate), so that a run covers the requested number of periods.
+
+Every function takes the circuit's parts as keywords, so ``simulate_spice(r_fsr_ohm=...,
+c_fsr_farad=..., **circuit.kwargs())`` runs an :class:`fsrlab.circuits.circuit.LM555Circuit`
+(see also :meth:`~fsrlab.circuits.circuit.LM555Circuit.simulate_spice`).
 
 References
 ----------
@@ -35,11 +41,12 @@ from pathlib import Path
 
 import numpy as np
 
-from fsrlab.circuits.circuit import check_fractions as _check_fractions, check_supply as _check_supply
+from fsrlab.circuits.circuit import check_lm555
 from fsrlab.circuits.lm555 import astable
+from fsrlab.circuits.phases import timing_per_rc
 
 __all__ = ["SUBCKT_555", "SpiceResult", "netlist", "run_ngspice", "simulate_spice", "ngspice_available",
-           "edges_from_waveform"]
+           "edges_from_waveform", "level_crossings"]
 
 #: Control-voltage gain in front of the latch switches (see module docstring). [1]
 GAIN = 1e4
@@ -128,16 +135,27 @@ def netlist(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: flo
     time_s : array_like, optional
         Sample times of a time-varying ``r_fsr_ohm`` (strictly increasing, starting at 0). [s]
     discharge_ohm : float
-        On-resistance of the discharge transistor (pin 7); 1 mΩ is practically ideal, as in the
-        closed forms. A real LM555 saturates at a few tens of ohms at these currents. [Ω]
+        On-resistance of the discharge transistor (pin 7, ≥ 0); 1 mΩ is practically ideal, as in the
+        closed forms, and so is 0 (an ``LM555Circuit``'s default; ngspice accepts ``RON=0``). A real
+        LM555 saturates at a few tens of ohms at these currents. [Ω]
 
     Returns
     -------
     str
         The netlist text.
+
+    Raises
+    ------
+    ValueError
+        A part out of range (the message names it).
     """
-    _check_fractions(lower_fraction, upper_fraction)
-    _check_supply(diode, diode_drop_v, vcc_v)
+    check_lm555(r_ohm, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, discharge_ohm)
+    if time_s is None and (np.ndim(r_fsr_ohm) or not r_fsr_ohm > 0):
+        raise ValueError(f"r_fsr_ohm: must be a single value > 0 Ω (inf allowed) without time_s, got {r_fsr_ohm!r}")
+    if not (np.ndim(c_fsr_farad) == 0 and math.isfinite(c_fsr_farad) and c_fsr_farad >= 0):
+        raise ValueError(f"c_fsr_farad: must be a single finite value >= 0 F, got {c_fsr_farad!r}")
+    if not c_fsr_farad + c_off_farad > 0:
+        raise ValueError("c_fsr_farad + c_off_farad: the timing capacitance must be > 0 F")
     v_lo, v_hi = lower_fraction * vcc_v, upper_fraction * vcc_v
     lines = [
         "* fsrlab: LM555 astable with the FSR as timing element (Matute et al. 2018, Figs. 9b/13/16)",
@@ -159,6 +177,8 @@ def netlist(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: flo
         rs = np.broadcast_to(np.asarray(r_fsr_ohm, dtype=float), t.shape)
         if t.ndim != 1 or t.size < 2 or t[0] != 0 or np.any(np.diff(t) <= 0) or not np.all(np.isfinite(rs)):
             raise ValueError("time_s: need strictly increasing sample times from 0 and finite r_fsr_ohm values")
+        if np.any(rs <= 0):
+            raise ValueError("r_fsr_ohm: every sample must be > 0 Ω")
         # Zero-order hold as in fsrlab.circuits.transient: each value holds until 1e-9 of a step before the next.
         eps = 1e-9 * float(np.min(np.diff(t)))
         pts = []
@@ -228,8 +248,27 @@ def run_ngspice(text: str, output_file: str = "fsrlab_out.txt", timeout_s: float
         return np.loadtxt(out, skiprows=1, ndmin=2)
 
 
-def _crossings(t, v, level, rising):
-    s = v - level
+def level_crossings(t_s, v_v, level_v: float, rising: bool) -> np.ndarray:
+    """Times a sampled waveform crosses a level, by linear interpolation between samples.
+
+    Parameters
+    ----------
+    t_s : ndarray
+        Sample times, increasing. [s]
+    v_v : ndarray
+        Waveform at ``t_s``. [V]
+    level_v : float
+        The level. [V]
+    rising : bool
+        True: upward crossings (from below to at or above); False: downward ones.
+
+    Returns
+    -------
+    ndarray
+        Crossing times. [s]
+    """
+    t, v = np.asarray(t_s, dtype=float), np.asarray(v_v, dtype=float)
+    s = v - level_v
     idx = np.nonzero((s[:-1] < 0) & (s[1:] >= 0))[0] if rising else np.nonzero((s[:-1] > 0) & (s[1:] <= 0))[0]
     return t[idx] - s[idx] * (t[idx + 1] - t[idx]) / (s[idx + 1] - s[idx])
 
@@ -254,8 +293,8 @@ def edges_from_waveform(t_s, v_out_v, vcc_v: float = 5.0, skip_periods: int = 2)
     """
     t = np.asarray(t_s, dtype=float)
     v = np.asarray(v_out_v, dtype=float)
-    rising = _crossings(t, v, vcc_v / 2, True)[skip_periods:]
-    falling = _crossings(t, v, vcc_v / 2, False)
+    rising = level_crossings(t, v, vcc_v / 2, True)[skip_periods:]
+    falling = level_crossings(t, v, vcc_v / 2, False)
     if rising.size < 2:
         return rising, falling[:0], math.nan, math.nan
     falling = falling[(falling > rising[0]) & (falling < rising[-1])]
@@ -276,7 +315,7 @@ def simulate_spice(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_far
     Parameters
     ----------
     r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction
-        As in :func:`fsrlab.circuits.lm555.astable`. [Ω, Ω, F, F, -, V, V, 1, 1]
+        As in :func:`fsrlab.circuits.lm555.astable` (single values). [Ω, Ω, F, F, -, V, V, 1, 1]
     periods : int
         Complete periods to measure after the start-up.
     skip_periods : int
@@ -287,7 +326,8 @@ def simulate_spice(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_far
     timeout_s : float
         ngspice time limit. [s]
     discharge_ohm : float
-        On-resistance of the discharge transistor (see :func:`netlist`). [Ω]
+        On-resistance of the discharge transistor (see :func:`netlist`). The default 1 mΩ is
+        practically the closed forms' ideal switch; an ``LM555Circuit`` passes its own value (0). [Ω]
 
     Returns
     -------
@@ -301,9 +341,11 @@ def simulate_spice(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_far
     period = float(est.period_s)
     shortest = float(min(est.tau_high_s, est.tau_low_s))
     if not math.isfinite(period):
-        # Does not oscillate by the closed form: simulate a few classic-555 periods and let ngspice show it.
-        period = 3 * math.log(2) * r_ohm * (c_fsr_farad + c_off_farad)
-        shortest = period / 3
+        # Does not oscillate by the closed form: simulate a few periods of the classic 555 with the same
+        # thresholds (R_FSR = ∞, no diode) and let ngspice show it.
+        th, tl = timing_per_rc(math.inf, vcc_v=vcc_v, lower_fraction=lower_fraction, upper_fraction=upper_fraction)
+        rc = r_ohm * (c_fsr_farad + c_off_farad)
+        period, shortest = float(th + tl) * rc, float(min(th, tl)) * rc
     # Start-up from 0 V takes longer than a steady period; allow for it.
     t_stop = period * (periods + skip_periods + 2)
     text = netlist(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction,

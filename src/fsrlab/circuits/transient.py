@@ -3,7 +3,8 @@
 Between events the timing capacitor follows a closed-form RC exponential, so the simulation jumps
 from one threshold crossing to the next without a time step: each crossing time is solved exactly,
 ``Δt = τ·ln((V − V∞)/(V_th − V∞))``. The circuit model is the one of :mod:`fsrlab.circuits.lm555`
-(ideal comparators, ideal discharge switch, constant-drop diode D1 in series with R_B).
+(ideal comparators, constant-drop diode D1 in series with R_B, optional discharge on-resistance), and
+each phase's source and resistance are the Thevenin equivalents of :func:`fsrlab.circuits.phases.thevenin`.
 
 Parts that change in time (the sensor under a changing force) are given as samples
 ``time_s``, ``r_fsr_ohm``, ``c_fsr_farad`` and held constant from one sample to the next (zero-order
@@ -24,7 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsrlab.circuits.circuit import check_lm555 as _check_circuit
+from fsrlab.circuits.circuit import check_lm555
+from fsrlab.circuits.phases import thevenin
 
 __all__ = ["TransientResult", "simulate"]
 
@@ -174,7 +176,7 @@ def simulate(r_ohm: float, r_fsr_ohm, c_fsr_farad, c_off_farad: float = 0.0, dio
     ``R_T = R ∥ R_d``). A circuit that does not oscillate simply produces no more
     edges (the capacitor settles below the upper threshold).
     """
-    _check_circuit(r_ohm, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, discharge_ohm)
+    check_lm555(r_ohm, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, discharge_ohm)
     if capacitance_step not in ("charge", "voltage"):
         raise ValueError(f"capacitance_step: must be 'charge' or 'voltage', got {capacitance_step!r}")
     if int(points_per_segment) < 2:
@@ -212,11 +214,11 @@ def simulate(r_ohm: float, r_fsr_ohm, c_fsr_farad, c_off_farad: float = 0.0, dio
     if np.any(cap <= 0):
         raise ValueError("c_fsr_farad + c_off_farad: the timing capacitance must be > 0 F")
 
-    r = float(r_ohm)
+    # What C sees in each phase, per sample (eqs. 21, 24, 33), as Python floats for the event loop.
+    charge, discharge = thevenin(float(r_ohm), rf, diode, diode_drop_v, vcc_v, float(discharge_ohm))
+    charge_vinfs, charge_rs = charge.source_v.tolist(), charge.resistance_ohm.tolist()
+    dis_vinfs, dis_rs = discharge.source_v.tolist(), discharge.resistance_ohm.tolist()
     vs = vcc_v - diode_drop_v
-    # Pin 7 during the discharge (Thevenin of R_A and the transistor's on-resistance).
-    v_t = vcc_v * discharge_ohm / (r + discharge_ohm)
-    b = r + r * discharge_ohm / (r + discharge_ohm)  # R_B + R_A ∥ R_d
     v_lo, v_hi = lower_fraction * vcc_v, upper_fraction * vcc_v
     max_rising = None if periods is None else int(periods) + 1
     npts = int(points_per_segment)
@@ -255,17 +257,9 @@ def simulate(r_ohm: float, r_fsr_ohm, c_fsr_farad, c_off_farad: float = 0.0, dio
         if k > 0 and capacitance_step == "charge" and ck != float(cap[k - 1]):
             v *= float(cap[k - 1]) / ck  # Q = C·V conserved across the step
         # Closed-form segment constants for this sample interval.
-        if math.isinf(rfk):
-            charge_vinf, charge_tau = vs, 2.0 * r * ck
-            dis_tau = math.inf if diode else b * ck
-            dis_vinf = 0.0 if diode else v_t
-            leak_tau = math.inf
-        else:
-            charge_vinf = vs * rfk / (2.0 * r + rfk)
-            charge_tau = 2.0 * r * rfk / (2.0 * r + rfk) * ck
-            dis_tau = rfk * ck if diode else b * rfk / (b + rfk) * ck
-            dis_vinf = 0.0 if diode else v_t * rfk / (b + rfk)
-            leak_tau = rfk * ck
+        charge_vinf, charge_tau = charge_vinfs[k], charge_rs[k] * ck
+        dis_vinf, dis_tau = dis_vinfs[k], dis_rs[k] * ck
+        leak_tau = rfk * ck  # D1 off: C decays through R_FSR alone
         while True:
             # A step of C (or the start) may already sit beyond a threshold: switch now.
             if high and v >= v_hi:

@@ -25,6 +25,14 @@ def _variant(diode: bool, diode_drop: float | None) -> tuple[bool, float]:
     return True, diode_drop
 
 
+def _circuit(r: float, coff: float, diode: bool, drop: float, vcc: float, vctrl: float | None, rdis: float):
+    """The LM555Circuit the options describe (call inside ``option_names(_NAMES)``)."""
+    from fsrlab.circuits.circuit import LM555Circuit
+
+    parts = dict(r_ohm=r, c_off_farad=coff, diode=diode, diode_drop_v=drop, vcc_v=vcc, discharge_ohm=rdis)
+    return LM555Circuit(**parts) if vctrl is None else LM555Circuit.with_control(vctrl, **parts)
+
+
 def _diode_text(diode: bool, drop: float) -> str:
     if not diode:
         return "no diode"
@@ -46,33 +54,31 @@ def oscillator(
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Frequency, duty cycle and sensitivities of the LM555 astable with the FSR as timing element."""
-    from fsrlab.circuits.lm555 import astable, minimum_n_ratio, sensitivity, thresholds_from_control
+    from fsrlab.circuits.lm555 import minimum_n_ratio
 
     diode, drop = _variant(diode, diode_drop)
     with option_names(_NAMES):
-        lower, upper = (1 / 3, 2 / 3) if vctrl is None else thresholds_from_control(vctrl, vcc)
-        kw = dict(c_off_farad=coff, diode=diode, diode_drop_v=drop, vcc_v=vcc, lower_fraction=lower,
-                  upper_fraction=upper, discharge_ohm=rdis)
-        res = astable(r, rfsr, cfsr, **kw, check=False)
+        circuit = _circuit(r, coff, diode, drop, vcc, vctrl, rdis)
+        res = circuit.astable(rfsr, cfsr, check=False)
     if not res.oscillates:
         # Raises NoOscillationError (a ValueError) saying which condition failed: one line, exit 2.
-        astable(r, rfsr, cfsr, **kw)
-    sens = sensitivity(r, rfsr, cfsr, **kw)
+        circuit.astable(rfsr, cfsr)
+    sens = circuit.sensitivity(rfsr, cfsr)
     out = {"frequency_hz": float(res.frequency_hz), "duty_cycle": float(res.duty_cycle),
            "tau_high_s": float(res.tau_high_s), "tau_low_s": float(res.tau_low_s), "n_ratio": float(res.n_ratio),
            "sensitivity_c": float(sens.c_fsr), "sensitivity_r": float(sens.r_fsr)}
     if spice:
-        from fsrlab.circuits.spice import ngspice_available, simulate_spice
+        from fsrlab.circuits.spice import ngspice_available
 
         if not ngspice_available():
             fail("ngspice is not installed (`make sysdeps` installs it)", "--spice")
-        sim = simulate_spice(r, rfsr, cfsr, **kw, periods=20)
+        sim = circuit.simulate_spice(rfsr, cfsr, periods=20)
         out["spice_frequency_hz"] = sim.frequency_hz
         out["spice_duty_cycle"] = sim.duty_cycle
     if json_out:
         emit_json(out)
         return
-    n_min = minimum_n_ratio(drop, vcc, upper)
+    n_min = minimum_n_ratio(circuit.diode_drop_v, circuit.vcc_v, circuit.upper_fraction)
     lines = [
         f"LM555 astable: R = {format_eng(r, 'Ω')}, R_FSR = {format_eng(rfsr, 'Ω')}, C_FSR = {format_eng(cfsr, 'F')}, "
         f"C_off = {format_eng(coff, 'F')}, {_diode_text(diode, drop)}, Vcc = {vcc:g} V",
@@ -106,14 +112,9 @@ def decode_cmd(
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Recover R_FSR and C_FSR from a measured frequency and duty cycle (uncertainty: 62.5 ns timer ticks)."""
-    from fsrlab.circuits.lm555 import thresholds_from_control
-    from fsrlab.circuits.decode import decode
-
     diode, drop = _variant(diode, diode_drop)
     with option_names(_NAMES):
-        lower, upper = (1 / 3, 2 / 3) if vctrl is None else thresholds_from_control(vctrl, vcc)
-        res = decode(frequency, duty, r, coff, diode=diode, diode_drop_v=drop, vcc_v=vcc, periods=periods,
-                     lower_fraction=lower, upper_fraction=upper, discharge_ohm=rdis)
+        res = _circuit(r, coff, diode, drop, vcc, vctrl, rdis).decode(frequency, duty, periods=periods)
     out = {"r_fsr_ohm": float(res.r_fsr_ohm), "c_fsr_farad": float(res.c_fsr_farad),
            "r_fsr_std_ohm": float(res.r_fsr_std_ohm), "c_fsr_std_farad": float(res.c_fsr_std_farad)}
     if json_out:
