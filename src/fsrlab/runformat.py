@@ -351,8 +351,8 @@ class Run:
         -------
         (LM555Circuit or None, OpAmpReadout or None)
             The sidecar's ``circuit`` and ``opamp`` (earlier layouts included); None where it says
-            nothing of that circuit. The LM555's ``c_off_farad`` is in circuit where the ``range``
-            column is 1 (:meth:`LM555Circuit.on_range`).
+            nothing of that circuit. In a run with a ``range`` column the LM555's ``c_off_farad`` is
+            in circuit where ``range`` is 1 (:meth:`LM555Circuit.on_range`), otherwise throughout.
 
         Raises
         ------
