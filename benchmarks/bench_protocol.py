@@ -1,7 +1,7 @@
 """Host parser throughput against the protocol's maximum frame rate at 1 Mbaud.
 
 The bound: at 1 Mbaud 8N1 a link carries 100 000 bytes/s, i.e. 3571 of the shortest possible
-measurement frames (28 bytes) per second; the issue asks the parser to manage ≥ 10× that.
+measurement frames (28 bytes) per second; fsrlab requires the parser to manage ≥ 10× that.
 For comparison, a naive byte-at-a-time state machine (the obvious way to write a framer) parses
 the same bytes in the same run.
 """
@@ -12,7 +12,9 @@ import binascii
 import random
 import time
 
-from fsrlab.acquisition.protocol import FrameParser, encode_frame, max_frame_rate, min_frame_length
+from fsrlab.acquisition.protocol import (
+    ADC_COUNTS, SEQ_MODULO, FrameParser, encode_frame, max_frame_rate, min_frame_length,
+)
 
 TITLE = "Serial protocol: host parser vs the 1 Mbaud frame rate"
 
@@ -26,8 +28,8 @@ def _stream(n: int, shortest: bool, corrupt: float, seed: int = 0) -> bytes:
         else:
             periods = rng.randrange(300, 1000)
             sum_p = periods * rng.randrange(1600, 5400)
-            frame = encode_frame("M", k % 65536, (100 * k, 100, periods, sum_p, sum_p // 9, 0,
-                                                  rng.randrange(1024), 0))
+            frame = encode_frame("M", k % SEQ_MODULO, (100 * k, 100, periods, sum_p, sum_p // 9, 0,
+                                                       rng.randrange(ADC_COUNTS), 0))
         if corrupt and rng.random() < corrupt:
             b = bytearray(frame)
             b[rng.randrange(len(b))] ^= 1 << rng.randrange(8)

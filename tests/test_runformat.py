@@ -175,3 +175,24 @@ def test_to_pandas(tmp_path):
     path = write_run(tmp_path / "x.csv", {"stress_pa": np.array([1.0, 2.0]), "frequency_hz": np.array([3.0, 4.0])})
     df = load_run(path).to_pandas()
     assert isinstance(df, pd.DataFrame) and list(df.columns) == ["stress_pa", "frequency_hz"]
+
+
+def test_readout_gives_the_sidecar_circuits(tmp_path):
+    """Run.readout(): the circuits of the sidecar as objects (fsrlab.circuits.circuit), in the
+    layout written today ("circuit" and "opamp") and in the earlier one (op-amp parts under
+    circuit.traditional); none without circuits; a bad part names the sidecar."""
+    from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout
+
+    lm, op = LM555Circuit(r_ohm=22e3, c_off_farad=1e-9), OpAmpReadout(r_f_ohm=20e3, vcc_v=-5.0)
+    path = write_run(tmp_path / "new.csv", {"time_s": [0.0]}, {"circuit": lm.to_dict(), "opamp": op.to_dict()})
+    assert load_run(path).readout() == (lm, op)
+    earlier = {"circuit": {"topology": "lm555-astable (paper Fig. 16)", "r_ohm": 22e3, "c_off_farad": 1e-9,
+                           "diode": True, "diode_drop_v": 0.0, "vcc_v": 5.0,
+                           "traditional": {"r_f_ohm": 20e3, "vcc_v": -5.0}}}
+    path = write_run(tmp_path / "old.csv", {"time_s": [0.0]}, earlier)
+    assert load_run(path).readout() == (lm, op)
+    path = write_run(tmp_path / "none.csv", {"time_s": [0.0]})
+    assert load_run(path).readout() == (None, None)
+    path = write_run(tmp_path / "bad.csv", {"time_s": [0.0]}, {"circuit": {"r_ohm": -1.0}})
+    with pytest.raises(RunFormatError, match=r"bad\.meta\.json: .*r_ohm"):
+        load_run(path).readout()

@@ -344,6 +344,28 @@ class Run:
             return self.columns["force_n"] / float(area)
         raise RunFormatError(f"{self.path}: column 'stress_pa' missing (or 'force_n' with a sensor area)")
 
+    def readout(self):
+        """The readout circuits the sidecar describes (:func:`fsrlab.circuits.circuit.readout_from_metadata`).
+
+        Returns
+        -------
+        (LM555Circuit or None, OpAmpReadout or None)
+            The sidecar's ``circuit`` and ``opamp`` (earlier layouts included); None where it says
+            nothing of that circuit. In a run with a ``range`` column the LM555's ``c_off_farad`` is
+            in circuit where ``range`` is 1 (:meth:`LM555Circuit.on_range`), otherwise throughout.
+
+        Raises
+        ------
+        RunFormatError
+            A circuit part out of range or unknown (the message names the sidecar and the part).
+        """
+        from fsrlab.circuits.circuit import readout_from_metadata
+
+        try:
+            return readout_from_metadata(self.metadata)
+        except ValueError as exc:
+            raise RunFormatError(f"{sidecar_path(self.path).name}: {exc}") from None
+
     def to_pandas(self):
         """The run as a ``pandas.DataFrame`` (pandas is imported only here)."""
         import pandas as pd

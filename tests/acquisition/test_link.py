@@ -20,6 +20,7 @@ from fsrlab.acquisition.serial_link import (
 from fsrlab.acquisition.virtual_device import (
     ConstantSource, PhysicsSource, StressProfile, VirtualDevice,
 )
+from fsrlab.physics.params import PAPER_CIRCUIT
 
 
 def _collect(link: SerialLink, n: int, kinds=("M",), limit_s: float = 10.0):
@@ -134,7 +135,7 @@ def test_physics_source_matches_the_closed_forms_at_constant_stress():
 
 def test_range_switch_adds_c_off_and_lowers_the_frequency():
     # Closed form: more timing capacitance C = C_FSR + C_off, lower frequency (f ∝ 1/C at fixed N).
-    src = PhysicsSource(StressProfile("hold", peak_pa=20e3, period_s=1.0), c_off_farad=1e-9)
+    src = PhysicsSource(StressProfile("hold", peak_pa=20e3, period_s=1.0), circuit=PAPER_CIRCUIT.replace(c_off_farad=1e-9))
     with VirtualDevice(src, seed=4) as dev, SerialLink(dev.port) as link:
         link.handshake()
         link.set_window(20)

@@ -407,7 +407,7 @@ def test_random_noise_never_raises(noise, chunks):
 
 
 def test_zz_total_corrupted_inputs_at_least_1e5():
-    """The issue asks for ≥ 10^5 corrupted inputs over the property tests (counted as they ran)."""
+    """The parser is held to ≥ 10^5 corrupted inputs over the property tests (counted as they ran)."""
     if any(name not in CORRUPTED for name in PROPERTY_TESTS):
         pytest.skip("not all property tests ran in this session")
     assert sum(CORRUPTED.values()) >= 100_000, CORRUPTED

@@ -1,7 +1,8 @@
 """Recording through a real pty: the run file, corruption, resets, unplugging, Ctrl-C, SIGKILL, the CLI.
 
 References: the run format (fsrlab.runformat.load_run, docs/data-format.md), the protocol's
-sequence numbers (every lost frame is a gap in ``seq``), and the CLI contract of issue 5.
+sequence numbers (every lost frame is a gap in ``seq``), and the command line's contract (the JSON
+summary, one-line errors with exit code 2, exit code 1 when the device disappears).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import pytest
 from fsrlab.acquisition.recorder import COLUMNS, record
 from fsrlab.acquisition.serial_link import SerialLink
 from fsrlab.acquisition.virtual_device import ConstantSource, Faults, VirtualDevice
+from fsrlab.physics.params import PAPER_CIRCUIT, PAPER_OPAMP
 from fsrlab.runformat import load_run
 from clirun import run_cli
 
@@ -168,6 +170,9 @@ def test_cli_json_contract(tmp_path):
     assert run.n_rows == summary["frames"] >= 10  # 100 ms windows over 2 s
     for col in ("time_s", "frequency_hz", "duty_cycle", "stress_pa"):
         assert col in run.columns and np.all(np.isfinite(run[col]))
+    # The sidecar names the virtual circuits (docs/data-format.md): the paper's 555 with the 1 nF C_off
+    # of --c-off's default, and the paper's op-amp.
+    assert run.readout() == (PAPER_CIRCUIT.replace(c_off_farad=1e-9), PAPER_OPAMP)
 
 
 @pytest.mark.parametrize("argv, field", [
@@ -227,8 +232,10 @@ def test_a_virtual_recording_is_analysable(tmp_path):
     the hysteretic sensor model, and the two steady cycles agree within 2 percentage points)."""
     out = tmp_path / "run.csv"
     code, _, err = run_cli(["acquire", "--virtual", "--duration", "2.05", "--period", "1", "--window", "20",
-                         "--out", str(out), "--quiet", "--seed", "1"])
+                         "--out", str(out), "--quiet", "--seed", "1", "--c-off", "2.2n"])
     assert code == 0, err
+    circuit = load_run(out).readout()[0]  # --c-off builds the circuit
+    assert circuit.c_off_farad == pytest.approx(2.2e-9) and circuit.replace(c_off_farad=0.0) == PAPER_CIRCUIT
     code, stdout, err = run_cli(["hysteresis", str(out), "--json"])
     assert code == 0, err
     result = json.loads(stdout)

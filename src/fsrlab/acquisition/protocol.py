@@ -23,10 +23,11 @@ from dataclasses import dataclass, field
 
 __all__ = [
     "PROTOCOL_VERSION", "F_CPU", "TICK_S", "ADC_BITS", "ADC_COUNTS", "ADC_VREF_V", "ADC_V_PER_COUNT", "DEFAULT_BAUD", "MAX_LINE", "MAX_COMMAND", "SEQ_MODULO",
+    "UINT32_MODULO",
     "WINDOW_MS_MIN", "WINDOW_MS_MAX", "WINDOW_MS_DEFAULT", "DEVICE_NAME", "FRAME_TYPES", "COMMANDS",
     "ERR_UNKNOWN_COMMAND", "ERR_BAD_VALUE", "ERR_LINE_TOO_LONG",
     "ProtocolError", "CommandError", "Frame", "Measurement", "Identity", "Ack", "DeviceError",
-    "ParserStats", "FrameParser", "crc16", "encode_frame", "encode_command", "parse_command",
+    "ParserStats", "FrameParser", "crc16", "encode_frame", "encode_command", "parse_command", "decode_sums",
     "max_frame_rate", "min_frame_length",
 ]
 
@@ -52,6 +53,8 @@ MAX_COMMAND = 32
 """Longest host command line, ``\\n`` included. [byte]"""
 SEQ_MODULO = 65536
 """Sequence numbers run 0..65535 and wrap."""
+UINT32_MODULO = 2**32
+"""Integers on the wire are unsigned 32-bit: ``t_ms`` wraps modulo 2³², tick sums stay below it."""
 WINDOW_MS_MIN, WINDOW_MS_MAX, WINDOW_MS_DEFAULT = 10, 60000, 100
 """Allowed and boot values of the measurement window. [ms]"""
 DEVICE_NAME = "fsrlab-meter"
@@ -60,7 +63,7 @@ DEVICE_NAME = "fsrlab-meter"
 ERR_UNKNOWN_COMMAND, ERR_BAD_VALUE, ERR_LINE_TOO_LONG = 1, 2, 3
 """Codes of ``$ERR`` frames."""
 
-_U32 = 0xFFFFFFFF
+_U32 = UINT32_MODULO - 1
 # Per type: number of fields after TYPE and SEQ (min, max).
 FRAME_TYPES: dict[str, tuple[int, int]] = {"M": (8, 8), "ID": (4, 4), "ACK": (1, 2), "ERR": (2, 2)}
 """Frame types of protocol v1 and how many fields follow ``SEQ`` (minimum, maximum)."""
@@ -455,6 +458,31 @@ class FrameParser:
         return None
 
 
+def decode_sums(periods, sum_period_ticks, sum_high_ticks):
+    """Frequency and duty cycle from a window's sums, as the host decodes an ``M`` frame.
+
+    Parameters
+    ----------
+    periods : int or array_like
+        Complete periods in the window (0: no signal).
+    sum_period_ticks, sum_high_ticks : int or array_like
+        Sums of the periods and of the high times over those periods. [ticks of :data:`TICK_S`]
+
+    Returns
+    -------
+    (frequency_hz, duty_cycle) : floats, or ndarrays for array input
+        ``f = periods · F_CPU / sum_period_ticks`` [Hz] and ``duty = sum_high_ticks / sum_period_ticks``
+        [1]; NaN where ``periods == 0``.
+    """
+    import numpy as np
+
+    n, p, h = (np.asarray(x, dtype=float) for x in (periods, sum_period_ticks, sum_high_ticks))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        f = np.where(n > 0, n * F_CPU / p, math.nan)
+        duty = np.where(n > 0, h / p, math.nan)
+    return (float(f), float(duty)) if f.ndim == 0 else (f, duty)
+
+
 @dataclass(frozen=True, slots=True)
 class Measurement:
     """One measurement window (an ``M`` frame) in physical units.
@@ -517,11 +545,7 @@ class Measurement:
             raise ProtocolError(f"frame kind must be 'M' for a measurement, got {frame.kind!r}")
         _check_fields("M", frame.fields)
         t_ms, window, periods, sum_p, sum_h, missed, adc, rng = (int(f) for f in frame.fields)
-        if periods > 0:
-            f = periods * F_CPU / sum_p
-            duty = sum_h / sum_p
-        else:
-            f = duty = math.nan
+        f, duty = decode_sums(periods, sum_p, sum_h)
         return cls(frame.seq, t_ms, window, periods, sum_p, sum_h, missed, adc, rng, f, duty)
 
     @property

@@ -22,15 +22,16 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Callable
 
-from fsrlab.acquisition.protocol import WINDOW_MS_DEFAULT, WINDOW_MS_MAX, WINDOW_MS_MIN, Frame, Identity, Measurement, ParserStats
+from fsrlab.acquisition.protocol import (
+    SEQ_MODULO, UINT32_MODULO, WINDOW_MS_DEFAULT, WINDOW_MS_MAX, WINDOW_MS_MIN, Frame, Identity, Measurement,
+    ParserStats,
+)
 from fsrlab.acquisition.serial_link import DeviceGone, LinkError, SerialLink
 
 __all__ = ["COLUMNS", "RecordStatus", "RecordResult", "record", "result_dict", "stats_dict"]
 
 COLUMNS = ("time_s", "frequency_hz", "duty_cycle", "voltage_v", "periods", "missed", "range", "seq")
 """Run columns written for every window (``stress_pa`` is added when a reference is given)."""
-
-_ADC_V = 5.0 / 1024.0  # Uno ADC with the 5 V reference [V per count]
 
 
 @dataclass(frozen=True)
@@ -104,7 +105,7 @@ def _configure(link: SerialLink, window_ms: int, range_: int) -> int:
     """Send the settings and START; return the sequence number the first window will carry."""
     link.set_window(window_ms)
     link.set_range(range_)
-    return (link.start().seq + 1) % 65536
+    return (link.start().seq + 1) % SEQ_MODULO
 
 
 def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS_DEFAULT, range_: int = 0,
@@ -207,12 +208,12 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
                         continue
                     m = Measurement.from_frame(frame)
                     if anchor_ms is None:
-                        anchor_ms = (m.t_ms - m.window_ms) % 2**32
+                        anchor_ms = (m.t_ms - m.window_ms) % UINT32_MODULO
                         offset_s = max(time.monotonic() - t_start - m.window_ms / 1000.0, 0.0) if frames else 0.0
                     row = {
-                        "time_s": offset_s + ((m.t_ms - anchor_ms) % 2**32) / 1000.0,
+                        "time_s": offset_s + ((m.t_ms - anchor_ms) % UINT32_MODULO) / 1000.0,
                         "frequency_hz": m.frequency_hz, "duty_cycle": m.duty_cycle,
-                        "voltage_v": m.adc * _ADC_V, "periods": m.periods, "missed": m.missed,
+                        "voltage_v": m.adc_v, "periods": m.periods, "missed": m.missed,
                         "range": m.range, "seq": m.seq,
                     }
                     if reference is not None:

@@ -7,12 +7,14 @@ sends one ``M`` frame per window, in real time.
 
 What the 555 does during a window comes from a *signal source* (:class:`SignalSource`), injectable
 for tests. :class:`PhysicsSource` is the default: a stress profile (:class:`StressProfile`) drives
-:class:`fsrlab.physics.sensor.VirtualFSR` (stress → R_FSR, C_FSR with hysteresis memory) and
-:func:`fsrlab.circuits.lm555.astable` (→ frequency, duty cycle), plus the op-amp readout on A0
-(paper eq. 38). The device then measures like the firmware: rising edges on a continuous phase,
-edge times with jitter quantized to 62.5 ns Timer1 ticks, whole periods per window, the high time
-summed per period. Optional faults (:class:`Faults`) corrupt, drop or add bytes, reset the device
-or unplug it, for tests.
+:class:`fsrlab.physics.sensor.VirtualFSR` (stress → R_FSR, C_FSR with hysteresis memory), an
+:class:`~fsrlab.circuits.circuit.LM555Circuit` (→ frequency, duty cycle) and an
+:class:`~fsrlab.circuits.circuit.OpAmpReadout` on A0 (paper eq. 38). The device then measures with
+the meter's model, :func:`fsrlab.acquisition.meter.measure`, window by window (the same model makes
+the synthetic runs): rising edges on a continuous phase, edge times with jitter quantized to
+62.5 ns Timer1 ticks, whole periods per window, the high times summed with their quantization
+noise, the 10-bit A0 conversion. Optional faults (:class:`Faults`) corrupt, drop or add bytes,
+reset the device or unplug it, for tests.
 
 References
 ----------
@@ -34,13 +36,16 @@ from typing import Protocol
 
 import numpy as np
 
+from fsrlab.acquisition.meter import MeterState, measure
 from fsrlab.acquisition.protocol import (
-    DEVICE_NAME, MAX_COMMAND, PROTOCOL_VERSION, SEQ_MODULO, TICK_S, F_CPU, WINDOW_MS_DEFAULT, CommandError,
+    DEVICE_NAME, F_CPU, MAX_COMMAND, PROTOCOL_VERSION, SEQ_MODULO, UINT32_MODULO, WINDOW_MS_DEFAULT, CommandError,
     encode_frame, parse_command,
 )
+from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout
+from fsrlab.physics.params import PAPER_CIRCUIT, PAPER_OPAMP
 
 __all__ = ["FIRMWARE_VERSION", "Signal", "SignalSource", "ConstantSource", "StressProfile", "PhysicsSource",
-           "Faults", "VirtualDevice", "PROFILE_KINDS"]
+           "Faults", "VirtualDevice", "PROFILE_KINDS", "VIRTUAL_CIRCUIT"]
 
 FIRMWARE_VERSION = "1.0.0-virtual"
 """Firmware version the virtual device reports in its ``ID`` frame."""
@@ -153,6 +158,11 @@ class StressProfile:
         return self.base_pa + (self.peak_pa - self.base_pa) * u
 
 
+VIRTUAL_CIRCUIT = PAPER_CIRCUIT.replace(c_off_farad=1e-9)
+"""The virtual device's 555: the paper's circuit (:data:`~fsrlab.physics.params.PAPER_CIRCUIT`) with a
+1 nF C_off that ``RANGE 1`` switches in."""
+
+
 class PhysicsSource:
     """Signal from a stress profile through the virtual FSR, the LM555 astable and the op-amp.
 
@@ -162,18 +172,12 @@ class PhysicsSource:
         σ(t).
     sensor : VirtualFSR, optional
         Default ``fsrlab.physics.sensor.VirtualFSR()``.
-    r_ohm : float
-        R_A = R_B of the astable (paper Fig. 16: 10 kΩ). [Ω]
-    c_off_farad : float
-        Offset capacitor switched in by ``RANGE 1``. [F]
-    diode : bool
-        D1 in series with R_B (paper Fig. 16).
-    diode_drop_v : float
-        Forward drop of D1 (0: ideal, as in the paper). [V]
-    r_f_ohm : float
-        Feedback resistor of the traditional readout, V = R_F/R_FSR · Vcc (eq. 38; 20 kΩ). [Ω]
-    vcc_v : float
-        Supply (also the op-amp's and ADC's range). [V]
+    circuit : LM555Circuit
+        The 555 readout; its C_off is in circuit on ``RANGE 1`` only (:meth:`LM555Circuit.on_range`).
+        R_FSR is taken at Vcc/2, the middle of the capacitor's swing.
+    opamp : OpAmpReadout
+        The traditional readout on A0 (eq. 38), with R_FSR taken at its |Vcc|
+        (:attr:`OpAmpReadout.fsr_voltage_v`).
     dt_s : float
         Time step on which the stress history is sampled. [s]
 
@@ -184,32 +188,34 @@ class PhysicsSource:
     profile reaches its steady loop after the first cycle), and later times map into it.
     """
 
-    def __init__(self, profile: StressProfile | None = None, sensor=None, r_ohm: float = 10e3,
-                 c_off_farad: float = 1e-9, diode: bool = True, diode_drop_v: float = 0.0,
-                 r_f_ohm: float = 20e3, vcc_v: float = 5.0, dt_s: float = 0.005) -> None:
+    def __init__(self, profile: StressProfile | None = None, sensor=None, circuit: LM555Circuit = VIRTUAL_CIRCUIT,
+                 opamp: OpAmpReadout = PAPER_OPAMP, dt_s: float = 0.005) -> None:
         from fsrlab.physics.sensor import VirtualFSR
 
-        for name, v in (("r_ohm", r_ohm), ("r_f_ohm", r_f_ohm), ("vcc_v", vcc_v), ("dt_s", dt_s)):
-            if not v > 0:
-                raise ValueError(f"{name} must be > 0, got {v!r}")
-        if not c_off_farad >= 0:
-            raise ValueError(f"c_off_farad must be >= 0 F, got {c_off_farad!r}")
+        if not dt_s > 0:
+            raise ValueError(f"dt_s must be > 0, got {dt_s!r}")
+        for name, obj, cls in (("circuit", circuit, LM555Circuit), ("opamp", opamp, OpAmpReadout)):
+            if not isinstance(obj, cls):
+                raise ValueError(f"{name} must be an {cls.__name__}, got {type(obj).__name__}")
         self.profile = profile or StressProfile()
         self.sensor = sensor if sensor is not None else VirtualFSR()
-        self.r_ohm, self.c_off_farad, self.diode, self.diode_drop_v = r_ohm, c_off_farad, diode, diode_drop_v
-        self.r_f_ohm, self.vcc_v = r_f_ohm, vcc_v
+        self.circuit, self.opamp = circuit, opamp
         period = self.profile.period_s
         self.dt_s = min(dt_s, period / 20)
         self._t = np.arange(0.0, 2 * period + self.dt_s, self.dt_s)
-        resp = self.sensor.respond(self.profile.stress(self._t), voltage_v=vcc_v / 2)
+        stress = self.profile.stress(self._t)
+        resp = self.sensor.respond(stress, voltage_v=circuit.vcc_v / 2)
         self._stress = np.asarray(resp.stress_pa, dtype=float)
         self._r = np.asarray(resp.r_fsr_ohm, dtype=float)
         self._c = np.asarray(resp.c_fsr_farad, dtype=float)
+        r_opamp = self.sensor.respond(stress, voltage_v=opamp.fsr_voltage_v).r_fsr_ohm
+        self._v = np.asarray(opamp.output_v(r_opamp), dtype=float)  # Eq. (38)
 
-    def circuit(self) -> dict:
-        """Circuit parts for a run's metadata."""
-        return {"r_ohm": self.r_ohm, "c_off_farad": self.c_off_farad, "diode": self.diode,
-                "diode_drop_v": self.diode_drop_v, "r_f_ohm": self.r_f_ohm, "vcc_v": self.vcc_v}
+    def metadata(self) -> dict:
+        """Sidecar content of a run recorded from this source: ``circuit``, ``opamp``, ``sensor``."""
+        return {"circuit": self.circuit.to_dict(), "opamp": self.opamp.to_dict(),
+                "sensor": {"model": "VirtualFSR (FlexiForce A201-like, fsrlab.physics.sensor)",
+                           "area_m2": self.sensor.area_m2}}
 
     def _index(self, t_s: np.ndarray) -> np.ndarray:
         period = self.profile.period_s
@@ -218,13 +224,9 @@ class PhysicsSource:
 
     def window(self, t0_s: float, t1_s: float, range_: int) -> Signal:
         """Mean signal over the window (see :class:`SignalSource`)."""
-        from fsrlab.circuits.lm555 import astable
-
         n = max(2, int(math.ceil((t1_s - t0_s) / self.dt_s)) + 1)
         idx = self._index(np.linspace(max(t0_s, 0.0), max(t1_s, 0.0), n))
-        r, c = self._r[idx], self._c[idx]
-        osc = astable(self.r_ohm, r, c, c_off_farad=self.c_off_farad if range_ else 0.0, diode=self.diode,
-                      diode_drop_v=self.diode_drop_v, vcc_v=self.vcc_v, check=False)
+        osc = self.circuit.on_range(range_).astable(self._r[idx], self._c[idx], check=False)
         period = np.asarray(osc.tau_high_s) + np.asarray(osc.tau_low_s)
         if not np.all(np.isfinite(period)):
             f = duty = math.nan
@@ -232,8 +234,7 @@ class PhysicsSource:
             # The meter measures whole periods: mean frequency = 1/mean period, duty = ΣτH/ΣT.
             f = 1.0 / float(np.mean(period))
             duty = float(np.mean(osc.tau_high_s) / np.mean(period))
-        volts = np.clip(self.r_f_ohm / r * self.vcc_v, 0.0, self.vcc_v)  # Eq. (38): V = R_F/R_FSR·|Vcc|
-        return Signal(f, duty, float(np.mean(volts)), float(np.mean(self._stress[idx])))
+        return Signal(f, duty, float(np.mean(self._v[idx])), float(np.mean(self._stress[idx])))
 
 
 @dataclass
@@ -281,8 +282,7 @@ class _State:
     range_: int = 0
     window_start: float = 0.0  # device time [s]
     start_time: float = 0.0
-    phase: float = 0.0  # 555 cycles since START
-    last_edge_tick: int | None = None
+    meter: MeterState = field(default_factory=MeterState)  # the 555's phase and the last captured edge
     m_frames: int = 0
     resets_done: int = 0
     line: bytearray = field(default_factory=bytearray)
@@ -447,8 +447,7 @@ class VirtualDevice:
             st.started = True
             st.window_start = st.start_time = self._now()
             st.current_ms = st.window_ms
-            st.phase = float(self._rng.random())
-            st.last_edge_tick = None
+            st.meter = MeterState.started(self._rng)
         elif name == "STOP":
             st.started = False
         elif name == "WINDOW":
@@ -456,7 +455,7 @@ class VirtualDevice:
             if st.started:  # as the firmware: the window in progress restarts with the new length
                 st.window_start = self._now()
                 st.current_ms = st.window_ms
-                st.last_edge_tick = None
+                st.meter = st.meter.restarted()
         elif name == "RANGE":
             st.range_ = int(value)
         self._send_frame("ACK", (name,) if value is None else (name, value), faults=False)
@@ -482,34 +481,12 @@ class VirtualDevice:
         st = self._st
         t0, t1 = st.window_start, t_end
         sig = self.source.window(t0 - st.start_time, t1 - st.start_time, st.range_)
-        rng = self._rng
-        f = sig.frequency_hz * (1.0 + self.frequency_noise * rng.standard_normal())
-        periods = sum_p = sum_h = 0
-        if math.isfinite(f) and f > 0:
-            phi0 = st.phase
-            phi1 = phi0 + f * (t1 - t0)
-            first, last = math.floor(phi0) + 1, math.floor(phi1)  # rising edges at integer phases
-            edges = last - first + 1
-            if edges > 0:
-                t_last = t0 + (last - phi0) / f + self.jitter_s * rng.standard_normal()
-                tick_last = math.floor(t_last / TICK_S)
-                if st.last_edge_tick is None:  # first edge after START opens the first period
-                    t_first = t0 + (first - phi0) / f + self.jitter_s * rng.standard_normal()
-                    st.last_edge_tick = math.floor(t_first / TICK_S)
-                    edges -= 1
-                periods = edges
-                if periods > 0:
-                    sum_p = max(tick_last - st.last_edge_tick, 1)
-                    duty = min(max(sig.duty_cycle, 0.0), 1.0)
-                    # Each high time is quantized at both ends: ±1 tick, variance 1/6 tick² per period.
-                    sum_h = round(duty * sum_p + math.sqrt(periods / 6.0) * rng.standard_normal())
-                    sum_h = min(max(sum_h, 0), sum_p)
-                st.last_edge_tick = tick_last
-            st.phase = phi1
-        volts = sig.voltage_v + self.adc_noise_v * rng.standard_normal()
-        adc = min(max(math.floor(volts / 5.0 * 1024), 0), 1023)  # ideal 10-bit ADC: floor(V·1024/Vref)
-        t_ms = int(t1 * 1000) % 2**32
-        fields = (t_ms, st.current_ms, periods, min(sum_p, 2**32 - 1), min(sum_h, 2**32 - 1), 0, adc, st.range_)
+        m, st.meter = measure(sig.frequency_hz, sig.duty_cycle, sig.voltage_v, t1 - t0, state=st.meter,
+                              rng=self._rng, start_s=t0, frequency_noise=self.frequency_noise,
+                              jitter_s=self.jitter_s, adc_noise_v=self.adc_noise_v)
+        u32 = UINT32_MODULO - 1
+        fields = (int(t1 * 1000) % UINT32_MODULO, st.current_ms, int(m.periods[0]), min(int(m.sum_period_ticks[0]), u32),
+                  min(int(m.sum_high_ticks[0]), u32), 0, int(m.adc[0]), st.range_)
         fault = self.faults
         st.m_frames += 1
         if fault.reset_after is not None and st.m_frames > fault.reset_after and st.resets_done == 0:

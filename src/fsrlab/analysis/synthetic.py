@@ -1,13 +1,16 @@
-"""Synthetic loading/unloading runs from the physics and oscillator models (test and demo data).
+"""Synthetic loading/unloading runs from the physics, circuit and meter models (test and demo data).
 
 Not measurements. A run is made by driving :class:`fsrlab.physics.sensor.VirtualFSR` (hysteretic
 separation, eqs. 1 and 9 with memory) along triangular stress ramps like the paper's stepper-motor
 bench (§6.1), turning R_FSR and C_FSR into LM555 frequency and duty cycle with the closed forms of
-:func:`fsrlab.circuits.lm555.astable` (paper Fig. 16: R = 10 kΩ, diode D1), and then measuring them
-as the firmware does: whole periods counted in a window, their summed length quantized to Timer1
-ticks of 62.5 ns (16 MHz), plus Gaussian noise. The traditional readout (paper Fig. 18, eq. 38:
-V = R_F/R_FSR · |Vcc|, R_F = 20 kΩ, |Vcc| = 5 V) is added as ``voltage_v``, quantized to 10-bit ADC
-steps of 5 V/1024.
+an :class:`~fsrlab.circuits.circuit.LM555Circuit` (default :data:`~fsrlab.physics.params.PAPER_CIRCUIT`:
+the paper's Fig. 16 with D1 ideal; R = 10 kΩ is fsrlab's choice, the paper prints no value for R)
+and the FSR's resistance into the op-amp voltage of the traditional readout with an
+:class:`~fsrlab.circuits.circuit.OpAmpReadout` (default :data:`~fsrlab.physics.params.PAPER_OPAMP`:
+Fig. 18, eq. 38, R_F = 20 kΩ, the FSR driven from −5 V). The meter's model
+(:func:`fsrlab.acquisition.meter.measure`, the same one the virtual device uses) then reports what
+the Uno would: whole periods per window, their summed length and high time in 62.5 ns ticks, and
+the 10-bit A0 reading.
 """
 
 from __future__ import annotations
@@ -16,10 +19,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["TICK_S", "triangle_stress", "SyntheticRun", "synthetic_run"]
+from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout
+from fsrlab.physics.params import PAPER_CIRCUIT, PAPER_OPAMP
 
-#: Timer1 tick at 16 MHz, prescaler 1 (protocol v1). [s]
-TICK_S = 62.5e-9
+__all__ = ["triangle_stress", "SyntheticRun", "synthetic_run"]
 
 
 def triangle_stress(cycles: int = 3, peak_pa: float = 50e3, points_per_ramp: int = 100, dwell_points: int = 0,
@@ -81,106 +84,97 @@ class SyntheticRun:
 
 def synthetic_run(cycles: int = 3, peak_pa: float = 50e3, points_per_ramp: int = 100, dwell_points: int = 0,
                   window_s: float = 0.1, frequency_noise: float = 0.002, stress_noise_pa: float = 0.0,
-                  voltage_noise_v: float = 0.002, r_ohm: float = 10e3, c_off_farad: float = 0.0,
-                  diode: bool = True, diode_drop_v: float = 0.0, sensor=None, seed: int = 0,
-                  stress_pa=None) -> SyntheticRun:
-    """Make a loading/unloading run through the virtual sensor, the 555 and the timer.
+                  voltage_noise_v: float = 0.002, jitter_s: float = 0.0, circuit: LM555Circuit = PAPER_CIRCUIT,
+                  opamp: OpAmpReadout = PAPER_OPAMP, sensor=None, seed: int = 0, stress_pa=None) -> SyntheticRun:
+    """Make a loading/unloading run through the virtual sensor, the 555, the op-amp and the meter.
 
     Parameters
     ----------
     cycles, peak_pa, points_per_ramp, dwell_points
         Stress profile, see :func:`triangle_stress`.
     window_s : float
-        Measurement window per reading (firmware default 100 ms). [s]
+        Measurement window per reading (firmware default 100 ms); the windows follow each other. [s]
     frequency_noise : float
-        Relative standard deviation of the frequency (sensor and bench noise) before quantization. [1]
+        Relative standard deviation of the frequency per window (sensor and bench noise). [1]
     stress_noise_pa : float
         Standard deviation of the reference stress reading (load cell noise). [Pa]
     voltage_noise_v : float
-        Standard deviation of the op-amp voltage before ADC quantization. [V]
-    r_ohm, c_off_farad, diode, diode_drop_v
-        555 circuit (paper Fig. 16 defaults: 10 kΩ, no C_off, ideal D1).
+        Standard deviation of the op-amp voltage before the 10-bit conversion. [V]
+    jitter_s : float
+        Standard deviation of each captured rising edge's time (0: none). [s]
+    circuit : LM555Circuit
+        The 555 readout (its R_FSR taken at Vcc/2, the middle of the capacitor's swing).
+    opamp : OpAmpReadout
+        The traditional readout (its R_FSR taken at :attr:`~OpAmpReadout.fsr_voltage_v`, |Vcc|).
     sensor : VirtualFSR, optional
         The sensor (default ``VirtualFSR()``).
     seed : int
-        Random seed.
+        Random seed: the meter's draws (:func:`fsrlab.acquisition.meter.measure`: its noise, then the
+        555's phase at START), then the reference stress noise.
     stress_pa : array_like, optional
-        Any stress history [Pa] instead of the triangles (e.g. minor loops); ``cycle`` and
-        ``direction`` then come from :func:`fsrlab.analysis.cycles.branch_directions`.
+        Any stress history [Pa] instead of the triangles (e.g. minor loops); ``direction`` then comes
+        from :func:`fsrlab.analysis.cycles.branch_directions`.
 
     Returns
     -------
     SyntheticRun
+        Columns ``time_s`` (start of each window), ``stress_pa``, ``frequency_hz``, ``duty_cycle``,
+        ``voltage_v``, ``periods``, ``cycle`` (:func:`fsrlab.analysis.cycles.cycle_numbers`),
+        ``direction`` and the truth; metadata with ``circuit`` and ``opamp`` (their ``to_dict``).
     """
-    from fsrlab.circuits.lm555 import astable
+    from fsrlab.acquisition.meter import measure
+    from fsrlab.analysis.cycles import branch_directions, cycle_numbers
     from fsrlab.physics.sensor import VirtualFSR
 
-    for name, v in (("window_s", window_s),):
-        if not v > 0:
-            raise ValueError(f"{name} must be > 0, got {v!r}")
+    if not (np.isfinite(window_s) and window_s > 0):
+        raise ValueError(f"window_s must be > 0, got {window_s!r}")
     for name, v in (("frequency_noise", frequency_noise), ("stress_noise_pa", stress_noise_pa),
-                    ("voltage_noise_v", voltage_noise_v)):
+                    ("voltage_noise_v", voltage_noise_v), ("jitter_s", jitter_s)):
         if not v >= 0:
             raise ValueError(f"{name} must be >= 0, got {v!r}")
+    for name, obj, cls in (("circuit", circuit, LM555Circuit), ("opamp", opamp, OpAmpReadout)):
+        if not isinstance(obj, cls):
+            raise ValueError(f"{name} must be an {cls.__name__}, got {type(obj).__name__}")
     rng = np.random.default_rng(seed)
     fsr = sensor if sensor is not None else VirtualFSR()
     stress = (triangle_stress(cycles, peak_pa, points_per_ramp, dwell_points) if stress_pa is None
               else np.asarray(stress_pa, dtype=float))
     n = stress.size
-    resp = fsr.respond(stress)  # 555 swing: ~Vcc/2 across the FSR
-    osc = astable(r_ohm, resp.r_fsr_ohm, resp.c_fsr_farad, c_off_farad=c_off_farad, diode=diode,
-                  diode_drop_v=diode_drop_v)
-    f_true = np.asarray(osc.frequency_hz) * (1 + frequency_noise * rng.standard_normal(n))
-    dc_true = np.asarray(osc.duty_cycle)
-    # Firmware: whole periods in the window; their summed length in 62.5 ns ticks (one quantization
-    # of the total), high times summed per period (±1 tick per period, uniform).
-    periods = np.floor(f_true * window_s).astype(int)
-    total = np.where(periods > 0, periods / f_true, np.nan)
-    ticks = np.round(total / TICK_S)
-    high = np.round(dc_true * total / TICK_S + rng.uniform(-0.5, 0.5, n) * np.sqrt(np.maximum(periods, 1) / 3.0))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        freq = np.where(periods > 0, periods / (ticks * TICK_S), np.nan)
-        duty = np.where(periods > 0, high / ticks, np.nan)
-    # Traditional readout, eq. (38): |V| = R_F/R_FSR·|Vcc| with the FSR at |Vcc| = 5 V.
-    r5 = fsr.respond(stress, voltage_v=5.0).r_fsr_ohm
-    v = 20e3 / r5 * 5.0 + voltage_noise_v * rng.standard_normal(n)
-    lsb = 5.0 / 1024
-    v = np.clip(np.round(v / lsb), 0, 1023) * lsb
+    resp = fsr.respond(stress, voltage_v=circuit.vcc_v / 2)  # the 555's swing: ~Vcc/2 across the FSR
+    osc = circuit.astable(resp.r_fsr_ohm, resp.c_fsr_farad)
+    volts = opamp.output_v(fsr.respond(stress, voltage_v=opamp.fsr_voltage_v).r_fsr_ohm)  # Eq. (38)
+    meter, _ = measure(osc.frequency_hz, osc.duty_cycle, volts, window_s, rng=rng,
+                       frequency_noise=frequency_noise, jitter_s=jitter_s, adc_noise_v=voltage_noise_v)
     if stress_pa is None:
         per_cycle = 2 * points_per_ramp + dwell_points
-        cycle = np.minimum(np.arange(n) // per_cycle, cycles - 1)
-        phase = np.arange(n) - cycle * per_cycle
+        phase = np.arange(n) % per_cycle
         # direction of the move that led to each reading: the peak reading is +1, the dwell 0.
         direction = np.where(phase <= points_per_ramp, 1, -1)
         direction[(phase > points_per_ramp) & (phase <= points_per_ramp + dwell_points)] = 0
-        direction[0] = 1
         direction[-1] = -1
     else:
-        from fsrlab.analysis.cycles import branch_directions
-
         direction = branch_directions(stress)
-        cycle = np.cumsum(np.concatenate([[0], (direction[1:] == 1) & (direction[:-1] == -1)]))
     cols = {
         "time_s": np.arange(n) * window_s,
         "stress_pa": stress + stress_noise_pa * rng.standard_normal(n),
-        "frequency_hz": freq,
-        "duty_cycle": duty,
-        "voltage_v": v,
-        "periods": periods,
-        "cycle": cycle,
+        "frequency_hz": meter.frequency_hz,
+        "duty_cycle": meter.duty_cycle,
+        "voltage_v": meter.voltage_v,
+        "periods": meter.periods,
+        "cycle": cycle_numbers(direction),
         "direction": direction,
         "c_fsr_farad": resp.c_fsr_farad,
         "r_fsr_ohm": resp.r_fsr_ohm,
     }
     meta = {
-        "circuit": {"topology": "lm555-astable (paper Fig. 16)", "r_ohm": r_ohm, "c_off_farad": c_off_farad,
-                    "diode": diode, "diode_drop_v": diode_drop_v, "vcc_v": 5.0,
-                    "traditional": {"r_f_ohm": 20e3, "vcc_v": -5.0}},
+        "circuit": circuit.to_dict(),
+        "opamp": opamp.to_dict(),
         "sensor": {"model": "VirtualFSR (FlexiForce A201-like, fsrlab.physics.sensor)", "area_m2": fsr.area_m2},
         "origin": (f"synthetic: fsrlab.analysis.synthetic.synthetic_run(cycles={cycles}, peak_pa={peak_pa}, "
                    f"points_per_ramp={points_per_ramp}, dwell_points={dwell_points}, window_s={window_s}, "
-                   f"frequency_noise={frequency_noise}, stress_noise_pa={stress_noise_pa}, seed={seed}); "
-                   "VirtualFSR -> lm555.astable -> 62.5 ns timer quantization"),
+                   f"frequency_noise={frequency_noise}, stress_noise_pa={stress_noise_pa}, "
+                   f"voltage_noise_v={voltage_noise_v}, jitter_s={jitter_s}, seed={seed}); "
+                   "VirtualFSR -> LM555 astable and op-amp (eq. 38) -> fsrlab.acquisition.meter"),
         "notes": "synthetic data, not a measurement",
     }
     return SyntheticRun(columns=cols, metadata=meta)

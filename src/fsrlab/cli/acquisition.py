@@ -35,10 +35,10 @@ def _sigterm_as_interrupt():
 
 def _virtual_device(profile: str, peak: float, period: float, c_off: float, seed: int | None,
                     corrupt: float, drop: float):
-    from fsrlab.acquisition.virtual_device import Faults, PhysicsSource, StressProfile, VirtualDevice
+    from fsrlab.acquisition.virtual_device import VIRTUAL_CIRCUIT, Faults, PhysicsSource, StressProfile, VirtualDevice
 
     prof = StressProfile(kind=profile, peak_pa=peak, period_s=period)
-    source = PhysicsSource(prof, c_off_farad=c_off)
+    source = PhysicsSource(prof, circuit=VIRTUAL_CIRCUIT.replace(c_off_farad=c_off))
     return VirtualDevice(source, faults=Faults(corrupt=corrupt, drop=drop), seed=seed), source
 
 
@@ -143,10 +143,9 @@ def acquire(
             fail(f"must be >= 0 F, got {c_off:g}", "--c-off")
         device, source = _virtual_device(profile, peak, period, c_off, seed, corrupt, drop)
         port = device.open()
-        metadata = {"origin": "fsrlab acquire --virtual (VirtualFSR -> LM555 astable -> emulated firmware over a pty)",
-                    "circuit": source.circuit(),
-                    "sensor": {"model": "VirtualFSR (FlexiForce A201-like, fsrlab.physics.sensor)",
-                               "area_m2": source.sensor.area_m2},
+        metadata = {"origin": "fsrlab acquire --virtual (VirtualFSR -> LM555 astable and op-amp -> meter model "
+                              "fsrlab.acquisition.meter -> emulated firmware over a pty)",
+                    **source.metadata(),
                     "notes": f"virtual stress profile {profile}, peak {peak:g} Pa, period {period:g} s; "
                              "stress_pa is the applied (reference) stress"}
         reference = lambda frame: device.reference(frame.seq)  # noqa: E731
