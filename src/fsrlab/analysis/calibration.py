@@ -552,35 +552,3 @@ def calibrate(x, y, degree: int | str = "auto", groups=None, folds: int = 5, x_n
                        data_fingerprint=fingerprint(xs, ys),
                        created=datetime.now(timezone.utc).isoformat(timespec="seconds").replace("+00:00", "Z"),
                        cv=cv, circuit=circuit, source=source)
-
-
-def decode_capacitance(frequency_hz, duty_cycle, r_ohm: float, c_off_farad: float = 0.0, diode: bool = True,
-                       diode_drop_v: float = 0.0) -> np.ndarray:
-    """C_FSR decoded from frequency and duty cycle, the circuit given by its parts.
-
-    Parameters
-    ----------
-    frequency_hz, duty_cycle : array_like
-        555 readings (NaN where missing).
-    r_ohm : float
-        R of the astable. [Ω]
-    c_off_farad : float
-        Offset capacitor in parallel with the FSR. [F]
-    diode : bool
-        D1 present (paper Fig. 16).
-    diode_drop_v : float
-        Forward drop of D1. [V]
-
-    Returns
-    -------
-    ndarray
-        C_FSR [F]; NaN where a reading is missing or impossible for the circuit. The same as
-        :func:`fsrlab.analysis.pipeline.decode_capacitance` with
-        ``LM555Circuit(r_ohm, c_off_farad, diode, diode_drop_v)``, which also honours a run's
-        ``range`` column.
-    """
-    from fsrlab.analysis.pipeline import decode_capacitance as decode_run
-    from fsrlab.circuits.circuit import LM555Circuit
-
-    circuit = LM555Circuit(r_ohm=r_ohm, c_off_farad=c_off_farad, diode=diode, diode_drop_v=diode_drop_v)
-    return decode_run(frequency_hz, duty_cycle, circuit)

@@ -14,7 +14,9 @@ from typing import Any
 
 import numpy as np
 
-from fsrlab.analysis.calibration import calibrate, decode_capacitance
+from fsrlab.analysis.calibration import calibrate
+from fsrlab.analysis.pipeline import decode_capacitance
+from fsrlab.circuits.circuit import readout_from_metadata
 from fsrlab.analysis.compensation import compare_compensation
 from fsrlab.analysis.cycles import run_hysteresis
 from fsrlab.analysis.repeatability import (DdofFinding, ForceRepeatability, PrintedTableCheck, ddof_finding,
@@ -50,14 +52,15 @@ class _Synthetic:
 
 
 def _synthetic() -> _Synthetic:
-    c = synthetic_run(cycles=3, peak_pa=50e3, points_per_ramp=100, seed=1).columns
+    run = synthetic_run(cycles=3, peak_pa=50e3, points_per_ramp=100, seed=1)
+    c = run.columns
     f, s, load = c["frequency_hz"], c["stress_pa"], c["direction"] >= 0
     fits = {"linear": calibrate(f, s, degree=1), "cubic": calibrate(f, s, degree=3),
             "loading_linear": calibrate(f[load], s[load], degree=1),
             "loading_cubic": calibrate(f[load], s[load], degree=3),
             "auto": calibrate(f, s, groups=c["cycle"])}
-    # Physics-informed: calibrate on C_FSR decoded from (f, DC); R = 10 kΩ as in synthetic_run.
-    c_dec = decode_capacitance(f, c["duty_cycle"], 10e3, diode=True)
+    # Physics-informed: calibrate on C_FSR decoded from (f, DC) through the run's own circuit.
+    c_dec = decode_capacitance(f, c["duty_cycle"], readout_from_metadata(run.metadata)[0])
     fits["decoded_cubic"] = calibrate(c_dec, s, degree=3, x_name="c_fsr_farad", x_unit="F")
     return _Synthetic(
         columns=c,
