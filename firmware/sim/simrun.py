@@ -65,7 +65,7 @@ class SimResult:
         return [f for f in self.frames if f.kind == kind]
 
     def measurements(self) -> list:
-        from fsrlab.acquisition.protocol import Measurement
+        from fsrlab.acquisition.messages import Measurement
 
         return [Measurement.from_frame(f) for f in self.of_kind("M")]
 

@@ -19,7 +19,8 @@ from pathlib import Path
 import pytest
 from toolcheck import require_file, require_tool
 
-from fsrlab.acquisition.protocol import FrameParser, Measurement
+from fsrlab.acquisition.messages import Measurement
+from fsrlab.acquisition.protocol import FrameParser
 from fsrlab.acquisition.serial_link import SerialLink
 from fsrlab.acquisition.virtual_device import ConstantSource, VirtualDevice
 

@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from fsrlab.acquisition import protocol as P
-from fsrlab.acquisition.protocol import DeviceError, Measurement, encode_frame
+from fsrlab.acquisition.messages import DeviceError, Measurement
+from fsrlab.acquisition.protocol import encode_frame
 from fsrlab.acquisition.serial_link import (
     CommandRejected, HandshakeError, LinkError, SerialLink, UsbPort, find_uno,
 )

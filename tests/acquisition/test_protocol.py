@@ -18,9 +18,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from fsrlab.acquisition import protocol as P
+from fsrlab.acquisition.messages import Ack, DeviceError, Identity, Measurement
 from fsrlab.acquisition.protocol import (
-    Ack, CommandError, DeviceError, Frame, FrameParser, Identity, Measurement, crc16, encode_command,
-    encode_frame, max_frame_rate, min_frame_length, parse_command,
+    CommandError, Frame, FrameParser, crc16, encode_command, encode_frame, max_frame_rate, min_frame_length,
+    parse_command,
 )
 
 # Number of corrupted inputs fed by each property test (checked by the last test in this module).

@@ -14,7 +14,8 @@ import time
 import numpy as np
 import pytest
 
-from fsrlab.acquisition.protocol import ADC_V_PER_COUNT, Measurement
+from fsrlab.acquisition.messages import Measurement
+from fsrlab.acquisition.protocol import ADC_V_PER_COUNT
 from fsrlab.acquisition.serial_link import SerialLink
 from fsrlab.acquisition.virtual_device import VIRTUAL_CIRCUIT, PhysicsSource, StressProfile, VirtualDevice
 from fsrlab.analysis.synthetic import synthetic_run

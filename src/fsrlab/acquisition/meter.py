@@ -32,7 +32,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsrlab.acquisition.protocol import ADC_COUNTS, ADC_V_PER_COUNT, TICK_S, decode_sums
+from fsrlab.acquisition.messages import decode_sums
+from fsrlab.acquisition.protocol import ADC_COUNTS, ADC_V_PER_COUNT, TICK_S
 
 __all__ = ["NOISE_DRAWS", "MeterState", "MeterReadings", "adc_code", "measure"]
 
@@ -129,7 +130,7 @@ class MeterReadings:
 
     @property
     def frequency_hz(self) -> np.ndarray:
-        """Frequency as the host decodes it (:func:`~fsrlab.acquisition.protocol.decode_sums`); NaN without periods. [Hz]"""
+        """Frequency as the host decodes it (:func:`~fsrlab.acquisition.messages.decode_sums`); NaN without periods. [Hz]"""
         return decode_sums(self.periods, self.sum_period_ticks, self.sum_high_ticks)[0]
 
     @property

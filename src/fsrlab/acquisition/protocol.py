@@ -5,7 +5,8 @@ CRC-16/CCITT-FALSE over the bytes strictly between ``$`` and ``*``; the host sen
 lines (``WINDOW 100\\n``). ``docs/protocol.md`` is the normative description; this module is its
 one implementation on the host (the firmware in ``firmware/`` and the virtual device match it).
 
-Everything here works on bytes and returns values: the transport (:mod:`fsrlab.acquisition.serial_link`)
+The frames' meaning in physical units (:class:`~fsrlab.acquisition.messages.Measurement` and the
+other messages) is :mod:`fsrlab.acquisition.messages`. Everything here works on bytes and returns values: the transport (:mod:`fsrlab.acquisition.serial_link`)
 only moves bytes, as in pyserial's ``serial.threaded`` framing classes.
 
 References
@@ -18,7 +19,6 @@ References
 from __future__ import annotations
 
 import binascii
-import math
 from dataclasses import dataclass, field
 
 __all__ = [
@@ -26,8 +26,8 @@ __all__ = [
     "UINT32_MODULO",
     "WINDOW_MS_MIN", "WINDOW_MS_MAX", "WINDOW_MS_DEFAULT", "DEVICE_NAME", "FRAME_TYPES", "COMMANDS",
     "ERR_UNKNOWN_COMMAND", "ERR_BAD_VALUE", "ERR_LINE_TOO_LONG",
-    "ProtocolError", "CommandError", "Frame", "Measurement", "Identity", "Ack", "DeviceError",
-    "ParserStats", "FrameParser", "crc16", "encode_frame", "encode_command", "parse_command", "decode_sums",
+    "ProtocolError", "CommandError", "Frame",
+    "ParserStats", "FrameParser", "crc16", "encode_frame", "encode_command", "parse_command", "check_fields",
     "max_frame_rate", "min_frame_length",
 ]
 
@@ -237,8 +237,16 @@ def _uint(text: str, hi: int = _U32) -> int:
     return value
 
 
-def _check_fields(kind: str, fields: tuple[str, ...]) -> None:
-    """Raise ProtocolError when the fields of a known frame type are not valid protocol v1."""
+def check_fields(kind: str, fields: tuple[str, ...]) -> None:
+    """Raise ProtocolError when the fields of a known frame type are not valid protocol v1.
+
+    Parameters
+    ----------
+    kind : str
+        A frame type of :data:`FRAME_TYPES`.
+    fields : tuple of str
+        The fields after ``SEQ``.
+    """
     lo, hi = FRAME_TYPES[kind]
     if not lo <= len(fields) <= hi:
         raise ProtocolError(f"{kind} frame with {len(fields)} fields")
@@ -434,7 +442,7 @@ class FrameParser:
                 raise ProtocolError("unknown type")
             seq = _uint(parts[1], SEQ_MODULO - 1)
             fields = tuple(parts[2:])
-            _check_fields(kind, fields)
+            check_fields(kind, fields)
         except (ProtocolError, UnicodeDecodeError):
             return self._bad(size)
         self.frames += 1
@@ -456,190 +464,6 @@ class FrameParser:
         self.malformed += 1
         self.bad_bytes += size
         return None
-
-
-def decode_sums(periods, sum_period_ticks, sum_high_ticks):
-    """Frequency and duty cycle from a window's sums, as the host decodes an ``M`` frame.
-
-    Parameters
-    ----------
-    periods : int or array_like
-        Complete periods in the window (0: no signal).
-    sum_period_ticks, sum_high_ticks : int or array_like
-        Sums of the periods and of the high times over those periods. [ticks of :data:`TICK_S`]
-
-    Returns
-    -------
-    (frequency_hz, duty_cycle) : floats, or ndarrays for array input
-        ``f = periods · F_CPU / sum_period_ticks`` [Hz] and ``duty = sum_high_ticks / sum_period_ticks``
-        [1]; NaN where ``periods == 0``.
-    """
-    import numpy as np
-
-    n, p, h = (np.asarray(x, dtype=float) for x in (periods, sum_period_ticks, sum_high_ticks))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        f = np.where(n > 0, n * F_CPU / p, math.nan)
-        duty = np.where(n > 0, h / p, math.nan)
-    return (float(f), float(duty)) if f.ndim == 0 else (f, duty)
-
-
-@dataclass(frozen=True, slots=True)
-class Measurement:
-    """One measurement window (an ``M`` frame) in physical units.
-
-    Attributes
-    ----------
-    seq : int
-        Sequence number of the frame.
-    t_ms : int
-        Device time at the end of the window. [ms]
-    window_ms : int
-        Window length. [ms]
-    periods : int
-        Complete periods of the 555 output in the window.
-    sum_period_ticks, sum_high_ticks : int
-        Sums over those periods of the period and of the high time, in 62.5 ns ticks.
-    missed : int
-        Edges missed or rejected by the firmware in the window.
-    adc : int
-        Mean A0 reading, 0..1023 (op-amp output, traditional readout).
-    range : int
-        State of the C_off switch (1 = C_off connected).
-    frequency_hz : float
-        ``periods · F_CPU / sum_period_ticks``; NaN when ``periods == 0`` (no signal). [Hz]
-    duty_cycle : float
-        ``sum_high_ticks / sum_period_ticks``, 0..1; NaN when ``periods == 0``.
-    """
-
-    seq: int
-    t_ms: int
-    window_ms: int
-    periods: int
-    sum_period_ticks: int
-    sum_high_ticks: int
-    missed: int
-    adc: int
-    range: int
-    frequency_hz: float
-    duty_cycle: float
-
-    @classmethod
-    def from_frame(cls, frame: Frame) -> "Measurement":
-        """Decode an ``M`` frame.
-
-        Parameters
-        ----------
-        frame : Frame
-            A frame of kind ``M`` (as returned by :class:`FrameParser`).
-
-        Returns
-        -------
-        Measurement
-
-        Raises
-        ------
-        ProtocolError
-            When the frame is not a valid ``M`` frame.
-        """
-        if frame.kind != "M":
-            raise ProtocolError(f"frame kind must be 'M' for a measurement, got {frame.kind!r}")
-        _check_fields("M", frame.fields)
-        t_ms, window, periods, sum_p, sum_h, missed, adc, rng = (int(f) for f in frame.fields)
-        f, duty = decode_sums(periods, sum_p, sum_h)
-        return cls(frame.seq, t_ms, window, periods, sum_p, sum_h, missed, adc, rng, f, duty)
-
-    @property
-    def adc_v(self) -> float:
-        """A0 voltage for the Uno's 5 V reference (``adc · ADC_V_PER_COUNT``). [V]"""
-        return self.adc * ADC_V_PER_COUNT
-
-
-@dataclass(frozen=True, slots=True)
-class Identity:
-    """The device's answer to ``ID`` (also sent once at boot).
-
-    Attributes
-    ----------
-    seq : int
-        Sequence number of the frame.
-    name : str
-        Device name (``fsrlab-meter``).
-    firmware_version : str
-        Firmware version, e.g. ``1.0.0``.
-    protocol_version : int
-        Protocol version (1).
-    f_cpu_hz : int
-        Device clock. [Hz]
-    """
-
-    seq: int
-    name: str
-    firmware_version: str
-    protocol_version: int
-    f_cpu_hz: int
-
-    @classmethod
-    def from_frame(cls, frame: Frame) -> "Identity":
-        """Decode an ``ID`` frame; raises :class:`ProtocolError` for any other kind."""
-        if frame.kind != "ID":
-            raise ProtocolError(f"frame kind must be 'ID', got {frame.kind!r}")
-        _check_fields("ID", frame.fields)
-        name, fw, proto, fcpu = frame.fields
-        return cls(frame.seq, name, fw, int(proto), int(fcpu))
-
-
-@dataclass(frozen=True, slots=True)
-class Ack:
-    """``$ACK``: the device accepted a command.
-
-    Attributes
-    ----------
-    seq : int
-        Sequence number of the frame.
-    command : str
-        The command word.
-    value : int or None
-        The value in force for ``WINDOW`` [ms] and ``RANGE``; None for the others.
-    """
-
-    seq: int
-    command: str
-    value: int | None
-
-    @classmethod
-    def from_frame(cls, frame: Frame) -> "Ack":
-        """Decode an ``ACK`` frame; raises :class:`ProtocolError` for any other kind."""
-        if frame.kind != "ACK":
-            raise ProtocolError(f"frame kind must be 'ACK', got {frame.kind!r}")
-        _check_fields("ACK", frame.fields)
-        return cls(frame.seq, frame.fields[0], int(frame.fields[1]) if len(frame.fields) == 2 else None)
-
-
-@dataclass(frozen=True, slots=True)
-class DeviceError:
-    """``$ERR``: the device rejected a command.
-
-    Attributes
-    ----------
-    seq : int
-        Sequence number of the frame.
-    code : int
-        1 unknown command, 2 bad value, 3 line too long.
-    token : str
-        The command word as the device read it (``LINE`` for code 3, ``?`` when empty).
-    """
-
-    seq: int
-    code: int
-    token: str
-
-    @classmethod
-    def from_frame(cls, frame: Frame) -> "DeviceError":
-        """Decode an ``ERR`` frame; raises :class:`ProtocolError` for any other kind."""
-        if frame.kind != "ERR":
-            raise ProtocolError(f"frame kind must be 'ERR', got {frame.kind!r}")
-        _check_fields("ERR", frame.fields)
-        return cls(frame.seq, int(frame.fields[0]), frame.fields[1])
 
 
 def encode_command(name: str, value: int | None = None) -> bytes:

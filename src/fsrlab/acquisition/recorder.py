@@ -22,9 +22,9 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Callable
 
+from fsrlab.acquisition.messages import Identity, Measurement
 from fsrlab.acquisition.protocol import (
-    SEQ_MODULO, UINT32_MODULO, WINDOW_MS_DEFAULT, WINDOW_MS_MAX, WINDOW_MS_MIN, Frame, Identity, Measurement,
-    ParserStats,
+    SEQ_MODULO, UINT32_MODULO, WINDOW_MS_DEFAULT, WINDOW_MS_MAX, WINDOW_MS_MIN, Frame, ParserStats,
 )
 from fsrlab.acquisition.serial_link import DeviceGone, LinkError, SerialLink
 

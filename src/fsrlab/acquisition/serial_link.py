@@ -15,9 +15,8 @@ from dataclasses import dataclass
 import serial
 from serial.tools import list_ports
 
-from fsrlab.acquisition.protocol import (
-    DEFAULT_BAUD, DEVICE_NAME, PROTOCOL_VERSION, Ack, DeviceError, Frame, FrameParser, Identity, encode_command,
-)
+from fsrlab.acquisition.messages import Ack, DeviceError, Identity
+from fsrlab.acquisition.protocol import DEFAULT_BAUD, DEVICE_NAME, PROTOCOL_VERSION, Frame, FrameParser, encode_command
 
 __all__ = ["UNO_USB_IDS", "LinkError", "DeviceGone", "HandshakeError", "CommandRejected", "UsbPort",
            "find_uno", "SerialLink"]

@@ -204,7 +204,7 @@ class PhysicsSource:
         self.dt_s = min(dt_s, period / 20)
         self._t = np.arange(0.0, 2 * period + self.dt_s, self.dt_s)
         stress = self.profile.stress(self._t)
-        resp = self.sensor.respond(stress, voltage_v=circuit.vcc_v / 2)
+        resp = self.sensor.respond(stress, voltage_v=circuit.fsr_voltage_v)
         self._stress = np.asarray(resp.stress_pa, dtype=float)
         self._r = np.asarray(resp.r_fsr_ohm, dtype=float)
         self._c = np.asarray(resp.c_fsr_farad, dtype=float)

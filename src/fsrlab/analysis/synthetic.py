@@ -140,7 +140,7 @@ def synthetic_run(cycles: int = 3, peak_pa: float = 50e3, points_per_ramp: int =
     stress = (triangle_stress(cycles, peak_pa, points_per_ramp, dwell_points) if stress_pa is None
               else np.asarray(stress_pa, dtype=float))
     n = stress.size
-    resp = fsr.respond(stress, voltage_v=circuit.vcc_v / 2)  # the 555's swing: ~Vcc/2 across the FSR
+    resp = fsr.respond(stress, voltage_v=circuit.fsr_voltage_v)
     osc = circuit.astable(resp.r_fsr_ohm, resp.c_fsr_farad)
     volts = opamp.output_v(fsr.respond(stress, voltage_v=opamp.fsr_voltage_v).r_fsr_ohm)  # Eq. (38)
     meter, _ = measure(osc.frequency_hz, osc.duty_cycle, volts, window_s, rng=rng,

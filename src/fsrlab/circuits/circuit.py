@@ -180,6 +180,11 @@ class LM555Circuit:
         """A copy with some parts changed (validated again)."""
         return replace(self, **changes)
 
+    @property
+    def fsr_voltage_v(self) -> float:
+        """Typical voltage across the FSR: the middle of the capacitor's swing between the thresholds. [V]"""
+        return 0.5 * (self.lower_fraction + self.upper_fraction) * self.vcc_v
+
     def on_range(self, range_) -> "LM555Circuit":
         """The circuit as the meter runs it on ``range_`` (0: FSR alone, 1: C_off switched in)."""
         return self if range_ else self.replace(c_off_farad=0.0)
