@@ -183,7 +183,7 @@ def test_readout_gives_the_sidecar_circuits(tmp_path):
     circuit.traditional); none without circuits; a bad part names the sidecar."""
     from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout
 
-    lm, op = LM555Circuit(r_ohm=22e3, c_off_farad=1e-9), OpAmpReadout(r_f_ohm=20e3, vcc_v=-5.0)
+    lm, op = LM555Circuit(r_ohm=22e3, c_off_farad=1e-9, diode=True), OpAmpReadout(r_f_ohm=20e3, vcc_v=-5.0)
     path = write_run(tmp_path / "new.csv", {"time_s": [0.0]}, {"circuit": lm.to_dict(), "opamp": op.to_dict()})
     assert load_run(path).readout() == (lm, op)
     earlier = {"circuit": {"topology": "lm555-astable (paper Fig. 16)", "r_ohm": 22e3, "c_off_farad": 1e-9,

@@ -64,9 +64,17 @@ def test_from_dict_defaults_and_unknown_parts():
 ])
 def test_each_part_is_checked(parts, name):
     with pytest.raises(ValueError, match=name):
-        LM555Circuit(**parts)
+        LM555Circuit(**{"r_ohm": 10e3, **parts})
     with pytest.raises(ValueError, match=name):
         PAPER_CIRCUIT.replace(**parts)
+
+
+def test_a_part_without_default_is_required_by_name():
+    # Property: the paper's values are not defaults (they live in physics.params only).
+    with pytest.raises(ValueError, match="r_ohm"):
+        LM555Circuit.from_dict({"diode": True})
+    with pytest.raises(ValueError, match="vcc_v"):
+        OpAmpReadout.from_dict({"r_f_ohm": 20e3})
 
 
 def test_with_control_and_on_range():
@@ -160,17 +168,17 @@ def test_simulate_spice_for_a_circuit(circuit):
 
 def test_opamp_readout_is_eq38():
     # Eq. (38) retyped: V_out = −(R_F/R_FSR)·Vcc, with the paper's R_F = 20 kΩ and Vcc = −5 V.
-    amp = OpAmpReadout()
+    amp = OpAmpReadout(r_f_ohm=20e3, vcc_v=-5.0)
     assert amp.output_v(100e3) == pytest.approx(-(20e3 / 100e3) * -5.0, rel=1e-15)
     assert amp.conductance_s(amp.output_v(100e3)) == pytest.approx(1 / 100e3, rel=1e-15)
     assert OpAmpReadout.from_dict(amp.to_dict()) == amp
     with pytest.raises(ValueError, match="vcc_v"):
-        OpAmpReadout(vcc_v=0.0)
+        OpAmpReadout(r_f_ohm=20e3, vcc_v=0.0)
 
 
 def test_readout_from_metadata_reads_current_and_earlier_sidecars():
-    now = {"circuit": FULL.to_dict(), "opamp": OpAmpReadout(r_f_ohm=10e3).to_dict()}
-    assert readout_from_metadata(now) == (FULL, OpAmpReadout(r_f_ohm=10e3))
+    now = {"circuit": FULL.to_dict(), "opamp": OpAmpReadout(r_f_ohm=10e3, vcc_v=-5.0).to_dict()}
+    assert readout_from_metadata(now) == (FULL, OpAmpReadout(r_f_ohm=10e3, vcc_v=-5.0))
     # Earlier sidecars: op-amp parts beside the LM555's (driven from −vcc_v), or under "traditional".
     old = {"circuit": {"r_ohm": 10e3, "vcc_v": 5.0, "r_f_ohm": 20e3, "topology": "LM555 + diode"}}
     assert readout_from_metadata(old) == (LM555Circuit(r_ohm=10e3), OpAmpReadout(20e3, -5.0))

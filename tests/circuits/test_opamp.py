@@ -51,7 +51,7 @@ def test_divider_sensitivities_match_self_consistent_solution(beta):
 
 def test_inverting_amplifier_supply_sensitivity():
     # V_out ∝ |Vcc|/R(|Vcc|) with R ∝ |Vcc|^β: ∂ln V_out/∂ln|Vcc| = 1 − β.
-    assert inverting_amplifier(1e5, voltage_coefficient=-0.4).sensitivity_supply == pytest.approx(1.4)
+    assert inverting_amplifier(1e5, 20e3, -5.0, voltage_coefficient=-0.4).sensitivity_supply == pytest.approx(1.4)
 
 
 def test_voltage_coefficient_ohmic_limit_and_sign():
@@ -62,7 +62,7 @@ def test_voltage_coefficient_ohmic_limit_and_sign():
 
 def test_validation():
     with pytest.raises(ValueError, match="r_fsr_ohm"):
-        inverting_amplifier(0.0)
+        inverting_amplifier(0.0, 20e3, -5.0)
     with pytest.raises(ValueError, match="vcc_v"):
         voltage_divider(1e5, 1e4, vcc_v=-5)
     with pytest.raises(ValueError, match="voltage_coefficient"):

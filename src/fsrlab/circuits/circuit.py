@@ -21,7 +21,7 @@ Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, §5 (Figs. 9b
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, fields, replace
+from dataclasses import MISSING, asdict, dataclass, fields, replace
 
 import numpy as np
 
@@ -102,6 +102,9 @@ def _from_dict(cls, d: dict, kind: str):
     unknown = sorted(set(d) - names - {"topology"})
     if unknown:
         raise ValueError(f"circuit: unknown {kind} part(s) {', '.join(unknown)} (known: {', '.join(sorted(names))})")
+    missing = [f.name for f in fields(cls) if f.default is MISSING and f.name not in d]
+    if missing:
+        raise ValueError(f"circuit: the {kind} part(s) {', '.join(missing)} must be given")
     return cls(**{k: v for k, v in d.items() if k in names})
 
 
@@ -116,7 +119,7 @@ class LM555Circuit:
     c_off_farad : float
         Offset capacitor in parallel with the FSR (≥ 0); the meter switches it in on range 1. [F]
     diode : bool
-        D1 in series with R_B (paper Figs. 13 and 16).
+        D1 in series with R_B (paper Figs. 13 and 16; default False, the plain astable of Fig. 9b).
     diode_drop_v : float
         Constant forward drop of D1 during the charge (0: the paper's ideal diode; needs ``diode``). [V]
     vcc_v : float
@@ -126,11 +129,16 @@ class LM555Circuit:
         moves both, see :meth:`with_control`). [1]
     discharge_ohm : float
         On-resistance of the discharge transistor (≥ 0; 0 is the paper's ideal switch). [Ω]
+
+    Notes
+    -----
+    The defaults are the LM555's own (5 V supply, internal 1/3–2/3 divider, ideal switch); the
+    paper's circuit is :data:`fsrlab.physics.params.PAPER_CIRCUIT`.
     """
 
-    r_ohm: float = 10e3
+    r_ohm: float
     c_off_farad: float = 0.0
-    diode: bool = True
+    diode: bool = False
     diode_drop_v: float = 0.0
     vcc_v: float = 5.0
     lower_fraction: float = 1 / 3
@@ -256,7 +264,7 @@ class LM555Circuit:
 
     @classmethod
     def from_dict(cls, d: dict) -> "LM555Circuit":
-        """Inverse of :meth:`to_dict` (missing parts take the defaults; unknown parts are an error)."""
+        """Inverse of :meth:`to_dict` (missing parts with a default take it; unknown parts are an error)."""
         return _from_dict(cls, d, "LM555")
 
 
@@ -278,8 +286,8 @@ class OpAmpReadout:
     (:attr:`fsr_voltage_v`).
     """
 
-    r_f_ohm: float = 20e3
-    vcc_v: float = -5.0
+    r_f_ohm: float
+    vcc_v: float
 
     def __post_init__(self) -> None:
         for name in ("r_f_ohm", "vcc_v"):

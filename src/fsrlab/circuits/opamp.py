@@ -52,7 +52,7 @@ def _out(a):
     return a[()] if a.ndim == 0 else a
 
 
-def inverting_amplifier(r_fsr_ohm, r_f_ohm: float = 20e3, vcc_v: float = -5.0,
+def inverting_amplifier(r_fsr_ohm, r_f_ohm: float, vcc_v: float,
                         voltage_coefficient=0.0) -> ReadoutResult:
     """Inverting amplifier with the FSR as input resistor, ``V_out = −(R_F/R_FSR)·Vcc`` (eq. 38).
 
