@@ -196,3 +196,65 @@ def test_readout_gives_the_sidecar_circuits(tmp_path):
     path = write_run(tmp_path / "bad.csv", {"time_s": [0.0]}, {"circuit": {"r_ohm": -1.0}})
     with pytest.raises(RunFormatError, match=r"bad\.meta\.json: .*r_ohm"):
         load_run(path).readout()
+
+
+@pytest.mark.parametrize(
+    "body, message",
+    [
+        # Corrupt values in a known column: beyond the column's values in docs/data-format.md.
+        ("time_s,frequency_hz\n0,1\n0.1,1e308\n", r"row 2 \(line 3\), column 'frequency_hz': 1e\+308 is beyond"),
+        ("time_s,frequency_hz\n0,1\n0.1,-3\n", r"row 2 \(line 3\), column 'frequency_hz': -3 is beyond .*0 to 1e\+09 Hz"),
+        ("time_s,duty_cycle\n0,0.5\n0.1,1.5\n", r"row 2 \(line 3\), column 'duty_cycle': 1.5 is beyond .*0 to 1;"),
+        ("time_s,range\n0,0\n0.1,2\n", r"row 2 \(line 3\), column 'range': 2 is not one of 0 \(C_off out\), 1 \(C_off in\)"),
+        ("time_s,my_column\n0,1\n0.1,1e200\n", r"row 2 \(line 3\), column 'my_column': 1e\+200 is beyond"),
+        # The first bad row in the file is named, whatever its kind.
+        ("time_s,frequency_hz,duty_cycle\n0,1,0.5\n0.1,1,2\n0.2,x,0.5\n", r"row 2 \(line 3\), column 'duty_cycle'"),
+    ],
+)
+def test_absurd_cells_are_rejected_naming_file_row_column(tmp_path, body, message):
+    # Reference: docs/data-format.md, "Known columns" (values) and "Errors"; issue 10 item 9 (1e308).
+    path = tmp_path / "bad.csv"
+    path.write_text(body, encoding="utf-8")
+    with pytest.raises(RunFormatError, match=message) as info:
+        load_run(path)
+    assert "\n" not in str(info.value) and str(path) in str(info.value)
+
+
+def test_skip_bad_rows_leaves_out_and_lists_them(tmp_path):
+    # Reference: docs/data-format.md, "Bad rows": each bad row left out and listed with its reason,
+    # the good rows kept in order, row numbers those of the file.
+    path = tmp_path / "b.csv"
+    path.write_text("time_s,frequency_hz,range\n0,1,0\n0.1,1e308,1\n0.2,x,0\n0.3,5,2\n0.4,,1\n0.5,inf,0\n"
+                    "0.6,3\n0.7,4,1,5\n0.8,2,0\n", encoding="utf-8")
+    run = load_run(path, skip_bad_rows=True)
+    np.testing.assert_array_equal(run["time_s"], [0.0, 0.4, 0.8])
+    np.testing.assert_array_equal(run["frequency_hz"], [1.0, np.nan, 2.0])
+    assert [(b.row, b.column) for b in run.skipped] == [(2, "frequency_hz"), (3, "frequency_hz"), (4, "range"),
+                                                        (6, "frequency_hz"), (7, "range"), (8, None)]
+    assert "row 3 (line 4), column 'frequency_hz': non-numeric cell 'x'" in run.skipped[1].reason
+    assert load_run(tmp_path / "b.csv", skip_bad_rows=True).skipped == run.skipped
+
+
+def test_skip_bad_rows_does_not_skip_time_order(tmp_path):
+    # Which row is wrong when time goes backwards cannot be told: an error even when skipping.
+    path = tmp_path / "t.csv"
+    path.write_text("time_s,frequency_hz\n0,1\n0.1,x\n0.3,1\n0.2,1\n", encoding="utf-8")
+    with pytest.raises(RunFormatError, match=r"row 4 \(line 5\), column 'time_s': time goes backwards"):
+        load_run(path, skip_bad_rows=True)
+
+
+def test_incomplete_run_says_so_and_names_its_last_row(tmp_path):
+    # Reference: docs/data-format.md, "complete" and "Incomplete runs".
+    path = tmp_path / "k.csv"
+    w = RunWriter(path, ["time_s", "frequency_hz"])
+    for i in range(3):
+        w.write({"time_s": 0.1 * i, "frequency_hz": 1000.0 + i})
+    w._raw("0.3,10")  # killed mid-line
+    run = load_run(path)
+    w._fd.close()
+    note = run.incomplete()
+    assert str(path) in note and "incomplete" in note and "row 3 (line 4, time_s 0.2 s)" in note
+    assert "incomplete last line was dropped" in note
+    w2 = RunWriter(tmp_path / "c.csv", ["time_s"])
+    w2.close()
+    assert load_run(tmp_path / "c.csv").incomplete() is None
