@@ -36,6 +36,7 @@ from numpy.polynomial import chebyshev as C
 
 if TYPE_CHECKING:
     from fsrlab.analysis.compensation import DirectionAwareCalibration
+    from fsrlab.analysis.provenance import RecordedWith
     from fsrlab.circuits.circuit import LM555Circuit
 
 __all__ = [
@@ -391,6 +392,10 @@ class Calibration:
     compensation_he_percent : (float, float) or None
         Hysteresis error (eq. 13) of the calibrated stress on the calibration data, plain
         polynomial and compensated. [%]
+    recorded_with : RecordedWith or None
+        The readout the data were recorded with (circuits, ranges), checked when the calibration
+        is applied to another run (:mod:`fsrlab.analysis.provenance`); None when unknown (a
+        calibration file written before fsrlab recorded it).
     path : Path or None
         The file the calibration was read from (not stored in the file).
     """
@@ -412,6 +417,7 @@ class Calibration:
     extra: dict = field(default_factory=dict)
     compensation: "DirectionAwareCalibration | None" = None
     compensation_he_percent: tuple[float, float] | None = None
+    recorded_with: "RecordedWith | None" = None
     path: Path | None = None
 
     @property
