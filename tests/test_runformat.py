@@ -1,24 +1,30 @@
 """The run format (docs/data-format.md): round trips, one-line errors, crash safety.
 
 References: the format's own specification (docs/data-format.md); round trips are exact because
-cells are written in Python's shortest round-trip float form.
+cells are written in Python's shortest round-trip float form. The document's examples are checked
+against what fsrlab does: its minimal run is calibrated by plain ``fsrlab calibrate`` and equals the
+shipped examples/minimal.csv; each line of its error example is what ``fsrlab hysteresis run.csv``
+prints for the bad file in BAD_RUNS (in the same order).
 """
 
 from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
 import textwrap
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import given, strategies as st
 
 from fsrlab.runformat import RunFormatError, RunWriter, load_run, sidecar_path, write_run
+from clirun import run_cli
 
 
 def test_writer_roundtrip_with_sidecar(tmp_path):
@@ -258,3 +264,53 @@ def test_incomplete_run_says_so_and_names_its_last_row(tmp_path):
     w2 = RunWriter(tmp_path / "c.csv", ["time_s"])
     w2.close()
     assert load_run(tmp_path / "c.csv").incomplete() is None
+
+ROOT = Path(__file__).resolve().parents[1]
+DOC = (ROOT / "docs" / "data-format.md").read_text(encoding="utf-8")
+
+# One bad run.csv per line of the doc's error example, in the doc's order.
+BAD_RUNS = [
+    "time_s,frequency_hz\n0,3012.5\n0.1,3890.1\n",
+    "stress_pa,frequency_hz\n0,3012.5\n1000,5.1k\n",
+    "stress_pa,frequency_hz,duty_cycle\n0,3012.5,0.5\n1000,3890.1,0.5\n2000,4630.7,nan\n",
+    "stress_pa,frequency_hz\n0,3012.5\n1000,1e308\n",
+    "time_s,stress_pa,frequency_hz\n0,0,3012.5\n0.2,1000,3890.1\n0.1,2000,4630.7\n",
+    "time_s,frequency_hz,stress_pa\n0,3012.5,0\n0.1\n",
+    "stress_pa,frequency_hz,direction\n0,3012.5,1\n1000,3890.1,2\n",
+]
+
+
+def _block(after: str, lang: str = "") -> str:
+    m = re.search(re.escape(after) + r".*?```" + lang + r"\n(.*?)```", DOC, re.DOTALL)
+    assert m, f"no code block after {after!r} in docs/data-format.md"
+    return m.group(1)
+
+
+def test_minimal_run_calibrates_with_plain_calibrate(tmp_path, monkeypatch):
+    text = _block("**Minimal run**", "csv")
+    assert text == (ROOT / "examples" / "minimal.csv").read_text(encoding="utf-8")
+    monkeypatch.chdir(tmp_path)
+    Path("run.csv").write_text(text, encoding="utf-8")
+    code, out, err = run_cli(["calibrate", "run.csv"])
+    assert code == 0 and err == "" and "not tried" in out
+    code, out, _ = run_cli(["calibrate", "run.csv", "--json"])
+    d = json.loads(out)
+    assert code == 0 and d["degree"] == 1 and d["degrees_tried"] == [1]
+
+
+def test_error_example_is_what_fsrlab_prints(tmp_path, monkeypatch):
+    lines = _block("## Errors").strip().splitlines()
+    assert len(lines) == len(BAD_RUNS)
+    monkeypatch.chdir(tmp_path)
+    for body, line in zip(BAD_RUNS, lines):
+        Path("run.csv").write_text(body, encoding="utf-8")
+        code, out, err = run_cli(["hysteresis", "run.csv"])
+        assert (code, out, err) == (2, "", line + "\n")
+
+
+@pytest.mark.parametrize("name", ["bench.csv", "other.csv", "minimal.csv"])
+def test_shipped_example_runs_load(name):
+    from fsrlab.runformat import load_run
+
+    run = load_run(ROOT / "examples" / name)
+    assert run.n_rows >= 3 and "stress_pa" in run and "frequency_hz" in run
