@@ -1,24 +1,30 @@
 """The run format (docs/data-format.md): round trips, one-line errors, crash safety.
 
 References: the format's own specification (docs/data-format.md); round trips are exact because
-cells are written in Python's shortest round-trip float form.
+cells are written in Python's shortest round-trip float form. The document's examples are checked
+against what fsrlab does: its minimal run is calibrated by plain ``fsrlab calibrate`` and equals the
+shipped examples/minimal.csv; each line of its error example is what ``fsrlab hysteresis run.csv``
+prints for the bad file in BAD_RUNS (in the same order).
 """
 
 from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
 import textwrap
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import given, strategies as st
 
 from fsrlab.runformat import RunFormatError, RunWriter, load_run, sidecar_path, write_run
+from clirun import run_cli
 
 
 def test_writer_roundtrip_with_sidecar(tmp_path):
@@ -90,6 +96,14 @@ def test_force_column_gives_stress_with_area(tmp_path):
         ("time_s,frequency_hz,stress_pa\n0,1,2\n0.1,2\n", r"row 2 \(line 3\), column 'stress_pa': missing"),
         ("time_s,direction\n0,1\n0.1,2\n", r"row 2 \(line 3\), column 'direction'"),
         ("time_s,inf_col\n0,1\n1,inf\n", r"row 2 \(line 3\), column 'inf_col'"),
+        # Corrupt values in a known column: beyond the column's values in docs/data-format.md.
+        ("time_s,frequency_hz\n0,1\n0.1,1e308\n", r"row 2 \(line 3\), column 'frequency_hz': 1e\+308 is beyond"),
+        ("time_s,frequency_hz\n0,1\n0.1,-3\n", r"row 2 \(line 3\), column 'frequency_hz': -3 is beyond .*0 to 1e\+09 Hz"),
+        ("time_s,duty_cycle\n0,0.5\n0.1,1.5\n", r"row 2 \(line 3\), column 'duty_cycle': 1.5 is beyond .*0 to 1;"),
+        ("time_s,range\n0,0\n0.1,2\n", r"row 2 \(line 3\), column 'range': 2 is not one of 0 \(C_off out\), 1 \(C_off in\)"),
+        ("time_s,my_column\n0,1\n0.1,1e200\n", r"row 2 \(line 3\), column 'my_column': 1e\+200 is beyond"),
+        # The first bad row in the file is named, whatever its kind.
+        ("time_s,frequency_hz,duty_cycle\n0,1,0.5\n0.1,1,2\n0.2,x,0.5\n", r"row 2 \(line 3\), column 'duty_cycle'"),
     ],
 )
 def test_bad_files_fail_with_one_line_naming_file_row_column(tmp_path, body, message):
@@ -196,3 +210,93 @@ def test_readout_gives_the_sidecar_circuits(tmp_path):
     path = write_run(tmp_path / "bad.csv", {"time_s": [0.0]}, {"circuit": {"r_ohm": -1.0}})
     with pytest.raises(RunFormatError, match=r"bad\.meta\.json: .*r_ohm"):
         load_run(path).readout()
+
+
+def test_skip_bad_rows_leaves_out_and_lists_them(tmp_path):
+    # Reference: docs/data-format.md, "Bad rows": each bad row left out and listed with its reason,
+    # the good rows kept in order, row numbers those of the file.
+    path = tmp_path / "b.csv"
+    path.write_text("time_s,frequency_hz,range\n0,1,0\n0.1,1e308,1\n0.2,x,0\n0.3,5,2\n0.4,,1\n0.5,inf,0\n"
+                    "0.6,3\n0.7,4,1,5\n0.8,2,0\n", encoding="utf-8")
+    run = load_run(path, skip_bad_rows=True)
+    np.testing.assert_array_equal(run["time_s"], [0.0, 0.4, 0.8])
+    np.testing.assert_array_equal(run["frequency_hz"], [1.0, np.nan, 2.0])
+    assert [(b.row, b.column) for b in run.skipped] == [(2, "frequency_hz"), (3, "frequency_hz"), (4, "range"),
+                                                        (6, "frequency_hz"), (7, "range"), (8, None)]
+    assert "row 3 (line 4), column 'frequency_hz': non-numeric cell 'x'" in run.skipped[1].reason
+    assert load_run(tmp_path / "b.csv", skip_bad_rows=True).skipped == run.skipped
+
+
+def test_skip_bad_rows_does_not_skip_time_order(tmp_path):
+    # Which row is wrong when time goes backwards cannot be told: an error even when skipping.
+    path = tmp_path / "t.csv"
+    path.write_text("time_s,frequency_hz\n0,1\n0.1,x\n0.3,1\n0.2,1\n", encoding="utf-8")
+    with pytest.raises(RunFormatError, match=r"row 4 \(line 5\), column 'time_s': time goes backwards"):
+        load_run(path, skip_bad_rows=True)
+
+
+def test_incomplete_run_says_so_and_names_its_last_row(tmp_path):
+    # Reference: docs/data-format.md, "complete" and "Incomplete runs".
+    path = tmp_path / "k.csv"
+    w = RunWriter(path, ["time_s", "frequency_hz"])
+    for i in range(3):
+        w.write({"time_s": 0.1 * i, "frequency_hz": 1000.0 + i})
+    w._raw("0.3,10")  # killed mid-line
+    run = load_run(path)
+    w._fd.close()
+    note = run.incomplete()
+    assert str(path) in note and "incomplete" in note and "row 3 (line 4, time_s 0.2 s)" in note
+    assert "incomplete last line was dropped" in note
+    w2 = RunWriter(tmp_path / "c.csv", ["time_s"])
+    w2.close()
+    assert load_run(tmp_path / "c.csv").incomplete() is None
+
+ROOT = Path(__file__).resolve().parents[1]
+DOC = (ROOT / "docs" / "data-format.md").read_text(encoding="utf-8")
+
+# One bad run.csv per line of the doc's error example, in the doc's order.
+BAD_RUNS = [
+    "time_s,frequency_hz\n0,3012.5\n0.1,3890.1\n",
+    "stress_pa,frequency_hz\n0,3012.5\n1000,5.1k\n",
+    "stress_pa,frequency_hz,duty_cycle\n0,3012.5,0.5\n1000,3890.1,0.5\n2000,4630.7,nan\n",
+    "stress_pa,frequency_hz\n0,3012.5\n1000,1e308\n",
+    "time_s,stress_pa,frequency_hz\n0,0,3012.5\n0.2,1000,3890.1\n0.1,2000,4630.7\n",
+    "time_s,frequency_hz,stress_pa\n0,3012.5,0\n0.1\n",
+    "stress_pa,frequency_hz,direction\n0,3012.5,1\n1000,3890.1,2\n",
+]
+
+
+def _block(after: str, lang: str = "") -> str:
+    m = re.search(re.escape(after) + r".*?```" + lang + r"\n(.*?)```", DOC, re.DOTALL)
+    assert m, f"no code block after {after!r} in docs/data-format.md"
+    return m.group(1)
+
+
+def test_minimal_run_calibrates_with_plain_calibrate(tmp_path, monkeypatch):
+    text = _block("**Minimal run**", "csv")
+    assert text == (ROOT / "examples" / "minimal.csv").read_text(encoding="utf-8")
+    monkeypatch.chdir(tmp_path)
+    Path("run.csv").write_text(text, encoding="utf-8")
+    code, out, err = run_cli(["calibrate", "run.csv"])
+    assert code == 0 and err == "" and "not tried" in out
+    code, out, _ = run_cli(["calibrate", "run.csv", "--json"])
+    d = json.loads(out)
+    assert code == 0 and d["degree"] == 1 and d["degrees_tried"] == [1]
+
+
+def test_error_example_is_what_fsrlab_prints(tmp_path, monkeypatch):
+    lines = _block("## Errors").strip().splitlines()
+    assert len(lines) == len(BAD_RUNS)
+    monkeypatch.chdir(tmp_path)
+    for body, line in zip(BAD_RUNS, lines):
+        Path("run.csv").write_text(body, encoding="utf-8")
+        code, out, err = run_cli(["hysteresis", "run.csv"])
+        assert (code, out, err) == (2, "", line + "\n")
+
+
+@pytest.mark.parametrize("name", ["bench.csv", "other.csv", "minimal.csv"])
+def test_shipped_example_runs_load(name):
+    from fsrlab.runformat import load_run
+
+    run = load_run(ROOT / "examples" / name)
+    assert run.n_rows >= 3 and "stress_pa" in run and "frequency_hz" in run

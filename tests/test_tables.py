@@ -41,3 +41,50 @@ def test_grouped_csv_errors_name_the_place(tmp_path, text, needle):
     p.write_text(text)
     with pytest.raises(ValueError, match=needle):
         load_grouped_csv(p)
+
+
+@pytest.mark.parametrize("body, needle", [
+    ("load,sensor,reading\n1,1,1e308\n", "row 1 (line 2), column 'reading': 1e+308 is beyond"),
+    ("load,sensor,reading\n1,1,inf\n", "row 1 (line 2), column 'reading': 'inf' is not a finite number"),
+])
+def test_grouped_csv_rejects_absurd_readings(tmp_path, body, needle):
+    # Reference: docs/data-format.md (a cell's magnitude at most 1e100 outside the known columns).
+    p = tmp_path / "g.csv"
+    p.write_text(body)
+    with pytest.raises(ValueError) as info:
+        load_grouped_csv(p)
+    assert needle in str(info.value)
+
+
+ISO = "series,rotation_deg,force_n,reading,direction\n1,0,0,0,1\n1,0,1,1.0,1\n1,0,2,2.0,1\n1,0,3,3.0,1\n"
+
+
+@pytest.mark.parametrize("row, needle", [
+    ("1,0,4,nan,1", "row 5 (line 6), column 'reading': 'nan' is not a finite number"),
+    ("1,0,4,1e308,1", "row 5 (line 6), column 'reading': 1e+308 is beyond"),
+    ("1,0,-4,4.0,1", "row 5 (line 6), column 'force_n': -4 is beyond what the column can hold (0 to"),
+    ("1,0,inf,4.0,1", "row 5 (line 6), column 'force_n': 'inf' is not a finite number"),
+    ("1,0,3,3.1,1", "row 5 (line 6), column 'force_n': series '1' already has a reading at 3 N (increasing)"),
+    ("1,0,0,0.1,1", "row 5 (line 6), column 'force_n': series '1' already has its zero reading before"),
+    ("1,90,4,4.0,1", "row 5 (line 6), column 'rotation_deg': series '1' was at 0°, not 90°"),
+    ("1,0,4,,1", "row 5 (line 6), column 'reading': empty cell"),
+])
+def test_iso376_csv_rejects_bad_cells_naming_row_and_column(tmp_path, row, needle):
+    # Reference: the ISO 376 reader's contract (fsrlab.tables.load_iso376_csv): one line, file, row, column;
+    # before, nan and 1e308 readings were accepted and a repeated force silently replaced the first.
+    from fsrlab.tables import load_iso376_csv
+
+    p = tmp_path / "iso.csv"
+    p.write_text(ISO + row + "\n")
+    with pytest.raises(ValueError) as info:
+        load_iso376_csv(p)
+    assert needle in str(info.value) and "\n" not in str(info.value)
+
+
+def test_iso376_csv_needs_two_forces(tmp_path):
+    from fsrlab.tables import load_iso376_csv
+
+    p = tmp_path / "iso.csv"
+    p.write_text("series,rotation_deg,force_n,reading\n1,0,0,0\n1,0,1,1.0\n")
+    with pytest.raises(ValueError, match="1 increasing force"):
+        load_iso376_csv(p)

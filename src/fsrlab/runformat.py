@@ -294,12 +294,15 @@ class Run:
         The sidecar (or defaults when there is none).
     truncated : bool
         True when an incomplete last line (a crash while writing) was dropped.
+    skipped : list of BadRow
+        Rows left out because of a bad cell (``load_run(..., skip_bad_rows=True)``), in file order.
     """
 
     path: Path
     columns: dict[str, np.ndarray]
     metadata: dict = field(default_factory=dict)
     truncated: bool = False
+    skipped: list = field(default_factory=list)
 
     @property
     def n_rows(self) -> int:
@@ -365,6 +368,31 @@ class Run:
             return readout_from_metadata(self.metadata)
         except ValueError as exc:
             raise RunFormatError(f"{sidecar_path(self.path).name}: {exc}") from None
+
+    def incomplete(self) -> str | None:
+        """What to tell a user of a run whose writer never closed it, or None for a closed run.
+
+        Returns
+        -------
+        str or None
+            For a sidecar saying ``"complete": false`` (a recording killed, or still going): the
+            file, that it is incomplete, its last row (number, file line and ``time_s``) and
+            whether an incomplete last line was dropped. None when the sidecar says the run is
+            complete, or there is no sidecar.
+        """
+        if self.metadata.get("complete") is not False:
+            return None
+        n_file = self.n_rows + len(self.skipped)
+        if n_file == 0:
+            last = "it holds no rows"
+        else:
+            row = int(_file_rows(n_file, self.skipped)[-1]) if self.n_rows else n_file
+            time = self.columns.get("time_s")
+            at = f", time_s {float(time[-1])!r} s" if time is not None and self.n_rows else ""
+            last = f"the last row read is row {row} (line {row + 1}{at})"
+        dropped = "; an incomplete last line was dropped" if self.truncated else ""
+        return (f"{self.path} is incomplete (its sidecar says \"complete\": false: the recording was not closed); "
+                f"{last}{dropped}")
 
     def to_pandas(self):
         """The run as a ``pandas.DataFrame`` (pandas is imported only here)."""
@@ -454,7 +482,7 @@ def read_table(path: str | os.PathLike, required: Sequence[str], hint: str = "")
 
 
 
-def load_run(path: str | os.PathLike, require: Sequence[str] = ()) -> Run:
+def load_run(path: str | os.PathLike, require: Sequence[str] = (), skip_bad_rows: bool = False) -> Run:
     """Read a run written by :class:`RunWriter`, by acquisition, by hand or by a spreadsheet.
 
     Parameters
@@ -463,6 +491,9 @@ def load_run(path: str | os.PathLike, require: Sequence[str] = ()) -> Run:
         The CSV file. Its sidecar ``NAME.meta.json`` is read when present (optional).
     require : sequence of str, optional
         Columns that must be present.
+    skip_bad_rows : bool
+        Leave out the rows with a bad cell and list them in ``Run.skipped`` instead of raising.
+        Rows out of time order are an error all the same (which row is wrong cannot be told).
 
     Returns
     -------
@@ -473,8 +504,10 @@ def load_run(path: str | os.PathLike, require: Sequence[str] = ()) -> Run:
     RunFormatError
         One line naming the file, the row (1-based data row, and its file line) and the column,
         for: a missing column, a row with too few or too many cells, a non-numeric cell, a NaN or
-        infinite value, an empty ``time_s`` cell, ``time_s`` going backwards, a ``direction``
-        other than -1, 0, +1; or a bad sidecar.
+        infinite value, a value its column cannot hold (``1e308`` Hz, a duty cycle of 2, a
+        ``direction`` other than -1, 0, +1, a ``range`` other than 0, 1: see
+        :data:`fsrlab.runcells.COLUMN_LIMITS`), an empty ``time_s`` cell, ``time_s`` going
+        backwards; or a bad sidecar.
     OSError
         If the file cannot be read.
 
@@ -510,86 +543,28 @@ def load_run(path: str | os.PathLike, require: Sequence[str] = ()) -> Run:
     for name in require:
         if name not in header:
             raise RunFormatError(f"{p}: column {name!r} missing (columns: {', '.join(header)})")
-    body = lines[1:]
-    ncol = len(header)
-    data = _parse_fast(body, ncol)
-    if data is None:
-        data = _parse_slow(p, body, header)
-    # NaN / inf written as text are errors (an empty cell is the way to say "missing").
-    if data.size:
-        bad = ~np.isfinite(data)
-        if bad.any():
-            # empty cells were parsed as NaN by the slow path only; re-check which are textual.
-            empties = _empty_mask(body, ncol) if not _has_no_empties(body) else np.zeros_like(bad)
-            textual = bad & ~empties
-            if textual.any():
-                r, c = np.argwhere(textual)[0]
-                cell = next(csv.reader([body[r]]))[c].strip()
-                raise RunFormatError(f"{where(p, r + 1, header[c])}: {cell!r} is not a finite number (leave the cell empty for a missing value)")
+    from fsrlab.runcells import parse_cells
+
+    data, skipped = parse_cells(p, lines[1:], header, skip_bad_rows)
     columns = {h: data[:, j].copy() for j, h in enumerate(header)}
     if "time_s" in columns:
         t = columns["time_s"]
-        nan = np.flatnonzero(np.isnan(t))
-        if nan.size:
-            raise RunFormatError(f"{where(p, nan[0] + 1, 'time_s')}: empty time cell")
         back = np.flatnonzero(np.diff(t) < 0)
         if back.size:
+            # Which row is wrong cannot be told (one late row, or the rows after an early one), so
+            # this stays an error even when bad rows are skipped.
             i = back[0] + 1
-            raise RunFormatError(f"{where(p, i + 1, 'time_s')}: time goes backwards ({t[i]!r} s after {t[i - 1]!r} s); rows must be in time order")
-    if "direction" in columns:
-        d = columns["direction"]
-        badd = np.flatnonzero(~np.isnan(d) & ~np.isin(d, (-1.0, 0.0, 1.0)))
-        if badd.size:
-            raise RunFormatError(f"{where(p, badd[0] + 1, 'direction')}: {d[badd[0]]!r} is not -1 (unloading), 0 (hold) or +1 (loading)")
+            row = _file_rows(len(lines) - 1, skipped)[i]
+            raise RunFormatError(f"{where(p, row, 'time_s')}: time goes backwards ({float(t[i])!r} s after {float(t[i - 1])!r} s); "
+                                 "rows must be in time order")
     if meta is None:
         meta = _default_metadata(header)
-    return Run(path=p, columns=columns, metadata=meta, truncated=truncated)
+    return Run(path=p, columns=columns, metadata=meta, truncated=truncated, skipped=skipped)
 
 
-def _has_no_empties(body: list[str]) -> bool:
-    return not any(",," in ln or ln.startswith(",") or ln.rstrip().endswith(",") for ln in body)
-
-
-def _empty_mask(body: list[str], ncol: int) -> np.ndarray:
-    mask = np.zeros((len(body), ncol), dtype=bool)
-    for i, row in enumerate(csv.reader(body)):
-        for j, cell in enumerate(row[:ncol]):
-            if not cell.strip():
-                mask[i, j] = True
-    return mask
-
-
-def _parse_fast(body: list[str], ncol: int) -> np.ndarray | None:
-    """numpy's C parser for the common case; None when anything is unusual (empties, text, quotes)."""
-    if not body:
-        return np.empty((0, ncol))
-    if not _has_no_empties(body) or any('"' in ln for ln in body[:1]):
-        return None
-    try:
-        arr = np.loadtxt(body, delimiter=",", dtype=np.float64, ndmin=2, comments=None)
-    except ValueError:
-        return None
-    if arr.shape != (len(body), ncol):
-        return None
-    return arr
-
-
-def _parse_slow(p: Path, body: list[str], header: list[str]) -> np.ndarray:
-    """Cell by cell, to name the first bad cell exactly; empty cells become NaN."""
-    ncol = len(header)
-    out = np.full((len(body), ncol), np.nan)
-    for i, row in enumerate(csv.reader(body)):
-        if len(row) < ncol:
-            raise RunFormatError(f"{where(p, i + 1, header[len(row)])}: missing ({len(row)} cells, the header has {ncol})")
-        if len(row) > ncol:
-            if any(c.strip() for c in row[ncol:]):
-                raise RunFormatError(f"{where(p, i + 1, None)}: {len(row)} cells, the header has {ncol}")
-        for j in range(ncol):
-            cell = row[j].strip()
-            if not cell:
-                continue
-            try:
-                out[i, j] = float(cell)
-            except ValueError:
-                raise RunFormatError(f"{where(p, i + 1, header[j])}: non-numeric cell {cell!r}") from None
-    return out
+def _file_rows(n_file_rows: int, skipped: Sequence) -> np.ndarray:
+    """1-based file row of each row kept, when ``skipped`` rows were left out."""
+    rows = np.arange(1, n_file_rows + 1)
+    if skipped:
+        rows = np.setdiff1d(rows, [b.row for b in skipped])
+    return rows

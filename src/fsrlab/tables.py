@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from fsrlab.analysis.iso376 import CalibrationSeries
+from fsrlab.runcells import OTHER_LIMIT
 from fsrlab.runformat import read_table, where
 
 __all__ = ["load_grouped_csv", "load_iso376_csv"]
@@ -24,6 +25,15 @@ def _label(cell: str) -> Any:
     except ValueError:
         return cell
     return int(v) if v.is_integer() else v
+
+
+def _check_number(p, k: int, column: str, value: float, cell: str, low: float = -OTHER_LIMIT) -> None:
+    """A cell must hold a finite number within what a reading can be (not 1e308)."""
+    if not np.isfinite(value):
+        raise ValueError(f"{where(p, k, column)}: {cell.strip()!r} is not a finite number")
+    if not low <= value <= OTHER_LIMIT:
+        raise ValueError(f"{where(p, k, column)}: {value:g} is beyond what the column can hold "
+                         f"({low:g} to {OTHER_LIMIT:g})")
 
 
 def load_grouped_csv(path: str | os.PathLike) -> tuple[list, list, np.ndarray]:
@@ -44,8 +54,8 @@ def load_grouped_csv(path: str | os.PathLike) -> tuple[list, list, np.ndarray]:
     Raises
     ------
     ValueError
-        One line naming the file, the row and the column for a missing column, an empty or
-        non-numeric reading.
+        One line naming the file, the row and the column for a missing column, an empty,
+        non-numeric or non-finite reading, or one beyond what a reading can be (above 1e100).
     """
     ix, rows, p = read_table(path, ("load", "sensor", "reading"), hint="header load,sensor,reading needed")
     il, isn, ir = ix["load"], ix["sensor"], ix["reading"]
@@ -58,8 +68,7 @@ def load_grouped_csv(path: str | os.PathLike) -> tuple[list, list, np.ndarray]:
             v = float(row[ir])
         except ValueError:
             raise ValueError(f"{where(p, k, 'reading')}: non-numeric cell {row[ir].strip()!r}") from None
-        if not np.isfinite(v):
-            raise ValueError(f"{where(p, k, 'reading')}: {row[ir].strip()!r} is not a finite number")
+        _check_number(p, k, "reading", v, row[ir])
         loads.append(_label(row[il].strip()))
         sensors.append(_label(row[isn].strip()))
         values.append(v)
@@ -90,8 +99,10 @@ def load_iso376_csv(path) -> tuple[np.ndarray, list[CalibrationSeries]]:
     Raises
     ------
     ValueError
-        One line naming the file, row and column for a missing column or a non-numeric cell, or
-        naming the series whose forces differ from the first series'.
+        One line naming the file, row and column for a missing column, an empty, non-numeric or
+        non-finite cell, a value beyond what a reading can be (magnitude above 1e100), a negative
+        force, a second reading at the same force and direction of a series, a series whose
+        rotation changes; or naming the series whose forces differ from the first series'.
     """
     ix, rows, p = read_table(path, ("series", "rotation_deg", "force_n", "reading"))
     data: dict[str, dict] = {}
@@ -104,23 +115,41 @@ def load_iso376_csv(path) -> tuple[np.ndarray, list[CalibrationSeries]]:
             if not cell and col == "direction":
                 vals[col] = 1.0
                 continue
+            if not cell:
+                raise ValueError(f"{where(p, k, col)}: empty cell")
             try:
                 vals[col] = float(cell)
             except ValueError:
                 raise ValueError(f"{where(p, k, col)}: non-numeric cell {cell!r}") from None
+            _check_number(p, k, col, vals[col], cell, 0.0 if col == "force_n" else -OTHER_LIMIT)
         d = vals.get("direction", 1.0)
         if d not in (1.0, -1.0):
             raise ValueError(f"{where(p, k, 'direction')}: must be +1 or -1, got {d:g}")
-        label = row[ix["series"]].strip()
+        label = row[ix["series"]].strip() if ix["series"] < len(row) else ""
+        if not label:
+            raise ValueError(f"{where(p, k, 'series')}: empty cell")
         s = data.setdefault(label, {"rot": vals["rotation_deg"], "inc": {}, "dec": {}, "z0": None, "z1": None})
+        if vals["rotation_deg"] != s["rot"]:
+            raise ValueError(f"{where(p, k, 'rotation_deg')}: series {label!r} was at {s['rot']:g}°, not {vals['rotation_deg']:g}°")
         if vals["force_n"] == 0:
-            s["z0" if d > 0 else "z1"] = vals["reading"]
+            key = "z0" if d > 0 else "z1"
+            if s[key] is not None:
+                raise ValueError(f"{where(p, k, 'force_n')}: series {label!r} already has its zero reading "
+                                 f"{'before' if d > 0 else 'after'} the forces")
+            s[key] = vals["reading"]
         else:
-            s["inc" if d > 0 else "dec"][vals["force_n"]] = vals["reading"]
+            branch = s["inc" if d > 0 else "dec"]
+            if vals["force_n"] in branch:
+                raise ValueError(f"{where(p, k, 'force_n')}: series {label!r} already has a reading at "
+                                 f"{vals['force_n']:g} N ({'increasing' if d > 0 else 'decreasing'})")
+            branch[vals["force_n"]] = vals["reading"]
     if not data:
         raise ValueError(f"{p}: no readings")
     first = next(iter(data.values()))
     forces = np.array(sorted(first["inc"]))
+    if forces.size < 2:
+        raise ValueError(f"{p}: series {next(iter(data))!r} has {forces.size} increasing force(s) above 0 N; "
+                         "ISO 376 needs at least 2 (8 or more, spread over 20–100 % of the range)")
     series = []
     for label, s in data.items():
         if sorted(s["inc"]) != forces.tolist():

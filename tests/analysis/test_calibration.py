@@ -204,3 +204,20 @@ def test_decode_capacitance_gives_nan_for_an_impossible_reading_not_an_error():
     c = decode_capacitance(f, dc, LM555Circuit(r_ohm=10e3, diode=False))
     assert c[0] == pytest.approx(1e-9, rel=1e-6)
     assert np.isnan(c[1]) and np.isnan(c[2])
+
+
+def test_auto_degree_on_a_small_run_tries_what_the_folds_determine():
+    # Reference: a training fold of n readings determines degree n − 1 at most (docs/data-format.md,
+    # minimal run: 3 readings, 3 folds of 2 training readings → degree 1 only).
+    cal = calibrate([3012.5, 3890.1, 4630.7], [0.0, 1000.0, 2000.0])
+    assert cal.degree == 1 and cal.cv.degrees == [1] and cal.cv.untried == [2, 3, 4, 5]
+    # 7 readings in 5 blocks: training folds of ≥ 5 readings → degrees up to 4.
+    x = np.linspace(0, 1, 7)
+    cv = calibrate(x, 1 + x + x ** 2).cv
+    assert cv.degrees == [1, 2, 3, 4] and cv.untried == [5]
+
+
+def test_auto_degree_says_what_to_do_when_no_degree_can_be_tried():
+    # Two groups, one of them a single reading: its complement trains on 1 reading.
+    with pytest.raises(ValueError, match=r"^degree: cannot be chosen by cross-validation.*give the degree"):
+        calibrate([1.0, 2.0, 3.0], [1.0, 2.0, 3.0], groups=[0, 0, 1])

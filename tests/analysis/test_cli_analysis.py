@@ -37,7 +37,8 @@ def test_minimal_csv_works_for_hysteresis_and_calibrate(tmp_path, capsys):
     assert code == 0 and len(json.loads(out)["cycles"]) == 2
     code, out, _ = run_cli(["calibrate", p, "--x", "frequency_hz", "--json"], capsys)
     assert code == 0
-    assert set(json.loads(out)) == {"degree", "r2", "rmse_pa", "max_error_percent_fs", "coefficients"}
+    assert set(json.loads(out)) == {"degree", "r2", "rmse_pa", "max_error_percent_fs", "coefficients", "readout_range",
+                                    "degrees_tried"}
 
 
 def test_repeatability_cli_reproduces_table5(paper, tmp_path, capsys):
@@ -64,8 +65,8 @@ def test_calibrate_apply_roundtrip_and_compensation(runs, tmp_path, capsys):
                             "-o", cal, "--json"], capsys)
     assert code == 0
     d = json.loads(out)
-    assert set(d) == {"degree", "r2", "rmse_pa", "max_error_percent_fs", "coefficients",
-                      "hysteresis_error_before_percent", "hysteresis_error_after_percent"}
+    assert set(d) == {"degree", "r2", "rmse_pa", "max_error_percent_fs", "coefficients", "readout_range",
+                      "degrees_tried", "hysteresis_error_before_percent", "hysteresis_error_after_percent"}
     assert d["degree"] == 3 and len(d["coefficients"]) == 4
     assert d["hysteresis_error_before_percent"] / d["hysteresis_error_after_percent"] >= 3
     out_csv = tmp_path / "est.csv"

@@ -85,3 +85,46 @@ def test_needs_both_branches():
     x = np.linspace(1, 2, 50)
     with pytest.raises(ValueError, match="too few unloading"):
         fit_direction_aware(x, 3 * x)
+
+
+def _minor_loop_run(seed=5):
+    # 0 → 50 kPa → 25 kPa → 50 kPa → 0: a reversal at 25 kPa where the memory's offset matters.
+    s = np.concatenate([np.linspace(0, 50e3, 101), np.linspace(50e3, 25e3, 51)[1:], np.linspace(25e3, 50e3, 51)[1:],
+                        np.linspace(50e3, 0, 101)[1:]])
+    return synthetic_run(stress_pa=s, seed=seed).columns["frequency_hz"], 150
+
+
+def test_a_corrupt_reading_does_not_poison_later_estimates(bench):
+    # Reference: the same sequence with that reading missing. Before, one 1e308 reading made every
+    # later estimate NaN (inf − inf in the memory) and printed numpy overflow warnings.
+    import warnings
+
+    comp = fit_direction_aware(bench["frequency_hz"], bench["stress_pa"])
+    x, _ = _minor_loop_run()
+    corrupt, gap = x.copy(), x.copy()
+    corrupt[60], gap[60] = 1e308, np.nan
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        y = comp(corrupt)
+    np.testing.assert_array_equal(y, comp(gap))
+    assert np.isnan(y[60]) and np.isfinite(np.delete(y, 60)).all()
+
+
+def test_memory_restarts_where_the_reversal_falls_in_a_gap(bench):
+    # Reference: the major loading curve itself (no offset) after an unobserved turning point; with
+    # the turning point observed, the minor branch starts from the estimate reached there instead.
+    comp = fit_direction_aware(bench["frequency_hz"], bench["stress_pa"])
+    x, k = _minor_loop_run()
+    y, lab = comp.predict(x)
+    assert lab[k] == -1 and lab[k + 1] == 1  # the reversal at 25 kPa is found
+    after = slice(k + 4, k + 30)
+    assert np.max(np.abs(y[after] - comp.load_model(x[after]))) > 500  # memory: off the major curve [Pa]
+    holed = x.copy()
+    holed[k + 1:k + 4] = np.nan  # the readings just after the turning point are missing
+    y2, _ = comp.predict(holed)
+    np.testing.assert_array_equal(y2[after], comp.load_model(x[after]))
+    # A gap inside a branch keeps the memory: estimates around it are unchanged.
+    inside = x.copy()
+    inside[k + 10] = np.nan
+    y3, _ = comp.predict(inside)
+    np.testing.assert_array_equal(np.delete(y3, k + 10), np.delete(y, k + 10))

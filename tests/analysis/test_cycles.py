@@ -163,3 +163,22 @@ def test_readout_directions_are_branch_directions_with_gaps_filled():
     assert lab[0] == lab[1] == lab[2] and lab[7] == lab[6] and lab[21] == lab[20] == lab[19]
     np.testing.assert_array_equal(readout_directions(-holes, sign=-1), lab)
     np.testing.assert_array_equal(readout_directions(np.full(5, 3.0)), np.ones(5))
+
+
+def test_a_readout_that_does_not_respond_has_no_hysteresis_error():
+    # Reference: a constant readout (zero span), one that flickers by one quantization step
+    # (10-bit ADC, 5 V / 1024), and 0.2 % white noise: none depends on the stress. The synthetic
+    # run's own readouts do (HE ≈ 14 %, see above).
+    from fsrlab.analysis.hysteresis import check_response
+    from fsrlab.analysis.synthetic import synthetic_run
+
+    c = synthetic_run(cycles=3, seed=1).columns
+    s, rng = c["stress_pa"], np.random.default_rng(3)
+    lsb = 5 / 1024
+    for dead in (np.full(s.size, 1300.0), lsb * (200 + rng.integers(0, 2, s.size)),
+                 1300 * (1 + 0.002 * rng.standard_normal(s.size))):
+        with pytest.raises(ValueError, match="does not respond to the stress"):
+            run_hysteresis(s, dead, c["direction"], c["cycle"], name="frequency_hz")
+    for q in ("frequency_hz", "duty_cycle", "voltage_v"):
+        check_response(s, c[q])
+    check_response([0, 1000, 2000, 1000, 0], [3012.5, 3890.1, 4630.7, 3900.2, 3010.0])  # 5 readings suffice

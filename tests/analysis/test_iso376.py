@@ -126,3 +126,35 @@ def test_csv_loader_and_cli(tmp_path, capsys):
         main(["iso376", str(p)])
     err = capsys.readouterr().err
     assert info.value.code == 2 and "row 1 (line 2), column 'reading'" in err and err.count("\n") == 1
+
+
+def test_no_numpy_warning_on_valid_input_with_partial_decreasing_series():
+    # Reference: the ISO 376 definition of v (mean over the series with a decreasing reading at
+    # each force); a force with none has no v. Before, numpy printed "Mean of empty slice".
+    import warnings
+
+    s = full_calibration()
+    dec = np.full(F.size, np.nan)
+    dec[[3, 7]] = ideal(1 + 6e-4)[[3, 7]] * (1 + 1e-3)
+    s[2] = CalibrationSeries(120, s[2].increasing, dec, 0.0, 0.0)
+    s[3] = CalibrationSeries(240, s[3].increasing, None, 0.0, 0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        r = iso376(F, s)
+    assert np.isnan(r.v[[0, 1, 2, 4, 5, 6, 8, 9]]).all()
+    np.testing.assert_allclose(r.v[[3, 7]], 0.1, rtol=1e-9)
+    assert r.worst("v") == pytest.approx(0.1, rel=1e-9)
+    assert r.notes == [] and "b_note" not in r.missing
+
+
+def test_creep_readings_must_be_finite():
+    for creep in ((float("nan"), 1.0), (1.0, float("inf")), (1e308, -1e308)):
+        with pytest.raises(ValueError, match="creep_readings: must be two finite readings"):
+            iso376(F, full_calibration(), creep_readings=creep)
+
+
+def test_two_rotations_give_b_with_a_note():
+    s = full_calibration()[:3]
+    r = iso376(F, s)
+    assert r.b is not None and r.notes == ["b from 2 mounting rotations (ISO 376 asks for 3)"]
+    assert set(r.missing) == {"c"}

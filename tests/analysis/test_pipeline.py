@@ -117,8 +117,14 @@ def test_apply_round_trip_estimate_is_the_polynomial_row_by_row(runs, tmp_path):
             assert e[i] == cal(f[i])
     assert est.units["stress_pa_estimate"] == "Pa"
     meta = est.metadata["calibration"]
+    inside = (f >= cal.x_range[0]) & (f <= cal.x_range[1])
+    counts = {"estimated": f.size - 3, "in_range": int(inside.sum()), "out_of_range": f.size - 3 - int(inside.sum()),
+              "extrapolated": f.size - 3 - int(inside.sum()),
+              "missing": 3, "no_readout": 3, "not_decodable": 0, "beyond_margin": 0}
     assert meta == {"x": "frequency_hz", "degree": 3, "method": "polynomial of degree 3",
-                    "data_fingerprint": cal.data_fingerprint, "created": cal.created}
+                    "data_fingerprint": cal.data_fingerprint, "created": cal.created,
+                    "readout_range": list(cal.x_range), "margin": 0.1, "counts": counts}
+    np.testing.assert_array_equal(est["in_range"], np.where(np.isnan(f), np.nan, inside))
     # Written and read back, the estimate is the same (the format stores shortest round-trip numbers).
     write_run(tmp_path / "est.csv", est.columns, est.metadata)
     back = load_run(tmp_path / "est.csv")
@@ -232,8 +238,10 @@ def test_earlier_calibration_file_with_a_decode_dict_still_loads_and_applies(tmp
     # Applied to a run without a sidecar, C_FSR is decoded through the calibration's circuit.
     run, c_true = _ranged_run(tmp_path / "r.csv", cal.circuit, with_range=False)
     (tmp_path / "r.meta.json").unlink()
-    est = apply_calibration(cal, load_run(tmp_path / "r.csv"))
+    # margin=inf: every estimate written, the file's range only flags (it predates readout_range).
+    est = apply_calibration(cal, load_run(tmp_path / "r.csv"), margin=np.inf)
     np.testing.assert_allclose(est["stress_pa_estimate"], 1 + (c_true - 5e-9) / 1e-9, rtol=1e-8)
+    np.testing.assert_array_equal(est["in_range"], (c_true >= 3e-9) & (c_true <= 7e-9))
     # Saved again, it is in the current layout.
     d = json.loads(save_calibration(cal, tmp_path / "new.json").read_text())
     assert "decode" not in d and d["circuit"]["r_ohm"] == 12e3 and d["operator"] == "kept as extra"

@@ -36,6 +36,7 @@ from numpy.polynomial import chebyshev as C
 
 if TYPE_CHECKING:
     from fsrlab.analysis.compensation import DirectionAwareCalibration
+    from fsrlab.analysis.provenance import RecordedWith
     from fsrlab.circuits.circuit import LM555Circuit
 
 __all__ = [
@@ -136,7 +137,7 @@ def fit_polynomial(x, y, degree: int, center: float | None = None, half_width: f
     degree = _check_degree(degree)
     x, y = _prepare(x, y)
     if x.size <= degree:
-        raise ValueError(f"x: degree {degree} needs more than {degree} readings, got {x.size}")
+        raise ValueError(f"degree: {degree} needs more than {degree} readings with both values, got {x.size}")
     if center is None or half_width is None:
         center, half_width = _scaling(x)
     z = (x - center) / half_width
@@ -162,6 +163,8 @@ class CrossValidation:
         Chosen degree: the lowest whose out-of-fold RMSE is within ``tolerance`` of the smallest.
     moments : tuple of ndarray, optional
         Whole-data sums (Σ T_0..T_2d, Σ T_k y) in the Chebyshev basis, reused for the final fit.
+    untried : list of int
+        Degrees asked for but not tried: a training fold has too few (distinct) readings for them.
     """
 
     degrees: list[int]
@@ -170,6 +173,7 @@ class CrossValidation:
     groups: int
     best_degree: int
     moments: tuple | None = field(default=None, repr=False, compare=False)
+    untried: list[int] = field(default_factory=list)
 
     def full_fit(self, degree: int) -> np.ndarray:
         """Chebyshev coefficients of the least-squares fit on all readings, from the stored sums."""
@@ -234,6 +238,13 @@ def cross_validate_degrees(x, y, groups, degrees: Sequence[int] = range(1, MAX_D
     Returns
     -------
     CrossValidation
+        Over the degrees that every training fold can determine (more readings than the degree,
+        a regular system); the others are listed in ``untried``.
+
+    Raises
+    ------
+    ValueError
+        No degree can be tried (message starting ``"degree:"``), fewer than 2 groups, bad options.
 
     Notes
     -----
@@ -277,23 +288,31 @@ def cross_validate_degrees(x, y, groups, degrees: Sequence[int] = range(1, MAX_D
     yy = np.bincount(fold, weights=y * y, minlength=k)
     mt, tyt, n_tot = m.sum(axis=1), ty.sum(axis=1), m[0].sum()
 
-    gram = _gram
-    rmse = []
-    for d in degrees:
-        sse = 0.0
-        for f in range(k):
-            gtrain = gram(mt - m[:, f], d)
-            btrain = (tyt - ty[:, f])[: d + 1]
-            if n_tot - m[0, f] <= d:
-                raise ValueError(f"degree {d}: a training fold has too few readings")
-            beta = np.linalg.solve(gtrain, btrain)
-            gf = gram(m[:, f], d)
-            sse += yy[f] - 2 * beta @ ty[: d + 1, f] + beta @ gf @ beta
-        rmse.append(float(np.sqrt(max(sse, 0.0) / n_tot)))
     if not tolerance >= 0:
         raise ValueError(f"tolerance must be >= 0, got {tolerance!r}")
-    best = min(d for d, e in zip(degrees, rmse) if e <= (1 + tolerance) * min(rmse))
-    return CrossValidation(degrees=degrees, rmse=rmse, folds=k, groups=n_groups, best_degree=best, moments=(mt, tyt))
+    # A training fold of n readings determines a polynomial of degree n - 1 at most: the degrees
+    # it cannot determine (small runs) are left out rather than failing the whole selection.
+    smallest = int(n_tot - m[0].max())
+    tried, rmse = [], []
+    for d in degrees:
+        if d >= smallest:
+            continue
+        sse = 0.0
+        try:
+            for f in range(k):
+                beta = np.linalg.solve(_gram(mt - m[:, f], d), (tyt - ty[:, f])[: d + 1])
+                sse += yy[f] - 2 * beta @ ty[: d + 1, f] + beta @ _gram(m[:, f], d) @ beta
+        except np.linalg.LinAlgError:  # too few distinct readings in a training fold for degree d
+            continue
+        tried.append(d)
+        rmse.append(float(np.sqrt(max(sse, 0.0) / n_tot)))
+    if not tried:
+        raise ValueError(f"degree: cannot be chosen by cross-validation: the smallest training fold holds {smallest} "
+                         f"readings ({int(n_tot)} readings in {k} folds of {n_groups} groups), too few for degree "
+                         f"{min(degrees)}; give the degree, or more readings")
+    best = min(d for d, e in zip(tried, rmse) if e <= (1 + tolerance) * min(rmse))
+    return CrossValidation(degrees=tried, rmse=rmse, folds=k, groups=n_groups, best_degree=best, moments=(mt, tyt),
+                           untried=[d for d in degrees if d not in tried])
 
 
 def fit_metrics(y, y_hat) -> dict[str, float]:
@@ -373,6 +392,10 @@ class Calibration:
     compensation_he_percent : (float, float) or None
         Hysteresis error (eq. 13) of the calibrated stress on the calibration data, plain
         polynomial and compensated. [%]
+    recorded_with : RecordedWith or None
+        The readout the data were recorded with (circuits, ranges), checked when the calibration
+        is applied to another run (:mod:`fsrlab.analysis.provenance`); None when unknown (a
+        calibration file written before fsrlab recorded it).
     path : Path or None
         The file the calibration was read from (not stored in the file).
     """
@@ -394,6 +417,7 @@ class Calibration:
     extra: dict = field(default_factory=dict)
     compensation: "DirectionAwareCalibration | None" = None
     compensation_he_percent: tuple[float, float] | None = None
+    recorded_with: "RecordedWith | None" = None
     path: Path | None = None
 
     @property

@@ -4,8 +4,16 @@ One JSON object (``"format": "fsrlab-calibration"``, ``"version": 1``) holding t
 its Chebyshev form (what is evaluated) and as plain power coefficients (for other tools), the fit
 quality, the cross-validation, the data fingerprint, the circuit through which C_FSR was decoded
 (:meth:`fsrlab.circuits.circuit.LM555Circuit.to_dict`) and, when fitted, the direction-aware
-compensation. Files written before the circuit objects stored the decoding circuit as
-``"decode": {"r_ohm", "c_off_farad", "diode", "diode_drop_v"}``; they are read as that circuit.
+compensation; and, for the checks of ``fsrlab apply``, the calibrated readout range
+(``"readout_range": [low, high]``, unit of x) and what the data were recorded with
+(``"recorded_with"``: :meth:`fsrlab.analysis.provenance.RecordedWith.to_dict`, the run's LM555
+circuit and op-amp readout, and the values of its ``range`` column, each null when unknown).
+
+Earlier files are read too: those written before the circuit objects stored the decoding circuit
+as ``"decode": {"r_ohm", "c_off_farad", "diode", "diode_drop_v"}`` (read as that circuit); those
+without ``"recorded_with"`` load with ``Calibration.recorded_with = None`` (nothing to check a run
+against), and their readout range is that of the polynomial's mapping (``x_center`` ±
+``x_half_width``, the same numbers).
 """
 
 from __future__ import annotations
@@ -28,7 +36,7 @@ CALIBRATION_FORMAT = "fsrlab-calibration"
 # Keys this module writes or reads; any other key of a file is kept in ``Calibration.extra``.
 _KNOWN = {"format", "version", "model", "basis", "x", "y", "units", "degree", "chebyshev_coefficients", "x_center",
           "x_half_width", "coefficients", "coefficients_note", "metrics", "cross_validation", "data_fingerprint",
-          "created", "circuit", "decode", "source", "compensation"}
+          "created", "circuit", "decode", "source", "compensation", "readout_range", "recorded_with"}
 
 
 def calibration_to_dict(cal: Calibration) -> dict[str, Any]:
@@ -41,7 +49,9 @@ def calibration_to_dict(cal: Calibration) -> dict[str, Any]:
     Returns
     -------
     dict
-        JSON-ready; ``circuit`` is :meth:`LM555Circuit.to_dict` or None; ``compensation`` (only
+        JSON-ready; ``circuit`` is :meth:`LM555Circuit.to_dict` or None; ``readout_range`` the
+        calibrated readout range [unit of x]; ``recorded_with`` :meth:`RecordedWith.to_dict` or
+        None; ``compensation`` (only
         when fitted) is :meth:`DirectionAwareCalibration.to_dict` with the hysteresis errors
         before and after; the entries of ``cal.extra`` follow.
     """
@@ -65,6 +75,8 @@ def calibration_to_dict(cal: Calibration) -> dict[str, Any]:
         "created": cal.created,
         "circuit": None if cal.circuit is None else cal.circuit.to_dict(),
         "source": cal.source,
+        "readout_range": list(cal.x_range),
+        "recorded_with": None if cal.recorded_with is None else cal.recorded_with.to_dict(),
     }
     if cal.compensation is not None:
         d["compensation"] = cal.compensation.to_dict()
@@ -99,6 +111,7 @@ def calibration_from_dict(d: dict) -> Calibration:
         An entry missing or malformed.
     """
     from fsrlab.analysis.compensation import DirectionAwareCalibration
+    from fsrlab.analysis.provenance import RecordedWith
     from fsrlab.circuits.circuit import LM555Circuit
 
     met = d.get("metrics", {})
@@ -118,7 +131,8 @@ def calibration_from_dict(d: dict) -> Calibration:
         data_fingerprint=d.get("data_fingerprint", ""), created=d.get("created", ""), cv=cv,
         circuit=None if not parts else LM555Circuit.from_dict(parts), source=d.get("source", ""),
         extra={k: v for k, v in d.items() if k not in _KNOWN},
-        compensation=DirectionAwareCalibration.from_dict(comp) if comp else None, compensation_he_percent=he)
+        compensation=DirectionAwareCalibration.from_dict(comp) if comp else None, compensation_he_percent=he,
+        recorded_with=RecordedWith.from_dict(d["recorded_with"]) if d.get("recorded_with") is not None else None)
 
 
 def save_calibration(cal: Calibration, path: str | os.PathLike) -> Path:

@@ -72,19 +72,29 @@ class DirectionAwareCalibration:
         Parameters
         ----------
         x : array_like
-            Readout in time order.
+            Readout in time order; NaN where a reading is missing.
 
         Returns
         -------
         y : ndarray
-            Estimate. [unit of y]
+            Estimate [unit of y]; NaN where the reading is missing or a branch polynomial has no
+            finite value at it (a corrupt reading such as 1e308 Hz), which count as missing.
         direction : ndarray of int
             +1 loading, -1 unloading.
+
+        Notes
+        -----
+        Missing readings are gaps: they take no part in finding the branches. The turning-point
+        memory restarts (the branch after it follows its major curve) where the reversal falls in
+        a gap, so that the turning point was not observed, or where its estimate is not finite; a
+        gap within a branch keeps the memory.
         """
         x = np.asarray(x, dtype=float)
+        with np.errstate(over="ignore", invalid="ignore"):
+            ok = np.isfinite(x) & np.isfinite(self.load_model(x)) & np.isfinite(self.unload_model(x))
+        x = np.where(ok, x, np.nan)
         lab = readout_directions(x, self.sign, self.threshold)
         y = np.full(x.size, np.nan)
-        ok = np.isfinite(x)
         # "up" = towards larger stress; the memory weights use the readout in stress order.
         u = self.sign * x
         u_lo, u_hi = sorted((self.sign * self.x_low, self.sign * self.x_high))
@@ -96,6 +106,8 @@ class DirectionAwareCalibration:
             seg = seg[ok[seg]]
             if seg.size == 0:
                 continue
+            if a > 0 and not ok[a - 1]:
+                prev_y = None  # the reversal fell in a gap: its turning point was not observed
             loading = lab[a] > 0
             model = self.load_model if loading else self.unload_model
             base = model(x[seg])
@@ -109,7 +121,7 @@ class DirectionAwareCalibration:
             y[seg] = base
             # The reversal ending this segment: its extremum reading (turning points are extrema).
             k = seg[np.argmax(u[seg])] if loading else seg[np.argmin(u[seg])]
-            prev_y, prev_u = float(y[k]), float(u[k])
+            prev_y, prev_u = (float(y[k]), float(u[k])) if np.isfinite(y[k]) else (None, None)
         return y, lab
 
     def to_dict(self) -> dict:

@@ -490,7 +490,8 @@ def mean_branches(stress_pa, q, cycles: list[Cycle], points: int = 201):
     return grid, ql, qu
 
 
-def run_hysteresis(stress_pa, q, direction=None, cycle=None, threshold: float = 0.05, **kwargs) -> RunHysteresis:
+def run_hysteresis(stress_pa, q, direction=None, cycle=None, threshold: float = 0.05, name: str = "the readout",
+                   **kwargs) -> RunHysteresis:
     """Hysteresis error (eq. 13) of a run, per cycle and overall.
 
     Parameters
@@ -504,6 +505,8 @@ def run_hysteresis(stress_pa, q, direction=None, cycle=None, threshold: float = 
         The run's ``direction`` and ``cycle`` columns (see :func:`split_cycles`).
     threshold : float
         Reversal threshold as a fraction of the stress span. [1]
+    name : str
+        The readout's name in messages.
     **kwargs
         Passed to :func:`fsrlab.analysis.hysteresis.hysteresis_error`.
 
@@ -514,9 +517,11 @@ def run_hysteresis(stress_pa, q, direction=None, cycle=None, threshold: float = 
     Raises
     ------
     ValueError
-        If the run holds no complete loading-unloading cycle.
+        If the run holds no complete loading-unloading cycle, or ``q`` does not respond to the
+        stress (:func:`fsrlab.analysis.hysteresis.check_response`: a constant readout has no
+        hysteresis error, not 0 %).
     """
-    from fsrlab.analysis.hysteresis import hysteresis_error
+    from fsrlab.analysis.hysteresis import check_response, hysteresis_error
 
     x = np.asarray(stress_pa, dtype=float)
     y = np.asarray(q, dtype=float)
@@ -532,6 +537,7 @@ def run_hysteresis(stress_pa, q, direction=None, cycle=None, threshold: float = 
     if not cycles:
         raise ValueError("the run holds no complete loading-unloading cycle (need the stress to rise and fall "
                          "back by more than the threshold, or a direction column with +1 then -1)")
+    check_response(x, y, name)
     results = []
     for c in cycles:
         li = c.load_index[np.isfinite(y[c.load_index])]

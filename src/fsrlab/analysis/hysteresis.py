@@ -1,5 +1,8 @@
 """Hysteresis error of eq. (13), for model curves and for sampled data.
 
+For data, :func:`check_response` first asks whether the readout responds to the stress at all: a
+dead sensor's constant readout would otherwise score a perfect 0 %.
+
 References
 ----------
 Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, eq. (13), Table 2.
@@ -19,6 +22,7 @@ from fsrlab.physics.separation import separation_loading, separation_unloading
 
 __all__ = [
     "HysteresisResult",
+    "check_response",
     "hysteresis_error",
     "hysteresis_error_curves",
     "CycleErrors",
@@ -165,6 +169,57 @@ def hysteresis_error(stress_load_pa, q_load, stress_unload_pa, q_unload) -> Hyst
                f"in the shared range {lo:g}–{hi:g} Pa",
         stress_pa=grid, q_load=q_l, q_unload=q_u,
     )
+
+
+def check_response(stress_pa, q, name: str = "the readout", fraction: float = 0.2) -> None:
+    """Raise ValueError when a readout does not respond to the stress (a dead or disconnected sensor).
+
+    Parameters
+    ----------
+    stress_pa, q : array_like, shape (n,)
+        Reference stress [Pa] and the readout [any unit]; readings where either is NaN are ignored.
+    name : str
+        The readout's name, for the message.
+    fraction : float
+        Share of the stress range at each end whose readings are compared. [1]
+
+    Raises
+    ------
+    ValueError
+        The readout does not respond: the difference Δ between its medians over the lowest and
+        over the highest ``fraction`` of the stress range is not larger than its resolution (the
+        smallest difference between two of its readings) or not larger than
+        ``5 s √(1/n_low + 1/n_high)``, where ``s`` is its scatter within those two ends (1.4826 ×
+        the median absolute deviation from each end's median). A constant readout (Δ = 0) and one
+        that only flickers by noise or by one quantization step fail; eq. (13) would report a
+        hysteresis error of a sensor that does not sense.
+
+    Notes
+    -----
+    The scatter within the ends includes the sensor's hysteresis, so a hysteretic sensor is not
+    taken for noise (its Δ is most of its full scale). Pure noise of a few hundred readings passes
+    with a probability of about 0.1 % (Δ beyond 4 standard errors of a difference of medians).
+    """
+    x = np.asarray(stress_pa, dtype=float)
+    y = np.asarray(q, dtype=float)
+    ok = np.isfinite(x) & np.isfinite(y)
+    x, y = x[ok], y[ok]
+    if y.size < 2:
+        raise ValueError(f"{name}: fewer than 2 readings with a reference stress")
+    values = np.unique(y)
+    if values.size == 1:
+        raise ValueError(f"{name} does not respond to the stress: it reads {values[0]:g} throughout "
+                         f"({y.size} readings); a dead or disconnected sensor?")
+    resolution = float(np.min(np.diff(values)))
+    lo, hi = float(x.min()), float(x.max())
+    low, high = y[x <= lo + fraction * (hi - lo)], y[x >= hi - fraction * (hi - lo)]
+    ml, mh = float(np.median(low)), float(np.median(high))
+    dev = np.concatenate([np.abs(low - ml), np.abs(high - mh)])
+    limit = max(resolution, 5 * 1.4826 * float(np.median(dev)) * np.sqrt(1 / low.size + 1 / high.size))
+    if not abs(mh - ml) > limit:
+        raise ValueError(f"{name} does not respond to the stress: its median changes by {mh - ml:.4g} from the lowest "
+                         f"to the highest {fraction:.0%} of the stress range, not more than its resolution and noise "
+                         f"({limit:.4g}); a dead or disconnected sensor?")
 
 
 def hysteresis_error_curves(

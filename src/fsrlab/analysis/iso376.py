@@ -47,6 +47,7 @@ A. Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901 (the quanti
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from typing import Sequence
 
@@ -109,6 +110,8 @@ class ISO376Result:
         ``"incomplete"`` when a required quantity is missing.
     missing : dict
         Quantity -> what the data lack to compute it.
+    notes : list of str
+        Where a quantity was computed from less than ISO 376 asks for (e.g. b from 2 rotations).
     """
 
     forces_n: np.ndarray
@@ -121,13 +124,16 @@ class ISO376Result:
     classes: dict = field(default_factory=dict)
     instrument_class: str = "incomplete"
     missing: dict = field(default_factory=dict)
+    notes: list = field(default_factory=list)
 
     def worst(self, name: str) -> float | None:
-        """Largest magnitude of a quantity over the forces [%], or None if missing."""
+        """Largest magnitude of a quantity over the forces where it is known [%], or None if missing."""
         val = getattr(self, name)
         if val is None:
             return None
-        return float(np.nanmax(np.abs(np.atleast_1d(val))))
+        a = np.abs(np.atleast_1d(np.asarray(val, dtype=float)))
+        a = a[~np.isnan(a)]
+        return float(a.max()) if a.size else None
 
 
 def class_reached(name: str, value_percent: float) -> str:
@@ -177,10 +183,22 @@ def iso376(forces_n, series: Sequence[CalibrationSeries], creep_readings: tuple[
     Raises
     ------
     ValueError
-        Forces not increasing and positive, a series of the wrong length, a bad degree.
+        Forces not increasing and positive, a series of the wrong length, a bad degree, creep
+        readings that are not finite.
+
+    Notes
+    -----
+    No numpy warning reaches the caller: a quantity with no value at a force (no decreasing
+    reading there) is NaN at that force, and a quantity with no value at any force is missing.
     """
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return _iso376(forces_n, series, creep_readings, interpolation_degree)
+
+
+def _iso376(forces_n, series, creep_readings, interpolation_degree) -> ISO376Result:
     F = np.asarray(forces_n, dtype=float)
-    if F.ndim != 1 or F.size < 2 or np.any(F <= 0) or np.any(np.diff(F) <= 0):
+    if F.ndim != 1 or F.size < 2 or not np.all(np.isfinite(F)) or np.any(F <= 0) or np.any(np.diff(F) <= 0):
         raise ValueError("forces_n must be at least 2 positive, strictly increasing forces [N]")
     if interpolation_degree not in (1, 2, 3):
         raise ValueError(f"interpolation_degree must be 1, 2 or 3 (ISO 376), got {interpolation_degree!r}")
@@ -199,7 +217,10 @@ def iso376(forces_n, series: Sequence[CalibrationSeries], creep_readings: tuple[
                 raise ValueError(f"series[{k}].decreasing: {d.size} readings for {F.size} forces")
             dec.append((k, d - z))
     missing: dict[str, str] = {}
+    notes: list[str] = []
     x_n = float(np.mean([x[-1] for x in inc]))
+    if not np.isfinite(x_n):
+        raise ValueError("series: the readings at the largest force must be finite")
     if x_n == 0:
         raise ValueError("series: zero deflection at the largest force")
 
@@ -224,7 +245,7 @@ def iso376(forces_n, series: Sequence[CalibrationSeries], creep_readings: tuple[
         xr = arr.mean(axis=0)
         b = 100 * (arr.max(axis=0) - arr.min(axis=0)) / np.abs(xr)
         if len(firsts) < 3:
-            missing["b_note"] = "ISO 376 asks for 3 rotations; b computed from 2"
+            notes.append("b from 2 mounting rotations (ISO 376 asks for 3)")
     # fc: interpolation equation X_a(F), degree 1..3, through the mean deflections.
     if F.size <= interpolation_degree + 1:
         missing["fc"] = f"more than {interpolation_degree + 1} forces for a degree-{interpolation_degree} interpolation equation"
@@ -239,24 +260,31 @@ def iso376(forces_n, series: Sequence[CalibrationSeries], creep_readings: tuple[
     if zs:
         f0 = float(100 * max(zs, key=abs) / x_n)
     else:
-        missing["f0"] = "zero readings before and after a series (zero_before, zero_after)"
+        missing["f0"] = ("zero readings before and after a series (zero_before, zero_after; in a CSV, force_n = 0 rows "
+                         "with direction +1 and -1)")
 
     # v: decreasing versus increasing readings within the same series, mean over series.
     v = None
     if dec:
-        vs = [100 * np.abs(d - inc[k]) / np.abs(inc[k]) for k, d in dec]
-        v = np.nanmean(np.array(vs), axis=0)
-    else:
+        vs = np.array([100 * np.abs(d - inc[k]) / np.abs(inc[k]) for k, d in dec])
+        taken = ~np.isnan(vs)
+        if taken.any():
+            # Mean over the series with a decreasing reading at each force; NaN where none has one.
+            v = np.where(taken.any(axis=0), np.nansum(vs, axis=0) / np.maximum(taken.sum(axis=0), 1), np.nan)
+    if v is None:
         missing["v"] = "a series with decreasing forces (ISO 376 series at 120° and 240°)"
 
     c = None
     if creep_readings is not None:
         i30, i300 = (float(v_) for v_ in creep_readings)
         c = 100 * abs(i300 - i30) / abs(x_n)
+        if not np.isfinite(c):
+            raise ValueError(f"creep_readings: must be two finite readings I30,I300 with a finite difference, "
+                             f"got {i30:g}, {i300:g}")
     else:
-        missing["c"] = "readings 30 s and 300 s after applying the largest force (creep_readings)"
+        missing["c"] = "readings 30 s and 300 s after applying the largest force"
 
-    res = ISO376Result(forces_n=F, b=b, b_prime=b_prime, fc=fc, f0=f0, v=v, c=c, missing=missing)
+    res = ISO376Result(forces_n=F, b=b, b_prime=b_prime, fc=fc, f0=f0, v=v, c=c, missing=missing, notes=notes)
     order = list(CLASS_LIMITS) + ["none"]
     for name in ("b", "b_prime", "fc", "f0", "v", "c"):
         w = res.worst(name)

@@ -29,6 +29,8 @@ A. Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, §5 (Figur
 
 from __future__ import annotations
 
+from contextlib import contextmanager
+
 import numpy as np
 
 from fsrlab.analysis.calibration import Calibration, calibrate, default_groups
@@ -38,6 +40,8 @@ from fsrlab.runformat import KNOWN_COLUMNS, Run, RunFormatError, load_run
 
 __all__ = [
     "ESTIMATE_COLUMN",
+    "IN_RANGE_COLUMN",
+    "MARGIN",
     "run_directions",
     "run_cycles",
     "run_groups",
@@ -45,12 +49,20 @@ __all__ = [
     "decode_capacitance",
     "run_readout",
     "calibrate_run",
+    "run_recorded_with",
+    "check_readout",
     "apply_calibration",
     "hysteresis_of_run",
 ]
 
 #: Column that :func:`apply_calibration` adds: the calibrated stress. [Pa]
 ESTIMATE_COLUMN = "stress_pa_estimate"
+#: Column that :func:`apply_calibration` adds: 1 where the readout lies in the calibrated readout
+#: range, 0 where the estimate is extrapolated or left out, empty where there is no readout. [1]
+IN_RANGE_COLUMN = "in_range"
+#: Default margin beyond the calibrated readout range, as a fraction of its span, within which an
+#: estimate is still written (extrapolated, flagged); beyond it the estimate is left empty. [1]
+MARGIN = 0.10
 #: The decoded-capacitance variable of the physics-informed calibration. [F]
 C_FSR = "c_fsr_farad"
 
@@ -60,6 +72,23 @@ _FILE_KEYS = ("complete", "rows", "closed", "created", "format", "version", "col
 
 def _as_run(run) -> Run:
     return run if isinstance(run, Run) else load_run(run)
+
+
+@contextmanager
+def _named(run: Run, x: str):
+    """Re-raise a computation's ValueError about its arrays ``x``, ``y`` naming the run's columns."""
+    try:
+        yield
+    except RunFormatError:
+        raise
+    except ValueError as exc:
+        message = str(exc)
+        for lead, name in (("x, y: ", f"{x} and stress_pa: "), ("x: ", f"{x}: ")):
+            if message.startswith(lead):
+                raise ValueError(f"{run.path}: {name}{message[len(lead):]}") from None
+        if message.startswith("degree: "):
+            raise
+        raise ValueError(f"{run.path}: {message}") from None
 
 
 def _recorded(run: Run):
@@ -260,7 +289,8 @@ def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", comp
     Returns
     -------
     Calibration
-        With ``circuit`` set when C_FSR was decoded, and ``compensation`` when asked.
+        With ``circuit`` set when C_FSR was decoded, ``compensation`` when asked, and
+        ``recorded_with`` (:func:`run_recorded_with` of the readings used).
 
     Raises
     ------
@@ -273,20 +303,76 @@ def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", comp
     stress = run.stress_pa()
     values, used = run_readout(run, x, circuit)
     unit = run.units.get(x) or KNOWN_COLUMNS.get(x, "F" if x == C_FSR else "")
-    cal = calibrate(values, stress, degree=degree, groups=run_groups(run, folds, threshold), folds=folds,
-                    x_name=x, y_name="stress_pa", x_unit=unit, y_unit="Pa", source=str(run.path), circuit=used)
+    with _named(run, x):
+        cal = calibrate(values, stress, degree=degree, groups=run_groups(run, folds, threshold), folds=folds,
+                        x_name=x, y_name="stress_pa", x_unit=unit, y_unit="Pa", source=str(run.path), circuit=used)
+    cal.recorded_with = run_recorded_with(run, np.isfinite(values) & np.isfinite(stress))
     if compensate:
         from fsrlab.analysis.compensation import compare_compensation
 
         direction, cycle = _recorded(run)
-        comp = compare_compensation(values, stress, degree=cal.degree, threshold=threshold, direction=direction,
-                                    cycle=cycle, plain=cal)
+        with _named(run, x):
+            comp = compare_compensation(values, stress, degree=cal.degree, threshold=threshold, direction=direction,
+                                        cycle=cycle, plain=cal)
         cal.compensation = comp.compensated
         cal.compensation_he_percent = (comp.he_before_percent, comp.he_after_percent)
     return cal
 
 
-def apply_calibration(cal: Calibration, run, compensation: bool = True, circuit: LM555Circuit | None = None) -> Run:
+def run_recorded_with(run: Run, used=None):
+    """What a run was recorded with: its sidecar's circuits and the ranges of its readings.
+
+    Parameters
+    ----------
+    run : Run
+        A loaded run.
+    used : array_like of bool, optional
+        The readings that count (default all).
+
+    Returns
+    -------
+    RecordedWith
+        See :func:`fsrlab.analysis.provenance.recorded_with`.
+    """
+    from fsrlab.analysis.provenance import recorded_with
+
+    try:
+        return recorded_with(run.metadata, run.columns.get("range"), used)
+    except ValueError as exc:
+        raise RunFormatError(f"{run.path}: its sidecar's circuit: {exc}") from None
+
+
+def check_readout(cal: Calibration, run: Run, circuit: LM555Circuit | None = None) -> list[str]:
+    """How a run's readout differs from the one a calibration was recorded with.
+
+    Parameters
+    ----------
+    cal : Calibration
+        The calibration (its ``recorded_with`` and, for C_FSR, its decoding circuit).
+    run : Run
+        The run it would be applied to.
+    circuit : LM555Circuit, optional
+        The circuit C_FSR is decoded through, when not the calibration's.
+
+    Returns
+    -------
+    list of str
+        One sentence per difference naming the run's and the calibration's value (see
+        :func:`fsrlab.analysis.provenance.mismatches`); empty when nothing known differs or when
+        the calibration does not record what it was recorded with (``cal.recorded_with`` None).
+    """
+    from fsrlab.analysis.provenance import mismatches
+
+    if cal.recorded_with is None:
+        return []
+    name = "the calibration" if cal.path is None else str(cal.path)
+    decode = (circuit if circuit is not None else cal.circuit) if cal.x_name == C_FSR else None
+    found = mismatches(cal.x_name, cal.recorded_with, run_recorded_with(run), decode)
+    return [f"{run.path} was recorded with {a}, {name} with {b}" for a, b in found]
+
+
+def apply_calibration(cal: Calibration, run, compensation: bool = True, circuit: LM555Circuit | None = None,
+                      margin: float = MARGIN, force: bool = False) -> Run:
     """The run with the stress its calibration estimates, ready for :func:`fsrlab.runformat.write_run`.
 
     Parameters
@@ -300,36 +386,83 @@ def apply_calibration(cal: Calibration, run, compensation: bool = True, circuit:
         Use the calibration's direction-aware compensation when it holds one (else the polynomial).
     circuit : LM555Circuit, optional
         Circuit for decoding C_FSR (default: the calibration's, else the run's, see :func:`run_circuit`).
+    margin : float
+        How far beyond the calibrated readout range an estimate is still written, as a fraction
+        of the range's span (default :data:`MARGIN`, 10 %; ``inf``: never left empty); beyond it
+        the estimate is left empty. [1]
+    force : bool
+        Apply even where the run's readout differs from the calibration's (:func:`check_readout`).
 
     Returns
     -------
     Run
-        The input columns plus ``stress_pa_estimate`` [Pa] (NaN where the readout is missing);
-        its metadata is the input's without the file keys (``complete``, ``rows``, ...), with
-        the unit of the new column and a ``calibration`` entry (file when known, readout,
-        degree, method, data fingerprint, creation time). ``path`` is the input run's.
+        The input columns plus ``stress_pa_estimate`` [Pa] and ``in_range`` (1 inside the
+        calibrated readout range, 0 outside, empty without a readout). An estimate is empty where
+        the readout is missing, cannot be decoded (C_FSR), or lies beyond the margin. Its metadata
+        is the input's without the file keys (``complete``, ``rows``, ...), with the units of the
+        new columns and a ``calibration`` entry: file when known, readout, degree, method, data
+        fingerprint, creation time, ``readout_range``, ``margin``, ``counts`` (rows ``estimated``,
+        ``in_range``, ``out_of_range`` (with a readout outside the range), ``extrapolated``
+        (estimated outside the range), ``missing`` (without an estimate) and, per reason,
+        ``no_readout``, ``not_decodable``, ``beyond_margin``) and, when forced, ``forced`` (the
+        differences). ``path`` is the input run's.
 
     Raises
     ------
     RunFormatError
         The run lacks the calibration's readout.
+    ValueError
+        The run's readout differs from the calibration's and ``force`` is false (one line naming
+        both), or ``margin`` is negative.
+
+    Notes
+    -----
+    Readings beyond the margin are treated as missing before the estimate is computed, so that
+    one corrupt reading does not bend the compensation's branch detection for the whole run
+    (see :meth:`fsrlab.analysis.compensation.DirectionAwareCalibration.predict` for gaps).
     """
     run = _as_run(run)
+    if not margin >= 0:
+        raise ValueError(f"margin: must be a fraction >= 0 of the calibrated span, got {margin!r}")
     if cal.x_name not in run and cal.x_name != C_FSR:
         raise RunFormatError(f"{run.path}: column {cal.x_name!r} (the calibration's readout) missing "
                              f"(columns: {', '.join(run.columns)})")
+    differences = check_readout(cal, run, circuit)
+    if differences and not force:
+        raise ValueError(f"{differences[0]}: the readout means another stress; calibrate on a run recorded the "
+                         "same way, or force it")
     values, _ = run_readout(run, cal.x_name, circuit if circuit is not None else cal.circuit)
+    given = np.isfinite(values)
+    lo, hi = cal.x_range
+    span = hi - lo
+    inside = given & (values >= lo) & (values <= hi)
+    kept = given if margin == np.inf else given & (values >= lo - margin * span) & (values <= hi + margin * span)
+    x = np.where(kept, values, np.nan)
     if compensation and cal.compensation is not None:
-        est, how = cal.compensation(values), "direction-aware compensation"
+        est, how = cal.compensation(x), "direction-aware compensation"
     else:
-        est, how = cal(values), f"polynomial of degree {cal.degree}"
+        est, how = cal(x), f"polynomial of degree {cal.degree}"
+    no_readout = ~given
+    not_decodable = np.zeros_like(given)
+    if cal.x_name == C_FSR and C_FSR not in run:
+        parts = np.isfinite(run["frequency_hz"]) & np.isfinite(run["duty_cycle"])
+        no_readout, not_decodable = ~given & ~parts, ~given & parts
     columns = dict(run.columns)
     columns[ESTIMATE_COLUMN] = est
+    columns[IN_RANGE_COLUMN] = np.where(given, inside.astype(float), np.nan)
+    counts = {"estimated": int(np.isfinite(est).sum()), "in_range": int(inside.sum()),
+              "out_of_range": int((given & ~inside).sum()), "extrapolated": int((np.isfinite(est) & ~inside).sum()),
+              "missing": int((~np.isfinite(est)).sum()),
+              "no_readout": int(no_readout.sum()), "not_decodable": int(not_decodable.sum()),
+              "beyond_margin": int((given & ~kept).sum())}
     meta = {k: v for k, v in run.metadata.items() if k not in _FILE_KEYS}
-    meta["units"] = dict(run.units, **{ESTIMATE_COLUMN: "Pa"})
+    meta["units"] = dict(run.units, **{ESTIMATE_COLUMN: "Pa", IN_RANGE_COLUMN: "1"})
     source = {} if cal.path is None else {"file": str(cal.path)}
     meta["calibration"] = {**source, "x": cal.x_name, "degree": cal.degree, "method": how,
-                           "data_fingerprint": cal.data_fingerprint, "created": cal.created}
+                           "data_fingerprint": cal.data_fingerprint, "created": cal.created,
+                           "readout_range": [lo, hi], "margin": margin, "counts": counts}
+    if differences:
+        meta["calibration"]["forced"] = differences
     return Run(path=run.path, columns=columns, metadata=meta)
 
 
@@ -349,6 +482,18 @@ def hysteresis_of_run(run, quantity: str = "frequency_hz", threshold: float = 0.
     -------
     RunHysteresis
         See :func:`fsrlab.analysis.cycles.run_hysteresis`.
+
+    Raises
+    ------
+    ValueError
+        No complete cycle, or the quantity does not respond to the stress (a dead sensor,
+        :func:`fsrlab.analysis.hysteresis.check_response`).
     """
     run = _as_run(run)
-    return run_hysteresis(run.stress_pa(), run[quantity], *_recorded(run), threshold)
+    stress, q = run.stress_pa(), run[quantity]
+    try:
+        return run_hysteresis(stress, q, *_recorded(run), threshold, name=quantity)
+    except RunFormatError:
+        raise
+    except ValueError as exc:
+        raise ValueError(f"{run.path}: {exc}") from None

@@ -1,12 +1,16 @@
-"""``fsrlab hysteresis``, ``repeatability``, ``calibrate``, ``apply``: what a user does with recorded runs.
+"""``fsrlab hysteresis``, ``repeatability``, ``calibrate``, ``apply``, ``iso376``: what a user does with recorded runs.
 
 Thin commands: they parse options and render; runs are calibrated, converted and measured by
-:mod:`fsrlab.analysis.pipeline`; files follow docs/data-format.md.
+:mod:`fsrlab.analysis.pipeline`; files follow docs/data-format.md. Warnings (an incomplete run,
+skipped rows, an unchecked calibration) go to stderr, each once, when the command has a result;
+a command that fails prints its one error line only.
 """
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from pathlib import Path
+from typing import Iterator
 
 import numpy as np
 import typer
@@ -14,15 +18,48 @@ from rich.console import Console
 from rich.table import Table
 
 from fsrlab.cli import app
-from fsrlab.cli._common import emit_json, fail, farads, fraction, ohms
+from fsrlab.cli._common import emit_json, fail, farads, fraction, number, ohms, option_names
 
 _DEGREES = ("auto", "1", "2", "3", "4", "5")
 
+_SKIP_HELP = ("Leave out each row with a bad cell (non-numeric, nan or inf, a value its column cannot hold such "
+              "as 1e308 Hz) and count it, instead of stopping at the first; rows out of time order still stop.")
 
-def _load(path: Path):
+
+def _warn(warnings: list[str]) -> None:
+    for message in dict.fromkeys(warnings):
+        typer.echo(f"fsrlab: warning: {message}", err=True)
+
+
+@contextmanager
+def _reading(path: Path) -> Iterator[None]:
+    """A file that cannot be read: one line naming it ("bench.csv: No such file or directory")."""
+    try:
+        yield
+    except OSError as exc:
+        raise ValueError(f"{path}: {exc.strerror or exc}") from None
+
+
+def _load(path: Path, skip_bad_rows: bool, warnings: list[str]):
+    """Load a run; what the user should know about it goes to ``warnings``."""
     from fsrlab.runformat import load_run
 
-    return load_run(path)
+    with _reading(path):
+        run = load_run(path, skip_bad_rows=skip_bad_rows)
+    if run.skipped:
+        first = run.skipped[0].reason
+        more = f" (and {len(run.skipped) - 1} more)" if len(run.skipped) > 1 else ""
+        warnings.append(f"skipped {len(run.skipped)} bad row{'s' if len(run.skipped) > 1 else ''} "
+                        f"(--skip-bad-rows): {first}{more}")
+    note = run.incomplete()
+    if note:
+        warnings.append(note)
+    return run
+
+
+def _skipped_json(run) -> dict:
+    return {"skipped_rows": len(run.skipped),
+            "skipped": [{"row": b.row, "column": b.column, "reason": b.reason} for b in run.skipped]}
 
 
 def _missing(path: Path, run, column: str, what: str = "", option: str | None = None) -> None:
@@ -31,22 +68,36 @@ def _missing(path: Path, run, column: str, what: str = "", option: str | None = 
 
 @app.command("hysteresis")
 def hysteresis(
-    run_file: Path = typer.Argument(..., metavar="RUN.csv", help="A run (docs/data-format.md) with stress_pa (or force_n) and the quantity."),
-    quantity: str = typer.Option("frequency_hz", "--quantity", "-q", help="Column whose hysteresis is measured (frequency_hz, duty_cycle, voltage_v, ...)."),
-    threshold: float = typer.Option(0.05, "--threshold", parser=fraction, help="Stress reversal threshold, fraction of the stress span (0..1 or %, e.g. 0.05 or 5%), used without a direction column."),
+    run_file: Path = typer.Argument(..., metavar="RUN.csv", help="A run (docs/data-format.md) with stress_pa [Pa] (or force_n [N] and the sensor area) and the quantity."),
+    quantity: str = typer.Option("frequency_hz", "--quantity", "-q", help="Column whose hysteresis is measured: frequency_hz [Hz], duty_cycle [1], voltage_v [V], stress_pa_estimate [Pa], ..."),
+    threshold: float = typer.Option(0.05, "--threshold", parser=fraction, help="Stress reversal threshold [1, a fraction of the stress span], 0.05 or 5%; used without a direction column."),
+    skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=_SKIP_HELP),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
-    """Hysteresis error (eq. 13) of a run, per loading-unloading cycle and overall."""
+    """Hysteresis error (eq. 13) of a run, per loading-unloading cycle and overall.
+
+    A readout that does not respond to the stress (a dead or disconnected sensor: its median at
+    the highest fifth of the stress range differs from that at the lowest by no more than its
+    resolution and noise) has no hysteresis error: the command says so and exits with 2.
+
+    Examples (files under examples/ in the fsrlab source tree):
+
+    \b
+      fsrlab hysteresis examples/bench.csv
+      fsrlab hysteresis examples/bench.csv --quantity voltage_v --json
+    """
     from fsrlab.analysis.pipeline import hysteresis_of_run
 
-    run = _load(run_file)
-    if quantity not in run:
-        _missing(run_file, run, quantity, option="--quantity")
     if not 0 < threshold < 1:
         fail(f"must be a fraction in (0, 1), got {threshold:g}", "--threshold")
+    warnings: list[str] = []
+    run = _load(run_file, skip_bad_rows, warnings)
+    if quantity not in run:
+        _missing(run_file, run, quantity, option="--quantity")
     res = hysteresis_of_run(run, quantity, threshold)
+    _warn(warnings)
     if json_out:
-        emit_json(res.to_dict())
+        emit_json({**res.to_dict(), **(_skipped_json(run) if skip_bad_rows else {})})
         return
     table = Table(title=f"Hysteresis error of {quantity} (eq. 13), {run_file.name}")
     for col in ("cycle", "HE (%)", "σd (kPa)"):
@@ -61,17 +112,26 @@ def hysteresis(
 
 @app.command("repeatability")
 def repeatability(
-    file: Path = typer.Argument(..., metavar="FILE.csv", help="CSV with columns load,sensor,reading (one row per reading)."),
-    ddof: int = typer.Option(1, "--ddof", help="1: sample std (n − 1), reproduces the paper's Tables 4 and 5; 0: divisor n as printed in eq. (39)."),
+    file: Path = typer.Argument(..., metavar="FILE.csv", help="CSV with columns load,sensor,reading (one row per reading; the readings in one unit, any)."),
+    ddof: int = typer.Option(1, "--ddof", help="Divisor of RE2's standard deviation [1]: 1 for n − 1 (the sample std; reproduces the paper's Tables 4 and 5), 0 for n as printed in eq. (39)."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
-    """Repeatability errors RE1 and RE2 (eq. 39) per load and sensor, and their means per load."""
+    """Repeatability errors RE1 and RE2 (eq. 39) per load and sensor, and their means per load.
+
+    Examples (files under examples/ in the fsrlab source tree):
+
+    \b
+      fsrlab repeatability examples/repeatability.csv
+      fsrlab repeatability examples/repeatability.csv --ddof 0 --json
+    """
     from fsrlab.analysis.repeatability import grouped_repeatability
     from fsrlab.tables import load_grouped_csv
 
     if ddof not in (0, 1):
         fail(f"must be 0 or 1, got {ddof}", "--ddof")
-    res = grouped_repeatability(*load_grouped_csv(file), ddof=ddof)
+    with _reading(file):
+        loads, sensors, readings = load_grouped_csv(file)
+    res = grouped_repeatability(loads, sensors, readings, ddof=ddof)
     if json_out:
         emit_json(res.to_dict())
         return
@@ -87,17 +147,28 @@ def repeatability(
 
 @app.command("calibrate")
 def calibrate_cmd(
-    run_file: Path = typer.Argument(..., metavar="RUN.csv", help="A run with the reference stress_pa (or force_n) and the readout."),
-    x: str = typer.Option("frequency_hz", "--x", help="Readout column to calibrate (frequency_hz, duty_cycle, voltage_v), or c_fsr_farad: C_FSR decoded from frequency_hz and duty_cycle (physics-informed)."),
-    degree: str = typer.Option("auto", "--degree", help="Polynomial degree 1..5, or auto (cross-validation keeping whole cycles together)."),
+    run_file: Path = typer.Argument(..., metavar="RUN.csv", help="A run with the reference stress_pa [Pa] (or force_n [N]) and the readout."),
+    x: str = typer.Option("frequency_hz", "--x", help="Readout to calibrate: frequency_hz [Hz], duty_cycle [1], voltage_v [V], or c_fsr_farad [F]: C_FSR decoded from frequency_hz and duty_cycle (physics-informed)."),
+    degree: str = typer.Option("auto", "--degree", help="Polynomial degree 1..5 [1], or auto: the lowest within 1 % of the best cross-validated RMSE (whole cycles kept together); a small run tries only the degrees its folds can determine."),
     compensate: bool = typer.Option(False, "--compensate", help="Also fit the direction-aware hysteresis compensation (extension beyond the paper) and report HE before/after."),
-    folds: int = typer.Option(5, "--folds", help="Cross-validation folds (≥ 2)."),
-    r: float = typer.Option(None, "--r", parser=ohms, help="555 R for --x c_fsr_farad [Ω] (default: the run's sidecar, else 10k)."),
-    c_off: float = typer.Option(None, "--c-off", parser=farads, help="C_off for --x c_fsr_farad [F] (default: sidecar, else 0)."),
+    folds: int = typer.Option(5, "--folds", help="Cross-validation folds [1], ≥ 2 (fewer when the run has fewer cycles or blocks)."),
+    r: float = typer.Option(None, "--r", parser=ohms, help="555 R for --x c_fsr_farad [Ω], e.g. 10k (default: the run's sidecar, else 10k)."),
+    c_off: float = typer.Option(None, "--c-off", parser=farads, help="C_off for --x c_fsr_farad [F], e.g. 470p (default: sidecar, else 0)."),
+    skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=_SKIP_HELP),
     output: Path = typer.Option(None, "--output", "-o", help="Write the calibration to this JSON file."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
-    """Calibrate readout → stress with a polynomial of degree 1–5 (paper Figure 17 uses 1 and 3)."""
+    """Calibrate readout → stress with a polynomial of degree 1–5 (paper Figure 17 uses 1 and 3).
+
+    The calibration file records the calibrated readout range and the circuit and range the run
+    was recorded with, which fsrlab apply checks.
+
+    Examples (files under examples/ in the fsrlab source tree):
+
+    \b
+      fsrlab calibrate examples/minimal.csv
+      fsrlab calibrate examples/bench.csv --compensate -o cal.json
+    """
     from fsrlab.analysis.calibration_io import save_calibration
     from fsrlab.analysis.pipeline import calibrate_run, run_circuit
 
@@ -105,21 +176,33 @@ def calibrate_cmd(
         fail(f"must be auto or 1..5, got {degree!r}", "--degree")
     if folds < 2:
         fail(f"must be >= 2, got {folds}", "--folds")
-    run = _load(run_file)
+    warnings: list[str] = []
+    run = _load(run_file, skip_bad_rows, warnings)
     if x not in run and x != "c_fsr_farad":
         _missing(run_file, run, x, option="--x")
     circuit = None
     parts = {k: v for k, v in (("r_ohm", r), ("c_off_farad", c_off)) if v is not None}
     if x == "c_fsr_farad" and parts:
-        circuit = run_circuit(run).replace(**parts)
-    cal = calibrate_run(run, x=x, degree="auto" if degree == "auto" else int(degree), compensate=compensate,
-                        folds=folds, circuit=circuit)
+        with option_names({"r_ohm": "--r", "c_off_farad": "--c-off"}):
+            circuit = run_circuit(run).replace(**parts)
+    try:
+        cal = calibrate_run(run, x=x, degree="auto" if degree == "auto" else int(degree), compensate=compensate,
+                            folds=folds, circuit=circuit)
+    except ValueError as exc:
+        if str(exc).startswith("degree: "):
+            fail(str(exc)[len("degree: "):], "--degree")
+        raise
+    lo, hi = cal.x_range
     out = {"degree": cal.degree, "r2": cal.r2, "rmse_pa": cal.rmse, "max_error_percent_fs": cal.max_error_percent_fs,
-           "coefficients": cal.model.power_coefficients().tolist()}
+           "coefficients": cal.model.power_coefficients().tolist(), "readout_range": [lo, hi],
+           "degrees_tried": None if cal.cv is None else cal.cv.degrees}
     if compensate:
         out["hysteresis_error_before_percent"], out["hysteresis_error_after_percent"] = cal.compensation_he_percent
+    if skip_bad_rows:
+        out.update(_skipped_json(run))
     if output is not None:
         save_calibration(cal, output)
+    _warn(warnings)
     if json_out:
         emit_json(out)
         return
@@ -131,6 +214,7 @@ def calibrate_cmd(
     table.add_row("R²", f"{cal.r2:.5f}")
     table.add_row("RMSE (Pa)", f"{cal.rmse:.4g}")
     table.add_row("max error (% FS)", f"{cal.max_error_percent_fs:.3f}")
+    table.add_row(f"readout range ({cal.x_unit or '1'})", f"{lo:.6g} … {hi:.6g}")
     if cal.cv:
         for d, e in zip(cal.cv.degrees, cal.cv.rmse):
             table.add_row(f"CV RMSE degree {d} (Pa)", f"{e:.4g}")
@@ -139,6 +223,9 @@ def calibrate_cmd(
         table.add_row("HE with compensation (%)", f"{out['hysteresis_error_after_percent']:.3f}")
     console.print(table)
     console.print("coefficients (ascending powers of x): " + ", ".join(f"{c:.6g}" for c in out["coefficients"]))
+    if cal.cv is not None and cal.cv.untried:
+        console.print(f"degrees {', '.join(map(str, cal.cv.untried))} not tried: the smallest training fold has too "
+                      f"few readings to determine them ({cal.n} readings, {cal.cv.folds} folds)")
     if output is not None:
         console.print(f"wrote {output}")
 
@@ -147,39 +234,87 @@ def calibrate_cmd(
 def apply_cmd(
     cal_file: Path = typer.Argument(..., metavar="CAL.json", help="A calibration written by fsrlab calibrate -o."),
     run_file: Path = typer.Argument(..., metavar="RUN.csv", help="The run to convert."),
-    output: Path = typer.Option(..., "--output", "-o", help="Output run: the input columns plus stress_pa_estimate."),
+    output: Path = typer.Option(..., "--output", "-o", help="Output run: the input columns plus stress_pa_estimate [Pa] and in_range [1]."),
     no_compensation: bool = typer.Option(False, "--no-compensation", help="Use the plain polynomial even if the calibration holds a compensation."),
-    json_out: bool = typer.Option(False, "--json", help="Print JSON."),
+    margin: float = typer.Option(0.10, "--margin", parser=fraction, help="How far beyond the calibrated readout range an estimate is still written [1, a fraction of the range's span], 0.1 or 10%; beyond it the estimate is left empty. Every reading outside the range has in_range = 0."),
+    force: bool = typer.Option(False, "--force", help="Apply even to a run recorded with another circuit or range than the calibration."),
+    skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=_SKIP_HELP + " Skipped rows are not written."),
+    json_out: bool = typer.Option(False, "--json", help="Print JSON: rows written, estimated, missing (with the reasons), in and out of the readout range."),
 ) -> None:
-    """Apply a calibration to a run: adds a stress_pa_estimate column [Pa]."""
+    """Apply a calibration to a run: adds stress_pa_estimate [Pa] and in_range [1] columns.
+
+    Readings outside the calibrated readout range are flagged (in_range = 0); beyond the margin
+    their estimate is left empty. A run recorded with another circuit or range than the
+    calibration is refused unless --force.
+
+    Examples (files under examples/ in the fsrlab source tree):
+
+    \b
+      fsrlab apply examples/calibration.json examples/other.csv -o estimate.csv
+      fsrlab apply examples/calibration.json examples/other.csv -o estimate.csv --no-compensation --json
+    """
     from fsrlab.analysis.calibration_io import load_calibration
-    from fsrlab.analysis.pipeline import ESTIMATE_COLUMN, apply_calibration
+    from fsrlab.analysis.pipeline import ESTIMATE_COLUMN, apply_calibration, check_readout
     from fsrlab.runformat import write_run
 
-    cal = load_calibration(cal_file)
-    run = _load(run_file)
+    if not (np.isfinite(margin) and margin >= 0):
+        fail(f"must be a fraction >= 0 of the calibrated span, got {margin:g}", "--margin")
+    with _reading(cal_file):
+        cal = load_calibration(cal_file)
+    warnings: list[str] = []
+    run = _load(run_file, skip_bad_rows, warnings)
     if cal.x_name not in run and cal.x_name != "c_fsr_farad":
         _missing(run_file, run, cal.x_name, " (the calibration's readout)")
-    est = apply_calibration(cal, run, compensation=not no_compensation)
-    how = est.metadata["calibration"]["method"]
     if output.resolve() == run_file.resolve():
         fail("must differ from the input run", "--output")
+    if cal.recorded_with is None:
+        warnings.append(f"{cal_file} does not record the circuit and range its data were recorded with (written by an "
+                        f"earlier fsrlab, or not from a run): {run_file} is not checked against them")
+    differences = check_readout(cal, run)
+    if differences and not force:
+        raise ValueError(f"{differences[0]}: the same readout means another stress there; calibrate on a run "
+                         "recorded the same way, or give --force to apply anyway")
+    est = apply_calibration(cal, run, compensation=not no_compensation, margin=margin, force=force)
+    info = est.metadata["calibration"]
+    for difference in info.get("forced", []):
+        warnings.append(f"applied with --force although {difference}")
     write_run(output, est.columns, est.metadata)
-    n_out = int(np.sum(~np.isfinite(est[ESTIMATE_COLUMN])))
+    n = info["counts"]
+    _warn(warnings)
     if json_out:
-        emit_json({"output": str(output), "rows": run.n_rows, "missing": n_out})
+        emit_json({"output": str(output), "rows": est.n_rows, "estimated": n["estimated"], "missing": n["missing"],
+                   "missing_reasons": {k: n[k] for k in ("no_readout", "not_decodable", "beyond_margin")},
+                   "in_range": n["in_range"], "out_of_range": n["out_of_range"],
+                   "extrapolated": n["extrapolated"], "readout_range": info["readout_range"],
+                   "margin_percent": 100 * margin, "method": info["method"], **_skipped_json(run)})
         return
-    typer.echo(f"wrote {output} ({run.n_rows} rows, stress_pa_estimate by {how})")
+    lo, hi = info["readout_range"]
+    lines = [f"wrote {output} ({est.n_rows} rows, {ESTIMATE_COLUMN} by {info['method']})"]
+    if n["extrapolated"] or n["beyond_margin"]:
+        lines.append(f"  outside the calibrated readout range {lo:.6g} … {hi:.6g} {cal.x_unit}: "
+                     f"{n['extrapolated']} extrapolated (in_range = 0), {n['beyond_margin']} beyond the "
+                     f"{100 * margin:g} % margin left empty")
+    if n["no_readout"] or n["not_decodable"]:
+        lines.append(f"  without an estimate: {n['no_readout']} rows without a readout"
+                     + (f", {n['not_decodable']} not decodable" if n["not_decodable"] else ""))
+    typer.echo("\n".join(lines))
 
 
 @app.command("iso376")
 def iso376_cmd(
-    file: Path = typer.Argument(..., metavar="FILE.csv", help="Long CSV: series,rotation_deg,force_n,reading[,direction]; force_n = 0 rows are zero readings."),
-    creep: str = typer.Option(None, "--creep", help="Readings 30 s and 300 s after applying the largest force, as 'I30,I300'."),
-    degree: int = typer.Option(3, "--degree", help="Degree 1..3 of the interpolation equation for fc."),
+    file: Path = typer.Argument(..., metavar="FILE.csv", help="Long CSV: series,rotation_deg [°],force_n [N],reading[,direction]; force_n = 0 rows are zero readings."),
+    creep: str = typer.Option(None, "--creep", help="Readings 30 s and 300 s after applying the largest force [unit of the readings], as 'I30,I300', e.g. 8396.6,8404.8."),
+    degree: int = typer.Option(3, "--degree", help="Degree 1..3 [1] of the interpolation equation for fc."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
-    """ISO 376:2011 quantities (b, b', fc, f0, v, c) and the class they reach (beyond the paper)."""
+    """ISO 376:2011 quantities (b, b', fc, f0, v, c) and the class they reach (beyond the paper).
+
+    Examples (files under examples/ in the fsrlab source tree):
+
+    \b
+      fsrlab iso376 examples/iso376.csv
+      fsrlab iso376 examples/iso376.csv --creep 8396.6,8404.8 --json
+    """
     from fsrlab.analysis.iso376 import iso376
     from fsrlab.tables import load_iso376_csv
 
@@ -187,16 +322,20 @@ def iso376_cmd(
         fail(f"must be 1, 2 or 3, got {degree}", "--degree")
     creep_readings = None
     if creep is not None:
-        try:
-            a, b = (float(v) for v in creep.split(","))
-        except ValueError:
+        cells = creep.split(",")
+        if len(cells) != 2:
             fail(f"write two readings as I30,I300, got {creep!r}", "--creep")
-        creep_readings = (a, b)
-    forces, series = load_iso376_csv(file)
-    res = iso376(forces, series, creep_readings, degree)
+        try:
+            creep_readings = tuple(number(c.strip()) for c in cells)
+        except typer.BadParameter as exc:
+            fail(f"write two finite readings as I30,I300, got {creep!r} ({exc.message})", "--creep")
+    with _reading(file):
+        forces, series = load_iso376_csv(file)
+    with option_names({"creep_readings": "--creep", "interpolation_degree": "--degree"}):
+        res = iso376(forces, series, creep_readings, degree)
     out = {"forces_n": res.forces_n, "b_percent": res.b, "b_prime_percent": res.b_prime, "fc_percent": res.fc,
            "f0_percent": res.f0, "v_percent": res.v, "c_percent": res.c, "classes": res.classes,
-           "instrument_class": res.instrument_class, "missing": res.missing}
+           "instrument_class": res.instrument_class, "missing": res.missing, "notes": res.notes}
     if json_out:
         emit_json(out)
         return
@@ -210,4 +349,6 @@ def iso376_cmd(
     console.print(table)
     console.print(f"instrument class: {res.instrument_class}")
     for name, why in res.missing.items():
-        console.print(f"{name}: needs {why}", style="dim")
+        console.print(f"{name.replace('_prime', chr(39))}: needs {why}" + (" (--creep)" if name == "c" else ""), style="dim")
+    for note in res.notes:
+        console.print(note, style="dim")
