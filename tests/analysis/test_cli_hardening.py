@@ -16,6 +16,7 @@ import pytest
 from clirun import run_cli
 from fsrlab.analysis.synthetic import synthetic_run
 from fsrlab.circuits.circuit import LM555Circuit
+from fsrlab.physics.params import PAPER_CIRCUIT
 from fsrlab.runformat import load_run, sidecar_path
 
 
@@ -145,7 +146,7 @@ def test_apply_refuses_another_circuit_naming_both(cal, tmp_path):
 
 def test_apply_refuses_another_range(tmp_path):
     # Calibrated on range 0 with C_off = 470 pF in the sidecar; applied to a range-1 run.
-    circuit = LM555Circuit(c_off_farad=470e-12)
+    circuit = PAPER_CIRCUIT.replace(c_off_farad=470e-12)
     for name, rng, seed in (("r0.csv", 0.0, 1), ("r1.csv", 1.0, 2)):
         r = synthetic_run(cycles=2, seed=seed, circuit=circuit.on_range(int(rng)))
         r.metadata["circuit"] = circuit.to_dict()

@@ -11,9 +11,10 @@ import pytest
 
 from fsrlab.analysis.provenance import RecordedWith, mismatches
 from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout
+from fsrlab.physics.params import PAPER_CIRCUIT, PAPER_OPAMP
 
-C0 = LM555Circuit()
-C470 = LM555Circuit(c_off_farad=470e-12)
+C0 = PAPER_CIRCUIT
+C470 = PAPER_CIRCUIT.replace(c_off_farad=470e-12)
 
 
 def _f(circuit, r=None):
@@ -23,7 +24,7 @@ def _f(circuit, r=None):
 
 @pytest.mark.parametrize("cal, run, differs", [
     (RecordedWith(C0), RecordedWith(C0), False),
-    (RecordedWith(C0), RecordedWith(LM555Circuit(r_ohm=4.7e3)), True),
+    (RecordedWith(C0), RecordedWith(PAPER_CIRCUIT.replace(r_ohm=4.7e3)), True),
     (RecordedWith(C470, ranges=(0,)), RecordedWith(C470, ranges=(1,)), True),
     (RecordedWith(C0, ranges=(0,)), RecordedWith(C0, ranges=(1,)), False),  # no C_off: range 1 = range 0
     (RecordedWith(C470, ranges=(0, 1)), RecordedWith(C470, ranges=(1,)), False),
@@ -44,15 +45,15 @@ def test_unknown_parts_are_not_compared_and_ranges_are_when_circuits_are_unknown
 
 
 def test_decoded_capacitance_compares_the_circuit_only_and_voltage_the_opamp():
-    cal = RecordedWith(C470, OpAmpReadout(), (0,))
-    assert mismatches("c_fsr_farad", cal, RecordedWith(C470, OpAmpReadout(r_f_ohm=10e3), (1,))) == []
+    cal = RecordedWith(C470, PAPER_OPAMP, (0,))
+    assert mismatches("c_fsr_farad", cal, RecordedWith(C470, OpAmpReadout(r_f_ohm=10e3, vcc_v=-5.0), (1,))) == []
     assert mismatches("c_fsr_farad", cal, RecordedWith(C0, None, (0,))) == [("C_off = 0 F", "C_off = 470 pF")]
-    assert mismatches("voltage_v", cal, RecordedWith(C0, OpAmpReadout(r_f_ohm=10e3))) == [("R_F = 10 kΩ", "R_F = 20 kΩ")]
-    assert mismatches("stress_pa_estimate", cal, RecordedWith(C0, OpAmpReadout(r_f_ohm=10e3))) == []
+    assert mismatches("voltage_v", cal, RecordedWith(C0, OpAmpReadout(r_f_ohm=10e3, vcc_v=-5.0))) == [("R_F = 10 kΩ", "R_F = 20 kΩ")]
+    assert mismatches("stress_pa_estimate", cal, RecordedWith(C0, OpAmpReadout(r_f_ohm=10e3, vcc_v=-5.0))) == []
 
 
 def test_round_trip_and_bad_range():
-    r = RecordedWith(C470, OpAmpReadout(), (0, 1))
+    r = RecordedWith(C470, PAPER_OPAMP, (0, 1))
     assert RecordedWith.from_dict(r.to_dict()) == r
     with pytest.raises(ValueError, match="recorded_with.range"):
         RecordedWith.from_dict({"range": [2]})
