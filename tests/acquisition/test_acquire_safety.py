@@ -28,24 +28,7 @@ from fsrlab.acquisition.serial_link import SerialLink
 from fsrlab.acquisition.virtual_device import ConstantSource, VirtualDevice
 from fsrlab.runformat import RunWriter, load_run, sidecar_path
 from clirun import run_cli
-
-CLI = [sys.executable, "-c", "import sys; from fsrlab.cli import main; main(sys.argv[1:])"]
-
-
-def _rows(path: Path) -> int:
-    try:
-        return max(path.read_text().count("\n") - 1, 0)
-    except FileNotFoundError:
-        return 0
-
-
-def _wait(predicate, limit_s: float = 30.0) -> None:
-    """Poll until ``predicate()``; the limit only guards against a hang."""
-    end = time.monotonic() + limit_s
-    while not predicate():
-        if time.monotonic() > end:
-            raise AssertionError("condition not reached")
-        time.sleep(0.02)
+from recording import CLI, rows as _rows, wait as _wait
 
 
 def _existing_run(path: Path, rows: int = 600) -> dict:

@@ -11,7 +11,6 @@ import json
 import os
 import signal
 import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -24,24 +23,7 @@ from fsrlab.acquisition.virtual_device import ConstantSource, Faults, VirtualDev
 from fsrlab.physics.params import PAPER_CIRCUIT, PAPER_OPAMP
 from fsrlab.runformat import load_run
 from clirun import run_cli
-
-CLI = [sys.executable, "-c", "import sys; from fsrlab.cli import main; main(sys.argv[1:])"]
-
-
-def _rows(path: Path) -> int:
-    try:
-        return max(path.read_text().count("\n") - 1, 0)
-    except FileNotFoundError:
-        return 0
-
-
-def _wait(predicate, limit_s: float = 30.0) -> None:
-    """Poll until ``predicate()``; the limit only guards against a hang."""
-    end = time.monotonic() + limit_s
-    while not predicate():
-        if time.monotonic() > end:
-            raise AssertionError("condition not reached")
-        time.sleep(0.02)
+from recording import CLI, rows as _rows, wait as _wait
 
 
 def test_recording_writes_a_valid_run(tmp_path):
