@@ -96,6 +96,7 @@ def test_record_refuses_an_existing_run_before_the_handshake(tmp_path):
     (["--peak", "999k"], "--peak", "smaller peak"),
     (["--period", "-1"], "--period", "> 0 s"),
     (["--c-off", "1m"], "--c-off", "ambiguous"),
+    (["--seed", "-1"], "--seed", ">= 0"),
 ])
 def test_acquire_options_take_units_and_blame_the_right_option(tmp_path, argv, field, words):
     out = tmp_path / "x.csv"
@@ -114,6 +115,7 @@ def test_acquire_options_take_units_and_blame_the_right_option(tmp_path, argv, f
     (["--c-off", "-1n"], "--c-off"),
     (["--duration", "2m"], "--duration"),
     (["--drop", "150%"], "--drop"),
+    (["--seed", "-3"], "--seed"),
 ])
 def test_virtual_device_options_blame_the_right_option(argv, field):
     code, stdout, stderr = run_cli(["virtual-device"] + argv)

@@ -41,7 +41,8 @@ def _sigterm_as_interrupt():
         signal.signal(signal.SIGTERM, previous)
 
 
-def _check_virtual(profile: str, peak: float, period: float, c_off: float, corrupt: float, drop: float) -> None:
+def _check_virtual(profile: str, peak: float, period: float, c_off: float, corrupt: float, drop: float,
+                   seed: int | None) -> None:
     """One-line errors, each naming its own option, for the virtual device's options."""
     from fsrlab.acquisition.virtual_device import PROFILE_KINDS
 
@@ -56,6 +57,8 @@ def _check_virtual(profile: str, peak: float, period: float, c_off: float, corru
     for name, v in (("--corrupt", corrupt), ("--drop", drop)):
         if not 0 <= v <= 1:
             fail(f"must be in 0..1, got {v:g}", name)
+    if seed is not None and seed < 0:
+        fail(f"must be an integer >= 0, got {seed}", "--seed")
 
 
 def _virtual_device(profile: str, peak: float, period: float, c_off: float, seed: int | None,
@@ -208,7 +211,7 @@ def acquire(
     metadata: dict = {}
     reference = health = None
     if virtual:
-        _check_virtual(profile, peak, period, c_off, corrupt, drop)
+        _check_virtual(profile, peak, period, c_off, corrupt, drop, seed)
         device, source = _virtual_device(profile, peak, period, c_off, seed, corrupt, drop)
         port = device.open()
         metadata = {"origin": "fsrlab acquire --virtual (VirtualFSR -> LM555 astable and op-amp -> meter model "
@@ -264,7 +267,7 @@ def virtual_device(
 
     if duration is not None and not duration > 0:
         fail(f"must be > 0 s, got {duration:g} s", "--duration")
-    _check_virtual(profile, peak, period, c_off, corrupt, drop)
+    _check_virtual(profile, peak, period, c_off, corrupt, drop, seed)
     device, _ = _virtual_device(profile, peak, period, c_off, seed, corrupt, drop)
     path = device.open(thread=False)
     typer.echo(json.dumps({"port": path}) if json_out else path)
