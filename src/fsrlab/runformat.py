@@ -119,14 +119,29 @@ def _check_columns(columns: Sequence[str]) -> list[str]:
     return cols
 
 
+def _user_error(exc: OSError, path: Path) -> OSError:
+    """``exc`` about ``path`` (the file the user named), never about a temporary file beside it."""
+    err = type(exc)(f"cannot write {path}: {exc.strerror or exc}")
+    err.errno = exc.errno
+    return err
+
+
 def _write_json_atomic(path: Path, obj: dict) -> None:
+    """Replace ``path`` by ``obj`` as JSON in one rename; an error names ``path``, not the temporary."""
+    text = json.dumps(obj, indent=2, allow_nan=False) + "\n"
     tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "w", encoding="utf-8") as fh:
-        json.dump(obj, fh, indent=2, allow_nan=False)
-        fh.write("\n")
-        fh.flush()
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
+    try:
+        with open(tmp, "w", encoding="utf-8") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except OSError as exc:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise _user_error(exc, path) from None
 
 
 def _build_metadata(columns: list[str], metadata: Mapping[str, Any] | None) -> dict:
@@ -156,19 +171,30 @@ class RunWriter:
     The header and the sidecar are written when the writer opens. Each :meth:`write` appends one
     whole line with a single write to the operating system, so a process killed at any moment
     leaves a file whose rows are all complete; :meth:`sync` also asks the OS to put them on disk
-    (``fsync``), which protects against power loss. Closing records the row count and
-    ``"complete": true`` in the sidecar.
+    (``fsync``), which protects against power loss. A write that fails half-way (disk full, file
+    size limit) is cut back to the last whole row before the error is raised. Closing records the
+    row count and ``"complete": true`` in the sidecar.
 
     Parameters
     ----------
     path : str or path-like
-        The CSV file (``NAME.csv``); the sidecar is ``NAME.meta.json``. An existing file is replaced.
+        The CSV file (``NAME.csv``); the sidecar is ``NAME.meta.json``.
     columns : sequence of str
         Column names in order, e.g. ``["time_s", "frequency_hz", "duty_cycle"]``.
     metadata : mapping, optional
         Sidecar content: ``units`` (per column, defaults from :data:`KNOWN_COLUMNS`), ``circuit``
         (e.g. ``{"r_ohm": 10e3, "c_off_farad": 0, "diode": true}``), ``sensor`` (e.g.
         ``{"model": "FlexiForce A201-1", "area_m2": 7.1e-5}``), ``origin``, ``notes``; other keys are kept.
+    overwrite : bool
+        Replace an existing run (the default). With False, an existing CSV or sidecar raises
+        ``FileExistsError`` naming it, and nothing is written.
+
+    Raises
+    ------
+    FileExistsError
+        ``overwrite=False`` and the CSV or its sidecar exists.
+    OSError
+        The files cannot be written; the message names the CSV or the sidecar, never a temporary file.
 
     Examples
     --------
@@ -176,25 +202,49 @@ class RunWriter:
     ...     w.write({"time_s": 0.1, "frequency_hz": 5123.4})
     """
 
-    def __init__(self, path: str | os.PathLike, columns: Sequence[str], metadata: Mapping[str, Any] | None = None):
+    def __init__(self, path: str | os.PathLike, columns: Sequence[str], metadata: Mapping[str, Any] | None = None,
+                 overwrite: bool = True):
         self.path = Path(path)
         self.columns = _check_columns(columns)
         self._set = set(self.columns)
         self.metadata = _build_metadata(self.columns, metadata)
         self.meta_path = sidecar_path(self.path)
         self.rows = 0
+        self._size = 0  # bytes of whole lines in the CSV
+        if not overwrite:
+            for existing in (self.path, self.meta_path):
+                if os.path.lexists(existing):
+                    raise FileExistsError(f"{existing} exists; a run is replaced only when asked to")
+        had_sidecar = os.path.lexists(self.meta_path)
         _write_json_atomic(self.meta_path, self.metadata)
-        # buffering=0: every write() below is one system call carrying one whole line.
-        self._fd = open(self.path, "wb", buffering=0)
+        try:
+            # buffering=0: every write() below is one system call carrying one whole line.
+            self._fd = open(self.path, "wb" if overwrite else "xb", buffering=0)
+        except OSError as exc:
+            if not had_sidecar:  # do not leave a sidecar without its run
+                try:
+                    os.unlink(self.meta_path)
+                except OSError:
+                    pass
+            raise _user_error(exc, self.path) from None
         self._raw(",".join(self.columns) + "\n")
         self.sync()
 
     def _raw(self, text: str) -> None:
         data = text.encode("utf-8")
         view = memoryview(data)
-        while view:
-            n = self._fd.write(view)
-            view = view[n:]
+        try:
+            while view:
+                n = self._fd.write(view)
+                view = view[n:]
+        except OSError as exc:
+            try:  # keep the file made of whole lines: cut the part of this write that got through
+                os.ftruncate(self._fd.fileno(), self._size)
+                self._fd.seek(self._size)
+            except OSError:
+                pass
+            raise _user_error(exc, self.path) from None
+        self._size += len(data)
 
     @property
     def closed(self) -> bool:
@@ -213,6 +263,8 @@ class RunWriter:
         ------
         ValueError
             If ``row`` names a column the run does not have, or holds a non-finite number.
+        OSError
+            If the row cannot be written (the file then still ends with the previous whole row).
         """
         unknown = [k for k in row if k not in self._set]
         if unknown:
@@ -228,18 +280,42 @@ class RunWriter:
 
     def sync(self) -> None:
         """Force the rows written so far to disk (``os.fsync``)."""
-        os.fsync(self._fd.fileno())
+        try:
+            os.fsync(self._fd.fileno())
+        except OSError as exc:
+            raise _user_error(exc, self.path) from None
+
+    def update_metadata(self, changes: Mapping[str, Any]) -> None:
+        """Merge ``changes`` into the sidecar and write it now (the run stays open, ``complete: false``).
+
+        Parameters
+        ----------
+        changes : mapping
+            Sidecar keys and their new values, e.g. ``{"gaps": [...]}``.
+        """
+        self.metadata.update(changes)
+        _write_json_atomic(self.meta_path, self.metadata)
 
     def close(self) -> None:
-        """Sync, close the CSV and mark the sidecar complete with the row count."""
+        """Sync, close the CSV and mark the sidecar complete with the row count.
+
+        The sidecar says ``"complete": false`` when the last ``fsync`` failed (the rows may not be
+        on disk); the error is raised after the sidecar is written.
+        """
         if self._fd.closed:
             return
-        self.sync()
+        error = None
+        try:
+            self.sync()
+        except OSError as exc:
+            error = exc
         self._fd.close()
-        self.metadata["complete"] = True
+        self.metadata["complete"] = error is None
         self.metadata["rows"] = self.rows
         self.metadata["closed"] = _utc_now()
         _write_json_atomic(self.meta_path, self.metadata)
+        if error is not None:
+            raise error
 
     def __enter__(self) -> "RunWriter":
         return self
@@ -248,7 +324,8 @@ class RunWriter:
         self.close()
 
 
-def write_run(path: str | os.PathLike, columns: Mapping[str, Any], metadata: Mapping[str, Any] | None = None) -> Path:
+def write_run(path: str | os.PathLike, columns: Mapping[str, Any], metadata: Mapping[str, Any] | None = None,
+              overwrite: bool = True) -> Path:
     """Write a whole run at once from column arrays.
 
     Parameters
@@ -259,6 +336,8 @@ def write_run(path: str | os.PathLike, columns: Mapping[str, Any], metadata: Map
         Column name -> 1-D values, all of the same length (NaN = missing).
     metadata : mapping, optional
         As for :class:`RunWriter`.
+    overwrite : bool
+        As for :class:`RunWriter`: with False an existing run raises ``FileExistsError``.
 
     Returns
     -------
@@ -274,7 +353,7 @@ def write_run(path: str | os.PathLike, columns: Mapping[str, Any], metadata: Map
     for i in range(arrays[0].shape[0]):
         buf.write(",".join(_format_value(a[i]) for a in arrays))
         buf.write("\n")
-    with RunWriter(path, names, metadata) as w:
+    with RunWriter(path, names, metadata, overwrite=overwrite) as w:
         w._raw(buf.getvalue())
         w.rows = arrays[0].shape[0]
     return Path(path)

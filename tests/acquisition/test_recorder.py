@@ -11,7 +11,6 @@ import json
 import os
 import signal
 import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -24,24 +23,7 @@ from fsrlab.acquisition.virtual_device import ConstantSource, Faults, VirtualDev
 from fsrlab.physics.params import PAPER_CIRCUIT, PAPER_OPAMP
 from fsrlab.runformat import load_run
 from clirun import run_cli
-
-CLI = [sys.executable, "-c", "import sys; from fsrlab.cli import main; main(sys.argv[1:])"]
-
-
-def _rows(path: Path) -> int:
-    try:
-        return max(path.read_text().count("\n") - 1, 0)
-    except FileNotFoundError:
-        return 0
-
-
-def _wait(predicate, limit_s: float = 30.0) -> None:
-    """Poll until ``predicate()``; the limit only guards against a hang."""
-    end = time.monotonic() + limit_s
-    while not predicate():
-        if time.monotonic() > end:
-            raise AssertionError("condition not reached")
-        time.sleep(0.02)
+from recording import CLI, rows as _rows, wait as _wait
 
 
 def test_recording_writes_a_valid_run(tmp_path):
@@ -122,7 +104,7 @@ def test_device_process_killed_mid_run(tmp_path):
 
 
 def _start_recording(out: Path) -> subprocess.Popen:
-    return subprocess.Popen(CLI + ["acquire", "--virtual", "--duration", "60", "--window", "20", "--out", str(out),
+    return subprocess.Popen(CLI + ["acquire", "--virtual", "--duration", "60", "--window", "20ms", "--out", str(out),
                                    "--quiet", "--json"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
@@ -156,6 +138,7 @@ def test_interrupt_of_a_recording_closes_the_file(tmp_path, sig):
     run = load_run(out)
     assert run.n_rows == summary["frames"] >= 5
     assert run.metadata["complete"] and run.metadata["acquisition"]["ended"] == "interrupted"
+    assert run.metadata["ended"] == f"interrupted: {run.n_rows} windows kept" and stderr == ""
 
 
 def test_cli_json_contract(tmp_path):
@@ -178,7 +161,7 @@ def test_cli_json_contract(tmp_path):
 @pytest.mark.parametrize("argv, field", [
     (["acquire", "--duration", "1"], "--port"),
     (["acquire", "--virtual", "--port", "/dev/null", "--duration", "1"], "--port"),
-    (["acquire", "--virtual", "--window", "5"], "--window"),
+    (["acquire", "--virtual", "--window", "5ms"], "--window"),
     (["acquire", "--virtual", "--range", "2"], "--range"),
     (["acquire", "--virtual", "--duration", "0"], "--duration"),
     (["acquire", "--virtual", "--profile", "zigzag"], "--profile"),
@@ -195,7 +178,7 @@ def test_cli_unplugged_device_exit_1_with_one_line(tmp_path):
     proc = subprocess.Popen(CLI + ["virtual-device", "--duration", "1"], stdout=subprocess.PIPE, text=True)
     try:
         port = proc.stdout.readline().strip()
-        code, stdout, stderr = run_cli(["acquire", "--port", port, "--duration", "30", "--window", "20",
+        code, stdout, stderr = run_cli(["acquire", "--port", port, "--duration", "30", "--window", "20ms",
                                      "--out", str(tmp_path / "run.csv"), "--json"])
     finally:
         proc.kill()
@@ -231,7 +214,7 @@ def test_a_virtual_recording_is_analysable(tmp_path):
     device give a hysteresis error per cycle through ``fsrlab hysteresis`` (property: HE > 0 for
     the hysteretic sensor model, and the two steady cycles agree within 2 percentage points)."""
     out = tmp_path / "run.csv"
-    code, _, err = run_cli(["acquire", "--virtual", "--duration", "2.05", "--period", "1", "--window", "20",
+    code, _, err = run_cli(["acquire", "--virtual", "--duration", "2.05", "--period", "1", "--window", "20ms",
                          "--out", str(out), "--quiet", "--seed", "1", "--c-off", "2.2n"])
     assert code == 0, err
     circuit = load_run(out).readout()[0]  # --c-off builds the circuit

@@ -4,10 +4,18 @@
 into one row written at once through :class:`fsrlab.runformat.RunWriter` (one whole line per
 system call, ``fsync`` about every second). Consequences:
 
+- An existing run is never replaced unless asked (``overwrite=True``); the check comes before the
+  device is touched.
 - Ctrl-C (or SIGTERM through the CLI) stops the device and closes the file: nothing is lost but
   the window in progress. A ``SIGKILL`` leaves every row already written; the file stays readable.
 - A device that disappears (unplugged, pty closed) ends the run with ``ended="disconnected"`` and a
   one-line ``message``; the file is closed normally.
+- A link that delivers no frame for ``stall_s`` seconds is a *gap*: reported at once through
+  ``on_event``, kept in the sidecar (``gaps``), and a failure (``ended="stalled"``) if the device is
+  still silent when the run ends.
+- A failure of the device's thread (``health``), of the file or of anything else while recording
+  ends the run (``ended="failed"``) with the rows so far kept and the reason in the sidecar
+  (``ended``); a run without a single valid window is a failure too (``ended="empty"``).
 - Corrupted bytes on the link are counted by the parser and never reach the file; lost frames show
   as gaps in ``seq`` and are counted as ``dropped``; a device reset is detected, the settings are
   sent again and recording goes on.
@@ -16,6 +24,7 @@ system call, ``fsync`` about every second). Consequences:
 from __future__ import annotations
 
 import math
+import os
 import threading
 import time
 from dataclasses import asdict, dataclass
@@ -28,10 +37,51 @@ from fsrlab.acquisition.protocol import (
 )
 from fsrlab.acquisition.serial_link import DeviceGone, LinkError, SerialLink
 
-__all__ = ["COLUMNS", "RecordStatus", "RecordResult", "record", "result_dict", "stats_dict"]
+__all__ = ["COLUMNS", "FAILED_ENDINGS", "Gap", "RecordStatus", "RecordResult", "default_stall_s", "record",
+           "result_dict", "stats_dict"]
 
 COLUMNS = ("time_s", "frequency_hz", "duty_cycle", "voltage_v", "periods", "missed", "range", "seq")
 """Run columns written for every window (``stress_pa`` is added when a reference is given)."""
+
+FAILED_ENDINGS = ("disconnected", "error", "failed", "stalled", "empty")
+"""Values of :attr:`RecordResult.ended` for a run that did not end as asked (the CLI exits with 1)."""
+
+
+def default_stall_s(window_ms: int) -> float:
+    """Silence that counts as a stall by default: 5 windows, at least 2 s.
+
+    Parameters
+    ----------
+    window_ms : int
+        Measurement window. [ms]
+
+    Returns
+    -------
+    float
+        [s]
+    """
+    return max(5 * window_ms / 1000.0, 2.0)
+
+
+@dataclass(frozen=True)
+class Gap:
+    """A stretch of the run in which the link delivered no frame for longer than the stall time.
+
+    Attributes
+    ----------
+    start_s : float
+        When the last frame before the silence arrived (or START, if none had), host clock since
+        START. [s]
+    length_s : float
+        From ``start_s`` to the next frame, or to the end of the run if none came. [s]
+    """
+
+    start_s: float
+    length_s: float
+
+    def to_dict(self) -> dict:
+        """``{"start_s", "length_s"}`` rounded to ms, as the sidecar's ``gaps`` holds them."""
+        return {"start_s": round(self.start_s, 3), "length_s": round(self.length_s, 3)}
 
 
 @dataclass(frozen=True)
@@ -81,14 +131,19 @@ class RecordResult:
     file : Path
         The run file.
     ended : str
-        ``"duration"``, ``"interrupted"`` (Ctrl-C), ``"stopped"`` (stop event), ``"disconnected"``
-        (device gone) or ``"error"`` (device stopped answering commands).
+        ``"duration"``, ``"interrupted"`` (Ctrl-C), ``"stopped"`` (stop event); or one of
+        :data:`FAILED_ENDINGS`: ``"disconnected"`` (device gone), ``"error"`` (device stopped
+        answering commands), ``"failed"`` (the device's thread, the file or the recorder failed),
+        ``"stalled"`` (no frame at the end for longer than the stall time), ``"empty"`` (no valid
+        window at all).
     message : str
-        One line describing how it ended.
+        One line describing how it ended (also the sidecar's ``ended``).
     stats : ParserStats
         The link's parser counters (whole session, handshake included).
     identity : Identity
         The device.
+    gaps : tuple of Gap
+        Silences longer than the stall time, in order.
     """
 
     frames: int
@@ -99,6 +154,16 @@ class RecordResult:
     message: str
     stats: ParserStats
     identity: Identity | None
+    gaps: tuple[Gap, ...] = ()
+
+    @property
+    def failed(self) -> bool:
+        """Whether the run did not end as asked (:data:`FAILED_ENDINGS`)."""
+        return self.ended in FAILED_ENDINGS
+
+
+class _Failure(Exception):
+    """Ends the recording loop with ``ended="failed"`` and this message."""
 
 
 def _configure(link: SerialLink, window_ms: int, range_: int) -> int:
@@ -108,11 +173,26 @@ def _configure(link: SerialLink, window_ms: int, range_: int) -> int:
     return (link.start().seq + 1) % SEQ_MODULO
 
 
+def _empty_reason(ended: str, window_ms: int, duration_s: float, bad: int, lost: int) -> str:
+    """Why a run has no valid window, in words."""
+    if ended in ("interrupted", "stopped"):
+        return "ended before the first window was complete"
+    if window_ms / 1000.0 > duration_s:
+        return f"each window lasts {window_ms / 1000.0:g} s, longer than the recording"
+    if bad:
+        return f"{bad} corrupted lines rejected and no intact measurement"
+    if lost:
+        return f"all {lost} measurements were lost on the link"
+    return "the device sent no measurement"
+
+
 def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS_DEFAULT, range_: int = 0,
            metadata: dict | None = None, reference: Callable[[Frame], float] | None = None,
            on_status: Callable[[RecordStatus], None] | None = None, stop: threading.Event | None = None,
            status_interval_s: float = 0.25, sync_interval_s: float = 1.0,
-           handshake_timeout_s: float = 3.0) -> RecordResult:
+           handshake_timeout_s: float = 3.0, stall_s: float | None = None,
+           on_event: Callable[[str], None] | None = None, health: Callable[[], str | None] | None = None,
+           overwrite: bool = False) -> RecordResult:
     """Record ``duration_s`` seconds of measurement windows into a run file.
 
     Parameters
@@ -140,6 +220,17 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
         Period of status callbacks and of ``fsync``. [s]
     handshake_timeout_s : float
         Longest wait for the device's identification. [s]
+    stall_s : float, optional
+        Silence on the link (no valid frame) that counts as a gap; longer than one window.
+        Default :func:`default_stall_s`: 5 windows, at least 2 s. [s]
+    on_event : callable, optional
+        Called with one line of text when a gap begins and when the device comes back.
+    health : callable, optional
+        ``health() -> None`` while the device is well, or a one-line reason once it has failed
+        (e.g. the virtual device's thread); checked on every read.
+    overwrite : bool
+        Replace an existing run. Without it an existing CSV or sidecar raises
+        ``FileExistsError`` before the device is touched.
 
     Returns
     -------
@@ -149,10 +240,14 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
     ------
     ValueError
         A parameter out of range.
+    FileExistsError
+        The run or its sidecar exists and ``overwrite`` is False.
     LinkError
         The device could not be identified or configured (before anything is recorded).
+    OSError
+        The run file could not be created (the device is stopped again).
     """
-    from fsrlab.runformat import RunWriter
+    from fsrlab.runformat import RunWriter, sidecar_path
 
     if not duration_s > 0:
         raise ValueError(f"duration_s must be > 0 s, got {duration_s!r}")
@@ -160,7 +255,14 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
         raise ValueError(f"window_ms must be in {WINDOW_MS_MIN}..{WINDOW_MS_MAX} ms, got {window_ms!r}")
     if range_ not in (0, 1):
         raise ValueError(f"range must be 0 or 1, got {range_!r}")
+    stall_s = default_stall_s(window_ms) if stall_s is None else float(stall_s)
+    if not stall_s > window_ms / 1000.0:
+        raise ValueError(f"stall_s must be longer than one window ({window_ms / 1000.0:g} s), got {stall_s!r}")
     path = Path(path)
+    if not overwrite:
+        for existing in (path, sidecar_path(path)):
+            if os.path.lexists(existing):
+                raise FileExistsError(f"{existing} exists; a run is replaced only when asked to")
     ident = link.handshake(timeout_s=handshake_timeout_s)
     link.stop()  # a device left running by a previous session: start from a clean state
     first_seq = _configure(link, window_ms, range_)
@@ -170,9 +272,18 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
     meta["acquisition"] = {"port": link.port, "baud": link.baud, "device": ident.name,
                            "firmware_version": ident.firmware_version, "protocol_version": ident.protocol_version,
                            "window_ms": window_ms, "range": range_, "duration_s": duration_s,
-                           "first_seq": first_seq}
+                           "stall_s": stall_s, "first_seq": first_seq}
+    meta["gaps"] = []
     parser = link.parser
-    lost0 = parser.lost
+    lost0, bad0 = parser.lost, parser.bad_frames
+    try:
+        writer = RunWriter(path, columns, meta, overwrite=overwrite)
+    except BaseException:  # e.g. no such directory: do not leave the device running
+        try:
+            link.command("STOP", timeout_s=0.5)
+        except LinkError:
+            pass
+        raise
     t_start = time.monotonic()
     t_end = t_start + duration_s
     frames, ended, message, dropped = 0, "duration", "", 0
@@ -182,14 +293,22 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
     recent: list[float] = []
     next_status = t_start
     next_sync = t_start + sync_interval_s
-    try:
-        writer = RunWriter(path, columns, meta)
-    except BaseException:  # e.g. no such directory: do not leave the device running
+    gaps: list[Gap] = []
+    silent_since = t_start  # arrival of the last frame (START before the first one)
+    in_gap = False
+
+    def event(text: str) -> None:
+        if on_event is not None:
+            on_event(text)
+
+    def save_gaps(now: float) -> None:
+        # The open gap's length so far is on disk too, in case the process dies during it.
+        shown = gaps + ([Gap(silent_since - t_start, now - silent_since)] if in_gap else [])
         try:
-            link.command("STOP", timeout_s=0.5)
-        except LinkError:
-            pass
-        raise
+            writer.update_metadata({"gaps": [g.to_dict() for g in shown]})
+        except OSError as exc:
+            raise _Failure(str(exc)) from None
+
     try:
         try:
             while True:
@@ -199,8 +318,24 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
                 if stop is not None and stop.is_set():
                     ended = "stopped"
                     break
+                if health is not None and (reason := health()):
+                    raise _Failure(reason)
                 restart = False
-                for frame in link.read_frames():
+                batch = link.read_frames()
+                if batch:
+                    now = time.monotonic()
+                    if in_gap:
+                        in_gap = False
+                        gaps.append(Gap(silent_since - t_start, now - silent_since))
+                        save_gaps(now)
+                        event(f"device back after {now - silent_since:.1f} s without a frame")
+                    silent_since = now
+                elif not in_gap and now - silent_since >= stall_s:
+                    in_gap = True
+                    save_gaps(now)
+                    event(f"no frame from the device for {now - silent_since:.1f} s "
+                          f"(since {silent_since - t_start:.1f} s into the run)")
+                for frame in batch:
                     if frame.reset:
                         restart = True
                         anchor_ms = None
@@ -219,7 +354,10 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
                     if reference is not None:
                         value = reference(frame)
                         row["stress_pa"] = value if value is not None and math.isfinite(value) else None
-                    writer.write(row)
+                    try:
+                        writer.write(row)
+                    except OSError as exc:
+                        raise _Failure(str(exc)) from None
                     frames += 1
                     last = m
                     recent.append(time.monotonic())
@@ -227,7 +365,10 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
                     _configure(link, window_ms, range_)
                 now = time.monotonic()
                 if now >= next_sync:
-                    writer.sync()
+                    try:
+                        writer.sync()
+                    except OSError as exc:
+                        raise _Failure(str(exc)) from None
                     next_sync = now + sync_interval_s
                 if on_status is not None and now >= next_status:
                     recent = [t for t in recent if t > now - 1.0]
@@ -240,30 +381,53 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
         except KeyboardInterrupt:
             ended = "interrupted"
         except DeviceGone as exc:
-            ended, message = "disconnected", str(exc)
+            reason = health() if health is not None else None  # a failed device closes its port
+            ended, message = ("failed", reason) if reason else ("disconnected", str(exc))
         except LinkError as exc:  # no answer while re-configuring after a reset
             ended, message = "error", str(exc)
+        except _Failure as exc:
+            ended, message = "failed", str(exc)
+        except Exception as exc:  # noqa: BLE001 - whatever it is, the rows so far are kept and the run says why
+            ended, message = "failed", f"recording failed: {type(exc).__name__}: {exc}"
         dropped = parser.lost - lost0  # frames sent while recording that never made it
-        if ended not in ("disconnected", "error"):
+        if ended not in ("disconnected", "error", "failed"):
             try:
                 link.command("STOP", timeout_s=0.5)
             except (LinkError, KeyboardInterrupt):
                 pass
     finally:
         duration = time.monotonic() - t_start
+        if in_gap:
+            gaps.append(Gap(silent_since - t_start, t_start + duration - silent_since))
         st = parser.stats()
+        if ended not in ("disconnected", "error", "failed"):
+            if frames == 0:
+                message = (f"no valid window recorded in {duration:.1f} s: "
+                           + _empty_reason(ended, window_ms, duration_s, st.bad_frames - bad0, st.lost - lost0)
+                           + f"; {path} has its header only")
+                ended = "empty"
+            elif in_gap:
+                ended = "stalled"
+                message = (f"the device sent nothing from {gaps[-1].start_s:.1f} s into the run to the end "
+                           f"({gaps[-1].length_s:.1f} s)")
+        if not message:
+            message = {"duration": f"recorded {frames} windows in {duration:.1f} s",
+                       "interrupted": f"interrupted: {frames} windows kept",
+                       "stopped": f"stopped: {frames} windows kept"}[ended]
+            if gaps:
+                message += (f", {len(gaps)} gap{'s' if len(gaps) > 1 else ''} without frames "
+                            f"({sum(g.length_s for g in gaps):.1f} s)")
+        elif ended != "empty":
+            message = f"{message}; {frames} windows kept in {path}"
+        message = " ".join(message.split())
         writer.metadata["acquisition"].update(
             {"ended": ended, "frames": frames, "dropped": dropped, "resets": st.resets,
              "bad_checksum": st.bad_checksum, "malformed": st.malformed, "garbage_bytes": st.garbage_bytes,
              "recorded_s": round(duration, 3)})
+        writer.metadata["gaps"] = [g.to_dict() for g in gaps]
+        writer.metadata["ended"] = message
         writer.close()
-    if not message:
-        message = {"duration": f"recorded {frames} windows in {duration:.1f} s",
-                   "interrupted": f"interrupted: {frames} windows kept",
-                   "stopped": f"stopped: {frames} windows kept"}[ended]
-    else:
-        message = f"{message}; {frames} windows kept in {path}"
-    return RecordResult(frames, dropped, duration, path, ended, message, parser.stats(), ident)
+    return RecordResult(frames, dropped, duration, path, ended, message, parser.stats(), ident, tuple(gaps))
 
 
 def result_dict(result: RecordResult) -> dict:

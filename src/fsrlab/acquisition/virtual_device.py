@@ -312,6 +312,9 @@ class VirtualDevice:
     Use as a context manager, or call :meth:`open` (returns the pty path and runs the device in a
     thread) and :meth:`close`; :meth:`serve` runs it in the calling thread instead. Times: the
     device clock starts at :meth:`open` (``t_ms``), the profile's clock at ``START``.
+
+    An exception inside the device (a signal source that raises, say) ends it without a traceback:
+    the pseudo-terminal closes, as a pulled cable, and :attr:`failure` says why.
     """
 
     def __init__(self, source: SignalSource | None = None, frequency_noise: float = 1e-3, jitter_s: float = 20e-9,
@@ -334,6 +337,7 @@ class VirtualDevice:
         self.frames_sent = 0
         self.frames_overflowed = 0
         self.unplugged = False
+        self.error: Exception | None = None
 
     # ------------------------------------------------------------ lifecycle
     def open(self, thread: bool = True) -> str:
@@ -392,6 +396,13 @@ class VirtualDevice:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+    @property
+    def failure(self) -> str | None:
+        """None while the device runs or after a normal end; one line saying why it failed otherwise."""
+        if self.error is None:
+            return None
+        return " ".join(f"device thread failed: {type(self.error).__name__}: {self.error}".split())
 
     def reference(self, seq: int) -> float:
         """Stress [Pa] the device applied during the window sent with sequence number ``seq`` (NaN if unknown)."""
@@ -536,3 +547,7 @@ class VirtualDevice:
                     self._feed_commands(data)
         except KeyboardInterrupt:
             return
+        except Exception as exc:  # noqa: BLE001 - any failure ends the device, as a pulled cable; see failure
+            self.error = exc
+            self._stop.set()
+            self._close_fds()

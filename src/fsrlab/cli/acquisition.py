@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 import signal
 import sys
 from contextlib import contextmanager
@@ -11,9 +12,16 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli._common import emit_json, eng, fail
+from fsrlab.cli._common import emit_json, fail, farads, fraction, pascals, plain_numbers, seconds
+from fsrlab.units import format_eng
 
 _PROFILE_HELP = "Virtual stress profile: triangle, sine, steps or hold."
+_PEAK_HELP = "Peak stress of the profile [Pa]: 50k, 50kPa, 0.1MPa."
+_PERIOD_HELP = "Cycle time of the profile [s]: 4, 4s, 500ms, 1.5min."
+_C_OFF_HELP = "C_off switched in by range 1 [F]: 1n, 1nF, 470p."
+_CORRUPT_HELP = "Probability that a frame gets a bit flipped [1]: 0..1 or a percentage, 0.05 or 5%."
+_DROP_HELP = "Probability that a frame is not sent [1]: 0..1 or a percentage, 0.05 or 5%."
+_SEED_HELP = "Random seed of the virtual device's noise and faults (an integer)."
 
 
 @contextmanager
@@ -33,13 +41,67 @@ def _sigterm_as_interrupt():
         signal.signal(signal.SIGTERM, previous)
 
 
+def _check_virtual(profile: str, peak: float, period: float, c_off: float, corrupt: float, drop: float,
+                   seed: int | None) -> None:
+    """One-line errors, each naming its own option, for the virtual device's options."""
+    from fsrlab.acquisition.virtual_device import PROFILE_KINDS
+
+    if profile not in PROFILE_KINDS:
+        fail(f"must be one of {', '.join(PROFILE_KINDS)}, got {profile!r}", "--profile")
+    if not peak > 0:
+        fail(f"must be > 0 Pa, got {peak:g} Pa", "--peak")
+    if not period > 0:
+        fail(f"must be > 0 s, got {period:g} s", "--period")
+    if not c_off >= 0:
+        fail(f"must be >= 0 F, got {c_off:g} F", "--c-off")
+    for name, v in (("--corrupt", corrupt), ("--drop", drop)):
+        if not 0 <= v <= 1:
+            fail(f"must be in 0..1, got {v:g}", name)
+    if seed is not None and seed < 0:
+        fail(f"must be an integer >= 0, got {seed}", "--seed")
+
+
 def _virtual_device(profile: str, peak: float, period: float, c_off: float, seed: int | None,
                     corrupt: float, drop: float):
     from fsrlab.acquisition.virtual_device import VIRTUAL_CIRCUIT, Faults, PhysicsSource, StressProfile, VirtualDevice
 
     prof = StressProfile(kind=profile, peak_pa=peak, period_s=period)
-    source = PhysicsSource(prof, circuit=VIRTUAL_CIRCUIT.replace(c_off_farad=c_off))
+    try:
+        source = PhysicsSource(prof, circuit=VIRTUAL_CIRCUIT.replace(c_off_farad=c_off))
+    except ValueError:  # the sensor model has no valid response up to this stress
+        fail(f"the virtual sensor model has no valid response up to {format_eng(peak, 'Pa')} (its resistance would not "
+             "be positive); choose a smaller peak, e.g. 50k", "--peak")
     return VirtualDevice(source, faults=Faults(corrupt=corrupt, drop=drop), seed=seed), source
+
+
+def _window_ms(window_s: float) -> int:
+    """The window in whole milliseconds, as the meter takes it (10 ms .. 60 s)."""
+    from fsrlab.acquisition.protocol import WINDOW_MS_MAX, WINDOW_MS_MIN
+
+    ms = round(window_s * 1000.0, 6)
+    if not WINDOW_MS_MIN <= ms <= WINDOW_MS_MAX:
+        fail(f"must be {WINDOW_MS_MIN} ms to {WINDOW_MS_MAX // 1000} s, got {window_s:g} s", "--window")
+    if ms != int(ms):
+        fail(f"the meter counts whole milliseconds, got {ms:g} ms: write {math.floor(ms)}ms or {math.ceil(ms)}ms",
+             "--window")
+    return int(ms)
+
+
+def _check_out(out: Path, overwrite: bool) -> None:
+    """Refuse an output that exists (unless ``overwrite``) or cannot be written, before any device is touched."""
+    from fsrlab.runformat import sidecar_path
+
+    if out.is_dir():
+        fail(f"{out} is a directory; give the run's CSV file, e.g. {out / 'run.csv'}", "--out")
+    if not overwrite:
+        for existing in (out, sidecar_path(out)):
+            if os.path.lexists(existing):
+                fail(f"{existing} exists; pass --overwrite to replace the run", "--out")
+    parent = out.parent if str(out.parent) else Path(".")
+    if not parent.is_dir():
+        fail(f"directory {parent} does not exist", "--out")
+    if not os.access(parent, os.W_OK):
+        fail(f"cannot write in directory {parent} (permission denied)", "--out")
 
 
 def _fmt(value: float, spec: str) -> str:
@@ -47,7 +109,7 @@ def _fmt(value: float, spec: str) -> str:
 
 
 class _LiveView:
-    """Rich live table of the recording on stderr (frames/s, frequency, duty cycle, dropped)."""
+    """Rich live table of the recording on stderr (frames/s, frequency, duty cycle, dropped), and notices."""
 
     def __init__(self, enabled: bool, title: str) -> None:
         from rich.console import Console
@@ -81,6 +143,13 @@ class _LiveView:
         if self.live is not None:
             self.live.update(self._render(st))
 
+    def notice(self, text: str) -> None:
+        """One line on stderr, above the live table when there is one (shown even with --quiet)."""
+        if self.live is not None:
+            self.console.print(f"fsrlab: {text}", markup=False, highlight=False)
+        else:
+            print(f"fsrlab: {text}", file=sys.stderr, flush=True)
+
     def __exit__(self, *exc) -> None:
         if self.live is not None:
             self.live.__exit__(*exc)
@@ -90,57 +159,59 @@ class _LiveView:
 def acquire(
     port: str = typer.Option(None, "--port", help="Serial port (/dev/ttyACM0, COM3, a pty) or 'auto' to find an Uno by USB id."),
     virtual: bool = typer.Option(False, "--virtual", help="Record from a virtual device (pty, physics and 555 models) instead of hardware."),
-    duration: float = typer.Option(60.0, "--duration", parser=eng, help="Recording time (s)."),
+    duration: float = typer.Option("60s", "--duration", parser=seconds, metavar="TIME", help="Recording time [s]: 90, 90s, 1.5min, 2h, 500ms (a bare m is refused: minutes or milliseconds?)."),
     out: Path = typer.Option(Path("run.csv"), "--out", "-o", help="Run file (CSV + NAME.meta.json sidecar, docs/data-format.md)."),
-    window: int = typer.Option(100, "--window", help="Measurement window (ms), 10..60000."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing run file and its sidecar; without it an existing one stops the command before the device is touched."),
+    window: float = typer.Option("100ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], 10ms to 60s in whole milliseconds (the meter counts ms): 20ms, 100ms, 0.25, 1s."),
+    stall: float = typer.Option(None, "--stall", parser=seconds, metavar="TIME", help="No frame for this long [s] is reported as a gap (default: 5 windows, at least 2s); a device still silent at the end fails the run (exit 1)."),
     range_: int = typer.Option(0, "--range", help="C_off range switch: 0 (off) or 1 (C_off connected)."),
-    baud: int = typer.Option(115200, "--baud", help="Line rate (bit/s; protocol v1: 115200)."),
+    baud: int = typer.Option(115200, "--baud", help="Line rate [bit/s]; protocol v1: 115200."),
     profile: str = typer.Option("triangle", "--profile", help=_PROFILE_HELP),
-    peak: float = typer.Option(50e3, "--peak", parser=eng, help="Virtual profile: peak stress [Pa], e.g. 50k."),
-    period: float = typer.Option(4.0, "--period", parser=eng, help="Virtual profile: cycle time (s)."),
-    c_off: float = typer.Option(1e-9, "--c-off", parser=eng, help="Virtual circuit: C_off switched in by --range 1 [F], e.g. 1n."),
-    seed: int = typer.Option(None, "--seed", help="Virtual device: random seed."),
-    corrupt: float = typer.Option(0.0, "--corrupt", parser=eng, help="Virtual device: probability that a frame is corrupted (tests)."),
-    drop: float = typer.Option(0.0, "--drop", parser=eng, help="Virtual device: probability that a frame is lost (tests)."),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="No live display."),
+    peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS", help="Virtual device: " + _PEAK_HELP[0].lower() + _PEAK_HELP[1:]),
+    period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="Virtual device: " + _PERIOD_HELP[0].lower() + _PERIOD_HELP[1:]),
+    c_off: float = typer.Option("1n", "--c-off", parser=farads, metavar="CAPACITANCE", help="Virtual circuit: " + _C_OFF_HELP),
+    seed: int = typer.Option(None, "--seed", help=_SEED_HELP),
+    corrupt: float = typer.Option("0", "--corrupt", parser=fraction, metavar="FRACTION", help="Virtual device (tests): " + _CORRUPT_HELP[0].lower() + _CORRUPT_HELP[1:]),
+    drop: float = typer.Option("0", "--drop", parser=fraction, metavar="FRACTION", help="Virtual device (tests): " + _DROP_HELP[0].lower() + _DROP_HELP[1:]),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No live display (notices of gaps still go to stderr)."),
     json_out: bool = typer.Option(False, "--json", help='Print {"frames", "dropped", "duration_s", "file"} as JSON.'),
 ) -> None:
     """Record measurement windows (frequency, duty cycle, A0 voltage) from an fsrlab meter into a run file.
 
-    Written row by row: Ctrl-C or a kill loses at most the window in progress. A device unplugged
-    mid-run ends the run with the file intact, a one-line message and exit code 1.
+    Written row by row: Ctrl-C or a kill loses at most the window in progress, and an existing run
+    is replaced only with --overwrite. Exit code 1, with one line saying why and the rows so far
+    kept, when the device is unplugged, fails, stays silent until the end, or no valid window
+    arrives; the sidecar's "ended" says the same and "gaps" lists the silences.
+
+    Examples:
+
+    \b
+      fsrlab acquire --virtual --duration 10s --window 20ms --out bench.csv
+      fsrlab acquire --port auto --duration 1.5min --window 100ms --range 1 --out bench.csv --overwrite
     """
-    from fsrlab.acquisition.protocol import WINDOW_MS_MAX, WINDOW_MS_MIN
     from fsrlab.acquisition.recorder import record, result_dict
     from fsrlab.acquisition.serial_link import SerialLink
 
     if virtual == (port is not None):
         fail("give exactly one of --port PORT|auto and --virtual", "--port")
     if not duration > 0:
-        fail(f"must be > 0 s, got {duration:g}", "--duration")
-    if not WINDOW_MS_MIN <= window <= WINDOW_MS_MAX:
-        fail(f"must be in {WINDOW_MS_MIN}..{WINDOW_MS_MAX} ms, got {window}", "--window")
+        fail(f"must be > 0 s, got {duration:g} s", "--duration")
+    window_ms = _window_ms(window)
+    if stall is not None and not stall > window_ms / 1000.0:
+        fail(f"must be longer than one window ({window_ms / 1000.0:g} s), got {stall:g} s", "--stall")
     if range_ not in (0, 1):
         fail(f"must be 0 or 1, got {range_}", "--range")
     if not baud > 0:
-        fail(f"must be > 0, got {baud}", "--baud")
+        fail(f"must be > 0 bit/s, got {baud}", "--baud")
     for name, v in (("--corrupt", corrupt), ("--drop", drop)):
         if not 0 <= v <= 1:
             fail(f"must be in 0..1, got {v:g}", name)
+    _check_out(out, overwrite)
     device = None
     metadata: dict = {}
-    reference = None
+    reference = health = None
     if virtual:
-        from fsrlab.acquisition.virtual_device import PROFILE_KINDS
-
-        if profile not in PROFILE_KINDS:
-            fail(f"must be one of {', '.join(PROFILE_KINDS)}, got {profile!r}", "--profile")
-        if not peak > 0:
-            fail(f"must be > 0 Pa, got {peak:g}", "--peak")
-        if not period > 0:
-            fail(f"must be > 0 s, got {period:g}", "--period")
-        if not c_off >= 0:
-            fail(f"must be >= 0 F, got {c_off:g}", "--c-off")
+        _check_virtual(profile, peak, period, c_off, corrupt, drop, seed)
         device, source = _virtual_device(profile, peak, period, c_off, seed, corrupt, drop)
         port = device.open()
         metadata = {"origin": "fsrlab acquire --virtual (VirtualFSR -> LM555 astable and op-amp -> meter model "
@@ -149,11 +220,13 @@ def acquire(
                     "notes": f"virtual stress profile {profile}, peak {peak:g} Pa, period {period:g} s; "
                              "stress_pa is the applied (reference) stress"}
         reference = lambda frame: device.reference(frame.seq)  # noqa: E731
+        health = lambda: device.failure  # noqa: E731
     try:
         with SerialLink(port, baud=baud) as link, _sigterm_as_interrupt(), \
                 _LiveView(not quiet, f"fsrlab acquire {link.port} -> {out}") as view:
-            result = record(link, out, duration, window_ms=window, range_=range_, metadata=metadata,
-                            reference=reference, on_status=view.update)
+            result = record(link, out, duration, window_ms=window_ms, range_=range_, metadata=metadata,
+                            reference=reference, on_status=view.update, on_event=view.notice, stall_s=stall,
+                            health=health, overwrite=overwrite)
     finally:
         if device is not None:
             device.close()
@@ -161,38 +234,40 @@ def acquire(
         emit_json(result_dict(result))
     else:
         typer.echo(f"{out}: {result.frames} windows, {result.dropped} dropped, {result.duration_s:.1f} s "
-                   f"({result.stats.bad_frames} corrupt lines, {result.stats.resets} device resets)")
-    if result.ended in ("disconnected", "error"):
-        print(f"fsrlab: {result.message}", file=sys.stderr)
+                   f"({result.stats.bad_frames} corrupt lines, {result.stats.resets} device resets, "
+                   f"{len(result.gaps)} gaps)")
+    if result.failed:
+        print(f"fsrlab: {plain_numbers(result.message)}", file=sys.stderr)
         raise typer.Exit(1)
 
 
 @app.command("virtual-device")
 def virtual_device(
-    duration: float = typer.Option(None, "--duration", parser=eng, help="Run this long (s); default until Ctrl-C."),
+    duration: float = typer.Option(None, "--duration", parser=seconds, metavar="TIME", help="Run this long [s]: 90, 90s, 1.5min, 2h (default: until Ctrl-C)."),
     profile: str = typer.Option("triangle", "--profile", help=_PROFILE_HELP),
-    peak: float = typer.Option(50e3, "--peak", parser=eng, help="Peak stress [Pa], e.g. 50k."),
-    period: float = typer.Option(4.0, "--period", parser=eng, help="Cycle time of the profile (s)."),
-    c_off: float = typer.Option(1e-9, "--c-off", parser=eng, help="C_off switched in by RANGE 1 [F], e.g. 1n."),
-    seed: int = typer.Option(None, "--seed", help="Random seed."),
-    corrupt: float = typer.Option(0.0, "--corrupt", parser=eng, help="Probability that a frame is corrupted."),
-    drop: float = typer.Option(0.0, "--drop", parser=eng, help="Probability that a frame is lost."),
+    peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS", help=_PEAK_HELP),
+    period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help=_PERIOD_HELP),
+    c_off: float = typer.Option("1n", "--c-off", parser=farads, metavar="CAPACITANCE", help=_C_OFF_HELP),
+    seed: int = typer.Option(None, "--seed", help=_SEED_HELP),
+    corrupt: float = typer.Option("0", "--corrupt", parser=fraction, metavar="FRACTION", help=_CORRUPT_HELP),
+    drop: float = typer.Option("0", "--drop", parser=fraction, metavar="FRACTION", help=_DROP_HELP),
     json_out: bool = typer.Option(False, "--json", help='Print {"port": PATH} as JSON (one line) instead of the bare path.'),
 ) -> None:
-    """Emulate an fsrlab meter on a pseudo-terminal; prints its path (open it with --port PATH or any serial tool)."""
+    """Emulate an fsrlab meter on a pseudo-terminal; prints its path (open it with --port PATH or any serial tool).
+
+    Exit code 1, with one line saying why, if the emulated device fails.
+
+    Examples:
+
+    \b
+      fsrlab virtual-device --duration 10min --profile sine --peak 80k --period 2s
+      fsrlab virtual-device --corrupt 1% --drop 0.5% --seed 1
+    """
     import json
 
-    from fsrlab.acquisition.virtual_device import PROFILE_KINDS
-
     if duration is not None and not duration > 0:
-        fail(f"must be > 0 s, got {duration:g}", "--duration")
-    if profile not in PROFILE_KINDS:
-        fail(f"must be one of {', '.join(PROFILE_KINDS)}, got {profile!r}", "--profile")
-    for name, v in (("--corrupt", corrupt), ("--drop", drop)):
-        if not 0 <= v <= 1:
-            fail(f"must be in 0..1, got {v:g}", name)
-    if not (peak > 0 and period > 0 and c_off >= 0):
-        fail("--peak and --period must be > 0 and --c-off >= 0", "--peak")
+        fail(f"must be > 0 s, got {duration:g} s", "--duration")
+    _check_virtual(profile, peak, period, c_off, corrupt, drop, seed)
     device, _ = _virtual_device(profile, peak, period, c_off, seed, corrupt, drop)
     path = device.open(thread=False)
     typer.echo(json.dumps({"port": path}) if json_out else path)
@@ -204,3 +279,7 @@ def virtual_device(
         pass
     finally:
         device.close()
+    if device.error is not None:
+        print(f"fsrlab: {plain_numbers(device.failure.replace('device thread failed', 'virtual device failed'))}",
+              file=sys.stderr)
+        raise typer.Exit(1)

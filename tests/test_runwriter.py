@@ -1,0 +1,101 @@
+"""RunWriter's guarantees beyond the format itself: an existing run is kept unless replacing it is
+asked for, errors name the files the user gave, and a write that fails half-way leaves whole rows.
+
+References: docs/data-format.md (crash safety: a run file is made of whole rows, the sidecar is
+replaced atomically) and the operating system's file-size limit (``RLIMIT_FSIZE``, POSIX), which
+makes a write fail with EFBIG part of the way through a line.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from fsrlab.runformat import RunWriter, load_run, sidecar_path, write_run
+
+
+def _run(path, rows=3):
+    with RunWriter(path, ["time_s", "frequency_hz"]) as w:
+        for i in range(rows):
+            w.write({"time_s": i * 0.1, "frequency_hz": 5000.0 + i})
+
+
+@pytest.mark.parametrize("which", ["csv", "sidecar"])
+def test_an_existing_run_is_kept_without_overwrite(tmp_path, which):
+    path = tmp_path / "run.csv"
+    _run(path)
+    if which == "sidecar":
+        path.unlink()  # the sidecar alone still belongs to a run
+    before = {p: p.read_bytes() for p in (path, sidecar_path(path)) if p.exists()}
+    existing = path if which == "csv" else sidecar_path(path)
+    with pytest.raises(FileExistsError, match=str(existing)):
+        RunWriter(path, ["time_s"], overwrite=False)
+    with pytest.raises(FileExistsError):
+        write_run(path, {"time_s": [0.0]}, overwrite=False)
+    assert {p: p.read_bytes() for p in (path, sidecar_path(path)) if p.exists()} == before
+
+
+def test_overwrite_replaces_and_a_new_run_needs_no_flag(tmp_path):
+    path = tmp_path / "run.csv"
+    _run(path, rows=5)
+    _run(path, rows=2)  # the default replaces, as before
+    assert load_run(path).n_rows == 2
+    with RunWriter(tmp_path / "new.csv", ["time_s"], overwrite=False) as w:
+        w.write({"time_s": 0.0})
+    assert load_run(tmp_path / "new.csv").n_rows == 1
+
+
+def test_errors_name_the_users_files_not_a_temporary(tmp_path):
+    with pytest.raises(OSError) as info:
+        RunWriter(tmp_path / "missing" / "x.csv", ["time_s"])
+    assert "x.meta.json" in str(info.value) and ".tmp" not in str(info.value)
+    (tmp_path / "y.meta.json").mkdir()  # a directory where the sidecar goes
+    with pytest.raises(OSError) as info:
+        RunWriter(tmp_path / "y.csv", ["time_s"])
+    assert str(tmp_path / "y.meta.json") in str(info.value) and ".tmp" not in str(info.value)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["y.meta.json"]  # no temporary left behind
+    (tmp_path / "z.csv").mkdir()  # a directory where the CSV goes: no orphan sidecar either
+    with pytest.raises(OSError) as info:
+        RunWriter(tmp_path / "z.csv", ["time_s"])
+    assert str(tmp_path / "z.csv") in str(info.value)
+    assert not sidecar_path(tmp_path / "z.csv").exists()
+
+
+def test_update_metadata_is_on_disk_while_the_run_is_open(tmp_path):
+    path = tmp_path / "run.csv"
+    w = RunWriter(path, ["time_s"])
+    w.update_metadata({"gaps": [{"start_s": 1.0, "length_s": 2.5}]})
+    meta = json.loads(sidecar_path(path).read_text())
+    assert meta["gaps"] == [{"start_s": 1.0, "length_s": 2.5}] and meta["complete"] is False
+    w.close()
+    meta = json.loads(sidecar_path(path).read_text())
+    assert meta["gaps"][0]["length_s"] == 2.5 and meta["complete"] is True
+
+
+def test_a_write_that_fails_half_way_leaves_whole_rows(tmp_path):
+    """A file-size limit makes a write stop inside a line (EFBIG): the writer cuts that part off,
+    raises one OSError naming the run, and still closes the run with the true row count."""
+    path = tmp_path / "run.csv"
+    script = f"""
+import resource, signal
+from fsrlab.runformat import RunWriter
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+resource.setrlimit(resource.RLIMIT_FSIZE, (1000, 1000))
+w = RunWriter({str(path)!r}, ["time_s", "frequency_hz"])
+try:
+    for i in range(1000):
+        w.write({{"time_s": i * 0.001, "frequency_hz": 5123.456789 + i}})
+except OSError as exc:
+    print(exc)
+w.close()
+"""
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == f"cannot write {path}: File too large"
+    text = path.read_text()
+    assert text.endswith("\n") and len(text) <= 1000
+    run = load_run(path)
+    assert run.metadata["complete"] is True and run.metadata["rows"] == run.n_rows == text.count("\n") - 1 > 0
