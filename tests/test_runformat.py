@@ -23,7 +23,8 @@ import numpy as np
 import pytest
 from hypothesis import given, strategies as st
 
-from fsrlab.runformat import RunFormatError, RunWriter, load_run, sidecar_path, write_run
+from fsrlab.runformat import RunFormatError, load_run, sidecar_path
+from fsrlab.runwriter import RunWriter, write_run
 from clirun import run_cli
 
 
@@ -161,7 +162,7 @@ def test_sigkill_mid_run_leaves_readable_file(tmp_path):
     path = tmp_path / "killed.csv"
     script = textwrap.dedent(f"""
         import itertools
-        from fsrlab.runformat import RunWriter
+        from fsrlab.runwriter import RunWriter
         w = RunWriter({str(path)!r}, ["time_s", "frequency_hz", "duty_cycle", "seq"], {{"origin": "kill test"}})
         for i in itertools.count():
             w.write({{"time_s": i * 0.001, "frequency_hz": 5000.123456789 + i, "duty_cycle": 0.5123456789, "seq": i}})

@@ -26,7 +26,8 @@ import pytest
 from fsrlab.acquisition.recorder import record
 from fsrlab.acquisition.serial_link import SerialLink
 from fsrlab.acquisition.virtual_device import ConstantSource, VirtualDevice
-from fsrlab.runformat import RunWriter, load_run, sidecar_path
+from fsrlab.runformat import load_run, sidecar_path
+from fsrlab.runwriter import RunWriter
 from clirun import run_cli
 from recording import CLI, rows as _rows, wait as _wait
 

@@ -111,7 +111,7 @@ def test_apply_json_counts_are_true(runs, cal, tmp_path):
     f[[3, 4]] = np.nan
     f[10], f[20], f[30] = 100.0, 1e6, 2e4
     synthetic_run(cycles=2, seed=7).write(tmp_path / "r.csv")
-    from fsrlab.runformat import write_run
+    from fsrlab.runwriter import write_run
 
     meta = json.loads(sidecar_path(runs / "other.csv").read_text())
     write_run(tmp_path / "r.csv", {k: v for k, v in c.items() if k not in ("c_fsr_farad", "r_fsr_ohm")}, meta)

@@ -26,7 +26,8 @@ from fsrlab.analysis.pipeline import (
 )
 from fsrlab.analysis.synthetic import synthetic_run
 from fsrlab.circuits.circuit import LM555Circuit
-from fsrlab.runformat import load_run, write_run
+from fsrlab.runformat import load_run
+from fsrlab.runwriter import write_run
 
 #: The five lines a Python user writes to calibrate one run and apply it to another.
 SNIPPET = '''\

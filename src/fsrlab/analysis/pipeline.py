@@ -373,7 +373,7 @@ def check_readout(cal: Calibration, run: Run, circuit: LM555Circuit | None = Non
 
 def apply_calibration(cal: Calibration, run, compensation: bool = True, circuit: LM555Circuit | None = None,
                       margin: float = MARGIN, force: bool = False) -> Run:
-    """The run with the stress its calibration estimates, ready for :func:`fsrlab.runformat.write_run`.
+    """The run with the stress its calibration estimates, ready for :func:`fsrlab.runwriter.write_run`.
 
     Parameters
     ----------

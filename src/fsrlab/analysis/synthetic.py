@@ -75,8 +75,8 @@ class SyntheticRun:
     metadata: dict
 
     def write(self, path, include_truth: bool = False):
-        """Write the run (see :func:`fsrlab.runformat.write_run`); the truth columns only if asked."""
-        from fsrlab.runformat import write_run
+        """Write the run (see :func:`fsrlab.runwriter.write_run`); the truth columns only if asked."""
+        from fsrlab.runwriter import write_run
 
         cols = {k: v for k, v in self.columns.items() if include_truth or k not in ("c_fsr_farad", "r_fsr_ohm")}
         return write_run(path, cols, self.metadata)

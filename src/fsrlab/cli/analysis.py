@@ -255,7 +255,7 @@ def apply_cmd(
     """
     from fsrlab.analysis.calibration_io import load_calibration
     from fsrlab.analysis.pipeline import ESTIMATE_COLUMN, apply_calibration, check_readout
-    from fsrlab.runformat import write_run
+    from fsrlab.runwriter import write_run
 
     if not (np.isfinite(margin) and margin >= 0):
         fail(f"must be a fraction >= 0 of the calibrated span, got {margin:g}", "--margin")
