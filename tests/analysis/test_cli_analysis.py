@@ -77,7 +77,8 @@ def test_calibrate_apply_roundtrip_and_compensation(runs, tmp_path, capsys):
     f = run["frequency_hz"]
     np.testing.assert_allclose(run["stress_pa_estimate"], np.polyval(d["coefficients"][::-1], f), rtol=1e-9, atol=1e-6)
     assert run.units["stress_pa_estimate"] == "Pa" and run.metadata["calibration"]["degree"] == 3
-    code, _, _ = run_cli(["apply", cal, runs / "other.csv", "-o", out_csv], capsys)
+    code, _, _ = run_cli(["apply", cal, runs / "other.csv", "-o", out_csv, "--overwrite"], capsys)
+    assert code == 0
     est = load_run(out_csv)
     he = lambda col: json.loads(run_cli(["hysteresis", out_csv, "-q", col, "--json"], capsys)[1])["hysteresis_error_percent"]
     assert he("stress_pa_estimate") < 3  # compensated estimate on a run the calibration never saw

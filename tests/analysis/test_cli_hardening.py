@@ -213,3 +213,17 @@ def test_iso376_prints_no_warnings_and_rejects_non_finite_creep(tmp_path):
     for creep in ("nan,1", "1,inf", "1e308,-1e308", "1,2,3", "5k,1"):
         code, out, err = run_cli(["iso376", p, "--creep", creep])
         assert code == 2 and "--creep" in err and err.count("\n") == 1, creep
+
+
+def test_apply_never_replaces_an_existing_run_unless_asked(runs, tmp_path):
+    # Property: a command that fails leaves an existing run byte for byte; --overwrite replaces it.
+    cal = tmp_path / "c.json"
+    assert run_cli(["calibrate", runs / "bench.csv", "-o", cal])[0] == 0
+    out = tmp_path / "keep.csv"
+    out.write_text("time_s,stress_pa\n0,1\n")
+    before = out.read_bytes()
+    code, _, err = run_cli(["apply", cal, runs / "other.csv", "-o", out])
+    assert code == 2 and "keep.csv exists" in err and "--overwrite" in err and err.count("\n") == 1
+    assert out.read_bytes() == before
+    assert run_cli(["apply", cal, runs / "other.csv", "-o", out, "--overwrite"])[0] == 0
+    assert out.read_bytes() != before

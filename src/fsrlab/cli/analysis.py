@@ -238,6 +238,7 @@ def apply_cmd(
     no_compensation: bool = typer.Option(False, "--no-compensation", help="Use the plain polynomial even if the calibration holds a compensation."),
     margin: float = typer.Option(0.10, "--margin", parser=fraction, help="How far beyond the calibrated readout range an estimate is still written [1, a fraction of the range's span], 0.1 or 10%; beyond it the estimate is left empty. Every reading outside the range has in_range = 0."),
     force: bool = typer.Option(False, "--force", help="Apply even to a run recorded with another circuit or range than the calibration."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing output run and its sidecar; without it an existing one stops the command."),
     skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=_SKIP_HELP + " Skipped rows are not written."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON: rows written, estimated, missing (with the reasons), in and out of the readout range."),
 ) -> None:
@@ -251,10 +252,11 @@ def apply_cmd(
 
     \b
       fsrlab apply examples/calibration.json examples/other.csv -o estimate.csv
-      fsrlab apply examples/calibration.json examples/other.csv -o estimate.csv --no-compensation --json
+      fsrlab apply examples/calibration.json examples/other.csv -o estimate.csv --no-compensation --json --overwrite
     """
     from fsrlab.analysis.calibration_io import load_calibration
     from fsrlab.analysis.pipeline import ESTIMATE_COLUMN, apply_calibration, check_readout
+    from fsrlab.runformat import sidecar_path
     from fsrlab.runwriter import write_run
 
     if not (np.isfinite(margin) and margin >= 0):
@@ -267,6 +269,10 @@ def apply_cmd(
         _missing(run_file, run, cal.x_name, " (the calibration's readout)")
     if output.resolve() == run_file.resolve():
         fail("must differ from the input run", "--output")
+    if not overwrite:
+        for existing in (output, sidecar_path(output)):
+            if existing.exists():
+                fail(f"{existing} exists; pass --overwrite to replace it", "--output")
     if cal.recorded_with is None:
         warnings.append(f"{cal_file} does not record the circuit and range its data were recorded with (written by an "
                         f"earlier fsrlab, or not from a run): {run_file} is not checked against them")
@@ -278,7 +284,7 @@ def apply_cmd(
     info = est.metadata["calibration"]
     for difference in info.get("forced", []):
         warnings.append(f"applied with --force although {difference}")
-    write_run(output, est.columns, est.metadata)
+    write_run(output, est.columns, est.metadata, overwrite=True)
     n = info["counts"]
     _warn(warnings)
     if json_out:
