@@ -166,3 +166,52 @@ def test_oscillation_stops_and_resumes_when_n_dips_below_4():
     assert np.any(sim.falling_s > 1.0e-3)
     np.testing.assert_allclose(sim.rising_s, rising, rtol=1e-8, atol=1e-14)
     np.testing.assert_allclose(sim.falling_s, falling, rtol=1e-8, atol=1e-14)
+
+
+_FAST_CIRCUITS = [
+    dict(r_fsr_ohm=200e3, c_fsr_farad=1e-9),
+    dict(r_fsr_ohm=10e6, c_fsr_farad=0.5e-9, c_off_farad=470e-12),
+    dict(r_fsr_ohm=200e3, c_fsr_farad=1e-9, diode=True),
+    dict(r_fsr_ohm=80e3, c_fsr_farad=1.5e-9, diode=True, diode_drop_v=0.6, c_off_farad=100e-12),
+    dict(r_fsr_ohm=150e3, c_fsr_farad=1e-9, discharge_ohm=60.0),
+    dict(r_fsr_ohm=np.inf, c_fsr_farad=1e-9, discharge_ohm=60.0, c_off_farad=220e-12),
+    dict(r_fsr_ohm=500e3, c_fsr_farad=1e-9, lower_fraction=0.3, upper_fraction=0.75, vcc_v=3.3),
+    dict(r_fsr_ohm=30e3, c_fsr_farad=1e-9),  # N = 3: no oscillation
+]
+_FAST_RUNS = [
+    dict(periods=1), dict(periods=2), dict(periods=5000), dict(periods=300, v_initial_v=0.0),
+    dict(periods=40, v_initial_v=4.0), dict(t_stop_s=1e-6), dict(t_stop_s=2e-3),
+    dict(t_stop_s=3e-2, v_initial_v=0.0), dict(t_stop_s=2e-3, v_initial_v=4.5),
+]
+
+
+def _assert_same_run(fast, loop, rtol):
+    assert fast.rising_s.shape == loop.rising_s.shape
+    assert fast.falling_s.shape == loop.falling_s.shape
+    np.testing.assert_allclose(fast.rising_s, loop.rising_s, rtol=rtol, atol=0)
+    np.testing.assert_allclose(fast.falling_s, loop.falling_s, rtol=rtol, atol=0)
+    assert fast.high_end == loop.high_end
+    assert fast.t_end_s == pytest.approx(loop.t_end_s, rel=rtol, abs=0)
+    assert fast.v_end_v == pytest.approx(loop.v_end_v, rel=1e-9)
+
+
+@pytest.mark.parametrize("kw", _FAST_CIRCUITS)
+@pytest.mark.parametrize("run", _FAST_RUNS)
+def test_closed_form_path_equals_event_loop(kw, run):
+    # Reference: the event loop itself (method="events"). The closed-form path's edges differ only
+    # by the rounding of the loop's running sum t += Δt: 1e-10 relative is the stated bound. v_end
+    # after a cut last period comes from exp() at a start time that differs by that rounding.
+    fast = simulate(10e3, **kw, **run)
+    loop = simulate(10e3, **kw, **run, method="events")
+    _assert_same_run(fast, loop, rtol=1e-10)
+
+
+def test_closed_form_path_equals_event_loop_over_many_periods():
+    # 2·10^5 periods: the loop's accumulated rounding stays well inside 1e-10 relative.
+    kw = dict(r_fsr_ohm=80e3, c_fsr_farad=1.5e-9, diode=True, diode_drop_v=0.6, periods=200_000)
+    _assert_same_run(simulate(10e3, **kw), simulate(10e3, **kw, method="events"), rtol=1e-10)
+
+
+def test_method_validation():
+    with pytest.raises(ValueError, match="method"):
+        simulate(10e3, 200e3, 1e-9, periods=3, method="fast")

@@ -13,6 +13,9 @@ hold), which makes every piece an exact RC segment. When the capacitance steps, 
 limit of ``i = d(C·v)/dt``); ``capacitance_step="voltage"`` keeps the voltage instead
 (quasi-static). A step can cross a threshold, which then switches the output at the sample time.
 
+With constant parts the period repeats after the start: the loop runs to the second rising edge
+and the remaining edges follow as an arithmetic sequence (``method="events"`` keeps the loop).
+
 References
 ----------
 Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, §5 (eqs. 20–26, 33–34).
@@ -116,7 +119,7 @@ def simulate(r_ohm: float, r_fsr_ohm, c_fsr_farad, c_off_farad: float = 0.0, dio
              upper_fraction: float = 2 / 3, *, periods: int | None = None, t_stop_s: float | None = None,
              time_s=None, v_initial_v: float | None = None, waveform: bool = False,
              points_per_segment: int = 16, capacitance_step: str = "charge",
-             discharge_ohm: float = 0.0) -> TransientResult:
+             discharge_ohm: float = 0.0, method: str = "auto") -> TransientResult:
     """Simulate the astable event by event with closed-form RC segments.
 
     Parameters
@@ -156,6 +159,10 @@ def simulate(r_ohm: float, r_fsr_ohm, c_fsr_farad, c_off_farad: float = 0.0, dio
     discharge_ohm : float
         Discharge-transistor on-resistance (0: ideal switch, as in the paper); see
         :func:`fsrlab.circuits.lm555.astable`. [Ω]
+    method : {"auto", "events"}
+        ``"auto"``: constant parts without a waveform take the closed-form path (the loop runs to
+        the second rising edge, the remaining edges are an arithmetic sequence of the steady
+        period); ``"events"``: every edge from the event loop (the reference for that path).
 
     Returns
     -------
@@ -175,10 +182,20 @@ def simulate(r_ohm: float, r_fsr_ohm, c_fsr_farad, c_off_farad: float = 0.0, dio
     heads for ``V_T·R_FSR/(R + R_T + R_FSR)`` through ``(R + R_T) ∥ R_FSR`` (``V_T = Vcc·R_d/(R + R_d)``,
     ``R_T = R ∥ R_d``). A circuit that does not oscillate simply produces no more
     edges (the capacitor settles below the upper threshold).
+
+    With constant parts (``method="auto"``, no waveform) the loop stops at the second rising edge:
+    the first rising edge leaves C at the lower threshold, so every later period repeats that one,
+    and the edges are ``r_0 + i·T`` (falling edges ``+ T_high``), with ``T`` and ``T_high`` taken
+    from the loop's first steady period; after a ``t_stop_s`` the loop runs again for the last, cut
+    period. The loop accumulates ``t += Δt`` one event at a time, so the two agree to the rounding of
+    that sum (≈ 3e-11 relative after 10^6 periods); an edge within that rounding of ``t_stop_s``
+    may fall on either side of it.
     """
     check_lm555(r_ohm, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, discharge_ohm)
     if capacitance_step not in ("charge", "voltage"):
         raise ValueError(f"capacitance_step: must be 'charge' or 'voltage', got {capacitance_step!r}")
+    if method not in ("auto", "events"):
+        raise ValueError(f"method: must be 'auto' or 'events', got {method!r}")
     if int(points_per_segment) < 2:
         raise ValueError(f"points_per_segment: must be >= 2, got {points_per_segment!r}")
 
@@ -250,69 +267,113 @@ def simulate(r_ohm: float, r_fsr_ohm, c_fsr_farad, c_off_farad: float = 0.0, dio
         wv.append(vs_)
         wh.append(np.full(npts, state))
 
-    done = False
-    for k in range(times.size - 1):
-        t_end = float(times[k + 1])
-        rfk, ck = float(rf[k]), float(cap[k])
-        if k > 0 and capacitance_step == "charge" and ck != float(cap[k - 1]):
-            v *= float(cap[k - 1]) / ck  # Q = C·V conserved across the step
-        # Closed-form segment constants for this sample interval.
-        charge_vinf, charge_tau = charge_vinfs[k], charge_rs[k] * ck
-        dis_vinf, dis_tau = dis_vinfs[k], dis_rs[k] * ck
-        leak_tau = rfk * ck  # D1 off: C decays through R_FSR alone
-        while True:
-            # A step of C (or the start) may already sit beyond a threshold: switch now.
-            if high and v >= v_hi:
-                falling.append(t)
-                high = False
-            elif not high and v <= v_lo:
-                rising.append(t)
-                high = True
-                if max_rising is not None and len(rising) >= max_rising:
-                    done = True
-                    break
-            if high:
-                if diode and v > vs:
-                    # D1 reverse biased: C decays through R_FSR until it reaches Vcc − V_D.
-                    vinf, tau, target, edge = 0.0, leak_tau, vs, False
-                else:
-                    vinf, tau, target, edge = charge_vinf, charge_tau, v_hi, True
-            else:
-                vinf, tau, target, edge = dis_vinf, dis_tau, v_lo, True
-            if math.isinf(tau):
-                dt = math.inf
-            else:
-                ratio = (target - vinf) / (v - vinf) if v != vinf else -1.0
-                dt = tau * math.log(1.0 / ratio) if 0.0 < ratio <= 1.0 else math.inf
-            if t + dt < t_end:
-                if waveform:
-                    record(t, dt, v, vinf, tau, high)
-                t += dt
-                v = target
-                if edge:
-                    if high:
-                        falling.append(t)
-                        high = False
+    def run(times, t, v, high, max_rising):
+        """The event loop over the sample intervals of ``times``; appends edges, returns the end state."""
+        done = False
+        for k in range(times.size - 1):
+            t_end = float(times[k + 1])
+            rfk, ck = float(rf[k]), float(cap[k])
+            if k > 0 and capacitance_step == "charge" and ck != float(cap[k - 1]):
+                v *= float(cap[k - 1]) / ck  # Q = C·V conserved across the step
+            # Closed-form segment constants for this sample interval.
+            charge_vinf, charge_tau = charge_vinfs[k], charge_rs[k] * ck
+            dis_vinf, dis_tau = dis_vinfs[k], dis_rs[k] * ck
+            leak_tau = rfk * ck  # D1 off: C decays through R_FSR alone
+            while True:
+                # A step of C (or the start) may already sit beyond a threshold: switch now.
+                if high and v >= v_hi:
+                    falling.append(t)
+                    high = False
+                elif not high and v <= v_lo:
+                    rising.append(t)
+                    high = True
+                    if max_rising is not None and len(rising) >= max_rising:
+                        done = True
+                        break
+                if high:
+                    if diode and v > vs:
+                        # D1 reverse biased: C decays through R_FSR until it reaches Vcc − V_D.
+                        vinf, tau, target, edge = 0.0, leak_tau, vs, False
                     else:
-                        rising.append(t)
-                        high = True
-                        if max_rising is not None and len(rising) >= max_rising:
-                            done = True
-                            break
-                continue
-            # No event before the end of this sample interval.
-            if math.isinf(t_end):
-                done = True  # constant parts that stopped oscillating: nothing more will happen
+                        vinf, tau, target, edge = charge_vinf, charge_tau, v_hi, True
+                else:
+                    vinf, tau, target, edge = dis_vinf, dis_tau, v_lo, True
+                if math.isinf(tau):
+                    dt = math.inf
+                else:
+                    ratio = (target - vinf) / (v - vinf) if v != vinf else -1.0
+                    dt = tau * math.log(1.0 / ratio) if 0.0 < ratio <= 1.0 else math.inf
+                if t + dt < t_end:
+                    if waveform:
+                        record(t, dt, v, vinf, tau, high)
+                    t += dt
+                    v = target
+                    if edge:
+                        if high:
+                            falling.append(t)
+                            high = False
+                        else:
+                            rising.append(t)
+                            high = True
+                            if max_rising is not None and len(rising) >= max_rising:
+                                done = True
+                                break
+                    continue
+                # No event before the end of this sample interval.
+                if math.isinf(t_end):
+                    done = True  # constant parts that stopped oscillating: nothing more will happen
+                    break
+                span = t_end - t
+                if waveform:
+                    record(t, span, v, vinf, tau, high)
+                if not math.isinf(tau):
+                    v = vinf + (v - vinf) * math.exp(-span / tau)
+                t = t_end
                 break
-            span = t_end - t
-            if waveform:
-                record(t, span, v, vinf, tau, high)
-            if not math.isinf(tau):
-                v = vinf + (v - vinf) * math.exp(-span / tau)
-            t = t_end
-            break
-        if done:
-            break
+            if done:
+                break
+
+        return t, v, high
+
+    fast = method == "auto" and time_s is None and not waveform
+    if not fast:
+        t, v, high = run(times, t, v, high, max_rising)
+    else:
+        # Constant parts: run the loop up to the second rising edge. rising[0] always starts a
+        # steady period (the default start sits at the lower threshold, and any other start reaches
+        # it at its first rising edge, with v = v_lo exactly), so every later period repeats the
+        # one from rising[0] to rising[1]: the remaining edges are an arithmetic sequence.
+        t, v, high = run(times, t, v, high, 2 if max_rising is None else min(2, max_rising))
+        if len(rising) == 2 and (max_rising is None or max_rising > 2):
+            r0, period = rising[0], rising[1] - rising[0]
+            f0 = next(f for f in falling if f > r0)
+            high_time = f0 - r0
+            startup_falls = [f for f in falling if f < r0]
+            if max_rising is not None:
+                count = max_rising  # rising edges in all, as the loop would record them
+            else:
+                # Rising edges strictly before t_stop (the loop records an edge only if t + dt < t_end).
+                t_end = float(times[-1])
+                count = max(2, math.ceil((t_end - r0) / period) + 2)
+                while count > 2 and r0 + (count - 1) * period >= t_end:
+                    count -= 1
+            edges = np.arange(count, dtype=float)  # in place: two passes over 10^6 edges, no temporaries
+            edges *= period
+            edges += r0
+            rising_arr = edges
+            falling_arr = np.empty(len(startup_falls) + count - 1)
+            falling_arr[:len(startup_falls)] = startup_falls
+            np.add(edges[:-1], high_time, out=falling_arr[len(startup_falls):])
+            t, v, high = float(edges[-1]), v_lo, True
+            if max_rising is None:
+                # The last period may be cut by t_stop: run the loop for it from the last rising edge.
+                rising.clear()
+                falling.clear()
+                t, v, high = run(np.array([t, t_end]), t, v, high, None)
+                rising_arr = np.concatenate([rising_arr, rising])  # empty unless rounding moved an edge
+                falling_arr = np.concatenate([falling_arr, falling])
+            return TransientResult(rising_s=rising_arr, falling_s=falling_arr, t_s=None, v_cap_v=None,
+                                   output_high=None, t_end_s=t, v_end_v=v, high_end=high)
 
     as_arr = (lambda parts: np.concatenate(parts) if parts else np.empty(0))
     return TransientResult(
