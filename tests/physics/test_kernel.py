@@ -36,3 +36,72 @@ def test_eq12_equals_the_printed_formula_exactly(u_shape, s_shape):
         got, ref = _eq12(u, s, PAPER.phi0_j), _eq12_as_printed(u, s, PAPER.phi0_j)
     assert np.shape(got) == np.shape(ref)
     np.testing.assert_array_equal(got, ref)
+
+
+def _pipeline_from_public_functions(u_v, p, n):
+    """The Table 2 pipeline as it was written before the fused kernel: public functions only."""
+    from fsrlab.analysis.hysteresis import _curves_on_grid
+    from fsrlab.physics.electrical import capacitance_per_area, resistance_per_area
+    from fsrlab.physics.separation import separation_loading, separation_unloading
+
+    def s_l(x):
+        return separation_loading(x, p.s0_m, p.modulus_pa)
+
+    def s_u(x):
+        return separation_unloading(x, p.sigma_f_pa, p.s0_m, p.modulus_pa, p.k)
+
+    x = np.linspace(0.0, p.sigma_f_pa, n)
+    sl, su = s_l(x), s_u(x)
+    he_r = _curves_on_grid(x, resistance_per_area(u_v, sl, p.phi0_j), resistance_per_area(u_v, su, p.phi0_j),
+                           lambda t: resistance_per_area(u_v, s_l(t), p.phi0_j),
+                           lambda t: resistance_per_area(u_v, s_u(t), p.phi0_j), refine=True)
+    he_c = _curves_on_grid(x, capacitance_per_area(sl, p.eps_r), capacitance_per_area(su, p.eps_r),
+                           lambda t: capacitance_per_area(s_l(t), p.eps_r),
+                           lambda t: capacitance_per_area(s_u(t), p.eps_r), refine=True)
+    return he_r, he_c
+
+
+@pytest.mark.parametrize("u", [3, 2, 1, 0.5, 3.6])
+@pytest.mark.parametrize("change", [{}, {"phi0_ev": 0.2295}, {"k": 4}, {"k": 3.3}])
+@pytest.mark.parametrize("n", [3, 4001, 70001])  # 70001: several chunks, the last one partial
+def test_table2_kernel_equals_the_public_functions_exactly(u, change, n):
+    import dataclasses
+
+    from scipy.constants import electron_volt
+
+    from fsrlab.analysis.hysteresis import model_cycle_errors
+
+    change = dict(change)
+    if "phi0_ev" in change:
+        change["phi0_j"] = change.pop("phi0_ev") * electron_volt
+    p = dataclasses.replace(PAPER, **change)
+    got = model_cycle_errors(u, p, n)
+    for res, ref in zip((got.resistance, got.capacitance), _pipeline_from_public_functions(u, p, n)):
+        np.testing.assert_array_equal([res.percent, res.stress_at_max_pa, res.difference, res.full_scale],
+                                      [ref.percent, ref.stress_at_max_pa, ref.difference, ref.full_scale])
+        np.testing.assert_array_equal(res.q_load, ref.q_load)
+        np.testing.assert_array_equal(res.q_unload, ref.q_unload)
+        assert res.method == ref.method
+
+
+def test_table2_kernel_raises_like_nanargmax_when_every_point_is_nan():
+    # At 5 V eq. (12) fails on every separation of the cycle (voltage_limit): np.nanargmax's error.
+    from fsrlab.analysis.hysteresis import model_cycle_errors
+
+    with pytest.raises(ValueError, match="All-NaN"):
+        model_cycle_errors(5.0)
+
+
+@pytest.mark.parametrize("k", [1.0, 2.0, 3.3, 4.0])
+def test_separation_cores_equal_the_printed_expressions_exactly(k):
+    # Eq. (1) as s0 (1 − σ/M); eq. (9), simplified, as s_f + (s0 − s_f)(1 − σ/σf)^k (separation.py).
+    from fsrlab.physics.separation import separation_loading, separation_unloading
+
+    p = PAPER
+    x = np.concatenate([np.linspace(0.0, p.sigma_f_pa, 10001), [-1.0, p.sigma_f_pa * 1.5]])
+    s_f = p.s0_m * (1.0 - p.sigma_f_pa / p.modulus_pa)
+    inside = (x >= 0) & (x <= p.sigma_f_pa)
+    t = np.where(inside, 1.0 - x / p.sigma_f_pa, 0.0)
+    np.testing.assert_array_equal(separation_unloading(x, k=k), np.where(inside, s_f + (p.s0_m - s_f) * t**k, np.nan))
+    np.testing.assert_array_equal(separation_loading(x), np.where(x >= 0, p.s0_m * (1.0 - x / p.modulus_pa), np.nan))
+    assert separation_loading(1e5) == p.s0_m * (1.0 - 1e5 / p.modulus_pa)

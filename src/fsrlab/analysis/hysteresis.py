@@ -14,11 +14,13 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
+from scipy.constants import epsilon_0
 from scipy.optimize import minimize_scalar
 
 from fsrlab.physics.electrical import capacitance_per_area, resistance_per_area
 from fsrlab.physics.params import PAPER, PaperParameters, check_positive
-from fsrlab.physics.separation import separation_loading, separation_unloading
+from fsrlab.physics.separation import _loading, _unloading, separation_loading, separation_unloading
+from fsrlab.physics.tunneling import _eq12
 
 __all__ = [
     "HysteresisResult",
@@ -249,12 +251,15 @@ def hysteresis_error_curves(
     return _curves_on_grid(x, q_load(x), q_unload(x), q_load, q_unload, refine)
 
 
-def _curves_on_grid(x, ql, qu, q_load, q_unload, refine: bool) -> HysteresisResult:
-    """Eq. (13) from both branches evaluated on the grid ``x`` = [0 … σf]; functions refine σd."""
+def _curves_on_grid(x, ql, qu, q_load, q_unload, refine: bool, i: int | None = None) -> HysteresisResult:
+    """Eq. (13) from both branches evaluated on the grid ``x`` = [0 … σf]; functions refine σd.
+
+    ``i``: the grid index of the largest |qu − ql| when the caller found it already.
+    """
     n, sigma_f_pa = x.size, float(x[-1])
-    diff = np.asarray(qu, dtype=float) - np.asarray(ql, dtype=float)
-    i = int(np.nanargmax(np.abs(diff)))
-    sd, d = float(x[i]), float(diff[i])
+    if i is None:
+        i = int(np.nanargmax(np.abs(np.asarray(qu, dtype=float) - np.asarray(ql, dtype=float))))
+    sd, d = float(x[i]), float(qu[i] - ql[i])
     method = f"both branches evaluated on {n} stresses in [0, σf]"
     if refine and 0 < i < n - 1:
         res = minimize_scalar(lambda t: -abs(float(q_unload(t)) - float(q_load(t))),
@@ -325,6 +330,8 @@ def model_cycle_errors(u_v: float, params: PaperParameters = PAPER, n: int = 400
     if n < 3:
         raise ValueError(f"n must be >= 3, got {n!r}")
     x = np.linspace(0.0, p.sigma_f_pa, n)
+    if regime == 12:
+        return _model_cycle_errors_eq12(float(u_v), p, x)
     sl, su = s_l(x), s_u(x)  # the separations, shared by R_A and C_A
 
     def r_l(t):
@@ -343,3 +350,61 @@ def model_cycle_errors(u_v: float, params: PaperParameters = PAPER, n: int = 400
                            r_l, r_u, refine=True)
     he_c = _curves_on_grid(x, capacitance_per_area(sl, p.eps_r), capacitance_per_area(su, p.eps_r), c_l, c_u, refine=True)
     return CycleErrors(u_v=float(u_v), resistance=he_r, capacitance=he_c, regime=int(regime))
+
+
+#: Stresses per chunk of the Table 2 kernel: its few temporaries stay in the CPU cache.
+_CHUNK = 16384
+
+
+def _model_cycle_errors_eq12(u: float, p: PaperParameters, x: np.ndarray) -> CycleErrors:
+    """:func:`model_cycle_errors` when eq. (12) applies (u > φ0/e, Table 2's voltages), fused.
+
+    The same operations in the same order as the public functions (separation_loading/unloading,
+    resistance_per_area, capacitance_per_area, all checked once by the caller), evaluated chunk by
+    chunk in place: the numbers are equal to the bit. x lies in [0, σf] with σf < M, inside both
+    branches' domains, so no NaN mask is needed.
+    """
+    n = x.size
+    rl, ru, cl, cu = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    c_num = p.eps_r * epsilon_0
+
+    def s_l(t):
+        return _loading(t, p.s0_m, p.modulus_pa)
+
+    def s_u(t):
+        return _unloading(t, p.sigma_f_pa, p.s0_m, p.modulus_pa, p.k)
+
+    # The largest |Q_u − Q_l| of each quantity as np.nanargmax would find it (first of equal maxima).
+    best = {"r": (-np.inf, None), "c": (-np.inf, None)}
+
+    def track(key, a, q_l, q_u, work):
+        d = np.subtract(q_u, q_l, out=work[:q_l.size])
+        np.abs(d, out=d)
+        np.fmax(d, -np.inf, out=d)  # NaN → −inf, as nanargmax does
+        k = int(np.argmax(d))
+        if d[k] > best[key][0]:
+            best[key] = (d[k], a + k)
+
+    work = np.empty(min(n, _CHUNK))
+    with np.errstate(over="ignore", under="ignore", invalid="ignore", divide="ignore"):
+        for a in range(0, n, _CHUNK):
+            xs, chunk = x[a:a + _CHUNK], slice(a, a + _CHUNK)
+            for s, r_out, c_out in ((s_l(xs), rl, cl), (s_u(xs), ru, cu)):
+                np.divide(u, _eq12(u, s, p.phi0_j), out=r_out[chunk])  # Eqs. (16)-(18)
+                np.divide(c_num, s, out=c_out[chunk])  # Eq. (15)
+            track("r", a, rl[chunk], ru[chunk], work)
+            track("c", a, cl[chunk], cu[chunk], work)
+    if best["r"][1] is None or best["c"][1] is None:
+        raise ValueError("All-NaN slice encountered")  # np.nanargmax's error, as on the public path
+
+    def scalar(fn):
+        def q(t):
+            with np.errstate(over="ignore", under="ignore", invalid="ignore", divide="ignore"):
+                return float(fn(t))
+        return q
+
+    he_r = _curves_on_grid(x, rl, ru, scalar(lambda t: u / _eq12(u, s_l(t), p.phi0_j)),
+                           scalar(lambda t: u / _eq12(u, s_u(t), p.phi0_j)), refine=True, i=best["r"][1])
+    he_c = _curves_on_grid(x, cl, cu, scalar(lambda t: c_num / s_l(t)), scalar(lambda t: c_num / s_u(t)),
+                           refine=True, i=best["c"][1])
+    return CycleErrors(u_v=u, resistance=he_r, capacitance=he_c, regime=12)

@@ -38,6 +38,25 @@ def _check_cycle(sigma_f_pa: float, modulus_pa: float, k: float) -> None:
         raise ValueError(f"k must be >= 1, got {float(k):g}")
 
 
+def _loading(stress, s0_m, modulus_pa):
+    """Eq. (1) without checks or domain mask, in place on one new array (the Table 2 kernel's core)."""
+    s = np.divide(stress, modulus_pa, out=np.empty(np.shape(stress)))
+    np.subtract(1.0, s, out=s)
+    s *= s0_m  # Eq. (1)
+    return s
+
+
+def _unloading(stress, sigma_f_pa, s0_m, modulus_pa, k):
+    """Eq. (9), simplified, for stresses in [0, σf]; no checks, in place on one new array."""
+    s_f = s0_m * (1.0 - sigma_f_pa / modulus_pa)  # Eq. (3)
+    s = np.divide(stress, sigma_f_pa, out=np.empty(np.shape(stress)))
+    np.subtract(1.0, s, out=s)
+    s **= k  # numpy's x**2 is x·x, as in the expression it replaces
+    s *= s0_m - s_f
+    s += s_f  # Eq. (9), simplified
+    return s
+
+
 def separation_loading(stress_pa, s0_m: float = PAPER.s0_m, modulus_pa: float = PAPER.modulus_pa):
     """Interparticle separation while the stress rises.
 
@@ -65,8 +84,7 @@ def separation_loading(stress_pa, s0_m: float = PAPER.s0_m, modulus_pa: float = 
     """
     _check_material(s0_m, modulus_pa)
     stress = np.asarray(stress_pa, dtype=float)
-    s = s0_m * (1.0 - stress / modulus_pa)  # Eq. (1)
-    s = np.where((stress >= 0) & (stress < modulus_pa), s, np.nan)
+    s = np.where((stress >= 0) & (stress < modulus_pa), _loading(stress, s0_m, modulus_pa), np.nan)  # Eq. (1)
     return s if s.ndim else float(s)
 
 
@@ -111,10 +129,9 @@ def separation_unloading(
     _check_material(s0_m, modulus_pa)
     _check_cycle(sigma_f_pa, modulus_pa, k)
     stress = np.asarray(stress_pa, dtype=float)
-    s_f = s0_m * (1.0 - sigma_f_pa / modulus_pa)  # Eq. (3)
     inside = (stress >= 0) & (stress <= sigma_f_pa)
-    x = np.where(inside, 1.0 - stress / sigma_f_pa, 0.0)
-    s = np.where(inside, s_f + (s0_m - s_f) * x**k, np.nan)  # Eq. (9), simplified
+    s = _unloading(np.where(inside, stress, 0.0), sigma_f_pa, s0_m, modulus_pa, k)  # Eq. (9), simplified
+    s = np.where(inside, s, np.nan)
     return s if s.ndim else float(s)
 
 
