@@ -9,11 +9,13 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
-from scipy.constants import electron_volt
-
 from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout
 
 __all__ = ["PaperParameters", "PAPER", "PAPER_CIRCUIT", "PAPER_OPAMP", "check_positive", "check_finite"]
+
+#: The electronvolt in joules: CODATA 2018, exact since the 2019 SI (e = 1.602176634e-19 C); equal to
+#: ``scipy.constants.electron_volt``, written out so that importing the parameters does not import scipy.
+electron_volt = 1.602176634e-19
 
 
 def check_finite(name: str, value) -> None:

@@ -1,0 +1,32 @@
+"""Structural check: the closed-form modules import neither scipy nor matplotlib.
+
+Reference: ``sys.modules`` in a fresh interpreter after the import (a property, not a timing; the
+start-up cost these modules would add is in issue 16: scipy.constants alone 0.10–0.13 s).
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+HEAVY = ("scipy", "matplotlib")
+
+
+@pytest.mark.parametrize("module", ["fsrlab.physics.params", "fsrlab.circuits.lm555", "fsrlab.circuits.circuit"])
+def test_module_does_not_import_scipy_or_matplotlib(module):
+    code = (f"import json, sys, {module}; "
+            f"print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] in {HEAVY!r})))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert json.loads(out) == []
+
+
+def test_electron_volt_literal_is_codata():
+    # CODATA 2018 / SI 2019: e = 1.602176634e-19 C exactly; scipy.constants agrees.
+    from scipy.constants import electron_volt as scipy_ev
+
+    from fsrlab.physics.params import electron_volt
+
+    assert electron_volt == scipy_ev == 1.602176634e-19
