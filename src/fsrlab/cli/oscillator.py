@@ -7,7 +7,7 @@ import math
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli._common import emit_json, eng, fail, option_names
+from fsrlab.cli._common import emit_json, fail, farads, fraction, hertz, ohms, option_names, seconds, volts
 from fsrlab.units import format_eng
 
 _NAMES = {"control_v": "--vctrl", "discharge_ohm": "--rdis", "r_ohm": "--r", "r_fsr_ohm": "--rfsr", "c_fsr_farad": "--cfsr", "c_off_farad": "--coff",
@@ -41,15 +41,15 @@ def _diode_text(diode: bool, drop: float) -> str:
 
 @app.command("oscillator")
 def oscillator(
-    r: float = typer.Option(..., "--r", parser=eng, help="R_A = R_B = R [Ω], e.g. 10k."),
-    rfsr: float = typer.Option(..., "--rfsr", parser=eng, help="FSR resistance R_FSR [Ω], e.g. 200k."),
-    cfsr: float = typer.Option(..., "--cfsr", parser=eng, help="FSR capacitance C_FSR [F], e.g. 1n."),
-    coff: float = typer.Option(0.0, "--coff", parser=eng, help="Offset capacitor C_off in parallel [F], e.g. 470p."),
+    r: float = typer.Option(..., "--r", parser=ohms, help="R_A = R_B = R [Ω], e.g. 10k."),
+    rfsr: float = typer.Option(..., "--rfsr", parser=ohms, help="FSR resistance R_FSR [Ω], e.g. 200k."),
+    cfsr: float = typer.Option(..., "--cfsr", parser=farads, help="FSR capacitance C_FSR [F], e.g. 1n."),
+    coff: float = typer.Option(0.0, "--coff", parser=farads, help="Offset capacitor C_off in parallel [F], e.g. 470p."),
     diode: bool = typer.Option(False, "--diode", help="Ideal diode D1 in series with R_B (paper Fig. 13)."),
-    diode_drop: float = typer.Option(None, "--diode-drop", parser=eng, help="D1 with this forward drop [V], e.g. 0.6 (implies --diode)."),
-    vcc: float = typer.Option(5.0, "--vcc", parser=eng, help="Supply [V]."),
-    vctrl: float = typer.Option(None, "--vctrl", parser=eng, help="Control-pin voltage [V] (thresholds at Vctrl and Vctrl/2; default: open pin, 2/3·Vcc)."),
-    rdis: float = typer.Option(0.0, "--rdis", parser=eng, help="Discharge-transistor on-resistance [Ω] (default 0: ideal, as in the paper)."),
+    diode_drop: float = typer.Option(None, "--diode-drop", parser=volts, help="D1 with this forward drop [V], e.g. 0.6 (implies --diode)."),
+    vcc: float = typer.Option(5.0, "--vcc", parser=volts, help="Supply [V]."),
+    vctrl: float = typer.Option(None, "--vctrl", parser=volts, help="Control-pin voltage [V] (thresholds at Vctrl and Vctrl/2; default: open pin, 2/3·Vcc)."),
+    rdis: float = typer.Option(0.0, "--rdis", parser=ohms, help="Discharge-transistor on-resistance [Ω] (default 0: ideal, as in the paper)."),
     spice: bool = typer.Option(False, "--spice", help="Also simulate the circuit in ngspice and show its frequency and duty cycle."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
@@ -99,15 +99,15 @@ def oscillator(
 
 @app.command("decode")
 def decode_cmd(
-    r: float = typer.Option(..., "--r", parser=eng, help="R_A = R_B = R of the circuit [Ω], e.g. 10k."),
-    frequency: float = typer.Option(..., "--frequency", parser=eng, help="Measured frequency [Hz], e.g. 6478.5 or 6.4785k."),
-    duty: float = typer.Option(..., "--duty", parser=eng, help="Measured duty cycle, 0–1 (output-high fraction)."),
-    coff: float = typer.Option(0.0, "--coff", parser=eng, help="Offset capacitor C_off [F]."),
+    r: float = typer.Option(..., "--r", parser=ohms, help="R_A = R_B = R of the circuit [Ω], e.g. 10k."),
+    frequency: float = typer.Option(..., "--frequency", parser=hertz, help="Measured frequency [Hz], e.g. 6478.5 or 6.4785k."),
+    duty: float = typer.Option(..., "--duty", parser=fraction, help="Measured duty cycle, 0–1 (output-high fraction)."),
+    coff: float = typer.Option(0.0, "--coff", parser=farads, help="Offset capacitor C_off [F]."),
     diode: bool = typer.Option(False, "--diode", help="The circuit has the ideal diode D1."),
-    diode_drop: float = typer.Option(None, "--diode-drop", parser=eng, help="D1 with this forward drop [V] (implies --diode)."),
-    vcc: float = typer.Option(5.0, "--vcc", parser=eng, help="Supply [V]."),
-    vctrl: float = typer.Option(None, "--vctrl", parser=eng, help="Control-pin voltage [V] (default: open pin)."),
-    rdis: float = typer.Option(0.0, "--rdis", parser=eng, help="Discharge-transistor on-resistance [Ω] (default 0)."),
+    diode_drop: float = typer.Option(None, "--diode-drop", parser=volts, help="D1 with this forward drop [V] (implies --diode)."),
+    vcc: float = typer.Option(5.0, "--vcc", parser=volts, help="Supply [V]."),
+    vctrl: float = typer.Option(None, "--vctrl", parser=volts, help="Control-pin voltage [V] (default: open pin)."),
+    rdis: float = typer.Option(0.0, "--rdis", parser=ohms, help="Discharge-transistor on-resistance [Ω] (default 0)."),
     periods: int = typer.Option(1, "--periods", help="Periods averaged into the measurement (for the uncertainty)."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
@@ -131,17 +131,17 @@ def decode_cmd(
 
 @app.command("design")
 def design_cmd(
-    rfsr_min: float = typer.Option(..., "--rfsr-min", parser=eng, help="Smallest R_FSR of the sensor (full load) [Ω], e.g. 100k."),
-    rfsr_max: float = typer.Option(..., "--rfsr-max", parser=eng, help="Largest R_FSR (no load) [Ω], e.g. 2M."),
-    cfsr_min: float = typer.Option(..., "--cfsr-min", parser=eng, help="Smallest C_FSR [F], e.g. 0.5n."),
-    cfsr_max: float = typer.Option(..., "--cfsr-max", parser=eng, help="Largest C_FSR [F], e.g. 1.5n."),
-    fmin: float = typer.Option(..., "--fmin", parser=eng, help="Lowest wanted frequency [Hz], e.g. 1k."),
-    fmax: float = typer.Option(..., "--fmax", parser=eng, help="Highest wanted frequency [Hz], e.g. 20k."),
+    rfsr_min: float = typer.Option(..., "--rfsr-min", parser=ohms, help="Smallest R_FSR of the sensor (full load) [Ω], e.g. 100k."),
+    rfsr_max: float = typer.Option(..., "--rfsr-max", parser=ohms, help="Largest R_FSR (no load) [Ω], e.g. 2M."),
+    cfsr_min: float = typer.Option(..., "--cfsr-min", parser=farads, help="Smallest C_FSR [F], e.g. 0.5n."),
+    cfsr_max: float = typer.Option(..., "--cfsr-max", parser=farads, help="Largest C_FSR [F], e.g. 1.5n."),
+    fmin: float = typer.Option(..., "--fmin", parser=hertz, help="Lowest wanted frequency [Hz], e.g. 1k."),
+    fmax: float = typer.Option(..., "--fmax", parser=hertz, help="Highest wanted frequency [Hz], e.g. 20k."),
     variant: str = typer.Option("auto", "--variant", help="auto, diode or no-diode."),
-    diode_drop: float = typer.Option(0.0, "--diode-drop", parser=eng, help="Forward drop of D1 in the diode variant [V]."),
-    vcc: float = typer.Option(5.0, "--vcc", parser=eng, help="Supply [V]."),
-    margin: float = typer.Option(0.25, "--margin", parser=eng, help="Required oscillation margin N/N_min − 1 at the smallest R_FSR."),
-    window: float = typer.Option(0.1, "--window", parser=eng, help="Measurement window for the stated resolution [s], e.g. 100m."),
+    diode_drop: float = typer.Option(0.0, "--diode-drop", parser=volts, help="Forward drop of D1 in the diode variant [V]."),
+    vcc: float = typer.Option(5.0, "--vcc", parser=volts, help="Supply [V]."),
+    margin: float = typer.Option(0.25, "--margin", parser=fraction, help="Required oscillation margin N/N_min − 1 at the smallest R_FSR."),
+    window: float = typer.Option(0.1, "--window", parser=seconds, help="Measurement window for the stated resolution [s], e.g. 100ms or 0.1."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Propose R, C_off and the variant for a sensor's R_FSR/C_FSR ranges and a wanted frequency band."""
