@@ -6,6 +6,7 @@ import math
 
 import typer
 
+from fsrlab.acquisition.protocol import CAPTURE_MAX_HZ
 from fsrlab.cli import app
 from fsrlab.cli._common import emit_json, fail, farads, fraction, hertz, ohms, option_names, seconds, volts
 from fsrlab.units import format_eng
@@ -14,7 +15,7 @@ _NAMES = {"control_v": "--vctrl", "discharge_ohm": "--rdis", "r_ohm": "--r", "r_
           "diode_drop_v": "--diode-drop", "vcc_v": "--vcc", "frequency_hz": "--frequency",
           "duty_cycle": "--duty", "periods": "--periods", "r_fsr_range_ohm": "--rfsr-min/--rfsr-max",
           "c_fsr_range_farad": "--cfsr-min/--cfsr-max", "band_hz": "--fmin/--fmax", "variant": "--variant",
-          "min_margin": "--margin", "window_s": "--window"}
+          "min_margin": "--margin", "window_s": "--window", "max_frequency_hz": "--max-frequency"}
 
 
 def _variant(diode: bool, diode_drop: float | None) -> tuple[bool, float]:
@@ -142,6 +143,10 @@ def design_cmd(
     vcc: float = typer.Option(5.0, "--vcc", parser=volts, help="Supply [V]."),
     margin: float = typer.Option(0.25, "--margin", parser=fraction, help="Required oscillation margin N/N_min − 1 at the smallest R_FSR."),
     window: float = typer.Option(0.1, "--window", parser=seconds, help="Measurement window for the stated resolution [s], e.g. 100ms or 0.1."),
+    max_frequency: float = typer.Option(
+        CAPTURE_MAX_HZ, "--max-frequency", parser=hertz,
+        help=f"Highest frequency the counter captures every edge of [Hz]; the band's top is lowered to it "
+             f"(default: the fsrlab meter, {CAPTURE_MAX_HZ / 1e3:g}k, measured in simavr). For another counter, e.g. 2M."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Propose R, C_off and the variant for a sensor's R_FSR/C_FSR ranges and a wanted frequency band."""
@@ -149,27 +154,37 @@ def design_cmd(
 
     from fsrlab.circuits.design import design
 
+    if not max_frequency > 0:
+        fail(f"must be > 0 Hz, got {max_frequency:g}", "--max-frequency")
+    if fmin >= max_frequency:
+        meter = max_frequency == CAPTURE_MAX_HZ
+        who, why = ("the fsrlab meter", "its firmware's limit, measured in simavr") if meter else ("the counter", "--max-frequency")
+        fail(f"{format_eng(fmin, 'Hz')} … {format_eng(fmax, 'Hz')} is beyond what {who} captures: every edge only up to "
+             f"{format_eng(max_frequency, 'Hz')} ({why}); lower the band, or give --max-frequency for another counter",
+             "--fmin/--fmax")
     with option_names(_NAMES):
         d = design((rfsr_min, rfsr_max), (cfsr_min, cfsr_max), (fmin, fmax), variant=variant,
                    diode_drop_v=diode_drop if variant != "no-diode" else 0.0, vcc_v=vcc, min_margin=margin,
-                   window_s=window)
+                   window_s=window, max_frequency_hz=max_frequency)
     if json_out:
         emit_json(asdict(d))
         return
     f0, f1 = d.frequency_range_hz
+    b0, b1 = d.band_hz
+    capped = f", --fmax {format_eng(fmax, 'Hz')} lowered to what the counter captures" if fmax > b1 else ""
     others = [a for a in d.alternatives if a["diode"] != d.diode]
     lines = [
         f"Proposal: {'with' if d.diode else 'without'} diode D1, R = {format_eng(d.r_ohm, 'Ω')}, "
         f"C_off = {format_eng(d.c_off_farad, 'F')}",
         f"  frequency        {format_eng(f0, 'Hz')} … {format_eng(f1, 'Hz')} "
-        f"(band {format_eng(fmin, 'Hz')} … {format_eng(fmax, 'Hz')})",
+        f"(band {format_eng(b0, 'Hz')} … {format_eng(b1, 'Hz')}{capped})",
         f"  duty cycle       {100 * d.duty_cycle_range[0]:.3g} … {100 * d.duty_cycle_range[1]:.3g} %",
         f"  oscillation      N/N_min − 1 ≥ {100 * d.margin:.3g} % over the whole range",
         f"  ∂ln f/∂ln C_FSR  {d.sensitivity_c_range[0]:+.3f} … {d.sensitivity_c_range[1]:+.3f}",
         f"  ∂ln f/∂ln R_FSR  {d.sensitivity_r_range[0]:+.3f} … {d.sensitivity_r_range[1]:+.3f}"
         f"  (capacitive share ≥ {100 * d.capacitive_share:.3g} %)",
         f"  Uno resolution   (62.5 ns ticks) one period: {format_eng(d.resolution_single_hz[0], 'Hz')} at "
-        f"{format_eng(fmin, 'Hz')}, {format_eng(d.resolution_single_hz[1], 'Hz')} at {format_eng(fmax, 'Hz')} "
+        f"{format_eng(b0, 'Hz')}, {format_eng(d.resolution_single_hz[1], 'Hz')} at {format_eng(b1, 'Hz')} "
         f"(band ends); {format_eng(d.range_resolution_single_hz[0], 'Hz')} at {format_eng(f0, 'Hz')}, "
         f"{format_eng(d.range_resolution_single_hz[1], 'Hz')} at {format_eng(f1, 'Hz')} (sensor range)",
         f"                   {format_eng(d.window_s, 's')} window: {format_eng(d.resolution_window_hz[0], 'Hz')}, "
