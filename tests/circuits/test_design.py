@@ -49,6 +49,8 @@ def test_impossible_band_says_why():
 @pytest.mark.parametrize("kwargs, name", [
     (dict(band_hz=(2e3, 1e3)), "band_hz"), (dict(band_hz=(1e3, 2e4), variant="x"), "variant"),
     (dict(band_hz=(1e3, 2e4), min_margin=-1), "min_margin"),
+    (dict(band_hz=(1e3, 2e4), vcc_v=0.0), "vcc_v"), (dict(band_hz=(1e3, 2e4), diode_drop_v=-1.0), "diode_drop_v"),
+    (dict(band_hz=(1e3, 2e4), window_s=float("inf")), "window_s"),
 ])
 def test_validation(kwargs, name):
     with pytest.raises(ValueError, match=name):

@@ -8,6 +8,7 @@ Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, §5 (Figs. 13
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -160,10 +161,14 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
     fhi = min(fhi, limit)
     if variant not in ("auto", "diode", "no-diode"):
         raise ValueError(f"variant: must be 'auto', 'diode' or 'no-diode', got {variant!r}")
-    if not (min_margin >= 0):
-        raise ValueError(f"min_margin: must be >= 0, got {min_margin!r}")
-    if not (window_s > 0):
-        raise ValueError(f"window_s: must be > 0 s, got {window_s!r}")
+    if not (0 <= min_margin < math.inf):
+        raise ValueError(f"min_margin: must be finite and >= 0, got {min_margin!r}")
+    if not (0 < window_s < math.inf):
+        raise ValueError(f"window_s: must be finite and > 0 s, got {window_s!r}")
+    if not (0 < vcc_v < math.inf):
+        raise ValueError(f"vcc_v: must be finite and > 0 V, got {vcc_v!r}")
+    if not (0 <= diode_drop_v < math.inf):
+        raise ValueError(f"diode_drop_v: must be finite and >= 0 V, got {diode_drop_v!r}")
     if diode_drop_v > 0 and variant == "no-diode":
         raise ValueError("diode_drop_v: a forward drop needs the diode variant")
     variants = {"auto": (False, True), "diode": (True,), "no-diode": (False,)}[variant]
@@ -190,16 +195,19 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
         CO = c_offs[None, :, None] * np.ones_like(R)
         RF = np.broadcast_to(rf_g.ravel()[None, None, :], R.shape)
         CF = np.broadcast_to(cf_g.ravel()[None, None, :], R.shape)
-        res = astable(R, RF, CF, CO, diode=diode, diode_drop_v=vd, vcc_v=vcc_v, check=False)
-        sens = sensitivity(R, RF, CF, CO, diode=diode, diode_drop_v=vd, vcc_v=vcc_v, check=False)
-        f = res.frequency_hz
-        ok = np.all(np.isfinite(f) & (f >= flo) & (f <= fhi), axis=2)
-        share = np.min(np.abs(sens.c_fsr) / (np.abs(sens.c_fsr) + np.abs(sens.r_fsr)), axis=2)
-        # Capacitive readout quality: the part of ∂ln f that comes from C_FSR, minus the part from R_FSR.
-        merit = np.min(np.abs(sens.c_fsr) - np.abs(sens.r_fsr), axis=2)
+        # Pairs that do not oscillate, and extreme sensor ranges, give NaN or inf here (check=False):
+        # they fail the band test below, so numpy's warnings about them say nothing.
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # nanmin/nanmax of an all-NaN row
+            res = astable(R, RF, CF, CO, diode=diode, diode_drop_v=vd, vcc_v=vcc_v, check=False)
+            sens = sensitivity(R, RF, CF, CO, diode=diode, diode_drop_v=vd, vcc_v=vcc_v, check=False)
+            f = res.frequency_hz
+            ok = np.all(np.isfinite(f) & (f >= flo) & (f <= fhi), axis=2)
+            share = np.min(np.abs(sens.c_fsr) / (np.abs(sens.c_fsr) + np.abs(sens.r_fsr)), axis=2)
+            # Capacitive readout quality: the part of ∂ln f that comes from C_FSR, minus the part from R_FSR.
+            merit = np.min(np.abs(sens.c_fsr) - np.abs(sens.r_fsr), axis=2)
+            span = np.nanmin(np.nanmax(f, axis=2) / np.nanmin(f, axis=2)) if not np.any(ok) else math.nan
         if not np.any(ok):
-            with np.errstate(invalid="ignore"):
-                span = np.nanmin(np.nanmax(f, axis=2) / np.nanmin(f, axis=2))
             why = (f"the sensor's frequencies span at least a factor {span:.3g}, wider than the band's {fhi / flo:.3g}"
                    if span > fhi / flo else "no E12 R and C_off place the sensor's frequencies inside the band")
             reasons.append(f"{'diode' if diode else 'no-diode'} circuit: {why} (R ≤ {rs.max():.3g} Ω for the margin)")
@@ -228,7 +236,9 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
         return tuple(fe**2 * q for fe in ends)
 
     def window(ends):
-        return tuple(fe * q / (max(math.floor(fe * window_s), 1) / fe) for fe in ends)
+        # n whole periods in the window (at least one); a window too long for floor() holds "infinitely" many.
+        periods = [fe * window_s for fe in ends]
+        return tuple(fe * q / ((max(math.floor(n), 1) if math.isfinite(n) else n) / fe) for fe, n in zip(ends, periods))
 
     rng = chosen["frequency_range_hz"]
     return DesignResult(**chosen, resolution_single_hz=single((flo, fhi)), resolution_window_hz=window((flo, fhi)),

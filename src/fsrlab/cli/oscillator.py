@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import math
+from contextlib import contextmanager
+from typing import Iterator
 
+import numpy as np
 import typer
 
 from fsrlab.acquisition.protocol import CAPTURE_MAX_HZ
@@ -34,6 +37,31 @@ def _circuit(r: float, coff: float, diode: bool, drop: float, vcc: float, vctrl:
     return LM555Circuit(**parts) if vctrl is None else LM555Circuit.with_control(vctrl, **parts)
 
 
+# The options to blame for each way a circuit can fail to oscillate (NoOscillationError.condition).
+_NO_OSCILLATION = {"charge": "--r/--rfsr", "diode_drop": "--diode-drop", "discharge": "--rdis"}
+
+
+@contextmanager
+def _model_errors(diode: bool = False) -> Iterator[None]:
+    """Model errors as one line naming the options; numpy's overflow warnings silenced (results are checked)."""
+    from fsrlab.circuits.lm555 import NoOscillationError
+
+    with option_names(_NAMES), np.errstate(all="ignore"):
+        try:
+            yield
+        except NoOscillationError as exc:
+            blame = "--rfsr" if exc.condition == "discharge" and diode else _NO_OSCILLATION.get(exc.condition)
+            fail(str(exc), blame)
+
+
+def _finite(values: dict, what: str, options: str) -> None:
+    """Fail naming ``options`` when a result is not a finite number (parts beyond floating point)."""
+    bad = {k: v for k, v in values.items() if not math.isfinite(v)}
+    if bad:
+        shown = ", ".join(f"{k} = {v:g}" for k, v in bad.items())
+        fail(f"no finite {what} for these values ({shown}): they leave the range of floating point", options)
+
+
 def _diode_text(diode: bool, drop: float) -> str:
     if not diode:
         return "no diode"
@@ -54,26 +82,40 @@ def oscillator(
     spice: bool = typer.Option(False, "--spice", help="Also simulate the circuit in ngspice and show its frequency and duty cycle."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
-    """Frequency, duty cycle and sensitivities of the LM555 astable with the FSR as timing element."""
+    """Frequency, duty cycle and sensitivities of the LM555 astable with the FSR as timing element.
+
+    Examples (the paper's circuit with D1; a 4.7 kΩ circuit with 1 nF of C_off at 3.3 V, as JSON):
+
+    \b
+      fsrlab oscillator --r 10k --rfsr 200k --cfsr 1n --diode
+      fsrlab oscillator --r 4k7 --rfsr 1meg --cfsr 470pF --coff 1n --vcc 3.3V --json
+    """
+    import subprocess
+
     from fsrlab.circuits.lm555 import minimum_n_ratio
 
     diode, drop = _variant(diode, diode_drop)
-    with option_names(_NAMES):
+    with _model_errors(diode):
         circuit = _circuit(r, coff, diode, drop, vcc, vctrl, rdis)
         res = circuit.astable(rfsr, cfsr, check=False)
-    if not res.oscillates:
-        # Raises NoOscillationError (a ValueError) saying which condition failed: one line, exit 2.
-        circuit.astable(rfsr, cfsr)
-    sens = circuit.sensitivity(rfsr, cfsr)
+        if not res.oscillates:
+            circuit.astable(rfsr, cfsr)  # raises NoOscillationError saying which condition failed
+        sens = circuit.sensitivity(rfsr, cfsr)
     out = {"frequency_hz": float(res.frequency_hz), "duty_cycle": float(res.duty_cycle),
            "tau_high_s": float(res.tau_high_s), "tau_low_s": float(res.tau_low_s), "n_ratio": float(res.n_ratio),
            "sensitivity_c": float(sens.c_fsr), "sensitivity_r": float(sens.r_fsr)}
+    _finite(out, "frequency, duty cycle and sensitivities", "--r/--rfsr/--cfsr/--coff")
     if spice:
         from fsrlab.circuits.spice import ngspice_available
 
         if not ngspice_available():
             fail("ngspice is not installed (`make sysdeps` installs it)", "--spice")
-        sim = circuit.simulate_spice(rfsr, cfsr, periods=20)
+        try:
+            with option_names(_NAMES):
+                sim = circuit.simulate_spice(rfsr, cfsr, periods=20, timeout_s=120.0)
+        except (RuntimeError, subprocess.TimeoutExpired) as exc:  # the simulator, not the input: exit 1
+            typer.echo(f"fsrlab: --spice: {' '.join(str(exc).split())}", err=True)
+            raise typer.Exit(1) from None
         out["spice_frequency_hz"] = sim.frequency_hz
         out["spice_duty_cycle"] = sim.duty_cycle
     if json_out:
@@ -102,22 +144,29 @@ def oscillator(
 def decode_cmd(
     r: float = typer.Option(..., "--r", parser=ohms, help="R_A = R_B = R of the circuit [Ω], e.g. 10k."),
     frequency: float = typer.Option(..., "--frequency", parser=hertz, help="Measured frequency [Hz], e.g. 6478.5 or 6.4785k."),
-    duty: float = typer.Option(..., "--duty", parser=fraction, help="Measured duty cycle, 0–1 (output-high fraction)."),
-    coff: float = typer.Option(0.0, "--coff", parser=farads, help="Offset capacitor C_off [F]."),
+    duty: float = typer.Option(..., "--duty", parser=fraction, help="Measured duty cycle, the output-high fraction [1], e.g. 0.10189 or 10.189%."),
+    coff: float = typer.Option(0.0, "--coff", parser=farads, help="Offset capacitor C_off [F], e.g. 470p."),
     diode: bool = typer.Option(False, "--diode", help="The circuit has the ideal diode D1."),
     diode_drop: float = typer.Option(None, "--diode-drop", parser=volts, help="D1 with this forward drop [V] (implies --diode)."),
     vcc: float = typer.Option(5.0, "--vcc", parser=volts, help="Supply [V]."),
     vctrl: float = typer.Option(None, "--vctrl", parser=volts, help="Control-pin voltage [V] (default: open pin)."),
     rdis: float = typer.Option(0.0, "--rdis", parser=ohms, help="Discharge-transistor on-resistance [Ω] (default 0)."),
-    periods: int = typer.Option(1, "--periods", help="Periods averaged into the measurement (for the uncertainty)."),
+    periods: int = typer.Option(1, "--periods", help="Periods averaged into the measurement [1], e.g. 100 (for the uncertainty)."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
-    """Recover R_FSR and C_FSR from a measured frequency and duty cycle (uncertainty: 62.5 ns timer ticks)."""
+    """Recover R_FSR and C_FSR from a measured frequency and duty cycle (uncertainty: 62.5 ns timer ticks).
+
+    Example (what the oscillator example's circuit gives, averaged over 100 periods):
+
+    \b
+      fsrlab decode --r 10k --frequency 6.4785kHz --duty 10.189% --diode --periods 100
+    """
     diode, drop = _variant(diode, diode_drop)
-    with option_names(_NAMES):
+    with _model_errors(diode):
         res = _circuit(r, coff, diode, drop, vcc, vctrl, rdis).decode(frequency, duty, periods=periods)
     out = {"r_fsr_ohm": float(res.r_fsr_ohm), "c_fsr_farad": float(res.c_fsr_farad),
            "r_fsr_std_ohm": float(res.r_fsr_std_ohm), "c_fsr_std_farad": float(res.c_fsr_std_farad)}
+    _finite(out, "R_FSR and C_FSR", "--r/--frequency/--duty/--coff")
     if json_out:
         emit_json(out)
         return
@@ -138,10 +187,10 @@ def design_cmd(
     cfsr_max: float = typer.Option(..., "--cfsr-max", parser=farads, help="Largest C_FSR [F], e.g. 1.5n."),
     fmin: float = typer.Option(..., "--fmin", parser=hertz, help="Lowest wanted frequency [Hz], e.g. 1k."),
     fmax: float = typer.Option(..., "--fmax", parser=hertz, help="Highest wanted frequency [Hz], e.g. 20k."),
-    variant: str = typer.Option("auto", "--variant", help="auto, diode or no-diode."),
-    diode_drop: float = typer.Option(0.0, "--diode-drop", parser=volts, help="Forward drop of D1 in the diode variant [V]."),
+    variant: str = typer.Option("auto", "--variant", help="Circuit variant: auto (the better one), diode or no-diode."),
+    diode_drop: float = typer.Option(0.0, "--diode-drop", parser=volts, help="Forward drop of D1 in the diode variant [V], e.g. 0.6."),
     vcc: float = typer.Option(5.0, "--vcc", parser=volts, help="Supply [V]."),
-    margin: float = typer.Option(0.25, "--margin", parser=fraction, help="Required oscillation margin N/N_min − 1 at the smallest R_FSR."),
+    margin: float = typer.Option(0.25, "--margin", parser=fraction, help="Required oscillation margin N/N_min − 1 at the smallest R_FSR [1], e.g. 0.25 or 25%."),
     window: float = typer.Option(0.1, "--window", parser=seconds, help="Measurement window for the stated resolution [s], e.g. 100ms or 0.1."),
     max_frequency: float = typer.Option(
         CAPTURE_MAX_HZ, "--max-frequency", parser=hertz,
@@ -149,7 +198,14 @@ def design_cmd(
              f"(default: the fsrlab meter, {CAPTURE_MAX_HZ / 1e3:g}k, measured in simavr). For another counter, e.g. 2M."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
-    """Propose R, C_off and the variant for a sensor's R_FSR/C_FSR ranges and a wanted frequency band."""
+    """Propose R, C_off and the variant for a sensor's R_FSR/C_FSR ranges and a wanted frequency band.
+
+    Examples (a band the fsrlab meter captures; a 1–2 MHz band for a counter that captures 5 MHz):
+
+    \b
+      fsrlab design --rfsr-min 100k --rfsr-max 2M --cfsr-min 0.5n --cfsr-max 1.5n --fmin 1k --fmax 20k
+      fsrlab design --rfsr-min 100k --rfsr-max 2M --cfsr-min 0.5n --cfsr-max 1.5n --fmin 1M --fmax 2M --max-frequency 5M
+    """
     from dataclasses import asdict
 
     from fsrlab.circuits.design import design
@@ -162,7 +218,7 @@ def design_cmd(
         fail(f"{format_eng(fmin, 'Hz')} … {format_eng(fmax, 'Hz')} is beyond what {who} captures: every edge only up to "
              f"{format_eng(max_frequency, 'Hz')} ({why}); lower the band, or give --max-frequency for another counter",
              "--fmin/--fmax")
-    with option_names(_NAMES):
+    with _model_errors():
         d = design((rfsr_min, rfsr_max), (cfsr_min, cfsr_max), (fmin, fmax), variant=variant,
                    diode_drop_v=diode_drop if variant != "no-diode" else 0.0, vcc_v=vcc, min_margin=margin,
                    window_s=window, max_frequency_hz=max_frequency)
