@@ -29,7 +29,11 @@ def probe():
         ev: float = typer.Option(None, "--ev", parser=electronvolts), t: float = typer.Option(None, "--t", parser=seconds),
         duty: float = typer.Option(None, "--duty", parser=fraction), n: float = typer.Option(None, "--n", parser=number),
         model_error: bool = typer.Option(False, "--model-error"), fail_numpy: bool = typer.Option(False, "--fail-numpy"),
+        model_error_inside: bool = typer.Option(False, "--model-error-inside"),
     ) -> None:
+        if model_error_inside:
+            with option_names({"modulus_pa": "--modulus"}):
+                raise ValueError(f"no solution: the film must be thinner than {np.float64(2.5)!r} nm")
         if model_error:
             with option_names({"modulus_pa": "--modulus", "sigma_f_pa": "--sigma-f"}):
                 raise ValueError(f"modulus_pa must be > sigma_f_pa ({np.float64(322e3)!r} Pa), got {np.float64(37.8)!r}")
@@ -93,6 +97,12 @@ def test_model_errors_use_option_names_and_plain_numbers(probe):
     code, _, err = probe("--model-error")
     assert code == 2
     assert err == "fsrlab: error: Invalid value for --modulus: must be > --sigma-f (322000.0 Pa), got 37.8\n"
+
+
+def test_model_errors_without_a_leading_option_are_one_plain_line(probe):
+    # click's "Invalid value: ..." would read as if an option had been named.
+    code, _, err = probe("--model-error-inside")
+    assert code == 2 and err == "fsrlab: error: no solution: the film must be thinner than 2.5 nm\n"
 
 
 def test_fail_shows_plain_numbers(probe):

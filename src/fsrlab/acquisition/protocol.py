@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 __all__ = [
     "PROTOCOL_VERSION", "F_CPU", "TICK_S", "ADC_BITS", "ADC_COUNTS", "ADC_VREF_V", "ADC_V_PER_COUNT", "DEFAULT_BAUD", "MAX_LINE", "MAX_COMMAND", "SEQ_MODULO",
-    "UINT32_MODULO",
+    "UINT32_MODULO", "CAPTURE_MAX_HZ",
     "WINDOW_MS_MIN", "WINDOW_MS_MAX", "WINDOW_MS_DEFAULT", "DEVICE_NAME", "FRAME_TYPES", "COMMANDS",
     "ERR_UNKNOWN_COMMAND", "ERR_BAD_VALUE", "ERR_LINE_TOO_LONG",
     "ProtocolError", "CommandError", "Frame",
@@ -57,6 +57,13 @@ UINT32_MODULO = 2**32
 """Integers on the wire are unsigned 32-bit: ``t_ms`` wraps modulo 2³², tick sums stay below it."""
 WINDOW_MS_MIN, WINDOW_MS_MAX, WINDOW_MS_DEFAULT = 10, 60000, 100
 """Allowed and boot values of the measurement window. [ms]"""
+CAPTURE_MAX_HZ = 50e3
+"""Highest signal frequency the firmware captures every edge of, at 5 to 95 % duty cycle. [Hz]
+
+The supported range, 10 Hz to 50 kHz, is checked in simavr by ``tests/firmware/test_firmware_sim.py``;
+the upward search of ``benchmarks/bench_firmware.py`` (simavr, 4 % steps) measured the last clean
+frequency at 52.5 kHz at 5 and 95 % duty cycle and 54.6 kHz at 50 % (``docs/performance.md``,
+``firmware/README.md``, "Limits"). Above it windows report ``missed > 0``. Not yet measured on an Uno."""
 DEVICE_NAME = "fsrlab-meter"
 """Device name in the ``ID`` frame."""
 

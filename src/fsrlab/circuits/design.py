@@ -8,11 +8,12 @@ Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, §5 (Figs. 13
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
-from fsrlab.acquisition.protocol import TICK_S
+from fsrlab.acquisition.protocol import CAPTURE_MAX_HZ, TICK_S
 from fsrlab.circuits.lm555 import astable, minimum_n_ratio, sensitivity
 
 __all__ = ["E12", "DesignResult", "design"]
@@ -57,11 +58,14 @@ class DesignResult:
     range_resolution_single_hz, range_resolution_window_hz : tuple of float
         The same at the ends of the proposal's frequency range. [Hz]
     band_hz : tuple of float
-        The wanted band. [Hz]
+        The band the frequencies were kept in: the wanted band, its top lowered to
+        ``max_frequency_hz`` where it was above. [Hz]
     window_s : float
         Measurement window assumed for ``resolution_window_hz``. [s]
     alternatives : list of dict
         The best design of each variant that was considered (for comparison).
+    max_frequency_hz : float
+        Highest frequency the counter captures every edge of, that the design respected. [Hz]
     """
 
     diode: bool
@@ -81,6 +85,7 @@ class DesignResult:
     range_resolution_single_hz: tuple = (math.nan, math.nan)
     range_resolution_window_hz: tuple = (math.nan, math.nan)
     band_hz: tuple = (math.nan, math.nan)
+    max_frequency_hz: float = CAPTURE_MAX_HZ
 
 
 def _e12(lo: float, hi: float) -> np.ndarray:
@@ -90,7 +95,7 @@ def _e12(lo: float, hi: float) -> np.ndarray:
 
 def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", diode_drop_v: float = 0.0,
            vcc_v: float = 5.0, min_margin: float = 0.25, window_s: float = 0.1,
-           timer_resolution_s: float = TICK_S) -> DesignResult:
+           timer_resolution_s: float = TICK_S, max_frequency_hz: float | None = CAPTURE_MAX_HZ) -> DesignResult:
     """Propose R, C_off and the variant that keep the sensor's frequencies inside a band.
 
     Parameters
@@ -100,7 +105,7 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
     c_fsr_range_farad : (float, float)
         Smallest and largest C_FSR. [F]
     band_hz : (float, float)
-        Wanted frequency band (e.g. what the firmware measures well). [Hz]
+        Wanted frequency band. [Hz]
     variant : {"auto", "diode", "no-diode"}
         Restrict the variant, or let the design choose.
     diode_drop_v : float
@@ -113,6 +118,10 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
         Measurement window for the stated resolution (protocol default 100 ms). [s]
     timer_resolution_s : float
         Timer tick (62.5 ns on an Uno). [s]
+    max_frequency_hz : float or None
+        Highest frequency the counter captures every edge of; the band's top is lowered to it.
+        Default: the fsrlab meter's firmware, :data:`fsrlab.acquisition.protocol.CAPTURE_MAX_HZ`
+        (50 kHz, measured in simavr). ``None``: no limit (another counter). [Hz]
 
     Returns
     -------
@@ -121,7 +130,7 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
     Raises
     ------
     ValueError
-        Bad ranges, or no E12 pair (R in 100 Ω–10 MΩ, C_off 0 or 1 pF–10 µF) satisfies the band and
+        Bad ranges, a band that lies wholly above ``max_frequency_hz``, or no E12 pair (R in 100 Ω–10 MΩ, C_off 0 or 1 pF–10 µF) satisfies the band and
         margin; the message says what limits it.
 
     Notes
@@ -142,12 +151,24 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
         raise ValueError(f"c_fsr_range_farad: need 0 < min <= max < inf, got {c_fsr_range_farad!r}")
     if not (0 < flo < fhi and math.isfinite(fhi)):
         raise ValueError(f"band_hz: need 0 < low < high < inf, got {band_hz!r}")
+    limit = math.inf if max_frequency_hz is None else float(max_frequency_hz)
+    if not limit > 0:
+        raise ValueError(f"max_frequency_hz: must be > 0 Hz, got {max_frequency_hz!r}")
+    if flo >= limit:
+        raise ValueError(f"band_hz: {flo:g} … {fhi:g} Hz is beyond what the counter captures: every edge only "
+                         f"up to max_frequency_hz = {limit:g} Hz")
+    capped = fhi > limit
+    fhi = min(fhi, limit)
     if variant not in ("auto", "diode", "no-diode"):
         raise ValueError(f"variant: must be 'auto', 'diode' or 'no-diode', got {variant!r}")
-    if not (min_margin >= 0):
-        raise ValueError(f"min_margin: must be >= 0, got {min_margin!r}")
-    if not (window_s > 0):
-        raise ValueError(f"window_s: must be > 0 s, got {window_s!r}")
+    if not (0 <= min_margin < math.inf):
+        raise ValueError(f"min_margin: must be finite and >= 0, got {min_margin!r}")
+    if not (0 < window_s < math.inf):
+        raise ValueError(f"window_s: must be finite and > 0 s, got {window_s!r}")
+    if not (0 < vcc_v < math.inf):
+        raise ValueError(f"vcc_v: must be finite and > 0 V, got {vcc_v!r}")
+    if not (0 <= diode_drop_v < math.inf):
+        raise ValueError(f"diode_drop_v: must be finite and >= 0 V, got {diode_drop_v!r}")
     if diode_drop_v > 0 and variant == "no-diode":
         raise ValueError("diode_drop_v: a forward drop needs the diode variant")
     variants = {"auto": (False, True), "diode": (True,), "no-diode": (False,)}[variant]
@@ -174,16 +195,19 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
         CO = c_offs[None, :, None] * np.ones_like(R)
         RF = np.broadcast_to(rf_g.ravel()[None, None, :], R.shape)
         CF = np.broadcast_to(cf_g.ravel()[None, None, :], R.shape)
-        res = astable(R, RF, CF, CO, diode=diode, diode_drop_v=vd, vcc_v=vcc_v, check=False)
-        sens = sensitivity(R, RF, CF, CO, diode=diode, diode_drop_v=vd, vcc_v=vcc_v, check=False)
-        f = res.frequency_hz
-        ok = np.all(np.isfinite(f) & (f >= flo) & (f <= fhi), axis=2)
-        share = np.min(np.abs(sens.c_fsr) / (np.abs(sens.c_fsr) + np.abs(sens.r_fsr)), axis=2)
-        # Capacitive readout quality: the part of ∂ln f that comes from C_FSR, minus the part from R_FSR.
-        merit = np.min(np.abs(sens.c_fsr) - np.abs(sens.r_fsr), axis=2)
+        # Pairs that do not oscillate, and extreme sensor ranges, give NaN or inf here (check=False):
+        # they fail the band test below, so numpy's warnings about them say nothing.
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # nanmin/nanmax of an all-NaN row
+            res = astable(R, RF, CF, CO, diode=diode, diode_drop_v=vd, vcc_v=vcc_v, check=False)
+            sens = sensitivity(R, RF, CF, CO, diode=diode, diode_drop_v=vd, vcc_v=vcc_v, check=False)
+            f = res.frequency_hz
+            ok = np.all(np.isfinite(f) & (f >= flo) & (f <= fhi), axis=2)
+            share = np.min(np.abs(sens.c_fsr) / (np.abs(sens.c_fsr) + np.abs(sens.r_fsr)), axis=2)
+            # Capacitive readout quality: the part of ∂ln f that comes from C_FSR, minus the part from R_FSR.
+            merit = np.min(np.abs(sens.c_fsr) - np.abs(sens.r_fsr), axis=2)
+            span = np.nanmin(np.nanmax(f, axis=2) / np.nanmin(f, axis=2)) if not np.any(ok) else math.nan
         if not np.any(ok):
-            with np.errstate(invalid="ignore"):
-                span = np.nanmin(np.nanmax(f, axis=2) / np.nanmin(f, axis=2))
             why = (f"the sensor's frequencies span at least a factor {span:.3g}, wider than the band's {fhi / flo:.3g}"
                    if span > fhi / flo else "no E12 R and C_off place the sensor's frequencies inside the band")
             reasons.append(f"{'diode' if diode else 'no-diode'} circuit: {why} (R ≤ {rs.max():.3g} Ω for the margin)")
@@ -203,7 +227,8 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
             merit=float(merit[i, j]),
         )
     if not best_per_variant:
-        raise ValueError("band_hz: no design keeps the sensor inside the band: " + "; ".join(reasons))
+        cap = f" (its top lowered to max_frequency_hz = {limit:g} Hz)" if capped else ""
+        raise ValueError(f"band_hz: no design keeps the sensor inside the band{cap}: " + "; ".join(reasons))
     chosen = max(best_per_variant.values(), key=lambda d: (d["merit"], d["margin"]))
     q = timer_resolution_s
 
@@ -211,9 +236,12 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
         return tuple(fe**2 * q for fe in ends)
 
     def window(ends):
-        return tuple(fe * q / (max(math.floor(fe * window_s), 1) / fe) for fe in ends)
+        # n whole periods in the window (at least one); a window too long for floor() holds "infinitely" many.
+        periods = [fe * window_s for fe in ends]
+        return tuple(fe * q / ((max(math.floor(n), 1) if math.isfinite(n) else n) / fe) for fe, n in zip(ends, periods))
 
     rng = chosen["frequency_range_hz"]
     return DesignResult(**chosen, resolution_single_hz=single((flo, fhi)), resolution_window_hz=window((flo, fhi)),
                         range_resolution_single_hz=single(rng), range_resolution_window_hz=window(rng),
-                        band_hz=(flo, fhi), window_s=window_s, alternatives=list(best_per_variant.values()))
+                        band_hz=(flo, fhi), window_s=window_s, alternatives=list(best_per_variant.values()),
+                        max_frequency_hz=limit)

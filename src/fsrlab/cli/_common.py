@@ -146,7 +146,7 @@ def option_names(mapping: dict[str, str]) -> Iterator[None]:
     """Re-raise a model's ``ValueError`` with its parameter names replaced by the CLI's option names.
 
     Numpy reprs in the message become plain numbers (:func:`plain_numbers`); a message that starts
-    with an option is reported as that option's invalid value.
+    with an option is reported as that option's invalid value, any other as it is.
 
     Parameters
     ----------
@@ -163,4 +163,6 @@ def option_names(mapping: dict[str, str]) -> Iterator[None]:
         lead = re.match(r"^(--[\w-]+(?:/--[\w-]+)*)(?::\s*|\s+)(.+)$", message, re.DOTALL)
         if lead and lead.group(1) in mapping.values():
             raise typer.BadParameter(lead.group(2), param_hint=lead.group(1)) from None
-        raise typer.BadParameter(message) from None
+        # No option leads the message: one line as it is ("fsrlab: error: ..."), not click's bare
+        # "Invalid value: ...", which reads as if an option had been named.
+        raise ValueError(message) from None

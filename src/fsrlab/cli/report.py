@@ -8,20 +8,34 @@ import typer
 from rich.console import Console
 
 from fsrlab.cli import app
-from fsrlab.cli._common import emit_json
+from fsrlab.cli._common import emit_json, fail
 
 
 @app.command("paper")
 def paper(
-    out: Path = typer.Option(Path("report"), "--out", "-o", help="Directory for index.html, paper.json and the PNG figures."),
+    out: Path = typer.Option(Path("report"), "--out", "-o", help="Directory for index.html, paper.json and the PNG figures; created if missing."),
     json_out: bool = typer.Option(False, "--json", help="Print the paths written as JSON instead of a summary."),
 ) -> None:
-    """Reproduce every figure and table of the paper, with the paper's values beside ours and the errata."""
+    """Reproduce every figure and table of the paper, with the paper's values beside ours and the errata.
+
+    Examples (the report in ./report, then open report/index.html; the files written, as JSON):
+
+    \b
+      fsrlab paper
+      fsrlab paper --out /tmp/fsrlab-report --json
+    """
     from fsrlab.report.paper import write_report
 
+    # A file where the directory should be: say so before building anything.
+    for parent in (out, *out.parents):
+        if parent.exists() and not parent.is_dir():
+            fail(f"{parent} is a file, not a directory", "--out")
     console = Console(stderr=True)
-    with console.status("building report") as status:
-        result = write_report(out, progress=lambda name: status.update(f"building report: {name}"))
+    try:
+        with console.status("building report") as status:
+            result = write_report(out, progress=lambda name: status.update(f"building report: {name}"))
+    except OSError as exc:
+        fail(f"cannot write the report into {out}: {exc.strerror or exc}", "--out")
     if json_out:
         emit_json({"index": result.index, "json": result.json, "figures": result.figures,
                    "errata": sum(len(s.errata) for s in result.sections)})
