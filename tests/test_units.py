@@ -60,7 +60,8 @@ def test_parse_quantity(text, quantity, value):
     ("4.7m", "resistance", ["4.7M", "4.7meg", "4.7e-3"]),
     ("1m5", "resistance", ["1.5M", "1.5meg", "1.5e-3"]),
     ("1mΩ", "resistance", ["ambiguous", "1M"]),
-    ("1m", "capacitance", ["ambiguous", "1e-3", "mF"]),
+    ("1m", "capacitance", ["ambiguous", "1e-3", "mF", "1u", "µF"]),
+    ("4.7mF", "capacitance", ["ambiguous", "4.7e-3", "4.7u"]),
     # another quantity's unit: the allowed one is named
     ("10kF", "resistance", ["capacitance", "Ω"]), ("10kΩ", "capacitance", ["resistance", "in F"]),
     ("5Hz", "voltage", ["frequency", "in V"]), ("1kV", "frequency", ["voltage", "in Hz"]),

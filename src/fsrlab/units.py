@@ -147,6 +147,9 @@ def _readings(suffix: str, q: Quantity) -> list[tuple[str, str, float]]:
 
 def _milli_message(number: str, value: float, q: Quantity, text: str) -> str:
     milli = f"{number}e-3" if re.fullmatch(r"[+-]?[\d.]+", number) else f"{value * 1e-3:g}"
+    if q.symbol == "F":  # nobody means megafarads: say how to write the small prefixes instead
+        return (f"{text!r} is ambiguous: write {milli} for {number} mF, or a small prefix such as "
+                f"{number}u ({number} µF), {number}n or {number}p")
     return (f"{text!r} is ambiguous: write {number}M or {number}meg for {number} M{q.symbol}, "
             f"or {milli} for {number} m{q.symbol}")
 
