@@ -14,8 +14,6 @@ from typing import Iterator
 
 import numpy as np
 import typer
-from rich.console import Console
-from rich.table import Table
 
 from fsrlab.cli import app
 from fsrlab.cli._common import emit_json, fail, farads, fraction, number, ohms, option_names
@@ -99,6 +97,9 @@ def hysteresis(
     if json_out:
         emit_json({**res.to_dict(), **(_skipped_json(run) if skip_bad_rows else {})})
         return
+    from rich.console import Console
+    from rich.table import Table
+
     table = Table(title=f"Hysteresis error of {quantity} (eq. 13), {run_file.name}")
     for col in ("cycle", "HE (%)", "σd (kPa)"):
         table.add_column(col, justify="right")
@@ -135,6 +136,9 @@ def repeatability(
     if json_out:
         emit_json(res.to_dict())
         return
+    from rich.console import Console
+    from rich.table import Table
+
     table = Table(title=f"Repeatability (eq. 39, RE2 with divisor {'n − 1' if ddof else 'n'}), {file.name}")
     for col in ("load", "sensor", "n", "mean", "RE1 (%)", "RE2 (%)"):
         table.add_column(col, justify="right")
@@ -206,6 +210,9 @@ def calibrate_cmd(
     if json_out:
         emit_json(out)
         return
+    from rich.console import Console
+    from rich.table import Table
+
     console = Console()
     table = Table(title=f"Calibration stress_pa({x}), {run_file.name}")
     table.add_column("quantity")
@@ -345,6 +352,9 @@ def iso376_cmd(
     if json_out:
         emit_json(out)
         return
+    from rich.console import Console
+    from rich.table import Table
+
     table = Table(title=f"ISO 376:2011 quantities, {file.name}")
     for col in ("quantity", "worst (%)", "class"):
         table.add_column(col, justify="right")

@@ -8,13 +8,10 @@ import warnings
 
 import numpy as np
 import typer
-from rich.console import Console
-from rich.table import Table
-from scipy.constants import electron_volt
 
 from fsrlab.cli import app
 from fsrlab.cli._common import electronvolts, emit_json, fail, metres, number, option_names, pascals, volts
-from fsrlab.physics.params import PAPER
+from fsrlab.physics.params import PAPER, electron_volt
 from fsrlab.units import format_eng
 
 _NAMES = {"u_v": "--u", "s0_m": "--s0", "modulus_pa": "--modulus", "sigma_f_pa": "--sigma-f", "k": "--k",
@@ -113,6 +110,9 @@ def physics(
              "capacitance_per_area_percent": cap.percent, "capacitance_stress_at_max_pa": cap.stress_at_max_pa}
             for v, regime, res, cap, _ in rows]})
         return
+    from rich.console import Console
+    from rich.table import Table
+
     table = Table(title=f"Hysteresis error over 0 → {sigma_f / 1e3:g} kPa → 0 (eq. 13)")
     for col in ("u (V)", "HE R_A (%)", "σd R_A (kPa)", "HE C_A (%)", "σd C_A (kPa)", "J from"):
         table.add_column(col, justify="right")

@@ -5,7 +5,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import typer
-from rich.console import Console
 
 from fsrlab.cli import app
 from fsrlab.cli._common import emit_json, fail
@@ -30,6 +29,8 @@ def paper(
     for parent in (out, *out.parents):
         if parent.exists() and not parent.is_dir():
             fail(f"{parent} is a file, not a directory", "--out")
+    from rich.console import Console
+
     console = Console(stderr=True)
     try:
         with console.status("building report") as status:
