@@ -33,6 +33,7 @@ __all__ = [
     "load_run",
     "sidecar_path",
     "check_columns",
+    "read_json_document",
 ]
 
 #: Value of the sidecar's ``"format"`` key.
@@ -231,19 +232,43 @@ def _default_metadata(columns: list[str]) -> dict:
             "origin": "", "notes": "", "complete": None, "rows": None}
 
 
+def read_json_document(path: Path, format_name: str, version: int, what: str,
+                       error: type[ValueError] = ValueError) -> dict:
+    """Read a JSON file of fsrlab's (a sidecar, a calibration) and check its ``format`` and ``version``.
+
+    Parameters
+    ----------
+    path : Path
+        The file.
+    format_name : str
+        Required value of its ``"format"`` key.
+    version : int
+        The version this fsrlab reads.
+    what : str
+        What the file is, for the messages (``"sidecar"``, ``"calibration"``).
+    error : type
+        Exception raised, with one line naming the file and what is wrong.
+
+    Returns
+    -------
+    dict
+    """
+    try:
+        d = json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise error(f"{path}: not a valid JSON {what} ({exc})") from None
+    if not isinstance(d, dict) or d.get("format") != format_name:
+        raise error(f"{path}: not an fsrlab {what} (\"format\" must be {format_name!r})")
+    if d.get("version") != version:
+        raise error(f"{path}: {what} version {d.get('version')!r} not supported (this fsrlab reads version {version})")
+    return d
+
+
 def _load_metadata(path: Path) -> dict | None:
     mp = sidecar_path(path)
     if not mp.exists():
         return None
-    try:
-        meta = json.loads(mp.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise RunFormatError(f"{mp}: not valid JSON ({exc})") from None
-    if not isinstance(meta, dict) or meta.get("format") != FORMAT:
-        raise RunFormatError(f"{mp}: not an {FORMAT!r} sidecar (\"format\" must be {FORMAT!r})")
-    if meta.get("version") != VERSION:
-        raise RunFormatError(f"{mp}: format version {meta.get('version')!r} not supported (this fsrlab reads version {VERSION})")
-    return meta
+    return read_json_document(mp, FORMAT, VERSION, "sidecar", RunFormatError)
 
 
 def where(path: Path, row: int, column: str | None) -> str:

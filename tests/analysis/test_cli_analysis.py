@@ -90,7 +90,7 @@ def test_calibrate_apply_roundtrip_and_compensation(runs, tmp_path, capsys):
     (["hysteresis", "{bench}", "--quantity", "nope"], "column 'nope' missing"),
     (["calibrate", "{bench}", "--degree", "7"], "--degree"),
     (["calibrate", "{bench}", "--x", "nope"], "column 'nope' missing"),
-    (["apply", "{bench}", "{bench}", "-o", "{tmp}/x.csv"], "not a JSON calibration"),
+    (["apply", "{bench}", "{bench}", "-o", "{tmp}/x.csv"], "not a valid JSON calibration"),
     (["hysteresis", "{tmp}/does-not-exist.csv"], "does-not-exist.csv"),
 ])
 def test_bad_input_one_line_exit_2(runs, tmp_path, capsys, args, needle):

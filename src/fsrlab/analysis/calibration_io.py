@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from fsrlab.analysis.calibration import Calibration, CrossValidation, PolynomialModel
+from fsrlab.runformat import read_json_document
 
 __all__ = ["CALIBRATION_FORMAT", "calibration_to_dict", "calibration_from_dict", "save_calibration",
            "load_calibration"]
@@ -171,14 +172,7 @@ def load_calibration(path: str | os.PathLike) -> Calibration:
         One line naming the file and what is wrong.
     """
     p = Path(path)
-    try:
-        d = json.loads(p.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise ValueError(f"{p}: not a JSON calibration file ({exc})") from None
-    if not isinstance(d, dict) or d.get("format") != CALIBRATION_FORMAT:
-        raise ValueError(f"{p}: not an fsrlab calibration (\"format\" must be {CALIBRATION_FORMAT!r})")
-    if d.get("version") != 1:
-        raise ValueError(f"{p}: calibration version {d.get('version')!r} not supported (version 1 is)")
+    d = read_json_document(p, CALIBRATION_FORMAT, 1, "calibration")
     try:
         cal = calibration_from_dict(d)
     except (KeyError, TypeError, ValueError) as exc:
