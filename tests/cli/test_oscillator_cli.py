@@ -110,3 +110,17 @@ def test_control_pin_option(capsys):
     assert code == 0 and json.loads(out)["frequency_hz"] == pytest.approx(ref.frequency_hz, rel=1e-12)
     code, _, err = run_cli(["oscillator", "--r", "10k", "--rfsr", "70k", "--cfsr", "1n", "--vctrl", "4"], capsys)
     assert code == 2 and "must exceed 8" in err  # N = 7 < N_min = 8 with the moved threshold
+
+
+def test_spice_failure_is_one_line_exit_1(monkeypatch):
+    # The simulator failing is not the user's input (exit 1, not 2), and never a traceback.
+    from fsrlab.circuits import circuit, spice
+
+    def broken(self, *args, **kwargs):
+        raise RuntimeError("ngspice failed (exit 1):\n  Error: no such vector time")
+
+    monkeypatch.setattr(spice, "ngspice_available", lambda: True)
+    monkeypatch.setattr(circuit.LM555Circuit, "simulate_spice", broken)
+    code, out, err = run_cli(["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1n", "--spice"])
+    assert code == 1 and out == ""
+    assert err == "fsrlab: --spice: ngspice failed (exit 1): Error: no such vector time\n"

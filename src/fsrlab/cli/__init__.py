@@ -57,6 +57,18 @@ def _root(
     """Force sensing with FSRs read through their piezocapacitance (Matute et al. 2018)."""
 
 
+_CLICK: dict = {}
+
+
+def _click_command():
+    """``app`` as a click command, built once per set of registered commands (building takes ~20 ms)."""
+    key = tuple((id(info), info.name) for info in app.registered_commands)
+    if key not in _CLICK:
+        _CLICK.clear()
+        _CLICK[key] = typer.main.get_command(app)
+    return _CLICK[key]
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; usage errors and invalid values end with one line and exit code 2.
 
@@ -73,7 +85,7 @@ def main(argv: list[str] | None = None) -> int:
     args = sys.argv[1:] if argv is None else list(argv)
     if not args:  # bare ``fsrlab``: the help, as a successful command
         args = ["--help"]
-    command = typer.main.get_command(app)
+    command = _click_command()
     try:
         # In non-standalone mode typer returns an explicit Exit's code, or the command's value.
         result = command.main(args=args, prog_name="fsrlab", standalone_mode=False)

@@ -54,11 +54,16 @@ def _model_errors(diode: bool = False) -> Iterator[None]:
             fail(str(exc), blame)
 
 
+_LABELS = {"frequency_hz": "f", "duty_cycle": "duty cycle", "tau_high_s": "τH", "tau_low_s": "τL", "n_ratio": "N",
+           "sensitivity_c": "∂ln f/∂ln C_FSR", "sensitivity_r": "∂ln f/∂ln R_FSR", "r_fsr_ohm": "R_FSR",
+           "c_fsr_farad": "C_FSR", "r_fsr_std_ohm": "σ(R_FSR)", "c_fsr_std_farad": "σ(C_FSR)"}
+
+
 def _finite(values: dict, what: str, options: str) -> None:
     """Fail naming ``options`` when a result is not a finite number (parts beyond floating point)."""
     bad = {k: v for k, v in values.items() if not math.isfinite(v)}
     if bad:
-        shown = ", ".join(f"{k} = {v:g}" for k, v in bad.items())
+        shown = ", ".join(f"{_LABELS.get(k, k)} = {v:g}" for k, v in bad.items())
         fail(f"no finite {what} for these values ({shown}): they leave the range of floating point", options)
 
 
