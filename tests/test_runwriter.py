@@ -95,7 +95,7 @@ w.close()
 """
     proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
     assert proc.returncode == 0, proc.stderr
-    assert proc.stdout.strip() == f"cannot write {path}: File too large"
+    assert proc.stdout.strip() == f"cannot write '{path}': File too large"
     text = path.read_text()
     assert text.endswith("\n") and len(text) <= 1000
     run = load_run(path)

@@ -47,7 +47,8 @@ def _format_value(value: Any) -> str:
 
 def _user_error(exc: OSError, path: Path) -> OSError:
     """``exc`` about ``path`` (the file the user named), never about a temporary file beside it."""
-    err = type(exc)(f"cannot write {path}: {exc.strerror or exc}")
+    why = "it is a directory" if isinstance(exc, IsADirectoryError) else (exc.strerror or exc)
+    err = type(exc)(f"cannot write '{path}': {why}")
     err.errno = exc.errno
     return err
 

@@ -303,7 +303,7 @@ def test_a_failing_writer_ends_the_run_with_one_line_and_whole_rows(tmp_path):
                            "--out", str(out), "--quiet", "--json"], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 1
     assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
-    assert f"cannot write {out}: File too large" in proc.stderr
+    assert f"cannot write '{out}': File too large" in proc.stderr
     run = load_run(out)
     assert out.read_text().endswith("\n")
     assert run.n_rows == run.metadata["rows"] == json.loads(proc.stdout)["frames"] > 0

