@@ -268,7 +268,11 @@ def _load_metadata(path: Path) -> dict | None:
     mp = sidecar_path(path)
     if not mp.exists():
         return None
-    return read_json_document(mp, FORMAT, VERSION, "sidecar", RunFormatError)
+    meta = read_json_document(mp, FORMAT, VERSION, "sidecar", RunFormatError)
+    for key in ("units", "circuit", "opamp", "sensor", "calibration", "acquisition"):
+        if meta.get(key) is not None and not isinstance(meta[key], dict):
+            raise RunFormatError(f"{mp}: \"{key}\" must be an object (a mapping), got {type(meta[key]).__name__}")
+    return meta
 
 
 def where(path: Path, row: int, column: str | None) -> str:

@@ -90,8 +90,13 @@ def calibration_to_dict(cal: Calibration) -> dict[str, Any]:
 
 
 def _model(m: dict) -> PolynomialModel:
-    return PolynomialModel(np.asarray(m["chebyshev_coefficients"], dtype=float), float(m["x_center"]),
-                           float(m["x_half_width"]))
+    coef = np.asarray(m["chebyshev_coefficients"], dtype=float)
+    center, half = float(m["x_center"]), float(m["x_half_width"])
+    if coef.ndim != 1 or coef.size < 1 or not np.all(np.isfinite(coef)):
+        raise ValueError("chebyshev_coefficients must be a list of finite numbers")
+    if not (np.isfinite(center) and np.isfinite(half) and half > 0):
+        raise ValueError("x_center must be finite and x_half_width finite and > 0")
+    return PolynomialModel(coef, center, half)
 
 
 def calibration_from_dict(d: dict) -> Calibration:
