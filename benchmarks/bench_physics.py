@@ -124,7 +124,7 @@ def run() -> str:
         f"{loop_rate / old_rate:.2f}× | {loop_rate / exp_rate:.1%} |\n"
         f"| loop calling fsrlab per scalar | {t_calls * 1e3:.0f} ms for {N_SCALAR_CALLS:,} | {calls_rate:.3g} | "
         f"{calls_rate / old_rate:.5f}× | {calls_rate / exp_rate:.3%} |\n\n"
-        f"Aim of issue 16 (≥ 8e7 points/s): {'met' if new_rate >= 8e7 else 'not met'} ({new_rate:.2g}). Keeping "
+        f"Target (≥ 8e7 points/s): {'met' if new_rate >= 8e7 else 'not met'} ({new_rate:.2g}). Keeping "
         f"every number equal to the bit fixes the order of the operations as printed (B alone is four "
         f"passes: 8π·s·√(2m)·φ0^1.5/(2.96·h·e·u)), so the kernel makes about 17 passes over each chunk besides "
         f"its four exponentials; folding the constants would change the last bits.\n"
