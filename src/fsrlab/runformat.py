@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -261,7 +262,22 @@ def read_json_document(path: Path, format_name: str, version: int, what: str,
         raise error(f"{path}: not an fsrlab {what} (\"format\" must be {format_name!r})")
     if d.get("version") != version:
         raise error(f"{path}: {what} version {d.get('version')!r} not supported (this fsrlab reads version {version})")
+    bad = _non_finite(d)
+    if bad is not None:
+        raise error(f"{path}: \"{bad}\" is not a finite number (JSON has no NaN or Infinity)")
     return d
+
+
+def _non_finite(obj, key: str = "") -> str | None:
+    """The key path of the first NaN or infinite number in a JSON document, or None."""
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return key or "(top level)"
+    items = obj.items() if isinstance(obj, dict) else enumerate(obj) if isinstance(obj, list) else ()
+    for k, v in items:
+        found = _non_finite(v, f"{key}.{k}" if key else str(k))
+        if found is not None:
+            return found
+    return None
 
 
 def _load_metadata(path: Path) -> dict | None:

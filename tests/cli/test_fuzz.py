@@ -517,7 +517,7 @@ def test_fuzz_case_count():
 # ------------------------------------------------------------------------------------------------
 
 #: Findings still open (the others are fixed and must stay fixed).
-OPEN = {"calibration-values", "sidecar-non-finite"}
+OPEN = {"calibration-values"}
 
 
 @pytest.mark.parametrize("ident", [pytest.param(k[0], marks=pytest.mark.xfail(strict=True, reason=k[4]))
