@@ -106,6 +106,32 @@ def test_worked_examples_of_docs_protocol_md():
         b"$M,5,1234,100,1000,1600000,800000,0,512,0*9CDE\r\n"
 
 
+def test_version_2_worked_example_and_reference_fields():
+    # docs/protocol.md's version-2 frame; its CRC checked against the independent bitwise CRC.
+    line = encode_frame("M", 5, (1234, 100, 1000, 1600000, 800000, 0, 512, 0, 1, 4, -1234))
+    assert line == b"$M,5,1234,100,1000,1600000,800000,0,512,0,1,4,-1234*A454\r\n"
+    assert _crc_bitwise(line[1:line.index(b"*")]) == 0xA454
+    (frame,) = FrameParser().feed(line)
+    m = Measurement.from_frame(frame)
+    assert (m.ref_ok, m.ref_n, m.ref_mean) == (1, 4, -1234.0)
+    assert (m.frequency_hz, m.duty_cycle) == (10000.0, 0.5)  # v1 fields unchanged
+    # The extremes of the 24-bit range are accepted; no sample means NaN, never 0.
+    for value in (P.HX711_MIN, P.HX711_MAX):
+        assert Measurement.from_frame(Frame("M", 0, ("0", "100", "0", "0", "0", "0", "0", "0", "1", "1", str(value)))).ref_mean == value
+    none = Measurement.from_frame(Frame("M", 0, ("0", "100", "0", "0", "0", "0", "0", "0", "1", "0", "0")))
+    assert none.ref_ok == 1 and none.ref_n == 0 and math.isnan(none.ref_mean)
+    # A version-1 frame: no reference input at all.
+    v1 = Measurement.from_frame(Frame("M", 0, ("0", "100", "0", "0", "0", "0", "0", "0")))
+    assert v1.ref_ok is None and v1.ref_n == 0 and math.isnan(v1.ref_mean)
+
+
+def test_longest_frame_fits_the_line_limit():
+    # Every number at its widest: 100 bytes, counted by hand from docs/protocol.md's grammar:
+    # one "$", the payload, "*XXXX" and CRLF, the payload written out from the grammar here:
+    widest = "M,65535," + ",".join(["4294967295", "60000"] + ["4294967295"] * 4 + ["1023", "1", "1", "65535", "-8388608"])
+    assert P.max_frame_length() == 1 + len(widest) + 5 + 2 == 100 <= P.MAX_LINE
+
+
 def test_measurement_decodes_frequency_and_duty_from_the_tick_sums():
     # Closed form of the protocol: f = periods * 16e6 / sum_period, duty = sum_high / sum_period.
     (frame,) = FrameParser().feed(encode_frame("M", 5, (1234, 100, 1000, 1600000, 400000, 2, 512, 1)))
@@ -136,7 +162,7 @@ def test_other_frames_decode():
 @pytest.mark.parametrize("kind, seq, fields, match", [
     ("X", 0, (), "kind"), ("M", 65536, (0,) * 8, "seq"), ("M", -1, (0,) * 8, "seq"),
     ("M", 0, (0,) * 7, "fields"), ("ACK", 0, ("A,B",), "fields"), ("ACK", 0, ("",), "fields"),
-    ("ACK", 0, (-1,), "fields"), ("ERR", 0, (1, "X" * 90), "maximum line length"),
+    ("ACK", 0, (-1,), "fields"), ("ERR", 0, (1, "X" * 110), "maximum line length"),
 ])
 def test_encode_frame_rejects_invalid_input(kind, seq, fields, match):
     with pytest.raises(ValueError, match=match):
@@ -230,6 +256,16 @@ def test_overlong_line_is_malformed_and_frame_after_it_recovered():
     b"$M,+1,0,100,0,0,0,0,0,0*%04X\r\n",              # signed
     b"$M,65536,0,100,0,0,0,0,0,0*%04X\r\n",           # seq out of range
     b"$Q,1,2*%04X\r\n",                               # unknown type
+    b"$M,1,0,100,0,0,0,0,0,0,1,1*%04X\r\n",           # v2 with 10 fields
+    b"$M,1,0,100,0,0,0,0,0,0,2,0,0*%04X\r\n",         # ref_ok 2
+    b"$M,1,0,100,0,0,0,0,0,0,0,3,12*%04X\r\n",        # samples counted without an HX711
+    b"$M,1,0,100,0,0,0,0,0,0,1,0,12*%04X\r\n",        # a mean of no samples
+    b"$M,1,0,100,0,0,0,0,0,0,1,1,-0*%04X\r\n",        # minus zero
+    b"$M,1,0,100,0,0,0,0,0,0,1,1,+5*%04X\r\n",        # plus sign
+    b"$M,1,0,100,0,0,0,0,0,0,1,1,8388608*%04X\r\n",   # beyond 24 bits (2^23)
+    b"$M,1,0,100,0,0,0,0,0,0,1,1,-8388609*%04X\r\n",  # beyond 24 bits (-2^23 - 1)
+    b"$M,1,0,100,0,0,0,0,0,0,1,65536,5*%04X\r\n",     # ref_n beyond 16 bits
+    b"$M,1,0,100,0,0,0,0,0,0,1,1,--5*%04X\r\n",       # two signs
 ])
 def test_lines_with_valid_crc_but_invalid_content_are_malformed(line):
     out, parser = _parse_all(line % crc16(line[1:line.index(b"*")]))

@@ -41,7 +41,7 @@ def test_recording_writes_a_valid_run(tmp_path):
     assert np.corrcoef(run["stress_pa"], run["frequency_hz"])[0, 1] > 0.9
     meta = run.metadata
     assert meta["complete"] and meta["rows"] == run.n_rows
-    assert meta["acquisition"]["window_ms"] == 20 and meta["acquisition"]["protocol_version"] == 1
+    assert meta["acquisition"]["window_ms"] == 20 and meta["acquisition"]["protocol_version"] == 2
 
 
 def test_corrupted_link_is_counted_and_never_reaches_the_file(tmp_path):

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from fsrlab.acquisition.protocol import ADC_V_PER_COUNT, F_CPU, Frame, ProtocolError, check_fields
+from fsrlab.acquisition.protocol import ADC_V_PER_COUNT, F_CPU, M_FIELDS_V2, Frame, ProtocolError, check_fields
 
 __all__ = ["decode_sums", "Measurement", "Identity", "Ack", "DeviceError"]
 
@@ -67,6 +67,15 @@ class Measurement:
         ``periods · F_CPU / sum_period_ticks``; NaN when ``periods == 0`` (no signal). [Hz]
     duty_cycle : float
         ``sum_high_ticks / sum_period_ticks``, 0..1; NaN when ``periods == 0``.
+    ref_ok : int or None
+        Protocol v2: 1 when the load cell's HX711 answers (a conversion completed in the last second),
+        0 when none is connected or it stopped answering; None for a version-1 frame (no reference input).
+    ref_n : int
+        HX711 conversions that completed in the window (0 for version 1, with no HX711, or when a slow
+        HX711 finished none in this window).
+    ref_mean : float
+        Mean of those conversions, raw 24-bit two's-complement counts as the firmware rounds it
+        (``floor(sum/n + 1/2)``); NaN when ``ref_n == 0``, never 0 in its place. [count]
     """
 
     seq: int
@@ -80,6 +89,9 @@ class Measurement:
     range: int
     frequency_hz: float
     duty_cycle: float
+    ref_ok: int | None = None
+    ref_n: int = 0
+    ref_mean: float = math.nan
 
     @classmethod
     def from_frame(cls, frame: Frame) -> "Measurement":
@@ -102,8 +114,12 @@ class Measurement:
         if frame.kind != "M":
             raise ProtocolError(f"frame kind must be 'M' for a measurement, got {frame.kind!r}")
         check_fields("M", frame.fields)
-        t_ms, window, periods, sum_p, sum_h, missed, adc, rng = (int(f) for f in frame.fields)
+        t_ms, window, periods, sum_p, sum_h, missed, adc, rng = (int(f) for f in frame.fields[:8])
         f, duty = decode_sums(periods, sum_p, sum_h)
+        if len(frame.fields) == M_FIELDS_V2:
+            ref_ok, ref_n, ref_mean = (int(x) for x in frame.fields[8:])
+            return cls(frame.seq, t_ms, window, periods, sum_p, sum_h, missed, adc, rng, f, duty,
+                       ref_ok, ref_n, float(ref_mean) if ref_n > 0 else math.nan)
         return cls(frame.seq, t_ms, window, periods, sum_p, sum_h, missed, adc, rng, f, duty)
 
     @property
@@ -125,7 +141,7 @@ class Identity:
     firmware_version : str
         Firmware version, e.g. ``1.0.0``.
     protocol_version : int
-        Protocol version (1).
+        Protocol version (2; version-1 devices send 1).
     f_cpu_hz : int
         Device clock. [Hz]
     """

@@ -1,4 +1,4 @@
-"""Serial protocol v1 between the fsrlab meter (Arduino firmware) and the host: pure framing, no I/O.
+"""Serial protocol (version 2; version 1 still read) between the fsrlab meter (Arduino firmware) and the host: pure framing, no I/O.
 
 The device sends one ASCII frame per line, ``$<TYPE>,<SEQ>[,<field>...]*<CRC>\\r\\n``, where CRC is
 CRC-16/CCITT-FALSE over the bytes strictly between ``$`` and ``*``; the host sends short command
@@ -22,17 +22,25 @@ import binascii
 from dataclasses import dataclass, field
 
 __all__ = [
-    "PROTOCOL_VERSION", "F_CPU", "TICK_S", "ADC_BITS", "ADC_COUNTS", "ADC_VREF_V", "ADC_V_PER_COUNT", "DEFAULT_BAUD", "MAX_LINE", "MAX_COMMAND", "SEQ_MODULO",
+    "PROTOCOL_VERSION", "SUPPORTED_PROTOCOLS", "M_FIELDS_V1", "M_FIELDS_V2", "HX711_MIN", "HX711_MAX", "F_CPU", "TICK_S", "ADC_BITS", "ADC_COUNTS", "ADC_VREF_V", "ADC_V_PER_COUNT", "DEFAULT_BAUD", "MAX_LINE", "MAX_COMMAND", "SEQ_MODULO",
     "UINT32_MODULO", "CAPTURE_MAX_HZ",
     "WINDOW_MS_MIN", "WINDOW_MS_MAX", "WINDOW_MS_DEFAULT", "DEVICE_NAME", "FRAME_TYPES", "COMMANDS",
     "ERR_UNKNOWN_COMMAND", "ERR_BAD_VALUE", "ERR_LINE_TOO_LONG",
     "ProtocolError", "CommandError", "Frame",
     "ParserStats", "FrameParser", "crc16", "encode_frame", "encode_command", "parse_command", "check_fields",
-    "max_frame_rate", "min_frame_length",
+    "max_frame_rate", "min_frame_length", "max_frame_length",
 ]
 
-PROTOCOL_VERSION = 1
-"""Version sent in the ``ID`` frame; the host refuses any other."""
+PROTOCOL_VERSION = 2
+"""Version of this protocol, sent in the ``ID`` frame of a current device (and the virtual device)."""
+SUPPORTED_PROTOCOLS = (1, 2)
+"""Versions the host reads: version 1 devices (no reference fields) keep working."""
+M_FIELDS_V1 = 8
+"""Fields after ``SEQ`` of a version-1 ``M`` frame (``t_ms`` .. ``range``)."""
+M_FIELDS_V2 = 11
+"""Fields after ``SEQ`` of a version-2 ``M`` frame: version 1's plus ``ref_ok``, ``ref_n``, ``ref_mean``."""
+HX711_MIN, HX711_MAX = -(2**23), 2**23 - 1
+"""Range of the HX711's 24-bit two's-complement output (``ref_mean`` of an ``M`` frame). [count]"""
 F_CPU = 16_000_000
 """ATmega328P clock of the Arduino Uno. [Hz]"""
 TICK_S = 62.5e-9
@@ -47,8 +55,8 @@ ADC_V_PER_COUNT = ADC_VREF_V / ADC_COUNTS
 """One ADC step, ``Vref/1024`` (code = floor(V·1024/Vref)). [V]"""
 DEFAULT_BAUD = 115200
 """Default line rate, 8N1. [bit/s]"""
-MAX_LINE = 96
-"""Longest device frame, from ``$`` to ``\\n`` inclusive. [byte]"""
+MAX_LINE = 112
+"""Longest device frame, from ``$`` to ``\\n`` inclusive (version 1 allowed 96). [byte]"""
 MAX_COMMAND = 32
 """Longest host command line, ``\\n`` included. [byte]"""
 SEQ_MODULO = 65536
@@ -72,21 +80,22 @@ ERR_UNKNOWN_COMMAND, ERR_BAD_VALUE, ERR_LINE_TOO_LONG = 1, 2, 3
 
 _U32 = UINT32_MODULO - 1
 # Per type: number of fields after TYPE and SEQ (min, max).
-FRAME_TYPES: dict[str, tuple[int, int]] = {"M": (8, 8), "ID": (4, 4), "ACK": (1, 2), "ERR": (2, 2)}
-"""Frame types of protocol v1 and how many fields follow ``SEQ`` (minimum, maximum)."""
+FRAME_TYPES: dict[str, tuple[int, int]] = {"M": (M_FIELDS_V1, M_FIELDS_V2), "ID": (4, 4), "ACK": (1, 2), "ERR": (2, 2)}
+"""Frame types and how many fields follow ``SEQ`` (minimum, maximum; an ``M`` frame has exactly
+:data:`M_FIELDS_V1` or :data:`M_FIELDS_V2`)."""
 # Commands and the allowed range of their value (None: takes no value).
 COMMANDS: dict[str, tuple[int, int] | None] = {
     "ID": None, "START": None, "STOP": None,
     "WINDOW": (WINDOW_MS_MIN, WINDOW_MS_MAX), "RANGE": (0, 1),
 }
-"""Host commands of protocol v1 and the inclusive range of their value (``None``: no value)."""
+"""Host commands (the same in versions 1 and 2) and the inclusive range of their value (``None``: no value)."""
 
 _HEX = frozenset(b"0123456789ABCDEF")
 _DOLLAR, _NL, _CR, _STAR = 0x24, 0x0A, 0x0D, 0x2A
 
 
 class ProtocolError(ValueError):
-    """A frame or value that protocol v1 does not allow."""
+    """A frame or value that the protocol does not allow."""
 
 
 class CommandError(ProtocolError):
@@ -164,8 +173,8 @@ def encode_frame(kind: str, seq: int, fields=()) -> bytes:
     seq : int
         Sequence number, 0..65535.
     fields : sequence of int or str
-        Fields after ``SEQ``: integers (written in decimal) or printable ASCII tokens without
-        ``,``, ``*``, ``$``, CR or LF.
+        Fields after ``SEQ``: integers (written in decimal; negative only where the protocol has a
+        signed field, ``ref_mean``) or printable ASCII tokens without ``,``, ``*``, ``$``, CR or LF.
 
     Returns
     -------
@@ -184,12 +193,13 @@ def encode_frame(kind: str, seq: int, fields=()) -> bytes:
     lo, hi = FRAME_TYPES[kind]
     if not lo <= len(fields) <= hi:
         raise ValueError(f"fields: a {kind} frame has {lo}..{hi} fields after SEQ, got {len(fields)}")
+    signed = kind == "M" and len(fields) == M_FIELDS_V2  # ref_mean, the last field, has a sign
     parts = [kind, str(seq)]
-    for value in fields:
+    for k, value in enumerate(fields):
         if isinstance(value, bool):
             value = int(value)
         if isinstance(value, int):
-            if value < 0:
+            if value < 0 and not (signed and k == M_FIELDS_V2 - 1):
                 raise ValueError(f"fields must be non-negative integers or tokens, got {value}")
             parts.append(str(value))
         else:
@@ -207,6 +217,12 @@ def encode_frame(kind: str, seq: int, fields=()) -> bytes:
 def min_frame_length() -> int:
     """Length of the shortest valid measurement frame (all numbers one digit, window 10 ms). [byte]"""
     return len(encode_frame("M", 0, (0, WINDOW_MS_MIN, 0, 0, 0, 0, 0, 0)))
+
+
+def max_frame_length() -> int:
+    """Length of the longest valid frame: a version-2 ``M`` frame with every number at its widest. [byte]"""
+    return len(encode_frame("M", SEQ_MODULO - 1, (_U32, WINDOW_MS_MAX, _U32, _U32, _U32, _U32, 1023, 1, 1, 65535,
+                                                  HX711_MIN)))
 
 
 def max_frame_rate(baud: float, frame_bytes: int | None = None, bits_per_byte: int = 10) -> float:
@@ -244,8 +260,19 @@ def _uint(text: str, hi: int = _U32) -> int:
     return value
 
 
+def _int24(text: str) -> int:
+    # Signed decimal: an optional '-' then plain digits, within the HX711's 24-bit range.
+    digits = text[1:] if text.startswith("-") else text
+    if not digits or len(digits) > 8 or not digits.isdigit() or not digits.isascii() or text == "-0":
+        raise ProtocolError(f"not a signed decimal integer: {text!r}")
+    value = int(text)
+    if not HX711_MIN <= value <= HX711_MAX:
+        raise ProtocolError(f"{value} is outside the 24-bit range")
+    return value
+
+
 def check_fields(kind: str, fields: tuple[str, ...]) -> None:
-    """Raise ProtocolError when the fields of a known frame type are not valid protocol v1.
+    """Raise ProtocolError when the fields of a known frame type are not valid protocol (v1 or v2).
 
     Parameters
     ----------
@@ -258,9 +285,15 @@ def check_fields(kind: str, fields: tuple[str, ...]) -> None:
     if not lo <= len(fields) <= hi:
         raise ProtocolError(f"{kind} frame with {len(fields)} fields")
     if kind == "M":
-        t_ms, window, periods, sum_p, sum_h, missed, adc, rng = (_uint(f) for f in fields)
+        if len(fields) not in (M_FIELDS_V1, M_FIELDS_V2):
+            raise ProtocolError(f"M frame with {len(fields)} fields")
+        t_ms, window, periods, sum_p, sum_h, missed, adc, rng = (_uint(f) for f in fields[:M_FIELDS_V1])
         if adc > 1023 or rng > 1 or window == 0 or sum_h > sum_p or (periods > 0 and sum_p == 0):
             raise ProtocolError("M frame values out of range")
+        if len(fields) == M_FIELDS_V2:
+            ref_ok, ref_n, ref_mean = _uint(fields[8]), _uint(fields[9], 65535), _int24(fields[10])
+            if ref_ok > 1 or (ref_ok == 0 and ref_n > 0) or (ref_n == 0 and ref_mean != 0):
+                raise ProtocolError("M frame reference values out of range")
     elif kind == "ID":
         _uint(fields[2])
         _uint(fields[3])
@@ -288,7 +321,7 @@ class ParserStats:
     bad_checksum : int
         Well-formed lines whose CRC did not match.
     malformed : int
-        Lines that began with ``$`` but were cut short, too long, or not valid protocol v1.
+        Lines that began with ``$`` but were cut short, too long, or not valid protocol.
     garbage_bytes : int
         Bytes outside any line that began with ``$`` (noise, a baud mismatch, a partial first line).
     lost : int
@@ -328,7 +361,7 @@ class FrameParser:
     frame whose own bytes are intact is always recovered, whatever precedes it. Bytes outside
     candidates are ``garbage_bytes``. A line is ``bad_checksum`` when it is well formed
     (``$payload*XXXX\\r\\n``) but its CRC does not match, and ``malformed`` when it is not well
-    formed, or has a valid CRC but is not a valid protocol v1 frame.
+    formed, or has a valid CRC but is not a valid protocol frame (version 1 or 2).
 
     Sequence numbers: each intact frame should carry the previous one's ``seq + 1`` (mod 65536).
     A forward gap of ``d < 32768`` adds ``d`` to ``lost``. The boot ``ID`` frame (``seq == 0``)

@@ -16,7 +16,7 @@ import serial
 from serial.tools import list_ports
 
 from fsrlab.acquisition.messages import Ack, DeviceError, Identity
-from fsrlab.acquisition.protocol import DEFAULT_BAUD, DEVICE_NAME, PROTOCOL_VERSION, Frame, FrameParser, encode_command
+from fsrlab.acquisition.protocol import DEFAULT_BAUD, DEVICE_NAME, SUPPORTED_PROTOCOLS, Frame, FrameParser, encode_command
 
 __all__ = ["UNO_USB_IDS", "LinkError", "DeviceGone", "HandshakeError", "CommandRejected", "UsbPort",
            "find_uno", "SerialLink"]
@@ -230,9 +230,9 @@ class SerialLink:
         ident = Identity.from_frame(frame)
         if ident.name != DEVICE_NAME:
             raise HandshakeError(f"{self.port} is {ident.name!r}, not an {DEVICE_NAME}")
-        if ident.protocol_version != PROTOCOL_VERSION:
+        if ident.protocol_version not in SUPPORTED_PROTOCOLS:
             raise HandshakeError(f"{self.port} speaks protocol version {ident.protocol_version}; "
-                                 f"this fsrlab speaks version {PROTOCOL_VERSION}")
+                                 f"this fsrlab reads versions {', '.join(map(str, SUPPORTED_PROTOCOLS))}")
         self.identity = ident
         return ident
 

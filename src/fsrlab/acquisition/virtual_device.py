@@ -497,7 +497,7 @@ class VirtualDevice:
                               jitter_s=self.jitter_s, adc_noise_v=self.adc_noise_v)
         u32 = UINT32_MODULO - 1
         fields = (int(t1 * 1000) % UINT32_MODULO, st.current_ms, int(m.periods[0]), min(int(m.sum_period_ticks[0]), u32),
-                  min(int(m.sum_high_ticks[0]), u32), 0, int(m.adc[0]), st.range_)
+                  min(int(m.sum_high_ticks[0]), u32), 0, int(m.adc[0]), st.range_, 0, 0, 0)  # no load cell yet
         fault = self.faults
         st.m_frames += 1
         if fault.reset_after is not None and st.m_frames > fault.reset_after and st.resets_done == 0:
