@@ -24,7 +24,7 @@ import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
 from fsrlab.circuits.lm555 import tau_ratio
-from fsrlab.circuits.spice import simulate_spice
+from fsrlab.circuits.spice import simulate_spice_many
 
 __all__ = [
     "tau_ratio_eq37_as_printed",
@@ -289,6 +289,7 @@ def simulate_tau_ratios(n_ratio: Sequence[float], diode: bool, r_ohm: float = 10
     Returns
     -------
     SimulatedRatios
+        The ngspice runs go concurrently (:func:`fsrlab.circuits.spice.simulate_spice_many`).
 
     Raises
     ------
@@ -297,8 +298,9 @@ def simulate_tau_ratios(n_ratio: Sequence[float], diode: bool, r_ohm: float = 10
         :func:`fsrlab.circuits.spice.ngspice_available` first.
     """
     ratio, dc = [], []
-    for n in n_ratio:
-        s = simulate_spice(r_ohm, n * r_ohm, c_farad, diode=diode, periods=periods)
+    runs = simulate_spice_many(({"r_ohm": r_ohm, "r_fsr_ohm": n * r_ohm, "c_fsr_farad": c_farad} for n in n_ratio),
+                               diode=diode, periods=periods)
+    for s in runs:
         ratio.append(s.duty_cycle / (1 - s.duty_cycle))
         dc.append(s.duty_cycle)
     return SimulatedRatios(n_ratio=tuple(n_ratio), tau_ratio=tuple(ratio), duty_cycle=tuple(dc))

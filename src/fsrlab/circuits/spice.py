@@ -45,7 +45,8 @@ from fsrlab.circuits.circuit import check_lm555
 from fsrlab.circuits.lm555 import astable
 from fsrlab.circuits.phases import timing_per_rc
 
-__all__ = ["SUBCKT_555", "SpiceResult", "netlist", "run_ngspice", "simulate_spice", "ngspice_available",
+__all__ = ["SUBCKT_555", "SpiceResult", "netlist", "read_raw", "run_ngspice", "simulate_spice", "simulate_spice_many",
+           "ngspice_available",
            "edges_from_waveform", "level_crossings"]
 
 #: Control-voltage gain in front of the latch switches (see module docstring). [1]
@@ -104,7 +105,7 @@ def ngspice_available() -> bool:
 def netlist(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: float = 0.0, diode: bool = False,
             diode_drop_v: float = 0.0, vcc_v: float = 5.0, lower_fraction: float = 1 / 3,
             upper_fraction: float = 2 / 3, *, t_stop_s: float, t_max_step_s: float,
-            output_file: str = "fsrlab_out.txt", time_s=None, discharge_ohm: float = 1e-3) -> str:
+            output_file: str = "fsrlab_out.raw", time_s=None, discharge_ohm: float = 1e-3) -> str:
     """ngspice netlist of the astable (paper Figs. 9b, 13, 16) with a ``.control`` block.
 
     Parameters
@@ -131,7 +132,9 @@ def netlist(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: flo
     t_max_step_s : float
         Largest time step ngspice may take. [s]
     output_file : str
-        File ``wrdata`` writes time, V(out), V(thr) into.
+        File the ``.control`` block writes time, V(out), V(thr) into, as an ngspice binary raw file
+        (``set filetype=binary``, ``write``; read by :func:`read_raw`): exact doubles, no text to format
+        and parse.
     time_s : array_like, optional
         Sample times of a time-varying ``r_fsr_ohm`` (strictly increasing, starting at 0). [s]
     discharge_ohm : float
@@ -198,11 +201,9 @@ def netlist(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: flo
         ".ic v(thr)=0",
         ".options reltol=1e-6 vntol=1e-9 abstol=1e-15",
         ".control",
-        "set wr_singlescale",
-        "set wr_vecnames",
-        "option numdgt=15",
+        "set filetype=binary",
         f"tran {t_max_step_s:.6g} {t_stop_s:.9g} 0 {t_max_step_s:.6g} uic",
-        f"wrdata {output_file} v(out) v(thr)",
+        f"write {output_file} v(out) v(thr)",
         "quit",
         ".endc",
         ".end",
@@ -210,13 +211,53 @@ def netlist(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: flo
     return "\n".join(lines) + "\n"
 
 
-def run_ngspice(text: str, output_file: str = "fsrlab_out.txt", timeout_s: float = 300.0) -> np.ndarray:
-    """Run a netlist with ``ngspice -b`` in a temporary directory and read its ``wrdata`` output.
+def read_raw(data: bytes) -> np.ndarray:
+    """Read an ngspice binary raw file (one real-valued plot, e.g. a transient analysis).
+
+    Parameters
+    ----------
+    data : bytes
+        The file's bytes: a text header (``No. Variables:``, ``No. Points:``, ``Flags: real``) ending
+        in ``Binary:\\n``, then the points, each the variables as little-endian float64 (the first is
+        the scale, time).
+
+    Returns
+    -------
+    ndarray
+        Shape (points, variables): column 0 time [s], then the written vectors in order.
+
+    Raises
+    ------
+    RuntimeError
+        When the header is not one of a real-valued binary plot or the data are cut short.
+    """
+    marker = data.find(b"Binary:\n")
+    if marker < 0:
+        raise RuntimeError("ngspice raw file: no 'Binary:' section (not a binary raw file)")
+    header = {}
+    for line in data[:marker].decode("ascii", "replace").splitlines():
+        key, sep, value = line.partition(":")
+        if sep:
+            header[key.strip().lower()] = value.strip()
+    if "complex" in header.get("flags", "real"):
+        raise RuntimeError("ngspice raw file: complex data (expected a real-valued transient plot)")
+    try:
+        nvars, npoints = int(header["no. variables"]), int(header["no. points"])
+    except (KeyError, ValueError):
+        raise RuntimeError("ngspice raw file: header without 'No. Variables' / 'No. Points'") from None
+    body = data[marker + len(b"Binary:\n"):]
+    if len(body) < 8 * nvars * npoints:
+        raise RuntimeError(f"ngspice raw file: {len(body)} bytes of data, {8 * nvars * npoints} expected")
+    return np.frombuffer(body, dtype="<f8", count=nvars * npoints).reshape(npoints, nvars).copy()
+
+
+def run_ngspice(text: str, output_file: str = "fsrlab_out.raw", timeout_s: float = 300.0) -> np.ndarray:
+    """Run a netlist with ``ngspice -b`` in a temporary directory and read its binary raw output.
 
     Parameters
     ----------
     text : str
-        Netlist whose ``.control`` block writes ``output_file`` with ``wrdata``.
+        Netlist whose ``.control`` block writes ``output_file`` as a binary raw file (as :func:`netlist`'s).
     output_file : str
         Name of that file.
     timeout_s : float
@@ -245,7 +286,7 @@ def run_ngspice(text: str, output_file: str = "fsrlab_out.txt", timeout_s: float
         if proc.returncode != 0 or not out.exists():
             tail = " | ".join((proc.stdout + proc.stderr).strip().splitlines()[-8:])
             raise RuntimeError(f"ngspice failed (exit {proc.returncode}): {tail}")
-        return np.loadtxt(out, skiprows=1, ndmin=2)
+        return read_raw(out.read_bytes())
 
 
 def level_crossings(t_s, v_v, level_v: float, rising: bool) -> np.ndarray:
@@ -361,3 +402,33 @@ def simulate_spice(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_far
     n = max(rising.size - 1, 0) if math.isfinite(f) else 0
     return SpiceResult(frequency_hz=f, duty_cycle=dc, rising_s=rising, falling_s=falling, n_periods=n,
                        n_points=int(data.shape[0]), netlist=text)
+
+
+def simulate_spice_many(cases, jobs: int | None = None, **options) -> list[SpiceResult]:
+    """Several :func:`simulate_spice` runs at once, as concurrent ngspice processes.
+
+    Parameters
+    ----------
+    cases : iterable of dict
+        Keyword arguments of :func:`simulate_spice` for each run (``r_ohm``, ``r_fsr_ohm``, ...).
+    jobs : int, optional
+        Processes at a time; by default the machine's cores (``os.cpu_count()``), the most that help:
+        each ngspice run is one busy process.
+    **options
+        Keywords common to every run (``periods``, ``steps_per_phase``, ...).
+
+    Returns
+    -------
+    list of SpiceResult
+        In the order of ``cases``; the same results as running them one after another.
+    """
+    import os
+    from concurrent.futures import ThreadPoolExecutor
+
+    cases = [dict(c) for c in cases]
+    workers = max(1, min(len(cases), jobs if jobs is not None else (os.cpu_count() or 1)))
+    if workers == 1:
+        return [simulate_spice(**options, **c) for c in cases]
+    # Threads suffice: each waits on its ngspice process, which does the work.
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        return list(pool.map(lambda c: simulate_spice(**options, **c), cases))

@@ -17,11 +17,34 @@ def new_figure(width: float = 6.4, height: float = 4.2):
     return fig, ax
 
 
+#: Fixed margins of every report figure [in]: room for the tick labels and axis labels on the left and
+#: bottom, an axes title on top (more with a figure title), and the gap between side-by-side panels.
+MARGINS_IN = {"left": 0.85, "right": 0.2, "bottom": 0.6, "top": 0.15, "title_line": 0.22, "suptitle": 0.3, "gap": 0.85}
+
+
+def fixed_layout(fig) -> None:
+    """Place the axes with :data:`MARGINS_IN`: a fixed layout, without ``tight_layout``'s extra draw.
+
+    ``tight_layout`` renders every figure once more to measure its labels (about as long as saving it);
+    the report's figures share one style, so fixed margins in inches fit them all (the top grows with the
+    number of lines of the axes' titles and with a figure title).
+    """
+    width, height = fig.get_size_inches()
+    m = MARGINS_IN
+    lines = max((len(ax.get_title().splitlines()) for ax in fig.axes), default=0)
+    top = m["top"] + m["title_line"] * lines + (m["suptitle"] if getattr(fig, "_suptitle", None) is not None else 0.0)
+    cols = max((ax.get_subplotspec().get_gridspec().ncols for ax in fig.axes if ax.get_subplotspec()), default=1)
+    panel = (width - m["left"] - m["right"] - (cols - 1) * m["gap"]) / cols
+    fig.set_layout_engine("none")
+    fig.subplots_adjust(left=m["left"] / width, right=1 - m["right"] / width, bottom=m["bottom"] / height,
+                        top=1 - top / height, wspace=m["gap"] / panel if cols > 1 else 0.2)
+
+
 def save(fig, path: Path) -> Path:
-    """Save ``fig`` as PNG at ``path`` and close it."""
+    """Save ``fig`` as PNG at ``path`` (fixed layout, :func:`fixed_layout`) and close it."""
     import matplotlib.pyplot as plt
 
-    fig.tight_layout()
+    fixed_layout(fig)
     fig.savefig(path, format="png")
     plt.close(fig)
     return path

@@ -66,11 +66,17 @@ def build_sections(outdir: Path, progress: Callable[[str], None] | None = None) 
     -------
     list of Section
     """
+    modules = [importlib.import_module(name) for name in SECTION_MODULES]
+    # Slow external work (ngspice) starts first and runs while the other sections draw.
+    started = {m.__name__: m.prefetch() for m in modules if hasattr(m, "prefetch")}
     sections = []
-    for name in SECTION_MODULES:
+    for module in modules:
         if progress:
-            progress(name.rsplit(".", 1)[-1])
-        sections.append(importlib.import_module(name).build(outdir))
+            progress(module.__name__.rsplit(".", 1)[-1])
+        if module.__name__ in started:
+            sections.append(module.build(outdir, prefetched=started[module.__name__]))
+        else:
+            sections.append(module.build(outdir))
     return sections
 
 

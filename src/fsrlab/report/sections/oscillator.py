@@ -10,6 +10,7 @@ This module draws and words them; the errata O1–O5 are worded in
 
 from __future__ import annotations
 
+from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -38,6 +39,21 @@ def _claims() -> dict:
 
 def _spice(diode: bool) -> SimulatedRatios | None:
     return simulate_tau_ratios(N_TABLE, diode, R_OHM, C_FARAD) if ngspice_available() else None
+
+
+def _spice_both() -> tuple[SimulatedRatios | None, SimulatedRatios | None]:
+    return _spice(False), _spice(True)
+
+
+def prefetch() -> Future:
+    """Start the section's ngspice runs in a background thread; :func:`build` takes the future.
+
+    The runs are separate processes, so they go on while the other sections draw their figures.
+    """
+    pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="fsrlab-spice")
+    future = pool.submit(_spice_both)
+    pool.shutdown(wait=False)
+    return future
 
 
 def _ratio_axes(ax, diode: bool, spice: SimulatedRatios | None, claims: dict, minimum: RatioMinimum) -> None:
@@ -216,14 +232,17 @@ def _intro() -> str:
     )
 
 
-def build(outdir: Path) -> Section:
-    """Build the oscillator section into ``outdir`` (PNGs) and return it."""
+def build(outdir: Path, prefetched: Future | None = None) -> Section:
+    """Build the oscillator section into ``outdir`` (PNGs) and return it.
+
+    ``prefetched`` is the future of :func:`prefetch` when the ngspice runs were started earlier.
+    """
     outdir = Path(outdir)
     claims = _claims()
     table = tau_ratio_table(N_TABLE)
     minimum = minimum_tau_ratio_times_n()
     n_at_claim = n_where_eq32_equals(claims["min_tau_ratio_no_diode"])
-    spice_nd, spice_d = _spice(False), _spice(True)
+    spice_nd, spice_d = prefetched.result() if prefetched is not None else _spice_both()
     s20_nd = float(sensitivity(R_OHM, 20 * R_OHM, C_FARAD).r_fsr)
     s20 = float(sensitivity(R_OHM, 20 * R_OHM, C_FARAD, diode=True).r_fsr)
     stress_figure, fs = _stress_figure(outdir)

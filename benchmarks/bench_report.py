@@ -1,0 +1,106 @@
+"""`fsrlab paper`: the reproduction report, the current way against the previous way, same run.
+
+The previous way, rebuilt here by swapping four functions back in (nothing else changes): ngspice runs
+one after another when the oscillator section is built, each writing its waveform as text (``wrdata``,
+15 digits) read with ``np.loadtxt``; every figure laid out by ``tight_layout`` (which renders the figure
+once more to measure it). The current way: ngspice runs side by side (``simulate_spice_many``, as many
+as the cores), started before the first section so they run while the physics figures draw
+(``prefetch``), binary raw output (``read_raw``), fixed figure layouts (``report.figures.fixed_layout``).
+
+Both build the same sections in-process after a warm-up (imports and caches loaded), best of N each.
+The aim of issue 16 is for the whole command, process start-up included: ``fsrlab paper`` ≤ 3.5 s,
+timed as separate processes (min / median / max of N).
+"""
+
+from __future__ import annotations
+
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from contextlib import contextmanager
+from pathlib import Path
+
+import numpy as np
+
+TITLE = "Reproduction report (`fsrlab paper`)"
+REPEAT = 3
+AIM_S = 3.5
+
+
+def _old_run_ngspice(text: str, output_file: str = "fsrlab_out.raw", timeout_s: float = 300.0) -> np.ndarray:
+    """The previous runner: the same netlist with a text ``wrdata`` output, read by ``np.loadtxt``."""
+    import shutil
+
+    old = text.replace("set filetype=binary\n", "set wr_singlescale\nset wr_vecnames\noption numdgt=15\n")
+    old = old.replace(f"write {output_file} v(out) v(thr)", "wrdata fsrlab_out.txt v(out) v(thr)")
+    with tempfile.TemporaryDirectory(prefix="fsrlab-bench-") as tmp:
+        (Path(tmp) / "circuit.cir").write_text(old, encoding="ascii")
+        subprocess.run([shutil.which("ngspice"), "-b", "circuit.cir"], cwd=tmp, capture_output=True, check=True,
+                       timeout=timeout_s)
+        return np.loadtxt(Path(tmp) / "fsrlab_out.txt", skiprows=1, ndmin=2)
+
+
+@contextmanager
+def _previous_way():
+    import fsrlab.circuits.paper_ratio as paper_ratio
+    import fsrlab.circuits.spice as spice
+    import fsrlab.report.figures as figures
+    import fsrlab.report.sections.oscillator as oscillator
+
+    saved = spice.run_ngspice, figures.fixed_layout, paper_ratio.simulate_spice_many, oscillator.prefetch
+    spice.run_ngspice = _old_run_ngspice
+    figures.fixed_layout = lambda fig: fig.tight_layout()
+    paper_ratio.simulate_spice_many = lambda cases, jobs=None, **o: spice.simulate_spice_many(cases, jobs=1, **o)
+    del oscillator.prefetch  # no background start: the section runs ngspice when it is built
+    try:
+        yield
+    finally:
+        spice.run_ngspice, figures.fixed_layout, paper_ratio.simulate_spice_many, oscillator.prefetch = saved
+
+
+def _build_time() -> float:
+    from fsrlab.report.paper import write_report
+
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        write_report(tmp)
+        return time.perf_counter() - t0
+
+
+def _best(repeat: int) -> float:
+    _build_time()  # warm-up
+    return min(_build_time() for _ in range(repeat))
+
+
+def _process_times(repeat: int) -> list[float]:
+    exe = str(Path(sys.executable).with_name("fsrlab"))
+    out = []
+    for _ in range(repeat):
+        with tempfile.TemporaryDirectory() as tmp:
+            t0 = time.perf_counter()
+            subprocess.run([exe, "paper", "--out", tmp], check=True, capture_output=True)
+            out.append(time.perf_counter() - t0)
+    return out
+
+
+def run() -> str:
+    from fsrlab.circuits.spice import ngspice_available
+
+    if not ngspice_available():
+        return "ngspice is not installed (`make sysdeps`): not measured.\n"
+    new = _best(REPEAT)
+    with _previous_way():
+        old = _best(REPEAT)
+    procs = _process_times(REPEAT)
+    lo, med, hi = min(procs), statistics.median(procs), max(procs)
+    met = "met" if med <= AIM_S else "not met"
+    return (
+        f"Sections built in-process after a warm-up, best of {REPEAT} each (same run, same machine):\n\n"
+        "| way | build time | ratio |\n|---|---|---|\n"
+        f"| previous: ngspice one at a time, text waveforms, `tight_layout` | {old:.2f} s | 1 |\n"
+        f"| current: concurrent ngspice, binary raw output, fixed layouts | {new:.2f} s | {old / new:.2f}× faster |\n\n"
+        f"Whole command as separate processes (`fsrlab paper --out DIR`, imports included), {REPEAT} runs: "
+        f"min {lo:.2f} s, median {med:.2f} s, max {hi:.2f} s. Aim ≤ {AIM_S} s (median): **{met}**.\n"
+    )

@@ -1,0 +1,36 @@
+"""The report's fixed figure layout (fsrlab.report.figures.fixed_layout).
+
+Reference: matplotlib's own measurement of what it draws (each axes' tight bounding box, tick labels,
+axis labels and titles included) must lie inside the figure: a property that fails when a margin is
+too small for the report's style.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from fsrlab.report.figures import fixed_layout, new_figure
+
+
+@pytest.mark.parametrize("panels, title_lines, suptitle", [(1, 1, False), (2, 2, False), (2, 1, True)])
+def test_labels_titles_and_ticks_stay_inside_the_figure(panels, title_lines, suptitle):
+    fig, _ = new_figure(11.0 if panels == 2 else 6.4, 4.2)
+    fig.clf()
+    axes = fig.subplots(1, panels, squeeze=False)[0]
+    for ax in axes:
+        ax.plot([1e-3, 2e4], [-1.5e3, 9.9e4])  # wide tick labels on both axes
+        ax.set_xlabel("N = R_FSR / R")
+        ax.set_ylabel("separation s (nm)")
+        ax.set_title("\n".join(["Figure 12: τH/τL vs N"] * title_lines))
+    if suptitle:
+        fig.suptitle("SYNTHETIC data, not the paper's measurements", fontsize=9)
+    fixed_layout(fig)
+    renderer = fig.canvas.get_renderer()
+    box = fig.bbox
+    for ax in axes:
+        tight = ax.get_tightbbox(renderer)
+        assert tight.x0 >= box.x0 and tight.y0 >= box.y0 and tight.x1 <= box.x1 and tight.y1 <= box.y1
+    if panels == 2:  # the right panel's y label clears the left panel
+        assert axes[1].get_tightbbox(renderer).x0 > axes[0].get_window_extent(renderer).x1
+    if suptitle:
+        assert fig._suptitle.get_window_extent(renderer).y0 > max(a.get_tightbbox(renderer).y1 for a in axes)
