@@ -73,20 +73,30 @@ def _best(fn, repeat):
     return best, out
 
 
+REPEAT = 3
+
+
 def run() -> str:
     f, s, g = make_data()
-    t_ours, (d_ours, rmse_ours) = _best(lambda: fsrlab_run(f, s, g), 3)
-    t_sk, (d_sk, rmse_sk) = _best(lambda: sklearn_run(f, s, g), 1)
-    t_sc, (d_sc, rmse_sc) = _best(lambda: sklearn_run(f, s, g, scaled=True), 1)
+    # Warm-up: every contender's imports and first-call costs are paid before any timing.
+    small = slice(0, 5 * (POINTS_PER_RAMP * 2 + 1))
+    fsrlab_run(f[small], s[small], g[small])
+    sklearn_run(f[small], s[small], g[small], scaled=True)
+    t_ours, (d_ours, rmse_ours) = _best(lambda: fsrlab_run(f, s, g), REPEAT)
+    t_sk, (d_sk, rmse_sk) = _best(lambda: sklearn_run(f, s, g), REPEAT)
+    t_sc, (d_sc, rmse_sc) = _best(lambda: sklearn_run(f, s, g, scaled=True), REPEAT)
+    equal = "the same degree as fsrlab" if d_sc == d_ours else f"degree {d_sc}, fsrlab {d_ours}: NOT equal accuracy"
     rows = "\n".join(f"| {d} | {a:.2f} | {b:.2f} | {c:.2f} |"
                      for d, a, b, c in zip(range(1, 6), rmse_ours, rmse_sk, rmse_sc))
     return (
         f"{f.size:,} readings ({N_CYCLES} cycles of synthetic data), degrees 1–5, 5 grouped folds, final fit.\n\n"
-        "| implementation | time (s) | chosen degree | speed-up |\n|---|---|---|---|\n"
-        f"| scikit-learn PolynomialFeatures + LinearRegression + cross_val_score(GroupKFold) | {t_sk:.2f} | {d_sk} | 1× |\n"
-        f"| same with StandardScaler first | {t_sc:.2f} | {d_sc} | {t_sk / t_sc:.1f}× |\n"
-        f"| fsrlab `calibrate(degree=\"auto\")` | {t_ours:.3f} | {d_ours} | **{t_sk / t_ours:.0f}×** "
-        f"({t_sc / t_ours:.0f}× vs the scaled pipeline) |\n\n"
+        "The peer at equal accuracy is scikit-learn with StandardScaler first (it picks "
+        f"{equal}); the unscaled pipeline is shown for its numerics, not as the peer.\n\n"
+        "| implementation | time (s) | chosen degree | fsrlab is faster by |\n|---|---|---|---|\n"
+        f"| scikit-learn StandardScaler + PolynomialFeatures + LinearRegression + cross_val_score(GroupKFold) "
+        f"(the peer) | {t_sc:.2f} | {d_sc} | **{t_sc / t_ours:.0f}×** |\n"
+        f"| same without StandardScaler (wrong degree) | {t_sk:.2f} | {d_sk} | {t_sk / t_ours:.0f}× |\n"
+        f"| fsrlab `calibrate(degree=\"auto\")` | {t_ours:.3f} | {d_ours} | 1 |\n\n"
         "Cross-validated RMSE [Pa] per degree (fsrlab pools squared errors over folds; scikit-learn "
         "averages the folds' MSE — equal here because the folds hold equal numbers of whole cycles, and "
         "GroupKFold may pair the cycles differently):\n\n"
@@ -94,7 +104,7 @@ def run() -> str:
         "Numerics, not only speed: on the raw frequency in Hz (x⁵ ≈ 10²⁰) the unscaled scikit-learn "
         "pipeline loses accuracy from degree 3 on, its cross-validated RMSE grows with the degree and it "
         "chooses a lower degree than the data support; with StandardScaler it agrees with fsrlab.\n\n"
-        "fsrlab: best of 3 runs; scikit-learn: 1 run. Why fsrlab is faster: the readout is mapped onto "
+        f"Every contender: best of {REPEAT} runs after a warm-up on 5 cycles (imports not timed). Why fsrlab is faster: the readout is mapped onto "
         "[-1, 1] and written in Chebyshev polynomials, so every fold's normal equations for every degree "
         "come from one pass of per-fold sums (T_0..T_10, T_k·y, y²) with `np.bincount`; no design matrix "
         "is built per fold and degree. The final model is one QR least-squares fit.\n"
