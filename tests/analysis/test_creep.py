@@ -364,3 +364,44 @@ def test_example_run_shows_the_creep_put_into_it():
     for h in res.holds:
         assert 1.0 < h.drift_percent_per_decade < 6.0 and h.total_drift_percent > 0
     assert res.unloaded >= 1
+
+
+def test_plot_draws_each_holds_readings_and_fits_in_percent_of_the_reading_at_1s():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rng = np.random.default_rng(7)
+    t, ref = _profile(ONE_HOLD)
+    s = t - 11.0
+    r = np.where((s >= 0) & (s <= 60), 1050 - 50 * np.exp(-s / 8.0), 500.0) + rng.normal(0, 0.25, t.size)
+    res = creep(t, r, ref)
+    (h,) = res.holds
+    try:
+        ax = res.plot()
+        data, line, curve = ax.lines  # τ determined: the first-order curve is drawn too
+        np.testing.assert_allclose(data.get_xdata(), res.elapsed[0])
+        np.testing.assert_allclose(data.get_ydata(), 100 * (res.readings[0] - h.log.a) / abs(h.log.a))
+        gx = line.get_xdata()
+        np.testing.assert_allclose(line.get_ydata(), 100 * h.log.b * np.log10(gx) / abs(h.log.a), atol=1e-9)
+        assert ax.get_xscale() == "log"
+    finally:
+        plt.close("all")
+
+
+def test_default_settling_is_half_a_second_at_most_a_fifth_of_min_hold(tmp_path):
+    t, ref = _profile(ONE_HOLD)
+    assert creep(t, _log_readout(t), ref).settle_s == 0.5
+    assert creep(t, _log_readout(t), ref, min_hold_s=1.0).settle_s == pytest.approx(0.2)
+    code, out, err = run_cli(["creep", _write(tmp_path / "h.csv", t, ref, _log_readout(t)), "--min-hold", "1s", "--json"])
+    assert code == 0, err
+    assert json.loads(out)["settle_s"] == pytest.approx(0.2)
+
+
+def test_drift_needs_three_readings_after_settling():
+    fit = log_drift([1.0, 2.0], [3.0, 4.0])
+    assert np.isnan(fit.percent_per_decade) and "3" in fit.note
+    fit = log_drift([1.0, 10.0, 100.0], [3.0, 4.0, 5.0])
+    assert fit.percent_per_decade == pytest.approx(100 / 3) and fit.b_stderr == pytest.approx(0.0, abs=1e-12)
+

@@ -14,7 +14,7 @@ readout does meanwhile:
   sampled slower than the readout) are left out of the test; the hold runs from the first to the
   last reference reading in its band, and every readout reading in that time belongs to it;
 * t0, the hold's start: its first reference reading in the band. The first ``settle_s`` after t0
-  (default 0.5 s, five 100 ms windows) are left out of the fits: the load is still settling, and
+  (default 0.5 s, five 100 ms windows, at most a fifth of ``min_hold_s``) are left out of the fits: the load is still settling, and
   with a slow reference the true start lies up to one reference interval before t0;
 * **drift per decade**: the least-squares line r(t) = a + b·log10(t − t0) through the readings of
   the hold; b [readout unit per decade], and ``100·b/|a|`` [% per decade], a = the line's value at
@@ -208,7 +208,7 @@ class LogDrift:
     b : float
         Drift per decade of time. [readout unit per decade]
     b_stderr : float
-        Standard error of b (NaN with fewer than 3 readings). [readout unit per decade]
+        Standard error of b (0 for 3 readings on a line). [readout unit per decade]
     percent_per_decade : float
         ``100·b/|a|`` (NaN when a = 0 or the line is not determined). [% per decade]
     percent_per_decade_stderr : float
@@ -241,25 +241,23 @@ def log_drift(elapsed_s, readout) -> LogDrift:
     Returns
     -------
     LogDrift
-        NaN numbers and a note when fewer than 2 readings, or a single distinct time, remain.
+        NaN numbers and a note when fewer than 3 readings, or a single distinct time, remain.
     """
     s = np.asarray(elapsed_s, dtype=float)
     r = np.asarray(readout, dtype=float)
     keep = np.isfinite(s) & np.isfinite(r) & (s > 0)
     s, r = s[keep], r[keep]
     nan = float("nan")
-    if s.size < 2 or np.ptp(s) == 0:
-        return LogDrift(nan, nan, nan, nan, nan, int(s.size), f"{s.size} reading(s) at distinct times after settling; 2 needed")
+    if s.size < 3 or np.unique(s).size < 2:
+        return LogDrift(nan, nan, nan, nan, nan, int(s.size), f"{s.size} reading(s) after settling; 3 at 2 or more "
+                        "distinct times needed")
     x = np.log10(s)
     xm, rm = x.mean(), r.mean()
     sxx = np.sum((x - xm) ** 2)
     b = float(np.sum((x - xm) * (r - rm)) / sxx)
     a = float(rm - b * xm)
-    if s.size > 2:
-        resid = r - (a + b * x)
-        b_se = float(np.sqrt(np.sum(resid ** 2) / (s.size - 2) / sxx))
-    else:
-        b_se = nan
+    resid = r - (a + b * x)
+    b_se = float(np.sqrt(np.sum(resid ** 2) / (s.size - 2) / sxx))
     with np.errstate(divide="ignore", invalid="ignore"):
         pct = 100 * b / abs(a) if a != 0 else nan
         pct_se = 100 * b_se / abs(a) if a != 0 else nan
@@ -297,19 +295,30 @@ class FirstOrder:
 
 
 def _sse(s: np.ndarray, r: np.ndarray, tau: np.ndarray):
-    """For each τ: (SSE, r∞, Δ) of the linear least squares of r on [1, −exp(−s/τ)]."""
-    e = np.exp(-s[:, None] / tau[None, :])
+    """For each τ: (SSE, r∞, Δ) of the linear least squares of r on [1, −exp(−s/τ)].
+
+    From the sums (SSE = Σr'² − β·Xᵀr', r' = r − mean r against cancellation), in blocks of τ so
+    that no more than ~2·10⁶ exponentials are held at once.
+    """
     n = s.size
-    se, see = e.sum(axis=0), (e * e).sum(axis=0)
-    sr, sre = r.sum(), (r[:, None] * e).sum(axis=0)
-    det = n * see - se * se
-    with np.errstate(divide="ignore", invalid="ignore"):
-        r_inf = (see * sr - se * sre) / det
-        delta = -(n * sre - se * sr) / det
-    fit = r_inf[None, :] - delta[None, :] * e
-    sse = np.sum((r[:, None] - fit) ** 2, axis=0)
-    sse = np.where(np.isfinite(sse) & (det > 1e-12 * n * n), sse, np.inf)
-    return sse, r_inf, delta
+    mean = r.mean()
+    rc = r - mean
+    srr = float(rc @ rc)
+    out = np.empty((3, tau.size))
+    step = max(1, 2_000_000 // max(n, 1))
+    for k in range(0, tau.size, step):
+        e = np.exp(-s[:, None] / tau[None, k:k + step])
+        se, see, sre = e.sum(axis=0), np.einsum("ij,ij->j", e, e), rc @ e
+        det = n * see - se * se
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r_inf = (see * 0.0 - se * sre) / det  # Σr' = 0
+            delta = -(n * sre) / det
+            sse = srr - (-delta * sre)  # β·Xᵀr' with Xᵀr' = [0, −Σr'e]
+        ok = np.isfinite(sse) & (det > 1e-12 * n * n)
+        out[0, k:k + step] = np.where(ok, np.maximum(sse, 0.0), np.inf)
+        out[1, k:k + step] = r_inf + mean
+        out[2, k:k + step] = delta
+    return out[0], out[1], out[2]
 
 
 def first_order_fit(elapsed_s, readout, hold_s: float | None = None) -> FirstOrder:
@@ -356,7 +365,7 @@ def first_order_fit(elapsed_s, readout, hold_s: float | None = None) -> FirstOrd
         return FirstOrder(nan, nan, nan, nan, "no first-order curve fits the readings")
     lo, hi = np.log10(grid[max(k - 1, 0)]), np.log10(grid[min(k + 1, grid.size - 1)])
     g = (np.sqrt(5) - 1) / 2
-    for _ in range(60):  # golden section in log τ
+    for _ in range(40):  # golden section in log τ: the bracket shrinks to 0.618⁴⁰ ≈ 4e-9 of two grid steps
         c, d = hi - g * (hi - lo), lo + g * (hi - lo)
         fc, fd = _sse(s, r, np.array([10 ** c, 10 ** d]))[0]
         if fc <= fd:
@@ -398,7 +407,7 @@ class HoldCreep:
     readout_end : float
         Median of the last tenth (1–5) of the readings. [readout unit]
     total_drift_percent : float
-        ``100·(readout_end − readout_start)/|readout_start|``. [%]
+        ``100·(readout_end − readout_start)/|readout_start|`` (NaN with fewer than 3 readings). [%]
     log : LogDrift
         The drift per decade of time.
     first_order : FirstOrder
@@ -432,7 +441,7 @@ def _hold_creep(t: np.ndarray, x: np.ndarray, hold: Hold, settle_s: float) -> Ho
     elapsed = t[inside] - hold.start_s
     r = x[inside]
     nan = float("nan")
-    if r.size:
+    if r.size >= 3:
         k = int(min(5, max(1, r.size // 10)))
         start, end = float(np.median(r[:k])), float(np.median(r[-k:]))
         total = 100 * (end - start) / abs(start) if start != 0 else nan
@@ -556,7 +565,7 @@ class RunCreep:
         return ax
 
 
-def creep(time_s, readout, reference, band: float = 0.02, min_hold_s: float = 5.0, settle_s: float = 0.5,
+def creep(time_s, readout, reference, band: float = 0.02, min_hold_s: float = 5.0, settle_s: float | None = None,
           x: str = "readout", x_unit: str = "", reference_name: str = "reference",
           reference_unit: str = "") -> RunCreep:
     """Drift per decade of time, time constant and total drift of a readout over each loaded hold.
@@ -573,8 +582,9 @@ def creep(time_s, readout, reference, band: float = 0.02, min_hold_s: float = 5.
         Half-width of the hold band, a fraction of full scale in (0, 0.5). [1]
     min_hold_s : float
         Shortest hold, > 0. [s]
-    settle_s : float
-        Time after each hold's start left out of the fits, in [0, min_hold_s). [s]
+    settle_s : float, optional
+        Time after each hold's start left out of the fits, in [0, min_hold_s); default 0.5 s, at
+        most a fifth of ``min_hold_s``. [s]
     x, x_unit : str
         Name and unit of the readout, for the result.
     reference_name, reference_unit : str
@@ -594,6 +604,10 @@ def creep(time_s, readout, reference, band: float = 0.02, min_hold_s: float = 5.
     xr = np.asarray(readout, dtype=float)
     if xr.shape != t.shape:
         raise ValueError(f"readout must have the shape of time_s, got {xr.shape} and {t.shape}")
+    if not (np.isfinite(min_hold_s) and min_hold_s > 0):
+        raise ValueError(f"min_hold_s must be > 0 s, got {min_hold_s!r}")
+    if settle_s is None:
+        settle_s = min(0.5, min_hold_s / 5)
     if not (np.isfinite(settle_s) and 0 <= settle_s < min_hold_s):
         raise ValueError(f"settle_s must be in [0, min_hold_s = {min_hold_s!r} s), got {settle_s!r}")
     if not np.isfinite(xr).any():
@@ -620,7 +634,7 @@ def creep(time_s, readout, reference, band: float = 0.02, min_hold_s: float = 5.
 
 
 def creep_of_run(run, x: str = "frequency_hz", reference: str | None = None, band: float = 0.02,
-                 min_hold_s: float = 5.0, settle_s: float = 0.5) -> RunCreep:
+                 min_hold_s: float = 5.0, settle_s: float | None = None) -> RunCreep:
     """:func:`creep` on a run's columns: ``time_s``, the readout ``x`` and the reference.
 
     Parameters
@@ -635,8 +649,9 @@ def creep_of_run(run, x: str = "frequency_hz", reference: str | None = None, ban
         Half-width of the hold band, a fraction of full scale in (0, 0.5). [1]
     min_hold_s : float
         Shortest hold, > 0. [s]
-    settle_s : float
-        Time after each hold's start left out of the fits. [s]
+    settle_s : float, optional
+        Time after each hold's start left out of the fits; default 0.5 s, at most a fifth of
+        ``min_hold_s``. [s]
 
     Returns
     -------

@@ -29,7 +29,7 @@ def creep_cmd(
     reference: str = typer.Option(None, "--reference", help="Reference column the holds are found on [N or Pa]: force_n or stress_pa (default: force_n if the run has it, else stress_pa)."),
     min_hold: float = typer.Option(5.0, "--min-hold", parser=seconds, help="Shortest hold reported [s], e.g. 5s, 500ms, 2min."),
     band: float = typer.Option(0.02, "--band", parser=fraction, help="Half-width of the hold band [1, a fraction of full scale = the largest |reference|], 0.02 or 2%; in (0, 50 %)."),
-    settle: float = typer.Option(0.5, "--settle", parser=seconds, help="Time after each hold's start left out of the fits, while the load settles [s], e.g. 0.5s; shorter than --min-hold."),
+    settle: float = typer.Option(None, "--settle", parser=seconds, help="Time after each hold's start left out of the fits, while the load settles [s], e.g. 0.5s; shorter than --min-hold (default: 0.5 s, at most a fifth of --min-hold)."),
     plot: Path = typer.Option(None, "--plot", metavar="FILE.png", help="Also draw the readout against log time per hold into this figure [.png, .svg or .pdf]."),
     skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=_SKIP_HELP),
     json_out: bool = typer.Option(False, "--json", help="Print JSON (units in the keys; null where not determined)."),
@@ -55,6 +55,8 @@ def creep_cmd(
         fail(f"must be a fraction of full scale in (0, 50 %), got {100 * band:g} %", "--band")
     if not min_hold > 0:
         fail(f"must be > 0 s, got {min_hold:g} s", "--min-hold")
+    if settle is None:
+        settle = min(0.5, min_hold / 5)
     if not 0 <= settle < min_hold:
         fail(f"must be >= 0 s and shorter than --min-hold ({min_hold:g} s), got {settle:g} s", "--settle")
     if reference is not None and reference not in REFERENCES:
