@@ -77,6 +77,56 @@ def creep_readings() -> tuple[float, float]:
     return round(float(f[at_max + 30]), 1), round(float(f[at_max + 300]), 1)
 
 
+#: Creep example: (nominal force [N], seconds) of each stretch: ramps of 1 s between rests and holds.
+CREEP_PROFILE = ((0.0, 5.0), (2.0, 30.0), (0.0, 8.0), (3.2, 45.0), (0.0, 5.0))
+#: Creep of the example's sensor: the stress it feels grows by this fraction per decade of the time since
+#: the load reached its level (sigma_eff = sigma * (1 + k * log10(1 + age / 1 s))). [1]
+CREEP_PER_DECADE = 0.03
+
+
+def creep() -> None:
+    """creep.csv: holds at 2 N (30 s) and 3.2 N (45 s) with a log-time creep of 3 %/decade in the stress felt.
+
+    The virtual sensor has no creep of its own, so the creep is put into the stress it is driven
+    with (sigma_eff above); the force_n column is the applied force (nominal plus 3 mN of load-cell
+    noise), written only every other 100 ms window, empty in between, as a load cell read more
+    slowly than the readout (an HX711) would leave it. Seeds 21 (meter) and 22 (load cell).
+    """
+    from fsrlab.analysis.synthetic import synthetic_run
+    from fsrlab.physics.sensor import VirtualFSR
+    from fsrlab.runwriter import write_run
+
+    window_s, ramp_s = 0.1, 1.0
+    area = VirtualFSR().area_m2
+    knots_t, knots_f, start = [0.0], [0.0], 0.0
+    for force, length in CREEP_PROFILE:
+        if force != knots_f[-1]:
+            start += ramp_s
+            knots_t.append(start)
+            knots_f.append(force)
+        start += length
+        knots_t.append(start)
+        knots_f.append(force)
+    t = np.arange(0.0, knots_t[-1], window_s)
+    force = np.interp(t, knots_t, knots_f)
+    # age: time since the force last changed (0 on ramps and rests).
+    moving = np.r_[True, np.abs(np.diff(force)) > 1e-12]
+    last_change = np.maximum.accumulate(np.where(moving, t, 0.0))
+    age = np.where(force > 0, t - last_change, 0.0)
+    felt = force * (1 + CREEP_PER_DECADE * np.log10(1 + age / 1.0))
+    c = synthetic_run(stress_pa=felt / area, window_s=window_s, seed=21).columns
+    noisy = force + 0.003 * np.random.default_rng(22).standard_normal(t.size)
+    force_n = np.where(np.arange(t.size) % 2 == 0, np.round(noisy, 4), np.nan)
+    meta = {"sensor": {"model": "VirtualFSR (FlexiForce A201-like, fsrlab.physics.sensor)", "area_m2": area},
+            "origin": ("synthetic: examples/make_examples.py creep(): VirtualFSR driven with the force of "
+                       f"CREEP_PROFILE and a creep of {CREEP_PER_DECADE:g} per decade of the hold's age in the "
+                       "stress it feels; synthetic_run(window_s=0.1, seed=21); force_n every other window, "
+                       "3 mN noise (seed 22)"),
+            "notes": "synthetic data, not a measurement"}
+    write_run(HERE / "creep.csv", {"time_s": np.round(t, 3), "force_n": force_n,
+                                   "frequency_hz": np.round(c["frequency_hz"], 1), "voltage_v": c["voltage_v"]}, meta)
+
+
 def calibration() -> None:
     """calibration.json: fsrlab calibrate examples/bench.csv --compensate -o examples/calibration.json."""
     import os
@@ -95,5 +145,6 @@ if __name__ == "__main__":
     runs()
     repeatability()
     iso376()
+    creep()
     calibration()
     print("--creep {},{}".format(*creep_readings()))
