@@ -38,6 +38,7 @@ test: venv sysdeps firmware
 	$(BIN)/python -m pytest
 
 bench: venv sysdeps firmware
+	$(BIN)/python -m pip install -q -e '.[dev,bench]'
 	$(BIN)/python benchmarks/run.py
 
 clean:

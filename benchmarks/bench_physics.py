@@ -66,6 +66,49 @@ def public_functions_pipeline(u_v: float, n: int):
 EXPS_PER_POINT = 4  # exp(−B) and exp(−B√r) on the loading and the unloading branch
 
 
+def numba_kernel():
+    """The same stage compiled by numba from a scalar loop (benchmark-only peer; None without numba).
+
+    Per stress: both separations (eqs. 1, 9), R_A by eq. (12) and C_A by eq. (15) on both branches,
+    written out as printed, and the stress of the largest |ΔR_A| and |ΔC_A| (σd's grid point); the
+    refinement of σd that follows is the same scalar code for every contender and is left out here.
+    """
+    try:
+        from numba import njit
+    except ImportError:
+        return None
+    import math
+
+    from scipy.constants import e, epsilon_0, h, m_e
+    from fsrlab.physics.params import PAPER as p
+
+    s0, mod, sf_pa, k, phi0, eps = p.s0_m, p.modulus_pa, p.sigma_f_pa, p.k, p.phi0_j, p.eps_r * epsilon_0
+
+    @njit(cache=False)
+    def kernel(u, n, rl, ru, cl, cu):
+        s_f = s0 * (1.0 - sf_pa / mod)
+        r = 1 + 2 * e * u / phi0
+        best_r, best_c, i_r, i_c = -1.0, -1.0, 0, 0
+        for i in range(n):
+            x = sf_pa * i / (n - 1)
+            for branch in range(2):
+                s = s0 * (1 - x / mod) if branch == 0 else s_f + (s0 - s_f) * (1 - x / sf_pa) ** k
+                b = 8 * math.pi * s * math.sqrt(2 * m_e) * phi0**1.5 / (2.96 * h * e * u)
+                j = 2.2 * e**3 * u**2 / (8 * math.pi * h * phi0 * s**2) * (math.exp(-b) - r * math.exp(-b * math.sqrt(r)))
+                if branch == 0:
+                    rl[i], cl[i] = u / j, eps / s
+                else:
+                    ru[i], cu[i] = u / j, eps / s
+            dr, dc = abs(ru[i] - rl[i]), abs(cu[i] - cl[i])
+            if dr > best_r:
+                best_r, i_r = dr, i
+            if dc > best_c:
+                best_c, i_c = dc, i
+        return i_r, i_c
+
+    return kernel
+
+
 def _best(fn, repeat):
     best = float("inf")
     for _ in range(repeat):
@@ -93,9 +136,29 @@ def run() -> str:
     out = np.empty_like(args)
     t_exp = _best(lambda: np.exp(args, out=out), 7)
     t_loop = _best(lambda: table2_row(2.0, N_LOOP), 2)
-    t_calls = _best(lambda: fsrlab_scalar_loop(2.0, N_SCALAR_CALLS), 2)
     new_rate, old_rate = N_POINTS / t_new, N_POINTS / t_old
     exp_rate = N_POINTS / t_exp
+    nb = numba_kernel()
+    numba_row, numba_note = "", "numba is not installed (`pip install -e '.[bench]'`): not measured."
+    if nb is not None:
+        from fsrlab.physics.electrical import resistance_per_area
+        from fsrlab.physics.params import PAPER
+        from fsrlab.physics.separation import separation_loading
+
+        arrays = [np.empty(N_POINTS) for _ in range(4)]
+        nb(2.0, 1000, *arrays)  # compile (not timed)
+        nb(2.0, N_POINTS, *arrays)
+        x = np.linspace(0.0, PAPER.sigma_f_pa, N_POINTS)
+        err = float(np.max(np.abs(arrays[0] / resistance_per_area(2.0, separation_loading(x), PAPER.phi0_j) - 1)))
+        t_nb = _best(lambda: nb(2.0, N_POINTS, *arrays), 7)
+        nb_rate = N_POINTS / t_nb
+        numba_row = (f"| numba `@njit` scalar loop (same stage, without σd's refinement) | {t_nb * 1e3:.1f} ms for "
+                     f"{N_POINTS:,} | {nb_rate:.3g} | {nb_rate / old_rate:.1f}× | {nb_rate / exp_rate:.0%} |\n")
+        ahead = "ahead of" if new_rate > nb_rate else "behind"
+        numba_note = (f"numba {__import__('numba').__version__} (benchmark-only extra `bench`), compiled before timing, "
+                      f"best of 7; its R_A agrees with the public functions to {err:.1e} relative. fsrlab's kernel "
+                      f"is **{ahead}** numba ({new_rate / nb_rate:.2f}×).")
+    t_calls = _best(lambda: fsrlab_scalar_loop(2.0, N_SCALAR_CALLS), 2)
     loop_rate = (N_LOOP + 1) / t_loop
     calls_rate = (N_SCALAR_CALLS + 1) / t_calls
     return (
@@ -110,8 +173,7 @@ def run() -> str:
         f"implementation with four exponentials per stress can pass on one core. Further: a plain Python "
         f"loop over scalars with the `math` module (`tests/reference_physics.py::table2_row`, {N_LOOP:,} "
         f"stresses) and fsrlab's functions called on one scalar at a time ({N_SCALAR_CALLS:,} stresses). "
-        f"Best of 7, 7, 7, 2 and 2 runs. numba was not tried (not installed here; a benchmark-only extra is "
-        f"left for later).\n\n"
+        f"Best of 7, 7, 7, 2 and 2 runs. {numba_note}\n\n"
         f"| implementation | time | stress points/s | vs the public-function pipeline | share of the exp limit |\n"
         f"|---|---|---|---|---|\n"
         f"| fsrlab `model_cycle_errors` (fused, chunked, in place) | {t_new * 1e3:.1f} ms for {N_POINTS:,} | "
@@ -119,7 +181,7 @@ def run() -> str:
         f"| public functions, whole arrays | {t_old * 1e3:.1f} ms for {N_POINTS:,} | {old_rate:.3g} | 1× | "
         f"{old_rate / exp_rate:.0%} |\n"
         f"| exp limit: `np.exp` on {EXPS_PER_POINT}×{N_POINTS:,} values | {t_exp * 1e3:.1f} ms | {exp_rate:.3g} | "
-        f"{exp_rate / old_rate:.1f}× | 100% |\n"
+        f"{exp_rate / old_rate:.1f}× | 100% |\n" + numba_row +
         f"| hand-written `math` loop | {t_loop * 1e3:.0f} ms for {N_LOOP:,} | {loop_rate:.3g} | "
         f"{loop_rate / old_rate:.2f}× | {loop_rate / exp_rate:.1%} |\n"
         f"| loop calling fsrlab per scalar | {t_calls * 1e3:.0f} ms for {N_SCALAR_CALLS:,} | {calls_rate:.3g} | "
