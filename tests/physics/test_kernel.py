@@ -64,7 +64,11 @@ def _pipeline_from_public_functions(u_v, p, n):
 @pytest.mark.parametrize("u", [3, 2, 1, 0.5, 3.6])
 @pytest.mark.parametrize("change", [{}, {"phi0_ev": 0.2295}, {"k": 4}, {"k": 3.3}])
 @pytest.mark.parametrize("n", [3, 4001, 70001])  # 70001: several chunks, the last one partial
-def test_table2_kernel_equals_the_public_functions_exactly(u, change, n):
+def test_table2_kernel_equals_the_public_functions(u, change, n):
+    # Where eq. (12) holds on the whole cycle the kernel folds the constants (R_A = k3·s²/bracket),
+    # so its curves agree with the public functions to a few units in the last place (rtol 1e-14; the
+    # folded products round differently), and σd's grid point is the same; where it fails somewhere
+    # (3.6 V, thin films) the exact path gives the public functions' NaN to the bit.
     import dataclasses
 
     from scipy.constants import electron_volt
@@ -77,10 +81,11 @@ def test_table2_kernel_equals_the_public_functions_exactly(u, change, n):
     p = dataclasses.replace(PAPER, **change)
     got = model_cycle_errors(u, p, n)
     for res, ref in zip((got.resistance, got.capacitance), _pipeline_from_public_functions(u, p, n)):
-        np.testing.assert_array_equal([res.percent, res.stress_at_max_pa, res.difference, res.full_scale],
-                                      [ref.percent, ref.stress_at_max_pa, ref.difference, ref.full_scale])
-        np.testing.assert_array_equal(res.q_load, ref.q_load)
-        np.testing.assert_array_equal(res.q_unload, ref.q_unload)
+        np.testing.assert_allclose([res.percent, res.stress_at_max_pa, res.difference, res.full_scale],
+                                   [ref.percent, ref.stress_at_max_pa, ref.difference, ref.full_scale], rtol=1e-12)
+        np.testing.assert_allclose(res.q_load, ref.q_load, rtol=1e-14)
+        np.testing.assert_allclose(res.q_unload, ref.q_unload, rtol=1e-14)
+        np.testing.assert_array_equal(np.isnan(res.q_load), np.isnan(ref.q_load))
         assert res.method == ref.method
 
 
@@ -105,3 +110,22 @@ def test_separation_cores_equal_the_printed_expressions_exactly(k):
     np.testing.assert_array_equal(separation_unloading(x, k=k), np.where(inside, s_f + (p.s0_m - s_f) * t**k, np.nan))
     np.testing.assert_array_equal(separation_loading(x), np.where(x >= 0, p.s0_m * (1.0 - x / p.modulus_pa), np.nan))
     assert separation_loading(1e5) == p.s0_m * (1.0 - 1e5 / p.modulus_pa)
+
+
+@pytest.mark.parametrize("cores", [2, 3, 4])
+def test_table2_kernel_split_between_cores_equals_one_pass(monkeypatch, cores):
+    # Property: splitting the grid between threads changes no number (each element is computed by the
+    # same operations) and finds the same σd (the first of equal maxima, as one pass in order).
+    import os
+
+    from fsrlab.analysis.hysteresis import model_cycle_errors
+
+    n = 400_001  # several chunks per thread, the last one partial
+    monkeypatch.setattr(os, "cpu_count", lambda: 1)
+    one = model_cycle_errors(2.0, PAPER, n)
+    monkeypatch.setattr(os, "cpu_count", lambda: cores)
+    split = model_cycle_errors(2.0, PAPER, n)
+    for a, b in zip((one.resistance, one.capacitance), (split.resistance, split.capacitance)):
+        assert (a.percent, a.stress_at_max_pa, a.difference) == (b.percent, b.stress_at_max_pa, b.difference)
+        np.testing.assert_array_equal(a.q_load, b.q_load)
+        np.testing.assert_array_equal(a.q_unload, b.q_unload)

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
-from scipy.constants import epsilon_0
+from scipy.constants import e, epsilon_0, h, m_e
 from scipy.optimize import minimize_scalar
 
 from fsrlab.physics.electrical import capacitance_per_area, resistance_per_area
@@ -356,8 +356,121 @@ def model_cycle_errors(u_v: float, params: PaperParameters = PAPER, n: int = 400
 _CHUNK = 16384
 
 
+class _BracketNotPositive(Exception):
+    """Eq. (12)'s bracket is not positive somewhere on the cycle: the exact path gives its NaN or 0."""
+
+
+def _kernel_range(u: float, p: PaperParameters, x: np.ndarray, lo: int, hi: int, rl, ru, cl, cu):
+    """R_A and C_A of both branches for ``x[lo:hi]``, chunk by chunk, constants folded.
+
+    Per stress and branch: the separation, −B = k1·s, exp(−B), exp(−B√r), the bracket, R_A = k3·s²/bracket
+    (eqs. 12, 16–18 with u/J folded into one constant) and C_A = ε·ε0/s (eq. 15): 11 passes and four
+    exponentials per stress over cached chunks. Returns the largest |ΔR_A| and |ΔC_A| of the range with
+    their indices (the first of equal maxima).
+    """
+    phi0 = p.phi0_j
+    k1 = -8 * np.pi * np.sqrt(2 * m_e) * phi0**1.5 / (2.96 * h * e * u)  # −B per metre of separation
+    r = 1 + 2 * e * u / phi0
+    sqrt_r = np.sqrt(r)
+    k3 = 8 * np.pi * h * phi0 / (2.2 * e**3 * u)  # R_A = u/J = k3·s²/bracket
+    c_num = p.eps_r * epsilon_0
+    s_f = p.s0_m * (1.0 - p.sigma_f_pa / p.modulus_pa)  # Eq. (3)
+    size = min(hi - lo, _CHUNK)
+    w1, w2, s_l, s_u = (np.empty(size) for _ in range(4))
+    best_r, best_c = (-np.inf, lo), (-np.inf, lo)
+    for a in range(lo, hi, _CHUNK):
+        xs = x[a:min(a + _CHUNK, hi)]
+        m, chunk = xs.size, slice(a, a + xs.size)
+        sl, su, t1, t2 = s_l[:m], s_u[:m], w1[:m], w2[:m]
+        np.multiply(xs, -p.s0_m / p.modulus_pa, out=sl)
+        sl += p.s0_m  # Eq. (1)
+        np.multiply(xs, -1.0 / p.sigma_f_pa, out=su)
+        su += 1.0
+        np.power(su, p.k, out=su)
+        su *= p.s0_m - s_f
+        su += s_f  # Eq. (9), simplified
+        for s, r_out, c_out in ((sl, rl, cl), (su, ru, cu)):
+            neg_b = np.multiply(s, k1, out=t1)
+            t = np.multiply(neg_b, sqrt_r, out=t2)
+            np.exp(neg_b, out=neg_b)
+            np.exp(t, out=t)
+            t *= r
+            bracket = np.subtract(neg_b, t, out=t)
+            if not bracket.min() > 0:  # NaN, 0 or negative: not this path's business
+                raise _BracketNotPositive
+            q = np.square(s, out=r_out[chunk])
+            q *= k3
+            q /= bracket
+            np.divide(c_num, s, out=c_out[chunk])
+        for key, q_l, q_u in (("r", rl, ru), ("c", cl, cu)):
+            d = np.subtract(q_u[chunk], q_l[chunk], out=t1)
+            np.abs(d, out=d)
+            k = int(np.argmax(d))
+            if key == "r" and d[k] > best_r[0]:
+                best_r = (float(d[k]), a + k)
+            elif key == "c" and d[k] > best_c[0]:
+                best_c = (float(d[k]), a + k)
+    return best_r, best_c
+
+
 def _model_cycle_errors_eq12(u: float, p: PaperParameters, x: np.ndarray) -> CycleErrors:
     """:func:`model_cycle_errors` when eq. (12) applies (u > φ0/e, Table 2's voltages), fused.
+
+    The grid is split between the cores (numpy's loops release the GIL), each range computed chunk by
+    chunk with the constants folded (:func:`_kernel_range`): the numbers agree with the public functions
+    (separation_loading/unloading, resistance_per_area, capacitance_per_area) to a few units in the last
+    place (tests/physics/test_kernel.py). Where eq. (12)'s bracket is not positive somewhere on the cycle
+    (thin films at high voltage), the exact in-place path takes over and gives the public functions'
+    NaN to the bit (:func:`_model_cycle_errors_eq12_exact`).
+    """
+    import os
+    from concurrent.futures import ThreadPoolExecutor
+
+    n = x.size
+    rl, ru, cl, cu = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    parts = max(1, min(os.cpu_count() or 1, n // (4 * _CHUNK)))
+    bounds = [n * i // parts for i in range(parts + 1)]
+    try:
+        with np.errstate(over="ignore", under="ignore"):
+            if parts == 1:
+                results = [_kernel_range(u, p, x, 0, n, rl, ru, cl, cu)]
+            else:
+                with ThreadPoolExecutor(max_workers=parts) as pool:
+                    results = list(pool.map(lambda i: _kernel_range(u, p, x, bounds[i], bounds[i + 1], rl, ru, cl, cu),
+                                            range(parts)))
+    except _BracketNotPositive:
+        return _model_cycle_errors_eq12_exact(u, p, x)
+    # The largest difference over the ranges; the first range wins ties, as one pass in order would.
+    i_r = max(results, key=lambda res: (res[0][0], -res[0][1]))[0][1]
+    i_c = max(results, key=lambda res: (res[1][0], -res[1][1]))[1][1]
+    return _errors_from_curves(u, p, x, rl, ru, cl, cu, i_r, i_c)
+
+
+def _errors_from_curves(u, p, x, rl, ru, cl, cu, i_r, i_c) -> CycleErrors:
+    """HE of R_A and C_A from the grid's curves and σd's grid points, refined with scalar evaluations."""
+    c_num = p.eps_r * epsilon_0
+
+    def s_l(t):
+        return _loading(t, p.s0_m, p.modulus_pa)
+
+    def s_u(t):
+        return _unloading(t, p.sigma_f_pa, p.s0_m, p.modulus_pa, p.k)
+
+    def scalar(fn):
+        def q(t):
+            with np.errstate(over="ignore", under="ignore", invalid="ignore", divide="ignore"):
+                return float(fn(t))
+        return q
+
+    he_r = _curves_on_grid(x, rl, ru, scalar(lambda t: u / _eq12(u, s_l(t), p.phi0_j)),
+                           scalar(lambda t: u / _eq12(u, s_u(t), p.phi0_j)), refine=True, i=i_r)
+    he_c = _curves_on_grid(x, cl, cu, scalar(lambda t: c_num / s_l(t)), scalar(lambda t: c_num / s_u(t)),
+                           refine=True, i=i_c)
+    return CycleErrors(u_v=u, resistance=he_r, capacitance=he_c, regime=12)
+
+
+def _model_cycle_errors_eq12_exact(u: float, p: PaperParameters, x: np.ndarray) -> CycleErrors:
+    """The Table 2 kernel evaluated exactly as the public functions do, where eq. (12) fails somewhere.
 
     The same operations in the same order as the public functions (separation_loading/unloading,
     resistance_per_area, capacitance_per_area, all checked once by the caller), evaluated chunk by
@@ -396,15 +509,4 @@ def _model_cycle_errors_eq12(u: float, p: PaperParameters, x: np.ndarray) -> Cyc
             track("c", a, cl[chunk], cu[chunk], work)
     if best["r"][1] is None or best["c"][1] is None:
         raise ValueError("All-NaN slice encountered")  # np.nanargmax's error, as on the public path
-
-    def scalar(fn):
-        def q(t):
-            with np.errstate(over="ignore", under="ignore", invalid="ignore", divide="ignore"):
-                return float(fn(t))
-        return q
-
-    he_r = _curves_on_grid(x, rl, ru, scalar(lambda t: u / _eq12(u, s_l(t), p.phi0_j)),
-                           scalar(lambda t: u / _eq12(u, s_u(t), p.phi0_j)), refine=True, i=best["r"][1])
-    he_c = _curves_on_grid(x, cl, cu, scalar(lambda t: c_num / s_l(t)), scalar(lambda t: c_num / s_u(t)),
-                           refine=True, i=best["c"][1])
-    return CycleErrors(u_v=u, resistance=he_r, capacitance=he_c, regime=12)
+    return _errors_from_curves(u, p, x, rl, ru, cl, cu, best["r"][1], best["c"][1])
