@@ -185,3 +185,20 @@ def test_readout_from_metadata_reads_current_and_earlier_sidecars():
     older = {"circuit": {"r_ohm": 10e3, "traditional": {"r_f_ohm": 15e3, "vcc_v": -3.3}}}
     assert readout_from_metadata(older)[1] == OpAmpReadout(15e3, -3.3)
     assert readout_from_metadata({}) == (None, None)
+
+
+@pytest.mark.parametrize("vcc", [1e308, 1001.0, float("inf"), 0.0, -5.0])
+def test_supply_beyond_any_555_is_refused_naming_vcc(vcc):
+    # Fuzzer finding: Vcc = 1e308 overflowed the thresholds and the message spoke of N "short by -400 %".
+    from fsrlab.circuits.circuit import check_supply
+
+    with pytest.raises(ValueError, match=r"vcc_v: must be a supply voltage > 0 V and ≤ 1000 V"):
+        check_supply(False, 0.0, vcc)
+
+
+def test_cli_oscillator_with_a_huge_supply_names_the_option():
+    from clirun import run_cli
+
+    code, _, err = run_cli(["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1n", "--vcc", "1e308"])
+    assert code == 2
+    assert "--vcc" in err and "1000 V" in err and "short by" not in err

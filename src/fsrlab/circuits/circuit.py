@@ -25,7 +25,8 @@ from dataclasses import MISSING, asdict, dataclass, fields, replace
 
 import numpy as np
 
-__all__ = ["LM555Circuit", "OpAmpReadout", "readout_from_metadata", "check_lm555", "check_fractions", "check_supply"]
+__all__ = ["LM555Circuit", "OpAmpReadout", "readout_from_metadata", "check_lm555", "check_fractions", "check_supply",
+           "VCC_MAX_V"]
 
 
 def check_fractions(lower_fraction: float, upper_fraction: float) -> None:
@@ -43,6 +44,11 @@ def check_fractions(lower_fraction: float, upper_fraction: float) -> None:
         )
 
 
+#: Largest supply the models accept: far beyond any 555 (LM555: 4.5–16 V; CMOS parts 2–18 V), and small
+#: enough that thresholds and currents stay finite in double precision. [V]
+VCC_MAX_V = 1000.0
+
+
 def check_supply(diode: bool, diode_drop_v: float, vcc_v: float) -> None:
     """Raise ``ValueError`` for a bad supply or diode drop (a drop needs the diode).
 
@@ -53,10 +59,10 @@ def check_supply(diode: bool, diode_drop_v: float, vcc_v: float) -> None:
     diode_drop_v : float
         Forward drop of D1 (≥ 0). [V]
     vcc_v : float
-        Supply (> 0). [V]
+        Supply, 0 < Vcc ≤ :data:`VCC_MAX_V`. [V]
     """
-    if not (np.isfinite(vcc_v) and vcc_v > 0):
-        raise ValueError(f"vcc_v: must be a finite supply voltage > 0 V, got {vcc_v!r}")
+    if not (np.isfinite(vcc_v) and 0 < vcc_v <= VCC_MAX_V):
+        raise ValueError(f"vcc_v: must be a supply voltage > 0 V and ≤ {VCC_MAX_V:g} V, got {vcc_v!r}")
     if not (np.isfinite(diode_drop_v) and diode_drop_v >= 0):
         raise ValueError(f"diode_drop_v: must be a finite forward drop >= 0 V, got {diode_drop_v!r}")
     if diode_drop_v > 0 and not diode:
