@@ -1,0 +1,144 @@
+"""``fsrlab live``: the meter's front panel in a browser (time series, hysteresis loop, status, controls)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import typer
+
+from fsrlab.cli import app
+from fsrlab.cli._common import fail, farads, pascals, seconds, to_jsonable
+
+
+def _json_line(obj) -> None:
+    """One JSON object on one line (a reader can act on the URL before the command ends)."""
+    import json
+
+    typer.echo(json.dumps(to_jsonable(obj)))
+
+
+@app.command()
+def live(
+    port: str = typer.Option(None, "--port", help="Serial port of the meter (/dev/ttyACM0, COM3, a pty) or 'auto'."),
+    virtual: bool = typer.Option(False, "--virtual", help="Show a virtual device (pty, physics and 555 models) instead of hardware."),
+    out: Path = typer.Option(None, "--out", "-o", help="Run file for the page's 'Start recording' (CSV + sidecar); later recordings get -2, -3, ...; never replaced. Without it recording is off."),
+    cal: Path = typer.Option(None, "--cal", help="Calibration JSON (fsrlab calibrate -o): the page also shows the estimate and its uncertainty."),
+    host: str = typer.Option("127.0.0.1", "--host", help="Interface to serve on: 127.0.0.1 (this computer only) or e.g. 0.0.0.0; any other than 127.0.0.1 needs the random token printed with the URL."),
+    http_port: int = typer.Option(5006, "--http-port", help="TCP port of the page [1], 1..65535, or 0 for any free one."),
+    open_browser: bool = typer.Option(False, "--open", help="Open the page in the default browser."),
+    window: float = typer.Option("100ms", "--window", parser=seconds, metavar="TIME", help="Measurement window at the start [s], 10ms to 60s: 20ms, 100ms, 1s."),
+    range_: int = typer.Option(0, "--range", help="C_off range switch at the start: 0 (off) or 1 (C_off connected)."),
+    duration: float = typer.Option(None, "--duration", parser=seconds, metavar="TIME", help="Serve this long [s], then stop (default: until Ctrl-C): 10s, 2min."),
+    profile: str = typer.Option("triangle", "--profile", help="Virtual device: stress profile (triangle, sine, ...)."),
+    peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS", help="Virtual device: peak stress [Pa], e.g. 50k."),
+    period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="Virtual device: period of the profile [s], e.g. 4s."),
+    c_off: float = typer.Option("1n", "--c-off", parser=farads, metavar="CAPACITANCE", help="Virtual circuit: C_off [F], e.g. 1n."),
+    seed: int = typer.Option(None, "--seed", help="Virtual device: random seed [1] (default: a fresh one)."),
+    json_out: bool = typer.Option(False, "--json", help='Print JSON lines: {"url", "token"} when the page is up, {"frames", "recorded", "state"} at the end.'),
+) -> None:
+    """Serve the meter's front panel: frequency, duty cycle, op-amp voltage and the reference live, the
+    loading/unloading loop, the link's health, and controls (recording, range, window).
+
+    The page updates every 50 ms and works offline (BokehJS comes with the bokeh package). It is
+    served on 127.0.0.1 only unless --host names another interface; then every request needs the
+    token printed with the URL. One browser tab controls the meter; more tabs watch.
+
+    Examples:
+
+    \\b
+      fsrlab live --virtual --out bench.csv --open
+      fsrlab live --port auto --cal cal.json --out run.csv
+      fsrlab live --virtual --host 0.0.0.0 --http-port 8080
+    """
+    import math
+    import time
+
+    from fsrlab.cli.acquisition import _check_out, _check_virtual, _virtual_device, _window_ms
+
+    if virtual == (port is not None):
+        fail("give exactly one of --port PORT|auto and --virtual", "--port")
+    window_ms = _window_ms(window)
+    if range_ not in (0, 1):
+        fail(f"must be 0 or 1, got {range_}", "--range")
+    if not 0 <= http_port <= 65535:
+        fail(f"must be 0..65535, got {http_port}", "--http-port")
+    if duration is not None and not duration > 0:
+        fail(f"must be > 0 s, got {duration:g} s", "--duration")
+    if out is not None:
+        _check_out(out, overwrite=False)
+    estimator = None
+    if cal is not None:
+        from fsrlab.analysis.calibration_io import load_calibration
+
+        try:
+            calibration = load_calibration(cal)
+        except (OSError, ValueError) as exc:
+            fail(str(exc), "--cal")
+
+        def estimator(row, c=calibration):
+            x = row.get(c.x_name)
+            if x is None or not math.isfinite(x):
+                return math.nan, math.nan
+            return float(c(x)), float(getattr(c, "cv").rmse) if getattr(c, "cv", None) else math.nan
+    try:
+        import bokeh  # noqa: F401
+    except ImportError:
+        fail("needs the bokeh package: pip install -e . (it is a dependency of fsrlab)", "--port")
+    from fsrlab.acquisition.serial_link import SerialLink
+    from fsrlab.live.page import Controller, make_document
+    from fsrlab.live.server import start_server
+    from fsrlab.live.session import LiveSession
+
+    device, reference, health, metadata = None, None, None, {}
+    if virtual:
+        _check_virtual(profile, peak, period, c_off, 0.0, 0.0, seed)
+        device, source = _virtual_device(profile, peak, period, c_off, seed, 0.0, 0.0)
+        port = device.open()
+        metadata = {"origin": "fsrlab live --virtual", **source.metadata()}
+        reference = lambda frame: device.reference(frame.seq)  # noqa: E731
+        health = lambda: device.failure  # noqa: E731
+    try:
+        link = SerialLink(port)
+    except Exception as exc:  # noqa: BLE001 - one line: the port could not be opened
+        if device is not None:
+            device.close()
+        fail(f"cannot open {port}: {exc}", "--port")
+    session = LiveSession(link, window_ms=window_ms, range_=range_, reference=reference, estimator=estimator,
+                          health=health, metadata=metadata).start()
+    controller = Controller(out)
+    try:
+        srv = start_server(lambda doc: make_document(doc, session, controller, "stress", "kPa", 1e-3),
+                           host=host, port=http_port)
+    except OSError as exc:
+        session.close()
+        link.close()
+        if device is not None:
+            device.close()
+        fail(f"cannot serve on {host}:{http_port}: {exc}", "--http-port")
+    if json_out:
+        _json_line({"url": srv.url, "token": srv.token})
+    else:
+        typer.echo(f"fsrlab live: {srv.url}  (Ctrl-C to stop)")
+    sys.stdout.flush()
+    if open_browser:
+        import webbrowser
+
+        webbrowser.open(srv.url)
+    loop = srv.server.io_loop
+    if duration is not None:
+        loop.call_later(duration, loop.stop)
+    try:
+        loop.start()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        srv.server.stop()
+        session.close()
+        link.close()
+        if device is not None:
+            device.close()
+    if json_out:
+        _json_line({"frames": session.status.frames, "recorded": session.status.recorded, "state": session.status.state})
+    else:
+        typer.echo(f"fsrlab live: {session.status.frames} windows shown; {session.status.state}: {session.status.message}")

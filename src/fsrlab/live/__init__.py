@@ -1,0 +1,1 @@
+"""``fsrlab live``: the meter's front panel in a browser (Bokeh server; session, page, server)."""

@@ -1,0 +1,187 @@
+"""The live page: a Bokeh document per browser tab, fed from a :class:`~fsrlab.live.session.LiveSession`.
+
+Time series of frequency, duty cycle, op-amp voltage and the reference (with the calibrated estimate
+and its band when a calibration is given), the loading/unloading loop (readout against reference),
+a status line, the latest window in numbers, and the controls. Each tab streams the windows it has
+not seen yet every :data:`UPDATE_S` (``ColumnDataSource.stream`` with a rollover, so memory stays
+bounded); one tab at a time controls the device and the recording, the others watch.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from pathlib import Path
+
+__all__ = ["UPDATE_S", "POINTS", "Controller", "make_document"]
+
+UPDATE_S = 0.05
+"""Period of a page's update callback. [s]"""
+POINTS = 10_000
+"""Windows a page keeps per plot (the oldest roll over). [1]"""
+WINDOWS_MS = ("20", "50", "100", "200", "500", "1000")
+"""Window lengths offered on the page. [ms]"""
+
+
+class Controller:
+    """Which tab controls the device, and where recordings go.
+
+    Parameters
+    ----------
+    out : Path or None
+        Run file for the first recording; later ones get ``-2``, ``-3``, ... (an existing file is never
+        replaced). None: recording is off.
+    """
+
+    def __init__(self, out: Path | None) -> None:
+        self.out = out
+        self.owner = None
+        self._lock = threading.Lock()
+        self._count = 0
+
+    def claim(self, doc) -> bool:
+        """Make ``doc`` the controlling tab if none is; True when it controls."""
+        with self._lock:
+            if self.owner is None:
+                self.owner = doc
+            return self.owner is doc
+
+    def release(self, doc) -> None:
+        """A tab closed: the next tab that asks may take control."""
+        with self._lock:
+            if self.owner is doc:
+                self.owner = None
+
+    def next_path(self) -> Path | None:
+        """The next unused run file name."""
+        if self.out is None:
+            return None
+        from fsrlab.runformat import sidecar_path
+
+        while True:
+            self._count += 1
+            stem = self.out.stem if self._count == 1 else f"{self.out.stem}-{self._count}"
+            path = self.out.with_name(stem + self.out.suffix)
+            if not path.exists() and not sidecar_path(path).exists():
+                return path
+
+
+def _fmt(v, spec: str) -> str:
+    return "—" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, spec)
+
+
+def make_document(doc, session, controller: Controller, reference_label: str = "reference",
+                  reference_unit: str = "", reference_scale: float = 1.0, title: str = "fsrlab live") -> None:
+    """Fill a Bokeh document (one browser tab) with the live view of ``session``.
+
+    Parameters
+    ----------
+    doc : bokeh.document.Document
+        The tab's document (Bokeh calls this with it).
+    session : LiveSession
+        The device session.
+    controller : Controller
+        Shared among tabs: who controls, where recordings go.
+    reference_label, reference_unit : str
+        How the reference is named on the page (``stress``/``kPa`` or ``force``/``N``).
+    reference_scale : float
+        Reference and estimate as shown = value in SI units × this (1e-3 for kPa). [1]
+    title : str
+        Page title.
+    """
+    from bokeh.layouts import column, row
+    from bokeh.models import (Band, Button, ColumnDataSource, Div, RadioButtonGroup, Select)
+    from bokeh.plotting import figure
+
+    empty = {c: [] for c in ("time_s", "seq", "frequency_khz", "duty_pct", "voltage_v", "reference", "estimate",
+                             "lower", "upper")}
+    src = ColumnDataSource(dict(empty), name="windows")
+    ts = dict(height=170, sizing_mode="stretch_width", tools="pan,wheel_zoom,box_zoom,reset,save",
+              x_axis_label="time (s)")
+    f_fig = figure(y_axis_label="frequency (kHz)", name="frequency_plot", **ts)
+    f_fig.line("time_s", "frequency_khz", source=src, color="#1f77b4")
+    d_fig = figure(y_axis_label="duty cycle (%)", x_range=f_fig.x_range, **ts)
+    d_fig.line("time_s", "duty_pct", source=src, color="#ff7f0e")
+    v_fig = figure(y_axis_label="op-amp V0 (V)", x_range=f_fig.x_range, **ts)
+    v_fig.line("time_s", "voltage_v", source=src, color="#2ca02c")
+    unit = f" ({reference_unit})" if reference_unit else ""
+    r_fig = figure(y_axis_label=f"{reference_label}{unit}", x_range=f_fig.x_range, **ts)
+    r_fig.line("time_s", "reference", source=src, color="black", legend_label="reference")
+    if session.estimator is not None:
+        r_fig.add_layout(Band(base="time_s", lower="lower", upper="upper", source=src, fill_alpha=0.25,
+                              fill_color="#d62728"))
+        r_fig.line("time_s", "estimate", source=src, color="#d62728", legend_label="estimate ± u")
+    r_fig.legend.location = "top_left"
+    loop = figure(height=360, width=420, x_axis_label=f"{reference_label}{unit}", name="loop_plot",
+                  y_axis_label="estimate" + unit if session.estimator is not None else "frequency (kHz)",
+                  title="loading / unloading loop")
+    loop.scatter("reference", "estimate" if session.estimator is not None else "frequency_khz", source=src,
+                 size=3, alpha=0.6)
+
+    status = Div(text="connecting…", name="status", sizing_mode="stretch_width")
+    latest = Div(text="", name="latest", sizing_mode="stretch_width")
+    events = Div(text="", name="events", sizing_mode="stretch_width")
+    controls = controller.claim(doc)
+    record = Button(label="Start recording", button_type="success", name="record",
+                    disabled=not controls or controller.out is None)
+    rng = RadioButtonGroup(labels=["range 0 (C_off out)", "range 1 (C_off in)"], active=session.status.range,
+                           name="range", disabled=not controls)
+    window = Select(title="window (ms)", value=str(session.status.window_ms), options=list(WINDOWS_MS),
+                    name="window", disabled=not controls)
+    role = Div(text="this tab controls the meter" if controls else
+               "view only: another tab controls the meter", name="role")
+
+    def on_record():
+        if session.status.recording:
+            session.command("stop_recording")
+        else:
+            path = controller.next_path()
+            if path is not None:
+                session.command("record", str(path))
+
+    record.on_click(on_record)
+    rng.on_change("active", lambda attr, old, new: session.command("range", int(new)))
+    window.on_change("value", lambda attr, old, new: session.command("window", int(new)))
+
+    state = {"cursor": 0}
+
+    def update():
+        cursor, cols = session.since(state["cursor"])
+        state["cursor"] = cursor
+        n = len(cols["seq"])
+        if n:
+            k = reference_scale
+            est, unc = [k * e for e in cols["estimate"]], [k * u for u in cols["uncertainty"]]
+            ref = [k * r for r in cols["reference"]]
+            src.stream({"time_s": cols["time_s"], "seq": cols["seq"],
+                        "frequency_khz": [f / 1e3 for f in cols["frequency_hz"]],
+                        "duty_pct": [100 * d for d in cols["duty_cycle"]], "voltage_v": cols["voltage_v"],
+                        "reference": ref, "estimate": est,
+                        "lower": [e - u for e, u in zip(est, unc)], "upper": [e + u for e, u in zip(est, unc)]},
+                       rollover=POINTS)
+            i = n - 1
+            latest.text = (f"<span id='latest-seq'>{cols['seq'][i]}</span> · f = "
+                           f"<span id='latest-frequency'>{_fmt(cols['frequency_hz'][i], '.2f')}</span> Hz · duty = "
+                           f"<span id='latest-duty'>{_fmt(cols['duty_cycle'][i], '.6f')}</span> · V0 = "
+                           f"<span id='latest-voltage'>{_fmt(cols['voltage_v'][i], '.4f')}</span> V · "
+                           f"{reference_label} = <span id='latest-reference'>{_fmt(ref[i], '.6g')}</span> {reference_unit}"
+                           + (f" · estimate = <span id='latest-estimate'>{_fmt(est[i], '.6g')}</span> ± {_fmt(unc[i], '.2g')}"
+                              if session.estimator is not None else ""))
+        st = session.status
+        status.text = (f"<b>{st.state}</b> {st.message} · {st.device} · "
+                       f"<span id='fps'>{st.frames_per_s:.1f}</span> frames/s · frames {st.frames} · "
+                       f"dropped <span id='dropped'>{st.dropped}</span> · corrupt {st.corrupt} · missed edges "
+                       f"{st.missed} · stalls {st.stalls} · range {st.range} · window {st.window_ms} ms"
+                       + (f" · <b>recording</b> <span id='recording'>{st.recording}</span> ({st.recorded} rows)"
+                          if st.recording else ""))
+        record.label = "Stop recording" if st.recording else "Start recording"
+        record.button_type = "danger" if st.recording else "success"
+        events.text = "<br>".join(st.events[-5:])
+
+    doc.add_periodic_callback(update, int(UPDATE_S * 1000))
+    doc.on_session_destroyed(lambda ctx: controller.release(doc))
+    doc.title = title
+    doc.add_root(column(Div(text=f"<h2 style='margin:4px 0'>{title}</h2>"), status, latest,
+                        row(record, rng, window, role), row(column(f_fig, d_fig, v_fig, r_fig, sizing_mode="stretch_width"),
+                                                              loop, sizing_mode="stretch_width"),
+                        events, sizing_mode="stretch_width"))

@@ -1,0 +1,313 @@
+"""A live session with a meter: one thread reads the frames, keeps the recent ones for the page, records on request.
+
+The device thread owns the :class:`~fsrlab.acquisition.serial_link.SerialLink`: it identifies the
+device, configures and starts it, then reads frames, appends each window to a bounded buffer the pages
+read from (:meth:`LiveSession.since`), writes it to a run file while recording (the crash-safe
+:class:`~fsrlab.runwriter.RunWriter`, rows from :func:`fsrlab.acquisition.recorder.window_row`), and
+carries out the commands the pages send (range, window, start/stop recording) between reads. A device
+that vanishes ends the session's reading with a reason on the page; a recording in progress is closed
+with everything written so far.
+"""
+
+from __future__ import annotations
+
+import math
+import queue
+import threading
+import time
+from collections import deque
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+__all__ = ["LiveSession", "LiveStatus", "COLUMNS"]
+
+#: Columns the session keeps for the page (one value per window).
+COLUMNS = ("time_s", "seq", "frequency_hz", "duty_cycle", "voltage_v", "range", "missed", "reference",
+           "estimate", "uncertainty", "received_s")
+
+
+@dataclass
+class LiveStatus:
+    """What the page's status line shows.
+
+    Attributes
+    ----------
+    state : str
+        ``connecting``, ``running``, ``stopped`` or ``disconnected``.
+    message : str
+        A sentence for the user (the reason, when the device is gone).
+    device : str
+        Device name, firmware and protocol version, once identified.
+    frames : int
+        Windows received.
+    frames_per_s : float
+        Windows in the last second. [1/s]
+    dropped, corrupt, missed, stalls : int
+        Frames lost on the link, corrupted lines, edges the meter missed, silences longer than the stall time.
+    range : int
+        C_off switch in force.
+    window_ms : int
+        Window length in force. [ms]
+    recording : str
+        The run file being written, or empty.
+    recorded : int
+        Rows written to it.
+    """
+
+    state: str = "connecting"
+    message: str = ""
+    device: str = ""
+    frames: int = 0
+    frames_per_s: float = 0.0
+    dropped: int = 0
+    corrupt: int = 0
+    missed: int = 0
+    stalls: int = 0
+    range: int = 0
+    window_ms: int = 100
+    recording: str = ""
+    recorded: int = 0
+    events: list = field(default_factory=list)
+
+
+class LiveSession:
+    """The device side of ``fsrlab live``.
+
+    Parameters
+    ----------
+    link : SerialLink
+        An open link (not yet identified); the session's thread owns it from :meth:`start` on.
+    window_ms : int
+        Measurement window. [ms]
+    range_ : int
+        C_off switch at the start.
+    capacity : int
+        Windows kept for the pages (the oldest drop out). [1]
+    reference : callable, optional
+        ``reference(frame) -> value`` of the reference (stress [Pa] or force [N]) for a window.
+    estimator : callable, optional
+        ``estimator(row) -> (estimate, uncertainty)`` for a window (a calibration), or None.
+    health : callable, optional
+        ``health() -> None`` or a one-line reason once the device has failed.
+    metadata : dict, optional
+        Sidecar content of the runs recorded (circuit, sensor, origin).
+    stall_s : float
+        Silence that counts as a stall. [s]
+    """
+
+    def __init__(self, link, window_ms: int = 100, range_: int = 0, capacity: int = 20000,
+                 reference: Callable | None = None, estimator: Callable | None = None,
+                 health: Callable[[], str | None] | None = None, metadata: dict | None = None,
+                 stall_s: float = 2.0) -> None:
+        self.link = link
+        self.reference = reference
+        self.estimator = estimator
+        self.health = health
+        self.metadata = dict(metadata or {})
+        self.stall_s = float(stall_s)
+        self.status = LiveStatus(range=range_, window_ms=window_ms)
+        self._lock = threading.Lock()
+        self._rows: deque = deque(maxlen=int(capacity))
+        self._total = 0
+        self._commands: queue.Queue = queue.Queue()
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._writer = None
+        self._t0 = time.monotonic()
+        self._recent: deque = deque()
+        self.identity = None
+
+    # ----------------------------------------------------------------- pages
+    def since(self, cursor: int) -> tuple[int, dict[str, list]]:
+        """Windows after ``cursor`` (the count a page has seen), as columns, and the new cursor.
+
+        A page that fell behind by more than the buffer gets the buffer (older windows are gone).
+        """
+        with self._lock:
+            total = self._total
+            n = min(total - cursor, len(self._rows))
+            rows = list(self._rows)[len(self._rows) - n:] if n > 0 else []
+        return total, {c: [r[c] for r in rows] for c in COLUMNS}
+
+    def command(self, name: str, value=None) -> None:
+        """Queue a command for the device thread: ``range`` (0/1), ``window`` [ms], ``record`` (a path) or ``stop_recording``."""
+        if name not in ("range", "window", "record", "stop_recording"):
+            raise ValueError(f"name: unknown live command {name!r}")
+        self._commands.put((name, value))
+
+    # ---------------------------------------------------------------- thread
+    def start(self) -> "LiveSession":
+        """Start the device thread."""
+        self._thread = threading.Thread(target=self._run, name="fsrlab-live-device", daemon=True)
+        self._thread.start()
+        return self
+
+    def close(self, timeout_s: float = 3.0) -> None:
+        """Stop the thread, close a recording in progress, leave the device stopped."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout_s)
+
+    def _event(self, text: str) -> None:
+        with self._lock:
+            self.status.events = (self.status.events + [f"{time.strftime('%H:%M:%S')} {text}"])[-20:]
+
+    def _run(self) -> None:
+        from fsrlab.acquisition.serial_link import DeviceGone, LinkError
+
+        st = self.status
+        try:
+            ident = self.link.handshake()
+            self.identity = ident
+            st.device = f"{ident.name} {ident.firmware_version} (protocol {ident.protocol_version})"
+            self.link.stop()
+            self.link.set_window(st.window_ms)
+            self.link.set_range(st.range)
+            self.link.start()
+            st.state, st.message = "running", f"reading {self.link.port}"
+            self._loop()
+        except DeviceGone as exc:
+            reason = self.health() if self.health is not None else None
+            st.state, st.message = "disconnected", reason or str(exc)
+            self._event(st.message)
+        except LinkError as exc:
+            st.state, st.message = "disconnected", str(exc)
+            self._event(st.message)
+        except Exception as exc:  # noqa: BLE001 - the page says what happened; the file keeps its rows
+            st.state, st.message = "disconnected", f"{type(exc).__name__}: {exc}"
+            self._event(st.message)
+        finally:
+            self._close_recording("device gone" if st.state == "disconnected" else "stopped")
+            if st.state == "running":
+                try:
+                    self.link.stop()
+                except Exception:  # noqa: BLE001 - best effort on the way out
+                    pass
+                st.state, st.message = "stopped", "session closed"
+
+    def _loop(self) -> None:
+        from fsrlab.acquisition.messages import Measurement
+        from fsrlab.acquisition.protocol import UINT32_MODULO
+
+        st = self.status
+        parser = self.link.parser
+        anchor_ms = None
+        silent_since = time.monotonic()
+        in_stall = False
+        while not self._stop.is_set():
+            if self.health is not None and (reason := self.health()):
+                from fsrlab.acquisition.serial_link import DeviceGone
+
+                raise DeviceGone(reason)
+            self._do_commands()
+            batch = self.link.read_frames()
+            now = time.monotonic()
+            if batch:
+                if in_stall:
+                    self._event(f"device back after {now - silent_since:.1f} s")
+                in_stall, silent_since = False, now
+            elif not in_stall and now - silent_since >= self.stall_s:
+                in_stall = True
+                st.stalls += 1
+                self._event(f"no frame for {now - silent_since:.1f} s")
+            for frame in batch:
+                if frame.reset:
+                    anchor_ms = None
+                    self._event("device restarted")
+                if frame.kind != "M":
+                    continue
+                m = Measurement.from_frame(frame)
+                if anchor_ms is None:
+                    anchor_ms = (m.t_ms - m.window_ms) % UINT32_MODULO
+                row = {"time_s": ((m.t_ms - anchor_ms) % UINT32_MODULO) / 1000.0, "seq": m.seq,
+                       "frequency_hz": m.frequency_hz, "duty_cycle": m.duty_cycle, "voltage_v": m.adc_v,
+                       "range": m.range, "missed": m.missed, "periods": m.periods}
+                ref = self.reference(frame) if self.reference is not None else None
+                row["reference"] = ref if ref is not None and math.isfinite(ref) else math.nan
+                est, unc = self.estimator(row) if self.estimator is not None else (math.nan, math.nan)
+                row["estimate"], row["uncertainty"] = est, unc
+                row["received_s"] = time.time()
+                self._write(row)
+                with self._lock:
+                    self._rows.append(row)
+                    self._total += 1
+                    st.frames += 1
+                    st.missed += m.missed
+                    st.range = m.range
+                self._recent.append(now)
+            while self._recent and self._recent[0] < now - 1.0:
+                self._recent.popleft()
+            span = min(now - self._t0, 1.0)
+            st.frames_per_s = len(self._recent) / span if span > 0 else 0.0
+            st.dropped, st.corrupt = parser.lost, parser.bad_frames
+
+    def _do_commands(self) -> None:
+        st = self.status
+        while True:
+            try:
+                name, value = self._commands.get_nowait()
+            except queue.Empty:
+                return
+            try:
+                if name == "range":
+                    self.link.set_range(int(value))
+                    st.range = int(value)
+                    self._event(f"range {int(value)} (C_off {'in' if value else 'out'})")
+                elif name == "window":
+                    self.link.set_window(int(value))
+                    st.window_ms = int(value)
+                    self._event(f"window {int(value)} ms")
+                elif name == "record":
+                    self._open_recording(Path(value))
+                elif name == "stop_recording":
+                    self._close_recording("stopped from the page")
+            except (ValueError, OSError) as exc:
+                self._event(f"{name} refused: {exc}")
+
+    # ------------------------------------------------------------- recording
+    def _open_recording(self, path: Path) -> None:
+        from fsrlab.acquisition.recorder import COLUMNS as RUN_COLUMNS
+        from fsrlab.runwriter import RunWriter
+
+        if self._writer is not None:
+            self._event(f"already recording to {self.status.recording}")
+            return
+        columns = list(RUN_COLUMNS) + (["stress_pa"] if self.reference is not None else [])
+        meta = dict(self.metadata)
+        meta.setdefault("origin", f"fsrlab live from {self.link.port}")
+        ident = self.identity
+        meta["acquisition"] = {"port": self.link.port, "window_ms": self.status.window_ms, "range": self.status.range,
+                               "device": ident.name if ident else "", "protocol_version": ident.protocol_version if ident else None}
+        self._writer = RunWriter(path, columns, meta, overwrite=False)  # never replaces a run
+        self._record_t0 = None
+        self.status.recording, self.status.recorded = str(path), 0
+        self._event(f"recording to {path}")
+
+    def _write(self, row: dict) -> None:
+        if self._writer is None:
+            return
+        if self._record_t0 is None:
+            self._record_t0 = row["time_s"]
+        out = {"time_s": row["time_s"] - self._record_t0, "frequency_hz": row["frequency_hz"],
+               "duty_cycle": row["duty_cycle"], "voltage_v": row["voltage_v"], "periods": row["periods"],
+               "missed": row["missed"], "range": row["range"], "seq": row["seq"]}
+        if self.reference is not None:
+            out["stress_pa"] = row["reference"] if math.isfinite(row["reference"]) else None
+        try:
+            self._writer.write(out)
+            self.status.recorded += 1
+        except OSError as exc:
+            self._close_recording(f"write failed: {exc}")
+
+    def _close_recording(self, why: str) -> None:
+        if self._writer is None:
+            return
+        writer, self._writer = self._writer, None
+        try:
+            writer.metadata["ended"] = f"{why}; {self.status.recorded} windows kept"
+            writer.close()
+        except OSError:
+            pass
+        self._event(f"recording closed ({why}): {self.status.recorded} windows in {self.status.recording}")
+        self.status.recording = ""
