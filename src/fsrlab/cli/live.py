@@ -35,6 +35,7 @@ def live(
     period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="Virtual device: period of the profile [s], e.g. 4s."),
     c_off: float = typer.Option("1n", "--c-off", parser=farads, metavar="CAPACITANCE", help="Virtual circuit: C_off [F], e.g. 1n."),
     seed: int = typer.Option(None, "--seed", help="Virtual device: random seed [1] (default: a fresh one)."),
+    unplug_after: int = typer.Option(None, "--unplug-after", help="Virtual device (tests): pull the cable after this many windows [1]."),
     json_out: bool = typer.Option(False, "--json", help='Print JSON lines: {"url", "token"} when the page is up, {"frames", "recorded", "state"} at the end.'),
 ) -> None:
     """Serve the meter's front panel: frequency, duty cycle, op-amp voltage and the reference live, the
@@ -94,6 +95,12 @@ def live(
     if virtual:
         _check_virtual(profile, peak, period, c_off, 0.0, 0.0, seed)
         device, source = _virtual_device(profile, peak, period, c_off, seed, 0.0, 0.0)
+        if unplug_after is not None:
+            if unplug_after < 1:
+                fail(f"must be >= 1 window, got {unplug_after}", "--unplug-after")
+            from fsrlab.acquisition.virtual_device import Faults
+
+            device.faults = Faults(unplug_after=unplug_after)
         port = device.open()
         metadata = {"origin": "fsrlab live --virtual", **source.metadata()}
         reference = lambda frame: device.reference(frame.seq)  # noqa: E731
