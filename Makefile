@@ -6,7 +6,7 @@ STAMP  := $(VENV)/.installed-stamp
 REPORT ?= report
 DEMO   ?= demo
 
-.PHONY: venv sysdeps demo test bench firmware clean
+.PHONY: venv sysdeps demo test bench firmware clean live-screenshot
 
 venv: $(STAMP)
 
@@ -40,6 +40,10 @@ test: venv sysdeps firmware
 bench: venv sysdeps firmware
 	$(BIN)/python -m pip install -q -e '.[dev,bench]'
 	$(BIN)/python benchmarks/run.py
+
+# docs/live.png: the live page on the virtual bench, as a real headless Chromium renders it.
+live-screenshot: venv sysdeps
+	$(BIN)/python scripts/live_screenshot.py
 
 clean:
 	rm -rf $(VENV) $(REPORT) $(DEMO) build firmware/build .pytest_cache .hypothesis

@@ -65,7 +65,7 @@ def test_page_shows_the_windows_the_recorder_wrote_and_the_loop_grows(driver, tm
 
 def test_unplugged_device_shows_on_the_page_and_the_file_keeps_its_rows(driver, tmp_path):
     out = tmp_path / "unplug.csv"
-    server = LiveServer("--virtual", "--out", str(out), "--window", "50ms", "--unplug-after", "60")
+    server = LiveServer("--virtual", "--out", str(out), "--window", "20ms", "--unplug-after", "500")
     try:
         driver.get(server.url)
         assert wait_for(lambda: text(driver, "#latest-seq"))

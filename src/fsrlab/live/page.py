@@ -11,12 +11,15 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 from pathlib import Path
 
-__all__ = ["UPDATE_S", "POINTS", "Controller", "make_document"]
+__all__ = ["UPDATE_S", "STATUS_S", "POINTS", "Controller", "make_document"]
 
 UPDATE_S = 0.05
 """Period of a page's update callback. [s]"""
+STATUS_S = 0.25
+"""Period of the status line's refresh. [s]"""
 POINTS = 10_000
 """Windows a page keeps per plot (the oldest roll over). [1]"""
 WINDOWS_MS = ("20", "50", "100", "200", "500", "1000")
@@ -118,9 +121,10 @@ def make_document(doc, session, controller: Controller, reference_label: str = "
     loop.scatter("reference", "estimate" if session.estimator is not None else "frequency_khz", source=src,
                  size=3, alpha=0.6)
 
-    status = Div(text="connecting…", name="status", sizing_mode="stretch_width")
-    latest = Div(text="", name="latest", sizing_mode="stretch_width")
-    events = Div(text="", name="events", sizing_mode="stretch_width")
+    # Fixed heights: a new text then repaints the line without laying the page out again.
+    status = Div(text="connecting…", name="status", sizing_mode="stretch_width", height=22)
+    latest = Div(text="", name="latest", sizing_mode="stretch_width", height=22)
+    events = Div(text="", name="events", sizing_mode="stretch_width", height=100)
     controls = controller.claim(doc)
     record = Button(label="Start recording", button_type="success", name="record",
                     disabled=not controls or controller.out is None)
@@ -128,8 +132,10 @@ def make_document(doc, session, controller: Controller, reference_label: str = "
                            name="range", disabled=not controls)
     window = Select(title="window (ms)", value=str(session.status.window_ms), options=list(WINDOWS_MS),
                     name="window", disabled=not controls)
-    role = Div(text="this tab controls the meter" if controls else
-               "view only: another tab controls the meter", name="role")
+    role = Div(text=("view only: another tab controls the meter" if not controls else
+                     "this tab controls the meter" + ("" if controller.out is not None else
+                                                      " (recording off: start fsrlab live with --out RUN.csv)")),
+               name="role")
 
     def on_record():
         if session.status.recording:
@@ -143,7 +149,7 @@ def make_document(doc, session, controller: Controller, reference_label: str = "
     rng.on_change("active", lambda attr, old, new: session.command("range", int(new)))
     window.on_change("value", lambda attr, old, new: session.command("window", int(new)))
 
-    state = {"cursor": 0}
+    state = {"cursor": 0, "status_at": 0.0}
 
     def update():
         cursor, cols = session.since(state["cursor"])
@@ -167,16 +173,26 @@ def make_document(doc, session, controller: Controller, reference_label: str = "
                            f"{reference_label} = <span id='latest-reference'>{_fmt(ref[i], '.6g')}</span> {reference_unit}"
                            + (f" · estimate = <span id='latest-estimate'>{_fmt(est[i], '.6g')}</span> ± {_fmt(unc[i], '.2g')}"
                               if session.estimator is not None else ""))
+        now = time.monotonic()
+        if now - state["status_at"] < STATUS_S:
+            return
+        state["status_at"] = now
         st = session.status
-        status.text = (f"<b>{st.state}</b> {st.message} · {st.device} · "
+        text = (f"<b>{st.state}</b> {st.message} · {st.device} · "
                        f"<span id='fps'>{st.frames_per_s:.1f}</span> frames/s · frames {st.frames} · "
                        f"dropped <span id='dropped'>{st.dropped}</span> · corrupt {st.corrupt} · missed edges "
                        f"{st.missed} · stalls {st.stalls} · range {st.range} · window {st.window_ms} ms"
                        + (f" · <b>recording</b> <span id='recording'>{st.recording}</span> ({st.recorded} rows)"
                           if st.recording else ""))
-        record.label = "Stop recording" if st.recording else "Start recording"
-        record.button_type = "danger" if st.recording else "success"
-        events.text = "<br>".join(st.events[-5:])
+        if text != status.text:
+            status.text = text
+        label = "Stop recording" if st.recording else "Start recording"
+        if label != record.label:
+            record.label = label
+            record.button_type = "danger" if st.recording else "success"
+        log = "<br>".join(st.events[-5:])
+        if log != events.text:
+            events.text = log
 
     doc.add_periodic_callback(update, int(UPDATE_S * 1000))
     doc.on_session_destroyed(lambda ctx: controller.release(doc))
