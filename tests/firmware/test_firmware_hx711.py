@@ -188,3 +188,62 @@ def test_the_pull_up_and_the_sck_idle_level_at_boot(fw):
     # ignored by the HX711 but would stretch the next read)
     r = fw.run([], [], time_s=0.05, hx_sps=10)  # first conversion at 100 ms
     assert r.sck_pulses == 0 and r.pd2 == (0, 1)
+
+
+PROBE_C = r"""
+#include <avr/io.h>
+#include <util/delay.h>
+int main(void) {
+  PORTD |= _BV(PD2);
+  DDRD |= _BV(PD3);
+  _delay_ms(20);
+  PORTD |= _BV(PD3);  /* SCK high for 100 us: more than the 60 us that power the HX711 down */
+  _delay_us(100);
+  PORTD &= (uint8_t)~_BV(PD3);
+  for (;;) {
+  }
+}
+"""
+
+
+def test_the_harness_sees_a_long_sck_high_and_powers_the_hx711_down(fw, tmp_path):
+    # the reference must be able to fail: a probe program (not the firmware) holds SCK high for
+    # 100 us at 20 ms; the model powers down 60 us after the rising edge, powers up when SCK falls,
+    # and converts again only after the 50 ms settling time of an 80 samples/s board
+    src = tmp_path / "probe.c"
+    src.write_text(PROBE_C)
+    elf = tmp_path / "probe.elf"
+    import subprocess
+
+    subprocess.run(["avr-gcc", "-mmcu=atmega328p", "-DF_CPU=16000000UL", "-Os", str(src), "-o", str(elf)],
+                   check=True, capture_output=True)
+    r = fw.run([], [], time_s=0.1, elf=elf, hx_sps=80)
+    (down,) = r.hx_powerdown
+    (up,) = r.hx_powerup
+    assert r.sck_pulses == 1 and r.sck_max_high_us > 99.0
+    assert abs(down - up + r.sck_max_high - 960) <= 2  # 60 us after the rising edge
+    assert abs(up / F_CPU - 0.0201) < 0.0005
+    # before: conversions every 12.5 ms replaced unread; after power-up: none for 50 ms
+    lost = [c / F_CPU for c, _ in r.hx_lost]
+    assert lost and all(t < 0.0201 or t >= up / F_CPU + 0.05 + 0.0125 - 1e-6 for t in lost)
+    assert any(t > up / F_CPU for t in lost)
+
+
+@pytest.mark.parametrize("duty", [0.05, 0.95])
+def test_15_ms_windows_at_50_khz_with_an_hx711_at_80_sps_keep_up(fw, duty):
+    # the documented limit (firmware/README.md): with an HX711 at 80/s the background still sends
+    # one frame per 15 ms window at 50 kHz; frames do not fall behind, every window is exact
+    f = 50_000.0
+    r = fw.run([Segment(0.0, f, duty)], [(0.005, "WINDOW 15"), (START_S, "START")], time_s=0.6,
+               hx_sps=80, hx_first_s=START_HANDLED_S + 0.004)
+    assert r.parser.bad_frames == 0 and r.parser.lost == 0
+    _hx_healthy(r)
+    ms = r.measurements()
+    assert len(ms) >= 37  # 39 windows end before 0.6 s; at most a frame or two on the way
+    ends = [m.t_ms for m in ms]
+    assert all(b - a == 15 for a, b in zip(ends, ends[1:]))
+    for m in ms[1:]:
+        df, dd = simrun.bounds(f, duty, m)
+        assert m.missed == 0 and abs(m.periods - f * m.window_ms / 1000) <= 3, m
+        assert abs(m.frequency_hz - f) <= df and abs(m.duty_cycle - duty) <= dd, m
+        assert m.ref_ok == 1 and 1 <= m.ref_n <= 2, m
