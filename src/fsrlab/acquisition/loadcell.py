@@ -51,11 +51,13 @@ HX711_RATES = (10, 80)
 STANDARD_GRAVITY = 9.80665
 """Standard acceleration of gravity g_n (CGPM 1901, exact), the default for masses → force. [m/s²]"""
 
-TARE_STABILITY = {"min_samples": 5, "max_drift_sigmas": 3.0, "max_relative_spread": 1e-3}
-"""When a tare is accepted: at least ``min_samples`` HX711 conversions, and the drift between the
-first and the second half of them (difference of their means) within ``max_drift_sigmas`` standard
-errors of that difference *or* within ``max_relative_spread`` of the cell's span (when known);
-anything else is an unstable reading (something still moving on the cell) and is refused."""
+TARE_STABILITY = {"min_samples": 5, "max_drift_sigmas": 4.0, "max_relative_spread": 1e-3}
+"""When a tare (or a scale reading) is accepted: at least ``min_samples`` readings (window means of
+the HX711's conversions), and the drift between the first and the second half of them (the
+difference of their means) within ``max_drift_sigmas`` standard errors of that difference (white
+noise alone exceeds 4 standard errors once in 16 000 readings) *or* within ``max_relative_spread``
+of the cell's span (capacity × scale, when both are known); anything else is an unstable reading
+(something still moving or settling on the cell) and is refused."""
 
 
 class LoadCellError(ValueError):
@@ -242,7 +244,7 @@ def _stability(counts: np.ndarray, span_counts: float | None) -> str | None:
     crit = TARE_STABILITY
     n = counts.size
     if n < crit["min_samples"]:
-        return (f"only {n} load-cell conversions (at least {crit['min_samples']} needed): is the HX711 connected "
+        return (f"only {n} load-cell readings (at least {crit['min_samples']} needed): is the HX711 connected "
                 "and the reading long enough?")
     a, b = counts[: n // 2], counts[n // 2:]
     drift = float(np.mean(b) - np.mean(a))
@@ -253,7 +255,7 @@ def _stability(counts: np.ndarray, span_counts: float | None) -> str | None:
     if span_counts and abs(drift) <= crit["max_relative_spread"] * abs(span_counts):
         return None
     return (f"reading unstable: it moved by {drift:+.0f} counts between the first and second half of {n} "
-            f"conversions, more than {crit['max_drift_sigmas']:g} standard errors ({crit['max_drift_sigmas'] * se:.0f} "
+            f"readings, more than {crit['max_drift_sigmas']:g} standard errors ({crit['max_drift_sigmas'] * se:.0f} "
             "counts)" + (f" and more than {crit['max_relative_spread']:.1%} of the span" if span_counts else "")
             + "; keep the cell unloaded and still, then tare again")
 
@@ -443,7 +445,8 @@ def scale_from_readings(cal: LoadCellCalibration, counts: Sequence[float], mass_
         raise LoadCellError(f"gravity must be > 0 m/s², got {gravity_m_s2!r}")
     c = np.asarray([x for x in counts if x is not None and math.isfinite(x)], dtype=float)
     force = mass_kg * gravity_m_s2
-    why = _stability(c, None)
+    estimate = (float(np.mean(c)) - cal.offset_counts) / force if c.size else 0.0
+    why = _stability(c, abs(estimate) * cal.capacity_n if cal.capacity_n else None)
     if why:
         raise LoadCellError(f"scale refused: {why.replace('unloaded', 'loaded').replace('tare again', 'try again')}")
     mean, sd, n = _stats(c)

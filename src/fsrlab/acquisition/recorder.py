@@ -212,7 +212,7 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
            on_event: Callable[[str], None] | None = None, health: Callable[[], str | None] | None = None,
            overwrite: bool = False, loadcell=None, area_m2: float | None = None,
            extra_columns: Sequence[str] = (), on_row: Callable[[Measurement, dict], dict | None] | None = None,
-           ) -> RecordResult:
+           final_metadata: Callable[[], dict] | None = None) -> RecordResult:
     """Record ``duration_s`` seconds of measurement windows into a run file.
 
     Parameters
@@ -262,6 +262,8 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
         ``on_row(measurement, row) -> row or None`` before each row is written: may add the extra
         columns, or return None to leave the window out (e.g. ``fsrlab weights`` keeps the steady
         windows only). It may set ``stop`` to end the recording.
+    final_metadata : callable, optional
+        ``final_metadata() -> dict`` merged into the sidecar when the run is closed (however it ends).
 
     Returns
     -------
@@ -485,6 +487,11 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
             writer.metadata["acquisition"]["no_reference"] = no_ref
         writer.metadata["gaps"] = [g.to_dict() for g in gaps]
         writer.metadata["ended"] = message
+        if final_metadata is not None:
+            try:
+                writer.metadata.update(final_metadata())
+            except Exception as exc:  # noqa: BLE001 - the rows are what matters; say what is missing
+                writer.metadata["final_metadata_error"] = f"{type(exc).__name__}: {exc}"
         writer.close()
     return RecordResult(frames, dropped, duration, path, ended, message, parser.stats(), ident, tuple(gaps),
                         has_ref, no_ref)
