@@ -221,7 +221,7 @@ def acquire(
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing run file and its sidecar; without it an existing one stops the command before the device is touched."),
     window: float = typer.Option("100ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], 10ms to 60s in whole milliseconds (the meter counts ms): 20ms, 100ms, 0.25, 1s."),
     stall: float = typer.Option(None, "--stall", parser=seconds, metavar="TIME", help="No frame for this long [s] is reported as a gap (default: 5 windows, at least 2s); a device still silent at the end fails the run (exit 1)."),
-    range_: int = typer.Option(0, "--range", help="C_off range switch: 0 (off) or 1 (C_off connected)."),
+    range_: int = typer.Option(0, "--range", help="C_off range switch [1]: 0 (off) or 1 (C_off connected)."),
     baud: int = typer.Option(115200, "--baud", help="Line rate [bit/s]; protocol v1: 115200."),
     profile: str = typer.Option("triangle", "--profile", help=_PROFILE_HELP),
     peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS", help="Virtual device: " + _PEAK_HELP[0].lower() + _PEAK_HELP[1:]),
