@@ -85,6 +85,14 @@ def test_timeout_asks_again_then_skips_saying_why():
     assert any("skipped: not stable after a second 1 s" in s for s in said)
 
 
+def test_windows_read_late_are_not_taken_for_the_new_mass():
+    # The bench places step 1 at t = 5 s while the host still reads windows up to 5 s of step 0.
+    proc = WeightsProcedure(plan_steps([0.0, 0.1]), lambda s: None, lambda: "ok",
+                            place=lambda s: 5.0 if s.index == 1 else None, settle_windows=2, hold_s=0.1)
+    rows = _run(proc, lambda t, k: 1000.0 if t <= 5.0 else 2000.0, n=100)
+    assert all(r["reading"] == 2000.0 for r in rows if r["step"] == 1)
+
+
 def test_user_skip():
     answers = iter([None, None, "skip"])
     proc = WeightsProcedure(plan_steps([0.0, 0.1]), lambda s: None, lambda: next(answers, "ok"), settle_windows=2,

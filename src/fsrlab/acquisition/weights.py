@@ -118,7 +118,9 @@ class WeightsProcedure:
     confirmed : callable
         ``confirmed() -> None | "ok" | "skip"``: polled while waiting for the user; None: not yet.
     place : callable, optional
-        ``place(step)``: called when a mass is asked for (the virtual bench places it).
+        ``place(step)``: called when a mass is asked for (the virtual bench places it). It may return
+        the time of the placement on the run's clock [s]: windows that ended before it are not
+        taken for the new mass (a host behind the device still reads windows of the old one).
     stop : threading.Event, optional
         Set when the plan is done (ends the recording).
     x : str
@@ -158,6 +160,7 @@ class WeightsProcedure:
         self._buf: deque = deque(maxlen=settle_windows)
         self._t_settle = self._t_hold = 0.0
         self._retried = False
+        self._not_before = -math.inf
         self.results: list[dict] = [{"step": s.index, "mass_kg": s.mass_kg, "direction": s.direction,
                                      "cycle": s.cycle, "status": "pending", "rows": 0} for s in steps]
         self._values: list[list[float]] = [[] for _ in steps]
@@ -195,7 +198,9 @@ class WeightsProcedure:
         self.announce(f"step {s.index + 1}/{len(self.steps)} (cycle {s.cycle + 1}, {way}): place {s.mass_kg * 1e3:g} g "
                       "in all on the sensor, then press Enter (s and Enter skips the step)")
         if self.place is not None:
-            self.place(s)
+            when = self.place(s)
+            if isinstance(when, (int, float)) and math.isfinite(when):
+                self._not_before = float(when)
         self.state = "wait"
 
     def on_row(self, m, row: dict) -> dict | None:
@@ -206,6 +211,8 @@ class WeightsProcedure:
         if self.state == "prompt":
             self._prompt()
         if self.state == "wait":
+            if t <= self._not_before:
+                return None  # a window of the old mass, read late
             answer = self.confirmed()
             if answer is None:
                 return None
