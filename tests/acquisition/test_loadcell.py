@@ -111,3 +111,17 @@ def test_file_round_trip_and_bad_files(tmp_path):
         load_loadcell(tmp_path / "bad.json")
     with pytest.raises(LoadCellError, match="no scale factor"):
         LoadCellCalibration(0.0).force(1.0)
+
+
+def test_a_drifting_offset_is_an_unstable_tare():
+    # 5 s of window means from a cell whose offset drifts 200 counts/s (a bridge warming up):
+    # the halves differ by ~500 counts, far beyond 4 standard errors of 40/√8-count means.
+    cell = LoadCellModel(drift_counts_per_s=200.0)
+    t = np.arange(50) * 0.1
+    means = [window_reference(cell, lambda s: 0 * s, a, a + 0.1, rng=np.random.default_rng(k)).ref_mean
+             for k, a in enumerate(t)]
+    with pytest.raises(LoadCellError, match="unstable"):
+        tare_from_readings(means)
+    steady = [window_reference(LoadCellModel(), lambda s: 0 * s, a, a + 0.1, rng=np.random.default_rng(k)).ref_mean
+              for k, a in enumerate(t)]
+    assert tare_from_readings(steady).offset_counts == pytest.approx(8192, abs=5 * 40 / np.sqrt(400))
