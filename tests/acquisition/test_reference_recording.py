@@ -56,3 +56,26 @@ def test_slow_or_missing_hx711_leaves_cells_empty_and_counts_them(tmp_path):
     run = load_run(out)
     assert np.all(np.isnan(run["reference_raw"])) and np.all(np.isnan(run["force_n"]))
     assert f'"no_reference": {run.n_rows}' in stdout
+
+
+def test_a_load_cell_that_stops_answering_is_said_and_its_cells_stay_empty(tmp_path):
+    """The HX711 disconnected mid-run (the virtual device stops emulating it after 0.4 s): the
+    recorder says so once, and the later windows have empty reference cells, counted."""
+    import threading
+
+    from fsrlab.acquisition.recorder import record
+    from fsrlab.acquisition.serial_link import SerialLink
+    from fsrlab.acquisition.virtual_device import VirtualDevice
+
+    said = []
+    with VirtualDevice(seed=3) as dev, SerialLink(dev.port) as link:
+        timer = threading.Timer(0.4, lambda: setattr(dev, "load_cell", None))
+        timer.start()
+        result = record(link, tmp_path / "run.csv", 1.0, window_ms=50, on_event=said.append)
+        timer.cancel()
+    run = load_run(tmp_path / "run.csv")
+    empty = np.isnan(run["reference_raw"])
+    assert 0 < empty.sum() < run.n_rows and not np.any(run["reference_raw"] == 0)
+    assert np.all(empty[np.argmax(empty):])  # once gone, gone
+    assert result.no_reference == empty.sum() == run.metadata["acquisition"]["no_reference"]
+    assert len([s for s in said if s.startswith("no load cell")]) == 1

@@ -333,6 +333,7 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
     t_start = time.monotonic()
     t_end = t_start + duration_s
     frames, ended, message, dropped, no_ref = 0, "duration", "", 0, 0
+    cell_ok: int | None = None  # the HX711's last state (ref_ok), to say when it goes or comes back
     anchor_ms: int | None = None  # device t_ms at START (start of the first window after it)
     offset_s = 0.0
     last: Measurement | None = None
@@ -400,6 +401,13 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
                     if reference is not None:
                         value = reference(frame)
                         row["stress_pa"] = value if value is not None and math.isfinite(value) else None
+                    if has_ref and m.ref_ok != cell_ok:
+                        if m.ref_ok == 0:
+                            event(f"no load cell: the meter reports no HX711 (ref_ok 0) from {row['time_s']:.1f} s into "
+                                  "the run; reference_raw and force_n stay empty")
+                        elif cell_ok == 0:
+                            event(f"load cell answering again from {row['time_s']:.1f} s into the run")
+                        cell_ok = m.ref_ok
                     if has_ref:
                         raw = m.ref_mean if m.ref_n > 0 else None  # empty, never 0, without a conversion
                         force = loadcell.force(raw) if raw is not None and loadcell is not None else None
