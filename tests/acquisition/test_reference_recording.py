@@ -79,3 +79,35 @@ def test_a_load_cell_that_stops_answering_is_said_and_its_cells_stay_empty(tmp_p
     assert np.all(empty[np.argmax(empty):])  # once gone, gone
     assert result.no_reference == empty.sum() == run.metadata["acquisition"]["no_reference"]
     assert len([s for s in said if s.startswith("no load cell")]) == 1
+
+
+class _Version1Device:
+    """A virtual device that speaks protocol version 1: ``ID`` says 1 and ``M`` frames have 8 fields
+    (docs/protocol.md, version 1), as a meter flashed before version 2."""
+
+    @staticmethod
+    def make(**kwargs):
+        from fsrlab.acquisition.virtual_device import VirtualDevice
+
+        class V1(VirtualDevice):
+            def _send_frame(self, kind, fields, faults=True):
+                fields = tuple(fields)
+                if kind == "ID":
+                    fields = fields[:2] + (1,) + fields[3:]
+                elif kind == "M":
+                    fields = fields[:8]
+                return super()._send_frame(kind, fields, faults)
+
+        return V1(**kwargs)
+
+
+def test_a_version_1_meter_records_as_before(tmp_path):
+    from fsrlab.acquisition.recorder import COLUMNS, record, result_dict
+    from fsrlab.acquisition.serial_link import SerialLink
+
+    with _Version1Device.make(seed=4) as dev, SerialLink(dev.port) as link:
+        result = record(link, tmp_path / "run.csv", 0.4, window_ms=50)
+    run = load_run(tmp_path / "run.csv")
+    assert run.n_rows == result.frames > 0 and list(run.columns) == list(COLUMNS)
+    assert run.metadata["acquisition"]["protocol_version"] == 1 and "no_reference" not in run.metadata["acquisition"]
+    assert list(result_dict(result)) == ["frames", "dropped", "duration_s", "file"]
