@@ -56,6 +56,9 @@ KNOWN_COLUMNS: dict[str, str] = {
     "periods": "1",
     "missed": "1",
     "seq": "1",
+    "reference_raw": "count",
+    "force_nominal_n": "N",
+    "step": "1",
 }
 
 #: Readout quantities a calibration or a hysteresis error can be computed on.
