@@ -550,7 +550,9 @@ def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", comp
     poly_cv = [(int(c.name.rpartition("-")[2]), c.cv_rmse) for c in polys]
     if poly_cv:
         cal.cv = CrossValidation(degrees=[d for d, _ in poly_cv], rmse=[e for _, e in poly_cv], folds=min(folds, int(
-            np.unique(gs).size)), groups=int(np.unique(gs).size), best_degree=cal.degree)
+            np.unique(gs).size)), groups=int(np.unique(gs).size), best_degree=cal.degree,
+            untried=[d for d in range(1, 6) if d not in [d for d, _ in poly_cv]] if "polynomial" in fams and only is None
+            else [])
     cal.family = None if chosen.family == "polynomial" else chosen
     cal.lag_s = None if "time_s" not in run else float(lag_value)
     if "time_s" not in run and lag_value != 0:

@@ -169,8 +169,8 @@ def _reference_option(run_file: Path, run, reference: str | None) -> None:
     if reference is not None and reference not in ("force_n", "stress_pa"):
         fail(f"must be force_n or stress_pa, got {reference!r}", "--reference")
     if reference is None and "force_n" not in run and "stress_pa" not in run:
-        fail(f"{run_file}: no reference: the run has neither force_n [N] nor stress_pa [Pa] (columns: "
-             f"{', '.join(run.columns)}); calibration needs one recorded beside the readout", "RUN.csv")
+        raise ValueError(f"{run_file}: no reference: column 'force_n' [N] or 'stress_pa' [Pa] missing (columns: "
+                         f"{', '.join(run.columns)})")
     if reference == "force_n" and "force_n" not in run:
         _missing(run_file, run, "force_n", " (the reference)", "--reference")
     if reference == "stress_pa" and "stress_pa" not in run and "force_n" not in run:
@@ -307,6 +307,9 @@ def calibrate_cmd(
     console.print(table)
     console.print("polynomial coefficients (ascending powers of x): "
                   + ", ".join(f"{c:.6g}" for c in out["coefficients"]))
+    if cal.cv is not None and cal.cv.untried:
+        console.print(f"polynomial degrees {', '.join(map(str, cal.cv.untried))} not tried: the smallest training fold "
+                      f"has too few readings to determine them ({cal.n} readings, {cal.cv.folds} folds)")
     if output is not None:
         console.print(f"wrote {output}")
 
