@@ -10,8 +10,9 @@ triangle). The sensor is deliberately *another* model than the calibration's:
   15 % of full scale), with the sensor seeing the effective force ``F_e = F·(1 − h·z/z_max)``
   (an FSR conducts more on unloading than on loading at the same force, and not at all at none);
   fsrlab compensates with play operators (:mod:`fsrlab.analysis.memory`), a different family;
-* **creep**: two first-order relaxations of ``F_e`` towards ``(1 + κ)·F`` (time constants of a
-  few seconds and of tens of seconds), so a held load reads more and more;
+* **creep**: ``F_e`` is multiplied by ``1 + κ·(0.6·F₃ + 0.4·F₄₀)/FS``, with ``F₃`` and ``F₄₀``
+  first-order relaxations of F (time constants 3 s and 40 s), so a held load reads more and more
+  and no load reads nothing;
 * **dead zone**: below an activation force the FSR is open (the divider reads 0 V);
 * **saturation**: the conductance saturates, ``G = G_p/(1 + G_p/G_sat)`` with the power law
   ``G_p = G_ref·(F_e/F_ref)^b``, and the divider compresses the top of the range;
@@ -220,7 +221,8 @@ def fsr_bench_run(kind: str = "hand", seed: int = 0, duration_s: float = 60.0, p
     # z saturates at ±15 % of full scale after a reversal; the effective force is F·(1 ∓ hysteresis).
     width = 0.15 * peak_n
     f_eff = force * (1 - hysteresis * _bouc_wen(force, width) / width)
-    f_eff = f_eff + creep * (0.6 * _relax(force, 3.0) + 0.4 * _relax(force, 40.0))
+    # Creep: the conductance of a held load keeps rising, in proportion to the load held.
+    f_eff = f_eff * (1 + creep * (0.6 * _relax(force, 3.0) + 0.4 * _relax(force, 40.0)) / peak_n)
     f_act = activation * peak_n
     g_ref = 1.0 / 2e3  # 2 kΩ at full scale (before saturation) [S]
     b = 1.1

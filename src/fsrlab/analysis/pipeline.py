@@ -50,7 +50,6 @@ __all__ = [
     "run_readout",
     "calibrate_run",
     "run_reference",
-    "reference_offset",
     "binned_hysteresis_percent",
     "live_estimator",
     "LiveEstimator",
@@ -307,44 +306,6 @@ def run_reference(run: Run, reference: str | None = None) -> tuple[np.ndarray, s
     return run["force_n"], "force_n", "N"
 
 
-def reference_offset(t, y, at_floor) -> np.ndarray | None:
-    """The reference's offset at no load, from the readings at the readout's floor (a tare).
-
-    Parameters
-    ----------
-    t : array_like
-        Row times (or row numbers).
-    y : array_like
-        Reference.
-    at_floor : array_like of bool
-        Rows at the readout's floor, where the load is below the activation force.
-
-    Returns
-    -------
-    ndarray or None
-        The offset of every row (a straight line in time through the floor readings when they
-        span more than half the run, else their median); None with fewer than 10 floor readings.
-
-    Notes
-    -----
-    Below activation the load is small but not necessarily zero, so the tare is biased up by at
-    most the activation force; a load cell's offset drift (tens of grams) is usually larger.
-    """
-    t = np.asarray(t, float)
-    y = np.asarray(y, float)
-    m = np.asarray(at_floor, bool) & np.isfinite(y) & np.isfinite(t)
-    if m.sum() < 10:
-        return None
-    tm, ym = t[m], y[m]
-    med = float(np.median(ym))
-    keep = np.abs(ym - med) <= 3 * 1.4826 * float(np.median(np.abs(ym - med))) + 1e-12
-    tm, ym = tm[keep], ym[keep]
-    if tm.size >= 10 and (tm.max() - tm.min()) > 0.5 * (np.nanmax(t) - np.nanmin(t)):
-        slope, icpt = np.polyfit(tm, ym, 1)
-        return icpt + slope * t
-    return np.full(t.shape, float(np.median(ym)))
-
-
 def _oof(fam, x, y, groups, folds, transform, floor):
     """Out-of-fold estimate of a model family (the chosen candidate refitted without each fold)."""
     from fsrlab.analysis.models import fit_family
@@ -483,8 +444,9 @@ def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", comp
     t = run["time_s"] if "time_s" in run else np.arange(run.n_rows, dtype=float)
     floor = find_floor(values[both], y_raw[both])
     at_floor = floor.below(values) & np.isfinite(values) if floor is not None else np.zeros(run.n_rows, bool)
-    offset = reference_offset(t, y_raw, at_floor) if floor is not None else None
-    y = y_raw - offset if offset is not None else y_raw
+    # No tare: the reference at the floor is not at zero load (anything below the activation force),
+    # and a constant offset of the load cell goes into the model's constant term.
+    y = y_raw
     groups = default_groups(run.n_rows, row_cycles(np.where(np.isfinite(y), y, np.nan), *_recorded(run), threshold)
                             if np.isfinite(y).all() else None, folds)
     usable = np.isfinite(values) & ~at_floor
@@ -565,9 +527,6 @@ def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", comp
     fs = float(np.ptp(yv))
     cal.full_scale = fs
     cal.data_fingerprint = fingerprint(xs, yv)
-    if offset is not None:
-        cal.extra["reference_offset"] = {"at_start": float(offset[0]), "at_end": float(offset[-1]), "unit": y_unit,
-                                         "from": "readings at the readout's floor (a tare)"}
     if search is not None:
         cal.extra["lag_search"] = search.to_dict()
     cal.recorded_with = run_recorded_with(run, np.isfinite(values) & np.isfinite(y_raw))

@@ -251,7 +251,7 @@ def calibrate_cmd(
                                 folds=folds, circuit=circuit, reference=reference, model=model, lag=lag_value)
     except ValueError as exc:
         if str(exc).startswith("degree: "):
-            fail(str(exc)[len("degree: "):], "--degree")
+            fail(str(exc)[len("degree: "):], "--model" if model != "auto" else "--degree")
         raise
     lo, hi = cal.x_range
     fs = cal.full_scale or float("nan")
@@ -266,7 +266,7 @@ def calibrate_cmd(
            "degrees_tried": None if cal.cv is None else cal.cv.degrees}
     if cal.y_name == "stress_pa":
         out["rmse_pa"] = cal.rmse
-    for key in ("reference_offset", "lag_search", "lag_rows", "compensation_candidates"):
+    for key in ("lag_search", "lag_rows", "compensation_candidates"):
         if key in cal.extra:
             out[key] = cal.extra[key]
     if compensate:
