@@ -47,11 +47,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["THRESHOLDS", "CREEP_TIME_CONSTANTS_S", "DIRECTION_THRESHOLD", "CausalState", "MemoryModel",
+__all__ = ["THRESHOLDS", "THRESHOLDS_WIDE", "CREEP_TIME_CONSTANTS_S", "DIRECTION_THRESHOLD", "CausalState", "MemoryModel",
            "Uncertainty", "causal_features", "fit_memory", "fit_uncertainty", "CausalEstimator"]
 
 #: Play-operator thresholds, fractions of full scale. [1]
 THRESHOLDS = (0.005, 0.01, 0.02, 0.04, 0.08, 0.16, 0.32)
+#: The wider set, also tried: an operator of threshold 0.5 remembers reversals of the whole range. [1]
+THRESHOLDS_WIDE = THRESHOLDS + (0.5,)
 #: Time constants of the creep terms. [s]
 CREEP_TIME_CONSTANTS_S = (2.0, 20.0)
 #: Threshold of the play operator that tells the direction (loading, unloading, still). [1]
@@ -225,7 +227,8 @@ class MemoryFit:
     model : MemoryModel or None
         The chosen compensation (None: the plain model was best).
     candidates : dict
-        Cross-validated RMSE of ``plain``, ``play operators`` and ``play operators + creep``. [unit of y]
+        Cross-validated RMSE of ``plain`` and of each variant: play operators to 32 % or to 50 % of
+        full scale, each with or without the creep terms. [unit of y]
     oof : ndarray
         Out-of-fold estimate of every row (of the chosen variant). [unit of y]
     direction : ndarray of int
@@ -272,9 +275,11 @@ def fit_memory(w, y, usable, groups, full_scale: float, row_s: float, folds: int
     w = np.asarray(w, dtype=float)
     y = np.asarray(y, dtype=float)
     use = np.asarray(usable, bool) & np.isfinite(w) & np.isfinite(y)
-    variants = {"play operators": (THRESHOLDS, ()), "play operators + creep": (THRESHOLDS, CREEP_TIME_CONSTANTS_S)}
+    variants = {"play operators": (THRESHOLDS, ()), "play operators + creep": (THRESHOLDS, CREEP_TIME_CONSTANTS_S),
+                "play operators to 50 %": (THRESHOLDS_WIDE, ()),
+                "play operators to 50 % + creep": (THRESHOLDS_WIDE, CREEP_TIME_CONSTANTS_S)}
     alphas = tuple(1.0 - math.exp(-row_s / tau) for tau in CREEP_TIME_CONSTANTS_S)
-    p, s, direction = causal_features(w, THRESHOLDS, alphas)
+    p_all, s, direction = causal_features(w, THRESHOLDS_WIDE, alphas)
     _, gi = np.unique(np.asarray(groups)[use], return_inverse=True)
     k = min(folds, int(gi.max()) + 1)
     if k < 2:
@@ -287,6 +292,7 @@ def fit_memory(w, y, usable, groups, full_scale: float, row_s: float, folds: int
     best = None
     for name, (thr, taus) in variants.items():
         ss = s if taus else s[:, :0]
+        p = p_all[:, : len(thr)]
         a = _design(w[use], p[use], ss[use], degree)
         b = y[use] / full_scale
         oof = np.empty(b.size)
@@ -296,15 +302,15 @@ def fit_memory(w, y, usable, groups, full_scale: float, row_s: float, folds: int
         e = float(full_scale * np.sqrt(np.mean((oof - b) ** 2)))
         cands[name] = e
         if best is None or e < best[1]:
-            best = (name, e, taus, a, b, oof * full_scale)
-    name, e, taus, a, b, oof_u = best
+            best = (name, e, thr, taus, a, b, oof * full_scale)
+    name, e, thr, taus, a, b, oof_u = best
     oof_all = np.full(w.size, np.nan)
     if not force and "plain" in cands and cands["plain"] <= e:
         oof_all[use] = np.asarray(plain_oof, float)[use]
         return MemoryFit(None, cands, oof_all, direction)
     coef = _lstsq(a, b)
     oof_all[use] = oof_u
-    model = MemoryModel(float(full_scale), tuple(THRESHOLDS), tuple(taus), float(row_s), degree, coef)
+    model = MemoryModel(float(full_scale), tuple(thr), tuple(taus), float(row_s), degree, coef)
     return MemoryFit(model, cands, oof_all, direction)
 
 
