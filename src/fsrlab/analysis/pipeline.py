@@ -67,8 +67,9 @@ IN_RANGE_COLUMN = "in_range"
 #: Default margin beyond the calibrated readout range, as a fraction of its span, within which an
 #: estimate is still written (extrapolated, flagged); beyond it the estimate is left empty. [1]
 MARGIN = 0.10
-#: Fewer readings than this: ``lag="auto"`` assumes no lag rather than searching. [1]
-MIN_LAG_READINGS = 50
+#: Fewer readings than this: ``lag="auto"`` assumes no lag rather than searching (the search fits
+#: 22 weights per fold at every lag). [1]
+MIN_LAG_READINGS = 250
 #: The decoded-capacitance variable of the physics-informed calibration. [F]
 C_FSR = "c_fsr_farad"
 
@@ -450,10 +451,11 @@ def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", comp
     groups = default_groups(run.n_rows, row_cycles(np.where(np.isfinite(y), y, np.nan), *_recorded(run), threshold)
                             if np.isfinite(y).all() else None, folds)
     usable = np.isfinite(values) & ~at_floor
-    search = None
+    search, lag_note = None, None
     with _named(run, x):
         if lag == "auto" and int((usable & np.isfinite(y)).sum()) < MIN_LAG_READINGS:
             lag_value = 0.0  # too few readings to tell a lag from noise: none assumed
+            lag_note = f"not searched: fewer than {MIN_LAG_READINGS} readings, no lag assumed"
         elif lag == "auto":
             search = estimate_lag(t, values, y, groups, usable & np.isfinite(y), max_lag_s,
                                   3 if degree == "auto" else int(degree), folds)
@@ -529,6 +531,8 @@ def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", comp
     cal.data_fingerprint = fingerprint(xs, yv)
     if search is not None:
         cal.extra["lag_search"] = search.to_dict()
+    elif lag_note:
+        cal.extra["lag_search"] = {"lag_s": 0.0, "method": lag_note}
     cal.recorded_with = run_recorded_with(run, np.isfinite(values) & np.isfinite(y_raw))
     plain_oof = np.full(run.n_rows, np.nan)
     plain_oof[ok] = _oof(chosen.name, xs, yv, gs, folds, transform, floor)
