@@ -459,7 +459,7 @@ def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", comp
         elif lag == "auto":
             search = estimate_lag(t, values, y, groups, usable & np.isfinite(y), max_lag_s,
                                   3 if degree == "auto" else int(degree), folds)
-            lag_value = search.lag_s
+            lag_value = float(f"{search.lag_s:.10g}")  # the grid's float noise (0.00999999...) off
         else:
             lag_value = float(lag)
             if not np.isfinite(lag_value):
