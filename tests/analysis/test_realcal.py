@@ -298,3 +298,9 @@ def test_bad_input_reference_mostly_negative(hand, tmp_path):
     err = _bad(tmp_path, {"time_s": run["time_s"], "voltage_v": run["voltage_v"], "force_n": -run["force_n"]},
                run.metadata)
     assert "force_n" in err and "mostly negative" in err
+
+
+def test_bad_input_too_few_readings_to_compensate(tmp_path):
+    f = np.linspace(0, 20, 40)
+    err = _bad(tmp_path, {"voltage_v": 0.1 * f + 0.05, "force_n": f}, args=("--compensate",))
+    assert "compensate" in err and "60 readings" in err

@@ -26,9 +26,11 @@ Noise: an operator does not move while w stays inside its band, so readout noise
 smallest threshold (0.5 % of full scale) causes no false reversal; larger noise enters each
 operator as a small, bounded wobble, not as a switched branch (the "backwards slips" that break
 cycle detection). Why this model: on the hand-loaded runs of :mod:`fsrlab.analysis.handloaded`
-(a Bouc–Wen sensor, i.e. not this model) it is the only one of the three tried (branch
-polynomials with turning-point memory, this, this with creep) that needs no cycles, and its
-cross-validated error is the lowest (docs/calibration.md gives the numbers).
+(a Bouc–Wen sensor, i.e. not this model) the earlier branch polynomials with turning-point memory
+(:mod:`fsrlab.analysis.compensation`) cannot be fitted at all (no whole cycles) and make a slow
+motor cycle worse (HE 13.7 → 22.2 %), while play operators need no cycles and bring the
+cross-validated error from 3.1 % to 1.4 % of full scale (1.0 % with the creep terms) and that
+cycle's HE to 3.2 % (docs/calibration.md).
 
 Uncertainty: out-of-fold residuals, grouped by level (quintiles of the estimate) and direction
 (the movement of a 1 % play operator: loading, unloading, still), give a standard deviation per

@@ -70,6 +70,8 @@ MARGIN = 0.10
 #: Fewer readings than this: ``lag="auto"`` assumes no lag rather than searching (the search fits
 #: 22 weights per fold at every lag). [1]
 MIN_LAG_READINGS = 250
+#: Fewest readings (above the floor, with a reference) the causal compensation is fitted on. [1]
+MIN_COMPENSATION_READINGS = 60
 #: The decoded-capacitance variable of the physics-informed calibration. [F]
 C_FSR = "c_fsr_farad"
 
@@ -545,14 +547,18 @@ def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", comp
 
     _, _, direction = causal_features(w, (), ())
     if compensate and compensation_method == "memory":
+        if int(ok.sum()) < MIN_COMPENSATION_READINGS:
+            raise ValueError(f"{run.path}: compensate: the causal compensation fits up to 30 weights and needs at least "
+                             f"{MIN_COMPENSATION_READINGS} readings above the floor with a reference, got {int(ok.sum())}")
         row_s = float(np.median(np.diff(t))) if "time_s" in run and run.n_rows > 1 else 1.0
         mf = fit_memory(w, ys, ok, groups, full_scale, row_s, folds, plain_oof=plain_oof)
         cal.memory = mf.model
         cal.extra["compensation_candidates"] = mf.candidates
         final_oof = mf.oof
         est = live_estimator(cal, margin=np.inf).run(values)[0]
-        before, after = _he_pair(run, ys, cal(values), est, ok, threshold)
+        before, after, how = _he_pair(run, ys, cal(values), est, ok, threshold)
         cal.compensation_he_percent = (before, after)
+        cal.extra["hysteresis_error_method"] = how
     elif compensate:
         from fsrlab.analysis.compensation import compare_compensation
 
@@ -568,7 +574,7 @@ def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", comp
     return cal
 
 
-def _he_pair(run: Run, y, plain, compensated, ok, threshold: float) -> tuple[float, float]:
+def _he_pair(run: Run, y, plain, compensated, ok, threshold: float) -> tuple[float, float, str]:
     """Hysteresis error of the plain and the compensated estimate: eq. (13) on whole cycles, else on level bins."""
     from fsrlab.analysis.cycles import row_directions
 
@@ -577,13 +583,14 @@ def _he_pair(run: Run, y, plain, compensated, ok, threshold: float) -> tuple[flo
         keep = np.isfinite(yy)
         b = run_hysteresis(yy[keep], np.asarray(plain)[keep], threshold=threshold).percent
         a = run_hysteresis(yy[keep], np.asarray(compensated)[keep], threshold=threshold).percent
-        return float(b), float(a)
+        return float(b), float(a), "eq. (13) on the run's loading-unloading cycles"
     except ValueError:
         pass
     keep = np.isfinite(yy)
     d = np.zeros(yy.size, int)
     d[keep] = row_directions(yy[keep], None, None, threshold)
-    return binned_hysteresis_percent(yy, plain, d), binned_hysteresis_percent(yy, compensated, d)
+    return (binned_hysteresis_percent(yy, plain, d), binned_hysteresis_percent(yy, compensated, d),
+            "eq. (13) on 10 level bins (loading vs unloading mean error): the run has no whole cycles")
 
 
 def live_estimator(cal: Calibration, margin: float = MARGIN, compensation: bool = True):

@@ -266,7 +266,7 @@ def calibrate_cmd(
            "degrees_tried": None if cal.cv is None else cal.cv.degrees}
     if cal.y_name == "stress_pa":
         out["rmse_pa"] = cal.rmse
-    for key in ("lag_search", "lag_rows", "compensation_candidates"):
+    for key in ("lag_search", "lag_rows", "compensation_candidates", "hysteresis_error_method"):
         if key in cal.extra:
             out[key] = cal.extra[key]
     if compensate:
