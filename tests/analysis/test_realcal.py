@@ -304,3 +304,39 @@ def test_bad_input_too_few_readings_to_compensate(tmp_path):
     f = np.linspace(0, 20, 40)
     err = _bad(tmp_path, {"voltage_v": 0.1 * f + 0.05, "force_n": f}, args=("--compensate",))
     assert "compensate" in err and "60 readings" in err
+
+
+def test_calibration_file_of_an_earlier_fsrlab_still_applies_and_steps(runs):
+    # examples/calibration.json was written before issue 12 (polynomial + branch compensation, no
+    # lag, floor, uncertainty): it loads, applies offline with its branch method, and steps live
+    # as its polynomial (the branch method needs the whole run).
+    from pathlib import Path
+
+    cal = load_calibration(Path(__file__).resolve().parents[2] / "examples" / "calibration.json")
+    assert cal.memory is None and cal.floor is None and cal.uncertainty is None and cal.lag_s == 0.0
+    other = load_run(runs / "other.csv")
+    est = apply_calibration(cal, other)
+    assert est.metadata["calibration"]["method"] == "direction-aware compensation"
+    assert np.isnan(est["stress_pa_uncertainty"]).all()
+    live = live_estimator(cal)
+    f = float(other["frequency_hz"][50])
+    y, u, inside = live.step(f)
+    assert y == pytest.approx(float(cal.model(f)), rel=1e-12) and u is None and inside
+
+
+def test_stress_reference_from_force_and_area(hand):
+    # The hand-loaded runs' sidecar gives a sensor area of 1e-4 m²: stress = force / area.
+    run = load_run(hand / "held21.csv")
+    cal = calibrate_run(run, x="voltage_v", reference="stress_pa", lag=0)
+    force = calibrate_run(run, x="voltage_v", reference="force_n", lag=0)
+    assert cal.y_name == "stress_pa" and cal.y_unit == "Pa"
+    assert cal.model_name == force.model_name
+    np.testing.assert_allclose(cal(run["voltage_v"][100:110]), 1e4 * force(run["voltage_v"][100:110]), rtol=1e-9)
+
+
+def test_calibrate_shows_force_errors_in_grams(hand):
+    code, out, err = run_cli(["calibrate", hand / "held21.csv", "--x", "voltage_v", "--unit", "g", "--lag", "0"])
+    assert code == 0, err
+    assert "CV RMSE (g)" in out
+    code, out, err = run_cli(["calibrate", hand / "held21.csv", "--x", "voltage_v", "--unit", "kPa"])
+    assert code == 2 and out == "" and "--unit" in err

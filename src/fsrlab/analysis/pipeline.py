@@ -611,7 +611,8 @@ def live_estimator(cal: Calibration, margin: float = MARGIN, compensation: bool 
     LiveEstimator
         ``step(readout) -> (estimate or None, standard uncertainty or None, in_range)`` keeps its
         memory between calls; ``reference`` (``"force_n"`` or ``"stress_pa"``) and ``x`` (the
-        readout column) name the quantities. A calibration with only the earlier offline branch
+        readout column) name the quantities. For a calibration on ``c_fsr_farad`` the reading to
+        step is C_FSR [F], decoded from the frequency and duty cycle (:func:`decode_capacitance`). A calibration with only the earlier offline branch
         compensation (:mod:`fsrlab.analysis.compensation`) steps without compensation.
     """
     from fsrlab.analysis.memory import CausalEstimator

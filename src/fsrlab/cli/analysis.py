@@ -198,6 +198,7 @@ def calibrate_cmd(
     model: str = typer.Option("auto", "--model", help="Model [name]: auto (every family, chosen by grouped cross-validation), polynomial, conductance-polynomial, conductance-power (F = c + a·G^b through the readout circuit), power, or one candidate such as polynomial-3."),
     degree: str = typer.Option("auto", "--degree", help="Polynomial degree 1..5 [1] (the model is then that polynomial), or auto."),
     compensate: bool = typer.Option(False, "--compensate", help="Also fit the causal hysteresis compensation (play operators with memory, extension beyond the paper) and report HE [%] before/after."),
+    unit: str = typer.Option(None, "--unit", help="Display unit of the errors in the table [N, g, Pa or kPa] (default: the reference's, N or Pa); --json and the file stay SI."),
     lag: str = typer.Option("auto", "--lag", help="Lag of the readout behind the reference [s] (rows without time_s), e.g. 0.02 or 0; auto: estimated by cross-correlation of the changes."),
     folds: int = typer.Option(5, "--folds", help="Cross-validation folds [1], ≥ 2 (fewer when the run has fewer cycles or blocks)."),
     r: float = typer.Option(None, "--r", parser=ohms, help="555 R for --x c_fsr_farad [Ω], e.g. 10k (default: the run's sidecar, else 10k)."),
@@ -240,6 +241,7 @@ def calibrate_cmd(
     if x not in run and x != "c_fsr_farad":
         _missing(run_file, run, x, option="--x")
     _reference_option(run_file, run, reference)
+    _unit_option(unit, reference or ("stress_pa" if "stress_pa" in run else "force_n"))
     circuit = None
     parts = {k: v for k, v in (("r_ohm", r), ("c_off_farad", c_off)) if v is not None}
     if x == "c_fsr_farad" and parts:
@@ -282,7 +284,7 @@ def calibrate_cmd(
     from rich.console import Console
     from rich.table import Table
 
-    u = cal.y_unit
+    u, k = _unit_option(unit, cal.y_name)
     console = Console()
     table = Table(title=f"Calibration {cal.y_name}({x}), {run_file.name}")
     table.add_column("quantity")
@@ -291,7 +293,7 @@ def calibrate_cmd(
     table.add_row("lag (s)" if cal.lag_s is not None else "lag (rows)",
                   f"{cal.lag_s if cal.lag_s is not None else cal.extra.get('lag_rows', 0.0):.4g}")
     if cal.cv_rmse is not None:
-        table.add_row(f"CV RMSE ({u})", f"{cal.cv_rmse:.4g}")
+        table.add_row(f"CV RMSE ({u})", f"{k * cal.cv_rmse:.4g}")
         table.add_row("CV RMSE (% FS)", f"{out['cv_rmse_percent_fs']:.3f}")
     table.add_row("R² (in sample)", f"{cal.r2:.5f}")
     table.add_row("max error (% FS, in sample)", f"{cal.max_error_percent_fs:.3f}")
@@ -300,7 +302,7 @@ def calibrate_cmd(
         table.add_row(f"below activation: readout at floor ({cal.x_unit or '1'})", f"≤ {cal.floor.threshold:.6g}"
                       if cal.floor.sign > 0 else f"≥ {cal.floor.threshold:.6g}")
     for c in cal.candidates:
-        table.add_row(f"CV RMSE {c['model']} ({u})", f"{c['cv_rmse']:.4g}")
+        table.add_row(f"CV RMSE {c['model']} ({u})", f"{k * c['cv_rmse']:.4g}")
     if compensate:
         table.add_row("HE of the estimate, plain (%)", f"{out['hysteresis_error_before_percent']:.3f}")
         table.add_row("HE with compensation (%)", f"{out['hysteresis_error_after_percent']:.3f}")
