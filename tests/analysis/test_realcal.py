@@ -340,3 +340,22 @@ def test_calibrate_shows_force_errors_in_grams(hand):
     assert "CV RMSE (g)" in out
     code, out, err = run_cli(["calibrate", hand / "held21.csv", "--x", "voltage_v", "--unit", "kPa"])
     assert code == 2 and out == "" and "--unit" in err
+
+
+def test_divider_read_in_adc_counts_gives_the_same_conductance(hand):
+    # The same recording with the readout as analogRead counts (V·1023/5) and the sidecar naming
+    # that column: the conductance (closed form of the divider) and the calibration are the same.
+    from fsrlab.analysis.models import transform_from_metadata
+
+    run = load_run(hand / "held21.csv")
+    meta = dict(run.metadata, divider=dict(run.metadata["divider"], column="a0_count"))
+    counts = np.round(run["voltage_v"] * 1023 / 5.0)
+    tv = transform_from_metadata("voltage_v", meta)
+    tc = transform_from_metadata("a0_count", meta)
+    np.testing.assert_allclose(tc(counts), tv(run["voltage_v"]), rtol=1e-9)
+    assert transform_from_metadata("a0_count", run.metadata) is None  # a column the sidecar does not name
+    p = write_and_load({"time_s": run["time_s"], "a0_count": counts, "force_n": run["force_n"]}, meta,
+                       hand / "counts.csv")
+    a = calibrate_run(p, x="a0_count", lag=0, model="conductance-power")
+    b = calibrate_run(run, x="voltage_v", lag=0, model="conductance-power")
+    np.testing.assert_allclose(a(counts[200:210]), b(run["voltage_v"][200:210]), rtol=1e-9)

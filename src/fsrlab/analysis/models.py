@@ -147,15 +147,21 @@ class ConductanceTransform:
         R_M of the divider or R_F of the op-amp (unused for capacitance). [Ω]
     vcc_v : float
         Supply of the divider, drive of the op-amp. [V]
+    counts_full_scale : float
+        For a divider read in ADC counts: the count at Vcc (1023 for a 10-bit ``analogRead``
+        referenced to the divider's supply); 0: the readout is in volts. [1]
     """
 
     topology: str
     r_ohm: float = float("nan")
     vcc_v: float = float("nan")
+    counts_full_scale: float = 0.0
 
     def __call__(self, x) -> np.ndarray:
         """Conductance [S] (capacitance [F] for ``"capacitance"``); NaN where impossible."""
         x = np.asarray(x, dtype=float)
+        if self.counts_full_scale > 0:
+            x = x * (self.vcc_v / self.counts_full_scale)  # ADC counts -> V (Vcc is the reference)
         with np.errstate(divide="ignore", invalid="ignore"):
             if self.topology == "divider":
                 g = x / (self.r_ohm * (self.vcc_v - x))  # V = Vcc·R_M·G/(1 + R_M·G) inverted
@@ -167,7 +173,8 @@ class ConductanceTransform:
 
     def to_dict(self) -> dict:
         """JSON form."""
-        return {"topology": self.topology, "r_ohm": self.r_ohm, "vcc_v": self.vcc_v}
+        return {"topology": self.topology, "r_ohm": self.r_ohm, "vcc_v": self.vcc_v,
+                "counts_full_scale": self.counts_full_scale}
 
     @classmethod
     def from_dict(cls, d: dict) -> "ConductanceTransform":
@@ -175,7 +182,10 @@ class ConductanceTransform:
         topo = str(d["topology"])
         if topo not in ("divider", "opamp-inverting", "capacitance"):
             raise ValueError(f"conductance topology must be divider, opamp-inverting or capacitance, got {topo!r}")
-        return cls(topo, float(d.get("r_ohm", float("nan"))), float(d.get("vcc_v", float("nan"))))
+        full = float(d.get("counts_full_scale", 0.0))
+        if not (np.isfinite(full) and full >= 0):
+            raise ValueError("counts_full_scale must be a count >= 0")
+        return cls(topo, float(d.get("r_ohm", float("nan"))), float(d.get("vcc_v", float("nan"))), full)
 
 
 def transform_from_metadata(x_name: str, metadata: dict) -> ConductanceTransform | None:
@@ -184,11 +194,12 @@ def transform_from_metadata(x_name: str, metadata: dict) -> ConductanceTransform
     Parameters
     ----------
     x_name : str
-        The readout column (``voltage_v`` with a ``divider`` or ``opamp`` sidecar entry;
-        ``c_fsr_farad``).
+        The readout column (``voltage_v`` with a ``divider`` or ``opamp`` sidecar entry; the
+        divider's ``column`` when it is read in ADC counts; ``c_fsr_farad``).
     metadata : dict
-        The run's sidecar: ``divider`` = ``{"r_m_ohm", "vcc_v"}``, ``opamp`` (see
-        :class:`fsrlab.circuits.circuit.OpAmpReadout`).
+        The run's sidecar: ``divider`` = ``{"r_m_ohm", "vcc_v"[, "adc_bits", "column"]}`` (a
+        readout column named by ``column`` holds ``analogRead`` counts of ``adc_bits`` bits, 10 by
+        default, referenced to ``vcc_v``), ``opamp`` (see :class:`fsrlab.circuits.circuit.OpAmpReadout`).
 
     Returns
     -------
@@ -196,13 +207,20 @@ def transform_from_metadata(x_name: str, metadata: dict) -> ConductanceTransform
     """
     if x_name == "c_fsr_farad":
         return ConductanceTransform("capacitance")
-    if x_name != "voltage_v":
-        return None
     div = (metadata or {}).get("divider")
+    counts = isinstance(div, dict) and div.get("column") == x_name and x_name != "voltage_v"
+    if x_name != "voltage_v" and not counts:
+        return None
     if isinstance(div, dict) and "r_m_ohm" in div:
-        r, v = float(div["r_m_ohm"]), float(div.get("vcc_v", 5.0))
+        try:
+            r, v = float(div["r_m_ohm"]), float(div.get("vcc_v", 5.0))
+            full = float(2 ** int(div.get("adc_bits", 10)) - 1) if counts else 0.0
+        except (TypeError, ValueError):
+            return None
         if np.isfinite(r) and r > 0 and np.isfinite(v) and v > 0:
-            return ConductanceTransform("divider", r, v)
+            return ConductanceTransform("divider", r, v, full)
+    if counts:
+        return None
     try:
         from fsrlab.circuits.circuit import readout_from_metadata
 
