@@ -287,7 +287,7 @@ def test_bad_input_fewer_readings_than_the_model_needs(tmp_path):
 
 def test_bad_input_lag_search_without_a_minimum(hand, tmp_path):
     run = load_run(hand / "cal.csv")
-    k = 25  # the readout 25 rows (0.5 s) behind: beyond the ±10-row search
+    k = 25  # the readout 25 rows (0.5 s) behind: beyond the ±0.25 s search
     v = np.concatenate([np.full(k, run["voltage_v"][0]), run["voltage_v"][:-k]])
     err = _bad(tmp_path, {"time_s": run["time_s"], "voltage_v": v, "force_n": run["force_n"]}, run.metadata)
     assert "lag" in err and "search range" in err

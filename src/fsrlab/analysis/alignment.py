@@ -2,8 +2,9 @@
 
 A load cell read by an HX711 at 10–80 samples/s and a readout averaged over a window do not
 describe the same instant: the readout of a row reflects the force some time ``lag_s`` earlier (a
-negative lag: later). fsrlab estimates the lag in quarter rows from −10 to +10 rows (the reference
-linearly interpolated in time) by one of three criteria:
+negative lag: later). fsrlab estimates the lag from −0.25 s to +0.25 s (:data:`MAX_LAG_S`, at
+least ±2 rows) in whole rows, then in quarter rows around the best (the reference linearly
+interpolated in time), by one of three criteria:
 
 * ``"memory"`` (default): the smallest grouped cross-validated RMSE of a model *with* hysteresis
   and creep -- a Chebyshev quintic in the normalised readout z plus the play-operator and creep
@@ -35,8 +36,12 @@ import numpy as np
 
 from fsrlab.analysis.calibration import cross_validate_degrees
 
-__all__ = ["LagSearch", "shift_reference", "estimate_lag", "SMOOTH_ROWS"]
+__all__ = ["LagSearch", "shift_reference", "estimate_lag", "SMOOTH_ROWS", "MAX_LAG_S"]
 
+#: Default half-width of the lag search: an HX711 at 10 SPS holds a sample up to 0.1 s, a readout
+#: window is up to 0.1 s; beyond that, on constant-rate triangles, a shift by a fraction of a ramp
+#: can stand in for hysteresis. [s]
+MAX_LAG_S = 0.25
 #: Rows over which "xcorr" takes the changes of readout and reference. [1]
 SMOOTH_ROWS = 5
 
@@ -111,7 +116,8 @@ def estimate_lag(t, x, y, groups, usable=None, max_lag_s: float | None = None, d
     usable : array_like of bool, optional
         Rows that may enter the fit (e.g. not at the readout's floor).
     max_lag_s : float, optional
-        Search from ``-max_lag_s`` to ``+max_lag_s`` (default: 10 rows). [s]
+        Search from ``-max_lag_s`` to ``+max_lag_s`` (default :data:`MAX_LAG_S`, and at least 2
+        rows). [s]
     degree : int
         Degree of the polynomial judged at each lag.
     folds : int
@@ -140,7 +146,9 @@ def estimate_lag(t, x, y, groups, usable=None, max_lag_s: float | None = None, d
     if not dt > 0:
         raise ValueError("time_s: rows must be in increasing time to estimate a lag")
     if max_lag_s is None:
-        max_lag_s = 10 * dt
+        max_lag_s = MAX_LAG_S
+    if not (np.isfinite(max_lag_s) and max_lag_s > 0):
+        raise ValueError(f"max_lag_s: must be a positive number of seconds, got {max_lag_s!r}")
     steps = max(int(round(max_lag_s / dt)), 2)
 
     def cv(lag: float) -> float:

@@ -70,6 +70,8 @@ MARGIN = 0.10
 #: Fewer readings than this: ``lag="auto"`` assumes no lag rather than searching (the search fits
 #: 22 weights per fold at every lag). [1]
 MIN_LAG_READINGS = 250
+#: Fewest cycles or time blocks for ``lag="auto"`` to search (else no lag is assumed). [1]
+MIN_LAG_GROUPS = 4
 #: Fewest readings (above the floor, with a reference) the causal compensation is fitted on. [1]
 MIN_COMPENSATION_READINGS = 60
 #: The decoded-capacitance variable of the physics-informed calibration. [F]
@@ -399,10 +401,11 @@ def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", comp
         (``polynomial-3``, ``conductance-polynomial-2``).
     lag : float or "auto"
         Lag of the readout behind the reference [s] (rows without ``time_s``), or ``"auto"``:
-        estimated (:func:`fsrlab.analysis.alignment.estimate_lag`, derivative cross-correlation)
-        when the run has at least :data:`MIN_LAG_READINGS` usable readings, else 0.
+        estimated (:func:`fsrlab.analysis.alignment.estimate_lag`) when the run has a ``time_s``
+        column, at least :data:`MIN_LAG_READINGS` usable readings and :data:`MIN_LAG_GROUPS`
+        cycles or time blocks, else 0.
     max_lag_s : float, optional
-        Search range of the lag (default: 10 rows). [s]
+        Half-width of the lag search (default 0.25 s, :data:`fsrlab.analysis.alignment.MAX_LAG_S`). [s]
     compensation_method : {"memory", "branches"}
         The causal play-operator model, or the earlier offline branch polynomials
         (:mod:`fsrlab.analysis.compensation`; needs whole cycles).
@@ -455,9 +458,17 @@ def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", comp
     usable = np.isfinite(values) & ~at_floor
     search, lag_note = None, None
     with _named(run, x):
-        if lag == "auto" and int((usable & np.isfinite(y)).sum()) < MIN_LAG_READINGS:
+        if lag == "auto" and "time_s" not in run:
+            lag_value = 0.0  # rows without times: nothing says how far apart they are
+            lag_note = "not searched: the run has no time_s column, no lag assumed"
+        elif lag == "auto" and int((usable & np.isfinite(y)).sum()) < MIN_LAG_READINGS:
             lag_value = 0.0  # too few readings to tell a lag from noise: none assumed
             lag_note = f"not searched: fewer than {MIN_LAG_READINGS} readings, no lag assumed"
+        elif lag == "auto" and np.unique(groups[usable & np.isfinite(y)]).size < MIN_LAG_GROUPS:
+            # With 2 or 3 cycles each fold trains the hysteresis model on one or two of them, and on
+            # constant-rate triangles a shift can stand in for hysteresis: the error curve is noise.
+            lag_value = 0.0
+            lag_note = f"not searched: fewer than {MIN_LAG_GROUPS} cycles or time blocks, no lag assumed"
         elif lag == "auto":
             search = estimate_lag(t, values, y, groups, usable & np.isfinite(y), max_lag_s,
                                   3 if degree == "auto" else int(degree), folds)

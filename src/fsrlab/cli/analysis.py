@@ -16,7 +16,7 @@ import numpy as np
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli._common import emit_json, fail, farads, fraction, number, ohms, option_names
+from fsrlab.cli._common import emit_json, fail, farads, fraction, number, ohms, option_names, seconds
 
 _DEGREES = ("auto", "1", "2", "3", "4", "5")
 
@@ -200,6 +200,7 @@ def calibrate_cmd(
     compensate: bool = typer.Option(False, "--compensate", help="Also fit the causal hysteresis compensation (play operators with memory, extension beyond the paper) and report HE [%] before/after."),
     unit: str = typer.Option(None, "--unit", help="Display unit of the errors in the table [N, g, Pa or kPa] (default: the reference's, N or Pa); --json and the file stay SI."),
     lag: str = typer.Option("auto", "--lag", help="Lag of the readout behind the reference [s] (rows without time_s), e.g. 0.02 or 0; auto: estimated by cross-correlation of the changes."),
+    max_lag: float = typer.Option(None, "--max-lag", parser=seconds, help="Half-width of the lag search [s], e.g. 0.25 (default 0.25 s, at least 2 rows)."),
     folds: int = typer.Option(5, "--folds", help="Cross-validation folds [1], ≥ 2 (fewer when the run has fewer cycles or blocks)."),
     r: float = typer.Option(None, "--r", parser=ohms, help="555 R for --x c_fsr_farad [Ω], e.g. 10k (default: the run's sidecar, else 10k)."),
     c_off: float = typer.Option(None, "--c-off", parser=farads, help="C_off for --x c_fsr_farad [F], e.g. 470p (default: sidecar, else 0)."),
@@ -248,9 +249,10 @@ def calibrate_cmd(
         with option_names({"r_ohm": "--r", "c_off_farad": "--c-off"}):
             circuit = run_circuit(run).replace(**parts)
     try:
-        with option_names({"model": "--model", "lag": "--lag", "reference": "--reference"}):
+        with option_names({"model": "--model", "max_lag_s": "--max-lag"}):
             cal = calibrate_run(run, x=x, degree="auto" if degree == "auto" else int(degree), compensate=compensate,
-                                folds=folds, circuit=circuit, reference=reference, model=model, lag=lag_value)
+                                folds=folds, circuit=circuit, reference=reference, model=model, lag=lag_value,
+                                max_lag_s=max_lag)
     except ValueError as exc:
         if str(exc).startswith("degree: "):
             fail(str(exc)[len("degree: "):], "--model" if model != "auto" else "--degree")
