@@ -359,3 +359,14 @@ def test_divider_read_in_adc_counts_gives_the_same_conductance(hand):
     a = calibrate_run(p, x="a0_count", lag=0, model="conductance-power")
     b = calibrate_run(run, x="voltage_v", lag=0, model="conductance-power")
     np.testing.assert_allclose(a(counts[200:210]), b(run["voltage_v"][200:210]), rtol=1e-9)
+
+
+def test_plain_estimate_has_its_own_larger_uncertainty(cal, hand):
+    # Reference: the plain model's cross-validated error is 3x the compensated one (test above), so
+    # its uncertainty must be larger on average, not the compensated table's.
+    run = load_run(hand / "held21.csv")
+    comp = apply_calibration(cal, run)["force_n_uncertainty"]
+    plain = apply_calibration(cal, run, compensation=False)["force_n_uncertainty"]
+    assert np.nanmean(plain) > 1.5 * np.nanmean(comp)
+    back = load_calibration(save_calibration(cal, hand / "u.json"))
+    np.testing.assert_array_equal(apply_calibration(back, run, compensation=False)["force_n_uncertainty"], plain)

@@ -409,7 +409,10 @@ class Calibration:
     memory : MemoryModel or None
         The causal hysteresis compensation (:mod:`fsrlab.analysis.memory`).
     uncertainty : Uncertainty or None
-        Standard uncertainty per estimate by level and direction (:mod:`fsrlab.analysis.memory`).
+        Standard uncertainty per estimate by level and direction (:mod:`fsrlab.analysis.memory`),
+        of the estimate as applied by default (with the compensation when there is one).
+    uncertainty_plain : Uncertainty or None
+        The same for the estimate without the compensation (only when there is one).
     candidates : list of dict
         Every candidate model's cross-validated RMSE (``model``, ``cv_rmse``, ``parameters``).
     cv_rmse : float or None
@@ -442,6 +445,7 @@ class Calibration:
     floor: Any = None
     memory: Any = None
     uncertainty: Any = None
+    uncertainty_plain: Any = None
     candidates: list = field(default_factory=list)
     cv_rmse: float | None = None
     full_scale: float | None = None

@@ -14,7 +14,7 @@ Since issue 12 the file also holds the chosen model when it is not the polynomia
 fitting (``"lag_s"``), the readout's floor (``"floor"``), the causal compensation (``"memory"``:
 :meth:`fsrlab.analysis.memory.MemoryModel.to_dict`, kept apart from the earlier ``"compensation"``
 so that an earlier fsrlab still reads the file and applies the polynomial), the uncertainty table
-(``"uncertainty"``), every candidate's cross-validated error (``"candidates"``), ``"cv_rmse"`` and
+(``"uncertainty"``, and ``"uncertainty_plain"`` for the estimate without the compensation), every candidate's cross-validated error (``"candidates"``), ``"cv_rmse"`` and
 ``"full_scale"``. Files without these keys load as before (no lag, no floor, no uncertainty).
 
 Earlier files are read too: those written before the circuit objects stored the decoding circuit
@@ -46,7 +46,8 @@ CALIBRATION_FORMAT = "fsrlab-calibration"
 _KNOWN = {"format", "version", "model", "basis", "x", "y", "units", "degree", "chebyshev_coefficients", "x_center",
           "x_half_width", "coefficients", "coefficients_note", "metrics", "cross_validation", "data_fingerprint",
           "created", "circuit", "decode", "source", "compensation", "readout_range", "recorded_with",
-          "model_family", "lag_s", "floor", "memory", "uncertainty", "candidates", "cv_rmse", "full_scale"}
+          "model_family", "lag_s", "floor", "memory", "uncertainty", "candidates", "cv_rmse", "full_scale",
+          "uncertainty_plain"}
 
 
 def calibration_to_dict(cal: Calibration) -> dict[str, Any]:
@@ -94,6 +95,7 @@ def calibration_to_dict(cal: Calibration) -> dict[str, Any]:
         "floor": None if cal.floor is None else cal.floor.to_dict(),
         "memory": None if cal.memory is None else cal.memory.to_dict(),
         "uncertainty": None if cal.uncertainty is None else cal.uncertainty.to_dict(),
+        "uncertainty_plain": None if cal.uncertainty_plain is None else cal.uncertainty_plain.to_dict(),
         "candidates": cal.candidates,
         "cv_rmse": cal.cv_rmse,
         "full_scale": cal.full_scale,
@@ -159,7 +161,7 @@ def calibration_from_dict(d: dict) -> Calibration:
     lag = d.get("lag_s", 0.0)
     if lag is not None and not np.isfinite(float(lag)):
         raise ValueError("lag_s must be a finite number of seconds or null")
-    fam, fl, unc = d.get("model_family"), d.get("floor"), d.get("uncertainty")
+    fam, fl, unc, unc0 = d.get("model_family"), d.get("floor"), d.get("uncertainty"), d.get("uncertainty_plain")
     return Calibration(
         model=_model(d), x_name=d["x"], y_name=d["y"], x_unit=d["units"]["x"], y_unit=d["units"]["y"],
         r2=met.get("r2", float("nan")), rmse=met.get("rmse", float("nan")),
@@ -171,7 +173,9 @@ def calibration_from_dict(d: dict) -> Calibration:
         recorded_with=RecordedWith.from_dict(d["recorded_with"]) if d.get("recorded_with") is not None else None,
         family=None if fam is None else FamilyModel.from_dict(fam), lag_s=None if lag is None else float(lag),
         floor=None if fl is None else Floor.from_dict(fl), memory=None if mem is None else MemoryModel.from_dict(mem),
-        uncertainty=None if unc is None else Uncertainty.from_dict(unc), candidates=list(d.get("candidates") or []),
+        uncertainty=None if unc is None else Uncertainty.from_dict(unc),
+        uncertainty_plain=None if unc0 is None else Uncertainty.from_dict(unc0),
+        candidates=list(d.get("candidates") or []),
         cv_rmse=None if d.get("cv_rmse") is None else float(d["cv_rmse"]),
         full_scale=None if d.get("full_scale") is None else float(d["full_scale"]))
 

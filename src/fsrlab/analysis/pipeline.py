@@ -582,6 +582,8 @@ def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", comp
     cal.cv_rmse = float(np.sqrt(np.nanmean((final_oof[ok] - yv) ** 2))) if np.isfinite(final_oof[ok]).any() \
         else float(chosen_cv)
     cal.uncertainty = fit_uncertainty(final_oof, ys, direction, resolution(values[ok]))
+    if cal.memory is not None:
+        cal.uncertainty_plain = fit_uncertainty(plain_oof, ys, direction, resolution(values[ok]))
     return cal
 
 
@@ -632,7 +634,8 @@ def live_estimator(cal: Calibration, margin: float = MARGIN, compensation: bool 
         raise ValueError(f"margin: must be a fraction >= 0 of the calibrated span, got {margin!r}")
     memory = cal.memory if compensation else None
     fs = memory.full_scale if memory is not None else (cal.full_scale or 1.0)
-    return CausalEstimator(cal, cal.x_range, margin, cal.floor, memory, cal.uncertainty, fs, cal.y_name, cal.x_name)
+    table = cal.uncertainty_plain if (cal.memory is not None and memory is None) else cal.uncertainty
+    return CausalEstimator(cal, cal.x_range, margin, cal.floor, memory, table, fs, cal.y_name, cal.x_name)
 
 
 #: The live estimator's type (see :func:`live_estimator`).
