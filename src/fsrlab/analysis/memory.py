@@ -44,6 +44,7 @@ operators, Prandtl–Ishlinskii). A. Matute et al., J. Sensors 2018, doi:10.1155
 
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass, field
 
@@ -217,9 +218,21 @@ class MemoryModel:
         return self.full_scale * (_design(w, p, s, self.degree) @ self.coefficients)
 
     def step_estimate(self, w: float, state: CausalState) -> float:
-        """y of one reading after ``state.advance(w)``. [unit of y]"""
-        row = _design(np.array([w]), np.array([state.p]), np.array([state.s]).reshape(1, -1), self.degree)
-        return float(self.full_scale * (row @ self.coefficients)[0])
+        """y of one reading after ``state.advance(w)``, in plain Python (the live path). [unit of y]"""
+        c = self.coefficients.tolist()
+        total, wk = 0.0, 1.0
+        for k in range(self.degree + 1):
+            total += c[k] * wk
+            wk *= w
+        i = self.degree + 1
+        n = len(state.p)
+        for j, pj in enumerate(state.p):
+            h = pj - w
+            total += c[i + j] * h + c[i + n + j] * (w * h)
+        i += 2 * n
+        for m, sm in enumerate(state.s):
+            total += c[i + m] * (sm - w)
+        return self.full_scale * total
 
     def to_dict(self) -> dict:
         """JSON form."""
@@ -491,7 +504,8 @@ class CausalEstimator:
             return None, None, False
         if not self.kept[0] <= x <= self.kept[1]:
             return None, None, False
-        y0 = float(self.base(np.array([x]))[0])
+        # One call for the estimate and the slope (elementwise: the same numbers as the offline path).
+        y0, up, down = self.base(np.array([x, x + self._h, x - self._h])).tolist()
         if not math.isfinite(y0):
             return None, None, False
         w = y0 / self.full_scale
@@ -499,7 +513,11 @@ class CausalEstimator:
         y = self.memory.step_estimate(w, self.state) if self.memory is not None else y0
         u = None
         if self.uncertainty is not None:
-            u = float(self.uncertainty(np.array([y]), np.array([self.state.direction]), self.slope(np.array([x])))[0])
+            tab = self.uncertainty
+            sig = float(tab.sigma[bisect.bisect_left(tab.edges.tolist(), y if math.isfinite(y) else 0.0),
+                                  self.state.direction + 1])
+            quant = abs(up - down) / (2 * self._h) * tab.step
+            u = math.sqrt(sig * sig + quant * quant / 12.0) if math.isfinite(y) else None
         return y, u, bool(self.lo <= x <= self.hi)
 
     def run(self, x) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
