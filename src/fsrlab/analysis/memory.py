@@ -14,11 +14,12 @@ so ``p − w`` lies in ``[−r, r]`` and remembers the last reversal larger than
 operators with thresholds from 0.5 % to 32 % of full scale remembers the turning points of every
 size (the wiping-out and congruency of Preisach models hold for this class). The estimate is::
 
-    y/FS = Σ_k a_k w^k + Σ_j (b_j + c_j·w)·(p_j − w) + Σ_m e_m·(s_m − w)
+    y/FS = Σ_k a_k w^k + Σ_j (b_j + c_j·w)·(p_j − w) + Σ_m (e_m + f_m·w)·(s_m − w)
 
 with ``k ≤ 3`` (the shape left over by the plain model), the hysteresis terms of the play
 operators (their weight allowed to grow with the level), and, where cross-validation supports it,
-creep terms: exponential averages ``s_m`` of w with time constants of 2 s and 20 s. All weights
+creep terms: exponential averages ``s_m`` of w with time constants of 2 s and 20 s, their weight
+also allowed to grow with the level (FSR creep is stated in % of the reading). All weights
 come from one linear least-squares fit (a small ridge term keeps it regular); the operators'
 memory is computed once, so grouped cross-validation only refits the weights.
 
@@ -29,8 +30,8 @@ cycle detection). Why this model: on the hand-loaded runs of :mod:`fsrlab.analys
 (a Bouc–Wen sensor, i.e. not this model) the earlier branch polynomials with turning-point memory
 (:mod:`fsrlab.analysis.compensation`) cannot be fitted at all (no whole cycles) and make a slow
 motor cycle worse (HE 13.7 → 22.2 %), while play operators need no cycles and bring the
-cross-validated error from 3.1 % to 1.4 % of full scale (1.0 % with the creep terms) and that
-cycle's HE to 3.2 % (docs/calibration.md).
+cross-validated error from 3.1 % to 1.4 % of full scale (0.9 % with the creep terms) and that
+cycle's HE to 2.3 % (docs/calibration.md).
 
 Uncertainty: out-of-fold residuals, grouped by level (quintiles of the estimate) and direction
 (the movement of a 1 % play operator: loading, unloading, still), give a standard deviation per
@@ -174,11 +175,12 @@ def causal_features(w, thresholds, alphas) -> tuple[np.ndarray, np.ndarray, np.n
 
 
 def _design(w: np.ndarray, p: np.ndarray, s: np.ndarray, degree: int) -> np.ndarray:
-    """Columns w^0..w^degree, (p_j − w), w·(p_j − w), (s_m − w)."""
+    """Columns w^0..w^degree, (p_j − w), w·(p_j − w), (s_m − w), w·(s_m − w)."""
     w = np.asarray(w, dtype=float)
     cols = [w ** k for k in range(degree + 1)]
     hyst = p - w[:, None]
-    return np.column_stack(cols + [hyst, w[:, None] * hyst, s - w[:, None]])
+    creep = s - w[:, None]
+    return np.column_stack(cols + [hyst, w[:, None] * hyst, creep, w[:, None] * creep])
 
 
 @dataclass(frozen=True)
@@ -230,8 +232,10 @@ class MemoryModel:
             h = pj - w
             total += c[i + j] * h + c[i + n + j] * (w * h)
         i += 2 * n
+        n = len(state.s)
         for m, sm in enumerate(state.s):
-            total += c[i + m] * (sm - w)
+            h = sm - w
+            total += c[i + m] * h + c[i + n + m] * (w * h)
         return self.full_scale * total
 
     def to_dict(self) -> dict:
@@ -248,7 +252,7 @@ class MemoryModel:
         thr = tuple(float(v) for v in d["thresholds"])
         taus = tuple(float(v) for v in d["time_constants_s"])
         fs, row_s, deg = float(d["full_scale"]), float(d["row_s"]), int(d["degree"])
-        if coef.size != deg + 1 + 2 * len(thr) + len(taus) or not np.all(np.isfinite(coef)):
+        if coef.size != deg + 1 + 2 * len(thr) + 2 * len(taus) or not np.all(np.isfinite(coef)):
             raise ValueError("memory coefficients: wrong number or not finite")
         if not (fs > 0 and row_s > 0 and all(r > 0 for r in thr) and all(t > 0 for t in taus)):
             raise ValueError("memory: full_scale, row_s, thresholds and time constants must be > 0")

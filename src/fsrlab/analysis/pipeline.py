@@ -559,7 +559,7 @@ def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", comp
     _, _, direction = causal_features(w, (), ())
     if compensate and compensation_method == "memory":
         if int(ok.sum()) < MIN_COMPENSATION_READINGS:
-            raise ValueError(f"{run.path}: compensate: the causal compensation fits up to 30 weights and needs at least "
+            raise ValueError(f"{run.path}: compensate: the causal compensation fits up to 24 weights and needs at least "
                              f"{MIN_COMPENSATION_READINGS} readings above the floor with a reference, got {int(ok.sum())}")
         row_s = float(np.median(np.diff(t))) if "time_s" in run and run.n_rows > 1 else 1.0
         mf = fit_memory(w, ys, ok, groups, full_scale, row_s, folds, plain_oof=plain_oof)
