@@ -259,10 +259,14 @@ class MemoryModel:
         return cls(fs, thr, taus, row_s, deg, coef)
 
 
-def _lstsq(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    ata = a.T @ a
+def _solve(ata: np.ndarray, atb: np.ndarray) -> np.ndarray:
+    """Ridge-regularised normal equations (the ridge relative to the Gram matrix's mean diagonal)."""
     lam = RIDGE * np.trace(ata) / ata.shape[0]
-    return np.linalg.solve(ata + lam * np.eye(ata.shape[0]), a.T @ b)
+    return np.linalg.solve(ata + lam * np.eye(ata.shape[0]), atb)
+
+
+def _lstsq(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return _solve(a.T @ a, a.T @ b)
 
 
 @dataclass
@@ -280,12 +284,15 @@ class MemoryFit:
         Out-of-fold estimate of every row (of the chosen variant). [unit of y]
     direction : ndarray of int
         Direction of every row (see :func:`causal_features`).
+    fitted : ndarray
+        In-sample estimate of the rows fitted (NaN elsewhere). [unit of y]
     """
 
     model: MemoryModel | None
     candidates: dict
     oof: np.ndarray
     direction: np.ndarray = field(repr=False, default=None)
+    fitted: np.ndarray = field(repr=False, default=None)
 
 
 def fit_memory(w, y, usable, groups, full_scale: float, row_s: float, folds: int = 5, degree: int = 3,
@@ -343,9 +350,13 @@ def fit_memory(w, y, usable, groups, full_scale: float, row_s: float, folds: int
         a = _design(w[use], p[use], ss[use], degree)
         b = y[use] / full_scale
         oof = np.empty(b.size)
-        for f in range(k):
-            tr = fold != f
-            oof[~tr] = a[~tr] @ _lstsq(a[tr], b[tr])
+        # Per-fold sums once: each training fold's normal equations are the total minus its own.
+        parts = [fold == f for f in range(k)]
+        grams = [a[m].T @ a[m] for m in parts]
+        rhs = [a[m].T @ b[m] for m in parts]
+        gram_all, rhs_all = sum(grams), sum(rhs)
+        for f, m in enumerate(parts):
+            oof[m] = a[m] @ _solve(gram_all - grams[f], rhs_all - rhs[f])
         e = float(full_scale * np.sqrt(np.mean((oof - b) ** 2)))
         cands[name] = e
         if best is None or e < best[1]:
@@ -358,7 +369,9 @@ def fit_memory(w, y, usable, groups, full_scale: float, row_s: float, folds: int
     coef = _lstsq(a, b)
     oof_all[use] = oof_u
     model = MemoryModel(float(full_scale), tuple(thr), tuple(taus), float(row_s), degree, coef)
-    return MemoryFit(model, cands, oof_all, direction)
+    fitted = np.full(w.size, np.nan)
+    fitted[use] = full_scale * (a @ coef)
+    return MemoryFit(model, cands, oof_all, direction, fitted)
 
 
 @dataclass(frozen=True)

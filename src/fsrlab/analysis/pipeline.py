@@ -566,8 +566,7 @@ def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", comp
         cal.memory = mf.model
         cal.extra["compensation_candidates"] = mf.candidates
         final_oof = mf.oof
-        est = live_estimator(cal, margin=np.inf).run(values)[0]
-        before, after, how = _he_pair(run, ys, cal(values), est, ok, threshold)
+        before, after, how = _he_pair(run, ys, cal(values), mf.fitted, ok, threshold)
         cal.compensation_he_percent = (before, after)
         cal.extra["hysteresis_error_method"] = how
     elif compensate:
