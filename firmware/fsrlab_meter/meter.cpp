@@ -1,5 +1,6 @@
-// fsrlab meter: the background (everything but the edge handlers): serial protocol v1
-// (docs/protocol.md), commands, measurement windows, the ADC on A0, the C_off switch on D4.
+// fsrlab meter: the background (everything but the edge handlers): serial protocol v2
+// (docs/protocol.md), commands, measurement windows, the ADC on A0, the C_off switch on D4, the
+// reference load cell's HX711 on D2 (DOUT) and D3 (SCK).
 // Matute et al. 2018, J. Sensors 6561901, doi:10.1155/2018/6561901, section 5.
 //
 // The edges are served by the interrupt handlers of capture.S / capture.cpp (see capture.h). This
@@ -33,6 +34,9 @@
 static uint8_t t2_last;
 static uint32_t now8;    // [8 us] since boot
 static uint32_t now_ms;  // now8 / 125
+static uint32_t ref_last8;  // completion of the last HX711 conversion [8 us]
+static uint8_t ref_seen;    // ... within the last second (REF_OK_8)
+#define REF_OK_8 (1000ul * T2_PER_MS)  // ref_ok: a conversion completed within 1000 ms [8 us]
 
 static void clock_poll(void) {
   uint8_t t = TCNT2;
@@ -56,6 +60,9 @@ static void clock_poll(void) {
   while (frac >= T2_PER_MS) {
     frac -= T2_PER_MS;
     now_ms++;
+    // once a millisecond (not every turn: the background's time is scarce at 50 kHz): forget a
+    // conversion older than a second before now8 - ref_last8 could wrap (9.5 h)
+    if (ref_seen && now8 - ref_last8 >= REF_OK_8) ref_seen = 0;
   }
 }
 
@@ -97,14 +104,23 @@ static void service(void) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Frames: "$" payload "*" CRC16 CR LF, formatted into fb and then queued whole.
-static char fb[96];
-static uint8_t fl;
+// Frames: "$" payload "*" CRC16 CR LF, written straight into the transmit ring with the CRC
+// computed on the way (no second pass over a frame buffer: at 50 kHz the background has ~12 % of
+// the CPU, and a 10 ms window leaves it ~19000 cycles for everything, frame included). The ring
+// has room for a whole frame (MAX_FRAME) before one begins; bytes already written may go out while
+// the rest is formatted.
+#define MAX_FRAME 112u  // protocol v2 line limit (the longest frame, a v2 M frame, is 100 bytes)
 static uint16_t seq_next;
+static uint16_t crc;
 static const uint32_t pow10_tab[10] = {1ul, 10ul, 100ul, 1000ul, 10000ul, 100000ul,
                                        1000000ul, 10000000ul, 100000000ul, 1000000000ul};
 
-static void put_c(char c) { fb[fl++] = c; }
+static inline void put_raw(char c) { txbuf[tx_head++] = (uint8_t)c; }
+
+static void put_c(char c) {
+  put_raw(c);
+  crc = _crc_xmodem_update(crc, (uint8_t)c);
+}
 
 static void put_P(const char *s) {
   char c;
@@ -112,6 +128,11 @@ static void put_P(const char *s) {
 }
 
 static void put_u32(uint32_t v) {
+  if (v < 10u) {  // most fields of a frame (missed, range, ref_ok, ...): no scan of the powers
+    put_c((char)('0' + (uint8_t)v));
+    rx_poll();
+    return;
+  }
   int8_t i = 9;
   while (i > 0 && v < pow10_tab[i]) i--;
   for (; i >= 0; i--) {
@@ -132,37 +153,36 @@ static void field_u32(uint32_t v) {
   put_u32(v);
 }
 
+static void field_i32(int32_t v) {
+  put_c(',');
+  if (v < 0) {
+    put_c('-');
+    v = -v;  // (never -2^31: the value is a mean of 24-bit samples)
+  }
+  put_u32((uint32_t)v);
+}
+
 static void field_P(const char *s) {
   put_c(',');
   put_P(s);
 }
 
 static void frame_begin(const char *type) {
-  fl = 0;
-  put_c('$');
+  while ((uint8_t)(tx_tail - tx_head - 1u) < MAX_FRAME) service();  // room (255 usable)
+  put_raw('$');
+  crc = 0xFFFF;
   put_P(type);
   field_u32(seq_next);
 }
 
 static void frame_end(void) {
-  uint16_t crc = 0xFFFF;
-  for (uint8_t i = 1; i < fl; i++) {
-    crc = _crc_xmodem_update(crc, (uint8_t)fb[i]);
-    if (i & 15) rx_poll();
-    else service();
-  }
-  put_c('*');
+  put_raw('*');
   for (int8_t s = 12; s >= 0; s -= 4) {
     uint8_t n = (uint8_t)((crc >> s) & 0xF);
-    put_c((char)(n < 10 ? '0' + n : 'A' + n - 10));
+    put_raw((char)(n < 10 ? '0' + n : 'A' + n - 10));
   }
-  put_c('\r');
-  put_c('\n');
-  while ((uint8_t)(tx_tail - tx_head - 1u) < fl) service();  // room in the ring (255 usable)
-  for (uint8_t i = 0; i < fl; i++) {
-    txbuf[tx_head++] = (uint8_t)fb[i];
-    rx_poll();
-  }
+  put_raw('\r');
+  put_raw('\n');
   seq_next++;
 }
 
@@ -231,6 +251,117 @@ static void window_poll(void) {
   win_end8 += (uint32_t)window_ms * T2_PER_MS;
 }
 
+// ---------------------------------------------------------------------------------------------
+// Reference load cell: HX711 (gain 128, channel A), DOUT on D2 = PD2 (input, pull-up: a missing
+// board reads high = never ready), SCK on D3 = PD3 (output, idle low). A conversion is ready when
+// DOUT is low; 24 SCK pulses shift it out MSB first (two's complement), a 25th selects gain 128 and
+// channel A for the next one and sets DOUT high again.
+//
+// The HX711 powers down when SCK stays high for more than 60 us (datasheet: SCK high 0.2..50 us).
+// An edge handler's visit can last up to 128 us (its poll after a break in the signal), so a pulse
+// with interrupts enabled could meet one and be stretched past that. Each pulse is therefore made
+// with interrupts disabled for 9 cycles (cli ... sei and the read of DOUT that sei lets through):
+// SCK is high for exactly 5 cycles (sbi to cbi, 0.31 us), whatever the edges do; an edge's
+// interrupt waits at most ~5 cycles longer than behind a 4-cycle instruction (firmware/README.md:
+// measured in simavr at 50 kHz, 5 and 95 % duty, with an HX711 at 80 samples/s). Between pulses
+// interrupts are enabled and SCK may stay low as long as it needs.
+#define HX_DOUT PD2
+#define HX_SCK PD3
+
+// One SCK pulse; returns PIND after it (DOUT holds the bit from the rising edge to the next one).
+static inline uint8_t hx_pulse(void) {
+  uint8_t pin;
+  asm volatile(
+      "cli\n\t"
+      "sbi %[port], %[sck]\n\t"
+      "nop\n\t"
+      "nop\n\t"
+      "nop\n\t"
+      "cbi %[port], %[sck]\n\t"
+      "sei\n\t"
+      "in %[pin], %[pinr]\n\t"  // runs before a pending interrupt: the disabled span ends here
+      : [pin] "=r"(pin)
+      : [port] "I"(_SFR_IO_ADDR(PORTD)), [sck] "I"(HX_SCK), [pinr] "I"(_SFR_IO_ADDR(PIND))
+      : "memory");
+  return pin;
+}
+
+// Clocks out a ready conversion (25 pulses). The receiver is polled between
+// pulses and the clock every 8 (the read takes ~700 background cycles).
+static int32_t hx_read(void) {
+  uint32_t v = 0;
+  for (uint8_t i = 1; i <= 24; i++) {
+    uint8_t pin = hx_pulse();
+    v <<= 1;
+    if (pin & _BV(HX_DOUT)) v |= 1;
+    if (i & 7) rx_poll();
+    else service();
+  }
+  hx_pulse();  // the 25th: gain 128, channel A
+  if (v & 0x800000ul) v |= 0xFF000000ul;
+  return (int32_t)v;
+}
+
+// The conversions of the window in progress (cur) and of the next one (next: completed at or after
+// the due time of the window's end while its snapshot is pending). A conversion belongs to the
+// window in which it completed, on the background's clock (8 us), read right after its 25th pulse.
+struct RefAcc {
+  int64_t sum;
+  uint16_t n;
+};
+static RefAcc ref_cur, ref_next;
+
+// Reads the conversion that DOUT announces and adds it to its window.
+static void __attribute__((noinline)) ref_take(void) {
+  int32_t v = hx_read();
+  clock_poll();
+  ref_last8 = now8;
+  ref_seen = 1;
+  uint8_t later;
+  if (snap_want != SNAP_NONE) later = (int32_t)(now8 - snap_due8) >= 0;
+  else later = running && (int32_t)(now8 - win_end8) >= 0;
+  RefAcc &a = later ? ref_next : ref_cur;
+  if (a.n < 0xFFFFu) {
+    a.sum += v;
+    a.n++;
+  }
+}
+
+// Called from every turn of the main loop: returns after one test of DOUT unless it is low.
+static inline void ref_poll(void) {
+  if (PIND & _BV(HX_DOUT)) return;
+  ref_take();
+}
+
+// floor(sum / n + 1/2) = floor((2 sum + n) / 2n) by shift-and-subtract, with the clock and the
+// receiver served every 8 steps: libgcc's 64-bit division would hold the background for ~2000
+// cycles, which at 50 kHz (12 % of the CPU left to it) is more than the 2 ms after which the
+// background counts itself starved and the edge handlers step aside. |2 sum + n| < 2^41.
+static int32_t ref_mean(int64_t sum, uint16_t n) {
+  if (n == 1) return (int32_t)sum;  // (windows shorter than the HX711's period: no division)
+  int64_t num = 2 * sum + n;
+  uint8_t neg = num < 0;
+  uint64_t u = neg ? (uint64_t)(-num) : (uint64_t)num;
+  uint32_t d = 2ul * n;
+  if (neg) u += d - 1u;  // floor of a negative quotient: minus the ceiling of its magnitude
+  uint32_t hi = (uint32_t)(u >> 32), lo = (uint32_t)u;
+  hi <<= 22;  // its 10 significant bits first
+  uint32_t r = 0, q = 0;
+  for (uint8_t b = 0; b < 42; b++) {
+    uint32_t w = b < 10 ? hi : lo;
+    r = (r << 1) | (w >> 31);
+    if (b < 10) hi <<= 1;
+    else lo <<= 1;
+    q <<= 1;
+    if (r >= d) {
+      r -= d;
+      q |= 1;
+    }
+    if ((b & 7) == 7) service();
+  }
+  return neg ? -(int32_t)q : (int32_t)q;
+}
+
 static void snap_poll(void) {
   if (snap_want == SNAP_NONE) return;
   if (!capture_ready() && (int32_t)(now8 - snap_due8) >= (int32_t)(SNAP_WAIT_MS * T2_PER_MS))
@@ -252,9 +383,18 @@ static void snap_poll(void) {
     field_u32(n.missed - base.missed);
     field_u32(adc);
     field_u32(fr_range);
+    // the reference: ref_ok at the window's end (snap_due8); no count without it (docs/protocol.md)
+    uint8_t ok = ref_seen && (int32_t)(snap_due8 - ref_last8) < (int32_t)REF_OK_8;
+    uint16_t rn = ok ? ref_cur.n : 0;
+    field_u32(ok);
+    field_u32(rn);
+    field_i32(rn ? ref_mean(ref_cur.sum, rn) : 0);
     frame_end();
   }
   base = n;
+  ref_cur = ref_next;  // (a base discards the conversions before it)
+  ref_next.sum = 0;
+  ref_next.n = 0;
   snap_want = SNAP_NONE;
 }
 
@@ -375,6 +515,11 @@ static void hw_init(void) {
   // C_off range switch on D4 = PD4, low at boot (range 0)
   DDRD |= _BV(PD4);
   PORTD &= (uint8_t)~_BV(PD4);
+  // HX711: DOUT on D2 input with pull-up, SCK on D3 output low (a long high powers it down)
+  DDRD &= (uint8_t)~_BV(PD2);
+  PORTD |= _BV(PD2);
+  PORTD &= (uint8_t)~_BV(PD3);
+  DDRD |= _BV(PD3);
   // ADC: AVcc reference, channel A0, clk/128 (one conversion per 104 us), polled
   ADMUX = _BV(REFS0);
   ADCSRB = 0;
@@ -412,6 +557,7 @@ void meter_run(void) {
       line_ready = 0;
     }
     adc_poll();
+    ref_poll();
     window_poll();
     snap_poll();
   }

@@ -10,16 +10,40 @@
  *   #PEEK <addr> <byte> <word>    data memory byte and little-endian 16-bit word at the end
  *   #OCR_SMALL <a> <b>            times OCR1A / OCR1B were set to a value below 16 (see main loop)
  *                                (--peek ADDR, data space address, e.g. from avr-nm minus 0x800000)
+ *   #HX <cycle> <value>           an HX711 conversion read completely (24 bits and the gain pulse:
+ *                                at the falling edge of the 25th SCK pulse) and its raw value
+ *   #HX_POWERDOWN <cycle>         SCK stayed high for more than 60 us: the HX711 powered down
+ *   #HX_POWERUP <cycle>           SCK low again: it powers up and settles before its next conversion
+ *   #HX_LOST <cycle> <value>      a conversion replaced (or, during a read, dropped) before it was read
+ *   #HX_SCK <max_high> <pulses> <stray>   at the end: longest SCK high time [cycles], SCK pulses,
+ *                                pulses while no conversion was ready
+ *   #PD2 <ddr> <port>             at the end: D2 direction and output bit (0 1 = input with pull-up)
  *   #END <cycles> <pd4>           simulated cycles and final D4 level
  *
  * Usage:
  *   fsrlab_sim FIRMWARE.elf [--time S] [--seg T0:FREQ:DUTY[:JITTER]]... [--cmd T:TEXT]...
  *              [--adc-mv MV] [--seed N] [--out FILE]
+ *              [--hx SPS[:FIRST]] [--hx-values V,V,...] [--hx-stop T]
  *   --seg   from time T0 [s] on: FREQ [Hz] (0: line held low), DUTY (0..1), JITTER: each edge moves
  *           by a uniform random amount in +-JITTER periods (default 0). Segments in time order.
  *   --cmd   at time T [s] send TEXT followed by '\n' (bytes spaced 100 us, faster than 115200 baud
  *           never happens on a real line). '\\n' inside TEXT is not interpreted; use several --cmd.
  *   --time  simulated time [s] (default 1).
+ *   --hx    an HX711 on D2 (DOUT) / D3 (SCK) converting SPS (10 or 80) times a second, the first
+ *           conversion ready at FIRST [s] (default 1/SPS), powered up at reset. Without --hx no HX711
+ *           is connected: DOUT is held high, as the firmware's pull-up does on a real board (simavr
+ *           1.6 does not model pull-ups; the firmware's setting is reported by #PD2).
+ *   --hx-values  raw values of the successive conversions, 24-bit two's complement
+ *           (-8388608..8388607), used in turn and repeated; default: conversion k gives
+ *           ((k * 2796203) mod 2^24) - 2^23, which visits the whole range.
+ *   --hx-stop  from time T [s] on the HX711 is unplugged: no more conversions, DOUT pulled high.
+ *
+ * HX711 model (datasheet, Avia Semiconductor HX711 rev. 2.0): a conversion is ready every 1/SPS;
+ * DOUT then goes low. Each SCK rising edge shifts out the next bit, MSB first (DOUT changes at the
+ * rising edge and holds until the next one); the 25th rising edge (gain 128, channel A) sets DOUT
+ * high until the next conversion. A conversion not read before the next one is replaced. SCK high
+ * for more than 60 us powers the chip down (no conversions); SCK low again powers it up, and the
+ * next conversion is ready after the settling time, 400 ms at 10 SPS and 50 ms at 80 SPS.
  *
  * Edge timing: an edge scheduled at cycle c is seen by the simulated MCU at the end of the
  * instruction running at c (simavr processes its cycle timers between instructions), so each
@@ -130,6 +154,114 @@ static avr_cycle_count_t edge_cb(struct avr_t *a, avr_cycle_count_t when, void *
   return to_cycle(next_edge, a->cycle);
 }
 
+/* ------------------------------------------------------------------ HX711 on PD2 / PD3 */
+#define HX_MAX_VALUES 4096
+static int hx_sps;                  /* 0: no HX711 connected */
+static double hx_first = -1, hx_stop = -1;
+static int32_t hx_vals[HX_MAX_VALUES];
+static int hx_nvals;
+static uint64_t hx_k;               /* conversions made */
+static int hx_ready;                /* a conversion waits or is being read */
+static int hx_bit;                  /* SCK rising edges of the read in progress */
+static int32_t hx_val;
+static int hx_down, hx_unplugged, hx_sck;
+static avr_cycle_count_t hx_rise, hx_max_high;
+static uint64_t hx_pulses, hx_stray;
+static avr_irq_t *dout_irq;
+
+/* DOUT is set as the port's external level, not only raised: simavr 1.6 re-applies the internal
+ * pull-up (PORTD2 = 1) to the input pin on every write to PORTD (each SCK edge), which would
+ * override a level that was merely raised. */
+static void dout(uint32_t level) {
+  avr_ioport_external_t e = {.name = 'D', .mask = 1u << 2, .value = (level ? 1u : 0u) << 2};
+  avr_ioctl(avr, AVR_IOCTL_IOPORT_SET_EXTERNAL('D'), &e);
+  avr_raise_irq(dout_irq, level ? 1 : 0);
+}
+
+static int32_t hx_value(uint64_t k) {
+  if (hx_nvals) return hx_vals[k % (uint64_t)hx_nvals];
+  return (int32_t)((k * 2796203ull) % 16777216ull) - 8388608;
+}
+
+static avr_cycle_count_t hx_period(void) { return (avr_cycle_count_t)llround(F_CPU_HZ / hx_sps); }
+
+static avr_cycle_count_t hx_conv_cb(struct avr_t *a, avr_cycle_count_t when, void *param) {
+  (void)param;
+  if (hx_down || hx_unplugged) return 0;
+  int32_t v = hx_value(hx_k++);
+  if (hx_ready && hx_bit > 0) {
+    fprintf(stderr, "#HX_LOST %llu %d\n", (unsigned long long)a->cycle, v); /* read in progress keeps its data */
+  } else {
+    if (hx_ready) fprintf(stderr, "#HX_LOST %llu %d\n", (unsigned long long)a->cycle, hx_val);
+    hx_val = v;
+    hx_ready = 1;
+    hx_bit = 0;
+    dout(0);
+  }
+  return when + hx_period();
+}
+
+static avr_cycle_count_t hx_unplug_cb(struct avr_t *a, avr_cycle_count_t when, void *param) {
+  (void)when; (void)param;
+  hx_unplugged = 1;
+  hx_ready = 0;
+  avr_cycle_timer_cancel(a, hx_conv_cb, NULL);
+  dout(1);
+  return 0;
+}
+
+static avr_cycle_count_t hx_powerdown_cb(struct avr_t *a, avr_cycle_count_t when, void *param) {
+  (void)when; (void)param;
+  if (!hx_sck || hx_down || hx_unplugged) return 0;
+  hx_down = 1;
+  hx_ready = 0;
+  hx_bit = 0;
+  fprintf(stderr, "#HX_POWERDOWN %llu\n", (unsigned long long)a->cycle);
+  avr_cycle_timer_cancel(a, hx_conv_cb, NULL);
+  dout(1);
+  return 0;
+}
+
+static void sck_cb(struct avr_irq_t *irq, uint32_t value, void *param) {
+  (void)irq; (void)param;
+  int v = value ? 1 : 0;
+  if (v == hx_sck) return;
+  hx_sck = v;
+  if (v) {
+    hx_rise = avr->cycle;
+    if (hx_unplugged || !hx_sps) {
+      hx_stray++;
+      return;
+    }
+    if (!hx_down) avr_cycle_timer_register(avr, 960, hx_powerdown_cb, NULL); /* 60 us */
+    if (hx_down) return;
+    if (!hx_ready) {
+      hx_stray++;
+      return;
+    }
+    hx_bit++;
+    dout(hx_bit <= 24 ? (uint32_t)((hx_val >> (24 - hx_bit)) & 1) : 1u);
+    return;
+  }
+  avr_cycle_count_t d = avr->cycle - hx_rise;
+  if (d > hx_max_high) hx_max_high = d;
+  hx_pulses++;
+  if (hx_unplugged) return;
+  avr_cycle_timer_cancel(avr, hx_powerdown_cb, NULL);
+  if (hx_down) {
+    hx_down = 0;
+    fprintf(stderr, "#HX_POWERUP %llu\n", (unsigned long long)avr->cycle);
+    avr_cycle_timer_register(avr, (avr_cycle_count_t)llround(F_CPU_HZ * (hx_sps == 10 ? 0.4 : 0.05)),
+                             hx_conv_cb, NULL);
+    return;
+  }
+  if (hx_ready && hx_bit == 25) {
+    fprintf(stderr, "#HX %llu %d\n", (unsigned long long)avr->cycle, hx_val);
+    hx_ready = 0;
+    hx_bit = 0;
+  }
+}
+
 /* ------------------------------------------------------------------ UART */
 static void uart_out_cb(struct avr_irq_t *irq, uint32_t value, void *param) {
   (void)irq; (void)param;
@@ -187,7 +319,8 @@ static int cmp_cmd(const void *a, const void *b) {
 
 static void usage(void) {
   fprintf(stderr, "usage: fsrlab_sim FIRMWARE.elf [--time S] [--seg T0:FREQ:DUTY[:JITTER]]... "
-                  "[--cmd T:TEXT]... [--adc-mv MV] [--seed N] [--out FILE]\n");
+                  "[--cmd T:TEXT]... [--adc-mv MV] [--seed N] [--out FILE] [--hx SPS[:FIRST]] "
+                  "[--hx-values V,V,...] [--hx-stop T]\n");
   exit(2);
 }
 
@@ -220,6 +353,19 @@ int main(int argc, char **argv) {
       unsigned a = (unsigned)strtoul(argv[++i], NULL, 0);
       if (npeek < 64) peeks[npeek++] = a;
     }
+    else if (!strcmp(a, "--hx") && i + 1 < argc) {
+      if (sscanf(argv[++i], "%d:%lf", &hx_sps, &hx_first) < 1 || (hx_sps != 10 && hx_sps != 80)) usage();
+    } else if (!strcmp(a, "--hx-values") && i + 1 < argc) {
+      char *p = argv[++i], *end;
+      for (;;) {
+        long v = strtol(p, &end, 0);
+        if (end == p || v < -8388608L || v > 8388607L || hx_nvals >= HX_MAX_VALUES) usage();
+        hx_vals[hx_nvals++] = (int32_t)v;
+        if (*end == 0) break;
+        if (*end != ',') usage();
+        p = end + 1;
+      }
+    } else if (!strcmp(a, "--hx-stop") && i + 1 < argc) hx_stop = atof(argv[++i]);
     else if (a[0] != '-' && !elf) elf = a;
     else usage();
   }
@@ -264,6 +410,17 @@ int main(int argc, char **argv) {
   avr_irq_t *adc0 = avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0);
   if (adc0) avr_raise_irq(adc0, (uint32_t)adc_mv);
 
+  /* HX711: DOUT (PD2) high = not ready, or no HX711 (the pull-up); SCK (PD3) watched */
+  dout_irq = avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 2);
+  dout(1);
+  avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 3), sck_cb, NULL);
+  if (hx_sps) {
+    double first = hx_first >= 0 ? hx_first : 1.0 / hx_sps;
+    avr_cycle_timer_register(avr, (avr_cycle_count_t)llround(first * F_CPU_HZ) + 1, hx_conv_cb, NULL);
+    if (hx_stop >= 0)
+      avr_cycle_timer_register(avr, (avr_cycle_count_t)llround(hx_stop * F_CPU_HZ) + 1, hx_unplug_cb, NULL);
+  }
+
   if (nseg) {
     ideal_rise = segs[0].t0 * F_CPU_HZ;
     if (plan_period()) {
@@ -295,6 +452,10 @@ int main(int argc, char **argv) {
     fprintf(stderr, "#PEEK 0x%04x %u %u\n", peeks[i], peeks[i] < 0x8ff ? avr->data[peeks[i]] : 0u,
             peeks[i] < 0x8ff ? (unsigned)(avr->data[peeks[i]] | (avr->data[peeks[i] + 1] << 8)) : 0u);
   fprintf(stderr, "#OCR_SMALL %u %u\n", small_a, small_b);
+  if (hx_sck && avr->cycle - hx_rise > hx_max_high) hx_max_high = avr->cycle - hx_rise;
+  fprintf(stderr, "#HX_SCK %llu %llu %llu\n", (unsigned long long)hx_max_high,
+          (unsigned long long)hx_pulses, (unsigned long long)hx_stray);
+  fprintf(stderr, "#PD2 %d %d\n", (avr->data[0x2A] >> 2) & 1, (avr->data[0x2B] >> 2) & 1);
   fprintf(stderr, "#PC 0x%x state %d\n", avr->pc, avr->state);
   fprintf(stderr, "#END %llu %d\n", (unsigned long long)avr->cycle, pd4_level);
   if (state == cpu_Crashed) { fprintf(stderr, "#CRASHED\n"); return 3; }

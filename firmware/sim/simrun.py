@@ -60,6 +60,19 @@ class SimResult:
     peeks: dict[int, tuple[int, int]] = field(default_factory=dict)  # addr -> (byte, word)
     small_ocr: tuple[int, int] = (0, 0)  # OCR1A, OCR1B set below 16 (simavr loses those matches)
     cycles: int = 0
+    hx: list[tuple[int, int]] = field(default_factory=list)  # (cycle, raw value) conversions read
+    hx_lost: list[tuple[int, int]] = field(default_factory=list)  # (cycle, value) never read
+    hx_powerdown: list[int] = field(default_factory=list)  # cycles: SCK high > 60 us
+    hx_powerup: list[int] = field(default_factory=list)
+    sck_max_high: int = 0  # longest SCK high time [cycles]
+    sck_pulses: int = 0
+    sck_stray: int = 0  # SCK pulses while no conversion was ready (or no HX711)
+    pd2: tuple[int, int] = (0, 0)  # D2 (DOUT) at the end: (DDR bit, PORT bit); (0, 1) = pull-up
+
+    @property
+    def sck_max_high_us(self) -> float:
+        """Longest SCK high time in the run. [us]"""
+        return self.sck_max_high / F_CPU * 1e6
 
     def of_kind(self, kind: str) -> list:
         return [f for f in self.frames if f.kind == kind]
@@ -71,7 +84,8 @@ class SimResult:
 
 
 def run(segments=(), commands=(), time_s: float = 1.0, adc_mv: int = 0, seed: int = 1,
-        elf: Path = ELF, sim: Path = SIM, peeks=()) -> SimResult:
+        elf: Path = ELF, sim: Path = SIM, peeks=(), hx_sps: int | None = None,
+        hx_first_s: float | None = None, hx_values=None, hx_stop_s: float | None = None) -> SimResult:
     """Run the firmware for ``time_s`` simulated seconds.
 
     Parameters
@@ -84,6 +98,16 @@ def run(segments=(), commands=(), time_s: float = 1.0, adc_mv: int = 0, seed: in
         Simulated time. [s]
     adc_mv : int
         Voltage on A0. [mV]
+    hx_sps : int or None
+        An HX711 on D2/D3 converting 10 or 80 times a second; None: no HX711 connected (DOUT high,
+        as the pull-up holds it). [1/s]
+    hx_first_s : float or None
+        Time the first conversion is ready (default ``1/hx_sps``). [s]
+    hx_values : sequence of int or None
+        Raw values of the successive conversions (24-bit two's complement), repeated; None: the
+        harness's formula over the whole range.
+    hx_stop_s : float or None
+        From this time on the HX711 is unplugged. [s]
     """
     from fsrlab.acquisition.protocol import FrameParser
 
@@ -94,6 +118,12 @@ def run(segments=(), commands=(), time_s: float = 1.0, adc_mv: int = 0, seed: in
         args += ["--cmd", f"{t!r}:{line}"]
     for a in peeks:
         args += ["--peek", hex(a)]
+    if hx_sps is not None:
+        args += ["--hx", f"{int(hx_sps)}" + ("" if hx_first_s is None else f":{hx_first_s!r}")]
+        if hx_values is not None:
+            args += ["--hx-values", ",".join(str(int(v)) for v in hx_values)]
+        if hx_stop_s is not None:
+            args += ["--hx-stop", repr(hx_stop_s)]
     proc = subprocess.run(args, capture_output=True, check=True, timeout=600)
     res = SimResult(raw=proc.stdout)
     parser = FrameParser()
@@ -111,6 +141,18 @@ def run(segments=(), commands=(), time_s: float = 1.0, adc_mv: int = 0, seed: in
             res.edges = (int(parts[1]), int(parts[2]))
         elif parts[0] == "#PEEK":
             res.peeks[int(parts[1], 16)] = (int(parts[2]), int(parts[3]))
+        elif parts[0] == "#HX":
+            res.hx.append((int(parts[1]), int(parts[2])))
+        elif parts[0] == "#HX_LOST":
+            res.hx_lost.append((int(parts[1]), int(parts[2])))
+        elif parts[0] == "#HX_POWERDOWN":
+            res.hx_powerdown.append(int(parts[1]))
+        elif parts[0] == "#HX_POWERUP":
+            res.hx_powerup.append(int(parts[1]))
+        elif parts[0] == "#HX_SCK":
+            res.sck_max_high, res.sck_pulses, res.sck_stray = (int(x) for x in parts[1:4])
+        elif parts[0] == "#PD2":
+            res.pd2 = (int(parts[1]), int(parts[2]))
         elif parts[0] == "#END":
             res.cycles = int(parts[1])
     return res

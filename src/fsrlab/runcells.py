@@ -31,6 +31,9 @@ COLUMN_LIMITS: dict[str, tuple] = {
     "voltage_v": (-1e3, 1e3),
     "stress_pa": (-1e12, 1e12),
     "stress_pa_estimate": (-1e12, 1e12),
+    "stress_pa_uncertainty": (0.0, 1e12),
+    "force_n_estimate": (-1e9, 1e9),
+    "force_n_uncertainty": (0.0, 1e9),
     "force_n": (-1e9, 1e9),
     "cycle": (-1e15, 1e15),
     "periods": (0.0, 1e15),
@@ -39,6 +42,9 @@ COLUMN_LIMITS: dict[str, tuple] = {
     "direction": ((-1.0, "unloading"), (0.0, "hold"), (1.0, "loading")),
     "range": ((0.0, "C_off out"), (1.0, "C_off in")),
     "in_range": ((0.0, "outside the calibrated readout range"), (1.0, "inside it")),
+    "reference_raw": (-8388608.0, 8388607.0),  # the HX711's 24-bit two's complement
+    "force_nominal_n": (-1e9, 1e9),
+    "step": (0.0, 1e15),
 }
 #: Largest magnitude of a cell in a column not listed in :data:`COLUMN_LIMITS`.
 OTHER_LIMIT = 1e100

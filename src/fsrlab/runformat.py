@@ -50,12 +50,18 @@ KNOWN_COLUMNS: dict[str, str] = {
     "voltage_v": "V",
     "stress_pa": "Pa",
     "force_n": "N",
+    "stress_pa_uncertainty": "Pa",
+    "force_n_estimate": "N",
+    "force_n_uncertainty": "N",
     "cycle": "1",
     "direction": "1",
     "range": "1",
     "periods": "1",
     "missed": "1",
     "seq": "1",
+    "reference_raw": "count",
+    "force_nominal_n": "N",
+    "step": "1",
 }
 
 #: Readout quantities a calibration or a hysteresis error can be computed on.

@@ -2,11 +2,12 @@
 running in simavr (firmware/build/fsrlab_sim, an ATmega328P at 16 MHz) and to the virtual device on
 a pty, parsed by the same host parser.
 
-Reference: simavr running the firmware's .elf (the firmware engineer's harness). Compared: every
+Reference: simavr running the firmware's .elf (firmware/sim/fsrlab_sim.c, protocol v2). Compared: every
 non-measurement frame (ID, ACK, ERR: type and fields; the firmware version string aside), and
 the measurement frames' window, range, A0 reading and decoded frequency and duty cycle (within
 the quantization bound of each: one 62.5 ns tick per timestamp difference for the virtual device,
-docs/protocol.md; four in simavr, firmware/sim/simrun.py).
+docs/protocol.md; four in simavr, firmware/sim/simrun.py). The session printed in docs/protocol.md
+is checked to be the firmware's.
 """
 
 from __future__ import annotations
@@ -105,3 +106,20 @@ def test_virtual_measurements_agree_with_the_firmware(simulator):
         assert abs(m.frequency_hz - F_HZ) <= F_HZ * e / m.sum_period_ticks + 1e-9
         # each high time is a timestamp difference: at worst e ticks per period over the sum
         assert abs(m.duty_cycle - DUTY) <= e * m.periods / m.sum_period_ticks
+
+
+def test_the_session_in_the_protocol_document_is_the_firmwares(simulator):
+    # docs/protocol.md, "A session", is the firmware's own answer to SESSION in simavr: every frame
+    # but the measurements' tick sums (which move by a few ticks between builds) byte for byte
+    doc = (FIRMWARE.parent / "docs" / "protocol.md").read_text(encoding="utf-8")
+    section = doc.split("### A session", 1)[1].split("```", 2)[1]
+    documented = FrameParser().feed("".join(
+        line[line.index("$"):] + "\r\n" for line in section.splitlines() if "$" in line).encode())
+    real = _firmware_frames(simulator)
+    assert len(documented) == len(real)
+    for d, r in zip(documented, real):
+        if r.kind == "M":
+            keep = (0, 1, 2, 5, 6, 7, 8, 9, 10)  # all but sum_period_ticks, sum_high_ticks
+            assert [d.fields[i] for i in keep] == [r.fields[i] for i in keep], (d, r)
+        else:
+            assert d.encode() == r.encode()

@@ -32,7 +32,9 @@ def test_recording_writes_a_valid_run(tmp_path):
     run = load_run(tmp_path / "run.csv")
     assert result.ended == "duration" and result.dropped == 0
     assert run.n_rows == result.frames > 0
-    assert list(run.columns) == list(COLUMNS) + ["stress_pa"]
+    # A protocol-2 device: the load cell's columns follow (empty force_n: no load-cell calibration given).
+    assert list(run.columns) == list(COLUMNS) + ["stress_pa", "reference_raw", "force_n"]
+    assert np.all(np.isfinite(run["reference_raw"])) and np.all(np.isnan(run["force_n"]))
     assert np.all(np.diff(run["time_s"]) > 0) and np.all(np.diff(run["seq"]) == 1)
     assert np.all(run["frequency_hz"] > 0) and np.all((run["duty_cycle"] > 0) & (run["duty_cycle"] < 1))
     assert np.all(np.isfinite(run["stress_pa"]))  # every window has its reference stress
@@ -146,7 +148,7 @@ def test_cli_json_contract(tmp_path):
     code, stdout, stderr = run_cli(["acquire", "--virtual", "--duration", "2", "--out", str(out), "--json"])
     assert code == 0, stderr
     summary = json.loads(stdout)
-    assert list(summary) == ["frames", "dropped", "duration_s", "file"]
+    assert list(summary) == ["frames", "dropped", "duration_s", "file", "no_reference"]
     assert summary["file"] == str(out) and summary["dropped"] == 0
     assert summary["duration_s"] >= 2.0
     run = load_run(out)

@@ -121,7 +121,7 @@ def test_apply_json_counts_are_true(runs, cal, tmp_path):
     est = load_run(tmp_path / "e.csv")
     e, flag = est["stress_pa_estimate"], est["in_range"]
     assert d["missing"] == int(np.isnan(e).sum()) == 5
-    assert d["missing_reasons"] == {"no_readout": 2, "not_decodable": 0, "beyond_margin": 3}
+    assert d["missing_reasons"] == {"no_readout": 2, "not_decodable": 0, "beyond_margin": 3, "below_activation": 0}
     assert np.isnan(e[[10, 20, 30]]).all() and (flag[[10, 20, 30]] == 0).all() and np.isnan(flag[[3, 4]]).all()
     lo, hi = d["readout_range"]
     inside = (f >= lo) & (f <= hi)

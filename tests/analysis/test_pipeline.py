@@ -21,6 +21,7 @@ from fsrlab.analysis.calibration import calibrate
 from fsrlab.analysis.calibration_io import load_calibration, save_calibration
 from fsrlab.analysis.cycles import branch_directions, cycle_numbers, run_hysteresis
 from fsrlab.analysis.pipeline import (
+    live_estimator,
     apply_calibration, calibrate_run, decode_capacitance, hysteresis_of_run, run_cycles, run_directions,
     run_groups, run_readout,
 )
@@ -67,7 +68,7 @@ def test_calibrate_run_equals_calibrate_with_groups_derived_by_hand(cycles, per_
     c = synthetic_run(cycles=cycles, points_per_ramp=per_ramp, seed=seed).columns
     with tempfile.TemporaryDirectory() as d:
         run = _minimal(Path(d) / "min.csv", {"stress_pa": c["stress_pa"], "frequency_hz": c["frequency_hz"]})
-        cal = calibrate_run(run, x="frequency_hz", degree="auto", folds=3)
+        cal = calibrate_run(run, x="frequency_hz", degree="auto", folds=3, lag=0)
     n = c["stress_pa"].size
     groups = np.maximum(np.arange(n) - 1, 0) // (2 * per_ramp)  # by construction of the triangles
     ref = calibrate(c["frequency_hz"], c["stress_pa"], degree="auto", groups=groups, folds=3)
@@ -77,7 +78,7 @@ def test_calibrate_run_equals_calibrate_with_groups_derived_by_hand(cycles, per_
 
 def test_calibrate_run_uses_the_cycle_column_and_records_units(runs):
     run = load_run(runs / "bench.csv")
-    cal = calibrate_run(run, x="voltage_v", degree="auto")
+    cal = calibrate_run(run, x="voltage_v", degree="auto", lag=0, model="polynomial")
     ref = calibrate(run["voltage_v"], run["stress_pa"], groups=run["cycle"])
     np.testing.assert_array_equal(cal.model.coefficients, ref.model.coefficients)
     assert (cal.x_name, cal.x_unit, cal.y_name, cal.y_unit) == ("voltage_v", "V", "stress_pa", "Pa")
@@ -121,8 +122,9 @@ def test_apply_round_trip_estimate_is_the_polynomial_row_by_row(runs, tmp_path):
     inside = (f >= cal.x_range[0]) & (f <= cal.x_range[1])
     counts = {"estimated": f.size - 3, "in_range": int(inside.sum()), "out_of_range": f.size - 3 - int(inside.sum()),
               "extrapolated": f.size - 3 - int(inside.sum()),
-              "missing": 3, "no_readout": 3, "not_decodable": 0, "beyond_margin": 0}
-    assert meta == {"x": "frequency_hz", "degree": 3, "method": "polynomial of degree 3",
+              "missing": 3, "no_readout": 3, "not_decodable": 0, "beyond_margin": 0, "below_activation": 0}
+    assert meta == {"x": "frequency_hz", "reference": "stress_pa", "model": "polynomial-3", "lag_s": cal.lag_s,
+                    "degree": 3, "method": "polynomial of degree 3",
                     "data_fingerprint": cal.data_fingerprint, "created": cal.created,
                     "readout_range": list(cal.x_range), "margin": 0.1, "counts": counts}
     np.testing.assert_array_equal(est["in_range"], np.where(np.isnan(f), np.nan, inside))
@@ -139,8 +141,11 @@ def test_apply_uses_the_compensation_unless_told_not_to(runs, tmp_path):
     assert before / after >= 3
     other = load_run(runs / "other.csv")
     est = apply_calibration(cal, other)
-    np.testing.assert_array_equal(est["stress_pa_estimate"], cal.compensation(other["frequency_hz"]))
-    assert est.metadata["calibration"]["method"] == "direction-aware compensation"
+    # Issue 12: the compensation is causal; offline it equals stepping the live estimator row by row.
+    live = live_estimator(cal)
+    stepped = [live.step(v)[0] for v in other["frequency_hz"]]
+    np.testing.assert_allclose(est["stress_pa_estimate"], [np.nan if v is None else v for v in stepped], rtol=1e-12)
+    assert est.metadata["calibration"]["method"] == "causal play-operator compensation"
     plain = apply_calibration(cal, other, compensation=False)
     np.testing.assert_array_equal(plain["stress_pa_estimate"], cal(other["frequency_hz"]))
     # Saved and loaded, the calibration gives the same estimate and names its file.
@@ -205,7 +210,7 @@ def test_decode_range_values_checked_and_missing_range_is_nan():
 def test_calibrate_on_decoded_capacitance_records_the_circuit(tmp_path):
     sidecar = LM555Circuit(r_ohm=10e3, c_off_farad=2.2e-9, diode=True)
     run, c_true = _ranged_run(tmp_path / "ranged.csv", sidecar)
-    cal = calibrate_run(run, x="c_fsr_farad", degree=2)
+    cal = calibrate_run(run, x="c_fsr_farad", degree=2, lag=0)
     assert cal.circuit == sidecar and cal.x_unit == "F"
     ref = calibrate(run_readout(run, "c_fsr_farad")[0], run["stress_pa"], degree=2)
     np.testing.assert_array_equal(cal.model.coefficients, ref.model.coefficients)

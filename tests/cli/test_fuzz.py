@@ -65,7 +65,7 @@ COLLECT = os.environ.get("FSRLAB_FUZZ_COLLECT")
 
 # Cases per 10 000 of the slow commands (a valid acquire takes ~0.5 s, a valid design ~60 ms);
 # the rest of the cases are split evenly among the other commands.
-SLOW = {"acquire": 60, "virtual-device": 80, "paper": 30, "design": 500}
+SLOW = {"acquire": 60, "virtual-device": 80, "paper": 30, "design": 500, "weights": 60, "measure": 60, "loadcell": 60}
 
 
 def _examples(name: str) -> int:
@@ -101,6 +101,12 @@ VALID_FOR = {
     ("virtual-device", "--corrupt"): ["0", "0.1"], ("virtual-device", "--drop"): ["0", "0.1"],
     ("calibrate", "--folds"): ["2", "3", "5"], ("calibrate", "--degree"): ["auto", "1", "2", "3"],
     ("iso376", "--degree"): ["1", "2", "3"], ("repeatability", "--ddof"): ["0", "1"],
+    ("weights", "--masses"): ["0,100g", "0,50g,100g", "0,0.2kg"], ("weights", "--x"): ["frequency_hz", "voltage_v"],
+    ("weights", "--window"): ["20ms", "0.02"], ("weights", "--settle-windows"): ["2", "3"],
+    ("weights", "--repeat"): ["1", "2"], ("weights", "--hold"): ["20ms", "40ms"], ("weights", "--timeout"): ["0.2s"],
+    ("weights", "--max-drift"): ["5%", "0.5"], ("loadcell", "--window"): ["20ms", "50ms"],
+    ("loadcell", "--hx711-rate"): ["10", "80"], ("acquire", "--hx711-rate"): ["10", "80"],
+    ("measure", "--window"): ["20ms", "50", "100ms"],
 }
 # Choices of the text options (plus words from each option's help, so new options get theirs).
 CHOICES = {
@@ -109,6 +115,7 @@ CHOICES = {
     "--x": ["frequency_hz", "duty_cycle", "voltage_v", "c_fsr_farad"],
     "--creep": ["0.00201,0.00202", "1,1.001", "nan,1", "1", "a,b", "1,2,3", "1e308,1"],
     "--port": ["nodev", "sub"],
+    "ACTION": ["tare", "scale"], "action": ["tare", "scale"],
 }
 
 
@@ -163,13 +170,23 @@ FORCED = {
     "acquire": lambda draw: ["--virtual", "--quiet", "--duration", draw(SHORT_DURATIONS)],
     "virtual-device": lambda draw: ["--duration", draw(SHORT_DURATIONS)],
     "paper": lambda draw: ["--out", draw(NOT_A_DIRECTORY)],
+    # The recording commands run in real time: virtual, short windows, few steps (or a bad value).
+    "weights": lambda draw: ["--virtual", "--quiet", "--window", "20ms", "--settle-windows", "2", "--hold", "20ms",
+                             "--timeout", draw(st.sampled_from(["0.2s", "0.1", "0", "abc"])), "--repeat",
+                             draw(st.sampled_from(["1", "2", "0", "-1"]))],
+    "measure": lambda draw: ["--virtual", "--quiet", "--duration", draw(SHORT_DURATIONS)],
+    "loadcell": lambda draw: ["--virtual", "--window", "20ms", "--duration",
+                              draw(st.sampled_from(["0.1", "0.2s", "0", "-1", "abc", "1m"]))],
 }
 LEFT_OUT = {("oscillator", "--spice"), ("acquire", "--virtual"), ("acquire", "--duration"), ("acquire", "--quiet"),
-            ("virtual-device", "--duration"), ("paper", "--out")}
+            ("virtual-device", "--duration"), ("paper", "--out"), ("weights", "--virtual"), ("weights", "--quiet"),
+            ("weights", "--window"), ("weights", "--settle-windows"), ("weights", "--hold"), ("weights", "--timeout"),
+            ("weights", "--repeat"), ("measure", "--virtual"), ("measure", "--duration"), ("measure", "--quiet"),
+            ("loadcell", "--virtual"), ("loadcell", "--window"), ("loadcell", "--duration")}
 
 # The virtual device's start-up time grows with --period (~20 s at 50k s, a finding: see
 # test_known_virtual_device_start_up_does_not_grow_with_period): periods above 60 s are left out.
-CAPPED = {("acquire", "--period"), ("virtual-device", "--period")}
+CAPPED = {("acquire", "--period"), ("virtual-device", "--period"), ("measure", "--period")}
 
 
 def _cap(text: str) -> str:
@@ -193,7 +210,7 @@ def _strategies(command: str, param) -> tuple:
     valid = VALID_FOR.get((command, opt)) or CHOICES.get(opt) or (
         VALID[kind] if kind in VALID else (_words(param) or ["x"]))
     text = TEXT
-    if command == "acquire" and opt == "--port":  # never "auto": a USB search of this machine
+    if opt == "--port":  # never "auto": a USB search of this machine
         text = TEXT.map(lambda t: "x" if t.strip() == "auto" else t)
     bad = st.one_of(st.sampled_from(GARBAGE), ENG, RKM, text, st.sampled_from(OTHER_UNITS),
                     st.sampled_from(_words(param) or GARBAGE))

@@ -2,7 +2,8 @@
 
 Reference: simavr (the C harness firmware/sim/fsrlab_sim.c drives D8 with exact square waves and
 feeds USART0); frames are decoded with the host's own parser (fsrlab.acquisition.protocol), so
-firmware and host are checked against each other and against protocol v1 (docs/protocol.md).
+firmware and host are checked against each other and against protocol v2 (docs/protocol.md).
+The HX711 reference is tested in test_firmware_hx711.py.
 
 Tolerance: quantization. A captured timestamp in the simulation lies within -0.5..+3.5 ticks of
 the ideal edge (the edge is rounded to a cycle and applied at the end of the running
@@ -79,7 +80,7 @@ def test_boot_id_frame_and_clean_stream(fw):
     assert r.frames, r.raw
     first = r.frames[0]
     assert (first.kind, first.seq) == ("ID", 0)
-    assert first.fields == ("fsrlab-meter", "1.0.0", "1", "16000000")
+    assert first.fields == ("fsrlab-meter", "2.0.0", "2", "16000000")
     assert r.parser.bad_checksum == 0 and r.parser.malformed == 0 and r.parser.garbage_bytes == 0
     assert not r.of_kind("M"), "windows run only after START"
 
@@ -181,7 +182,7 @@ def test_no_signal_gives_zero_periods(fw):
 
 
 def _expected_reply(line: str):
-    """What protocol v1 says the device answers to `line` (from the host's parse_command)."""
+    """What the protocol says the device answers to `line` (from the host's parse_command)."""
     try:
         word, value = parse_command(line.encode("ascii"))
     except CommandError as e:
@@ -241,7 +242,7 @@ def test_firmware_frames_survive_the_host_parser_in_chunks(fw):
     for i in range(0, len(r.raw), 7):
         frames += p.feed(r.raw[i:i + 7])
     assert [f.encode() for f in frames] == [f.encode() for f in r.frames]
-    assert all(len(f.encode()) <= 96 for f in frames)
+    assert all(len(f.encode()) <= 112 for f in frames)  # protocol v2 line limit
 
 
 @pytest.mark.parametrize("duty", [0.05, 0.5, 0.95])
@@ -326,7 +327,7 @@ def test_a_gap_in_the_signal_is_no_period(fw):
 @pytest.mark.parametrize("duty", [0.05, 0.5, 0.95])
 def test_above_the_limit_a_window_without_missed_edges_is_right(fw, duty):
     # honesty across 40 kHz .. 500 kHz: either the window reports missed edges, or its values are
-    # within the quantization bound; and the frames stay valid protocol v1
+    # within the quantization bound; and the frames stay valid protocol v2
     # (0.4 s: just above the limit the frames lag their windows by up to ~0.1 s)
     for f in [40e3 * (500e3 / 40e3) ** (i / 11) for i in range(12)]:
         r = fw.run([Segment(0.0, f, duty)], [(0.01, "START")], time_s=0.4)

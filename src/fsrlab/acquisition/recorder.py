@@ -19,6 +19,14 @@ system call, ``fsync`` about every second). Consequences:
 - Corrupted bytes on the link are counted by the parser and never reach the file; lost frames show
   as gaps in ``seq`` and are counted as ``dropped``; a device reset is detected, the settings are
   sent again and recording goes on.
+
+The reference force (protocol version 2, a load cell read by an HX711): each row of a version-2
+device gets ``reference_raw`` (the window's mean raw HX711 counts) and ``force_n`` (those counts
+through a load-cell calibration, :class:`~fsrlab.acquisition.loadcell.LoadCellCalibration`), both
+empty — never 0 — in a window without a conversion (no HX711, or a 10 samples/s one between
+conversions) or, for ``force_n``, without a calibration; such windows are counted
+(:attr:`RecordResult.no_reference`). With a sensor area, ``stress_pa = force_n / area``. A
+version-1 device records as before, without these columns.
 """
 
 from __future__ import annotations
@@ -29,7 +37,7 @@ import threading
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Sequence
 
 from fsrlab.acquisition.messages import Identity, Measurement
 from fsrlab.acquisition.protocol import (
@@ -37,11 +45,14 @@ from fsrlab.acquisition.protocol import (
 )
 from fsrlab.acquisition.serial_link import DeviceGone, LinkError, SerialLink
 
-__all__ = ["COLUMNS", "FAILED_ENDINGS", "Gap", "RecordStatus", "RecordResult", "default_stall_s", "record",
+__all__ = ["COLUMNS", "REFERENCE_COLUMNS", "FAILED_ENDINGS", "Gap", "RecordStatus", "RecordResult", "default_stall_s", "record",
            "result_dict", "stats_dict"]
 
 COLUMNS = ("time_s", "frequency_hz", "duty_cycle", "voltage_v", "periods", "missed", "range", "seq")
 """Run columns written for every window (``stress_pa`` is added when a reference is given)."""
+
+REFERENCE_COLUMNS = ("reference_raw", "force_n")
+"""Columns added for a protocol-version-2 device (the load cell's reference)."""
 
 FAILED_ENDINGS = ("disconnected", "error", "failed", "stalled", "empty")
 """Values of :attr:`RecordResult.ended` for a run that did not end as asked (the CLI exits with 1)."""
@@ -144,6 +155,11 @@ class RecordResult:
         The device.
     gaps : tuple of Gap
         Silences longer than the stall time, in order.
+    reference : bool
+        Whether the device sends a reference (protocol version 2: ``reference_raw``, ``force_n``).
+    no_reference : int
+        Rows written without a load-cell conversion (``reference_raw`` empty): no HX711, a
+        disconnected one, or a slow one between conversions.
     """
 
     frames: int
@@ -155,6 +171,8 @@ class RecordResult:
     stats: ParserStats
     identity: Identity | None
     gaps: tuple[Gap, ...] = ()
+    reference: bool = False
+    no_reference: int = 0
 
     @property
     def failed(self) -> bool:
@@ -192,7 +210,9 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
            status_interval_s: float = 0.25, sync_interval_s: float = 1.0,
            handshake_timeout_s: float = 3.0, stall_s: float | None = None,
            on_event: Callable[[str], None] | None = None, health: Callable[[], str | None] | None = None,
-           overwrite: bool = False) -> RecordResult:
+           overwrite: bool = False, loadcell=None, area_m2: float | None = None,
+           extra_columns: Sequence[str] = (), on_row: Callable[[Measurement, dict], dict | None] | None = None,
+           final_metadata: Callable[[], dict] | None = None) -> RecordResult:
     """Record ``duration_s`` seconds of measurement windows into a run file.
 
     Parameters
@@ -231,6 +251,19 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
     overwrite : bool
         Replace an existing run. Without it an existing CSV or sidecar raises
         ``FileExistsError`` before the device is touched.
+    loadcell : LoadCellCalibration, optional
+        Turns the raw counts into ``force_n`` (:mod:`fsrlab.acquisition.loadcell`); stored in the
+        sidecar (``load_cell``). Without one ``force_n`` stays empty.
+    area_m2 : float, optional
+        Sensor area: ``stress_pa = force_n / area_m2`` when no ``reference`` is given. [m²]
+    extra_columns : sequence of str
+        More columns, filled by ``on_row``.
+    on_row : callable, optional
+        ``on_row(measurement, row) -> row or None`` before each row is written: may add the extra
+        columns, or return None to leave the window out (e.g. ``fsrlab weights`` keeps the steady
+        windows only). It may set ``stop`` to end the recording.
+    final_metadata : callable, optional
+        ``final_metadata() -> dict`` merged into the sidecar when the run is closed (however it ends).
 
     Returns
     -------
@@ -259,6 +292,10 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
     stall_s = default_stall_s(window_ms) if stall_s is None else float(stall_s)
     if not stall_s > window_ms / 1000.0:
         raise ValueError(f"stall_s must be longer than one window ({window_ms / 1000.0:g} s), got {stall_s!r}")
+    if area_m2 is not None and not (math.isfinite(area_m2) and area_m2 > 0):
+        raise ValueError(f"area_m2 must be > 0 m², got {area_m2!r}")
+    if loadcell is not None and not loadcell.scaled:
+        raise ValueError("loadcell: the load-cell calibration has a tare but no scale factor; run fsrlab loadcell scale")
     path = Path(path)
     if not overwrite:
         for existing in (path, sidecar_path(path)):
@@ -267,8 +304,16 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
     ident = link.handshake(timeout_s=handshake_timeout_s)
     link.stop()  # a device left running by a previous session: start from a clean state
     first_seq = _configure(link, window_ms, range_)
-    columns = list(COLUMNS) + (["stress_pa"] if reference is not None else [])
+    has_ref = ident.protocol_version >= 2
+    stress_from_force = reference is None and area_m2 is not None and loadcell is not None and has_ref
+    columns = list(COLUMNS) + (["stress_pa"] if reference is not None or stress_from_force else [])
+    columns += [c for c in (REFERENCE_COLUMNS if has_ref else ()) if c not in columns]
+    columns += [c for c in extra_columns if c not in columns]
     meta = dict(metadata or {})
+    if loadcell is not None:
+        meta["load_cell"] = loadcell.to_dict()
+    if area_m2 is not None:
+        meta["sensor"] = {**(meta.get("sensor") or {}), "area_m2": area_m2}
     meta.setdefault("origin", f"fsrlab acquire from {link.port}")
     meta["acquisition"] = {"port": link.port, "baud": link.baud, "device": ident.name,
                            "firmware_version": ident.firmware_version, "protocol_version": ident.protocol_version,
@@ -287,7 +332,8 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
         raise
     t_start = time.monotonic()
     t_end = t_start + duration_s
-    frames, ended, message, dropped = 0, "duration", "", 0
+    frames, ended, message, dropped, no_ref = 0, "duration", "", 0, 0
+    cell_ok: int | None = None  # the HX711's last state (ref_ok), to say when it goes or comes back
     anchor_ms: int | None = None  # device t_ms at START (start of the first window after it)
     offset_s = 0.0
     last: Measurement | None = None
@@ -355,6 +401,26 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
                     if reference is not None:
                         value = reference(frame)
                         row["stress_pa"] = value if value is not None and math.isfinite(value) else None
+                    if has_ref and m.ref_ok != cell_ok:
+                        if m.ref_ok == 0:
+                            event(f"no load cell: the meter reports no HX711 (ref_ok 0) from {row['time_s']:.1f} s into "
+                                  "the run; reference_raw and force_n stay empty")
+                        elif cell_ok == 0:
+                            event(f"load cell answering again from {row['time_s']:.1f} s into the run")
+                        cell_ok = m.ref_ok
+                    if has_ref:
+                        raw = m.ref_mean if m.ref_n > 0 else None  # empty, never 0, without a conversion
+                        force = loadcell.force(raw) if raw is not None and loadcell is not None else None
+                        row["reference_raw"], row["force_n"] = raw, force
+                        if stress_from_force:
+                            row["stress_pa"] = force / area_m2 if force is not None else None
+                    if on_row is not None:
+                        row = on_row(m, row)
+                        if row is None:
+                            last = m
+                            continue
+                    if has_ref and row.get("reference_raw") is None:
+                        no_ref += 1
                     try:
                         writer.write(row)
                     except OSError as exc:
@@ -425,10 +491,18 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
             {"ended": ended, "frames": frames, "dropped": dropped, "resets": st.resets,
              "bad_checksum": st.bad_checksum, "malformed": st.malformed, "garbage_bytes": st.garbage_bytes,
              "recorded_s": round(duration, 3)})
+        if has_ref:
+            writer.metadata["acquisition"]["no_reference"] = no_ref
         writer.metadata["gaps"] = [g.to_dict() for g in gaps]
         writer.metadata["ended"] = message
+        if final_metadata is not None:
+            try:
+                writer.metadata.update(final_metadata())
+            except Exception as exc:  # noqa: BLE001 - the rows are what matters; say what is missing
+                writer.metadata["final_metadata_error"] = f"{type(exc).__name__}: {exc}"
         writer.close()
-    return RecordResult(frames, dropped, duration, path, ended, message, parser.stats(), ident, tuple(gaps))
+    return RecordResult(frames, dropped, duration, path, ended, message, parser.stats(), ident, tuple(gaps),
+                        has_ref, no_ref)
 
 
 def result_dict(result: RecordResult) -> dict:
@@ -442,10 +516,15 @@ def result_dict(result: RecordResult) -> dict:
     Returns
     -------
     dict
-        ``frames``, ``dropped``, ``duration_s`` [s] (rounded to ms) and ``file``, in this order.
+        ``frames``, ``dropped``, ``duration_s`` [s] (rounded to ms) and ``file``, in this order; then,
+        for a device with a reference (protocol version 2), ``no_reference``: rows without a load-cell
+        conversion.
     """
-    return {"frames": result.frames, "dropped": result.dropped, "duration_s": round(result.duration_s, 3),
-            "file": str(result.file)}
+    out = {"frames": result.frames, "dropped": result.dropped, "duration_s": round(result.duration_s, 3),
+           "file": str(result.file)}
+    if result.reference:
+        out["no_reference"] = result.no_reference
+    return out
 
 
 def stats_dict(stats: ParserStats) -> dict:

@@ -13,7 +13,11 @@ for tests. :class:`PhysicsSource` is the default: a stress profile (:class:`Stre
 the meter's model, :func:`fsrlab.acquisition.meter.measure`, window by window (the same model makes
 the synthetic runs): rising edges on a continuous phase, edge times with jitter quantized to
 62.5 ns Timer1 ticks, whole periods per window, the high times summed with their quantization
-noise, the 10-bit A0 conversion. Optional faults (:class:`Faults`) corrupt, drop or add bytes,
+noise, the 10-bit A0 conversion. The load cell under the sensor and its HX711
+(:mod:`fsrlab.acquisition.loadcell`, :class:`~fsrlab.acquisition.loadcell.LoadCellModel`) see the
+applied force, stress × the sensor's area, and fill the ``M`` frame's reference (protocol version 2:
+``ref_ok``, ``ref_n``, ``ref_mean``) with their own conversion times, noise and lag; ``load_cell=None``
+emulates a meter without an HX711 (``ref_ok`` 0). Optional faults (:class:`Faults`) corrupt, drop or add bytes,
 reset the device or unplug it, for tests.
 
 References
@@ -36,6 +40,7 @@ from typing import Protocol
 
 import numpy as np
 
+from fsrlab.acquisition.loadcell import LoadCellModel, window_reference
 from fsrlab.acquisition.meter import MeterState, measure
 from fsrlab.acquisition.protocol import (
     DEVICE_NAME, F_CPU, MAX_COMMAND, PROTOCOL_VERSION, SEQ_MODULO, UINT32_MODULO, WINDOW_MS_DEFAULT, CommandError,
@@ -43,6 +48,7 @@ from fsrlab.acquisition.protocol import (
 )
 from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout
 from fsrlab.physics.params import PAPER_CIRCUIT, PAPER_OPAMP
+from fsrlab.physics.sensor import A201_AREA_M2
 
 __all__ = ["FIRMWARE_VERSION", "Signal", "SignalSource", "ConstantSource", "StressProfile", "PhysicsSource",
            "Faults", "VirtualDevice", "PROFILE_KINDS", "VIRTUAL_CIRCUIT"]
@@ -101,16 +107,24 @@ class ConstantSource:
         Voltage on A0. [V]
     stress_pa : float
         Reference stress reported by :meth:`VirtualDevice.reference`. [Pa]
+    area_m2 : float
+        Sensor area, for the force on the load cell (stress × area; NaN stress: no force). [m²]
     """
 
     frequency_hz: float = 5000.0
     duty_cycle: float = 0.5
     voltage_v: float = 1.0
     stress_pa: float = math.nan
+    area_m2: float = A201_AREA_M2
 
     def window(self, t0_s: float, t1_s: float, range_: int) -> Signal:
         """The same :class:`Signal` for every window."""
         return Signal(self.frequency_hz, self.duty_cycle, self.voltage_v, self.stress_pa)
+
+    def force_n(self, t_s) -> np.ndarray:
+        """Force on the load cell at times ``t_s`` [s]: stress × area, 0 when the stress is unknown. [N]"""
+        f = self.stress_pa * self.area_m2 if math.isfinite(self.stress_pa) else 0.0
+        return np.full(np.shape(t_s), f)
 
 
 @dataclass(frozen=True)
@@ -217,6 +231,10 @@ class PhysicsSource:
                 "sensor": {"model": "VirtualFSR (FlexiForce A201-like, fsrlab.physics.sensor)",
                            "area_m2": self.sensor.area_m2}}
 
+    def force_n(self, t_s) -> np.ndarray:
+        """Applied force at times ``t_s`` since START [s]: the profile's stress × the sensor's area. [N]"""
+        return self.profile.stress(t_s) * self.sensor.area_m2
+
     def _index(self, t_s: np.ndarray) -> np.ndarray:
         period = self.profile.period_s
         t = np.where(t_s < 2 * period, t_s, period + np.mod(t_s - period, period))
@@ -306,6 +324,10 @@ class VirtualDevice:
         Fault injection for tests.
     seed : int, optional
         Random seed (noise and faults).
+    load_cell : LoadCellModel or None
+        The load cell and HX711 under the sensor (default :class:`LoadCellModel()`: 80 samples/s);
+        None: no HX711 (``ref_ok`` 0 in every frame). Its noise has a random stream of its own, so
+        the 555's and A0's numbers for a seed do not depend on it.
 
     Notes
     -----
@@ -318,7 +340,8 @@ class VirtualDevice:
     """
 
     def __init__(self, source: SignalSource | None = None, frequency_noise: float = 1e-3, jitter_s: float = 20e-9,
-                 adc_noise_v: float = 2e-3, faults: Faults | None = None, seed: int | None = None) -> None:
+                 adc_noise_v: float = 2e-3, faults: Faults | None = None, seed: int | None = None,
+                 load_cell: LoadCellModel | None = LoadCellModel()) -> None:
         for name, v in (("frequency_noise", frequency_noise), ("jitter_s", jitter_s), ("adc_noise_v", adc_noise_v)):
             if not v >= 0:
                 raise ValueError(f"{name} must be >= 0, got {v!r}")
@@ -326,6 +349,10 @@ class VirtualDevice:
         self.frequency_noise, self.jitter_s, self.adc_noise_v = frequency_noise, jitter_s, adc_noise_v
         self.faults = faults or Faults()
         self._rng = np.random.default_rng(seed)
+        if load_cell is not None and not isinstance(load_cell, LoadCellModel):
+            raise ValueError(f"load_cell must be a LoadCellModel or None, got {type(load_cell).__name__}")
+        self.load_cell = load_cell
+        self._cell_rng = np.random.default_rng(None if seed is None else [seed, 711])
         self._master: int | None = None
         self._slave: int | None = None
         self.port: str | None = None
@@ -403,6 +430,18 @@ class VirtualDevice:
         if self.error is None:
             return None
         return " ".join(f"device thread failed: {type(self.error).__name__}: {self.error}".split())
+
+    def time_since_start(self) -> float:
+        """Time since ``START`` on the device's clock, the signal source's time (NaN when stopped). [s]"""
+        st = self._st
+        return self._now() - st.start_time if st.started else math.nan
+
+    def _force_at(self, sig: Signal):
+        source_force = getattr(self.source, "force_n", None)
+        if callable(source_force):
+            return source_force
+        f = sig.stress_pa * A201_AREA_M2 if math.isfinite(sig.stress_pa) else 0.0  # a source without a force
+        return lambda t: np.full(np.shape(t), f)
 
     def reference(self, seq: int) -> float:
         """Stress [Pa] the device applied during the window sent with sequence number ``seq`` (NaN if unknown)."""
@@ -496,8 +535,10 @@ class VirtualDevice:
                               rng=self._rng, start_s=t0, frequency_noise=self.frequency_noise,
                               jitter_s=self.jitter_s, adc_noise_v=self.adc_noise_v)
         u32 = UINT32_MODULO - 1
+        ref = window_reference(self.load_cell, self._force_at(sig), t0 - st.start_time, t1 - st.start_time,
+                               rng=self._cell_rng)
         fields = (int(t1 * 1000) % UINT32_MODULO, st.current_ms, int(m.periods[0]), min(int(m.sum_period_ticks[0]), u32),
-                  min(int(m.sum_high_ticks[0]), u32), 0, int(m.adc[0]), st.range_, 0, 0, 0)  # no load cell yet
+                  min(int(m.sum_high_ticks[0]), u32), 0, int(m.adc[0]), st.range_, ref.ref_ok, ref.ref_n, ref.ref_mean)
         fault = self.faults
         st.m_frames += 1
         if fault.reset_after is not None and st.m_frames > fault.reset_after and st.resets_done == 0:

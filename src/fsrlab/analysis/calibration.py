@@ -398,6 +398,27 @@ class Calibration:
         calibration file written before fsrlab recorded it).
     path : Path or None
         The file the calibration was read from (not stored in the file).
+    family : FamilyModel or None
+        The chosen model when it is not ``model`` itself (a conductance or power-law family,
+        :mod:`fsrlab.analysis.models`); None: the polynomial ``model`` is the calibration.
+    lag_s : float or None
+        Lag applied when fitting: the readout at t went with the reference at ``t − lag_s``
+        (:mod:`fsrlab.analysis.alignment`); None when the run had no time column. [s]
+    floor : Floor or None
+        The readout's floor (dead zone): readings at it are "below activation".
+    memory : MemoryModel or None
+        The causal hysteresis compensation (:mod:`fsrlab.analysis.memory`).
+    uncertainty : Uncertainty or None
+        Standard uncertainty per estimate by level and direction (:mod:`fsrlab.analysis.memory`),
+        of the estimate as applied by default (with the compensation when there is one).
+    uncertainty_plain : Uncertainty or None
+        The same for the estimate without the compensation (only when there is one).
+    candidates : list of dict
+        Every candidate model's cross-validated RMSE (``model``, ``cv_rmse``, ``parameters``).
+    cv_rmse : float or None
+        Cross-validated RMSE of the estimate as applied (with the compensation when fitted). [unit of y]
+    full_scale : float or None
+        Full scale of the reference (its range over the calibration data). [unit of y]
     """
 
     model: PolynomialModel
@@ -419,6 +440,20 @@ class Calibration:
     compensation_he_percent: tuple[float, float] | None = None
     recorded_with: "RecordedWith | None" = None
     path: Path | None = None
+    family: Any = None
+    lag_s: float | None = 0.0
+    floor: Any = None
+    memory: Any = None
+    uncertainty: Any = None
+    uncertainty_plain: Any = None
+    candidates: list = field(default_factory=list)
+    cv_rmse: float | None = None
+    full_scale: float | None = None
+
+    @property
+    def model_name(self) -> str:
+        """The chosen model: ``polynomial-3``, ``conductance-power``, ..."""
+        return self.family.name if self.family is not None else f"polynomial-{self.degree}"
 
     @property
     def degree(self) -> int:
@@ -431,8 +466,8 @@ class Calibration:
         return (self.model.center - self.model.half_width, self.model.center + self.model.half_width)
 
     def __call__(self, x) -> np.ndarray:
-        """y estimated from readout ``x`` by the polynomial."""
-        return self.model(x)
+        """y estimated from readout ``x`` by the chosen model (without compensation)."""
+        return self.model(x) if self.family is None else self.family(x)
 
     def inverse(self, y, points: int = 8193) -> np.ndarray:
         """Readout x that the calibration maps to ``y`` (e.g. the frequency expected at a stress).

@@ -9,6 +9,14 @@ compensation; and, for the checks of ``fsrlab apply``, the calibrated readout ra
 (``"recorded_with"``: :meth:`fsrlab.analysis.provenance.RecordedWith.to_dict`, the run's LM555
 circuit and op-amp readout, and the values of its ``range`` column, each null when unknown).
 
+Since issue 12 the file also holds the chosen model when it is not the polynomial
+(``"model_family"``: :meth:`fsrlab.analysis.models.FamilyModel.to_dict`), the lag applied when
+fitting (``"lag_s"``), the readout's floor (``"floor"``), the causal compensation (``"memory"``:
+:meth:`fsrlab.analysis.memory.MemoryModel.to_dict`, kept apart from the earlier ``"compensation"``
+so that an earlier fsrlab still reads the file and applies the polynomial), the uncertainty table
+(``"uncertainty"``, and ``"uncertainty_plain"`` for the estimate without the compensation), every candidate's cross-validated error (``"candidates"``), ``"cv_rmse"`` and
+``"full_scale"``. Files without these keys load as before (no lag, no floor, no uncertainty).
+
 Earlier files are read too: those written before the circuit objects stored the decoding circuit
 as ``"decode": {"r_ohm", "c_off_farad", "diode", "diode_drop_v"}`` (read as that circuit); those
 without ``"recorded_with"`` load with ``Calibration.recorded_with = None`` (nothing to check a run
@@ -37,7 +45,9 @@ CALIBRATION_FORMAT = "fsrlab-calibration"
 # Keys this module writes or reads; any other key of a file is kept in ``Calibration.extra``.
 _KNOWN = {"format", "version", "model", "basis", "x", "y", "units", "degree", "chebyshev_coefficients", "x_center",
           "x_half_width", "coefficients", "coefficients_note", "metrics", "cross_validation", "data_fingerprint",
-          "created", "circuit", "decode", "source", "compensation", "readout_range", "recorded_with"}
+          "created", "circuit", "decode", "source", "compensation", "readout_range", "recorded_with",
+          "model_family", "lag_s", "floor", "memory", "uncertainty", "candidates", "cv_rmse", "full_scale",
+          "uncertainty_plain"}
 
 
 def calibration_to_dict(cal: Calibration) -> dict[str, Any]:
@@ -59,7 +69,7 @@ def calibration_to_dict(cal: Calibration) -> dict[str, Any]:
     d = {
         "format": CALIBRATION_FORMAT,
         "version": 1,
-        "model": "polynomial",
+        "model": cal.model_name if cal.family is not None else "polynomial",
         "basis": "chebyshev",
         "x": cal.x_name, "y": cal.y_name,
         "units": {"x": cal.x_unit, "y": cal.y_unit},
@@ -79,6 +89,20 @@ def calibration_to_dict(cal: Calibration) -> dict[str, Any]:
         "readout_range": list(cal.x_range),
         "recorded_with": None if cal.recorded_with is None else cal.recorded_with.to_dict(),
     }
+    d.update({
+        "model_family": None if cal.family is None else cal.family.to_dict(),
+        "lag_s": cal.lag_s,
+        "floor": None if cal.floor is None else cal.floor.to_dict(),
+        "memory": None if cal.memory is None else cal.memory.to_dict(),
+        "uncertainty": None if cal.uncertainty is None else cal.uncertainty.to_dict(),
+        "uncertainty_plain": None if cal.uncertainty_plain is None else cal.uncertainty_plain.to_dict(),
+        "candidates": cal.candidates,
+        "cv_rmse": cal.cv_rmse,
+        "full_scale": cal.full_scale,
+    })
+    if cal.memory is not None and cal.compensation_he_percent is not None:
+        d["memory"]["hysteresis_error_before_percent"], d["memory"]["hysteresis_error_after_percent"] = \
+            cal.compensation_he_percent
     if cal.compensation is not None:
         d["compensation"] = cal.compensation.to_dict()
         if cal.compensation_he_percent is not None:
@@ -117,6 +141,8 @@ def calibration_from_dict(d: dict) -> Calibration:
         An entry missing or malformed.
     """
     from fsrlab.analysis.compensation import DirectionAwareCalibration
+    from fsrlab.analysis.memory import MemoryModel, Uncertainty
+    from fsrlab.analysis.models import FamilyModel, Floor
     from fsrlab.analysis.provenance import RecordedWith
     from fsrlab.circuits.circuit import LM555Circuit
 
@@ -128,8 +154,14 @@ def calibration_from_dict(d: dict) -> Calibration:
     parts = d.get("circuit") if "circuit" in d else d.get("decode")
     comp = d.get("compensation")
     he = None
-    if comp and "hysteresis_error_before_percent" in comp:
-        he = (float(comp["hysteresis_error_before_percent"]), float(comp["hysteresis_error_after_percent"]))
+    mem = d.get("memory")
+    for holder in (comp, mem):
+        if holder and "hysteresis_error_before_percent" in holder:
+            he = (float(holder["hysteresis_error_before_percent"]), float(holder["hysteresis_error_after_percent"]))
+    lag = d.get("lag_s", 0.0)
+    if lag is not None and not np.isfinite(float(lag)):
+        raise ValueError("lag_s must be a finite number of seconds or null")
+    fam, fl, unc, unc0 = d.get("model_family"), d.get("floor"), d.get("uncertainty"), d.get("uncertainty_plain")
     return Calibration(
         model=_model(d), x_name=d["x"], y_name=d["y"], x_unit=d["units"]["x"], y_unit=d["units"]["y"],
         r2=met.get("r2", float("nan")), rmse=met.get("rmse", float("nan")),
@@ -138,7 +170,14 @@ def calibration_from_dict(d: dict) -> Calibration:
         circuit=None if not parts else LM555Circuit.from_dict(parts), source=d.get("source", ""),
         extra={k: v for k, v in d.items() if k not in _KNOWN},
         compensation=DirectionAwareCalibration.from_dict(comp) if comp else None, compensation_he_percent=he,
-        recorded_with=RecordedWith.from_dict(d["recorded_with"]) if d.get("recorded_with") is not None else None)
+        recorded_with=RecordedWith.from_dict(d["recorded_with"]) if d.get("recorded_with") is not None else None,
+        family=None if fam is None else FamilyModel.from_dict(fam), lag_s=None if lag is None else float(lag),
+        floor=None if fl is None else Floor.from_dict(fl), memory=None if mem is None else MemoryModel.from_dict(mem),
+        uncertainty=None if unc is None else Uncertainty.from_dict(unc),
+        uncertainty_plain=None if unc0 is None else Uncertainty.from_dict(unc0),
+        candidates=list(d.get("candidates") or []),
+        cv_rmse=None if d.get("cv_rmse") is None else float(d["cv_rmse"]),
+        full_scale=None if d.get("full_scale") is None else float(d["full_scale"]))
 
 
 def save_calibration(cal: Calibration, path: str | os.PathLike) -> Path:

@@ -33,7 +33,7 @@ from contextlib import contextmanager
 
 import numpy as np
 
-from fsrlab.analysis.calibration import Calibration, calibrate, default_groups
+from fsrlab.analysis.calibration import Calibration, PolynomialModel, calibrate, default_groups
 from fsrlab.analysis.cycles import RunHysteresis, row_cycles, row_directions, run_hysteresis
 from fsrlab.circuits.circuit import LM555Circuit, readout_from_metadata
 from fsrlab.runformat import KNOWN_COLUMNS, Run, RunFormatError, load_run
@@ -49,6 +49,10 @@ __all__ = [
     "decode_capacitance",
     "run_readout",
     "calibrate_run",
+    "run_reference",
+    "binned_hysteresis_percent",
+    "live_estimator",
+    "LiveEstimator",
     "run_recorded_with",
     "check_readout",
     "apply_calibration",
@@ -63,6 +67,13 @@ IN_RANGE_COLUMN = "in_range"
 #: Default margin beyond the calibrated readout range, as a fraction of its span, within which an
 #: estimate is still written (extrapolated, flagged); beyond it the estimate is left empty. [1]
 MARGIN = 0.10
+#: Fewer readings than this: ``lag="auto"`` assumes no lag rather than searching (the search fits
+#: 22 weights per fold at every lag). [1]
+MIN_LAG_READINGS = 250
+#: Fewest cycles or time blocks for ``lag="auto"`` to search (else no lag is assumed). [1]
+MIN_LAG_GROUPS = 4
+#: Fewest readings (above the floor, with a reference) the causal compensation is fitted on. [1]
+MIN_COMPENSATION_READINGS = 60
 #: The decoded-capacitance variable of the physics-informed calibration. [F]
 C_FSR = "c_fsr_farad"
 
@@ -263,60 +274,371 @@ def run_readout(run: Run, x: str, circuit: LM555Circuit | None = None) -> tuple[
     return run[x], None
 
 
+def run_reference(run: Run, reference: str | None = None) -> tuple[np.ndarray, str, str]:
+    """The reference of a run: ``force_n`` [N] or ``stress_pa`` [Pa].
+
+    Parameters
+    ----------
+    run : Run
+        A loaded run.
+    reference : {"force_n", "stress_pa"}, optional
+        Which one (default: ``stress_pa`` when the run has it, else ``force_n``). ``stress_pa``
+        from a run with only ``force_n`` needs the sidecar's sensor area (:meth:`Run.stress_pa`).
+
+    Returns
+    -------
+    values : ndarray
+    name : str
+    unit : str
+        ``"N"`` or ``"Pa"``.
+
+    Raises
+    ------
+    ValueError
+        ``reference`` not one of the two.
+    RunFormatError
+        The run has no such reference.
+    """
+    if reference not in (None, "force_n", "stress_pa"):
+        raise ValueError(f"reference: must be force_n or stress_pa, got {reference!r}")
+    if reference is None:
+        reference = "stress_pa" if "stress_pa" in run else ("force_n" if "force_n" in run else None)
+    if reference is None:
+        raise RunFormatError(f"{run.path}: no reference: the run has neither 'force_n' nor 'stress_pa' "
+                             f"(columns: {', '.join(run.columns)})")
+    if reference == "stress_pa":
+        return run.stress_pa(), "stress_pa", "Pa"
+    return run["force_n"], "force_n", "N"
+
+
+def _oof(fam, x, y, groups, folds, transform, floor):
+    """Out-of-fold estimate of a model family (the chosen candidate refitted without each fold)."""
+    from fsrlab.analysis.models import fit_family
+
+    _, gi = np.unique(groups, return_inverse=True)
+    k = min(folds, int(gi.max()) + 1)
+    fold = (np.arange(int(gi.max()) + 1) % k)[gi]
+    out = np.full(x.size, np.nan)
+    for f in range(k):
+        tr = fold != f
+        try:
+            m = fit_family(fam, x[tr], y[tr], transform, floor)
+        except (ValueError, np.linalg.LinAlgError):
+            continue
+        with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+            out[~tr] = m(x[~tr])
+    return out
+
+
+def binned_hysteresis_percent(y, estimate, direction, bins: int = 10) -> float:
+    """Hysteresis error of a calibrated estimate on a run without whole cycles. [%]
+
+    Parameters
+    ----------
+    y : array_like
+        Reference (the level). [unit of y]
+    estimate : array_like
+        Calibrated estimate. [unit of y]
+    direction : array_like of int
+        +1 loading, −1 unloading (0 rows ignored), from the reference.
+    bins : int
+        Level bins over the reference's range.
+
+    Returns
+    -------
+    float
+        ``100·max_bins |mean error loading − mean error unloading| / FS``, FS the reference's range:
+        eq. (13) for a calibrated output (its loading and unloading curves at the same level differ
+        by the difference of their errors), on level bins instead of matched branches; NaN when no
+        bin holds both directions.
+    """
+    y = np.asarray(y, float)
+    e = np.asarray(estimate, float) - y
+    d = np.asarray(direction, int)
+    ok = np.isfinite(y) & np.isfinite(e)
+    y, e, d = y[ok], e[ok], d[ok]
+    fs = float(np.ptp(y)) if y.size else 0.0
+    if fs <= 0:
+        return float("nan")
+    b = np.clip(((y - y.min()) / fs * bins).astype(int), 0, bins - 1)
+    worst = float("nan")
+    for i in range(bins):
+        lo, un = e[(b == i) & (d > 0)], e[(b == i) & (d < 0)]
+        if lo.size >= 5 and un.size >= 5:
+            v = abs(lo.mean() - un.mean())
+            worst = v if not worst >= v else worst
+    return 100 * worst / fs
+
+
 def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", compensate: bool = False,
-                  folds: int = 5, circuit: LM555Circuit | None = None, threshold: float = 0.05) -> Calibration:
-    """Calibrate a run's readout to its reference stress.
+                  folds: int = 5, circuit: LM555Circuit | None = None, threshold: float = 0.05,
+                  reference: str | None = None, model: str = "auto", lag: float | str = "auto",
+                  max_lag_s: float | None = None, compensation_method: str = "memory") -> Calibration:
+    """Calibrate a run's readout to its reference (force or stress).
 
     Parameters
     ----------
     run : Run or path
-        A run with ``stress_pa`` (or ``force_n`` and the sensor area) and the readout.
+        A run with ``force_n`` or ``stress_pa`` and the readout.
     x : str
         Readout column, or ``c_fsr_farad`` (physics-informed, see :func:`run_readout`).
     degree : int or "auto"
-        Polynomial degree 1..5, or ``"auto"``: chosen by cross-validation keeping the run's
-        cycles whole (:func:`run_groups`).
+        Polynomial degree 1..5 (the model is then that polynomial), or ``"auto"``.
     compensate : bool
-        Also fit the direction-aware hysteresis compensation (an extension beyond the paper) and
-        record the hysteresis error of the calibrated stress before and after.
+        Also fit the causal hysteresis compensation (:mod:`fsrlab.analysis.memory`, an extension
+        beyond the paper) and record the hysteresis error of the estimate before and after.
     folds : int
         Cross-validation folds (≥ 2).
     circuit : LM555Circuit, optional
         Circuit for ``x="c_fsr_farad"`` (default: the sidecar's, else ``PAPER_CIRCUIT``).
     threshold : float
-        Reversal threshold, a fraction of the span, where branches come from the data. [1]
+        Reversal threshold, a fraction of the span, where cycles come from the data. [1]
+    reference : {"force_n", "stress_pa"}, optional
+        The reference (default: ``stress_pa`` when the run has it, else ``force_n``).
+    model : str
+        ``"auto"`` (every family, chosen by grouped CV), a family (``polynomial``,
+        ``conductance-polynomial``, ``conductance-power``, ``power``) or one candidate
+        (``polynomial-3``, ``conductance-polynomial-2``).
+    lag : float or "auto"
+        Lag of the readout behind the reference [s] (rows without ``time_s``), or ``"auto"``:
+        estimated (:func:`fsrlab.analysis.alignment.estimate_lag`) when the run has a ``time_s``
+        column, at least :data:`MIN_LAG_READINGS` usable readings and :data:`MIN_LAG_GROUPS`
+        cycles or time blocks, else 0.
+    max_lag_s : float, optional
+        Half-width of the lag search (default 0.25 s, :data:`fsrlab.analysis.alignment.MAX_LAG_S`). [s]
+    compensation_method : {"memory", "branches"}
+        The causal play-operator model, or the earlier offline branch polynomials
+        (:mod:`fsrlab.analysis.compensation`; needs whole cycles).
 
     Returns
     -------
     Calibration
-        With ``circuit`` set when C_FSR was decoded, ``compensation`` when asked, and
-        ``recorded_with`` (:func:`run_recorded_with` of the readings used).
+        ``model`` the best polynomial, ``family`` the chosen model when not a polynomial,
+        ``lag_s``, ``floor``, ``memory``, ``uncertainty``, ``candidates``, ``cv_rmse``.
 
     Raises
     ------
     RunFormatError
-        A column the run lacks.
+        A column the run lacks, no reference.
     ValueError
-        A parameter out of range, too few readings, no cycles to compensate.
+        A parameter out of range, too few readings, a readout that does not respond, a reference
+        that is mostly negative, a lag search without a minimum.
     """
+    from fsrlab.analysis.alignment import estimate_lag, shift_reference
+    from fsrlab.analysis.calibration import fit_metrics, fingerprint
+    from fsrlab.analysis.models import cross_validate_families, find_floor, resolution, transform_from_metadata
+
     run = _as_run(run)
-    stress = run.stress_pa()
+    y_raw, y_name, y_unit = run_reference(run, reference)
     values, used = run_readout(run, x, circuit)
     unit = run.units.get(x) or KNOWN_COLUMNS.get(x, "F" if x == C_FSR else "")
+    if compensation_method not in ("memory", "branches"):
+        raise ValueError(f"compensation_method: must be memory or branches, got {compensation_method!r}")
+    both = np.isfinite(values) & np.isfinite(y_raw)
+    if both.sum() < 3:
+        raise ValueError(f"{run.path}: {x} and {y_name}: fewer than 3 readings with both values present")
+    neg = float(np.mean(y_raw[both] < 0))
+    if neg > 0.5:
+        raise ValueError(f"{run.path}: {y_name}: the reference is mostly negative ({100 * neg:.0f} % of the readings "
+                         "below 0): a load cell mounted or wired the wrong way round, or the wrong column")
+    from fsrlab.analysis.hysteresis import check_response
+
+    try:
+        check_response(y_raw[both], values[both], x)
+    except ValueError as exc:
+        raise ValueError(f"{run.path}: {exc}") from None
+    t = run["time_s"] if "time_s" in run else np.arange(run.n_rows, dtype=float)
+    floor = find_floor(values[both], y_raw[both])
+    at_floor = floor.below(values) & np.isfinite(values) if floor is not None else np.zeros(run.n_rows, bool)
+    # No tare: the reference at the floor is not at zero load (anything below the activation force),
+    # and a constant offset of the load cell goes into the model's constant term.
+    y = y_raw
+    groups = default_groups(run.n_rows, row_cycles(np.where(np.isfinite(y), y, np.nan), *_recorded(run), threshold)
+                            if np.isfinite(y).all() else None, folds)
+    usable = np.isfinite(values) & ~at_floor
+    search, lag_note = None, None
     with _named(run, x):
-        cal = calibrate(values, stress, degree=degree, groups=run_groups(run, folds, threshold), folds=folds,
-                        x_name=x, y_name="stress_pa", x_unit=unit, y_unit="Pa", source=str(run.path), circuit=used)
-    cal.recorded_with = run_recorded_with(run, np.isfinite(values) & np.isfinite(stress))
-    if compensate:
+        if lag == "auto" and "time_s" not in run:
+            lag_value = 0.0  # rows without times: nothing says how far apart they are
+            lag_note = "not searched: the run has no time_s column, no lag assumed"
+        elif lag == "auto" and int((usable & np.isfinite(y)).sum()) < MIN_LAG_READINGS:
+            lag_value = 0.0  # too few readings to tell a lag from noise: none assumed
+            lag_note = f"not searched: fewer than {MIN_LAG_READINGS} readings, no lag assumed"
+        elif lag == "auto" and np.unique(groups[usable & np.isfinite(y)]).size < MIN_LAG_GROUPS:
+            # With 2 or 3 cycles each fold trains the hysteresis model on one or two of them, and on
+            # constant-rate triangles a shift can stand in for hysteresis: the error curve is noise.
+            lag_value = 0.0
+            lag_note = f"not searched: fewer than {MIN_LAG_GROUPS} cycles or time blocks, no lag assumed"
+        elif lag == "auto":
+            search = estimate_lag(t, values, y, groups, usable & np.isfinite(y), max_lag_s,
+                                  3 if degree == "auto" else int(degree), folds)
+            lag_value = float(f"{search.lag_s:.10g}")  # the grid's float noise (0.00999999...) off
+        else:
+            lag_value = float(lag)
+            if not np.isfinite(lag_value):
+                raise ValueError(f"lag: must be finite seconds or auto, got {lag!r}")
+    ys = shift_reference(t, y, lag_value)
+    ok = usable & np.isfinite(ys)
+    xs, yv, gs = values[ok], ys[ok], groups[ok]
+    transform = transform_from_metadata(x, run.metadata)
+    fams = ("polynomial", "conductance-polynomial", "conductance-power", "power")
+    only = None
+    if model != "auto":
+        fam, _, deg = model.rpartition("-")
+        if model in fams:
+            fams = (model,)
+        elif fam in ("polynomial", "conductance-polynomial") and deg.isdigit():
+            fams, only = (fam,), model
+        else:
+            raise ValueError(f"model: must be auto, {', '.join(fams)} or polynomial-1..5, conductance-polynomial-1..3, "
+                             f"got {model!r}")
+        if fams[0].startswith("conductance") and transform is None:
+            raise ValueError(f"model: {model} needs the readout circuit: a 'divider' (r_m_ohm, vcc_v) or 'opamp' in "
+                             "the run's sidecar with --x voltage_v, or --x c_fsr_farad")
+    if degree != "auto":
+        fams, only = ("polynomial",), f"polynomial-{int(degree)}"
+    with _named(run, x):
+        sel = cross_validate_families(xs, yv, gs, folds, transform, floor, families=fams,
+                                      degree=int(only.rpartition("-")[2]) if only and only.startswith("polynomial")
+                                      else None)
+        if only is not None and only in sel.models:
+            chosen = sel.models[only]
+            chosen_cv = next(c.cv_rmse for c in sel.candidates if c.name == only)
+        elif only is not None:
+            raise ValueError(f"model: {only} cannot be fitted: too few readings for it")
+        else:
+            chosen, chosen_cv = sel.best, sel.best_cv_rmse
+        # The polynomial of the calibration file: the chosen one, else the best polynomial (or a cubic).
+        polys = [c for c in sel.candidates if c.name.startswith("polynomial-")]
+        if chosen.family == "polynomial":
+            pname = chosen.name
+        elif polys:  # the lowest degree within 1 % of the best, as calibrate(degree="auto") chooses
+            best_poly = min(c.cv_rmse for c in polys)
+            pname = next(c.name for c in polys if c.cv_rmse <= 1.01 * best_poly)
+        else:
+            pname = "polynomial-3"
+        cal = calibrate(xs, yv, degree=int(pname.rpartition("-")[2]), x_name=x, y_name=y_name, x_unit=unit,
+                        y_unit=y_unit, source=str(run.path), circuit=used)
+        if pname in sel.models and degree == "auto":  # the same numbers as the selection (its sums)
+            p = sel.models[pname].params
+            cal.model = PolynomialModel(np.asarray(p["chebyshev_coefficients"], float), p["center"], p["half_width"])
+    from fsrlab.analysis.calibration import CrossValidation
+
+    poly_cv = [(int(c.name.rpartition("-")[2]), c.cv_rmse) for c in polys]
+    if poly_cv:
+        cal.cv = CrossValidation(degrees=[d for d, _ in poly_cv], rmse=[e for _, e in poly_cv], folds=min(folds, int(
+            np.unique(gs).size)), groups=int(np.unique(gs).size), best_degree=cal.degree,
+            untried=[d for d in range(1, 6) if d not in [d for d, _ in poly_cv]] if "polynomial" in fams and only is None
+            else [])
+    cal.family = None if chosen.family == "polynomial" else chosen
+    cal.lag_s = None if "time_s" not in run else float(lag_value)
+    if "time_s" not in run and lag_value != 0:
+        cal.extra["lag_rows"] = float(lag_value)
+    cal.floor = floor
+    cal.candidates = [c.to_dict() for c in sel.candidates]
+    yhat = cal(xs)
+    met = fit_metrics(yv, yhat)
+    cal.r2, cal.rmse, cal.max_error_percent_fs = met["r2"], met["rmse"], met["max_error_percent_fs"]
+    fs = float(np.ptp(yv))
+    cal.full_scale = fs
+    cal.data_fingerprint = fingerprint(xs, yv)
+    if search is not None:
+        cal.extra["lag_search"] = search.to_dict()
+    elif lag_note:
+        cal.extra["lag_search"] = {"lag_s": 0.0, "method": lag_note}
+    cal.recorded_with = run_recorded_with(run, np.isfinite(values) & np.isfinite(y_raw))
+    plain_oof = np.full(run.n_rows, np.nan)
+    plain_oof[ok] = _oof(chosen.name, xs, yv, gs, folds, transform, floor)
+    full_scale = float(np.nanmax(yv))
+    if not full_scale > 0:
+        raise ValueError(f"{run.path}: {y_name}: no positive reference reading to calibrate against")
+    w = np.where(ok, cal(values) / full_scale, np.where(at_floor, 0.0, np.nan))
+    final_oof = plain_oof
+    from fsrlab.analysis.memory import causal_features, fit_memory, fit_uncertainty
+
+    _, _, direction = causal_features(w, (), ())
+    if compensate and compensation_method == "memory":
+        if int(ok.sum()) < MIN_COMPENSATION_READINGS:
+            raise ValueError(f"{run.path}: compensate: the causal compensation fits up to 24 weights and needs at least "
+                             f"{MIN_COMPENSATION_READINGS} readings above the floor with a reference, got {int(ok.sum())}")
+        row_s = float(np.median(np.diff(t))) if "time_s" in run and run.n_rows > 1 else 1.0
+        mf = fit_memory(w, ys, ok, groups, full_scale, row_s, folds, plain_oof=plain_oof)
+        cal.memory = mf.model
+        cal.extra["compensation_candidates"] = mf.candidates
+        final_oof = mf.oof
+        before, after, how = _he_pair(run, ys, cal(values), mf.fitted, ok, threshold)
+        cal.compensation_he_percent = (before, after)
+        cal.extra["hysteresis_error_method"] = how
+    elif compensate:
         from fsrlab.analysis.compensation import compare_compensation
 
-        direction, cycle = _recorded(run)
+        direction_col, cycle = _recorded(run)
         with _named(run, x):
-            comp = compare_compensation(values, stress, degree=cal.degree, threshold=threshold, direction=direction,
+            comp = compare_compensation(values, ys, degree=cal.degree, threshold=threshold, direction=direction_col,
                                         cycle=cycle, plain=cal)
         cal.compensation = comp.compensated
         cal.compensation_he_percent = (comp.he_before_percent, comp.he_after_percent)
+    cal.cv_rmse = float(np.sqrt(np.nanmean((final_oof[ok] - yv) ** 2))) if np.isfinite(final_oof[ok]).any() \
+        else float(chosen_cv)
+    cal.uncertainty = fit_uncertainty(final_oof, ys, direction, resolution(values[ok]))
+    if cal.memory is not None:
+        cal.uncertainty_plain = fit_uncertainty(plain_oof, ys, direction, resolution(values[ok]))
     return cal
+
+
+def _he_pair(run: Run, y, plain, compensated, ok, threshold: float) -> tuple[float, float, str]:
+    """Hysteresis error of the plain and the compensated estimate: eq. (13) on whole cycles, else on level bins."""
+    from fsrlab.analysis.cycles import row_directions
+
+    yy = np.where(ok, y, np.nan)
+    try:
+        keep = np.isfinite(yy)
+        b = run_hysteresis(yy[keep], np.asarray(plain)[keep], threshold=threshold).percent
+        a = run_hysteresis(yy[keep], np.asarray(compensated)[keep], threshold=threshold).percent
+        return float(b), float(a), "eq. (13) on the run's loading-unloading cycles"
+    except ValueError:
+        pass
+    keep = np.isfinite(yy)
+    d = np.zeros(yy.size, int)
+    d[keep] = row_directions(yy[keep], None, None, threshold)
+    return (binned_hysteresis_percent(yy, plain, d), binned_hysteresis_percent(yy, compensated, d),
+            "eq. (13) on 10 level bins (loading vs unloading mean error): the run has no whole cycles")
+
+
+def live_estimator(cal: Calibration, margin: float = MARGIN, compensation: bool = True):
+    """A causal estimator of a calibration: readings in, estimates out, one at a time.
+
+    Parameters
+    ----------
+    cal : Calibration
+        From :func:`calibrate_run` or :func:`fsrlab.analysis.calibration_io.load_calibration`.
+    margin : float
+        Beyond the calibrated readout range by more than this fraction of its span, a reading
+        gets no estimate. [1]
+    compensation : bool
+        Use the calibration's causal compensation when it holds one.
+
+    Returns
+    -------
+    LiveEstimator
+        ``step(readout) -> (estimate or None, standard uncertainty or None, in_range)`` keeps its
+        memory between calls; ``reference`` (``"force_n"`` or ``"stress_pa"``) and ``x`` (the
+        readout column) name the quantities. For a calibration on ``c_fsr_farad`` the reading to
+        step is C_FSR [F], decoded from the frequency and duty cycle (:func:`decode_capacitance`). A calibration with only the earlier offline branch
+        compensation (:mod:`fsrlab.analysis.compensation`) steps without compensation.
+    """
+    from fsrlab.analysis.memory import CausalEstimator
+
+    if not margin >= 0:
+        raise ValueError(f"margin: must be a fraction >= 0 of the calibrated span, got {margin!r}")
+    memory = cal.memory if compensation else None
+    fs = memory.full_scale if memory is not None else (cal.full_scale or 1.0)
+    table = cal.uncertainty_plain if (cal.memory is not None and memory is None) else cal.uncertainty
+    return CausalEstimator(cal, cal.x_range, margin, cal.floor, memory, table, fs, cal.y_name, cal.x_name)
+
+
+#: The live estimator's type (see :func:`live_estimator`).
+from fsrlab.analysis.memory import CausalEstimator as LiveEstimator  # noqa: E402
 
 
 def run_recorded_with(run: Run, used=None):
@@ -435,30 +757,39 @@ def apply_calibration(cal: Calibration, run, compensation: bool = True, circuit:
     given = np.isfinite(values)
     lo, hi = cal.x_range
     span = hi - lo
-    inside = given & (values >= lo) & (values <= hi)
-    kept = given if margin == np.inf else given & (values >= lo - margin * span) & (values <= hi + margin * span)
-    x = np.where(kept, values, np.nan)
-    if compensation and cal.compensation is not None:
-        est, how = cal.compensation(x), "direction-aware compensation"
+    estimate_col, uncertainty_col = f"{cal.y_name}_estimate", f"{cal.y_name}_uncertainty"
+    below = np.zeros_like(given)
+    if compensation and cal.compensation is not None and cal.memory is None:
+        # An earlier calibration file: the offline branch method (it needs the whole run).
+        inside = given & (values >= lo) & (values <= hi)
+        kept = given if margin == np.inf else given & (values >= lo - margin * span) & (values <= hi + margin * span)
+        est, how = cal.compensation(np.where(kept, values, np.nan)), "direction-aware compensation"
+        unc = np.full(values.shape, np.nan)
     else:
-        est, how = cal(x), f"polynomial of degree {cal.degree}"
+        est, unc, inside, reason = live_estimator(cal, margin, compensation).run(values)
+        below = reason == 2
+        kept = given & (reason != 3)
+        how = ("causal play-operator compensation" if compensation and cal.memory is not None
+               else f"{cal.model_name}" if cal.family is not None else f"polynomial of degree {cal.degree}")
     no_readout = ~given
     not_decodable = np.zeros_like(given)
     if cal.x_name == C_FSR and C_FSR not in run:
         parts = np.isfinite(run["frequency_hz"]) & np.isfinite(run["duty_cycle"])
         no_readout, not_decodable = ~given & ~parts, ~given & parts
     columns = dict(run.columns)
-    columns[ESTIMATE_COLUMN] = est
+    columns[estimate_col] = est
+    columns[uncertainty_col] = unc
     columns[IN_RANGE_COLUMN] = np.where(given, inside.astype(float), np.nan)
     counts = {"estimated": int(np.isfinite(est).sum()), "in_range": int(inside.sum()),
               "out_of_range": int((given & ~inside).sum()), "extrapolated": int((np.isfinite(est) & ~inside).sum()),
               "missing": int((~np.isfinite(est)).sum()),
               "no_readout": int(no_readout.sum()), "not_decodable": int(not_decodable.sum()),
-              "beyond_margin": int((given & ~kept).sum())}
+              "beyond_margin": int((given & ~kept & ~below).sum()), "below_activation": int(below.sum())}
     meta = {k: v for k, v in run.metadata.items() if k not in _FILE_KEYS}
-    meta["units"] = dict(run.units, **{ESTIMATE_COLUMN: "Pa", IN_RANGE_COLUMN: "1"})
+    meta["units"] = dict(run.units, **{estimate_col: cal.y_unit, uncertainty_col: cal.y_unit, IN_RANGE_COLUMN: "1"})
     source = {} if cal.path is None else {"file": str(cal.path)}
-    meta["calibration"] = {**source, "x": cal.x_name, "degree": cal.degree, "method": how,
+    meta["calibration"] = {**source, "x": cal.x_name, "reference": cal.y_name, "model": cal.model_name,
+                           "degree": cal.degree, "method": how, "lag_s": cal.lag_s,
                            "data_fingerprint": cal.data_fingerprint, "created": cal.created,
                            "readout_range": [lo, hi], "margin": margin, "counts": counts}
     if differences:
@@ -466,7 +797,8 @@ def apply_calibration(cal: Calibration, run, compensation: bool = True, circuit:
     return Run(path=run.path, columns=columns, metadata=meta)
 
 
-def hysteresis_of_run(run, quantity: str = "frequency_hz", threshold: float = 0.05) -> RunHysteresis:
+def hysteresis_of_run(run, quantity: str = "frequency_hz", threshold: float = 0.05,
+                      reference: str | None = None) -> RunHysteresis:
     """Hysteresis error (eq. 13) of one column of a run, per cycle and overall.
 
     Parameters
@@ -477,6 +809,9 @@ def hysteresis_of_run(run, quantity: str = "frequency_hz", threshold: float = 0.
         Column whose hysteresis is measured (``frequency_hz``, ``voltage_v``, ``stress_pa_estimate``, ...).
     threshold : float
         Reversal threshold as a fraction of the stress span, used without a direction column. [1]
+    reference : {"force_n", "stress_pa"}, optional
+        The reference the branches follow (default: ``stress_pa`` when the run has it, else
+        ``force_n``, which needs no sensor area; the result's "stress" is then a force [N]).
 
     Returns
     -------
@@ -490,7 +825,7 @@ def hysteresis_of_run(run, quantity: str = "frequency_hz", threshold: float = 0.
         :func:`fsrlab.analysis.hysteresis.check_response`).
     """
     run = _as_run(run)
-    stress, q = run.stress_pa(), run[quantity]
+    stress, q = run_reference(run, reference)[0], run[quantity]
     try:
         return run_hysteresis(stress, q, *_recorded(run), threshold, name=quantity)
     except RunFormatError:

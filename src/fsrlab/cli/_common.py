@@ -15,6 +15,9 @@ for --r: '1m' is ambiguous: ..."), exit code 2; none accepts ``nan`` or ``inf``:
 ``seconds``               duration: 90, 90s, 1.5min, 2h, 500ms, 250us; ``1m`` refused
 ``fraction``              0.1 or 10%; a value above 1 without ``%`` is refused
 ``number``                a plain number without unit or prefix
+``areas``                 area: 71.3mm2, 71.3mm², 0.713cm2, 7.13e-5m2 (a bare number is m²)
+``masses``                mass: 500g, 0.5kg, 250mg, 0 (a bare number other than 0 is refused)
+``mass_list``             comma-separated masses: 0,50g,100g,0.2kg (strictly increasing)
 ``eng``                   any engineering notation, unit letters ignored (lenient, older)
 ========================  ==================================================================
 """
@@ -33,7 +36,7 @@ import typer
 from fsrlab.units import parse_eng, parse_quantity
 
 __all__ = ["eng", "ohms", "farads", "volts", "hertz", "pascals", "metres", "electronvolts", "seconds",
-           "fraction", "number", "emit_json", "to_jsonable", "fail", "option_names", "plain_numbers"]
+           "fraction", "number", "areas", "masses", "mass_list", "emit_json", "to_jsonable", "fail", "option_names", "plain_numbers"]
 
 
 def eng(text: str | float) -> float:
@@ -71,6 +74,60 @@ electronvolts = _parser("electronvolts", "energy", "Energy in electronvolts [eV]
 seconds = _parser("seconds", "duration", "Duration [s]: 90, 90s, 1.5min, 2h, 500ms, 250us; 1m is refused (minutes or milli?).")
 fraction = _parser("fraction", "fraction", "Fraction: 0.1 or 10%; a value above 1 without % is refused, never read as percent.")
 number = _parser("number", "number", "A plain finite number (2, 7.5, 1e3), without unit letters or prefixes.")
+
+_MEASURE = re.compile(r"^([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*([A-Za-zµ²0-9]*)$")
+_AREA_UNITS = {"": 1.0, "m2": 1.0, "m²": 1.0, "cm2": 1e-4, "cm²": 1e-4, "mm2": 1e-6, "mm²": 1e-6}
+_MASS_UNITS = {"kg": 1.0, "g": 1e-3, "mg": 1e-6}
+
+
+def _measure(text: str | float, units: dict, what: str, examples: str) -> tuple[float, str]:
+    if isinstance(text, (int, float)) and not isinstance(text, bool):
+        value, unit = float(text), ""
+    else:
+        m = _MEASURE.match(str(text).strip())
+        if not m or m.group(2) not in units:
+            raise typer.BadParameter(f"cannot read {text!r} as {what}; write e.g. {examples}")
+        value, unit = float(m.group(1)) * units[m.group(2)], m.group(2)
+    if not math.isfinite(value):
+        raise typer.BadParameter(f"{text!r} is not a finite {what.split()[-1]}; write e.g. {examples}")
+    return value, unit
+
+
+def areas(text: str | float) -> float:
+    """Area [m²]: 71.3mm2, 71.3mm², 0.713cm2, 7.13e-5m2; a bare number is in m²."""
+    return _measure(text, _AREA_UNITS, "an area", "71.3mm2, 0.713cm2, 7.13e-5m2")[0]
+
+
+def masses(text: str | float) -> float:
+    """Mass [kg]: 500g, 0.5kg, 250mg; 0 without a unit; any other bare number is refused (g or kg?)."""
+    value, unit = _measure(text, {**_MASS_UNITS, "": 1.0}, "a mass", "500g, 0.5kg, 250mg")
+    if unit == "" and value != 0:
+        raise typer.BadParameter(f"{text!r} has no unit: write {text}g or {text}kg (a mass in g, kg or mg)")
+    return value
+
+
+def mass_list(text: str) -> list[float]:
+    """Comma-separated masses [kg], strictly increasing and ≥ 0: ``0,50g,100g,0.2kg``.
+
+    A value in another unit, a negative mass, or a list that does not increase is refused, naming
+    the value.
+    """
+    items = [t.strip() for t in str(text).split(",")]
+    if not items or any(not t for t in items):
+        raise typer.BadParameter(f"{text!r}: give comma-separated masses such as 0,50g,100g,200g (no empty item)")
+    out: list[float] = []
+    for t in items:
+        try:
+            v = masses(t)
+        except typer.BadParameter as exc:
+            raise typer.BadParameter(f"value {t!r}: {exc.message}") from None
+        if v < 0:
+            raise typer.BadParameter(f"value {t!r}: a mass must be >= 0")
+        if out and not v > out[-1]:
+            raise typer.BadParameter(f"value {t!r} is not larger than the mass before it ({out[-1] * 1e3:g} g): "
+                                     "give the masses in increasing order")
+        out.append(v)
+    return out
 
 
 def to_jsonable(obj: Any) -> Any:

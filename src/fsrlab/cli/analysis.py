@@ -16,7 +16,7 @@ import numpy as np
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli._common import emit_json, fail, farads, fraction, number, ohms, option_names
+from fsrlab.cli._common import emit_json, fail, farads, fraction, number, ohms, option_names, seconds
 
 _DEGREES = ("auto", "1", "2", "3", "4", "5")
 
@@ -71,6 +71,8 @@ def hysteresis(
     run_file: Path = typer.Argument(..., metavar="RUN.csv", help="A run (docs/data-format.md) with stress_pa [Pa] (or force_n [N] and the sensor area) and the quantity."),
     quantity: str = typer.Option("frequency_hz", "--quantity", "-q", help="Column whose hysteresis is measured: frequency_hz [Hz], duty_cycle [1], voltage_v [V], stress_pa_estimate [Pa], ..."),
     threshold: float = typer.Option(0.05, "--threshold", parser=fraction, help="Stress reversal threshold [1, a fraction of the stress span], 0.05 or 5%; used without a direction column."),
+    reference: str = typer.Option(None, "--reference", help="Reference the branches follow: force_n [N] (no sensor area needed) or stress_pa [Pa] (default: stress_pa if the run has it, else force_n)."),
+    unit: str = typer.Option(None, "--unit", help="Display unit of the reference level at the largest difference [N, g, Pa or kPa] (default kPa for stress, N for force); --json stays SI."),
     skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=_SKIP_HELP),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
@@ -94,20 +96,25 @@ def hysteresis(
     run = _load(run_file, skip_bad_rows, warnings)
     if quantity not in run:
         _missing(run_file, run, quantity, option="--quantity")
-    res = hysteresis_of_run(run, quantity, threshold)
+    _reference_option(run_file, run, reference)
+    ref = reference or ("stress_pa" if "stress_pa" in run else "force_n")
+    shown, factor = _unit_option(unit if unit is not None else ("kPa" if ref == "stress_pa" else None), ref)
+    res = hysteresis_of_run(run, quantity, threshold, reference=ref)
     _warn(warnings)
     if json_out:
-        emit_json({**res.to_dict(), **(_skipped_json(run) if skip_bad_rows else {})})
+        extra = {} if ref == "stress_pa" else {"reference": "force_n", "force_at_max_n": res.stress_at_max_pa}
+        emit_json({**res.to_dict(), **extra, **(_skipped_json(run) if skip_bad_rows else {})})
         return
     from rich.console import Console
     from rich.table import Table
 
     table = Table(title=f"Hysteresis error of {quantity} (eq. 13), {run_file.name}")
-    for col in ("cycle", "HE (%)", "σd (kPa)"):
+    level = "σd" if ref == "stress_pa" else "Fd"
+    for col in ("cycle", "HE (%)", f"{level} ({shown})"):
         table.add_column(col, justify="right")
     for n, c in zip(res.cycle_numbers, res.cycles):
-        table.add_row(str(n), f"{c.percent:.2f}", f"{c.stress_at_max_pa / 1e3:.2f}")
-    table.add_row("overall", f"{res.percent:.2f}", f"{res.stress_at_max_pa / 1e3:.2f}")
+        table.add_row(str(n), f"{c.percent:.2f}", f"{c.stress_at_max_pa * factor:.4g}")
+    table.add_row("overall", f"{res.percent:.2f}", f"{res.stress_at_max_pa * factor:.4g}")
     console = Console()
     console.print(table)
     console.print(res.method, style="dim")
@@ -151,23 +158,63 @@ def repeatability(
     Console().print(table)
 
 
+_MODELS = ("auto", "polynomial", "conductance-polynomial", "conductance-power", "power", "polynomial-1", "polynomial-2",
+           "polynomial-3", "polynomial-4", "polynomial-5", "conductance-polynomial-1", "conductance-polynomial-2",
+           "conductance-polynomial-3")
+_GRAMS_PER_NEWTON = 1e3 / 9.80665  # standard gravity
+
+
+def _reference_option(run_file: Path, run, reference: str | None) -> None:
+    """Check --reference against the run (one line naming what the run has)."""
+    if reference is not None and reference not in ("force_n", "stress_pa"):
+        fail(f"must be force_n or stress_pa, got {reference!r}", "--reference")
+    if reference is None and "force_n" not in run and "stress_pa" not in run:
+        raise ValueError(f"{run_file}: no reference: column 'force_n' [N] or 'stress_pa' [Pa] missing (columns: "
+                         f"{', '.join(run.columns)})")
+    if reference == "force_n" and "force_n" not in run:
+        _missing(run_file, run, "force_n", " (the reference)", "--reference")
+    if reference == "stress_pa" and "stress_pa" not in run and "force_n" not in run:
+        _missing(run_file, run, "stress_pa", " (the reference)", "--reference")
+
+
+def _unit_option(unit: str | None, reference: str) -> tuple[str, float]:
+    """Display unit and factor from the reference's unit (SI inside)."""
+    base = "N" if reference == "force_n" else "Pa"
+    if unit is None or unit == base:
+        return base, 1.0
+    if unit == "g" and base == "N":
+        return "g", _GRAMS_PER_NEWTON
+    if unit == "kPa" and base == "Pa":
+        return "kPa", 1e-3
+    fail(f"must be N or g for force_n, Pa or kPa for stress_pa; got {unit!r} for {reference}", "--unit")
+    raise AssertionError  # fail() raises
+
+
 @app.command("calibrate")
 def calibrate_cmd(
-    run_file: Path = typer.Argument(..., metavar="RUN.csv", help="A run with the reference stress_pa [Pa] (or force_n [N]) and the readout."),
-    x: str = typer.Option("frequency_hz", "--x", help="Readout to calibrate: frequency_hz [Hz], duty_cycle [1], voltage_v [V], or c_fsr_farad [F]: C_FSR decoded from frequency_hz and duty_cycle (physics-informed)."),
-    degree: str = typer.Option("auto", "--degree", help="Polynomial degree 1..5 [1], or auto: the lowest within 1 % of the best cross-validated RMSE (whole cycles kept together); a small run tries only the degrees its folds can determine."),
-    compensate: bool = typer.Option(False, "--compensate", help="Also fit the direction-aware hysteresis compensation (extension beyond the paper) and report HE before/after."),
+    run_file: Path = typer.Argument(..., metavar="RUN.csv", help="A run with the reference force_n [N] or stress_pa [Pa] and the readout; time_s [s] optional (row order otherwise)."),
+    x: str = typer.Option("frequency_hz", "--x", help="Readout to calibrate: any numeric column, e.g. frequency_hz [Hz], duty_cycle [1], voltage_v [V], or c_fsr_farad [F]: C_FSR decoded from frequency_hz and duty_cycle (physics-informed)."),
+    reference: str = typer.Option(None, "--reference", help="Reference column: force_n [N] (no sensor area needed) or stress_pa [Pa] (default: stress_pa if the run has it, else force_n)."),
+    model: str = typer.Option("auto", "--model", help="Model [name]: auto (every family, chosen by grouped cross-validation), polynomial, conductance-polynomial, conductance-power (F = c + a·G^b through the readout circuit), power, or one candidate such as polynomial-3."),
+    degree: str = typer.Option("auto", "--degree", help="Polynomial degree 1..5 [1] (the model is then that polynomial), or auto."),
+    compensate: bool = typer.Option(False, "--compensate", help="Also fit the causal hysteresis compensation (play operators with memory, extension beyond the paper) and report HE [%] before/after."),
+    unit: str = typer.Option(None, "--unit", help="Display unit of the errors in the table [N, g, Pa or kPa] (default: the reference's, N or Pa); --json and the file stay SI."),
+    lag: str = typer.Option("auto", "--lag", help="Lag of the readout behind the reference [s] (rows without time_s), e.g. 0.02 or 0; auto: estimated by cross-correlation of the changes."),
+    max_lag: float = typer.Option(None, "--max-lag", parser=seconds, help="Half-width of the lag search [s], e.g. 0.25 (default 0.25 s, at least 2 rows)."),
     folds: int = typer.Option(5, "--folds", help="Cross-validation folds [1], ≥ 2 (fewer when the run has fewer cycles or blocks)."),
     r: float = typer.Option(None, "--r", parser=ohms, help="555 R for --x c_fsr_farad [Ω], e.g. 10k (default: the run's sidecar, else 10k)."),
     c_off: float = typer.Option(None, "--c-off", parser=farads, help="C_off for --x c_fsr_farad [F], e.g. 470p (default: sidecar, else 0)."),
     skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=_SKIP_HELP),
     output: Path = typer.Option(None, "--output", "-o", help="Write the calibration to this JSON file."),
-    json_out: bool = typer.Option(False, "--json", help="Print JSON."),
+    json_out: bool = typer.Option(False, "--json", help="Print JSON: model, lag_s [s], cv_rmse [reference unit], cv_rmse_percent_fs [%], candidates, ..."),
 ) -> None:
-    """Calibrate readout → stress with a polynomial of degree 1–5 (paper Figure 17 uses 1 and 3).
+    """Calibrate readout → force or stress: model families by grouped CV, lag, dead zone, uncertainty.
 
-    The calibration file records the calibrated readout range and the circuit and range the run
-    was recorded with, which fsrlab apply checks.
+    The candidates are polynomials of degree 1–5 (paper Figure 17 uses 1 and 3), and, through the
+    readout circuit (a divider or op-amp in the sidecar, or decoded C_FSR), the FSR's conductance
+    as a power law or a low-degree polynomial. Readings at the readout's floor are "below
+    activation". The calibration file records the calibrated readout range and the circuit and
+    range the run was recorded with, which fsrlab apply checks. See docs/calibration.md.
 
     Examples (files under examples/ in the fsrlab source tree):
 
@@ -180,28 +227,52 @@ def calibrate_cmd(
 
     if degree not in _DEGREES:
         fail(f"must be auto or 1..5, got {degree!r}", "--degree")
+    if model not in _MODELS:
+        fail(f"must be one of {', '.join(_MODELS)}; got {model!r}", "--model")
     if folds < 2:
         fail(f"must be >= 2, got {folds}", "--folds")
+    lag_value: float | str = "auto"
+    if lag != "auto":
+        try:
+            lag_value = number(lag)
+        except typer.BadParameter as exc:
+            fail(f"must be auto or a lag in seconds such as 0.02, got {lag!r} ({exc.message})", "--lag")
     warnings: list[str] = []
     run = _load(run_file, skip_bad_rows, warnings)
     if x not in run and x != "c_fsr_farad":
         _missing(run_file, run, x, option="--x")
+    _reference_option(run_file, run, reference)
+    _unit_option(unit, reference or ("stress_pa" if "stress_pa" in run else "force_n"))
     circuit = None
     parts = {k: v for k, v in (("r_ohm", r), ("c_off_farad", c_off)) if v is not None}
     if x == "c_fsr_farad" and parts:
         with option_names({"r_ohm": "--r", "c_off_farad": "--c-off"}):
             circuit = run_circuit(run).replace(**parts)
     try:
-        cal = calibrate_run(run, x=x, degree="auto" if degree == "auto" else int(degree), compensate=compensate,
-                            folds=folds, circuit=circuit)
+        with option_names({"model": "--model", "max_lag_s": "--max-lag"}):
+            cal = calibrate_run(run, x=x, degree="auto" if degree == "auto" else int(degree), compensate=compensate,
+                                folds=folds, circuit=circuit, reference=reference, model=model, lag=lag_value,
+                                max_lag_s=max_lag)
     except ValueError as exc:
         if str(exc).startswith("degree: "):
-            fail(str(exc)[len("degree: "):], "--degree")
+            fail(str(exc)[len("degree: "):], "--model" if model != "auto" else "--degree")
         raise
     lo, hi = cal.x_range
-    out = {"degree": cal.degree, "r2": cal.r2, "rmse_pa": cal.rmse, "max_error_percent_fs": cal.max_error_percent_fs,
+    fs = cal.full_scale or float("nan")
+    out = {"model": cal.model_name, "reference": cal.y_name, "unit": cal.y_unit, "lag_s": cal.lag_s,
+           "cv_rmse": cal.cv_rmse, "cv_rmse_percent_fs": 100 * cal.cv_rmse / fs if cal.cv_rmse is not None else None,
+           "full_scale": cal.full_scale, "candidates": cal.candidates,
+           "below_activation": None if cal.floor is None else {
+               "readout_threshold": cal.floor.threshold, "activation": cal.floor.activation,
+               "fraction": cal.floor.fraction},
+           "degree": cal.degree, "r2": cal.r2, "rmse": cal.rmse, "max_error_percent_fs": cal.max_error_percent_fs,
            "coefficients": cal.model.power_coefficients().tolist(), "readout_range": [lo, hi],
            "degrees_tried": None if cal.cv is None else cal.cv.degrees}
+    if cal.y_name == "stress_pa":
+        out["rmse_pa"] = cal.rmse
+    for key in ("lag_search", "lag_rows", "compensation_candidates", "hysteresis_error_method"):
+        if key in cal.extra:
+            out[key] = cal.extra[key]
     if compensate:
         out["hysteresis_error_before_percent"], out["hysteresis_error_after_percent"] = cal.compensation_he_percent
     if skip_bad_rows:
@@ -215,26 +286,34 @@ def calibrate_cmd(
     from rich.console import Console
     from rich.table import Table
 
+    u, k = _unit_option(unit, cal.y_name)
     console = Console()
-    table = Table(title=f"Calibration stress_pa({x}), {run_file.name}")
+    table = Table(title=f"Calibration {cal.y_name}({x}), {run_file.name}")
     table.add_column("quantity")
     table.add_column("value", justify="right")
-    table.add_row("degree", str(cal.degree) + (" (chosen by grouped CV)" if cal.cv else ""))
-    table.add_row("R²", f"{cal.r2:.5f}")
-    table.add_row("RMSE (Pa)", f"{cal.rmse:.4g}")
-    table.add_row("max error (% FS)", f"{cal.max_error_percent_fs:.3f}")
+    table.add_row("model", cal.model_name + (" (chosen by grouped CV)" if model == "auto" and degree == "auto" else ""))
+    table.add_row("lag (s)" if cal.lag_s is not None else "lag (rows)",
+                  f"{cal.lag_s if cal.lag_s is not None else cal.extra.get('lag_rows', 0.0):.4g}")
+    if cal.cv_rmse is not None:
+        table.add_row(f"CV RMSE ({u})", f"{k * cal.cv_rmse:.4g}")
+        table.add_row("CV RMSE (% FS)", f"{out['cv_rmse_percent_fs']:.3f}")
+    table.add_row("R² (in sample)", f"{cal.r2:.5f}")
+    table.add_row("max error (% FS, in sample)", f"{cal.max_error_percent_fs:.3f}")
     table.add_row(f"readout range ({cal.x_unit or '1'})", f"{lo:.6g} … {hi:.6g}")
-    if cal.cv:
-        for d, e in zip(cal.cv.degrees, cal.cv.rmse):
-            table.add_row(f"CV RMSE degree {d} (Pa)", f"{e:.4g}")
+    if cal.floor is not None:
+        table.add_row(f"below activation: readout at floor ({cal.x_unit or '1'})", f"≤ {cal.floor.threshold:.6g}"
+                      if cal.floor.sign > 0 else f"≥ {cal.floor.threshold:.6g}")
+    for c in cal.candidates:
+        table.add_row(f"CV RMSE {c['model']} ({u})", f"{k * c['cv_rmse']:.4g}")
     if compensate:
-        table.add_row("HE of calibrated stress, plain (%)", f"{out['hysteresis_error_before_percent']:.3f}")
+        table.add_row("HE of the estimate, plain (%)", f"{out['hysteresis_error_before_percent']:.3f}")
         table.add_row("HE with compensation (%)", f"{out['hysteresis_error_after_percent']:.3f}")
     console.print(table)
-    console.print("coefficients (ascending powers of x): " + ", ".join(f"{c:.6g}" for c in out["coefficients"]))
+    console.print("polynomial coefficients (ascending powers of x): "
+                  + ", ".join(f"{c:.6g}" for c in out["coefficients"]))
     if cal.cv is not None and cal.cv.untried:
-        console.print(f"degrees {', '.join(map(str, cal.cv.untried))} not tried: the smallest training fold has too "
-                      f"few readings to determine them ({cal.n} readings, {cal.cv.folds} folds)")
+        console.print(f"polynomial degrees {', '.join(map(str, cal.cv.untried))} not tried: the smallest training fold "
+                      f"has too few readings to determine them ({cal.n} readings, {cal.cv.folds} folds)")
     if output is not None:
         console.print(f"wrote {output}")
 
@@ -243,19 +322,21 @@ def calibrate_cmd(
 def apply_cmd(
     cal_file: Path = typer.Argument(..., metavar="CAL.json", help="A calibration written by fsrlab calibrate -o."),
     run_file: Path = typer.Argument(..., metavar="RUN.csv", help="The run to convert."),
-    output: Path = typer.Option(..., "--output", "-o", help="Output run: the input columns plus stress_pa_estimate [Pa] and in_range [1]."),
-    no_compensation: bool = typer.Option(False, "--no-compensation", help="Use the plain polynomial even if the calibration holds a compensation."),
+    output: Path = typer.Option(..., "--output", "-o", help="Output run: the input columns plus <reference>_estimate and <reference>_uncertainty [N or Pa] and in_range [1]."),
+    no_compensation: bool = typer.Option(False, "--no-compensation", help="Use the plain model even if the calibration holds a compensation."),
     margin: float = typer.Option(0.10, "--margin", parser=fraction, help="How far beyond the calibrated readout range an estimate is still written [1, a fraction of the range's span], 0.1 or 10%; beyond it the estimate is left empty. Every reading outside the range has in_range = 0."),
     force: bool = typer.Option(False, "--force", help="Apply even to a run recorded with another circuit or range than the calibration."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing output run and its sidecar; without it an existing one stops the command."),
     skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=_SKIP_HELP + " Skipped rows are not written."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON: rows written, estimated, missing (with the reasons), in and out of the readout range."),
 ) -> None:
-    """Apply a calibration to a run: adds stress_pa_estimate [Pa] and in_range [1] columns.
+    """Apply a calibration to a run: adds <reference>_estimate, <reference>_uncertainty and in_range.
 
-    Readings outside the calibrated readout range are flagged (in_range = 0); beyond the margin
-    their estimate is left empty. A run recorded with another circuit or range than the
-    calibration is refused unless --force.
+    The estimate runs causally in row order (the compensation's memory goes forward in time, as
+    it would live). Readings at the readout's floor are below activation (no estimate). Readings
+    outside the calibrated readout range are flagged (in_range = 0); beyond the margin their
+    estimate is left empty. A run recorded with another circuit or range than the calibration is
+    refused unless --force.
 
     Examples (files under examples/ in the fsrlab source tree):
 
@@ -264,7 +345,7 @@ def apply_cmd(
       fsrlab apply examples/calibration.json examples/other.csv -o estimate.csv --no-compensation --json --overwrite
     """
     from fsrlab.analysis.calibration_io import load_calibration
-    from fsrlab.analysis.pipeline import ESTIMATE_COLUMN, apply_calibration, check_readout
+    from fsrlab.analysis.pipeline import apply_calibration, check_readout
     from fsrlab.runformat import sidecar_path
     from fsrlab.runwriter import write_run
 
@@ -296,19 +377,25 @@ def apply_cmd(
     write_run(output, est.columns, est.metadata, overwrite=True)
     n = info["counts"]
     _warn(warnings)
+    estimate_col = f"{cal.y_name}_estimate"
     if json_out:
         emit_json({"output": str(output), "rows": est.n_rows, "estimated": n["estimated"], "missing": n["missing"],
-                   "missing_reasons": {k: n[k] for k in ("no_readout", "not_decodable", "beyond_margin")},
+                   "missing_reasons": {k: n[k] for k in ("no_readout", "not_decodable", "beyond_margin",
+                                                          "below_activation")},
                    "in_range": n["in_range"], "out_of_range": n["out_of_range"],
                    "extrapolated": n["extrapolated"], "readout_range": info["readout_range"],
-                   "margin_percent": 100 * margin, "method": info["method"], **_skipped_json(run)})
+                   "margin_percent": 100 * margin, "method": info["method"], "model": info["model"],
+                   "reference": cal.y_name, "unit": cal.y_unit, "lag_s": info["lag_s"],
+                   "columns": [estimate_col, f"{cal.y_name}_uncertainty", "in_range"], **_skipped_json(run)})
         return
     lo, hi = info["readout_range"]
-    lines = [f"wrote {output} ({est.n_rows} rows, {ESTIMATE_COLUMN} by {info['method']})"]
+    lines = [f"wrote {output} ({est.n_rows} rows, {estimate_col} by {info['method']})"]
     if n["extrapolated"] or n["beyond_margin"]:
         lines.append(f"  outside the calibrated readout range {lo:.6g} … {hi:.6g} {cal.x_unit}: "
                      f"{n['extrapolated']} extrapolated (in_range = 0), {n['beyond_margin']} beyond the "
                      f"{100 * margin:g} % margin left empty")
+    if n["below_activation"]:
+        lines.append(f"  below activation (readout at its floor, no estimate): {n['below_activation']} rows")
     if n["no_readout"] or n["not_decodable"]:
         lines.append(f"  without an estimate: {n['no_readout']} rows without a readout"
                      + (f", {n['not_decodable']} not decodable" if n["not_decodable"] else ""))

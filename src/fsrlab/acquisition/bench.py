@@ -1,0 +1,208 @@
+"""The bench around the meter: reading the load cell for a while, and the virtual bench's hands.
+
+- :func:`read_reference` starts the meter, collects the load cell's window means (``ref_mean``,
+  ``ref_n`` of each ``M`` frame) for a while and stops it: the readings behind ``fsrlab loadcell
+  tare`` and ``scale``.
+- :class:`BenchSource` is a signal source for :class:`~fsrlab.acquisition.virtual_device.VirtualDevice`
+  whose applied force follows a sequence of placed masses: the virtual bench of ``fsrlab weights
+  --virtual`` places each mass itself (:meth:`BenchSource.place`), the force ramps to it in
+  ``ramp_s``, and the sensor (:class:`~fsrlab.physics.sensor.VirtualFSR`, with its hysteresis
+  memory), the 555 and the op-amp answer as with :class:`~fsrlab.acquisition.virtual_device.PhysicsSource`.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+from fsrlab.acquisition.messages import Measurement
+from fsrlab.acquisition.protocol import SEQ_MODULO
+from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout
+from fsrlab.physics.params import PAPER_OPAMP
+
+__all__ = ["ReferenceReadings", "read_reference", "BenchSource", "NoLoadCell"]
+
+
+class NoLoadCell(RuntimeError):
+    """The meter has no load cell to read (protocol version 1, or ``ref_ok`` 0); the message says which."""
+
+
+@dataclass(frozen=True)
+class ReferenceReadings:
+    """The load cell's readings over a while.
+
+    Attributes
+    ----------
+    means : ndarray
+        Window means of the windows with at least one conversion. [count]
+    conversions : int
+        HX711 conversions in those windows.
+    windows : int
+        Windows received (with or without a conversion).
+    """
+
+    means: np.ndarray
+    conversions: int
+    windows: int
+
+
+def read_reference(link, duration_s: float, window_ms: int = 100, stop: threading.Event | None = None,
+                   handshake_timeout_s: float = 3.0) -> ReferenceReadings:
+    """Start the meter, collect the load cell's window means for ``duration_s`` and stop it.
+
+    Parameters
+    ----------
+    link : SerialLink
+        An open link.
+    duration_s : float
+        Reading time (> 0). [s]
+    window_ms : int
+        Measurement window. [ms]
+    stop : threading.Event, optional
+        Ends the reading early.
+    handshake_timeout_s : float
+        Longest wait for the device's identification. [s]
+
+    Returns
+    -------
+    ReferenceReadings
+
+    Raises
+    ------
+    NoLoadCell
+        A protocol-1 device, or one reporting no HX711 (``ref_ok`` 0) in every window.
+    LinkError
+        The device does not answer.
+    """
+    ident = link.handshake(timeout_s=handshake_timeout_s)
+    if ident.protocol_version < 2:
+        raise NoLoadCell(f"the meter speaks protocol version {ident.protocol_version}, which has no load-cell "
+                         "reference: update its firmware (docs/protocol.md, version 2)")
+    link.stop()
+    link.set_window(window_ms)
+    first = (link.start().seq + 1) % SEQ_MODULO  # noqa: F841 - frames before START are discarded by start()
+    means, conversions, windows, ok = [], 0, 0, 0
+    end = time.monotonic() + duration_s
+    try:
+        while time.monotonic() < end and not (stop is not None and stop.is_set()):
+            for frame in link.read_frames():
+                if frame.kind != "M":
+                    continue
+                m = Measurement.from_frame(frame)
+                windows += 1
+                ok += int(bool(m.ref_ok))
+                if m.ref_n > 0:
+                    means.append(m.ref_mean)
+                    conversions += m.ref_n
+    finally:
+        try:
+            link.stop()
+        except OSError:
+            pass
+    if windows and not ok:
+        raise NoLoadCell("the meter reports no HX711 (ref_ok 0 in every window): check the load cell's board "
+                         "(DOUT to D2, SCK to D3, VCC to 5 V, GND)")
+    return ReferenceReadings(np.asarray(means, dtype=float), conversions, windows)
+
+
+class BenchSource:
+    """Signal source whose applied force follows masses placed one after the other (the virtual bench).
+
+    Parameters
+    ----------
+    forces_n : sequence of float
+        The forces of the planned placements, in order (≥ 0). [N]
+    sensor : VirtualFSR, optional
+        Default ``VirtualFSR()`` (FlexiForce A201-like).
+    circuit : LM555Circuit, optional
+        Default the virtual device's circuit (:data:`~fsrlab.acquisition.virtual_device.VIRTUAL_CIRCUIT`).
+    opamp : OpAmpReadout
+        The A0 readout (eq. 38).
+    ramp_s : float
+        Time the force takes from one mass to the next (a hand lowering it). [s]
+    ramp_points : int
+        Points of the stress history per placement (the sensor's memory is evaluated on them).
+
+    Notes
+    -----
+    The sensor model is rate-independent, so its response to the whole planned sequence is computed
+    once; :meth:`place` only sets when each placement happens. Before the first placement the force
+    is that of the first one.
+    """
+
+    def __init__(self, forces_n: Sequence[float], sensor=None, circuit: LM555Circuit | None = None,
+                 opamp: OpAmpReadout = PAPER_OPAMP, ramp_s: float = 0.15, ramp_points: int = 16) -> None:
+        from fsrlab.acquisition.virtual_device import VIRTUAL_CIRCUIT
+        from fsrlab.physics.sensor import VirtualFSR
+
+        f = np.asarray(forces_n, dtype=float)
+        if f.ndim != 1 or f.size == 0 or not np.all(np.isfinite(f)) or np.any(f < 0):
+            raise ValueError("forces_n must be a non-empty sequence of finite forces >= 0 N")
+        if not ramp_s > 0 or ramp_points < 2:
+            raise ValueError(f"ramp_s must be > 0 s and ramp_points >= 2, got {ramp_s!r}, {ramp_points!r}")
+        self.sensor = sensor if sensor is not None else VirtualFSR()
+        self.circuit = circuit if circuit is not None else VIRTUAL_CIRCUIT
+        self.opamp = opamp
+        self.forces_n, self.ramp_s, self._n = f, float(ramp_s), int(ramp_points)
+        stress = f / self.sensor.area_m2
+        hist = [np.array([stress[0]])] + [np.linspace(stress[k - 1], stress[k], self._n + 1)[1:]
+                                          for k in range(1, f.size)]
+        sigma = np.concatenate(hist)
+        resp = self.sensor.respond(sigma, voltage_v=self.circuit.fsr_voltage_v)
+        self._stress = np.asarray(resp.stress_pa, dtype=float)
+        self._r = np.asarray(resp.r_fsr_ohm, dtype=float)
+        self._c = np.asarray(resp.c_fsr_farad, dtype=float)
+        r_op = self.sensor.respond(sigma, voltage_v=opamp.fsr_voltage_v).r_fsr_ohm
+        self._v = np.asarray(opamp.output_v(r_op), dtype=float)  # Eq. (38)
+        self._placed = [0.0] + [np.inf] * (f.size - 1)  # when each placement began (time since START) [s]
+
+    def place(self, step: int, t_s: float) -> None:
+        """Begin placement ``step`` (0-based, in the planned order) at time ``t_s`` since START [s]."""
+        if not 0 <= step < self.forces_n.size:
+            raise ValueError(f"step must be in 0..{self.forces_n.size - 1}, got {step!r}")
+        if step > 0:
+            self._placed[step] = max(float(t_s), self._placed[step - 1])
+
+    def metadata(self) -> dict:
+        """Sidecar content: ``circuit``, ``opamp``, ``sensor``."""
+        return {"circuit": self.circuit.to_dict(), "opamp": self.opamp.to_dict(),
+                "sensor": {"model": "VirtualFSR (FlexiForce A201-like, fsrlab.physics.sensor)",
+                           "area_m2": self.sensor.area_m2}}
+
+    def _where(self, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Placement in force at each time, and the fraction of its ramp done."""
+        placed = np.asarray(self._placed)
+        k = np.searchsorted(placed, t_s, side="right") - 1
+        k = np.clip(k, 0, placed.size - 1)
+        with np.errstate(invalid="ignore"):
+            u = np.clip((t_s - placed[k]) / self.ramp_s, 0.0, 1.0)
+        return k, np.where(k == 0, 1.0, u)
+
+    def _index(self, t_s: np.ndarray) -> np.ndarray:
+        k, u = self._where(np.asarray(t_s, dtype=float))
+        return np.where(k == 0, 0, (k - 1) * self._n + 1 + np.round(u * (self._n - 1)).astype(int))
+
+    def force_n(self, t_s) -> np.ndarray:
+        """Applied force at times ``t_s`` since START [s] (linear ramps between placements). [N]"""
+        k, u = self._where(np.asarray(t_s, dtype=float))
+        before = self.forces_n[np.maximum(k - 1, 0)]
+        return before + u * (self.forces_n[k] - before)
+
+    def window(self, t0_s: float, t1_s: float, range_: int):
+        """Mean signal over the window (see :class:`~fsrlab.acquisition.virtual_device.SignalSource`)."""
+        from fsrlab.acquisition.virtual_device import Signal
+
+        t = np.linspace(max(t0_s, 0.0), max(t1_s, 0.0), 8)
+        idx = self._index(t)
+        osc = self.circuit.on_range(range_).astable(self._r[idx], self._c[idx], check=False)
+        period = np.asarray(osc.tau_high_s) + np.asarray(osc.tau_low_s)
+        if not np.all(np.isfinite(period)):
+            f = duty = float("nan")
+        else:
+            f = 1.0 / float(np.mean(period))
+            duty = float(np.mean(osc.tau_high_s) / np.mean(period))
+        return Signal(f, duty, float(np.mean(self._v[idx])), float(np.mean(self._stress[idx])))

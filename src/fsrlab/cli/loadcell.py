@@ -1,0 +1,166 @@
+"""``fsrlab loadcell tare|scale``: calibrate the load cell under the sensor (HX711 offset and scale factor)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import typer
+
+from fsrlab.cli import app
+from fsrlab.cli._common import emit_json, fail, masses, plain_numbers, seconds
+from fsrlab.cli.acquisition import _check_rate, _load_loadcell, _sigterm_as_interrupt, _window_ms
+
+_GRAVITY_HELP = "Local acceleration of gravity [m/s²], for mass -> force: 9.80665 (standard gravity g_n, the default), 9.81."
+
+
+def _gravity(text: str | float) -> float:
+    """Acceleration of gravity [m/s²]: a plain number, or with m/s2 / m/s²."""
+    t = str(text).strip()
+    for suffix in ("m/s²", "m/s2", "m/s^2"):
+        if t.endswith(suffix):
+            t = t[: -len(suffix)].strip()
+    try:
+        value = float(t)
+    except ValueError:
+        raise typer.BadParameter(f"cannot read {text!r} as an acceleration; write e.g. 9.80665 or 9.81m/s2") from None
+    if not 9.7 <= value <= 9.9:
+        raise typer.BadParameter(f"{value:g} m/s² is not an acceleration of gravity on Earth (9.7 to 9.9 m/s²)")
+    return value
+
+
+@app.command("loadcell")
+def loadcell(
+    action: str = typer.Argument(..., metavar="ACTION", help="tare: read the unloaded cell, write its offset to -o; "
+                                 "scale: read it with --mass on, add the scale factor to --cal."),
+    port: str = typer.Option(None, "--port", help="Serial port of the meter (/dev/ttyACM0, COM3, a pty) or 'auto'."),
+    virtual: bool = typer.Option(False, "--virtual", help="Use a virtual meter with its emulated load cell; the virtual bench places the mass itself."),
+    out: Path = typer.Option(None, "--out", "-o", metavar="LC.json", help="tare: the load-cell calibration file to write (LC.json)."),
+    cal: Path = typer.Option(None, "--cal", metavar="LC.json", help="scale: the tare's calibration file (LC.json); the scale factor is added to it (or written to -o)."),
+    mass: float = typer.Option(None, "--mass", parser=masses, metavar="MASS", help="scale: the known mass on the cell [kg]: 500g, 0.5kg, 250mg."),
+    gravity: float = typer.Option("9.80665", "--gravity", parser=_gravity, metavar="ACCELERATION", help=_GRAVITY_HELP),
+    capacity: float = typer.Option(None, "--capacity", parser=masses, metavar="MASS", help="tare: the cell's rated capacity [kg], stored (a scale mass below 5 % of it warns): 5kg, 1kg, 500g."),
+    duration: float = typer.Option("3s", "--duration", parser=seconds, metavar="TIME", help="Reading time [s]: 3s, 5, 1.5s."),
+    window: float = typer.Option("100ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], whole ms: 100ms, 0.5s."),
+    hx711_rate: int = typer.Option(80, "--hx711-rate", help="Virtual load cell: HX711 output data rate [samples/s]: 10 or 80."),
+    seed: int = typer.Option(None, "--seed", help="Random seed of the virtual meter's noise (an integer)."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="tare: replace an existing -o file."),
+    json_out: bool = typer.Option(False, "--json", help="Print the calibration written (offset_counts [count], scale_counts_per_n [count/N], noise) as JSON."),
+) -> None:
+    """Calibrate the load cell: tare (offset, nothing on the cell), then scale (counts per newton from a known mass).
+
+    Like the HX711 libraries' tare() and set_scale(), kept in a small JSON file with the date, the
+    mass and g used and the noise of the readings; fsrlab acquire --loadcell LC.json turns the raw
+    counts into force_n = (raw - offset) / scale. A tare is refused while the reading drifts (the
+    second half of the window means differs from the first by more than 4 standard errors and 0.1 % of the span); a
+    scale mass below 5 % of --capacity warns.
+
+    Examples:
+
+    \b
+      fsrlab loadcell tare --virtual --capacity 5kg -o lc.json
+      fsrlab loadcell scale --virtual --mass 500g --cal lc.json
+    """
+    from fsrlab.acquisition.bench import NoLoadCell, read_reference
+    from fsrlab.acquisition.loadcell import LoadCellError, scale_from_readings, tare_from_readings
+    from fsrlab.acquisition.serial_link import LinkError, SerialLink
+
+    action = action.strip().lower()
+    if action not in ("tare", "scale"):
+        fail(f"must be tare or scale, got {action!r}", "ACTION")
+    if virtual == (port is not None):
+        fail("give exactly one of --port PORT|auto and --virtual", "--port")
+    if not duration > 0:
+        fail(f"must be > 0 s, got {duration:g} s", "--duration")
+    window_ms = _window_ms(window)
+    if duration < 5 * window_ms / 1000.0:
+        fail(f"must be at least 5 windows ({5 * window_ms / 1000.0:g} s) to judge the reading's stability, "
+             f"got {duration:g} s", "--duration")
+    _check_rate(hx711_rate)
+    if seed is not None and seed < 0:
+        fail(f"must be an integer >= 0, got {seed}", "--seed")
+    tare = None
+    if action == "tare":
+        if out is None:
+            fail("tare needs the file to write, e.g. -o lc.json", "--out")
+        if mass is not None or cal is not None:
+            fail("--mass and --cal belong to scale (fsrlab loadcell scale --mass 500g --cal lc.json)", "--mass")
+        if capacity is not None and not capacity > 0:
+            fail(f"must be > 0 kg, got {capacity:g} kg", "--capacity")
+        target = out
+    else:
+        if cal is None:
+            fail("scale needs the tare's file, e.g. --cal lc.json", "--cal")
+        if mass is None or not mass > 0:
+            fail("scale needs the known mass > 0 on the cell, e.g. --mass 500g", "--mass")
+        if capacity is not None:
+            fail("the capacity is given at the tare (fsrlab loadcell tare --capacity 5kg)", "--capacity")
+        tare = _load_loadcell(cal, "--cal", scaled=False)
+        target = out if out is not None else cal
+    if target.is_dir():
+        fail(f"{target} is a directory; give a file, e.g. {target / 'lc.json'}", "--out" if out is not None else "--cal")
+    if action == "tare" and target.exists() and not overwrite:
+        fail(f"{target} exists; pass --overwrite to replace it", "--out")
+    parent = target.parent if str(target.parent) else Path(".")
+    if not parent.is_dir():
+        fail(f"directory {parent} does not exist", "--out" if out is not None else "--cal")
+
+    device = None
+    force = 0.0 if action == "tare" else mass * gravity
+    if virtual:
+        from fsrlab.acquisition.loadcell import LoadCellModel
+        from fsrlab.acquisition.virtual_device import ConstantSource, VirtualDevice
+        from fsrlab.physics.sensor import A201_AREA_M2
+
+        # The virtual bench: the cell unloaded for a tare, the mass on it for a scale.
+        device = VirtualDevice(ConstantSource(stress_pa=force / A201_AREA_M2), seed=seed,
+                               load_cell=LoadCellModel(rate_sps=hx711_rate))
+        port = device.open()
+    try:
+        with SerialLink(port) as link, _sigterm_as_interrupt():
+            if not virtual:
+                what = "nothing on the load cell" if action == "tare" else f"{mass * 1e3:g} g on the load cell"
+                print(f"fsrlab: reading for {duration:g} s with {what}; keep it still", file=sys.stderr)
+            readings = read_reference(link, duration, window_ms)
+    except NoLoadCell as exc:
+        print(f"fsrlab: {exc}", file=sys.stderr)
+        raise typer.Exit(1)
+    except LinkError as exc:
+        print(f"fsrlab: {plain_numbers(str(exc))}", file=sys.stderr)
+        raise typer.Exit(1)
+    except KeyboardInterrupt:
+        print(f"fsrlab: interrupted: nothing written to {target}", file=sys.stderr)
+        raise typer.Exit(1)
+    finally:
+        if device is not None:
+            device.close()
+    try:
+        if action == "tare":
+            result, warning = tare_from_readings(readings.means, None if capacity is None else capacity * gravity), None
+        else:
+            result, warning = scale_from_readings(tare, readings.means, mass, gravity)
+    except LoadCellError as exc:
+        print(f"fsrlab: {exc}; {target} not written", file=sys.stderr)
+        raise typer.Exit(1)
+    if action == "tare" and capacity is not None:
+        result.tare["capacity_kg"] = capacity
+        result.tare["gravity_m_s2"] = gravity
+    (result.tare if action == "tare" else result.scale)["conversions"] = readings.conversions
+    result.save(target)
+    if warning:
+        print(f"fsrlab: warning: {warning}", file=sys.stderr)
+    summary = {"file": str(target), "action": action, "offset_counts": result.offset_counts,
+               "scale_counts_per_n": result.scale_counts_per_n, "capacity_n": result.capacity_n,
+               "windows": len(readings.means), "conversions": readings.conversions,
+               "noise_counts": (result.tare if action == "tare" else result.scale)["noise_counts"]}
+    if action == "scale":
+        summary["mass_kg"], summary["gravity_m_s2"] = mass, gravity
+        summary["noise_n"] = result.scale["noise_n"]
+    if json_out:
+        emit_json(summary)
+    elif action == "tare":
+        typer.echo(f"{target}: offset {result.offset_counts:.1f} counts (noise {summary['noise_counts']:.1f} counts, "
+                   f"{summary['windows']} windows); next: fsrlab loadcell scale --mass 500g --cal {target}")
+    else:
+        typer.echo(f"{target}: scale {result.scale_counts_per_n:.2f} counts/N from {mass * 1e3:g} g at g = {gravity:g} "
+                   f"m/s² (noise {summary['noise_n'] * 1e3:.2f} mN = {summary['noise_n'] / gravity * 1e6:.2f} mg)")

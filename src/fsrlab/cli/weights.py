@@ -1,0 +1,224 @@
+"""``fsrlab weights``: the guided known-weight calibration (place masses, wait until stable, record)."""
+
+from __future__ import annotations
+
+import queue
+import sys
+import threading
+from pathlib import Path
+
+import typer
+
+from fsrlab.cli import app
+from fsrlab.cli._common import emit_json, fail, fraction, mass_list, plain_numbers, seconds
+from fsrlab.cli.acquisition import (
+    _AREA_HELP, _LOADCELL_HELP, _SENSOR_HELP, _check_out, _load_loadcell, _sensor_area, _sigterm_as_interrupt,
+    _window_ms,
+)
+from fsrlab.cli._common import areas
+from fsrlab.cli.loadcell import _GRAVITY_HELP, _gravity
+
+
+class _Keyboard:
+    """The user's answers: lines typed on stdin, read by a daemon thread (the recording never waits on them)."""
+
+    def __init__(self) -> None:
+        self._lines: queue.Queue = queue.Queue()
+        self._eof_said = False
+        threading.Thread(target=self._read, name="fsrlab-weights-stdin", daemon=True).start()
+
+    def _read(self) -> None:
+        try:
+            for line in sys.stdin:
+                self._lines.put(line)
+        except (OSError, ValueError):  # no usable stdin (closed, or a test's captured one)
+            pass
+        self._lines.put(None)  # end of input: every later question is answered "ok"
+
+    def drain(self) -> None:
+        """Forget what was typed before the question."""
+        while True:
+            try:
+                if self._lines.get_nowait() is None:
+                    self._lines.put(None)
+                    return
+            except queue.Empty:
+                return
+
+    def answer(self) -> str | None:
+        """None (nothing typed yet), "skip" (s) or "ok" (anything else, or the end of the input)."""
+        try:
+            line = self._lines.get_nowait()
+        except queue.Empty:
+            return None
+        if line is None:
+            self._lines.put(None)
+            if not self._eof_said:
+                self._eof_said = True
+                print("fsrlab: standard input closed: every later step goes on without waiting for Enter",
+                      file=sys.stderr, flush=True)
+            return "ok"
+        return "skip" if line.strip().lower() in ("s", "skip") else "ok"
+
+
+@app.command("weights")
+def weights(
+    masses: str = typer.Option(..., "--masses", metavar="MASSES", help="Masses to place, increasing, comma-separated [kg]: 0,50g,100g,200g,500g (g, kg or mg; 0 needs no unit)."),
+    port: str = typer.Option(None, "--port", help="Serial port of the meter (/dev/ttyACM0, COM3, a pty) or 'auto'."),
+    virtual: bool = typer.Option(False, "--virtual", help="A virtual meter and a virtual bench that places the masses itself (runs unattended)."),
+    out: Path = typer.Option(Path("weights.csv"), "--out", "-o", help="Run file (CSV + NAME.meta.json sidecar; NAME.placements.csv beside it)."),
+    repeat: int = typer.Option(1, "--repeat", help="Cycles of placements [1], for repeatability (RE1, RE2 as in Tables 4 and 5): 1, 3, 5."),
+    unload: bool = typer.Option(False, "--unload", help="After the largest mass, unload in reverse (direction -1), for hysteresis."),
+    loadcell: Path = typer.Option(None, "--loadcell", metavar="LC.json", help="Load-cell calibration JSON: force_n is then the load cell's reading, force_nominal_n stays m·g."),
+    sensor: str = typer.Option(None, "--sensor", help=_SENSOR_HELP),
+    area: float = typer.Option(None, "--area", parser=areas, metavar="AREA", help=_AREA_HELP),
+    x: str = typer.Option("frequency_hz", "--x", help="Readout judged for stability and written as reading: frequency_hz [Hz], duty_cycle [1] or voltage_v [V]."),
+    window: float = typer.Option("100ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], whole ms: 20ms, 100ms, 0.25."),
+    settle_windows: int = typer.Option(10, "--settle-windows", help="Windows over which the readout's drift is judged [1]: 10 (at least 2)."),
+    max_drift: float = typer.Option("0.5%", "--max-drift", parser=fraction, metavar="FRACTION", help="Stable when the readout's relative drift over --settle-windows is at most this [1]: 0.5%, 0.002."),
+    timeout: float = typer.Option("30s", "--timeout", parser=seconds, metavar="TIME", help="Not stable after this long [s]: ask again (then skip the step): 30s, 1min."),
+    hold: float = typer.Option("1s", "--hold", parser=seconds, metavar="TIME", help="Steady time recorded per step [s]: 1s, 2s, 500ms."),
+    gravity: float = typer.Option("9.80665", "--gravity", parser=_gravity, metavar="ACCELERATION", help=_GRAVITY_HELP),
+    seed: int = typer.Option(None, "--seed", help="Random seed of the virtual meter's noise (an integer)."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing run and its sidecar."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Virtual bench: do not print its steps (prompts for a person are always shown)."),
+    json_out: bool = typer.Option(False, "--json", help='Print {"frames", "dropped", "duration_s", "file", "recorded", "skipped", "placements"} as JSON.'),
+) -> None:
+    """Guided known-weight calibration: place each mass, wait until the reading is stable, record it.
+
+    For each step the command asks for the mass (the total on the sensor), waits for Enter, then
+    waits until the readout's relative drift over the last --settle-windows windows (second half's
+    mean minus first half's, over the mean) is at most --max-drift, and records --hold seconds of
+    steady windows. Not stable within --timeout: asked again, then the step is skipped. The run has
+    force_n (m·g, or the load cell's with --loadcell; force_nominal_n keeps m·g), stress_pa (with
+    an area: --sensor, --area or the virtual sensor), step, direction, cycle, and load (g), sensor,
+    reading for fsrlab repeatability; NAME.placements.csv holds one mean reading per placement.
+    Ctrl-C keeps the rows recorded.
+
+    Examples:
+
+    \b
+      fsrlab weights --virtual --masses 0,100g,200g,400g --repeat 3 --unload --window 20ms --hold 200ms -o w.csv
+      fsrlab weights --port auto --masses 0,50g,100g,200g,500g --repeat 5 --unload --sensor flexiforce-a201 -o w.csv
+    """
+    from fsrlab.acquisition.recorder import record, result_dict
+    from fsrlab.acquisition.serial_link import SerialLink
+    from fsrlab.acquisition.weights import READOUTS, WeightsProcedure, placements_table, plan_steps
+
+    try:
+        masses_kg = mass_list(masses)
+    except typer.BadParameter as exc:
+        fail(exc.message, "--masses")
+    if virtual == (port is not None):
+        fail("give exactly one of --port PORT|auto and --virtual", "--port")
+    if len(masses_kg) < 2:
+        fail(f"give at least two masses, e.g. 0,100g; got {masses!r}", "--masses")
+    if not 1 <= repeat <= 1000:
+        fail(f"must be 1 to 1000 cycles, got {repeat}", "--repeat")
+    if x not in READOUTS:
+        fail(f"must be one of {', '.join(READOUTS)}, got {x!r}", "--x")
+    window_ms = _window_ms(window)
+    if not 2 <= settle_windows <= 10000:
+        fail(f"must be 2 to 10000 windows, got {settle_windows}", "--settle-windows")
+    if not 0 < max_drift <= 1:
+        fail(f"must be in (0, 1], got {max_drift:g}", "--max-drift")
+    if not timeout >= settle_windows * window_ms / 1000.0:
+        fail(f"must be at least --settle-windows windows ({settle_windows * window_ms / 1000.0:g} s), got {timeout:g} s",
+             "--timeout")
+    if not window_ms / 1000.0 <= hold <= 3600:
+        fail(f"must be one window ({window_ms / 1000.0:g} s) to 1 h, got {hold:g} s", "--hold")
+    if seed is not None and seed < 0:
+        fail(f"must be an integer >= 0, got {seed}", "--seed")
+    sensor_meta, area_m2 = _sensor_area(sensor, area)
+    cal = _load_loadcell(loadcell)
+    _check_out(out, overwrite)
+    steps = plan_steps(masses_kg, repeat, unload)
+    stop = threading.Event()
+    device = bench = None
+    metadata: dict = {"sensor": sensor_meta} if sensor_meta else {}
+    if virtual:
+        from fsrlab.acquisition.bench import BenchSource
+        from fsrlab.acquisition.virtual_device import VirtualDevice
+        from fsrlab.physics.sensor import VirtualFSR
+
+        try:
+            bench = BenchSource([s.mass_kg * gravity for s in steps],
+                                sensor=VirtualFSR() if area_m2 is None else VirtualFSR(area_m2=area_m2))
+        except ValueError:
+            fail(f"the virtual sensor model has no valid response up to {masses_kg[-1] * 1e3:g} g on its area; "
+                 "choose smaller masses", "--masses")
+        device = VirtualDevice(bench, seed=seed)
+        port = device.open()
+        vmeta = bench.metadata()
+        if sensor_meta:
+            vmeta["sensor"] = {**sensor_meta, "virtual_model": vmeta["sensor"]["model"]}
+        metadata = {"origin": "fsrlab weights --virtual (virtual bench placing the masses -> VirtualFSR -> LM555 "
+                              "and op-amp -> meter model -> emulated firmware over a pty)", **vmeta}
+        area_m2 = bench.sensor.area_m2
+
+        def announce(text: str) -> None:
+            if not quiet:
+                print(f"fsrlab: virtual bench: {text.split(', then press Enter')[0]}", file=sys.stderr, flush=True)
+
+        def place(step) -> float:
+            t = device.time_since_start()
+            bench.place(step.index, t)
+            return t
+
+        def confirmed() -> str:
+            return "ok"
+    else:
+        keyboard = _Keyboard()
+
+        def announce(text: str) -> None:
+            print(f"fsrlab: {text}", file=sys.stderr, flush=True)
+
+        def place(step) -> None:
+            keyboard.drain()
+
+        confirmed = keyboard.answer
+    unit = {"frequency_hz": "Hz", "duty_cycle": "1", "voltage_v": "V"}[x]
+    force_source = "load cell (--loadcell)" if cal is not None else "nominal (mass × g)"
+    metadata["units"] = {"load": "g", "sensor": "1", "reading": unit}
+    metadata["weights"] = {"masses_kg": masses_kg, "repeat": repeat, "unload": unload, "gravity_m_s2": gravity,
+                           "force_n": force_source, "reading": x,
+                           "stability": {"criterion": "relative drift of the readout (mean of the second half "
+                                                      "of the last windows minus the first half's, over their mean)",
+                                         "settle_windows": settle_windows, "max_drift": max_drift,
+                                         "timeout_s": timeout, "hold_s": hold}}
+    proc = WeightsProcedure(steps, announce, confirmed, place, stop, x=x, gravity_m_s2=gravity,
+                            use_loadcell=cal is not None, area_m2=area_m2, settle_windows=settle_windows,
+                            max_drift=max_drift, timeout_s=timeout, hold_s=hold)
+    columns = ["step", "direction", "cycle", "force_nominal_n", "force_n"] + (["stress_pa"] if area_m2 else []) + [
+        "load", "sensor", "reading"]
+    # No time limit: a person may take long to place a mass; the plan's end (or Ctrl-C) stops it.
+    budget = 10 * 365 * 86400.0
+    try:
+        with SerialLink(port) as link, _sigterm_as_interrupt():
+            result = record(link, out, budget, window_ms=window_ms, metadata=metadata, stop=stop,
+                            on_event=lambda text: print(f"fsrlab: {text}", file=sys.stderr, flush=True),
+                            health=(lambda: device.failure) if device is not None else None, overwrite=overwrite,
+                            loadcell=cal, extra_columns=columns, on_row=proc.on_row,
+                            final_metadata=lambda: {"weights": {**metadata["weights"], **proc.summary()}})
+    finally:
+        if device is not None:
+            device.close()
+    summary = proc.summary()
+    placements = out.with_name(out.stem + ".placements.csv")
+    try:
+        placements.write_text(placements_table(summary, x), encoding="utf-8")
+    except OSError as exc:
+        print(f"fsrlab: cannot write {placements}: {exc.strerror}", file=sys.stderr)
+    info = {**result_dict(result), "recorded": summary["recorded"], "skipped": summary["skipped"],
+            "completed": summary["completed"], "placements": str(placements)}
+    if json_out:
+        emit_json(info)
+    else:
+        typer.echo(f"{out}: {summary['recorded']} of {len(steps)} steps recorded ({summary['skipped']} skipped), "
+                   f"{result.frames} windows; force_n: {force_source}; per placement: {placements}")
+    if result.failed:
+        print(f"fsrlab: {plain_numbers(result.message)}", file=sys.stderr)
+        raise typer.Exit(1)
+    if not summary["completed"] and result.ended != "interrupted":
+        print(f"fsrlab: the plan did not finish ({result.ended}): {summary['recorded']} steps recorded", file=sys.stderr)
+        raise typer.Exit(1)

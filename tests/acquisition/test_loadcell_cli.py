@@ -1,0 +1,85 @@
+"""``fsrlab loadcell`` and ``fsrlab measure`` on the virtual meter, and their bad input.
+
+References: the virtual load cell's known parameters (fsrlab.acquisition.loadcell.LoadCellModel():
+offset 8192 counts, 87 600 counts/N, 40 counts of noise per conversion, 5 kg capacity in the
+file only through --capacity); the stated rules (a scale mass below 5 % of the capacity warns;
+one line naming the option, exit 2). Real time: about 1 s per reading.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+from pathlib import Path
+
+import numpy as np
+
+from clirun import run_cli
+from fsrlab.runformat import load_run
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_tare_then_scale_find_the_virtual_cells_parameters(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run_cli(["loadcell", "tare", "--virtual", "--capacity", "5kg", "-o", "lc.json",
+                              "--duration", "1s", "--seed", "1", "--json"])
+    assert code == 0, err
+    tare = json.loads(out)
+    # 10 windows of 8 conversions: the mean of 80 conversions is within 5·40/√80 counts of 8192.
+    assert abs(tare["offset_counts"] - 8192) < 5 * 40 / math.sqrt(80)
+    assert tare["capacity_n"] == 5 * 9.80665
+    code, out, err = run_cli(["loadcell", "scale", "--virtual", "--mass", "500g", "--cal", "lc.json",
+                              "--duration", "1s", "--seed", "2", "--json"])
+    assert code == 0 and "warning" not in err, err
+    scale = json.loads(out)
+    assert abs(scale["scale_counts_per_n"] - 87600) < 2 * 5 * 40 / math.sqrt(80) / (0.5 * 9.80665)
+    saved = json.loads(Path("lc.json").read_text())
+    assert saved["scale"]["mass_kg"] == 0.5 and saved["scale"]["gravity_m_s2"] == 9.80665
+    assert saved["tare"]["noise_counts"] > 0 and saved["scale"]["noise_n"] > 0 and saved["created"]
+    code, out, err = run_cli(["loadcell", "scale", "--virtual", "--mass", "100g", "--cal", "lc.json",
+                              "-o", "small.json", "--duration", "1s", "--seed", "3"])
+    assert code == 0 and "below 5 % of the load cell's capacity" in err, err  # 0.98 N < 2.45 N
+    # The recorder turns raw counts into force with it (force = (raw − offset)/scale).
+    code, out, err = run_cli(["acquire", "--virtual", "--quiet", "--duration", "0.5", "--loadcell", "lc.json",
+                              "-o", "run.csv"])
+    assert code == 0, err
+    run = load_run("run.csv")
+    expected = (run["reference_raw"] - saved["offset_counts"]) / saved["scale_counts_per_n"]
+    assert np.allclose(run["force_n"], expected, rtol=1e-12) and run.metadata["load_cell"] == saved
+
+
+def test_bad_input_one_line_naming_the_option(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    Path("tare.json").write_text(json.dumps({"format": "fsrlab-loadcell", "version": 1, "offset_counts": 8192.0,
+                                             "scale_counts_per_n": None}))
+    for args, option in ((["loadcell", "tare", "--virtual"], "--out"),
+                         (["loadcell", "weigh", "--virtual", "-o", "x.json"], "ACTION"),
+                         (["loadcell", "scale", "--virtual", "--cal", "tare.json"], "--mass"),
+                         (["loadcell", "scale", "--virtual", "--cal", "tare.json", "--mass", "5N"], "--mass"),
+                         (["loadcell", "tare", "--virtual", "-o", "tare.json"], "--out"),  # exists
+                         (["acquire", "--virtual", "--duration", "0.1", "--loadcell", "tare.json"], "--loadcell"),
+                         (["acquire", "--virtual", "--duration", "0.1", "--sensor", "fsr-999"], "--sensor"),
+                         (["acquire", "--virtual", "--duration", "0.1", "--area", "5kg"], "--area"),
+                         (["measure", "--virtual", "--cal", "tare.json", "--duration", "0.1"], "--cal")):
+        code, out, err = run_cli(args)
+        assert code == 2 and err.count("\n") == 1 and option in err and "Traceback" not in err, (args, err)
+
+
+def test_measure_records_the_estimate_beside_the_load_cell(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    shutil.copy(ROOT / "examples" / "bench.csv", "bench.csv")
+    shutil.copy(ROOT / "examples" / "bench.meta.json", "bench.meta.json")
+    code, out, err = run_cli(["calibrate", "bench.csv", "--degree", "3", "-o", "cal.json"])
+    assert code == 0, err
+    code, out, err = run_cli(["measure", "--virtual", "--cal", "cal.json", "--duration", "1s", "--quiet",
+                              "-o", "live.csv", "--json"])
+    assert code == 0, err
+    info = json.loads(out)
+    run = load_run("live.csv")
+    assert run.n_rows == info["frames"] > 0 and info["estimated"] == np.sum(np.isfinite(run["stress_pa_estimate"]))
+    area = run.metadata["sensor"]["area_m2"]
+    ok = np.isfinite(run["stress_pa_estimate"])
+    assert np.allclose(run["force_n_estimate"][ok], run["stress_pa_estimate"][ok] * area)  # force = stress × area
+    assert np.all(np.isfinite(run["force_n"]))  # the emulated load cell beside it
