@@ -46,6 +46,7 @@ from fsrlab.acquisition.protocol import (
 from fsrlab.acquisition.serial_link import DeviceGone, LinkError, SerialLink
 
 __all__ = ["COLUMNS", "REFERENCE_COLUMNS", "FAILED_ENDINGS", "Gap", "RecordStatus", "RecordResult", "default_stall_s", "record",
+           "window_row",
            "result_dict", "stats_dict"]
 
 COLUMNS = ("time_s", "frequency_hz", "duty_cycle", "voltage_v", "periods", "missed", "range", "seq")
@@ -182,6 +183,44 @@ class RecordResult:
 
 class _Failure(Exception):
     """Ends the recording loop with ``ended="failed"`` and this message."""
+
+
+def window_row(m: Measurement, time_s: float, has_ref: bool, loadcell=None, area_m2: float | None = None,
+               stress_pa: float | None = None) -> dict:
+    """One run row for a measurement window (what ``record`` writes, before ``on_row``).
+
+    Parameters
+    ----------
+    m : Measurement
+        The window.
+    time_s : float
+        Its time in the run. [s]
+    has_ref : bool
+        The device sends a reference (protocol 2): ``reference_raw`` and ``force_n`` are filled, empty
+        (None, never 0) for a window without an HX711 conversion.
+    loadcell : LoadCellCalibration, optional
+        Converts raw counts to ``force_n``; without it ``force_n`` stays empty.
+    area_m2 : float, optional
+        Sensor area: ``stress_pa = force_n / area``. [m²]
+    stress_pa : float, optional
+        A known reference stress (the virtual device's); written as ``stress_pa`` when given. [Pa]
+
+    Returns
+    -------
+    dict
+        Column → value (None: an empty cell).
+    """
+    row = {"time_s": time_s, "frequency_hz": m.frequency_hz, "duty_cycle": m.duty_cycle, "voltage_v": m.adc_v,
+           "periods": m.periods, "missed": m.missed, "range": m.range, "seq": m.seq}
+    if stress_pa is not None:
+        row["stress_pa"] = stress_pa if math.isfinite(stress_pa) else None
+    if has_ref:
+        raw = m.ref_mean if m.ref_n > 0 else None  # empty, never 0, without a conversion
+        force = loadcell.force(raw) if raw is not None and loadcell is not None else None
+        row["reference_raw"], row["force_n"] = raw, force
+        if area_m2 is not None:
+            row["stress_pa"] = force / area_m2 if force is not None else None
+    return row
 
 
 def _configure(link: SerialLink, window_ms: int, range_: int) -> int:
@@ -392,15 +431,9 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
                     if anchor_ms is None:
                         anchor_ms = (m.t_ms - m.window_ms) % UINT32_MODULO
                         offset_s = max(time.monotonic() - t_start - m.window_ms / 1000.0, 0.0) if frames else 0.0
-                    row = {
-                        "time_s": offset_s + ((m.t_ms - anchor_ms) % UINT32_MODULO) / 1000.0,
-                        "frequency_hz": m.frequency_hz, "duty_cycle": m.duty_cycle,
-                        "voltage_v": m.adc_v, "periods": m.periods, "missed": m.missed,
-                        "range": m.range, "seq": m.seq,
-                    }
-                    if reference is not None:
-                        value = reference(frame)
-                        row["stress_pa"] = value if value is not None and math.isfinite(value) else None
+                    row = window_row(m, offset_s + ((m.t_ms - anchor_ms) % UINT32_MODULO) / 1000.0, has_ref,
+                                     loadcell, area_m2 if stress_from_force else None,
+                                     reference(frame) if reference is not None else None)
                     if has_ref and m.ref_ok != cell_ok:
                         if m.ref_ok == 0:
                             event(f"no load cell: the meter reports no HX711 (ref_ok 0) from {row['time_s']:.1f} s into "
@@ -408,12 +441,6 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
                         elif cell_ok == 0:
                             event(f"load cell answering again from {row['time_s']:.1f} s into the run")
                         cell_ok = m.ref_ok
-                    if has_ref:
-                        raw = m.ref_mean if m.ref_n > 0 else None  # empty, never 0, without a conversion
-                        force = loadcell.force(raw) if raw is not None and loadcell is not None else None
-                        row["reference_raw"], row["force_n"] = raw, force
-                        if stress_from_force:
-                            row["stress_pa"] = force / area_m2 if force is not None else None
                     if on_row is not None:
                         row = on_row(m, row)
                         if row is None:

@@ -8,7 +8,24 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli._common import fail, farads, pascals, seconds, to_jsonable
+from fsrlab.cli._common import areas, fail, farads, pascals, seconds, to_jsonable
+from fsrlab.cli.acquisition import _AREA_HELP, _LOADCELL_HELP, _SENSOR_HELP
+
+
+def _estimator(cal, area_m2: float | None):
+    """``row -> (estimate [N], uncertainty [N])`` by the calibration's causal estimator (compensation included)."""
+    import math
+
+    from fsrlab.analysis.pipeline import live_estimator
+
+    est = live_estimator(cal)
+    scale = 1.0 if est.reference == "force_n" else (area_m2 or math.nan)  # stress → force
+
+    def step(row):
+        x = row.get(est.x)
+        e, u, _inside = est.step(x if x is not None and math.isfinite(x) else None)
+        return (math.nan if e is None else e * scale), (math.nan if u is None else u * scale)
+    return step
 
 
 def _json_line(obj) -> None:
@@ -35,6 +52,9 @@ def live(
     period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="Virtual device: period of the profile [s], e.g. 4s."),
     c_off: float = typer.Option("1n", "--c-off", parser=farads, metavar="CAPACITANCE", help="Virtual circuit: C_off [F], e.g. 1n."),
     seed: int = typer.Option(None, "--seed", help="Virtual device: random seed [1] (default: a fresh one)."),
+    loadcell: Path = typer.Option(None, "--loadcell", help=_LOADCELL_HELP),
+    sensor: str = typer.Option(None, "--sensor", help=_SENSOR_HELP),
+    area: float = typer.Option(None, "--area", parser=areas, metavar="AREA", help=_AREA_HELP),
     unplug_after: int = typer.Option(None, "--unplug-after", help="Virtual device (tests): pull the cable after this many windows [1]."),
     json_out: bool = typer.Option(False, "--json", help='Print JSON lines: {"url", "token"} when the page is up, {"frames", "recorded", "state"} at the end.'),
 ) -> None:
@@ -55,7 +75,8 @@ def live(
     import math
     import time
 
-    from fsrlab.cli.acquisition import _check_out, _check_virtual, _virtual_device, _window_ms
+    from fsrlab.cli.acquisition import (_check_out, _check_virtual, _load_loadcell, _sensor_area, _virtual_device,
+                                        _window_ms)
 
     if virtual == (port is not None):
         fail("give exactly one of --port PORT|auto and --virtual", "--port")
@@ -68,20 +89,21 @@ def live(
         fail(f"must be > 0 s, got {duration:g} s", "--duration")
     if out is not None:
         _check_out(out, overwrite=False)
-    estimator = None
+    sensor_meta, area_m2 = _sensor_area(sensor, area)
+    lc = _load_loadcell(loadcell)
+    calibration = None
     if cal is not None:
         from fsrlab.analysis.calibration_io import load_calibration
 
+        if not cal.is_file():
+            fail(f"{cal} does not exist; write one with fsrlab calibrate RUN.csv -o {cal}", "--cal")
         try:
             calibration = load_calibration(cal)
         except (OSError, ValueError) as exc:
             fail(str(exc), "--cal")
-
-        def estimator(row, c=calibration):
-            x = row.get(c.x_name)
-            if x is None or not math.isfinite(x):
-                return math.nan, math.nan
-            return float(c(x)), float(getattr(c, "cv").rmse) if getattr(c, "cv", None) else math.nan
+        if calibration.x_name not in ("frequency_hz", "duty_cycle", "voltage_v"):
+            fail(f"{cal} calibrates {calibration.x_name}; fsrlab live reads frequency_hz, duty_cycle or voltage_v",
+                 "--cal")
     try:
         import bokeh  # noqa: F401
     except ImportError:
@@ -91,31 +113,36 @@ def live(
     from fsrlab.live.server import start_server
     from fsrlab.live.session import LiveSession
 
-    device, reference, health, metadata = None, None, None, {}
+    device, reference, health = None, None, None
+    metadata: dict = {"sensor": sensor_meta} if sensor_meta else {}
     if virtual:
         _check_virtual(profile, peak, period, c_off, 0.0, 0.0, seed)
-        device, source = _virtual_device(profile, peak, period, c_off, seed, 0.0, 0.0)
+        device, source = _virtual_device(profile, peak, period, c_off, seed, 0.0, 0.0, True, 80, area_m2)
         if unplug_after is not None:
             if unplug_after < 1:
                 fail(f"must be >= 1 window, got {unplug_after}", "--unplug-after")
             from fsrlab.acquisition.virtual_device import Faults
 
             device.faults = Faults(unplug_after=unplug_after)
+        if lc is None:
+            lc = device.load_cell.calibration()
+        area_m2 = source.sensor.area_m2
         port = device.open()
-        metadata = {"origin": "fsrlab live --virtual", **source.metadata()}
+        metadata = {"origin": "fsrlab live --virtual", **source.metadata(), **metadata}
         reference = lambda frame: device.reference(frame.seq)  # noqa: E731
         health = lambda: device.failure  # noqa: E731
+    estimator = _estimator(calibration, area_m2) if calibration is not None else None
     try:
         link = SerialLink(port)
     except Exception as exc:  # noqa: BLE001 - one line: the port could not be opened
         if device is not None:
             device.close()
         fail(f"cannot open {port}: {exc}", "--port")
-    session = LiveSession(link, window_ms=window_ms, range_=range_, reference=reference, estimator=estimator,
-                          health=health, metadata=metadata).start()
+    session = LiveSession(link, window_ms=window_ms, range_=range_, reference=reference, loadcell=lc, area_m2=area_m2,
+                          estimator=estimator, health=health, metadata=metadata).start()
     controller = Controller(out)
     try:
-        srv = start_server(lambda doc: make_document(doc, session, controller, "stress", "kPa", 1e-3),
+        srv = start_server(lambda doc: make_document(doc, session, controller, "force", "N", 1.0),
                            host=host, port=http_port)
     except OSError as exc:
         session.close()

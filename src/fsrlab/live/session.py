@@ -3,7 +3,8 @@
 The device thread owns the :class:`~fsrlab.acquisition.serial_link.SerialLink`: it identifies the
 device, configures and starts it, then reads frames, appends each window to a bounded buffer the pages
 read from (:meth:`LiveSession.since`), writes it to a run file while recording (the crash-safe
-:class:`~fsrlab.runwriter.RunWriter`, rows from :func:`fsrlab.acquisition.recorder.window_row`), and
+:class:`~fsrlab.runwriter.RunWriter`, the rows ``fsrlab acquire`` writes:
+:func:`fsrlab.acquisition.recorder.window_row`), and
 carries out the commands the pages send (range, window, start/stop recording) between reads. A device
 that vanishes ends the session's reading with a reason on the page; a recording in progress is closed
 with everything written so far.
@@ -85,9 +86,13 @@ class LiveSession:
     capacity : int
         Windows kept for the pages (the oldest drop out). [1]
     reference : callable, optional
-        ``reference(frame) -> value`` of the reference (stress [Pa] or force [N]) for a window.
+        ``reference(frame) -> stress [Pa]`` known for a window (the virtual device's applied stress).
+    loadcell : LoadCellCalibration, optional
+        Converts the meter's HX711 counts to ``force_n`` (protocol 2); the page's reference is that force.
+    area_m2 : float, optional
+        Sensor area, to show a stress-only reference as a force. [m²]
     estimator : callable, optional
-        ``estimator(row) -> (estimate, uncertainty)`` for a window (a calibration), or None.
+        ``estimator(row) -> (estimate [N], uncertainty [N])`` for a window (a calibration), or None.
     health : callable, optional
         ``health() -> None`` or a one-line reason once the device has failed.
     metadata : dict, optional
@@ -97,12 +102,16 @@ class LiveSession:
     """
 
     def __init__(self, link, window_ms: int = 100, range_: int = 0, capacity: int = 20000,
-                 reference: Callable | None = None, estimator: Callable | None = None,
+                 reference: Callable | None = None, loadcell=None, area_m2: float | None = None,
+                 estimator: Callable | None = None,
                  health: Callable[[], str | None] | None = None, metadata: dict | None = None,
                  stall_s: float = 2.0) -> None:
         self.link = link
         self.reference = reference
+        self.loadcell = loadcell
+        self.area_m2 = area_m2
         self.estimator = estimator
+        self._has_ref = False
         self.health = health
         self.metadata = dict(metadata or {})
         self.stall_s = float(stall_s)
@@ -161,6 +170,7 @@ class LiveSession:
             ident = self.link.handshake()
             self.identity = ident
             st.device = f"{ident.name} {ident.firmware_version} (protocol {ident.protocol_version})"
+            self._has_ref = ident.protocol_version >= 2
             self.link.stop()
             self.link.set_window(st.window_ms)
             self.link.set_range(st.range)
@@ -189,6 +199,7 @@ class LiveSession:
     def _loop(self) -> None:
         from fsrlab.acquisition.messages import Measurement
         from fsrlab.acquisition.protocol import UINT32_MODULO
+        from fsrlab.acquisition.recorder import window_row
 
         st = self.status
         parser = self.link.parser
@@ -220,13 +231,12 @@ class LiveSession:
                 m = Measurement.from_frame(frame)
                 if anchor_ms is None:
                     anchor_ms = (m.t_ms - m.window_ms) % UINT32_MODULO
-                row = {"time_s": ((m.t_ms - anchor_ms) % UINT32_MODULO) / 1000.0, "seq": m.seq,
-                       "frequency_hz": m.frequency_hz, "duty_cycle": m.duty_cycle, "voltage_v": m.adc_v,
-                       "range": m.range, "missed": m.missed, "periods": m.periods}
-                ref = self.reference(frame) if self.reference is not None else None
-                row["reference"] = ref if ref is not None and math.isfinite(ref) else math.nan
+                row = window_row(m, ((m.t_ms - anchor_ms) % UINT32_MODULO) / 1000.0, self._has_ref, self.loadcell,
+                                 None, self.reference(frame) if self.reference is not None else None)
+                row["reference"] = self._force(row)
                 est, unc = self.estimator(row) if self.estimator is not None else (math.nan, math.nan)
-                row["estimate"], row["uncertainty"] = est, unc
+                row["estimate"] = est if est is not None else math.nan
+                row["uncertainty"] = unc if unc is not None else math.nan
                 row["received_s"] = time.time()
                 self._write(row)
                 with self._lock:
@@ -241,6 +251,13 @@ class LiveSession:
             span = min(now - self._t0, 1.0)
             st.frames_per_s = len(self._recent) / span if span > 0 else 0.0
             st.dropped, st.corrupt = parser.lost, parser.bad_frames
+
+    def _force(self, row: dict) -> float:
+        """The page's reference [N]: the load cell's force, else a known stress times the area, else NaN."""
+        force = row.get("force_n")
+        if force is None and row.get("stress_pa") is not None and self.area_m2:
+            force = row["stress_pa"] * self.area_m2
+        return float(force) if force is not None and math.isfinite(force) else math.nan
 
     def _do_commands(self) -> None:
         st = self.status
@@ -268,17 +285,23 @@ class LiveSession:
     # ------------------------------------------------------------- recording
     def _open_recording(self, path: Path) -> None:
         from fsrlab.acquisition.recorder import COLUMNS as RUN_COLUMNS
+        from fsrlab.acquisition.recorder import REFERENCE_COLUMNS
         from fsrlab.runwriter import RunWriter
 
         if self._writer is not None:
             self._event(f"already recording to {self.status.recording}")
             return
         columns = list(RUN_COLUMNS) + (["stress_pa"] if self.reference is not None else [])
+        columns += list(REFERENCE_COLUMNS) if self._has_ref else []
         meta = dict(self.metadata)
         meta.setdefault("origin", f"fsrlab live from {self.link.port}")
+        if self.loadcell is not None:
+            meta["load_cell"] = self.loadcell.to_dict()
         ident = self.identity
         meta["acquisition"] = {"port": self.link.port, "window_ms": self.status.window_ms, "range": self.status.range,
-                               "device": ident.name if ident else "", "protocol_version": ident.protocol_version if ident else None}
+                               "device": ident.name if ident else "",
+                               "firmware_version": ident.firmware_version if ident else "",
+                               "protocol_version": ident.protocol_version if ident else None}
         self._writer = RunWriter(path, columns, meta, overwrite=False)  # never replaces a run
         self._record_t0 = None
         self.status.recording, self.status.recorded = str(path), 0
@@ -289,13 +312,8 @@ class LiveSession:
             return
         if self._record_t0 is None:
             self._record_t0 = row["time_s"]
-        out = {"time_s": row["time_s"] - self._record_t0, "frequency_hz": row["frequency_hz"],
-               "duty_cycle": row["duty_cycle"], "voltage_v": row["voltage_v"], "periods": row["periods"],
-               "missed": row["missed"], "range": row["range"], "seq": row["seq"]}
-        if self.reference is not None:
-            out["stress_pa"] = row["reference"] if math.isfinite(row["reference"]) else None
         try:
-            self._writer.write(out)
+            self._writer.write({**row, "time_s": row["time_s"] - self._record_t0})
             self.status.recorded += 1
         except OSError as exc:
             self._close_recording(f"write failed: {exc}")
