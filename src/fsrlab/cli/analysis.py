@@ -31,13 +31,13 @@ def _warn(warnings: list[str]) -> None:
 
 @contextmanager
 def _reading(path: Path) -> Iterator[None]:
-    """A file that cannot be read: one line naming it ("bench.csv: No such file or directory")."""
+    """A file that cannot be read: one line naming it ("cannot read 'bench.csv': No such file or directory")."""
     try:
         yield
     except IsADirectoryError:
         raise ValueError(f"'{path}' is a directory, not a file") from None
     except OSError as exc:
-        raise ValueError(f"{path}: {exc.strerror or exc}") from None
+        raise ValueError(f"cannot read '{path}': {exc.strerror or exc}") from None
 
 
 def _load(path: Path, skip_bad_rows: bool, warnings: list[str]):

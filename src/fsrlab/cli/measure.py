@@ -16,44 +16,12 @@ from fsrlab.cli.acquisition import (
     _fmt, _load_loadcell, _sensor_area, _sigterm_as_interrupt, _virtual_device, _window_ms,
 )
 
-_MARGIN = 0.10  # as fsrlab apply's default --margin: beyond 10 % of the range's span, no estimate
+def _estimator(cal):
+    """The causal estimator of a calibration (:func:`fsrlab.analysis.pipeline.live_estimator`): one reading at
+    a time, ``step(x) -> (estimate, uncertainty, in_range)``, with the compensation's memory between calls."""
+    from fsrlab.analysis.pipeline import live_estimator
 
-
-class _Estimator:
-    """One reading at a time through a calibration: ``step(x) -> (estimate, uncertainty, in_range)``.
-
-    Uses :func:`fsrlab.analysis.pipeline.live_estimator` (the causal estimator) when it is
-    importable; otherwise the calibration's plain polynomial on the calibrated range, with fsrlab
-    apply's 10 % margin. The fallback goes when the estimator lands.
-    """
-
-    def __init__(self, cal) -> None:
-        try:
-            from fsrlab.analysis.pipeline import live_estimator
-        except ImportError:
-            live_estimator = None
-        if live_estimator is not None:
-            self._est = live_estimator(cal)
-            self.x, self.reference = self._est.x, self._est.reference
-            return
-        self._est = None  # fallback: the plain polynomial (goes when live_estimator lands)
-        self._cal = cal
-        self.x, self.reference = cal.x_name, cal.y_name
-        self._lo, self._hi = cal.x_range
-
-    def step(self, value: float | None) -> tuple[float | None, float | None, bool]:
-        """Estimate [unit of the reference], its uncertainty (None when unknown), and whether the
-        readout is inside the calibrated range."""
-        if self._est is not None:
-            return self._est.step(value)
-        if value is None or not math.isfinite(value):
-            return None, None, False
-        span = self._hi - self._lo
-        inside = self._lo <= value <= self._hi
-        if not self._lo - _MARGIN * span <= value <= self._hi + _MARGIN * span:
-            return None, None, False
-        est = float(self._cal(value))
-        return (est if math.isfinite(est) else None), None, inside
+    return live_estimator(cal)
 
 
 class _Live:
@@ -144,7 +112,7 @@ def measure(
         fail(f"{cal} calibrates {calibration.x_name}; fsrlab measure reads frequency_hz, duty_cycle or voltage_v",
              "--cal")
     try:
-        est = _Estimator(calibration)
+        est = _estimator(calibration)
     except ValueError as exc:
         fail(f"{cal}: {exc}", "--cal")
     sensor_meta, area_m2 = _sensor_area(sensor, area)
@@ -163,10 +131,8 @@ def measure(
     ref = est.reference  # "stress_pa" or "force_n"
     to_force = (lambda v: v) if ref == "force_n" else ((lambda v: v * area_m2) if area_m2 else None)
     columns = [f"{ref}_estimate", "in_range"] + (["force_n_estimate"] if ref != "force_n" and to_force else [])
-    if est._est is not None:
-        columns.append(f"{ref}_estimate_uncertainty")
-    metadata["calibration"] = {"file": str(cal), "x": est.x, "reference": ref,
-                               "estimator": "live_estimator" if est._est is not None else "polynomial (fallback)"}
+    columns.append(f"{ref}_uncertainty")
+    metadata["calibration"] = {"file": str(cal), "x": est.x, "reference": ref, "estimator": "live_estimator"}
     counts = {"estimated": 0, "out_of_range": 0}
     last: dict = {}
     g = 9.80665
@@ -178,8 +144,7 @@ def measure(
             row = dict(row)
             row[f"{ref}_estimate"] = e
             row["in_range"] = (1 if inside else 0) if value is not None and math.isfinite(value) else None
-            if f"{ref}_estimate_uncertainty" in columns:
-                row[f"{ref}_estimate_uncertainty"] = u
+            row[f"{ref}_uncertainty"] = u
             force = to_force(e) if (to_force and e is not None) else None
             if "force_n_estimate" in columns:
                 row["force_n_estimate"] = force
