@@ -175,6 +175,7 @@ FORCED = {
                              "--timeout", draw(st.sampled_from(["0.2s", "0.1", "0", "abc"])), "--repeat",
                              draw(st.sampled_from(["1", "2", "0", "-1"]))],
     "measure": lambda draw: ["--virtual", "--quiet", "--duration", draw(SHORT_DURATIONS)],
+    "live": lambda draw: ["--virtual", "--http-port", "0", "--duration", draw(SHORT_DURATIONS)],
     "loadcell": lambda draw: ["--virtual", "--window", "20ms", "--duration",
                               draw(st.sampled_from(["0.1", "0.2s", "0", "-1", "abc", "1m"]))],
 }
@@ -182,11 +183,12 @@ LEFT_OUT = {("oscillator", "--spice"), ("acquire", "--virtual"), ("acquire", "--
             ("virtual-device", "--duration"), ("paper", "--out"), ("weights", "--virtual"), ("weights", "--quiet"),
             ("weights", "--window"), ("weights", "--settle-windows"), ("weights", "--hold"), ("weights", "--timeout"),
             ("weights", "--repeat"), ("measure", "--virtual"), ("measure", "--duration"), ("measure", "--quiet"),
-            ("loadcell", "--virtual"), ("loadcell", "--window"), ("loadcell", "--duration")}
+            ("loadcell", "--virtual"), ("loadcell", "--window"), ("loadcell", "--duration"),
+            ("live", "--virtual"), ("live", "--http-port"), ("live", "--duration"), ("live", "--open")}
 
 # The virtual device's start-up time grows with --period (~20 s at 50k s, a finding: see
 # test_known_virtual_device_start_up_does_not_grow_with_period): periods above 60 s are left out.
-CAPPED = {("acquire", "--period"), ("virtual-device", "--period"), ("measure", "--period")}
+CAPPED = {("acquire", "--period"), ("virtual-device", "--period"), ("measure", "--period"), ("live", "--period")}
 
 
 def _cap(text: str) -> str:

@@ -67,14 +67,11 @@ def live(
 
     Examples:
 
-    \\b
+    \b
       fsrlab live --virtual --out bench.csv --open
       fsrlab live --port auto --cal cal.json --out run.csv
       fsrlab live --virtual --host 0.0.0.0 --http-port 8080
     """
-    import math
-    import time
-
     from fsrlab.cli.acquisition import (_check_out, _check_virtual, _load_loadcell, _sensor_area, _virtual_device,
                                         _window_ms)
 
@@ -149,7 +146,7 @@ def live(
         link.close()
         if device is not None:
             device.close()
-        fail(f"cannot serve on {host}:{http_port}: {exc}", "--http-port")
+        fail(f"cannot serve on {host}:{http_port}: {exc.strerror or exc}", "--host" if host != "127.0.0.1" else "--http-port")
     if json_out:
         _json_line({"url": srv.url, "token": srv.token})
     else:

@@ -2,9 +2,9 @@
 
 Time series of frequency, duty cycle, op-amp voltage and the reference (with the calibrated estimate
 and its band when a calibration is given), the loading/unloading loop (readout against reference),
-a status line, the latest window in numbers, and the controls. Each tab streams the windows it has
-not seen yet every :data:`UPDATE_S` (``ColumnDataSource.stream`` with a rollover, so memory stays
-bounded); one tab at a time controls the device and the recording, the others watch.
+a status line, the latest window in numbers, and the controls. Each tab shows the latest window in numbers every
+:data:`UPDATE_S` and streams the windows it has not plotted yet every :data:`PLOT_S`
+(``ColumnDataSource.stream`` with a rollover, so memory stays bounded); one tab at a time controls the device and the recording, the others watch.
 """
 
 from __future__ import annotations
@@ -14,10 +14,12 @@ import threading
 import time
 from pathlib import Path
 
-__all__ = ["UPDATE_S", "STATUS_S", "POINTS", "Controller", "make_document"]
+__all__ = ["UPDATE_S", "PLOT_S", "STATUS_S", "POINTS", "Controller", "make_document"]
 
-UPDATE_S = 0.05
+UPDATE_S = 0.04
 """Period of a page's update callback. [s]"""
+PLOT_S = 0.1
+"""Shortest time between two redraws of the plots (the numbers update every :data:`UPDATE_S`). [s]"""
 STATUS_S = 0.25
 """Period of the status line's refresh. [s]"""
 POINTS = 10_000
@@ -149,7 +151,8 @@ def make_document(doc, session, controller: Controller, reference_label: str = "
     rng.on_change("active", lambda attr, old, new: session.command("range", int(new)))
     window.on_change("value", lambda attr, old, new: session.command("window", int(new)))
 
-    state = {"cursor": 0, "status_at": 0.0}
+    state = {"cursor": 0, "status_at": 0.0, "plot_at": 0.0}
+    pending = {c: [] for c in empty}
 
     def update():
         cursor, cols = session.since(state["cursor"])
@@ -159,12 +162,13 @@ def make_document(doc, session, controller: Controller, reference_label: str = "
             k = reference_scale
             est, unc = [k * e for e in cols["estimate"]], [k * u for u in cols["uncertainty"]]
             ref = [k * r for r in cols["reference"]]
-            src.stream({"time_s": cols["time_s"], "seq": cols["seq"],
-                        "frequency_khz": [f / 1e3 for f in cols["frequency_hz"]],
-                        "duty_pct": [100 * d for d in cols["duty_cycle"]], "voltage_v": cols["voltage_v"],
-                        "reference": ref, "estimate": est,
-                        "lower": [e - u for e, u in zip(est, unc)], "upper": [e + u for e, u in zip(est, unc)]},
-                       rollover=POINTS)
+            new = {"time_s": cols["time_s"], "seq": cols["seq"],
+                   "frequency_khz": [f / 1e3 for f in cols["frequency_hz"]],
+                   "duty_pct": [100 * d for d in cols["duty_cycle"]], "voltage_v": cols["voltage_v"],
+                   "reference": ref, "estimate": est,
+                   "lower": [e - u for e, u in zip(est, unc)], "upper": [e + u for e, u in zip(est, unc)]}
+            for key, values in new.items():
+                pending[key].extend(values)
             i = n - 1
             latest.text = (f"<span id='latest-seq'>{cols['seq'][i]}</span> · f = "
                            f"<span id='latest-frequency'>{_fmt(cols['frequency_hz'][i], '.2f')}</span> Hz · duty = "
@@ -174,6 +178,11 @@ def make_document(doc, session, controller: Controller, reference_label: str = "
                            + (f" · estimate = <span id='latest-estimate'>{_fmt(est[i], '.6g')}</span> ± {_fmt(unc[i], '.2g')}"
                               if session.estimator is not None else ""))
         now = time.monotonic()
+        if pending["seq"] and now - state["plot_at"] >= PLOT_S:  # the plots redraw at most every PLOT_S
+            state["plot_at"] = now
+            src.stream({c: list(v) for c, v in pending.items()}, rollover=POINTS)
+            for v in pending.values():
+                v.clear()
         if now - state["status_at"] < STATUS_S:
             return
         state["status_at"] = now

@@ -54,6 +54,8 @@ class LiveStatus:
         The run file being written, or empty.
     recorded : int
         Rows written to it.
+    events : list of str
+        The last 20 notices, each with its time (recording started, device restarted, stall, ...).
     """
 
     state: str = "connecting"
@@ -312,10 +314,12 @@ class LiveSession:
             return
         if self._record_t0 is None:
             self._record_t0 = row["time_s"]
+        out = {c: row.get(c) for c in self._writer.columns}
+        out["time_s"] = row["time_s"] - self._record_t0
         try:
-            self._writer.write({**row, "time_s": row["time_s"] - self._record_t0})
+            self._writer.write(out)
             self.status.recorded += 1
-        except OSError as exc:
+        except (OSError, ValueError) as exc:  # the display goes on; the file keeps what it has
             self._close_recording(f"write failed: {exc}")
 
     def _close_recording(self, why: str) -> None:
