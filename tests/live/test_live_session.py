@@ -19,12 +19,12 @@ from fsrlab.live.page import Controller
 from fsrlab.runformat import load_run, sidecar_path
 
 
-def _virtual_session(tmp_path, capacity=20000):
+def _virtual_session(tmp_path, capacity=20000, profile="triangle"):
     from fsrlab.acquisition.serial_link import SerialLink
     from fsrlab.cli.acquisition import _virtual_device
     from fsrlab.live.session import LiveSession
 
-    device, source = _virtual_device("triangle", 50e3, 2.0, 1e-9, 7, 0.0, 0.0, True, 80, None)
+    device, source = _virtual_device(profile, 50e3, 2.0, 1e-9, 7, 0.0, 0.0, True, 80, None)
     port = device.open()
     cal = device.load_cell.calibration()
     session = LiveSession(SerialLink(port), window_ms=20, capacity=capacity,
@@ -138,3 +138,64 @@ def test_served_for_a_duration_then_stops_with_a_summary(tmp_path, monkeypatch):
     first, last = (json.loads(line) for line in out.strip().splitlines())
     assert first["url"].startswith("http://127.0.0.1:") and first["token"] is None
     assert last["frames"] > 10 and last["recorded"] == 0 and not math.isnan(last["frames"])
+
+
+def _wait(predicate, timeout_s=15.0):
+    deadline = time.monotonic() + timeout_s
+    while not predicate() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    return predicate()
+
+
+def test_tare_from_the_page_zeroes_a_steady_load_cell(tmp_path):
+    # A held load (profile "hold"): the tare takes the mean of 1 s of conversions as the new offset, so
+    # the force reads 0 afterwards within the cell's noise (closed form: (raw - offset)/scale).
+    session, device, cal = _virtual_session(tmp_path, profile="hold")
+    try:
+        assert _wait(lambda: session.status.frames > 20)
+        before = session.since(0)[1]["reference"][-1]
+        session.command("tare")
+        assert _wait(lambda: any("tare: offset" in e for e in session.status.events))
+        cursor = session.since(0)[0]
+        assert _wait(lambda: len(session.since(cursor)[1]["reference"]) > 20)
+        after = [f for f in session.since(cursor)[1]["reference"] if not math.isnan(f)]
+    finally:
+        session.close()
+        device.close()
+    noise_n = device.load_cell.noise_counts / cal.scale_counts_per_n
+    assert before > 100 * noise_n  # a real load was on the cell
+    assert abs(np.mean(after)) < 3 * noise_n and session.loadcell.scale_counts_per_n == cal.scale_counts_per_n
+
+
+def test_tare_while_the_load_moves_is_refused_saying_why(tmp_path):
+    session, device, cal = _virtual_session(tmp_path)
+    try:
+        assert _wait(lambda: session.status.frames > 5)
+        session.command("tare")
+        assert _wait(lambda: any("tare refused" in e for e in session.status.events))
+    finally:
+        session.close()
+        device.close()
+    assert session.loadcell == cal  # unchanged
+
+
+def test_a_calibration_recorded_on_another_range_is_refused_with_the_reason(tmp_path, monkeypatch):
+    import json
+
+    from fsrlab.acquisition.virtual_device import VIRTUAL_CIRCUIT
+    from fsrlab.analysis.calibration_io import save_calibration
+    from fsrlab.analysis.pipeline import calibrate_run
+    from fsrlab.analysis.synthetic import synthetic_run
+    from fsrlab.runwriter import write_run
+
+    monkeypatch.chdir(tmp_path)
+    run = synthetic_run(cycles=2, points_per_ramp=60, seed=1)  # recorded on range 0 of the virtual circuit
+    write_run(tmp_path / "cal-run.csv", {**run.columns, "range": np.zeros(len(run.columns["time_s"]))},
+              {"circuit": VIRTUAL_CIRCUIT.to_dict()})
+    cal = calibrate_run(tmp_path / "cal-run.csv", x="frequency_hz", lag=0.0)
+    save_calibration(cal, tmp_path / "cal.json")
+    code, out, err = run_cli(["live", "--virtual", "--range", "1", "--cal", "cal.json", "--http-port", "0",
+                              "--duration", "1s", "--json"])
+    assert code == 0
+    assert "cal.json refused" in err and "range 1" in err and "range 0" in err
+    assert json.loads(out.strip().splitlines()[-1])["frames"] > 0

@@ -12,6 +12,16 @@ from fsrlab.cli._common import areas, fail, farads, pascals, seconds, to_jsonabl
 from fsrlab.cli.acquisition import _AREA_HELP, _LOADCELL_HELP, _SENSOR_HELP
 
 
+def _refusal(cal, path, metadata: dict, range_: int) -> str | None:
+    """Why a calibration does not fit the meter it would be used with (circuit, range), or None."""
+    from fsrlab.analysis.provenance import mismatches, recorded_with
+
+    if cal.recorded_with is None:
+        return None
+    found = mismatches(cal.x_name, cal.recorded_with, recorded_with(metadata, [range_]))
+    return "; ".join(f"the meter has {a}, {path} was recorded with {b}" for a, b in found) or None
+
+
 def _estimator(cal, area_m2: float | None):
     """``row -> (estimate [N], uncertainty [N])`` by the calibration's causal estimator (compensation included)."""
     import math
@@ -21,7 +31,11 @@ def _estimator(cal, area_m2: float | None):
     est = live_estimator(cal)
     scale = 1.0 if est.reference == "force_n" else (area_m2 or math.nan)  # stress → force
 
+    ranges = cal.recorded_with.ranges if cal.recorded_with is not None else None
+
     def step(row):
+        if ranges is not None and row.get("range") not in ranges:  # switched to a range it does not know
+            return math.nan, math.nan
         x = row.get(est.x)
         e, u, _inside = est.step(x if x is not None and math.isfinite(x) else None)
         return (math.nan if e is None else e * scale), (math.nan if u is None else u * scale)
@@ -128,7 +142,13 @@ def live(
         metadata = {"origin": "fsrlab live --virtual", **source.metadata(), **metadata}
         reference = lambda frame: device.reference(frame.seq)  # noqa: E731
         health = lambda: device.failure  # noqa: E731
-    estimator = _estimator(calibration, area_m2) if calibration is not None else None
+    estimator, refusal = None, None
+    if calibration is not None:
+        refusal = _refusal(calibration, cal, metadata, range_)
+        if refusal:
+            print(f"fsrlab: {cal} refused: {refusal}; the page shows no estimate", file=sys.stderr)
+        else:
+            estimator = _estimator(calibration, area_m2)
     try:
         link = SerialLink(port)
     except Exception as exc:  # noqa: BLE001 - one line: the port could not be opened
@@ -136,7 +156,10 @@ def live(
             device.close()
         fail(f"cannot open {port}: {exc}", "--port")
     session = LiveSession(link, window_ms=window_ms, range_=range_, reference=reference, loadcell=lc, area_m2=area_m2,
-                          estimator=estimator, health=health, metadata=metadata).start()
+                          estimator=estimator, health=health, metadata=metadata)
+    if refusal:
+        session.status.events.append(f"calibration {cal} refused: {refusal}")
+    session.start()
     controller = Controller(out)
     try:
         srv = start_server(lambda doc: make_document(doc, session, controller, "force", "N", 1.0),

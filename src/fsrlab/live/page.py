@@ -130,6 +130,8 @@ def make_document(doc, session, controller: Controller, reference_label: str = "
     controls = controller.claim(doc)
     record = Button(label="Start recording", button_type="success", name="record",
                     disabled=not controls or controller.out is None)
+    tare = Button(label="Tare load cell", name="tare", disabled=not controls or session.loadcell is None)
+    tare.on_click(lambda: session.command("tare"))
     rng = RadioButtonGroup(labels=["range 0 (C_off out)", "range 1 (C_off in)"], active=session.status.range,
                            name="range", disabled=not controls)
     window = Select(title="window (ms)", value=str(session.status.window_ms), options=list(WINDOWS_MS),
@@ -207,6 +209,6 @@ def make_document(doc, session, controller: Controller, reference_label: str = "
     doc.on_session_destroyed(lambda ctx: controller.release(doc))
     doc.title = title
     doc.add_root(column(Div(text=f"<h2 style='margin:4px 0'>{title}</h2>"), status, latest,
-                        row(record, rng, window, role), row(column(f_fig, d_fig, v_fig, r_fig, sizing_mode="stretch_width"),
+                        row(record, tare, rng, window, role), row(column(f_fig, d_fig, v_fig, r_fig, sizing_mode="stretch_width"),
                                                               loop, sizing_mode="stretch_width"),
                         events, sizing_mode="stretch_width"))

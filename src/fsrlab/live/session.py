@@ -21,7 +21,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
-__all__ = ["LiveSession", "LiveStatus", "COLUMNS"]
+__all__ = ["LiveSession", "LiveStatus", "COLUMNS", "TARE_S"]
+
+#: Time over which a tare from the page collects the load cell's conversions. [s]
+TARE_S = 1.0
 
 #: Columns the session keeps for the page (one value per window).
 COLUMNS = ("time_s", "seq", "frequency_hz", "duty_cycle", "voltage_v", "range", "missed", "reference",
@@ -114,6 +117,8 @@ class LiveSession:
         self.area_m2 = area_m2
         self.estimator = estimator
         self._has_ref = False
+        self._tare: list | None = None  # conversions collected for a tare, None when none is going on
+        self._tare_until = 0.0
         self.health = health
         self.metadata = dict(metadata or {})
         self.stall_s = float(stall_s)
@@ -142,8 +147,9 @@ class LiveSession:
         return total, {c: [r[c] for r in rows] for c in COLUMNS}
 
     def command(self, name: str, value=None) -> None:
-        """Queue a command for the device thread: ``range`` (0/1), ``window`` [ms], ``record`` (a path) or ``stop_recording``."""
-        if name not in ("range", "window", "record", "stop_recording"):
+        """Queue a command for the device thread: ``range`` (0/1), ``window`` [ms], ``record`` (a path),
+        ``stop_recording`` or ``tare`` (the load cell's offset from the next :data:`TARE_S` of conversions)."""
+        if name not in ("range", "window", "record", "stop_recording", "tare"):
             raise ValueError(f"name: unknown live command {name!r}")
         self._commands.put((name, value))
 
@@ -241,6 +247,7 @@ class LiveSession:
                 row["uncertainty"] = unc if unc is not None else math.nan
                 row["received_s"] = time.time()
                 self._write(row)
+                self._collect_tare(row, now)
                 with self._lock:
                     self._rows.append(row)
                     self._total += 1
@@ -253,6 +260,29 @@ class LiveSession:
             span = min(now - self._t0, 1.0)
             st.frames_per_s = len(self._recent) / span if span > 0 else 0.0
             st.dropped, st.corrupt = parser.lost, parser.bad_frames
+
+    def _collect_tare(self, row: dict, now: float) -> None:
+        """Add a window's conversion to a tare in progress; finish it after :data:`TARE_S`."""
+        import dataclasses
+
+        from fsrlab.acquisition.loadcell import LoadCellError, tare_from_readings
+
+        if self._tare is None:
+            return
+        if row.get("reference_raw") is not None:
+            self._tare.append(row["reference_raw"])
+        if now < self._tare_until:
+            return
+        counts, self._tare = self._tare, None
+        old = self.loadcell
+        try:
+            new = tare_from_readings(counts, old.capacity_n, old.scale_counts_per_n)
+        except LoadCellError as exc:
+            self._event(str(exc))
+            return
+        self.loadcell = dataclasses.replace(old, offset_counts=new.offset_counts, created=new.created, tare=new.tare)
+        self._event(f"tare: offset {old.offset_counts:.0f} → {new.offset_counts:.0f} counts "
+                    f"({len(counts)} conversions; in this session only)")
 
     def _force(self, row: dict) -> float:
         """The page's reference [N]: the load cell's force, else a known stress times the area, else NaN."""
@@ -281,6 +311,12 @@ class LiveSession:
                     self._open_recording(Path(value))
                 elif name == "stop_recording":
                     self._close_recording("stopped from the page")
+                elif name == "tare":
+                    if self.loadcell is None or not self._has_ref:
+                        self._event("tare refused: no load cell (give --loadcell, or a meter with an HX711)")
+                    else:
+                        self._tare, self._tare_until = [], time.monotonic() + TARE_S
+                        self._event(f"tare: keep the load cell unloaded for {TARE_S:g} s")
             except (ValueError, OSError) as exc:
                 self._event(f"{name} refused: {exc}")
 
