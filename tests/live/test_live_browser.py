@@ -14,6 +14,8 @@ import pytest
 from browser import (ARTIFACTS, LiveServer, button_disabled, chromium, click_button, model_length, text, texts,
                      wait_for)
 
+from clirun import run_cli
+
 from fsrlab.runformat import load_run, sidecar_path
 
 
@@ -139,3 +141,34 @@ def test_local_page_needs_no_token_and_serves_nothing_else():
             assert missing.value.code == 404
     finally:
         server.stop()
+
+
+def test_guided_known_weights_from_the_page_write_a_run_calibrate_accepts(driver, tmp_path):
+    # The virtual bench places each mass when the page's Placed is clicked; the procedure waits for a
+    # steady readout and keeps 1 s of windows per placement (acquisition.weights). Reference: the plan
+    # (mass × g per step, loading then unloading) and fsrlab calibrate reading the run back.
+    out = tmp_path / "w.csv"
+    server = LiveServer("--virtual", "--seed", "2", "--window", "20ms", "--out", str(out),
+                        "--masses", "0,100g,200g", "--unload")
+    try:
+        driver.get(server.url)
+        assert wait_for(lambda: text(driver, "#latest-seq"))
+        assert click_button(driver, "Start guided calibration")
+        for step in range(1, 6):  # 0, 100 g, 200 g, then 100 g, 0 back down
+            assert wait_for(lambda s=step: (text(driver, "#prompt") or "").startswith(f"step {s}/5"), timeout_s=30)
+            assert click_button(driver, "Placed")
+        assert wait_for(lambda: "guided calibration done" in (text(driver, "#prompt") or ""), timeout_s=30)
+    finally:
+        server.stop()
+    weights = tmp_path / "w-weights.csv"
+    run = load_run(weights)
+    steps = sorted(set(int(s) for s in run["step"]))
+    assert steps == [0, 1, 2, 3, 4]
+    g = 9.80665
+    for s, mass, direction in zip(steps, (0.0, 0.1, 0.2, 0.1, 0.0), (1, 1, 1, -1, -1)):
+        rows = run["step"] == s
+        assert rows.sum() >= 20  # ~1 s of 20 ms windows held per placement
+        assert set(run["force_nominal_n"][rows]) == {mass * g}
+        assert set(run["direction"][rows]) == {direction}
+    code, out_json, err = run_cli(["calibrate", str(weights), "--x", "frequency_hz", "--reference", "force_n", "--json"])
+    assert code == 0, err

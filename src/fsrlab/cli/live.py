@@ -8,8 +8,30 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli._common import areas, fail, farads, pascals, seconds, to_jsonable
+from fsrlab.cli._common import areas, fail, farads, mass_list, pascals, seconds, to_jsonable
 from fsrlab.cli.acquisition import _AREA_HELP, _LOADCELL_HELP, _SENSOR_HELP
+
+
+def _virtual_bench(steps, seed, area_m2):
+    """A virtual meter on a bench that places the plan's masses: (device, source, place(step) -> time)."""
+    from fsrlab.acquisition.bench import BenchSource
+    from fsrlab.acquisition.loadcell import LoadCellModel
+    from fsrlab.acquisition.virtual_device import VirtualDevice
+    from fsrlab.physics.sensor import VirtualFSR
+
+    try:
+        bench = BenchSource([s.mass_kg * 9.80665 for s in steps],
+                            sensor=VirtualFSR() if area_m2 is None else VirtualFSR(area_m2=area_m2))
+    except ValueError:
+        fail("the virtual sensor model has no valid response up to the largest mass on its area; choose smaller "
+             "masses", "--masses")
+    device = VirtualDevice(bench, seed=seed, load_cell=LoadCellModel())
+
+    def place(step) -> float:
+        t = device.time_since_start()
+        bench.place(step.index, t)
+        return t
+    return device, bench, place
 
 
 def _refusal(cal, path, metadata: dict, range_: int) -> str | None:
@@ -69,6 +91,9 @@ def live(
     loadcell: Path = typer.Option(None, "--loadcell", help=_LOADCELL_HELP),
     sensor: str = typer.Option(None, "--sensor", help=_SENSOR_HELP),
     area: float = typer.Option(None, "--area", parser=areas, metavar="AREA", help=_AREA_HELP),
+    masses: str = typer.Option(None, "--masses", metavar="MASSES", help="Offer the guided known-weight calibration on the page with these masses, increasing, comma-separated [kg]: 0,100g,200g,400g (g, kg or mg; 0 needs no unit). With --virtual a virtual bench places each mass when the page says Placed."),
+    repeat: int = typer.Option(1, "--repeat", help="Guided calibration: cycles of placements [1], e.g. 3."),
+    unload: bool = typer.Option(False, "--unload", help="Guided calibration: also unload in reverse (for hysteresis)."),
     unplug_after: int = typer.Option(None, "--unplug-after", help="Virtual device (tests): pull the cable after this many windows [1]."),
     json_out: bool = typer.Option(False, "--json", help='Print JSON lines: {"url", "token"} when the page is up, {"frames", "recorded", "state"} at the end.'),
 ) -> None:
@@ -126,9 +151,28 @@ def live(
 
     device, reference, health = None, None, None
     metadata: dict = {"sensor": sensor_meta} if sensor_meta else {}
+    steps = None
+    if masses is not None:
+        from fsrlab.acquisition.weights import plan_steps
+
+        try:
+            masses_kg = mass_list(masses)
+        except typer.BadParameter as exc:
+            fail(exc.message, "--masses")
+        if len(masses_kg) < 2:
+            fail(f"give at least two masses, e.g. 0,100g; got {masses!r}", "--masses")
+        if not 1 <= repeat <= 1000:
+            fail(f"must be 1 to 1000 cycles, got {repeat}", "--repeat")
+        if out is None:
+            fail("the guided calibration writes a run: give --out RUN.csv", "--masses")
+        steps = plan_steps(masses_kg, repeat, unload)
+    place = None
     if virtual:
         _check_virtual(profile, peak, period, c_off, 0.0, 0.0, seed)
-        device, source = _virtual_device(profile, peak, period, c_off, seed, 0.0, 0.0, True, 80, area_m2)
+        if steps is not None:  # a virtual bench that places the masses of the plan
+            device, source, place = _virtual_bench(steps, seed, area_m2)
+        else:
+            device, source = _virtual_device(profile, peak, period, c_off, seed, 0.0, 0.0, True, 80, area_m2)
         if unplug_after is not None:
             if unplug_after < 1:
                 fail(f"must be >= 1 window, got {unplug_after}", "--unplug-after")
@@ -140,8 +184,13 @@ def live(
         area_m2 = source.sensor.area_m2
         port = device.open()
         metadata = {"origin": "fsrlab live --virtual", **source.metadata(), **metadata}
-        reference = lambda frame: device.reference(frame.seq)  # noqa: E731
+        if steps is None:
+            reference = lambda frame: device.reference(frame.seq)  # noqa: E731
         health = lambda: device.failure  # noqa: E731
+    weights = None if steps is None else {"steps": steps, "place": place, "x": "frequency_hz",
+                                          "gravity_m_s2": 9.80665,
+                                          "metadata": {"weights": {"masses_kg": [s.mass_kg for s in steps],
+                                                                   "repeat": repeat, "unload": unload}}}
     estimator, refusal = None, None
     if calibration is not None:
         refusal = _refusal(calibration, cal, metadata, range_)
@@ -156,7 +205,7 @@ def live(
             device.close()
         fail(f"cannot open {port}: {exc}", "--port")
     session = LiveSession(link, window_ms=window_ms, range_=range_, reference=reference, loadcell=lc, area_m2=area_m2,
-                          estimator=estimator, health=health, metadata=metadata)
+                          estimator=estimator, health=health, metadata=metadata, weights=weights)
     if refusal:
         session.status.events.append(f"calibration {cal} refused: {refusal}")
     session.start()

@@ -57,15 +57,15 @@ class Controller:
             if self.owner is doc:
                 self.owner = None
 
-    def next_path(self) -> Path | None:
-        """The next unused run file name."""
+    def next_path(self, suffix: str = "") -> Path | None:
+        """The next unused run file name (``suffix`` after the stem: ``-weights`` for a guided calibration)."""
         if self.out is None:
             return None
         from fsrlab.runformat import sidecar_path
 
         while True:
             self._count += 1
-            stem = self.out.stem if self._count == 1 else f"{self.out.stem}-{self._count}"
+            stem = self.out.stem + suffix + ("" if self._count == 1 else f"-{self._count}")
             path = self.out.with_name(stem + self.out.suffix)
             if not path.exists() and not sidecar_path(path).exists():
                 return path
@@ -132,6 +132,21 @@ def make_document(doc, session, controller: Controller, reference_label: str = "
                     disabled=not controls or controller.out is None)
     tare = Button(label="Tare load cell", name="tare", disabled=not controls or session.loadcell is None)
     tare.on_click(lambda: session.command("tare"))
+    guided = session.weights is not None and controller.out is not None
+    start_w = Button(label="Start guided calibration", name="weights", disabled=not (controls and guided))
+    placed = Button(label="Placed", button_type="primary", name="placed", disabled=not (controls and guided))
+    skip = Button(label="Skip step", name="skip", disabled=not (controls and guided))
+    prompt = Div(text="" if guided else "guided known weights: start fsrlab live with --masses and --out",
+                 name="prompt", sizing_mode="stretch_width", height=22)
+
+    def on_weights():
+        path = controller.next_path("-weights")
+        if path is not None:
+            session.command("weights", str(path))
+
+    start_w.on_click(on_weights)
+    placed.on_click(lambda: session.command("answer", "ok"))
+    skip.on_click(lambda: session.command("answer", "skip"))
     rng = RadioButtonGroup(labels=["range 0 (C_off out)", "range 1 (C_off in)"], active=session.status.range,
                            name="range", disabled=not controls)
     window = Select(title="window (ms)", value=str(session.status.window_ms), options=list(WINDOWS_MS),
@@ -197,6 +212,10 @@ def make_document(doc, session, controller: Controller, reference_label: str = "
                           if st.recording else ""))
         if text != status.text:
             status.text = text
+        said = (f"<b>{st.weights}</b>: " if st.weights else "") + f"<span id='prompt'>{st.prompt}</span>" \
+            if (st.prompt or st.weights) else prompt.text
+        if said != prompt.text:
+            prompt.text = said
         label = "Stop recording" if st.recording else "Start recording"
         if label != record.label:
             record.label = label
@@ -209,6 +228,6 @@ def make_document(doc, session, controller: Controller, reference_label: str = "
     doc.on_session_destroyed(lambda ctx: controller.release(doc))
     doc.title = title
     doc.add_root(column(Div(text=f"<h2 style='margin:4px 0'>{title}</h2>"), status, latest,
-                        row(record, tare, rng, window, role), row(column(f_fig, d_fig, v_fig, r_fig, sizing_mode="stretch_width"),
+                        row(record, tare, rng, window, role), row(start_w, placed, skip, prompt, sizing_mode="stretch_width"), row(column(f_fig, d_fig, v_fig, r_fig, sizing_mode="stretch_width"),
                                                               loop, sizing_mode="stretch_width"),
                         events, sizing_mode="stretch_width"))

@@ -57,6 +57,10 @@ class LiveStatus:
         The run file being written, or empty.
     recorded : int
         Rows written to it.
+    prompt : str
+        What the guided known-weight calibration asks for now (empty when none runs).
+    weights : str
+        Where the guided calibration is (step k/N and its file), or empty.
     events : list of str
         The last 20 notices, each with its time (recording started, device restarted, stall, ...).
     """
@@ -74,6 +78,8 @@ class LiveStatus:
     window_ms: int = 100
     recording: str = ""
     recorded: int = 0
+    prompt: str = ""
+    weights: str = ""
     events: list = field(default_factory=list)
 
 
@@ -104,19 +110,27 @@ class LiveSession:
         Sidecar content of the runs recorded (circuit, sensor, origin).
     stall_s : float
         Silence that counts as a stall. [s]
+    weights : dict, optional
+        The guided known-weight calibration the page offers: ``steps`` (:func:`fsrlab.acquisition.weights.plan_steps`),
+        ``place`` (``place(step) -> time or None``: the virtual bench places the mass), ``x``, ``gravity_m_s2``
+        and ``metadata`` for its run's sidecar. None: no guided calibration on the page.
     """
 
     def __init__(self, link, window_ms: int = 100, range_: int = 0, capacity: int = 20000,
                  reference: Callable | None = None, loadcell=None, area_m2: float | None = None,
                  estimator: Callable | None = None,
                  health: Callable[[], str | None] | None = None, metadata: dict | None = None,
-                 stall_s: float = 2.0) -> None:
+                 stall_s: float = 2.0, weights: dict | None = None) -> None:
         self.link = link
         self.reference = reference
         self.loadcell = loadcell
         self.area_m2 = area_m2
         self.estimator = estimator
         self._has_ref = False
+        self.weights = weights
+        self._proc = None  # the guided calibration in progress (WeightsProcedure)
+        self._wwriter = None
+        self._answer: str | None = None
         self._tare: list | None = None  # conversions collected for a tare, None when none is going on
         self._tare_until = 0.0
         self.health = health
@@ -148,8 +162,9 @@ class LiveSession:
 
     def command(self, name: str, value=None) -> None:
         """Queue a command for the device thread: ``range`` (0/1), ``window`` [ms], ``record`` (a path),
-        ``stop_recording`` or ``tare`` (the load cell's offset from the next :data:`TARE_S` of conversions)."""
-        if name not in ("range", "window", "record", "stop_recording", "tare"):
+        ``stop_recording``, ``tare`` (the load cell's offset from the next :data:`TARE_S` of conversions),
+        ``weights`` (start the guided calibration into a path) or ``answer`` (``ok``: the mass is placed; ``skip``)."""
+        if name not in ("range", "window", "record", "stop_recording", "tare", "weights", "answer"):
             raise ValueError(f"name: unknown live command {name!r}")
         self._commands.put((name, value))
 
@@ -197,6 +212,8 @@ class LiveSession:
             self._event(st.message)
         finally:
             self._close_recording("device gone" if st.state == "disconnected" else "stopped")
+            if self._proc is not None:
+                self._finish_weights("ended early (device gone)" if st.state == "disconnected" else "stopped")
             if st.state == "running":
                 try:
                     self.link.stop()
@@ -248,6 +265,7 @@ class LiveSession:
                 row["received_s"] = time.time()
                 self._write(row)
                 self._collect_tare(row, now)
+                self._guide(m, row)
                 with self._lock:
                     self._rows.append(row)
                     self._total += 1
@@ -260,6 +278,84 @@ class LiveSession:
             span = min(now - self._t0, 1.0)
             st.frames_per_s = len(self._recent) / span if span > 0 else 0.0
             st.dropped, st.corrupt = parser.lost, parser.bad_frames
+
+    # ----------------------------------------------------- guided known weights
+    def _start_weights(self, path: Path) -> None:
+        from fsrlab.acquisition.recorder import COLUMNS as RUN_COLUMNS
+        from fsrlab.acquisition.recorder import REFERENCE_COLUMNS
+        from fsrlab.acquisition.weights import WeightsProcedure
+        from fsrlab.runwriter import RunWriter
+
+        w = self.weights
+        if w is None:
+            self._event("no guided calibration: start fsrlab live with --masses")
+            return
+        if self._proc is not None:
+            self._event("the guided calibration is already running")
+            return
+        use_loadcell = self.loadcell is not None and self._has_ref
+        self._answer = None
+        proc = WeightsProcedure(w["steps"], self._announce, self._take_answer, w.get("place"), None, x=w["x"],
+                                gravity_m_s2=w["gravity_m_s2"], use_loadcell=use_loadcell, area_m2=self.area_m2)
+        columns = list(RUN_COLUMNS) + (list(REFERENCE_COLUMNS) if self._has_ref else [])
+        columns += ["step", "direction", "cycle", "force_nominal_n", "force_n"] + (["stress_pa"] if self.area_m2 else [])
+        columns += ["load", "sensor", "reading"]
+        columns = list(dict.fromkeys(columns))
+        meta = {**self.metadata, **w.get("metadata", {})}
+        meta["origin"] = f"fsrlab live (guided known weights) from {self.link.port}"
+        meta.setdefault("units", {}).update({"load": "g", "sensor": "1"})
+        meta["weights"] = {**meta.get("weights", {}), "force_n": "load cell" if use_loadcell else "nominal (mass × g)"}
+        self._wwriter = RunWriter(path, columns, meta, overwrite=False)
+        self._proc, self._wpath, self._wt0 = proc, path, None
+        self.status.weights = f"guided calibration into {path}"
+        self._event(f"guided calibration: {len(w['steps'])} placements into {path}")
+
+    def _announce(self, text: str) -> None:
+        self.status.prompt = text.replace("then press Enter (s and Enter skips the step)",
+                                          "then click Placed (or Skip step)").replace(
+            "press Enter to wait again, or s and Enter to skip the step", "click Placed to wait again, or Skip step")
+        self._event(self.status.prompt)
+
+    def _take_answer(self) -> str | None:
+        answer, self._answer = self._answer, None
+        return answer
+
+    def _guide(self, m, row: dict) -> None:
+        """Feed a window to the guided calibration; write its steady windows; finish it at the end of the plan."""
+        proc = self._proc
+        if proc is None:
+            return
+        out = proc.on_row(m, dict(row))
+        if out is not None:
+            if self._wt0 is None:
+                self._wt0 = row["time_s"]
+            line = {c: out.get(c) for c in self._wwriter.columns}
+            line["time_s"] = row["time_s"] - self._wt0
+            try:
+                self._wwriter.write(line)
+            except (OSError, ValueError) as exc:
+                self._finish_weights(f"write failed: {exc}")
+                return
+        k = min(proc.k + 1, len(proc.steps))
+        self.status.weights = f"step {k}/{len(proc.steps)} in {self._wpath}"
+        if proc.done:
+            self._finish_weights("done")
+
+    def _finish_weights(self, why: str) -> None:
+        proc, writer, self._proc, self._wwriter = self._proc, self._wwriter, None, None
+        if writer is None:
+            return
+        summary = proc.summary()
+        try:
+            writer.metadata["weights"] = {**writer.metadata.get("weights", {}), **summary}
+            writer.metadata["ended"] = f"guided calibration {why}: {summary['recorded']} placements recorded, " \
+                                       f"{summary['skipped']} skipped"
+            writer.close()
+        except OSError:
+            pass
+        self.status.prompt = f"guided calibration {why}: {summary['recorded']} recorded, {summary['skipped']} skipped"
+        self.status.weights = ""
+        self._event(f"{self.status.prompt} ({self._wpath})")
 
     def _collect_tare(self, row: dict, now: float) -> None:
         """Add a window's conversion to a tare in progress; finish it after :data:`TARE_S`."""
@@ -311,6 +407,10 @@ class LiveSession:
                     self._open_recording(Path(value))
                 elif name == "stop_recording":
                     self._close_recording("stopped from the page")
+                elif name == "weights":
+                    self._start_weights(Path(value))
+                elif name == "answer":
+                    self._answer = str(value)
                 elif name == "tare":
                     if self.loadcell is None or not self._has_ref:
                         self._event("tare refused: no load cell (give --loadcell, or a meter with an HX711)")
