@@ -32,3 +32,12 @@ def test_electron_volt_literal_is_codata():
     from fsrlab.physics.params import electron_volt
 
     assert electron_volt == scipy_ev == 1.602176634e-19
+
+
+@pytest.mark.parametrize("module", ["fsrlab.cli", "fsrlab.physics.params", "fsrlab.circuits.circuit"])
+def test_command_line_start_does_not_import_numpy(module):
+    # `fsrlab --help` and the paper's parameters and circuit (plain numbers, checked with math) need no
+    # numpy: ~0.05-0.07 s of every start (python -X importtime). Commands import it when they run.
+    code = f"import sys, {module}; print('numpy' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "False"

@@ -23,7 +23,6 @@ from __future__ import annotations
 import math
 from dataclasses import MISSING, asdict, dataclass, fields, replace
 
-import numpy as np
 
 __all__ = ["LM555Circuit", "OpAmpReadout", "readout_from_metadata", "check_lm555", "check_fractions", "check_supply",
            "VCC_MAX_V"]
@@ -49,6 +48,28 @@ def check_fractions(lower_fraction: float, upper_fraction: float) -> None:
 VCC_MAX_V = 1000.0
 
 
+def _finite(x) -> bool:
+    """A finite number (a Python or numpy scalar)."""
+    try:
+        return math.isfinite(float(x))
+    except (TypeError, ValueError):
+        return False
+
+
+def _all(value, ok) -> bool:
+    """Every element of ``value`` (a number or an array) finite and ``ok(element)``.
+
+    Plain numbers are checked without numpy, so building a circuit of numbers (the paper's, at import)
+    does not import it.
+    """
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return math.isfinite(value) and bool(ok(value))
+    import numpy as np
+
+    v = np.asarray(value, dtype=float)
+    return bool(np.all(np.isfinite(v)) and np.all(ok(v)))
+
+
 def check_supply(diode: bool, diode_drop_v: float, vcc_v: float) -> None:
     """Raise ``ValueError`` for a bad supply or diode drop (a drop needs the diode).
 
@@ -61,9 +82,9 @@ def check_supply(diode: bool, diode_drop_v: float, vcc_v: float) -> None:
     vcc_v : float
         Supply, 0 < Vcc ≤ :data:`VCC_MAX_V`. [V]
     """
-    if not (np.isfinite(vcc_v) and 0 < vcc_v <= VCC_MAX_V):
+    if not (_finite(vcc_v) and 0 < vcc_v <= VCC_MAX_V):
         raise ValueError(f"vcc_v: must be a supply voltage > 0 V and ≤ {VCC_MAX_V:g} V, got {vcc_v!r}")
-    if not (np.isfinite(diode_drop_v) and diode_drop_v >= 0):
+    if not (_finite(diode_drop_v) and diode_drop_v >= 0):
         raise ValueError(f"diode_drop_v: must be a finite forward drop >= 0 V, got {diode_drop_v!r}")
     if diode_drop_v > 0 and not diode:
         raise ValueError("diode_drop_v: a forward drop needs diode=True (the drop belongs to D1 in series with R_B)")
@@ -93,11 +114,9 @@ def check_lm555(r_ohm, c_off_farad, diode: bool, diode_drop_v: float, vcc_v: flo
     check_fractions(lower_fraction, upper_fraction)
     check_supply(diode, diode_drop_v, vcc_v)
     for name, value, unit in (("discharge_ohm", discharge_ohm, "Ω"), ("c_off_farad", c_off_farad, "F")):
-        v = np.asarray(value, dtype=float)
-        if np.any(~np.isfinite(v)) or np.any(v < 0):
+        if not _all(value, lambda v: v >= 0):
             raise ValueError(f"{name}: must be finite and >= 0 {unit}, got {value!r}")
-    r = np.asarray(r_ohm, dtype=float)
-    if np.any(~np.isfinite(r)) or np.any(r <= 0):
+    if not _all(r_ohm, lambda v: v > 0):
         raise ValueError(f"r_ohm: must be finite and > 0 Ω, got {r_ohm!r}")
 
 
@@ -155,7 +174,7 @@ class LM555Circuit:
         for f in fields(self):
             v = getattr(self, f.name)
             if f.name == "diode":
-                if not isinstance(v, (bool, np.bool_)):
+                if not (isinstance(v, bool) or type(v).__name__ == "bool_"):  # Python's or numpy's
                     raise ValueError(f"diode: must be true or false, got {v!r}")
                 object.__setattr__(self, "diode", bool(v))
             else:
@@ -183,7 +202,7 @@ class LM555Circuit:
             Thresholds ``control_v`` and half of it (the LM555's internal divider).
         """
         vcc = float(parts.get("vcc_v", 5.0))
-        if not (np.isfinite(vcc) and vcc > 0):
+        if not (math.isfinite(vcc) and vcc > 0):
             raise ValueError(f"vcc_v: must be a finite supply voltage > 0 V, got {vcc!r}")
         if not (0 < control_v < vcc):
             raise ValueError(f"control_v: must be between 0 and vcc_v = {vcc:g} V, got {control_v!r}")
@@ -319,6 +338,8 @@ class OpAmpReadout:
 
     def conductance_s(self, v_out_v):
         """FSR conductance from the output voltage, ``G = −V_out/(R_F·Vcc)`` (eq. 38 inverted). [S]"""
+        import numpy as np
+
         v = np.asarray(v_out_v, dtype=float)
         g = -v / (self.r_f_ohm * self.vcc_v)
         return g[()] if g.ndim == 0 else g

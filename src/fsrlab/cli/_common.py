@@ -27,10 +27,10 @@ from __future__ import annotations
 import json
 import math
 import re
+import sys
 from contextlib import contextmanager
 from typing import Any, Callable, Iterator
 
-import numpy as np
 import typer
 
 from fsrlab.units import parse_eng, parse_quantity
@@ -147,9 +147,10 @@ def to_jsonable(obj: Any) -> Any:
         return {str(k): to_jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
         return [to_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
+    np = sys.modules.get("numpy")  # a numpy value exists only once numpy is imported: no import here
+    if np is not None and isinstance(obj, np.ndarray):
         return to_jsonable(obj.tolist())
-    if isinstance(obj, np.generic):
+    if np is not None and isinstance(obj, np.generic):
         return to_jsonable(obj.item())
     if isinstance(obj, float):
         return obj if math.isfinite(obj) else None

@@ -8,11 +8,12 @@ a command that fails prints its one error line only.
 
 from __future__ import annotations
 
+import math
+
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Iterator
 
-import numpy as np
 import typer
 
 from fsrlab.cli import app
@@ -349,7 +350,7 @@ def apply_cmd(
     from fsrlab.runformat import sidecar_path
     from fsrlab.runwriter import write_run
 
-    if not (np.isfinite(margin) and margin >= 0):
+    if not (math.isfinite(margin) and margin >= 0):
         fail(f"must be a fraction >= 0 of the calibrated span, got {margin:g}", "--margin")
     with _reading(cal_file):
         cal = load_calibration(cal_file)

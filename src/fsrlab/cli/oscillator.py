@@ -6,7 +6,6 @@ import math
 from contextlib import contextmanager
 from typing import Iterator
 
-import numpy as np
 import typer
 
 from fsrlab.acquisition.protocol import CAPTURE_MAX_HZ
@@ -45,6 +44,8 @@ _NO_OSCILLATION = {"charge": "--r/--rfsr", "diode_drop": "--diode-drop", "discha
 def _model_errors(diode: bool = False) -> Iterator[None]:
     """Model errors as one line naming the options; numpy's overflow warnings silenced (results are checked)."""
     from fsrlab.circuits.lm555 import NoOscillationError
+
+    import numpy as np
 
     with option_names(_NAMES), np.errstate(all="ignore"):
         try:

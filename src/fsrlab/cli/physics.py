@@ -6,7 +6,6 @@ import dataclasses
 import math
 import warnings
 
-import numpy as np
 import typer
 
 from fsrlab.cli import app
@@ -75,6 +74,8 @@ def physics(
                                 phi0_j=phi0 * electron_volt, eps_r=eps_r)
     # Extreme parameters (films of metres, barriers of 1e300 eV) overflow or underflow on the way:
     # such a row shows no R_A, and the reason; numpy's warnings about them would only repeat it.
+    import numpy as np
+
     with option_names(_NAMES), np.errstate(all="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         # The film is thinnest at σf (eq. 3); thicker films keep J valid to higher voltages.

@@ -7,6 +7,8 @@ Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, Table 1.
 
 from __future__ import annotations
 
+import math
+
 from dataclasses import asdict, dataclass
 
 from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout
@@ -28,6 +30,10 @@ def check_finite(name: str, value) -> None:
     value : float or array_like
         The value to check.
     """
+    if isinstance(value, (int, float)) and not isinstance(value, bool):  # a number: no numpy needed
+        if not math.isfinite(value):
+            raise ValueError(f"{name} must be finite, got {value!r}")
+        return
     import numpy as np
 
     if not np.all(np.isfinite(np.asarray(value, dtype=float))):
@@ -46,10 +52,14 @@ def check_positive(name: str, value, unit: str = "") -> None:
     unit : str
         Unit shown in the message.
     """
-    import numpy as np
-
     check_finite(name, value)
-    if not np.all(np.asarray(value, dtype=float) > 0):
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        positive = value > 0
+    else:
+        import numpy as np
+
+        positive = bool(np.all(np.asarray(value, dtype=float) > 0))
+    if not positive:
         raise ValueError(f"{name} must be > 0{(' ' + unit) if unit else ''}, got {value!r}")
 
 
