@@ -1,4 +1,4 @@
-"""Calibration on realistic FSR recordings (issue 12): error on held-out hand-loaded runs, HE of a clean cycle, speed.
+"""Calibration on realistic FSR recordings: error on held-out hand-loaded runs, HE of a clean cycle, speed.
 
 Data: :func:`fsrlab.analysis.handloaded.fsr_bench_run` -- an FSR in a 10 kΩ / 5 V divider read
 by a 10-bit ADC over 20 ms rows, a load cell read by an HX711 at 80 SPS (the same bench for every

@@ -8,7 +8,7 @@ as the cores), started before the first section so they run while the physics fi
 (``prefetch``), binary raw output (``read_raw``), fixed figure layouts (``report.figures.fixed_layout``).
 
 Both build the same sections in-process after a warm-up (imports and caches loaded), best of N each.
-The aim of issue 16 is for the whole command, process start-up included: ``fsrlab paper`` ≤ 3.5 s,
+The aim is for the whole command, process start-up included: ``fsrlab paper`` ≤ 3.5 s,
 timed as separate processes (min / median / max of N).
 """
 

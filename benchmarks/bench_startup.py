@@ -2,7 +2,7 @@
 
 Each command is started N times as its own process (the way a user runs it); min / median / max of the
 wall time, against bare Python starting in the same run (``python -c pass``: the floor no command can
-go under). Aims (issue 16): ``--help`` ≤ 0.2 s and ``fsrlab oscillator ... --json`` ≤ 0.3 s (medians).
+go under). Aims: ``--help`` ≤ 0.2 s and ``fsrlab oscillator ... --json`` ≤ 0.3 s (medians).
 """
 
 from __future__ import annotations

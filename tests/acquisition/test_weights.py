@@ -102,7 +102,7 @@ def test_user_skip():
 
 
 def test_weights_virtual_run_is_ready_for_calibrate_and_repeatability(tmp_path, monkeypatch):
-    """The issue's "done when", with short windows (about 10 s in real time)."""
+    """The documented guided calibration (README), with short windows (about 10 s in real time)."""
     monkeypatch.chdir(tmp_path)
     code, out, err = run_cli(["weights", "--virtual", "--masses", "0,100g,200g,400g", "--repeat", "3", "--unload",
                               "--out", "w.csv", "--window", "20ms", "--settle-windows", "5", "--hold", "100ms",

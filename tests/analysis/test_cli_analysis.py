@@ -37,7 +37,7 @@ def test_minimal_csv_works_for_hysteresis_and_calibrate(tmp_path, capsys):
     assert code == 0 and len(json.loads(out)["cycles"]) == 2
     code, out, _ = run_cli(["calibrate", p, "--x", "frequency_hz", "--json"], capsys)
     assert code == 0
-    # The earlier keys stay; issue 12 adds the contract's model, lag_s, cv_rmse, cv_rmse_percent_fs, candidates.
+    # The earlier keys stay; the calibration on real data adds model, lag_s, cv_rmse, cv_rmse_percent_fs, candidates.
     assert set(json.loads(out)) >= {"degree", "r2", "rmse_pa", "max_error_percent_fs", "coefficients", "readout_range",
                                     "degrees_tried", "model", "lag_s", "cv_rmse", "cv_rmse_percent_fs", "candidates"}
 
@@ -68,7 +68,7 @@ def test_calibrate_apply_roundtrip_and_compensation(runs, tmp_path, capsys):
     d = json.loads(out)
     assert set(d) >= {"degree", "r2", "rmse_pa", "max_error_percent_fs", "coefficients", "readout_range",
                       "degrees_tried", "hysteresis_error_before_percent", "hysteresis_error_after_percent",
-                      "model", "lag_s", "cv_rmse", "cv_rmse_percent_fs", "candidates"}  # issue 12 adds keys
+                      "model", "lag_s", "cv_rmse", "cv_rmse_percent_fs", "candidates"}  # keys of the real-data calibration
     assert d["degree"] == 3 and len(d["coefficients"]) == 4
     assert d["hysteresis_error_before_percent"] / d["hysteresis_error_after_percent"] >= 3
     out_csv = tmp_path / "est.csv"

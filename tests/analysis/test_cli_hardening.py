@@ -1,4 +1,4 @@
-"""Issue 10, the analysis commands: nothing lost, nothing silently wrong.
+"""The analysis commands: nothing lost, nothing silently wrong.
 
 Data: synthetic runs from fsrlab.analysis.synthetic.synthetic_run (VirtualFSR -> LM555, R = 10 kΩ,
 ideal D1 -> meter model) written in the run format; references are the runs' own construction
@@ -39,7 +39,7 @@ def _corrupt(src, dst, row: int, column: str, text: str):
     return dst
 
 
-# --- item 6: an incomplete run is read with one warning naming its last row -----------------------
+# --- an incomplete run is read with one warning naming its last row -----------------------
 
 @pytest.mark.parametrize("command", [["hysteresis"], ["calibrate"], ["apply", "{cal}", "-o", "{tmp}/est.csv"]])
 def test_incomplete_run_warns_once_naming_the_last_row(runs, cal, tmp_path, command):
@@ -63,7 +63,7 @@ def test_complete_run_has_no_warning(runs):
     assert code == 0 and err == ""
 
 
-# --- item 9: a corrupt cell is rejected, or skipped and counted; it never poisons later rows -------
+# --- a corrupt cell is rejected, or skipped and counted; it never poisons later rows -------
 
 def test_corrupt_cell_is_rejected_with_row_and_column(runs, cal, tmp_path):
     bad = _corrupt(runs / "bench.csv", tmp_path / "bad.csv", 51, "frequency_hz", "1e308")
@@ -132,7 +132,7 @@ def test_apply_json_counts_are_true(runs, cal, tmp_path):
     assert np.all((f[written] >= lo - 0.1 * (hi - lo)) & (f[written] <= hi + 0.1 * (hi - lo)))
 
 
-# --- item 8: a run recorded with another circuit or range is refused unless --force ---------------
+# --- a run recorded with another circuit or range is refused unless --force ---------------
 
 def test_apply_refuses_another_circuit_naming_both(cal, tmp_path):
     synthetic_run(cycles=1, seed=3, circuit=LM555Circuit(r_ohm=4.7e3)).write(tmp_path / "r47.csv")
@@ -179,7 +179,7 @@ def test_older_calibration_file_loads_and_says_it_is_not_checked(cal, runs, tmp_
     assert code == 0 and err.count("\n") == 1 and "not checked" in err
 
 
-# --- item 10: a readout that does not respond has no hysteresis error ------------------------------
+# --- a readout that does not respond has no hysteresis error ------------------------------
 
 @pytest.mark.parametrize("fault", ["constant", "noise"])
 def test_hysteresis_of_a_dead_sensor_is_an_error(tmp_path, fault):
@@ -194,7 +194,7 @@ def test_hysteresis_of_a_dead_sensor_is_an_error(tmp_path, fault):
     assert "frequency_hz does not respond to the stress" in err and "dead.csv" in err
 
 
-# --- item 14: iso376 without numpy warnings; non-finite creep readings rejected --------------------
+# --- iso376 without numpy warnings; non-finite creep readings rejected --------------------
 
 def test_iso376_prints_no_warnings_and_rejects_non_finite_creep(tmp_path):
     p = tmp_path / "iso.csv"

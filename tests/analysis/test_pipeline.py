@@ -141,7 +141,7 @@ def test_apply_uses_the_compensation_unless_told_not_to(runs, tmp_path):
     assert before / after >= 3
     other = load_run(runs / "other.csv")
     est = apply_calibration(cal, other)
-    # Issue 12: the compensation is causal; offline it equals stepping the live estimator row by row.
+    # The compensation is causal; offline it equals stepping the live estimator row by row.
     live = live_estimator(cal)
     stepped = [live.step(v)[0] for v in other["frequency_hz"]]
     np.testing.assert_allclose(est["stress_pa_estimate"], [np.nan if v is None else v for v in stepped], rtol=1e-12)

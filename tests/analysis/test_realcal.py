@@ -1,4 +1,4 @@
-"""Calibration on realistic FSR recordings (issue 12): families, lag, dead zone, causal compensation, uncertainty.
+"""Calibration on realistic FSR recordings: families, lag, dead zone, causal compensation, uncertainty.
 
 How the data were made: :func:`fsrlab.analysis.handloaded.fsr_bench_run` simulates an FSR in a
 voltage divider (R_M = 10 kΩ, 5 V, 10-bit ADC averaged over 20 ms rows) under a load cell read by
@@ -59,7 +59,7 @@ def test_generator_is_deterministic_and_shows_what_real_recordings_show():
 
 
 def test_hand_loaded_run_calibrates_with_compensate_from_the_command_line(hand, tmp_path):
-    # Issue 12: this run used to stop with "cycles: the branches share no stress range".
+    # This run used to stop with "cycles: the branches share no stress range".
     code, out, err = run_cli(["calibrate", hand / "cal.csv", "--x", "voltage_v", "--compensate", "-o",
                               tmp_path / "cal.json", "--json"])
     assert code == 0, err
@@ -118,7 +118,7 @@ def test_held_out_error_compensated_beats_plain_and_the_best_polynomial(cal, han
         plain = apply_calibration(cal, run, compensation=False)["force_n_estimate"]
         rows = np.isfinite(comp)
         best_poly = min(_rms_percent(np.where(rows, p(run["voltage_v"]), np.nan), unaligned) for p in polys)
-        # Reference: data from a different hysteresis model (Bouc–Wen); the aim of issue 12 is 0.6.
+        # Reference: data from a different hysteresis model (Bouc–Wen); the aim is 0.6 (docs/performance.md).
         assert _rms_percent(comp, ref) < 0.7 * best_poly
         assert _rms_percent(comp, ref) < _rms_percent(plain, ref)
 
@@ -257,7 +257,7 @@ def test_force_reference_without_area_in_hysteresis(hand, tmp_path):
     assert code == 2 and "--unit" in err
 
 
-# ---- Bad input (issue 12): one line naming the problem, exit 2 ----
+# ---- Bad input: one line naming the problem, exit 2 ----
 
 def _bad(tmp_path, columns, meta=None, args=()):
     p = tmp_path / "bad.csv"
@@ -307,7 +307,7 @@ def test_bad_input_too_few_readings_to_compensate(tmp_path):
 
 
 def test_calibration_file_of_an_earlier_fsrlab_still_applies_and_steps(runs):
-    # examples/calibration.json was written before issue 12 (polynomial + branch compensation, no
+    # examples/calibration.json was written by an earlier fsrlab (polynomial + branch compensation, no
     # lag, floor, uncertainty): it loads, applies offline with its branch method, and steps live
     # as its polynomial (the branch method needs the whole run).
     from pathlib import Path

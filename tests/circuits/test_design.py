@@ -57,7 +57,7 @@ def test_validation(kwargs, name):
         design(**SENSOR, **kwargs)
 
 
-# The firmware's capture limit (issue 10, item 13). Reference: the measured highest clean frequency in
+# The firmware's capture limit. Reference: the measured highest clean frequency in
 # docs/performance.md (simavr search of benchmarks/bench_firmware.py) and firmware/README.md "Limits".
 
 def _measured_clean_khz() -> list[float]:

@@ -1,4 +1,4 @@
-"""`fsrlab design` and the meter's capture limit (issue 10, item 13).
+"""`fsrlab design` and the meter's capture limit.
 
 Reference: fsrlab.acquisition.protocol.CAPTURE_MAX_HZ, the firmware's highest frequency with every
 edge captured (50 kHz supported; 52.5 kHz measured in simavr, docs/performance.md), and the

@@ -1,5 +1,4 @@
-"""Help text and error messages of `oscillator`, `decode`, `design`, `physics` and `paper` (issue 10,
-items 15 and 17).
+"""Help text and error messages of `oscillator`, `decode`, `design`, `physics` and `paper`.
 
 References: the options' own help strings and the commands' docstrings (cli/oscillator.py,
 cli/physics.py, cli/report.py); the contract of docs/architecture.md (bad input: one line on stderr

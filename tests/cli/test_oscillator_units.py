@@ -1,4 +1,4 @@
-"""Units of the `oscillator`, `decode` and `design` options (issue 10, item 12).
+"""Units of the `oscillator`, `decode` and `design` options.
 
 Reference: the quantity parsers' contract in cli/_common.py and fsrlab.units.parse_quantity (their
 own tests are tests/test_units.py and tests/cli/test_parsers.py); here each option of the three
@@ -58,7 +58,7 @@ def test_each_option_refuses_another_quantitys_unit(command, option, unit):
 
 
 def test_oscillator_r_1m_is_refused_with_both_spellings():
-    # Issue 10, item 12: "1m" was silently 1 mΩ.
+    # "1m" was silently 1 mΩ.
     code, out, err = run_cli(_with(BASE["oscillator"], "--r", "1m"))
     assert code == 2 and out == ""
     assert err == ("fsrlab: error: Invalid value for --r: '1m' is ambiguous: write 1M or 1meg for 1 MΩ, "

@@ -56,7 +56,7 @@ def test_regimes_do_not_join_at_phi0():
 
 
 def test_no_floating_point_warnings_over_the_required_domain():
-    # Issue 2: no overflow or invalid-value warnings for s in [0.5, 20] nm and u in [1e-4, 10] V.
+    # No overflow or invalid-value warnings for s in [0.5, 20] nm and u in [1e-4, 10] V.
     u = np.geomspace(1e-4, 10, 200)[:, None]
     s = np.linspace(0.5e-9, 20e-9, 200)[None, :]
     with warnings.catch_warnings():

@@ -1,4 +1,4 @@
-"""Time alignment of a reference and a readout recorded side by side (issue 12, an extension).
+"""Time alignment of a reference and a readout recorded side by side (an extension beyond the paper).
 
 A load cell read by an HX711 at 10–80 samples/s and a readout averaged over a window do not
 describe the same instant: the readout of a row reflects the force some time ``lag_s`` earlier (a

@@ -9,7 +9,7 @@ compensation; and, for the checks of ``fsrlab apply``, the calibrated readout ra
 (``"recorded_with"``: :meth:`fsrlab.analysis.provenance.RecordedWith.to_dict`, the run's LM555
 circuit and op-amp readout, and the values of its ``range`` column, each null when unknown).
 
-Since issue 12 the file also holds the chosen model when it is not the polynomial
+The file also holds the chosen model when it is not the polynomial
 (``"model_family"``: :meth:`fsrlab.analysis.models.FamilyModel.to_dict`), the lag applied when
 fitting (``"lag_s"``), the readout's floor (``"floor"``), the causal compensation (``"memory"``:
 :meth:`fsrlab.analysis.memory.MemoryModel.to_dict`, kept apart from the earlier ``"compensation"``

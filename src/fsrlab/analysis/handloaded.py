@@ -1,6 +1,6 @@
 """Realistic FSR recordings for tests and benchmarks, from a model that fsrlab does not fit.
 
-Not measurements. The runs imitate the bench of issue 12: an FSR in a voltage divider read by the
+Not measurements. The runs imitate a typical FSR calibration bench: an FSR in a voltage divider read by the
 Arduino's 10-bit ``analogRead`` (averaged over a window), a load cell under it read by an HX711,
 loaded by hand (irregular, reversals of every size, minor loops, holds) or by a motor (one clean
 triangle). The sensor is deliberately *another* model than the calibration's:

@@ -1,6 +1,6 @@
 """Causal hysteresis compensation with memory: play operators (Prandtl–Ishlinskii), fitted by least squares.
 
-**Extension beyond the paper** (issue 12). The compensation runs forward in time on the readout
+**Extension beyond the paper.** The compensation runs forward in time on the readout
 alone, sample by sample, so it works live (``fsrlab measure``) and on any run -- hand-loaded runs
 with reversals of every size included -- without finding cycles or branches.
 

@@ -1,6 +1,6 @@
 """Model families of a calibration and their choice by grouped cross-validation.
 
-**Extension beyond the paper** (issue 12). Besides polynomials in the readout (the paper's
+**Extension beyond the paper.** Besides polynomials in the readout (the paper's
 Figure 17, :mod:`fsrlab.analysis.calibration`), a calibration can go through the FSR's
 conductance, where FSRs are close to a power law:
 
