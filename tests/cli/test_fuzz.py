@@ -32,7 +32,7 @@ tests/cli/test_oscillator_cli.py), and so are ``acquire --port auto`` (a USB sea
 machine) and virtual ``--period`` values above 60 s (a finding, see ``CAPPED``). A new command
 that runs until stopped needs an entry in ``FORCED``, or its cases fail as too slow.
 
-Problems found in commands owned elsewhere are listed in ``KNOWN``: they are counted, not failed,
+Open problems found in the commands are listed in ``KNOWN``: they are counted, not failed,
 and each has an xfail test with one concrete case.
 """
 
@@ -285,9 +285,9 @@ def _names_something(line: str, args: list[str], command: str, columns: set[str]
 
 
 # ------------------------------------------------------------------------------------------------
-# Findings in commands owned elsewhere (acquisition, analysis, runformat): a problem that matches
+# Open findings (acquisition, analysis, runformat): a problem that matches
 # one is counted in KNOWN_SEEN instead of failing the case; each has an xfail test with one
-# concrete case (test_known_finding), which passes once the owner fixes it.
+# concrete case (test_known_finding), which passes once it is fixed.
 # ------------------------------------------------------------------------------------------------
 
 ABSURD = {"1e308", "-1e308", "1e999", "inf", "nan", "NaN", 1e308, float("inf"), float("nan")}
@@ -532,7 +532,7 @@ def test_fuzz_case_count():
 
 
 # ------------------------------------------------------------------------------------------------
-# The findings in commands owned elsewhere, one concrete case each (they pass once fixed)
+# The open findings, one concrete case each (they pass once fixed)
 # ------------------------------------------------------------------------------------------------
 
 #: Findings still open (the others are fixed and must stay fixed).
