@@ -10,6 +10,7 @@ import typer
 from fsrlab.cli import app
 from fsrlab.cli._common import areas, fail, farads, mass_list, pascals, seconds, to_jsonable
 from fsrlab.cli.acquisition import _AREA_HELP, _LOADCELL_HELP, _SENSOR_HELP
+from fsrlab.cli.measure import load_frame_calibration
 
 
 def _virtual_bench(steps, seed, area_m2):
@@ -127,23 +128,7 @@ def live(
         _check_out(out, overwrite=False)
     sensor_meta, area_m2 = _sensor_area(sensor, area)
     lc = _load_loadcell(loadcell)
-    calibration = None
-    if cal is not None:
-        from fsrlab.analysis.calibration_io import load_calibration
-
-        if not cal.is_file():
-            fail(f"{cal} does not exist; write one with fsrlab calibrate RUN.csv -o {cal}", "--cal")
-        try:
-            calibration = load_calibration(cal)
-        except (OSError, ValueError) as exc:
-            fail(str(exc), "--cal")
-        if calibration.x_name not in ("frequency_hz", "duty_cycle", "voltage_v"):
-            fail(f"{cal} calibrates {calibration.x_name}; fsrlab live reads frequency_hz, duty_cycle or voltage_v",
-                 "--cal")
-    try:
-        import bokeh  # noqa: F401
-    except ImportError:
-        fail("needs the bokeh package: pip install -e . (it is a dependency of fsrlab)", "--port")
+    calibration = load_frame_calibration(cal, "live") if cal is not None else None
     from fsrlab.acquisition.serial_link import SerialLink
     from fsrlab.live.page import Controller, make_document
     from fsrlab.live.server import start_server

@@ -13,8 +13,29 @@ from fsrlab.cli import app
 from fsrlab.cli._common import areas, emit_json, fail, farads, pascals, plain_numbers, seconds
 from fsrlab.cli.acquisition import (
     _AREA_HELP, _LOADCELL_HELP, _PEAK_HELP, _PERIOD_HELP, _PROFILE_HELP, _SENSOR_HELP, _check_out, _check_virtual,
-    _fmt, _load_loadcell, _sensor_area, _sigterm_as_interrupt, _virtual_device, _window_ms,
+    _LiveView, _fmt, _load_loadcell, _sensor_area, _sigterm_as_interrupt, _virtual_device, _window_ms,
 )
+
+def load_frame_calibration(cal: Path, command: str):
+    """The calibration of ``--cal`` for a command that reads the meter's frames (frequency, duty, voltage).
+
+    One line naming ``--cal`` (exit 2) when the file is missing, unreadable, or calibrates another readout.
+    """
+    from fsrlab.analysis.calibration_io import load_calibration
+
+    if cal.is_dir():
+        fail(f"{cal} is a directory, not a calibration file", "--cal")
+    if not cal.exists():
+        fail(f"{cal} does not exist; write one with fsrlab calibrate RUN.csv -o {cal}", "--cal")
+    try:
+        calibration = load_calibration(cal)
+    except (ValueError, OSError) as exc:
+        fail(str(exc), "--cal")
+    if calibration.x_name not in ("frequency_hz", "duty_cycle", "voltage_v"):
+        fail(f"{cal} calibrates {calibration.x_name}; fsrlab {command} reads frequency_hz, duty_cycle or voltage_v",
+             "--cal")
+    return calibration
+
 
 def _estimator(cal):
     """The causal estimator of a calibration (:func:`fsrlab.analysis.pipeline.live_estimator`): one reading at
@@ -24,37 +45,15 @@ def _estimator(cal):
     return live_estimator(cal)
 
 
-class _Live:
-    """Live line of the force on stderr (rich, redrawn in place) when stderr is a terminal."""
+class _Live(_LiveView):
+    """Live line of the force on stderr (rich, redrawn in place) when stderr is a terminal; notices as acquire's."""
 
-    def __init__(self, enabled: bool, title: str) -> None:
-        from rich.console import Console
-
-        self.console = Console(stderr=True)
-        self.enabled = enabled and self.console.is_terminal
-        self.title, self.live = title, None
-
-    def __enter__(self) -> "_Live":
-        if self.enabled:
-            from rich.live import Live
-
-            self.live = Live("", console=self.console, transient=True, refresh_per_second=8)
-            self.live.__enter__()
-        return self
+    def _render(self, st) -> str:
+        return self.title
 
     def show(self, text: str) -> None:
         if self.live is not None:
             self.live.update(f"{self.title}\n{text}")
-
-    def notice(self, text: str) -> None:
-        if self.live is not None:
-            self.console.print(f"fsrlab: {text}", markup=False, highlight=False)
-        else:
-            print(f"fsrlab: {text}", file=sys.stderr, flush=True)
-
-    def __exit__(self, *exc) -> None:
-        if self.live is not None:
-            self.live.__exit__(*exc)
 
 
 @app.command("measure")
@@ -93,24 +92,13 @@ def measure(
     """
     from fsrlab.acquisition.recorder import record, result_dict
     from fsrlab.acquisition.serial_link import SerialLink
-    from fsrlab.analysis.calibration_io import load_calibration
 
     if virtual == (port is not None):
         fail("give exactly one of --port PORT|auto and --virtual", "--port")
     if duration is not None and not duration > 0:
         fail(f"must be > 0 s, got {duration:g} s", "--duration")
     window_ms = _window_ms(window)
-    if cal.is_dir():
-        fail(f"{cal} is a directory, not a calibration file", "--cal")
-    if not cal.exists():
-        fail(f"{cal} does not exist; write one with fsrlab calibrate RUN.csv -o {cal}", "--cal")
-    try:
-        calibration = load_calibration(cal)
-    except (ValueError, OSError) as exc:
-        fail(str(exc), "--cal")
-    if calibration.x_name not in ("frequency_hz", "duty_cycle", "voltage_v"):
-        fail(f"{cal} calibrates {calibration.x_name}; fsrlab measure reads frequency_hz, duty_cycle or voltage_v",
-             "--cal")
+    calibration = load_frame_calibration(cal, "measure")
     try:
         est = _estimator(calibration)
     except ValueError as exc:
