@@ -370,3 +370,19 @@ def test_plain_estimate_has_its_own_larger_uncertainty(cal, hand):
     assert np.nanmean(plain) > 1.5 * np.nanmean(comp)
     back = load_calibration(save_calibration(cal, hand / "u.json"))
     np.testing.assert_array_equal(apply_calibration(back, run, compensation=False)["force_n_uncertainty"], plain)
+
+
+@pytest.mark.parametrize("method", ["memory", "cv", "xcorr"])
+def test_every_lag_criterion_finds_a_known_delay(method):
+    # Reference: a readout-free construction: the reference is the readout delayed by 60 ms (3 rows of
+    # 20 ms) through a linear map; every criterion must find that shift (the sign convention of
+    # shift_reference: the reference lags, the lag found is negative).
+    import numpy as np
+
+    from fsrlab.analysis.alignment import estimate_lag
+
+    t = np.arange(2000) * 0.02
+    x = np.sin(1.3 * t) + 0.5 * np.sin(0.37 * t)
+    y = 3.0 * np.interp(t - 0.06, t, x) + 1.0
+    found = estimate_lag(t, x, y, np.arange(2000) // 200, method=method)
+    assert found.lag_s == pytest.approx(-0.06, abs=1e-9)

@@ -182,10 +182,9 @@ def estimate_lag(t, x, y, groups, usable=None, max_lag_s: float | None = None, d
 
     if method == "memory":
         return _memory_search(t, x, y, g, use, steps, dt, sign, folds)
-    crit = cv if method == "cv" else xcorr
     if method == "xcorr":
         lags = np.arange(-4 * steps, 4 * steps + 1) * dt / 4
-        errs = np.array([crit(lag) for lag in lags])
+        errs = np.array([xcorr(lag) for lag in lags])
         i = int(np.argmin(errs))
         if errs[i] > 0.8:
             raise ValueError("lag: the changes of readout and reference hardly correlate (r < 0.2) at any lag within "
@@ -195,8 +194,14 @@ def estimate_lag(t, x, y, groups, usable=None, max_lag_s: float | None = None, d
                              f"search range (±{steps * dt:.4g} s): no maximum inside it; check that readout and "
                              "reference belong to the same recording")
         return LagSearch(lag_s=float(lags[i]), lags_s=lags, cv_rmse=errs, method="xcorr")
+    return _grid_search(lambda lags: np.array([cv(lag) for lag in lags]), steps, dt, "cv")
+
+
+def _grid_search(criterion, steps: int, dt: float, method: str) -> LagSearch:
+    """The lag of least ``criterion(lags)`` (an array of errors): whole rows over ±steps, then quarter rows
+    around the best; one line when the error is flat or keeps falling towards an end of the range."""
     coarse = np.arange(-steps, steps + 1) * dt
-    errs = np.array([cv(lag) for lag in coarse])
+    errs = criterion(coarse)
     i = int(np.argmin(errs))
     if np.ptp(errs) <= 1e-9 * max(errs.max(), 1e-300):
         raise ValueError("lag: the cross-validated error does not change with the lag: no minimum to find "
@@ -206,13 +211,11 @@ def estimate_lag(t, x, y, groups, usable=None, max_lag_s: float | None = None, d
                          f"of the search range (±{steps * dt:.4g} s): no minimum inside it; check that readout and "
                          "reference belong to the same recording")
     fine = coarse[i] + np.array([-0.75, -0.5, -0.25, 0.25, 0.5, 0.75]) * dt
-    ferrs = np.array([cv(lag) for lag in fine])
     lags = np.concatenate([coarse, fine])
-    allerr = np.concatenate([errs, ferrs])
+    allerr = np.concatenate([errs, criterion(fine)])
     order = np.argsort(lags)
     lags, allerr = lags[order], allerr[order]
-    best = float(lags[int(np.argmin(allerr))])
-    return LagSearch(lag_s=best, lags_s=lags, cv_rmse=allerr, method="cv")
+    return LagSearch(lag_s=float(lags[int(np.argmin(allerr))]), lags_s=lags, cv_rmse=allerr, method=method)
 
 
 def _memory_search(t, x, y, g, use, steps, dt, sign, folds) -> LagSearch:
@@ -268,19 +271,4 @@ def _memory_search(t, x, y, g, use, steps, dt, sign, folds) -> LagSearch:
             sse += (yf * yf).sum(0) - 2 * (beta * bs[f]).sum(0) + (beta * (grams[f] @ beta)).sum(0)
         return scale * np.sqrt(np.clip(sse, 0.0, None) / idx.size)
 
-    coarse = np.arange(-steps, steps + 1) * dt
-    errs = crits(coarse)
-    i = int(np.argmin(errs))
-    if np.ptp(errs) <= 1e-9 * max(errs.max(), 1e-300):
-        raise ValueError("lag: the cross-validated error does not change with the lag: no minimum to find "
-                         "(does the readout respond to the reference?)")
-    if i in (0, coarse.size - 1):
-        raise ValueError(f"lag: the cross-validated error keeps falling towards a lag of {coarse[i]:+.4g} s, the end "
-                         f"of the search range (±{steps * dt:.4g} s): no minimum inside it; check that readout and "
-                         "reference belong to the same recording")
-    fine = coarse[i] + np.array([-0.75, -0.5, -0.25, 0.25, 0.5, 0.75]) * dt
-    lags = np.concatenate([coarse, fine])
-    allerr = np.concatenate([errs, crits(fine)])
-    order = np.argsort(lags)
-    lags, allerr = lags[order], allerr[order]
-    return LagSearch(lag_s=float(lags[int(np.argmin(allerr))]), lags_s=lags, cv_rmse=allerr, method="memory")
+    return _grid_search(crits, steps, dt, "memory")
