@@ -23,14 +23,6 @@ FRAMES = 1000
 AIMS = {"median_ms": 50.0, "p99_ms": 200.0, "cpu_pct": 15.0}
 
 _OBSERVE = """
-function walk(root, sel) {
-  const el = root.querySelector ? root.querySelector(sel) : null;
-  if (el) return el;
-  for (const n of (root.querySelectorAll ? root.querySelectorAll('*') : [])) {
-    if (n.shadowRoot) { const r = walk(n.shadowRoot, sel); if (r) return r; }
-  }
-  return null;
-}
 const span = walk(document, '#latest-seq');
 if (!span) return false;
 const host = span.getRootNode();
@@ -45,7 +37,7 @@ return true;
 
 def _latency() -> tuple[list[float], int]:
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-    from browser import chromium, wait_for
+    from browser import FIND_JS, chromium, wait_for
 
     from fsrlab.acquisition.serial_link import SerialLink
     from fsrlab.acquisition.virtual_device import PhysicsSource, StressProfile, VirtualDevice
@@ -74,7 +66,7 @@ def _latency() -> tuple[list[float], int]:
     driver = chromium()
     try:
         driver.get(srv.url)
-        if not wait_for(lambda: driver.execute_script(_OBSERVE), timeout_s=30):
+        if not wait_for(lambda: driver.execute_script(FIND_JS + _OBSERVE), timeout_s=30):
             raise RuntimeError("the page showed no window")
         seen: list = []
         deadline = time.monotonic() + FRAMES / 100.0 * 3 + 10

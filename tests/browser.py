@@ -19,7 +19,7 @@ CHROMEDRIVER = "/usr/bin/chromedriver"
 ARTIFACTS = Path(__file__).resolve().parents[1] / "build" / "test-artifacts"
 
 # Find the first element matching a CSS selector in the document or any shadow root below it.
-_FIND = """
+FIND_JS = """
 function walk(root, sel) {
   const el = root.querySelector ? root.querySelector(sel) : null;
   if (el) return el;
@@ -51,7 +51,7 @@ def text(driver, selector: str) -> str | None:
 
     The root an element was found in is remembered in the page, so later look-ups are quick.
     """
-    return driver.execute_script(_FIND + """
+    return driver.execute_script(FIND_JS + """
       const sel = arguments[0];
       window.__fsrlabRoots = window.__fsrlabRoots || [];
       for (const r of window.__fsrlabRoots) { const e = r.querySelector(sel); if (e) return e.textContent; }
@@ -63,7 +63,7 @@ def text(driver, selector: str) -> str | None:
 
 def texts(driver, selectors) -> dict:
     """Texts of several elements read in one step (one page state), by :func:`text`'s rules."""
-    return driver.execute_script(_FIND + """
+    return driver.execute_script(FIND_JS + """
       const out = {};
       window.__fsrlabRoots = window.__fsrlabRoots || [];
       for (const sel of arguments[0]) {
@@ -75,36 +75,27 @@ def texts(driver, selectors) -> dict:
       return out;""", list(selectors))
 
 
+# Every button whose text is arguments[0], in the document and every shadow root.
+_BUTTONS_JS = """
+function buttons(root, want, out) {
+  for (const n of (root.querySelectorAll ? root.querySelectorAll('*') : [])) {
+    if (n.tagName === 'BUTTON' && n.textContent.trim() === want) out.push(n);
+    if (n.shadowRoot) buttons(n.shadowRoot, want, out);
+  }
+  return out;
+}
+const b = buttons(document, arguments[0], [])[0];
+"""
+
+
 def click_button(driver, label: str) -> bool:
     """Click the button whose text is ``label``; False when there is none."""
-    return driver.execute_script(_FIND + """
-      const want = arguments[0];
-      function all(root, out) {
-        for (const n of (root.querySelectorAll ? root.querySelectorAll('*') : [])) {
-          if (n.tagName === 'BUTTON' && n.textContent.trim() === want) out.push(n);
-          if (n.shadowRoot) all(n.shadowRoot, out);
-        }
-        return out;
-      }
-      const b = all(document, [])[0];
-      if (!b) return false;
-      b.click();
-      return true;""", label)
+    return driver.execute_script(_BUTTONS_JS + "if (!b) return false; b.click(); return true;", label)
 
 
 def button_disabled(driver, label: str) -> bool | None:
     """Whether the button with text ``label`` is disabled (None: no such button)."""
-    return driver.execute_script("""
-      const want = arguments[0];
-      function all(root, out) {
-        for (const n of (root.querySelectorAll ? root.querySelectorAll('*') : [])) {
-          if (n.tagName === 'BUTTON' && n.textContent.trim() === want) out.push(n);
-          if (n.shadowRoot) all(n.shadowRoot, out);
-        }
-        return out;
-      }
-      const b = all(document, [])[0];
-      return b ? b.disabled : null;""", label)
+    return driver.execute_script(_BUTTONS_JS + "return b ? b.disabled : null;", label)
 
 
 def model_length(driver, name: str, column: str) -> int:
