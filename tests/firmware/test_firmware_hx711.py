@@ -23,8 +23,6 @@ from pathlib import Path
 
 import pytest
 
-from toolcheck import require_file, require_tool
-
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "firmware" / "sim"))
 import simrun  # noqa: E402
@@ -39,16 +37,6 @@ START_HANDLED_S = START_S + 0.0006
 TOL_S = 0.0015
 HX711_MIN, HX711_MAX = -(2**23), 2**23 - 1
 SCK_HIGH_MAX_US = 60.0  # the HX711 powers down when SCK stays high longer (datasheet)
-
-
-@pytest.fixture(scope="module")
-def fw():
-    require_tool("avr-gcc")
-    require_tool("make")
-    require_file("/usr/include/simavr/sim_avr.h", "libsimavr-dev (simavr headers)")
-    require_file("/usr/share/arduino/hardware/arduino/avr/cores/arduino/Arduino.h", "arduino-core-avr")
-    simrun.build()
-    return simrun
 
 
 def _rounded_mean(values) -> int:

@@ -20,8 +20,6 @@ from pathlib import Path
 
 import pytest
 
-from toolcheck import require_file, require_tool
-
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "firmware" / "sim"))
 import simrun  # noqa: E402
@@ -50,16 +48,6 @@ GRID = [
     (20_000.0, 0.5), (24_000.0, 0.5),
     (TOP, 0.05), (TOP, 0.5), (TOP, 0.95),
 ]
-
-
-@pytest.fixture(scope="module")
-def fw():
-    require_tool("avr-gcc")
-    require_tool("make")
-    require_file("/usr/include/simavr/sim_avr.h", "libsimavr-dev (simavr headers)")
-    require_file("/usr/share/arduino/hardware/arduino/avr/cores/arduino/Arduino.h", "arduino-core-avr")
-    simrun.build()
-    return simrun
 
 
 def _steady(ms, skip=1):
