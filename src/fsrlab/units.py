@@ -17,7 +17,10 @@ import re
 from dataclasses import dataclass
 from decimal import Decimal
 
-__all__ = ["PREFIXES", "QUANTITIES", "Quantity", "parse_eng", "parse_quantity", "format_eng"]
+__all__ = ["PREFIXES", "QUANTITIES", "STANDARD_GRAVITY", "Quantity", "parse_eng", "parse_quantity", "format_eng"]
+
+#: Standard acceleration of gravity g0 (exact, CGPM 1901): a mass of m kg weighs m·g0 N; grams-force = N·1000/g0. [m/s²]
+STANDARD_GRAVITY = 9.80665
 
 #: Multiplier of each SI prefix letter.
 PREFIXES = {

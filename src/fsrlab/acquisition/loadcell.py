@@ -40,6 +40,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from fsrlab.acquisition.protocol import HX711_MAX, HX711_MIN
+from fsrlab.units import STANDARD_GRAVITY
 
 __all__ = ["HX711_RATES", "STANDARD_GRAVITY", "TARE_STABILITY", "LoadCellModel", "WindowReference",
            "window_reference", "LoadCellCalibration", "load_loadcell", "tare_from_readings",
@@ -48,8 +49,6 @@ __all__ = ["HX711_RATES", "STANDARD_GRAVITY", "TARE_STABILITY", "LoadCellModel",
 HX711_RATES = (10, 80)
 """Output data rates of the HX711 (pin RATE low: 10, high: 80). [samples/s]"""
 
-STANDARD_GRAVITY = 9.80665
-"""Standard acceleration of gravity g_n (CGPM 1901, exact), the default for masses → force. [m/s²]"""
 
 TARE_STABILITY = {"min_samples": 5, "max_drift_sigmas": 4.0, "max_relative_spread": 1e-3}
 """When a tare (or a scale reading) is accepted: at least ``min_samples`` readings (window means of

@@ -31,10 +31,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from fsrlab.units import STANDARD_GRAVITY
+
 __all__ = ["HandLoadedRun", "hand_loaded_force", "motor_cycle_force", "fsr_bench_run"]
 
 _DT = 1e-3  # simulation step [s]
-_G0 = 9.80665  # standard gravity, for the offset stated in grams [m/s²]
+_G0 = STANDARD_GRAVITY  # for the offset stated in grams [m/s²]
 
 
 @dataclass

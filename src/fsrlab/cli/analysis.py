@@ -18,6 +18,7 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli._common import emit_json, fail, farads, fraction, number, ohms, option_names, seconds
+from fsrlab.units import STANDARD_GRAVITY
 
 _DEGREES = ("auto", "1", "2", "3", "4", "5")
 
@@ -162,7 +163,7 @@ def repeatability(
 _MODELS = ("auto", "polynomial", "conductance-polynomial", "conductance-power", "power", "polynomial-1", "polynomial-2",
            "polynomial-3", "polynomial-4", "polynomial-5", "conductance-polynomial-1", "conductance-polynomial-2",
            "conductance-polynomial-3")
-_GRAMS_PER_NEWTON = 1e3 / 9.80665  # standard gravity
+_GRAMS_PER_NEWTON = 1e3 / STANDARD_GRAVITY
 
 
 def _reference_option(run_file: Path, run, reference: str | None) -> None:

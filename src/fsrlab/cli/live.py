@@ -11,28 +11,7 @@ from fsrlab.cli import app
 from fsrlab.cli._common import areas, fail, farads, mass_list, pascals, seconds, to_jsonable
 from fsrlab.cli.acquisition import _AREA_HELP, _LOADCELL_HELP, _SENSOR_HELP
 from fsrlab.cli.measure import load_frame_calibration
-
-
-def _virtual_bench(steps, seed, area_m2):
-    """A virtual meter on a bench that places the plan's masses: (device, source, place(step) -> time)."""
-    from fsrlab.acquisition.bench import BenchSource
-    from fsrlab.acquisition.loadcell import LoadCellModel
-    from fsrlab.acquisition.virtual_device import VirtualDevice
-    from fsrlab.physics.sensor import VirtualFSR
-
-    try:
-        bench = BenchSource([s.mass_kg * 9.80665 for s in steps],
-                            sensor=VirtualFSR() if area_m2 is None else VirtualFSR(area_m2=area_m2))
-    except ValueError:
-        fail("the virtual sensor model has no valid response up to the largest mass on its area; choose smaller "
-             "masses", "--masses")
-    device = VirtualDevice(bench, seed=seed, load_cell=LoadCellModel())
-
-    def place(step) -> float:
-        t = device.time_since_start()
-        bench.place(step.index, t)
-        return t
-    return device, bench, place
+from fsrlab.units import STANDARD_GRAVITY
 
 
 def _refusal(cal, path, metadata: dict, range_: int) -> str | None:
@@ -155,7 +134,9 @@ def live(
     if virtual:
         _check_virtual(profile, peak, period, c_off, 0.0, 0.0, seed)
         if steps is not None:  # a virtual bench that places the masses of the plan
-            device, source, place = _virtual_bench(steps, seed, area_m2)
+            from fsrlab.cli.weights import virtual_bench
+
+            device, source, place = virtual_bench(steps, seed, area_m2, STANDARD_GRAVITY)
         else:
             device, source = _virtual_device(profile, peak, period, c_off, seed, 0.0, 0.0, True, 80, area_m2)
         if unplug_after is not None:
@@ -173,7 +154,7 @@ def live(
             reference = lambda frame: device.reference(frame.seq)  # noqa: E731
         health = lambda: device.failure  # noqa: E731
     weights = None if steps is None else {"steps": steps, "place": place, "x": "frequency_hz",
-                                          "gravity_m_s2": 9.80665,
+                                          "gravity_m_s2": STANDARD_GRAVITY,
                                           "metadata": {"weights": {"masses_kg": [s.mass_kg for s in steps],
                                                                    "repeat": repeat, "unload": unload}}}
     estimator, refusal = None, None

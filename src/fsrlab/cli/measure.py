@@ -15,6 +15,7 @@ from fsrlab.cli.acquisition import (
     _AREA_HELP, _LOADCELL_HELP, _PEAK_HELP, _PERIOD_HELP, _PROFILE_HELP, _SENSOR_HELP, _check_out, _check_virtual,
     _LiveView, _fmt, _load_loadcell, _sensor_area, _sigterm_as_interrupt, _virtual_device, _window_ms,
 )
+from fsrlab.units import STANDARD_GRAVITY
 
 def load_frame_calibration(cal: Path, command: str):
     """The calibration of ``--cal`` for a command that reads the meter's frames (frequency, duty, voltage).
@@ -123,7 +124,7 @@ def measure(
     metadata["calibration"] = {"file": str(cal), "x": est.x, "reference": ref, "estimator": "live_estimator"}
     counts = {"estimated": 0, "out_of_range": 0}
     last: dict = {}
-    g = 9.80665
+    g = STANDARD_GRAVITY
 
     with _Live(not quiet, f"fsrlab measure {out}  (Ctrl-C ends)") as live:
         def on_row(m, row):

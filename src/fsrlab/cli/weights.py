@@ -61,6 +61,32 @@ class _Keyboard:
         return "skip" if line.strip().lower() in ("s", "skip") else "ok"
 
 
+def virtual_bench(steps, seed: int | None, area_m2: float | None, gravity_m_s2: float):
+    """A virtual meter on a bench that places the plan's masses: ``(device, bench, place)``.
+
+    ``place(step)`` starts that placement on the bench and returns its time since START [s] (the
+    procedure's ``place``); the meter has the virtual device's emulated HX711. One line naming ``--masses``
+    when the virtual sensor has no response up to the largest mass.
+    """
+    from fsrlab.acquisition.bench import BenchSource
+    from fsrlab.acquisition.virtual_device import VirtualDevice
+    from fsrlab.physics.sensor import VirtualFSR
+
+    try:
+        bench = BenchSource([s.mass_kg * gravity_m_s2 for s in steps],
+                            sensor=VirtualFSR() if area_m2 is None else VirtualFSR(area_m2=area_m2))
+    except ValueError:
+        fail(f"the virtual sensor model has no valid response up to {max(s.mass_kg for s in steps) * 1e3:g} g on "
+             "its area; choose smaller masses", "--masses")
+    device = VirtualDevice(bench, seed=seed)
+
+    def place(step) -> float:
+        t = device.time_since_start()
+        bench.place(step.index, t)
+        return t
+    return device, bench, place
+
+
 @app.command("weights")
 def weights(
     masses: str = typer.Option(..., "--masses", metavar="MASSES", help="Masses to place, increasing, comma-separated [kg]: 0,50g,100g,200g,500g (g, kg or mg; 0 needs no unit)."),
@@ -137,17 +163,7 @@ def weights(
     device = bench = None
     metadata: dict = {"sensor": sensor_meta} if sensor_meta else {}
     if virtual:
-        from fsrlab.acquisition.bench import BenchSource
-        from fsrlab.acquisition.virtual_device import VirtualDevice
-        from fsrlab.physics.sensor import VirtualFSR
-
-        try:
-            bench = BenchSource([s.mass_kg * gravity for s in steps],
-                                sensor=VirtualFSR() if area_m2 is None else VirtualFSR(area_m2=area_m2))
-        except ValueError:
-            fail(f"the virtual sensor model has no valid response up to {masses_kg[-1] * 1e3:g} g on its area; "
-                 "choose smaller masses", "--masses")
-        device = VirtualDevice(bench, seed=seed)
+        device, bench, place = virtual_bench(steps, seed, area_m2, gravity)
         port = device.open()
         vmeta = bench.metadata()
         if sensor_meta:
@@ -159,11 +175,6 @@ def weights(
         def announce(text: str) -> None:
             if not quiet:
                 print(f"fsrlab: virtual bench: {text.split(', then press Enter')[0]}", file=sys.stderr, flush=True)
-
-        def place(step) -> float:
-            t = device.time_since_start()
-            bench.place(step.index, t)
-            return t
 
         def confirmed() -> str:
             return "ok"
