@@ -33,8 +33,13 @@ def test_section_files_errata_and_data(section, paper):
     assert data["paper_claims"] == claims  # quoted from the one transcription
     assert data["duty_cycle_infimum_no_diode"] == pytest.approx(2 / 3)
     np.testing.assert_allclose(data["tau_ratio_no_diode"], tau_ratio(np.array(data["N"])), rtol=1e-12)
-    # The paper's 24.37 sits just above the oscillation limit N = 4 (erratum O1).
-    assert 4.0 < data["n_where_eq32_equals_24_37"] < 4.001
+    # The circuit reaches the paper's 24.37 just above the oscillation limit N = 4 (erratum O1); the
+    # printed eq. (32) is N × the circuit's ratio and its minimum is the printed 24.37 (truncated).
+    assert 4.0 < data["n_where_corrected_eq32_equals_24_37"] < 4.001
+    np.testing.assert_allclose(data["paper_eq32_as_printed"], np.array(data["N"]) * data["tau_ratio_no_diode"],
+                               rtol=1e-12)
+    assert int(100 * data["paper_24_37_explained"]["minimum"]) / 100 == paper["section5_tau_ratio_claims"][
+        "min_tau_ratio_no_diode"]
     if data["ngspice_available"]:
         # ngspice columns agree with the closed forms (0.1 %, as in test_spice.py).
         np.testing.assert_allclose(data["ngspice_diode"]["duty_cycle"], data["duty_cycle_diode"], rtol=1e-3)

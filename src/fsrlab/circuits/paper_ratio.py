@@ -1,12 +1,12 @@
 """τH/τL versus N = R_FSR/R as the paper prints it and as its own equations give it (errata O1–O3).
 
 The paper's §5 derives τH/τL of the FSR-timed LM555 without the diode, eq. (32), and with the diode
-D1, eq. (37). Eq. (32) follows from eqs. (23) and (26) and falls monotonically toward 2; the paper
-nevertheless states a minimum of 24.37 for N > 4. Eq. (37) as printed carries an extra factor N over
-the ratio that follows from eqs. (23) and (34). Both printed results are N times the ratio of the
-paper's own τH and τL, as if τL had been divided by N. This module gives the printed forms, the
-"N times" ratio and its minimum, the corrected columns over N (via
-:func:`fsrlab.circuits.lm555.tau_ratio`) and an ngspice check of them (docs/errata.md, O1–O3).
+D1, eq. (37). Both printed equations carry an extra factor N over the ratio that follows from the
+paper's own τH and τL (eqs. 23 with 26, and 23 with 34), as if τL had been divided by N. The quoted
+minimum 24.37 (DC ≥ 0.96) and Figure 12 follow from eq. (32) as printed; the circuit's ratio falls
+monotonically toward 2 and has no minimum. This module gives the printed forms, the minimum of the
+printed eq. (32), the corrected columns over N (via :func:`fsrlab.circuits.lm555.tau_ratio`) and an
+ngspice check of them (docs/errata.md, O1–O3).
 
 References
 ----------
@@ -27,16 +27,45 @@ from fsrlab.circuits.lm555 import tau_ratio
 from fsrlab.circuits.spice import simulate_spice_many
 
 __all__ = [
+    "tau_ratio_eq32_as_printed",
     "tau_ratio_eq37_as_printed",
     "tau_ratio_times_n",
     "RatioMinimum",
-    "minimum_tau_ratio_times_n",
-    "n_where_eq32_equals",
+    "minimum_eq32_as_printed",
+    "n_where_ratio_equals",
     "TauRatioTable",
     "tau_ratio_table",
     "SimulatedRatios",
     "simulate_tau_ratios",
 ]
+
+
+def tau_ratio_eq32_as_printed(n_ratio):
+    """The paper's eq. (32) as printed: ``ln((2 − 2N)/(4 − N))·2N(N + 1)/(ln 2·(N + 2))``.
+
+    Parameters
+    ----------
+    n_ratio : float or array_like
+        ``N = R_FSR / R``, > 4 for a real value. [1]
+
+    Returns
+    -------
+    float or ndarray
+        The printed expression; NaN for 1 < N ≤ 4 where the logarithm's argument is negative. [1]
+
+    Notes
+    -----
+    The extracted text reads "ln 2 − 2N / 4 −N 2N N + 1 / ln 2 N + 2", the same layout as eq. (37)
+    ("ln 2 − 2N / 4 −N 2N / ln 2 N + 2") with the factor ``N + 1`` added, so the numerator is
+    ``2N·(N + 1)``. This is N times the ratio that follows from eqs. (23) and (26),
+    ``2·ln((2N − 2)/(N − 4))·(N + 1)/(ln 2·(N + 2))`` (:func:`fsrlab.circuits.lm555.tau_ratio`):
+    the same extra factor N as eq. (37). Its minimum over N > 4 is the paper's 24.37
+    (:func:`minimum_eq32_as_printed`; docs/errata.md, O1).
+    """
+    n = np.asarray(n_ratio, dtype=float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = np.log((2 - 2 * n) / (4 - n)) * 2 * n * (n + 1) / (math.log(2) * (n + 2))  # Eq. (32) as printed
+    return out[()] if out.ndim == 0 else out
 
 
 def tau_ratio_eq37_as_printed(n_ratio):
@@ -65,14 +94,14 @@ def tau_ratio_eq37_as_printed(n_ratio):
 
 
 def tau_ratio_times_n(n_ratio, diode: bool = False):
-    """``N × τH/τL``: how the paper's quoted numbers and Figures 12 and 15 behave.
+    """``N × τH/τL``: the paper's printed eqs. (32) and (37), from the circuit's ratio.
 
     Parameters
     ----------
     n_ratio : float or array_like
         ``N = R_FSR / R``. [1]
     diode : bool
-        With the ideal diode D1 (eqs. 23 and 34); without it, eqs. (23) and (26), i.e. eq. (32).
+        With the ideal diode D1 (eqs. 23 and 34); without it, eqs. (23) and (26).
 
     Returns
     -------
@@ -82,8 +111,9 @@ def tau_ratio_times_n(n_ratio, diode: bool = False):
 
     Notes
     -----
-    Both the quoted minimum 24.37 (no diode) and the printed eq. (37) (diode) equal this product,
-    as if τL had been divided by N (R_FSR replaced by R in the numerators of eqs. 26 and 34).
+    Without the diode this equals eq. (32) as printed (:func:`tau_ratio_eq32_as_printed`), with it
+    eq. (37) as printed: both printed ratios are the circuit's times N, as if τL had been divided by
+    N (R_FSR replaced by R in the numerators of eqs. 26 and 34).
     """
     n = np.asarray(n_ratio, dtype=float)
     return n * tau_ratio(n, diode=diode)
@@ -91,14 +121,14 @@ def tau_ratio_times_n(n_ratio, diode: bool = False):
 
 @dataclass(frozen=True)
 class RatioMinimum:
-    """The minimum of N × eq. (32) over N > 4.
+    """The minimum of eq. (32) as printed (N × the circuit's τH/τL) over N > 4.
 
     Parameters
     ----------
     n_ratio : float
         N where the minimum lies. [1]
     value : float
-        The minimum of N × eq. (32). [1]
+        The minimum of eq. (32) as printed. [1]
     """
 
     n_ratio: float
@@ -111,17 +141,18 @@ class RatioMinimum:
 
     def to_dict(self) -> dict:
         """The report's JSON shape: ``expression``, ``minimum`` and ``at_N``."""
-        return {"expression": "N * eq. (32)", "minimum": self.value, "at_N": self.n_ratio}
+        return {"expression": "eq. (32) as printed (= N * tau_H/tau_L of eqs. 23, 26)", "minimum": self.value,
+                "at_N": self.n_ratio}
 
 
-def minimum_tau_ratio_times_n(bounds: tuple[float, float] = (4.2, 20.0), xatol: float = 1e-10) -> RatioMinimum:
-    """Minimum of N × eq. (32) for N > 4: where the paper's "minimal value 24.37" comes from.
+def minimum_eq32_as_printed(bounds: tuple[float, float] = (4.2, 20.0), xatol: float = 1e-10) -> RatioMinimum:
+    """Minimum of eq. (32) as printed for N > 4: the paper's "minimal value 24.37".
 
     Parameters
     ----------
     bounds : (float, float)
-        Search interval for N; the default holds the single minimum (N × eq. (32) grows without
-        bound as N → 4 and as N → ∞). [1]
+        Search interval for N; the default holds the single minimum (the printed eq. (32) grows
+        without bound as N → 4 and as N → ∞). [1]
     xatol : float
         Absolute tolerance in N. [1]
 
@@ -136,24 +167,25 @@ def minimum_tau_ratio_times_n(bounds: tuple[float, float] = (4.2, 20.0), xatol: 
 
     Notes
     -----
-    Bounded scalar minimisation of :func:`tau_ratio_times_n` without the diode. Eq. (32) itself
-    has no minimum for N > 4: it falls monotonically toward 2 (docs/errata.md, O1).
+    Bounded scalar minimisation of :func:`tau_ratio_eq32_as_printed`: 24.3796 at N = 6.0302
+    (the printed 24.37 is this truncated; 24.3796/25.3796 = 0.9606). The circuit's ratio, eqs. (23)
+    and (26), has no minimum for N > 4: it falls monotonically toward 2 (docs/errata.md, O1).
     """
     lo, hi = bounds
     if not 4.0 < lo < hi:
         raise ValueError(f"bounds must satisfy 4 < low < high (the circuit oscillates for N > 4), got {bounds!r}")
-    res = minimize_scalar(lambda x: float(tau_ratio_times_n(x)), bounds=(lo, hi), method="bounded",
+    res = minimize_scalar(lambda x: float(tau_ratio_eq32_as_printed(x)), bounds=(lo, hi), method="bounded",
                           options={"xatol": xatol})
     return RatioMinimum(n_ratio=float(res.x), value=float(res.fun))
 
 
-def n_where_eq32_equals(value: float) -> float:
-    """The N > 4 at which eq. (32), τH/τL without the diode, equals ``value``.
+def n_where_ratio_equals(value: float) -> float:
+    """The N > 4 at which the circuit's τH/τL without the diode (eqs. 23 and 26) equals ``value``.
 
     Parameters
     ----------
     value : float
-        A ratio τH/τL, > 2 (eq. 32's infimum) and at most eq. (32) at N = 4 + 1e-9 (about 54). [1]
+        A ratio τH/τL, > 2 (the infimum) and at most the ratio at N = 4 + 1e-9 (about 54). [1]
 
     Returns
     -------
@@ -167,12 +199,13 @@ def n_where_eq32_equals(value: float) -> float:
 
     Notes
     -----
-    Eq. (32) falls monotonically from +∞ at N = 4 to 2 as N → ∞, so the root is unique; it is
-    bracketed between 4 + 1e-9 and an upper N doubled from 5 until eq. (32) falls below ``value``.
+    The ratio (eq. 32 as printed divided by N) falls monotonically from +∞ at N = 4 to 2 as N → ∞,
+    so the root is unique; it is bracketed between 4 + 1e-9 and an upper N doubled from 5 until the
+    ratio falls below ``value``.
     """
     lo = 4.0 + 1e-9
     if not 2.0 < value <= float(tau_ratio(lo)):
-        raise ValueError(f"value must be in (2, {float(tau_ratio(lo)):.4g}] (eq. 32 for N > 4 + 1e-9), got {value!r}")
+        raise ValueError(f"value must be in (2, {float(tau_ratio(lo)):.4g}] (τH/τL for N > 4 + 1e-9), got {value!r}")
     hi = 5.0
     while tau_ratio(hi) > value:
         hi = 4.0 + 2.0 * (hi - 4.0)
@@ -181,24 +214,27 @@ def n_where_eq32_equals(value: float) -> float:
 
 @dataclass(frozen=True)
 class TauRatioTable:
-    """τH/τL and duty cycle versus N, with and without D1, beside eq. (37) as printed.
+    """τH/τL and duty cycle versus N, with and without D1, beside eqs. (32) and (37) as printed.
 
     Parameters
     ----------
     n_ratio : tuple of float
         N = R_FSR / R. [1]
     no_diode : ndarray
-        τH/τL without the diode, eq. (32). [1]
+        τH/τL without the diode, from eqs. (23) and (26). [1]
     diode : ndarray
         τH/τL with the ideal diode, from eqs. (23) and (34). [1]
     eq37_as_printed : ndarray
         The paper's eq. (37) as printed (N times ``diode``). [1]
+    eq32_as_printed : ndarray
+        The paper's eq. (32) as printed (N times ``no_diode``). [1]
     """
 
     n_ratio: tuple
     no_diode: np.ndarray
     diode: np.ndarray
     eq37_as_printed: np.ndarray
+    eq32_as_printed: np.ndarray
 
     @property
     def duty_cycle_no_diode(self) -> np.ndarray:
@@ -217,13 +253,14 @@ class TauRatioTable:
             "tau_ratio_no_diode": [float(v) for v in self.no_diode],
             "tau_ratio_diode": [float(v) for v in self.diode],
             "paper_eq37_as_printed": [float(v) for v in self.eq37_as_printed],
+            "paper_eq32_as_printed": [float(v) for v in self.eq32_as_printed],
             "duty_cycle_no_diode": [float(v) for v in self.duty_cycle_no_diode],
             "duty_cycle_diode": [float(v) for v in self.duty_cycle_diode],
         }
 
 
 def tau_ratio_table(n_ratio: Sequence[float]) -> TauRatioTable:
-    """τH/τL with and without D1 and eq. (37) as printed at each N (ideal parts, default thresholds).
+    """τH/τL with and without D1 and eqs. (32), (37) as printed at each N (ideal parts, default thresholds).
 
     Parameters
     ----------
@@ -243,7 +280,7 @@ def tau_ratio_table(n_ratio: Sequence[float]) -> TauRatioTable:
     if n.ndim != 1 or not np.all(n > 4):
         raise ValueError(f"n_ratio must be a sequence of values > 4 (eq. 30), got {n_ratio!r}")
     return TauRatioTable(n_ratio=tuple(n_ratio), no_diode=tau_ratio(n), diode=tau_ratio(n, diode=True),
-                         eq37_as_printed=tau_ratio_eq37_as_printed(n))
+                         eq37_as_printed=tau_ratio_eq37_as_printed(n), eq32_as_printed=tau_ratio_eq32_as_printed(n))
 
 
 @dataclass(frozen=True)

@@ -38,23 +38,30 @@ def _erratum_o1(t: TauRatioTable, minimum: RatioMinimum, n_at_claim: float, evid
     i10, i100, i20 = (t.n_ratio.index(n) for n in (10.0, 100.0, 20.0))
     g, dc = t.no_diode, t.duty_cycle_no_diode
     return Erratum(
-        "O1", "Without the diode τH/τL has no minimum 24.37 and the duty cycle is not limited to ≥ 96 %",
-        "“The minimal value of the ratio τH/τL for N > 4 is 24.37. This means that the duty cycle of the "
-        "output signal cannot be smaller than 24.37/25.37 = 0.96.”",
-        "Eq. (32), τH/τL = ln((2N − 2)/(N − 4))·2(N + 1)/((N + 2)·ln 2), falls monotonically for N > 4 from "
-        f"+∞ to its infimum 2 (N → ∞), which it never reaches: there is no minimum. τH/τL = {g[i10]:.3f} "
-        f"at N = 10 (DC {100 * dc[i10]:.1f} %), {g[i100]:.3f} at N = 100 (DC {100 * dc[i100]:.2f} %). "
-        f"Every duty cycle in ({100 * duty_cycle_limits()[0]:.2f} %, 100 %) is reachable. The quoted 24.37 is the "
-        f"minimum of N × eq. (32): {minimum.value:.4f} at N = {minimum.n_ratio:.3f} (24.37 truncated; DC "
-        f"{100 * minimum.duty_cycle:.2f} %), the same extra factor N as in the printed eq. (37) (O2), as if τL had "
-        "been divided by N (R_FSR replaced by R in the numerators of eqs. 26 and 34). Figure 12's axes (up to 60 at "
-        "N ≤ 20, where eq. (32) stays below 6.5 for N ≥ 4.5) fit N × eq. (32) too "
-        f"({20 * g[i20]:.1f} at N = 20). Eq. (32) itself reaches 24.37 only at N = {n_at_claim:.5f}. "
-        "The paper's point that DC stays high without the diode holds (always above 2/3).",
-        "Derivation from eqs. (23), (26): as N → ∞, τH → 2RC·ln 2 and τL → RC·ln 2, ratio 2 (the classic "
-        "555); the 1/N term of the expansion, 2(3/ln 2 − 1)/N, is positive, and a dense evaluation over "
-        "N ∈ (4, 10⁷) is strictly decreasing (tests/circuits/test_lm555.py). The minimum of N × eq. (32) is "
-        "found numerically (bounded minimisation)." + evidence,
+        "O1", "Eq. (32) as printed carries an extra factor N: without the diode τH/τL has no minimum 24.37 "
+        "and the duty cycle is not limited to ≥ 96 %",
+        "Eq. (32): τH/τL = ln((2 − 2N)/(4 − N))·2N(N + 1)/(ln 2·(N + 2)) (extracted text “ln 2 − 2N / 4 −N 2N N + 1 "
+        "/ ln 2 N + 2”, read as eq. (37) is read); “The minimal value of the ratio τH/τL for N > 4 is 24.37. This "
+        "means that the duty cycle of the output signal cannot be smaller than 24.37/25.37 = 0.96.”",
+        "The printed eq. (32) is N times the ratio of the paper's own τH (eq. 23) and τL (eq. 26), "
+        "τH/τL = ln((2N − 2)/(N − 4))·2(N + 1)/((N + 2)·ln 2): the same extra factor N as eq. (37) (O2), as if τL "
+        "had been divided by N (R_FSR replaced by R in the numerator of eq. 26). The quoted numbers follow from the "
+        f"printed equation: its minimum is {minimum.value:.4f} at N = {minimum.n_ratio:.3f} (24.37 truncated; "
+        f"{minimum.value:.4f}/{1 + minimum.value:.4f} = {minimum.duty_cycle:.4f}, the printed 0.96), and Figure 12's "
+        f"axes (up to 60 for N ≤ 20) fit it ({t.eq32_as_printed[i20]:.1f} at N = 20), not the corrected ratio "
+        f"({g[i20]:.3f} at N = 20). So the derivation's last step is wrong, and with it the number, the 0.96 and "
+        "Figure 12. The circuit's ratio falls monotonically for N > 4 from +∞ to its infimum 2 (N → ∞), which it "
+        f"never reaches: there is no minimum. τH/τL = {g[i10]:.3f} at N = 10 (DC {100 * dc[i10]:.1f} %), "
+        f"{g[i100]:.3f} at N = 100 (DC {100 * dc[i100]:.2f} %); every duty cycle in "
+        f"({100 * duty_cycle_limits()[0]:.2f} %, 100 %) is reachable, and τH/τL = 24.37 only at "
+        f"N = {n_at_claim:.5f}, at the oscillation limit. The paper's point that DC stays high without the diode "
+        "holds (always above 2/3), not the 96 % bound.",
+        "Substitution of eq. (31) into eqs. (23) and (26): τH = ln((2N − 2)/(N − 4))·2NR·C/(N + 2), "
+        "τL = ln 2·NR·C/(N + 1). As N → ∞, τH → 2RC·ln 2 and τL → RC·ln 2, ratio 2 (the classic 555); the 1/N "
+        "term of the expansion, 2(3/ln 2 − 1)/N, is positive, and a dense evaluation over N ∈ (4, 10⁷) is strictly "
+        "decreasing (tests/circuits/test_lm555.py). The minimum of the printed eq. (32) is found by bounded "
+        "minimisation and checked against a retyped printed equation (tests/circuits/test_paper_ratio.py). Only the "
+        "text extraction was available: the reading of eq. (32) should be checked on the printed PDF." + evidence,
     )
 
 
@@ -68,7 +75,7 @@ def _erratum_o2(t: TauRatioTable, evidence_d: str) -> Erratum:
         f"0, not 2: {t.diode[i10]:.4f} at N = 10 (printed: {t.eq37_as_printed[i10]:.4f}), {t.diode[i100]:.5f} at "
         f"N = 100 (printed: {t.eq37_as_printed[i100]:.4f}).",
         "Substitution of eq. (31) into eqs. (23) and (34); the paper's own eqs. (35) and (36) agree with the "
-        "corrected ratio, not with eq. (37)." + evidence_d,
+        "corrected ratio, not with eq. (37). Eq. (32) as printed has the same extra factor N (O1)." + evidence_d,
     )
 
 
@@ -122,9 +129,9 @@ def oscillator_errata(table: TauRatioTable, minimum: RatioMinimum, n_at_claim: f
     table : TauRatioTable
         τH/τL over N; must include N = 10, 20, 100 and 1000 (quoted).
     minimum : RatioMinimum
-        The minimum of N × eq. (32).
+        The minimum of eq. (32) as printed.
     n_at_claim : float
-        N where eq. (32) equals the printed 24.37. [1]
+        N where the corrected τH/τL (eqs. 23 and 26) equals the printed 24.37. [1]
     spice_nd, spice_d : SimulatedRatios or None
         ngspice without and with D1 over the same N; None when ngspice is not installed.
     r_ohm : float

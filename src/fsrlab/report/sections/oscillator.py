@@ -17,9 +17,9 @@ import numpy as np
 
 from fsrlab.circuits.decomposition import frequency_decomposition
 from fsrlab.circuits.lm555 import astable, duty_cycle_limits, minimum_n_ratio, sensitivity, tau_ratio
-from fsrlab.circuits.paper_ratio import (RatioMinimum, SimulatedRatios, TauRatioTable, minimum_tau_ratio_times_n,
-                                         n_where_eq32_equals, simulate_tau_ratios, tau_ratio_eq37_as_printed,
-                                         tau_ratio_table, tau_ratio_times_n)
+from fsrlab.circuits.paper_ratio import (RatioMinimum, SimulatedRatios, TauRatioTable, minimum_eq32_as_printed,
+                                         n_where_ratio_equals, simulate_tau_ratios, tau_ratio_eq32_as_printed,
+                                         tau_ratio_eq37_as_printed, tau_ratio_table)
 from fsrlab.circuits.spice import ngspice_available
 from fsrlab.reference import paper_values
 from fsrlab.report.figures import new_figure, save
@@ -58,15 +58,16 @@ def prefetch() -> Future:
 
 def _ratio_axes(ax, diode: bool, spice: SimulatedRatios | None, claims: dict, minimum: RatioMinimum) -> None:
     n = 4.0 + np.geomspace(1e-9, 16.0, 3000)
-    ax.plot(n, tau_ratio(n, diode=diode), "C0-", lw=1.8, label=f"{'eq. (37) corrected' if diode else 'eq. (32)'}, fsrlab")
+    ax.plot(n, tau_ratio(n, diode=diode), "C0-", lw=1.8,
+            label=f"{'eq. (37) corrected' if diode else 'eq. (32) corrected'}: eqs. (23), ({34 if diode else 26})")
     if diode:
         ax.plot(n, tau_ratio_eq37_as_printed(n), "C3--", lw=1.4, label="eq. (37) as printed (extra factor N)")
         lim, lim_dc = claims["lim_tau_ratio_diode"], 100 * claims["min_duty_cycle_diode"]
         ax.axhline(lim, color="C3", ls=":", lw=1, label=f"printed eq. (37) → {lim:g} (paper: DC ≥ {lim_dc:g} %)")
         ax.axhline(0.0, color="C0", ls=":", lw=1, label="corrected → 0 as N → ∞")
     else:
-        ax.plot(n, tau_ratio_times_n(n), "C3--", lw=1.4,
-                label=f"N × eq. (32): the paper's numbers (min {minimum.value:.2f} at N = {minimum.n_ratio:.2f})")
+        ax.plot(n, tau_ratio_eq32_as_printed(n), "C3--", lw=1.4,
+                label=f"eq. (32) as printed (extra factor N; min {minimum.value:.2f} at N = {minimum.n_ratio:.2f})")
         ax.axhline(claims["min_tau_ratio_no_diode"], color="C3", ls=":", lw=1,
                    label=f"paper: “minimal value {claims['min_tau_ratio_no_diode']}”")
         ax.axhline(2.0, color="C0", ls=":", lw=1, label="infimum 2 (N → ∞), never reached")
@@ -121,12 +122,14 @@ def _ratio_figure(outdir: Path, diode: bool, spice: SimulatedRatios | None, clai
         name, "Figure 12: τH/τL versus N without the diode (eq. 32)",
         "Figure 12 plots eq. (32) for N from 0 to 20 (y from −10 to 60); the text says its minimum for N > 4 "
         "is 24.37, so DC ≥ 96 %.",
-        f"Eq. (32) decreases monotonically toward 2; no minimum. At N = 20 τH/τL = "
-        f"{t.no_diode[t.n_ratio.index(20.0)]:.3f}. Red dashed: N × eq. (32), which has the paper's minimum "
-        f"({minimum.value:.2f} at N = {minimum.n_ratio:.2f}) and fits Figure 12's axes: the printed figure and "
-        "number appear to carry the extra N of eq. (37). "
-        + ("ngspice points lie on the curve (within 0.01 %)." if spice else "ngspice not installed: no simulator "
-           "points.") + " Right: the duty cycle stays above 66.7 %, not 96 % (O1).")
+        f"Red dashed: eq. (32) as printed, ln((2 − 2N)/(4 − N))·2N(N + 1)/(ln 2·(N + 2)); its minimum "
+        f"({minimum.value:.2f} at N = {minimum.n_ratio:.2f}) is the paper's 24.37 and its values fit Figure 12's "
+        f"axes ({t.eq32_as_printed[t.n_ratio.index(20.0)]:.1f} at N = 20): figure and number follow from the "
+        "printed equation. Blue: the ratio of the paper's own τH and τL, eqs. (23) and (26), the printed one "
+        f"divided by N; it decreases monotonically toward 2 with no minimum ({t.no_diode[t.n_ratio.index(20.0)]:.3f} "
+        "at N = 20). "
+        + ("ngspice points lie on the blue curve (within 0.01 %)." if spice else "ngspice not installed: no "
+           "simulator points.") + " Right: the duty cycle stays above 66.7 %, not 96 % (O1).")
 
 
 def _sensitivity_figure(outdir: Path, s20_nd: float, s20: float) -> Figure:
@@ -202,6 +205,7 @@ def _ratio_table(t: TauRatioTable, spice_nd: SimulatedRatios | None, spice_d: Si
     rows = []
     for i, ni in enumerate(t.n_ratio):
         rows.append([f"{ni:g}", float(t.no_diode[i]), spice_nd.tau_ratio[i] if spice_nd else "n/a",
+                     float(t.eq32_as_printed[i]),
                      100 * float(t.duty_cycle_no_diode[i]), float(t.diode[i]), spice_d.tau_ratio[i] if spice_d else "n/a",
                      float(t.eq37_as_printed[i]), 100 * float(t.duty_cycle_diode[i])])
     note = ("ngspice columns: transient simulation of fsrlab's behavioural-555 netlist, 5 periods after "
@@ -209,7 +213,8 @@ def _ratio_table(t: TauRatioTable, spice_nd: SimulatedRatios | None, spice_d: Si
             "ngspice is not installed here, so the independent-simulator columns are empty "
             "(`make sysdeps` installs it).")
     return Table("τH/τL and duty cycle versus N (R = 10 kΩ, C = 1 nF; both depend on N only)",
-                 ["N", "τH/τL eq. (32)", "ngspice", "DC % no diode", "τH/τL with D1", "ngspice (D1)",
+                 ["N", "τH/τL eqs. (23), (26)", "ngspice", "eq. (32) as printed", "DC % no diode", "τH/τL with D1",
+                  "ngspice (D1)",
                   "eq. (37) as printed", "DC % with D1"], rows, note=note, fmt="{:.4g}")
 
 
@@ -240,8 +245,8 @@ def build(outdir: Path, prefetched: Future | None = None) -> Section:
     outdir = Path(outdir)
     claims = _claims()
     table = tau_ratio_table(N_TABLE)
-    minimum = minimum_tau_ratio_times_n()
-    n_at_claim = n_where_eq32_equals(claims["min_tau_ratio_no_diode"])
+    minimum = minimum_eq32_as_printed()
+    n_at_claim = n_where_ratio_equals(claims["min_tau_ratio_no_diode"])
     spice_nd, spice_d = prefetched.result() if prefetched is not None else _spice_both()
     s20_nd = float(sensitivity(R_OHM, 20 * R_OHM, C_FARAD).r_fsr)
     s20 = float(sensitivity(R_OHM, 20 * R_OHM, C_FARAD, diode=True).r_fsr)
@@ -257,7 +262,7 @@ def build(outdir: Path, prefetched: Future | None = None) -> Section:
         "duty_cycle_infimum_no_diode": dc_inf_nd,
         "duty_cycle_infimum_diode": dc_inf_d,
         "tau_ratio_infimum_no_diode": dc_inf_nd / (1 - dc_inf_nd),
-        "n_where_eq32_equals_24_37": n_at_claim,
+        "n_where_corrected_eq32_equals_24_37": n_at_claim,
         "paper_24_37_explained": minimum.to_dict(),
         "sensitivity_r_fsr_at_N20": {"no_diode": s20_nd, "diode": s20},
         "frequency_vs_stress_virtual_fsr": fs,
