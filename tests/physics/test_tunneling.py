@@ -28,15 +28,29 @@ def test_eq11_matches_independent_implementation(u, s):
 
 
 @pytest.mark.parametrize("s", [2e-9, 4.418e-9, 10e-9])
-def test_eq10_is_the_small_voltage_limit_times_3_2(s):
+def test_eq10_over_eq11_tends_to_the_closed_form_limit(s):
     # Independent closed form: expanding eq. (11) for u → 0 gives
-    # J11 ≈ e² u √(2mφ0)/(h² s) (1 − 2/(A√φ0)) exp(−A√φ0) with A = (4πs/h)√(2m);
-    # eq. (10) is 3/2 of the leading term, so J10/J11 → (3/2) / (1 − 2/(A√φ0)).
-    a_root = 4 * math.pi * s / H * math.sqrt(2 * ME * PHI0)
-    expected = 1.5 / (1 - 2 / a_root)
+    # J11 ≈ (2/3)·J10·(1 − 2/c) with c = (4πs/h)√(2mφ0), and eq. (10) is 3/2
+    # of the leading term, so J10/J11 → (3/2)·c/(c − 2): 3/2 only as c → ∞ (thick barriers).
+    c = 4 * math.pi * s / H * math.sqrt(2 * ME * PHI0)
+    expected = 1.5 * c / (c - 2)
     u = 1e-6
     ratio = current_density(u, s, regime=10) / current_density(u, s, regime=11)
     assert ratio == pytest.approx(expected, rel=1e-4)
+
+
+def test_eq10_over_eq11_at_s0_is_1_655_not_3_2():
+    # Reference: eq. (10) retyped here and eq. (11) of tests/reference_physics.py at u = 1e-6 V, against
+    # the closed form (3/2)·c/(c − 2) with c = 21.377 at s0 = 4.418 nm, φ0 = 0.223 eV: 1.6548.
+    s = PAPER.s0_m
+    j10 = 3 * math.sqrt(2 * ME * PHI0) / (2 * s) * (E / H) ** 2 * 1e-6 * math.exp(
+        -(4 * math.pi * s / H) * math.sqrt(2 * ME * PHI0))
+    ratio = j10 / j11_scalar(1e-6, s)
+    c = 4 * math.pi * s / H * math.sqrt(2 * ME * PHI0)
+    assert c == pytest.approx(21.377, abs=1e-3)
+    assert ratio == pytest.approx(1.5 * c / (c - 2), rel=1e-5)
+    assert ratio == pytest.approx(1.6548, abs=1e-4)
+    assert abs(ratio / 1.5 - 1) > 0.1  # not "3/2 near u = 0"
 
 
 def test_auto_regime_uses_paper_thresholds():

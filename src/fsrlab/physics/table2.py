@@ -6,7 +6,9 @@ the capacitance per unit area (eq. 15) over one cycle 0 → σf → 0 of the sep
 and 9) at u = 3, 2, 1 V, with Table 1's parameters. With those parameters fsrlab does not reproduce
 the R_A column; a barrier height of about 0.2295 eV instead of the printed 0.223 eV does
 (docs/errata.md, P1). :func:`cycle_error_table` computes the table, :func:`fit_barrier_height` finds
-that barrier height.
+that barrier height. :func:`voltage_sweep` (extension) follows both errors over u and finds where the
+paper's "in all cases" capacitance-below-resistance statement fails (docs/errata.md, P4), and
+:func:`current_maximum_voltage` the voltage where eq. (12) stops falling with film thickness.
 
 References
 ----------
@@ -17,17 +19,21 @@ Tables 1 and 2.
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
-from scipy.constants import electron_volt
-from scipy.optimize import minimize_scalar
+from scipy.constants import e, electron_volt, h, m_e
+from scipy.optimize import brentq, minimize_scalar
 
 from fsrlab.analysis.hysteresis import model_cycle_errors
 from fsrlab.physics.params import PAPER, PaperParameters, check_positive
+from fsrlab.physics.separation import separation_loading
+from fsrlab.physics.tunneling import voltage_limit
 
-__all__ = ["CycleErrorTable", "cycle_error_table", "BarrierHeightFit", "fit_barrier_height"]
+__all__ = ["CycleErrorTable", "cycle_error_table", "BarrierHeightFit", "fit_barrier_height",
+           "current_maximum_voltage", "VoltageSweep", "voltage_sweep"]
 
 
 @dataclass(frozen=True)
@@ -172,3 +178,123 @@ def fit_barrier_height(target_percent: Sequence[float], u_v: Sequence[float] = (
 
     phi0 = float(minimize_scalar(cost, bounds=(lo, hi), method="bounded", options={"xatol": xatol_ev}).x)
     return BarrierHeightFit(phi0_ev=phi0, table=cycle_error_table(u_v, _with_phi0(params, phi0)))
+
+
+def current_maximum_voltage(s_m: float, phi0_j: float = PAPER.phi0_j) -> float:
+    """The voltage above which eq. (12)'s J grows with the film thickness at separation ``s_m``.
+
+    Parameters
+    ----------
+    s_m : float
+        Interparticle separation s, > 0. [m]
+    phi0_j : float
+        Barrier height φ0. [J]
+
+    Returns
+    -------
+    float
+        u* with ∂J/∂s = 0 at ``s_m`` (eq. 12): below u*, J falls as s grows (a thicker barrier
+        passes less current), above it J rises with s up to :func:`fsrlab.physics.tunneling.voltage_limit`,
+        where eq. (12)'s bracket reaches 0. [V]
+
+    Notes
+    -----
+    Extension (fsrlab), on eq. (12): ``ln J = const − 2 ln s + ln(exp(−B) − r exp(−B√r))`` with
+    ``B = βs`` ∝ s and ``r = 1 + 2eu/φ0``, so ``s ∂ln J/∂s = 0`` where
+    ``B (r^(3/2) g − 1) = 2 (1 − r g)``, ``g = exp(−B(√r − 1))``. The left minus the right side is
+    negative at u just above φ0/e and positive just below the voltage limit; the root is found by
+    Brent's method. For Table 1 (φ0 = 0.223 eV) u* = 3.079 V at s_f = 4.117 nm (σ = σf) and
+    3.413 V at s0 = 4.418 nm: between the two, R_A = u/J is not monotonic over the stress cycle.
+    """
+    check_positive("s_m", s_m, "m")
+    check_positive("phi0_j", phi0_j, "J")
+    beta = 8 * math.pi * s_m * math.sqrt(2 * m_e) * phi0_j**1.5 / (2.96 * h * e)  # B·u
+
+    def side(u: float) -> float:
+        b, r = beta / u, 1 + 2 * e * u / phi0_j
+        g = math.exp(-b * (math.sqrt(r) - 1))
+        return b * (r**1.5 * g - 1) - 2 * (1 - r * g)
+
+    lo, hi = phi0_j / e * (1 + 1e-9), float(voltage_limit(s_m, phi0_j)) * (1 - 1e-12)
+    return float(brentq(side, lo, hi, xtol=1e-12, rtol=1e-12))
+
+
+@dataclass(frozen=True)
+class VoltageSweep:
+    """HE of R_A and C_A over a range of voltages (extension of Table 2), with where they cross.
+
+    Parameters
+    ----------
+    table : CycleErrorTable
+        Both errors at each voltage of the sweep.
+    crossings_v : tuple of float
+        Voltages where HE(R_A) = HE(C_A), refined between the sweep's points; between the first two,
+        capacitance shows *more* hysteresis than resistance. [V]
+    minimum_v : float
+        Voltage of the smallest HE(R_A) of the sweep, refined. [V]
+    minimum_percent : float
+        That smallest HE(R_A). [%]
+    current_maximum_v : (float, float)
+        :func:`current_maximum_voltage` at the cycle's thinnest (σf) and thickest (σ = 0) separation. [V]
+    """
+
+    table: CycleErrorTable
+    crossings_v: tuple
+    minimum_v: float
+    minimum_percent: float
+    current_maximum_v: tuple
+
+    def to_dict(self) -> dict:
+        """The report's JSON shape (``table2_voltage_sweep`` in ``paper.json``)."""
+        return {"u_V": list(self.table.u_v), "resistance_per_area_percent": list(self.table.resistance_percent),
+                "capacitance_per_area_percent": list(self.table.capacitance_percent),
+                "resistance_below_capacitance_between_V": list(self.crossings_v),
+                "resistance_minimum_V": self.minimum_v, "resistance_minimum_percent": self.minimum_percent,
+                "dJ_ds_zero_at_sf_and_s0_V": list(self.current_maximum_v),
+                "phi0_eV": self.table.params.phi0_j / electron_volt}
+
+
+def voltage_sweep(u_v: Sequence[float] = tuple(np.round(np.arange(1.0, 4.201, 0.05), 3)),
+                  params: PaperParameters = PAPER) -> VoltageSweep:
+    """HE of R_A and C_A over u (extension): where the paper's "in all cases" C_A < R_A fails.
+
+    Parameters
+    ----------
+    u_v : sequence of float
+        Increasing voltages, each above φ0/e and below the eq. (12) limit at the cycle's thinnest
+        separation (4.33 V for Table 1). Default 1–4.2 V in 50 mV steps. [V]
+    params : PaperParameters
+        Material and cycle parameters (default: Table 1 with k = 2).
+
+    Returns
+    -------
+    VoltageSweep
+
+    Notes
+    -----
+    Each point is :func:`cycle_error_table`'s computation. Crossings of HE(R_A) − HE(C_A) are refined
+    by Brent's method between neighbouring sweep points of opposite sign, the minimum of HE(R_A) by a
+    bounded search between the neighbours of the smallest sweep value. HE(R_A) is not monotonic in u:
+    it falls while R_A(s) flattens toward its slope reversal (:func:`current_maximum_voltage`), is
+    smallest where the loading/unloading difference changes sign, then grows as R_A(s) reverses and
+    diverges toward the limit of eq. (12). All of it lies in eq. (12)'s regime (u > φ0/e), so it is
+    not the eq. (11)/(12) switch.
+    """
+    t = cycle_error_table(u_v, params)
+    u = np.asarray(t.u_v, dtype=float)
+    diff = np.array(t.resistance_percent) - np.array(t.capacitance_percent)
+
+    def d(x: float) -> float:
+        r = model_cycle_errors(x, params)
+        return r.resistance.percent - r.capacitance.percent
+
+    crossings = tuple(float(brentq(d, u[i], u[i + 1], xtol=1e-6)) for i in range(len(u) - 1)
+                      if diff[i] * diff[i + 1] < 0)
+    i = int(np.argmin(t.resistance_percent))
+    lo, hi = u[max(i - 1, 0)], u[min(i + 1, len(u) - 1)]
+    res = minimize_scalar(lambda x: model_cycle_errors(x, params).resistance.percent, bounds=(lo, hi),
+                          method="bounded", options={"xatol": 1e-5})
+    s_f = float(separation_loading(params.sigma_f_pa, params.s0_m, params.modulus_pa))
+    umax = (current_maximum_voltage(s_f, params.phi0_j), current_maximum_voltage(params.s0_m, params.phi0_j))
+    return VoltageSweep(table=t, crossings_v=crossings, minimum_v=float(res.x), minimum_percent=float(res.fun),
+                        current_maximum_v=umax)

@@ -46,9 +46,11 @@ def tunneling_regime(u_v, phi0_j: float = PAPER.phi0_j, small_u_fraction: float 
     Notes
     -----
     The paper's thresholds: eq. (10) for u ≈ 0, eq. (11) for u ≤ φ0/e, eq. (12) for u > φ0/e.
-    The three do not join continuously: near u = 0 eq. (10) is 3/2 of eq. (11) (Simmons' low-voltage
-    formula keeps a factor the intermediate one drops), and at u = φ0/e eq. (11) is about half of
-    eq. (12).
+    The three do not join continuously. As u → 0, eq. (10)/eq. (11) → (3/2)·c/(c − 2) with
+    c = (4πs/h)√(2mφ0) (expanding eq. (11) to first order in u gives
+    J11 ≈ (2/3)·J10·(1 − 2/c)): 1.655 at s0 = 4.418 nm and φ0 = 0.223 eV (c = 21.38), 1.667 at
+    s_f = 4.117 nm, and 3/2 only in the thick-barrier limit c → ∞. At u = φ0/e eq. (12) is about
+    twice eq. (11) (2.15× at s0, 2.06× at s_f).
     """
     check_positive("phi0_j", phi0_j, "J")
     if not 0 <= small_u_fraction < 1:

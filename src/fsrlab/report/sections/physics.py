@@ -1,6 +1,7 @@
 """Report section: sensor physics (paper §2–4): Figures 2, 4, 8, Table 2 and their errata.
 
-Table 2 and the barrier height that reproduces it come from :mod:`fsrlab.physics.table2`, the
+Table 2, the barrier height that reproduces it and the HE-versus-u sweep (erratum P4) come from
+:mod:`fsrlab.physics.table2`, the
 paper's printed values from :func:`fsrlab.reference.paper_values`; this module draws and words them.
 """
 
@@ -14,7 +15,8 @@ from scipy.constants import electron_volt, epsilon_0
 from fsrlab.physics.electrical import capacitance_per_area, resistance_per_area
 from fsrlab.physics.params import PAPER, PaperParameters
 from fsrlab.physics.separation import separation_history, separation_loading, separation_unloading
-from fsrlab.physics.table2 import BarrierHeightFit, CycleErrorTable, cycle_error_table, fit_barrier_height
+from fsrlab.physics.table2 import (BarrierHeightFit, CycleErrorTable, VoltageSweep, cycle_error_table,
+                                   fit_barrier_height, voltage_sweep)
 from fsrlab.physics.tunneling import current_density
 from fsrlab.reference import paper_values
 from fsrlab.report.figures import new_figure, save
@@ -203,6 +205,65 @@ def _erratum_p2(axis_ranges: dict, fit: BarrierHeightFit) -> Erratum:
     )
 
 
+def _fig_sweep(outdir: Path, sweeps: list[tuple[str, VoltageSweep]]) -> Figure:
+    """Extension: HE of R_A and C_A versus u for Table 1's and the fitted φ0."""
+    fig, ax = new_figure()
+    for (tag, sw), style in zip(sweeps, ("-", "--")):
+        t = sw.table
+        ax.plot(t.u_v, t.resistance_percent, "C0" + style, label=f"R_A, {tag}")
+        lo, hi = sw.crossings_v[:2]
+        ax.axvspan(lo, hi, color="C3" if style == "-" else "C1", alpha=0.12 if style == "-" else 0.08)
+    ax.plot(sweeps[0][1].table.u_v, sweeps[0][1].table.capacitance_percent, "k-", lw=1.2, label="C_A (any φ0)")
+    ax.axvline(10 / 3, color="0.5", ls=":", lw=1, label="2/3·Vcc = 3.33 V")
+    ax.set(xlabel="u (V)", ylabel="HE (%)", ylim=(0, 20), title="Extension: HE of R_A and C_A versus u (eq. 12)")
+    ax.legend(fontsize=7.5)
+    save(fig, outdir / "ext_he_vs_voltage.png")
+    (t1, s1), (t2, s2) = sweeps
+    return Figure(
+        "ext_he_vs_voltage.png", "Extension: hysteresis error of R_A and C_A versus u",
+        "Table 2 gives three voltages only (1, 2, 3 V), where HE of R_A falls as u rises; §4 says capacitance shows "
+        "less hysteresis “in all cases”.",
+        f"HE of R_A is not monotonic in u. With {t1} it falls to {s1.minimum_percent:.2f} % at "
+        f"u = {s1.minimum_v:.2f} V and rises again ({_he_at(s1, 4.0):.1f} % at 4 V); it is below C_A's "
+        f"{s1.table.capacitance_percent[0]:.2f} % between {s1.crossings_v[0]:.3f} and {s1.crossings_v[1]:.3f} V "
+        f"(shaded). With {t2}: minimum {s2.minimum_percent:.2f} % at {s2.minimum_v:.2f} V, below C_A between "
+        f"{s2.crossings_v[0]:.3f} and {s2.crossings_v[1]:.3f} V. Erratum P4 explains why.")
+
+
+def _he_at(sweep: VoltageSweep, u: float) -> float:
+    return sweep.table.resistance_percent[sweep.table.u_v.index(u)]
+
+
+def _erratum_p4(ours: CycleErrorTable, sweep: VoltageSweep, fitted: VoltageSweep) -> Erratum:
+    i3 = ours.u_v.index(3)
+    lo, hi = sweep.crossings_v[:2]
+    u_sf, u_s0 = sweep.current_maximum_v
+    at_2_3_vcc = cycle_error_table([10 / 3], ours.params).resistance_percent[0]
+    return Erratum(
+        "P4", "Capacitance does not show less hysteresis than resistance “in all cases”",
+        "§4, after Table 2: “In all cases, the HE is lower for capacitance than the corresponding HE for the "
+        "resistance in the simulation.”",
+        f"With Table 1's parameters HE of R_A at 3 V is {ours.resistance_percent[i3]:.2f} %, below C_A's "
+        f"{ours.capacitance_percent[i3]:.2f} %; R_A shows less hysteresis than C_A for u between {lo:.3f} and "
+        f"{hi:.3f} V, with a minimum of {sweep.minimum_percent:.2f} % at {sweep.minimum_v:.3f} V, and HE of R_A "
+        f"rises again above it ({at_2_3_vcc:.2f} % at 2/3·Vcc = 3.33 V, {_he_at(sweep, 4.0):.2f} % at 4 V). With "
+        f"the barrier height that reproduces the printed Table 2 (P1) the statement holds at 1, 2 and 3 V, but the "
+        f"band moves to {fitted.crossings_v[0]:.3f}–{fitted.crossings_v[1]:.3f} V and still holds 2/3·Vcc = 3.33 V, "
+        "the largest voltage across the FSR in the paper's Figure 16 circuit. The cause is not the eq. (11)/(12) "
+        "switch (u is the voltage across the composite, u = V − R_C·I, and φ0/e = 0.223 V lies far below; all of "
+        "this is eq. (12)): at fixed u, eq. (12)'s J(s) stops falling with the film thickness at u* = "
+        f"{u_sf:.3f} V at the cycle's thinnest separation s_f and {u_s0:.3f} V at s0. As u approaches that band "
+        "R_A(σ) flattens, the loading and unloading branches cross and their largest difference changes sign "
+        "(the minimum); above it R_A rises with stress and diverges toward the voltage where eq. (12)'s bracket "
+        "reaches 0 at s_f (4.33 V), outside Simmons' high-voltage formula. Capacitance's 1.73 % does not depend "
+        "on u.",
+        "fsrlab.physics.table2.voltage_sweep (eq. 13 on a 50 mV grid, crossings refined by Brent's method) against "
+        "the independent scalar brute force of tests/reference_physics.py (tests/physics/test_table2.py); u* from "
+        "the closed-form condition ∂ln J/∂s = 0 of eq. (12) (current_maximum_voltage), checked against a finite "
+        "difference of the reference eq. (12).",
+    )
+
+
 _ERRATUM_P3 = Erratum(
     "P3", "Table 2 is said to come from Figures 9(a) and 9(b)",
     "“Table 2 presents the values of HE for the simulations performed in Figures 9(a) and 9(b).”",
@@ -225,8 +286,10 @@ def _intro(p: PaperParameters) -> str:
         f"Table 1 (M = {p.modulus_pa / 1e6:g} MPa, σf = {p.sigma_f_pa / 1e3:g} kPa, U = {p.u_v:g} V, "
         f"s0 = {p.s0_m * 1e9:g} nm, φ0 = {p.phi0_j / electron_volt:g} eV, ε_r = {p.eps_r:g}) with k = {p.k:g}, "
         "which the paper does not print.\n\n"
-        "The tunnelling regimes do not join: near u = 0 eq. (10) is 3/2 of eq. (11), and at u = φ0/e eq. (11) is "
-        "about half of eq. (12). fsrlab reports the equation it used; at u = 1, 2, 3 V it is eq. (12).\n\n"
+        "The tunnelling regimes do not join: as u → 0, eq. (10)/eq. (11) → (3/2)·c/(c − 2) with "
+        "c = (4πs/h)√(2mφ0), which is 1.655 at s0 (c = 21.38) and 3/2 only for thick barriers (c → ∞); at "
+        "u = φ0/e eq. (12) is about twice eq. (11). fsrlab reports the equation it used; at u = 1, 2, 3 V it is "
+        "eq. (12).\n\n"
         "Eq. (9) as printed needs an even k (eq. 8); it simplifies exactly to s_u = s_f + (s0 − s_f)(1 − σ/σf)^k, "
         "which is real for any k ≥ 1 and is what fsrlab computes."
     )
@@ -239,9 +302,12 @@ def build(outdir: Path) -> Section:
     axis_ranges = printed["figure4_axis_ranges"]
     ours = cycle_error_table(t2["u_V"])
     fit = fit_barrier_height(t2["resistance_per_area"], t2["u_V"])
+    sweep, fitted_sweep = voltage_sweep(), voltage_sweep(params=fit.table.params)
+    sweeps = [("Table 1's φ0 = 0.223 eV", sweep), (f"φ0 = {fit.phi0_ev:.4f} eV (P1)", fitted_sweep)]
     figures = ([_fig2a(outdir), _fig2b(outdir)] + [_fig_branches(outdir, spec, fit, axis_ranges) for spec in _BRANCH_FIGURES]
-               + [_fig8b(outdir), _fig_memory(outdir)])
-    errata = [_erratum_p1(t2, ours, fit), _erratum_p2(axis_ranges, fit), _ERRATUM_P3]
+               + [_fig8b(outdir), _fig_sweep(outdir, sweeps), _fig_memory(outdir)])
+    errata = [_erratum_p1(t2, ours, fit), _erratum_p2(axis_ranges, fit), _ERRATUM_P3,
+              _erratum_p4(ours, sweep, fitted_sweep)]
     data = {
         "parameters": _parameters(PAPER),
         "table2": {**ours.to_dict(),
@@ -249,5 +315,6 @@ def build(outdir: Path) -> Section:
                              "capacitance_per_area_percent": t2["capacitance_per_area"]},
                    "phi0_reproducing_paper_eV": fit.phi0_ev,
                    "resistance_per_area_percent_at_that_phi0": list(fit.table.resistance_percent)},
+        "table2_voltage_sweep": {"table1_phi0": sweep.to_dict(), "fitted_phi0": fitted_sweep.to_dict()},
     }
     return Section("physics", "Sensor physics (§2–4)", _intro(PAPER), figures, [_table2(t2, ours, fit)], errata, data)
