@@ -145,7 +145,9 @@ def test_apply_uses_the_compensation_unless_told_not_to(runs, tmp_path):
     live = live_estimator(cal)
     stepped = [live.step(v)[0] for v in other["frequency_hz"]]
     np.testing.assert_allclose(est["stress_pa_estimate"], [np.nan if v is None else v for v in stepped], rtol=1e-12)
-    assert est.metadata["calibration"]["method"] == "causal play-operator compensation"
+    # Clean whole cycles: the grouped CV keeps the causal branches (tests/analysis/test_compensation_choice.py).
+    assert cal.extra["compensation_choice"]["chosen"] == "branches (causal)" and cal.memory is None
+    assert est.metadata["calibration"]["method"].startswith("causal branch compensation")
     plain = apply_calibration(cal, other, compensation=False)
     np.testing.assert_array_equal(plain["stress_pa_estimate"], cal(other["frequency_hz"]))
     # Saved and loaded, the calibration gives the same estimate and names its file.

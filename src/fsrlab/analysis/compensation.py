@@ -18,9 +18,18 @@ readout range [x_lo, x_hi] (x increasing with stress)::
 
 A minor loop therefore starts on the estimate at its reversal and is pulled onto the major branch
 as it proceeds -- the simplest rule with the wiping-out flavour of Preisach models; it is exact
-for the major loop and approximate for minor loops. Branch labels use the whole run (the reversal
-is confirmed after the readout has moved back by the threshold, then dated to the extremum), so
-this is an offline correction of recorded runs.
+for the major loop and approximate for minor loops.
+
+Direction. The fit labels branches from the whole run (:func:`fsrlab.analysis.cycles.readout_directions`:
+a reversal is confirmed once the readout has moved back by the threshold, then dated back to the
+extremum), which is not causal. A calibration with ``causal=True`` (what ``fsrlab calibrate``
+writes since the branch method takes part in the compensation choice) labels the readings it
+*applies* to causally instead (:func:`causal_readout_directions`): the branch switches at the
+reading that confirms the reversal, the readings between the extremum and that one stay on the
+old branch, and the turning point is the extremum seen so far. Every estimate then depends on
+past readings only, so :class:`BranchState` steps it live with the same numbers as
+:meth:`DirectionAwareCalibration.predict` offline. Older files (no ``causal`` key) keep the
+offline labels.
 
 References
 ----------
@@ -36,7 +45,53 @@ import numpy as np
 from fsrlab.analysis.calibration import PolynomialModel, calibrate
 from fsrlab.analysis.cycles import readout_directions
 
-__all__ = ["DirectionAwareCalibration", "fit_direction_aware", "CompensationResult", "compare_compensation"]
+__all__ = ["causal_readout_directions", "DirectionAwareCalibration", "BranchState", "fit_direction_aware",
+           "CompensationResult", "compare_compensation"]
+
+
+def causal_readout_directions(x, sign: float, band: float) -> np.ndarray:
+    """Label readings +1 (loading) / −1 (unloading) causally, from the readings so far only.
+
+    Parameters
+    ----------
+    x : array_like
+        Readout in time order; NaN readings keep the previous label (the first ones: loading).
+    sign : {+1, −1}
+        +1 if the readout grows with stress, −1 if it falls.
+    band : float
+        Reversal threshold in readout units (> 0): the label switches at the first reading that
+        lies this far back from the extremum of the current branch. [unit of x]
+
+    Returns
+    -------
+    ndarray of int
+        +1 or −1 for every reading. A run starts loading (the sensor starts from rest).
+
+    Notes
+    -----
+    With u = sign·x: on loading, the running maximum m follows u while u ≥ m; a reading with
+    u < m − band switches to unloading and restarts m at u (symmetrically on unloading). This is
+    a play operator of half-width ``band`` on u, read for its direction.
+    """
+    x = np.asarray(x, dtype=float)
+    lab = np.ones(x.size, dtype=int)
+    label, ext = 1, None
+    for i, v in enumerate((sign * x).tolist()):
+        if v == v:  # finite (NaN != NaN)
+            if ext is None:
+                ext = v
+            elif label > 0:
+                if v > ext:
+                    ext = v
+                elif v < ext - band:
+                    label, ext = -1, v
+            else:
+                if v < ext:
+                    ext = v
+                elif v > ext + band:
+                    label, ext = 1, v
+        lab[i] = label
+    return lab
 
 
 @dataclass(frozen=True)
@@ -53,6 +108,10 @@ class DirectionAwareCalibration:
         +1 if the readout grows with stress, -1 if it falls.
     threshold : float
         Reversal threshold as a fraction of the readout span. [1]
+    causal : bool
+        Label branches causally when applied (:func:`causal_readout_directions` with a band of
+        ``threshold`` × the calibrated span), so that the estimate can be stepped live
+        (:class:`BranchState`); False: offline labels from the whole sequence (older files).
     """
 
     load_model: PolynomialModel
@@ -61,18 +120,33 @@ class DirectionAwareCalibration:
     x_high: float
     sign: float
     threshold: float
+    causal: bool = False
+
+    @property
+    def band(self) -> float:
+        """The causal reversal band, ``threshold`` × the calibrated readout span. [unit of x]"""
+        return self.threshold * abs(self.x_high - self.x_low)
+
+    def usable(self, x) -> np.ndarray:
+        """True where a reading is finite and both branch polynomials are finite at it."""
+        x = np.asarray(x, dtype=float)
+        with np.errstate(over="ignore", invalid="ignore"):
+            return np.isfinite(x) & np.isfinite(self.load_model(x)) & np.isfinite(self.unload_model(x))
 
     def __call__(self, x) -> np.ndarray:
         """Estimate y along a readout sequence in time order (NaN readings give NaN)."""
         return self.predict(x)[0]
 
-    def predict(self, x) -> tuple[np.ndarray, np.ndarray]:
+    def predict(self, x, labels=None) -> tuple[np.ndarray, np.ndarray]:
         """Estimate y and the branch of each reading.
 
         Parameters
         ----------
         x : array_like
             Readout in time order; NaN where a reading is missing.
+        labels : array_like of int, optional
+            The branch labels of ``x`` when already computed (the labels this calibration would
+            give ``x``; :func:`fsrlab.analysis.pipeline.fit_causal_branches` reuses them across folds).
 
         Returns
         -------
@@ -87,32 +161,42 @@ class DirectionAwareCalibration:
         Missing readings are gaps: they take no part in finding the branches. The turning-point
         memory restarts (the branch after it follows its major curve) where the reversal falls in
         a gap, so that the turning point was not observed, or where its estimate is not finite; a
-        gap within a branch keeps the memory.
+        gap within a branch keeps the memory. With ``causal`` the labels are
+        :func:`causal_readout_directions` and each estimate depends on earlier readings only
+        (stepping :class:`BranchState` gives the same numbers). Both polynomials are evaluated
+        once over the whole sequence; a branch's offset reads the new branch's curve at the
+        turning-point reading.
         """
         x = np.asarray(x, dtype=float)
-        with np.errstate(over="ignore", invalid="ignore"):
-            ok = np.isfinite(x) & np.isfinite(self.load_model(x)) & np.isfinite(self.unload_model(x))
+        ok = self.usable(x)
         x = np.where(ok, x, np.nan)
-        lab = readout_directions(x, self.sign, self.threshold)
+        if labels is not None:
+            lab = np.asarray(labels, dtype=int)
+        else:
+            lab = (causal_readout_directions(x, self.sign, self.band) if self.causal
+                   else readout_directions(x, self.sign, self.threshold))
+        with np.errstate(invalid="ignore"):
+            curves = {True: self.load_model(x), False: self.unload_model(x)}
         y = np.full(x.size, np.nan)
         # "up" = towards larger stress; the memory weights use the readout in stress order.
         u = self.sign * x
         u_lo, u_hi = sorted((self.sign * self.x_low, self.sign * self.x_high))
         starts = np.flatnonzero(np.diff(lab) != 0) + 1
-        bounds = np.concatenate([[0], starts, [x.size]])
-        prev_y, prev_u = None, None
+        bounds = np.concatenate([[0], starts, [x.size]]).tolist()
+        okl = ok.tolist()
+        prev = None  # (y_r, u_r, row) of the turning point
         for a, b in zip(bounds[:-1], bounds[1:]):
-            seg = np.arange(a, b)
-            seg = seg[ok[seg]]
+            seg = np.arange(a, b)[ok[a:b]]
             if seg.size == 0:
                 continue
-            if a > 0 and not ok[a - 1]:
-                prev_y = None  # the reversal fell in a gap: its turning point was not observed
-            loading = lab[a] > 0
-            model = self.load_model if loading else self.unload_model
-            base = model(x[seg])
-            if prev_y is not None:
-                offset = prev_y - float(model(self.sign * prev_u))
+            if a > 0 and not okl[a - 1]:
+                prev = None  # the reversal fell in a gap: its turning point was not observed
+            loading = bool(lab[a] > 0)
+            curve = curves[loading]
+            base = curve[seg]
+            if prev is not None:
+                prev_y, prev_u, k = prev
+                offset = prev_y - float(curve[k])
                 if loading:
                     w = (u_hi - u[seg]) / max(u_hi - prev_u, 1e-300)
                 else:
@@ -120,8 +204,8 @@ class DirectionAwareCalibration:
                 base = base + offset * np.clip(w, 0.0, 1.0)
             y[seg] = base
             # The reversal ending this segment: its extremum reading (turning points are extrema).
-            k = seg[np.argmax(u[seg])] if loading else seg[np.argmin(u[seg])]
-            prev_y, prev_u = (float(y[k]), float(u[k])) if np.isfinite(y[k]) else (None, None)
+            k = int(seg[np.argmax(u[seg])] if loading else seg[np.argmin(u[seg])])
+            prev = (float(y[k]), float(u[k]), k) if np.isfinite(y[k]) else None
         return y, lab
 
     def to_dict(self) -> dict:
@@ -133,20 +217,88 @@ class DirectionAwareCalibration:
             "unload": {"chebyshev_coefficients": self.unload_model.coefficients.tolist(),
                        "x_center": self.unload_model.center, "x_half_width": self.unload_model.half_width},
             "x_low": self.x_low, "x_high": self.x_high, "sign": self.sign, "threshold": self.threshold,
+            "causal": self.causal,
         }
 
     @classmethod
     def from_dict(cls, d: dict) -> "DirectionAwareCalibration":
-        """Inverse of :meth:`to_dict`."""
+        """Inverse of :meth:`to_dict` (a file without ``causal`` is an older, offline one)."""
         def model(m):
             return PolynomialModel(np.asarray(m["chebyshev_coefficients"], float), float(m["x_center"]),
                                    float(m["x_half_width"]))
 
         return cls(model(d["load"]), model(d["unload"]),
-                   float(d["x_low"]), float(d["x_high"]), float(d["sign"]), float(d["threshold"]))
+                   float(d["x_low"]), float(d["x_high"]), float(d["sign"]), float(d["threshold"]),
+                   bool(d.get("causal", False)))
 
 
-def fit_direction_aware(x, y, degree: int | str = "auto", threshold: float = 0.05, folds: int = 5) -> DirectionAwareCalibration:
+class BranchState:
+    """Steps a causal :class:`DirectionAwareCalibration` one reading at a time (the live path).
+
+    Parameters
+    ----------
+    comp : DirectionAwareCalibration
+        With ``causal=True``.
+
+    Notes
+    -----
+    :meth:`step` reproduces :meth:`DirectionAwareCalibration.predict` reading by reading: the
+    same causal labels, the same turning point (the first extremum of the branch just left) and
+    the same memory offset, evaluated with the same floating-point operations.
+    """
+
+    def __init__(self, comp: DirectionAwareCalibration):
+        if not comp.causal:
+            raise ValueError("comp: only a causal branch calibration can be stepped")
+        self.comp = comp
+        self.u_lo, self.u_hi = sorted((comp.sign * comp.x_low, comp.sign * comp.x_high))
+        self.label = 1
+        self.ext = None  # (u, y) of the current branch's extremum so far
+        self.prev = None  # (y_r, u_r) of the turning point the branch started from
+        self.offset = None
+        self.last_missing = False
+        self.started = False
+
+    def step(self, x: float | None) -> float | None:
+        """Take one reading (None or NaN: missing); return the estimate or None. [unit of y]"""
+        c = self.comp
+        xa = np.array([np.nan if x is None else float(x)])
+        if not c.usable(xa)[0]:
+            self.last_missing = self.started or self.last_missing
+            return None
+        u = float(c.sign * xa[0])
+        switched = False
+        if not self.started:
+            self.started, self.ext = True, None
+        elif self.label > 0 and u < self.ext[0] - c.band:
+            switched = True
+        elif self.label < 0 and u > self.ext[0] + c.band:
+            switched = True
+        if switched:
+            self.prev = None if (self.last_missing or not np.isfinite(self.ext[1])) else (self.ext[1], self.ext[0])
+            self.label = -self.label
+            self.ext = None
+            self.offset = None
+        loading = self.label > 0
+        model = c.load_model if loading else c.unload_model
+        base = model(xa)
+        if self.prev is not None:
+            if self.offset is None:
+                self.offset = self.prev[0] - float(model(c.sign * self.prev[1]))
+            if loading:
+                w = (self.u_hi - c.sign * xa) / max(self.u_hi - self.prev[1], 1e-300)
+            else:
+                w = (c.sign * xa - self.u_lo) / max(self.prev[1] - self.u_lo, 1e-300)
+            base = base + self.offset * np.clip(w, 0.0, 1.0)
+        y = float(base[0])
+        if self.ext is None or (u > self.ext[0] if loading else u < self.ext[0]):
+            self.ext = (u, y)
+        self.last_missing = False
+        return y if np.isfinite(y) else None
+
+
+def fit_direction_aware(x, y, degree: int | str | tuple = "auto", threshold: float = 0.05,
+                        folds: int = 5) -> DirectionAwareCalibration:
     """Fit the loading and unloading curves of a run with loading-unloading cycles.
 
     Parameters
@@ -155,10 +307,10 @@ def fit_direction_aware(x, y, degree: int | str = "auto", threshold: float = 0.0
         Readout in time order (frequency [Hz], ...).
     y : array_like
         Reference stress [Pa].
-    degree : int or "auto"
-        Degree of each branch polynomial (1..5), or ``"auto"``: chosen per branch by
-        cross-validation over contiguous blocks of that branch's readings (whole branches of a
-        cycle stay together when there are enough cycles).
+    degree : int, (int, int) or "auto"
+        Degree of each branch polynomial (1..5), or (loading, unloading) degrees, or ``"auto"``:
+        chosen per branch by cross-validation over contiguous blocks of that branch's readings
+        (whole branches of a cycle stay together when there are enough cycles).
     threshold : float
         Reversal threshold as a fraction of the readout span. [1]
     folds : int
@@ -184,7 +336,8 @@ def fit_direction_aware(x, y, degree: int | str = "auto", threshold: float = 0.0
     lab = readout_directions(x, sign, threshold)
     lo, hi = float(x[ok].min()), float(x[ok].max())
     models = []
-    for d in (1, -1):
+    per_branch = tuple(degree) if isinstance(degree, (tuple, list)) else (degree, degree)
+    for d, deg in zip((1, -1), per_branch):
         m = ok & (lab == d)
         if m.sum() <= 7:
             raise ValueError(f"the run has too few {'loading' if d > 0 else 'unloading'} readings "
@@ -192,7 +345,7 @@ def fit_direction_aware(x, y, degree: int | str = "auto", threshold: float = 0.0
         # Groups: one per branch run (a cycle's branch), or contiguous blocks if there are few.
         runs = np.cumsum(np.diff(lab, prepend=lab[0]) != 0)[m]
         groups = runs if np.unique(runs).size >= 2 else None
-        models.append(calibrate(x[m], y[m], degree=degree, groups=groups, folds=folds).model)
+        models.append(calibrate(x[m], y[m], degree=deg, groups=groups, folds=folds).model)
     return DirectionAwareCalibration(models[0], models[1], lo, hi, sign, float(threshold))
 
 

@@ -52,7 +52,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = ["THRESHOLDS", "THRESHOLDS_WIDE", "CREEP_TIME_CONSTANTS_S", "DIRECTION_THRESHOLD", "CausalState", "MemoryModel",
-           "Uncertainty", "causal_features", "fit_memory", "fit_uncertainty", "CausalEstimator"]
+           "Uncertainty", "causal_features", "fold_assignment", "fit_memory", "fit_uncertainty", "CausalEstimator"]
 
 #: Play-operator thresholds, fractions of full scale. [1]
 THRESHOLDS = (0.005, 0.01, 0.02, 0.04, 0.08, 0.16, 0.32)
@@ -295,6 +295,37 @@ class MemoryFit:
     fitted: np.ndarray = field(repr=False, default=None)
 
 
+def fold_assignment(groups, use, folds: int) -> tuple[np.ndarray, int]:
+    """The folds of the grouped cross-validation: whole groups, dealt round-robin in group order.
+
+    Parameters
+    ----------
+    groups : array_like of int
+        Group of every row (whole cycles or time blocks).
+    use : array_like of bool
+        Rows that take part.
+    folds : int
+        Folds wanted.
+
+    Returns
+    -------
+    fold : ndarray of int
+        Fold of each used row (in row order of ``use``).
+    k : int
+        Folds made, ``min(folds, groups among the used rows)``.
+
+    Raises
+    ------
+    ValueError
+        Fewer than 2 groups among the used rows.
+    """
+    _, gi = np.unique(np.asarray(groups)[np.asarray(use, bool)], return_inverse=True)
+    k = min(folds, int(gi.max(initial=0)) + 1)
+    if k < 2:
+        raise ValueError("groups: cross-validation needs at least 2 groups (cycles or blocks)")
+    return (np.arange(int(gi.max()) + 1) % k)[gi], k
+
+
 def fit_memory(w, y, usable, groups, full_scale: float, row_s: float, folds: int = 5, degree: int = 3,
                plain_oof=None, force: bool = True) -> MemoryFit:
     """Fit the causal compensation on a run (any run with a reference) and choose its variant by CV.
@@ -334,11 +365,7 @@ def fit_memory(w, y, usable, groups, full_scale: float, row_s: float, folds: int
                 "play operators to 50 % + creep": (THRESHOLDS_WIDE, CREEP_TIME_CONSTANTS_S)}
     alphas = tuple(1.0 - math.exp(-row_s / tau) for tau in CREEP_TIME_CONSTANTS_S)
     p_all, s, direction = causal_features(w, THRESHOLDS_WIDE, alphas)
-    _, gi = np.unique(np.asarray(groups)[use], return_inverse=True)
-    k = min(folds, int(gi.max()) + 1)
-    if k < 2:
-        raise ValueError("groups: cross-validation needs at least 2 groups (cycles or blocks)")
-    fold = (np.arange(int(gi.max()) + 1) % k)[gi]
+    fold, k = fold_assignment(groups, use, folds)
     cands = {}
     if plain_oof is not None:
         po = np.asarray(plain_oof, float)[use]
@@ -479,6 +506,10 @@ class CausalEstimator:
         FS of w = ŷ₀/FS. [unit of y]
     reference, x : str
         The reference column (``force_n`` or ``stress_pa``) and the readout column.
+    branches : DirectionAwareCalibration, optional
+        A causal branch compensation (:mod:`fsrlab.analysis.compensation`, ``causal=True``) to use
+        instead of ``memory``: the estimate is its branch polynomial with turning-point memory,
+        stepped by :class:`fsrlab.analysis.compensation.BranchState`.
 
     Notes
     -----
@@ -488,7 +519,7 @@ class CausalEstimator:
     leaves the memory as it is; a reading at the floor moves it to zero load.
     """
 
-    def __init__(self, base, x_range, margin, floor, memory, uncertainty, full_scale, reference, x):
+    def __init__(self, base, x_range, margin, floor, memory, uncertainty, full_scale, reference, x, branches=None):
         self.base = base
         self.lo, self.hi = (float(v) for v in x_range)
         self.margin = float(margin)
@@ -501,6 +532,14 @@ class CausalEstimator:
         span = self.hi - self.lo
         self.kept = (self.lo - self.margin * span, self.hi + self.margin * span) if np.isfinite(self.margin) \
             else (-np.inf, np.inf)
+        if branches is not None and memory is not None:
+            raise ValueError("memory, branches: one compensation at a time")
+        self.branches = branches
+        self.branch_state = None
+        if branches is not None:
+            from fsrlab.analysis.compensation import BranchState
+
+            self.branch_state = BranchState(branches)
         self.state = CausalState(memory.thresholds if memory else (), memory.alphas if memory else ())
         self._h = max(1e-9 * max(abs(self.lo), abs(self.hi)), 1e-6 * span)
 
@@ -518,16 +557,26 @@ class CausalEstimator:
             return None, None, False
         if self.floor is not None and self.floor.sign * (x - self.floor.threshold) <= 0:
             self.state.advance(0.0)
+            if self.branch_state is not None:
+                self.branch_state.step(None)  # a gap for the branch labels
             return None, None, False
         if not self.kept[0] <= x <= self.kept[1]:
+            if self.branch_state is not None:
+                self.branch_state.step(None)
             return None, None, False
         # One call for the estimate and the slope (elementwise: the same numbers as the offline path).
         y0, up, down = self.base(np.array([x, x + self._h, x - self._h])).tolist()
         if not math.isfinite(y0):
+            if self.branch_state is not None:
+                self.branch_state.step(None)
             return None, None, False
         w = y0 / self.full_scale
         self.state.advance(w)
-        y = self.memory.step_estimate(w, self.state) if self.memory is not None else y0
+        if self.branch_state is not None:
+            yb = self.branch_state.step(x)
+            y = math.nan if yb is None else yb
+        else:
+            y = self.memory.step_estimate(w, self.state) if self.memory is not None else y0
         u = None
         if self.uncertainty is not None:
             tab = self.uncertainty
@@ -567,7 +616,9 @@ class CausalEstimator:
         reason[(reason == 0) & ~kept] = 3
         w = np.where(kept, y0 / self.full_scale, np.where(at_floor, 0.0, np.nan))
         p, s, d = causal_features(w, self.state.r, self.state.alphas)
-        if self.memory is not None:
+        if self.branches is not None:
+            y = np.where(kept, self.branches.predict(np.where(kept, x, np.nan))[0], np.nan)
+        elif self.memory is not None:
             y = np.where(kept, self.memory.estimate(np.where(kept, w, 0.0), np.nan_to_num(p), np.nan_to_num(s)), np.nan)
         else:
             y = y0

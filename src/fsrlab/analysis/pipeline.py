@@ -49,6 +49,8 @@ __all__ = [
     "decode_capacitance",
     "run_readout",
     "calibrate_run",
+    "fit_causal_branches",
+    "BranchFit",
     "run_reference",
     "binned_hysteresis_percent",
     "live_estimator",
@@ -373,7 +375,7 @@ def binned_hysteresis_percent(y, estimate, direction, bins: int = 10) -> float:
 def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", compensate: bool = False,
                   folds: int = 5, circuit: LM555Circuit | None = None, threshold: float = 0.05,
                   reference: str | None = None, model: str = "auto", lag: float | str = "auto",
-                  max_lag_s: float | None = None, compensation_method: str = "memory") -> Calibration:
+                  max_lag_s: float | None = None, compensation_method: str = "auto") -> Calibration:
     """Calibrate a run's readout to its reference (force or stress).
 
     Parameters
@@ -385,8 +387,8 @@ def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", comp
     degree : int or "auto"
         Polynomial degree 1..5 (the model is then that polynomial), or ``"auto"``.
     compensate : bool
-        Also fit the causal hysteresis compensation (:mod:`fsrlab.analysis.memory`, an extension
-        beyond the paper) and record the hysteresis error of the estimate before and after.
+        Also fit the causal hysteresis compensation (an extension beyond the paper; see
+        ``compensation_method``) and record the hysteresis error of the estimate before and after.
     folds : int
         Cross-validation folds (≥ 2).
     circuit : LM555Circuit, optional
@@ -406,9 +408,14 @@ def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", comp
         cycles or time blocks, else 0.
     max_lag_s : float, optional
         Half-width of the lag search (default 0.25 s, :data:`fsrlab.analysis.alignment.MAX_LAG_S`). [s]
-    compensation_method : {"memory", "branches"}
-        The causal play-operator model, or the earlier offline branch polynomials
-        (:mod:`fsrlab.analysis.compensation`; needs whole cycles).
+    compensation_method : {"auto", "memory", "branches"}
+        ``"auto"``: the causal play-operator model (:mod:`fsrlab.analysis.memory`) and, when the
+        run is made of whole loading-unloading cycles (at least 2 over 80 % of the reference range,
+        holding at least 80 % of the readings), the branch polynomials with
+        turning-point memory applied causally (:func:`fit_causal_branches`); the one with the
+        smaller grouped cross-validated RMSE is kept, both are listed in
+        ``extra["compensation_candidates"]`` and the choice in ``extra["compensation_choice"]``.
+        ``"memory"`` or ``"branches"``: only that one.
 
     Returns
     -------
@@ -432,8 +439,8 @@ def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", comp
     y_raw, y_name, y_unit = run_reference(run, reference)
     values, used = run_readout(run, x, circuit)
     unit = run.units.get(x) or KNOWN_COLUMNS.get(x, "F" if x == C_FSR else "")
-    if compensation_method not in ("memory", "branches"):
-        raise ValueError(f"compensation_method: must be memory or branches, got {compensation_method!r}")
+    if compensation_method not in ("auto", "memory", "branches"):
+        raise ValueError(f"compensation_method: must be auto, memory or branches, got {compensation_method!r}")
     both = np.isfinite(values) & np.isfinite(y_raw)
     if both.sum() < 3:
         raise ValueError(f"{run.path}: {x} and {y_name}: fewer than 3 readings with both values present")
@@ -557,33 +564,185 @@ def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", comp
     from fsrlab.analysis.memory import causal_features, fit_memory, fit_uncertainty
 
     _, _, direction = causal_features(w, (), ())
-    if compensate and compensation_method == "memory":
+    if compensate:
         if int(ok.sum()) < MIN_COMPENSATION_READINGS:
             raise ValueError(f"{run.path}: compensate: the causal compensation fits up to 24 weights and needs at least "
                              f"{MIN_COMPENSATION_READINGS} readings above the floor with a reference, got {int(ok.sum())}")
         row_s = float(np.median(np.diff(t))) if "time_s" in run and run.n_rows > 1 else 1.0
-        mf = fit_memory(w, ys, ok, groups, full_scale, row_s, folds, plain_oof=plain_oof)
-        cal.memory = mf.model
-        cal.extra["compensation_candidates"] = mf.candidates
-        final_oof = mf.oof
-        before, after, how = _he_pair(run, ys, cal(values), mf.fitted, ok, threshold)
+        candidates, fits = {}, {}
+        if compensation_method in ("auto", "memory"):
+            mf = fit_memory(w, ys, ok, groups, full_scale, row_s, folds, plain_oof=plain_oof)
+            candidates.update(mf.candidates)
+            fits[PLAY] = (mf.candidates[_best_variant(mf.candidates)], mf.oof, mf.fitted, mf.model)
+        whole = _whole_cycles(run, y, ok, threshold)
+        note = None
+        if compensation_method == "branches" or (compensation_method == "auto" and whole):
+            try:
+                with _named(run, x):
+                    bf = fit_causal_branches(values, ys, ok, groups, threshold, folds)
+                candidates[BRANCHES] = bf.cv_rmse
+                fits[BRANCHES] = (bf.cv_rmse, bf.oof, bf.fitted, bf.model)
+            except ValueError as exc:
+                if compensation_method == "branches":
+                    raise
+                note = f"branches not fitted: {exc}"
+        elif compensation_method == "auto":
+            note = ("branches not tried: the run is not made of whole loading-unloading cycles (fewer than 2 cycles "
+                    "over 80 % of the range, or under 80 % of the readings on them)")
+        chosen_name = min(fits, key=lambda k: fits[k][0])
+        _, final_oof, fitted, model_obj = fits[chosen_name]
+        if chosen_name == PLAY:
+            cal.memory = model_obj
+        else:
+            cal.compensation = model_obj
+        cal.extra["compensation_candidates"] = candidates
+        cal.extra["compensation_choice"] = {
+            "chosen": chosen_name, "by": "grouped cross-validation (whole cycles or time blocks held out), RMSE of "
+            "the causal estimate", **({"note": note} if note else {})}
+        before, after, how = _he_pair(run, ys, cal(values), fitted, ok, threshold)
         cal.compensation_he_percent = (before, after)
         cal.extra["hysteresis_error_method"] = how
-    elif compensate:
-        from fsrlab.analysis.compensation import compare_compensation
-
-        direction_col, cycle = _recorded(run)
-        with _named(run, x):
-            comp = compare_compensation(values, ys, degree=cal.degree, threshold=threshold, direction=direction_col,
-                                        cycle=cycle, plain=cal)
-        cal.compensation = comp.compensated
-        cal.compensation_he_percent = (comp.he_before_percent, comp.he_after_percent)
     cal.cv_rmse = float(np.sqrt(np.nanmean((final_oof[ok] - yv) ** 2))) if np.isfinite(final_oof[ok]).any() \
         else float(chosen_cv)
     cal.uncertainty = fit_uncertainty(final_oof, ys, direction, resolution(values[ok]))
-    if cal.memory is not None:
+    if cal.memory is not None or cal.compensation is not None:
         cal.uncertainty_plain = fit_uncertainty(plain_oof, ys, direction, resolution(values[ok]))
     return cal
+
+
+#: Causal reversal bands tried for the branch compensation, fractions of the readout span (with the
+#: calibration's ``threshold``); the one with the smallest cross-validated RMSE is kept. [1]
+CAUSAL_BANDS = (0.01, 0.02, 0.05)
+#: Names of the two compensations in a calibration's ``compensation_candidates`` and ``compensation_choice``.
+PLAY, BRANCHES = "play operators", "branches (causal)"
+
+
+def _best_variant(candidates: dict) -> str:
+    """The play-operator variant with the smallest cross-validated RMSE (``plain`` is not one)."""
+    return min((k for k in candidates if k != "plain"), key=candidates.get)
+
+
+def _whole_cycles(run: Run, y, ok, threshold: float) -> bool:
+    """True when the run is made of whole loading-unloading cycles: the case the branch method describes.
+
+    At least 2 cycles (:func:`run_cycles`' rule) each with ≥ 3 loading and ≥ 3 unloading readings
+    among the fitted rows ``ok`` and a reference range of ≥ 80 % of the run's, together holding
+    at least 80 % of the fitted rows. A hand-loaded run, with many of its readings on partial
+    presses and minor loops, is not.
+    """
+    from fsrlab.analysis.cycles import row_directions
+
+    if not np.isfinite(y).all() or not ok.any():
+        return False
+    cyc = row_cycles(y, *_recorded(run), threshold)
+    d = row_directions(y, *_recorded(run), threshold)
+    span = float(np.ptp(y[ok]))
+    whole, rows = 0, 0
+    for c in np.unique(cyc[ok & np.isfinite(cyc)]):
+        m = ok & (cyc == c)
+        if (d[m] > 0).sum() >= 3 and (d[m] < 0).sum() >= 3 and np.ptp(y[m]) >= 0.8 * span:
+            whole += 1
+            rows += int(m.sum())
+    return whole >= 2 and rows >= 0.8 * int(ok.sum())
+
+
+class BranchFit:
+    """The causal branch compensation fitted on a run, with its grouped cross-validation.
+
+    Parameters
+    ----------
+    model : DirectionAwareCalibration
+        Fitted on every usable reading, ``causal=True``.
+    cv_rmse : float
+        RMSE of the out-of-fold causal estimate over the usable readings. [unit of y]
+    oof, fitted : ndarray
+        Out-of-fold and in-sample causal estimates of every row (NaN where not usable). [unit of y]
+    cv_by_band : dict
+        Cross-validated RMSE for each causal reversal band tried (fraction of the readout span). [unit of y]
+    """
+
+    def __init__(self, model, cv_rmse: float, oof: np.ndarray, fitted: np.ndarray, cv_by_band: dict):
+        self.model, self.cv_rmse, self.oof, self.fitted, self.cv_by_band = model, cv_rmse, oof, fitted, cv_by_band
+
+
+def fit_causal_branches(values, y, usable, groups, threshold: float = 0.05, folds: int = 5) -> BranchFit:
+    """Fit loading/unloading polynomials with turning-point memory, applied causally, and cross-validate them.
+
+    Parameters
+    ----------
+    values : array_like
+        Readout of every row in time order. [unit of x]
+    y : array_like
+        The (aligned) reference of every row. [unit of y]
+    usable : array_like of bool
+        Rows fitted and scored (finite, above the floor).
+    groups : array_like of int
+        Cross-validation groups; the folds are those of :func:`fsrlab.analysis.memory.fit_memory`
+        (:func:`fsrlab.analysis.memory.fold_assignment`).
+    threshold : float
+        Reversal threshold of the fit's (offline) branch labels, a fraction of the readout span;
+        also one of the causal bands tried (with :data:`CAUSAL_BANDS`). [1]
+    folds : int
+        Folds.
+
+    Returns
+    -------
+    BranchFit
+
+    Raises
+    ------
+    ValueError
+        Too few readings on a branch, or fewer than 2 groups.
+
+    Notes
+    -----
+    Branches are labelled for the fit from the whole readout sequence
+    (:func:`fsrlab.analysis.compensation.fit_direction_aware`; each branch's degree chosen by its
+    own cross-validation on the whole run, then kept in the folds), and applied with causal labels
+    (:class:`fsrlab.analysis.compensation.DirectionAwareCalibration` with ``causal=True``). Each
+    fold's model is fitted with the held-out rows' reference removed and run over the whole
+    readout sequence (the readout alone drives the labels and the memory), and its estimate of
+    the held-out rows is kept; the causal band with the smallest out-of-fold RMSE is kept.
+    """
+    import dataclasses
+
+    from fsrlab.analysis.compensation import causal_readout_directions, fit_direction_aware
+    from fsrlab.analysis.memory import fold_assignment
+
+    use = np.asarray(usable, bool)
+    xv = np.where(use, np.asarray(values, float), np.nan)
+    yv = np.where(use, np.asarray(y, float), np.nan)
+    fold, k = fold_assignment(groups, use, folds)
+    model = dataclasses.replace(fit_direction_aware(xv, yv, threshold=threshold, folds=folds), causal=True)
+    bands = tuple(sorted(set(CAUSAL_BANDS) | {float(threshold)}))
+    # Each branch's degree as chosen on the whole run (a fold may hold too few branch runs to choose).
+    degrees = (model.load_model.coefficients.size - 1, model.unload_model.coefficients.size - 1)
+    rows = np.flatnonzero(use)
+    oof = {band: np.full(xv.size, np.nan) for band in bands}
+    # The labels depend on the readout, its calibrated range and the band only: once per band.
+    labels = {band: causal_readout_directions(np.where(model.usable(xv), xv, np.nan), model.sign,
+                                              dataclasses.replace(model, threshold=band).band) for band in bands}
+    for f in range(k):
+        held = rows[fold == f]
+        yt = yv.copy()
+        yt[held] = np.nan
+        # The fold's branches, on the readout range of the whole run (the readout, not the reference).
+        m = dataclasses.replace(fit_direction_aware(xv, yt, degrees, threshold, folds), x_low=model.x_low,
+                                x_high=model.x_high, causal=True)
+        for band in bands:
+            mb = dataclasses.replace(m, threshold=band)
+            oof[band][held] = mb.predict(xv, labels[band] if np.array_equal(mb.usable(xv), model.usable(xv))
+                                         else None)[0][held]
+
+    def rmse(est):
+        e = est[use] - yv[use]
+        return float(np.sqrt(np.nanmean(e * e))) if np.isfinite(e).any() else float("inf")
+
+    cv = {band: rmse(oof[band]) for band in bands}
+    best = min(bands, key=cv.get)
+    model = dataclasses.replace(model, threshold=best)
+    fitted = np.where(use, model.predict(xv)[0], np.nan)
+    return BranchFit(model, cv[best], oof[best], fitted, cv)
 
 
 def _he_pair(run: Run, y, plain, compensated, ok, threshold: float) -> tuple[float, float, str]:
@@ -624,17 +783,28 @@ def live_estimator(cal: Calibration, margin: float = MARGIN, compensation: bool 
         ``step(readout) -> (estimate or None, standard uncertainty or None, in_range)`` keeps its
         memory between calls; ``reference`` (``"force_n"`` or ``"stress_pa"``) and ``x`` (the
         readout column) name the quantities. For a calibration on ``c_fsr_farad`` the reading to
-        step is C_FSR [F], decoded from the frequency and duty cycle (:func:`decode_capacitance`). A calibration with only the earlier offline branch
-        compensation (:mod:`fsrlab.analysis.compensation`) steps without compensation.
+        step is C_FSR [F], decoded from the frequency and duty cycle (:func:`decode_capacitance`).
+        The compensation is the calibration's play-operator model, or its causal branch
+        polynomials when those were chosen (:func:`calibrate_run`); a calibration with only the
+        earlier offline branch compensation (older files) steps without compensation.
     """
     from fsrlab.analysis.memory import CausalEstimator
 
     if not margin >= 0:
         raise ValueError(f"margin: must be a fraction >= 0 of the calibrated span, got {margin!r}")
     memory = cal.memory if compensation else None
+    branches = _causal_branches(cal) if compensation and memory is None else None
     fs = memory.full_scale if memory is not None else (cal.full_scale or 1.0)
-    table = cal.uncertainty_plain if (cal.memory is not None and memory is None) else cal.uncertainty
-    return CausalEstimator(cal, cal.x_range, margin, cal.floor, memory, table, fs, cal.y_name, cal.x_name)
+    has = cal.memory is not None or _causal_branches(cal) is not None
+    table = cal.uncertainty_plain if (has and memory is None and branches is None) else cal.uncertainty
+    return CausalEstimator(cal, cal.x_range, margin, cal.floor, memory, table, fs, cal.y_name, cal.x_name,
+                           branches=branches)
+
+
+def _causal_branches(cal: Calibration):
+    """The calibration's branch compensation when it is the causal one (else None)."""
+    comp = cal.compensation
+    return comp if comp is not None and getattr(comp, "causal", False) else None
 
 
 #: The live estimator's type (see :func:`live_estimator`).
@@ -759,7 +929,7 @@ def apply_calibration(cal: Calibration, run, compensation: bool = True, circuit:
     span = hi - lo
     estimate_col, uncertainty_col = f"{cal.y_name}_estimate", f"{cal.y_name}_uncertainty"
     below = np.zeros_like(given)
-    if compensation and cal.compensation is not None and cal.memory is None:
+    if compensation and cal.compensation is not None and cal.memory is None and _causal_branches(cal) is None:
         # An earlier calibration file: the offline branch method (it needs the whole run).
         inside = given & (values >= lo) & (values <= hi)
         kept = given if margin == np.inf else given & (values >= lo - margin * span) & (values <= hi + margin * span)
@@ -770,6 +940,8 @@ def apply_calibration(cal: Calibration, run, compensation: bool = True, circuit:
         below = reason == 2
         kept = given & (reason != 3)
         how = ("causal play-operator compensation" if compensation and cal.memory is not None
+               else "causal branch compensation (loading/unloading polynomials, turning-point memory)"
+               if compensation and _causal_branches(cal) is not None
                else f"{cal.model_name}" if cal.family is not None else f"polynomial of degree {cal.degree}")
     no_readout = ~given
     not_decodable = np.zeros_like(given)
