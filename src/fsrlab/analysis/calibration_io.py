@@ -16,6 +16,11 @@ fitting (``"lag_s"``), the readout's floor (``"floor"``), the causal compensatio
 so that an earlier fsrlab still reads the file and applies the polynomial), the uncertainty table
 (``"uncertainty"``, and ``"uncertainty_plain"`` for the estimate without the compensation), every candidate's cross-validated error (``"candidates"``), ``"cv_rmse"`` and
 ``"full_scale"``. Files without these keys load as before (no lag, no floor, no uncertainty).
+When the compensation choice kept the branch polynomials, ``"compensation"`` holds them with
+``"causal": true`` (applied with causal branch labels, :mod:`fsrlab.analysis.compensation`) and
+there is no ``"memory"``; ``"compensation_candidates"`` and ``"compensation_choice"`` (kept in
+``Calibration.extra``) record every candidate's cross-validated error and the choice. An earlier
+fsrlab reading such a file applies the branches with its offline labels.
 
 Earlier files are read too: those written before the circuit objects stored the decoding circuit
 as ``"decode": {"r_ohm", "c_off_farad", "diode", "diode_drop_v"}`` (read as that circuit); those
