@@ -120,13 +120,24 @@ def test_clean_whole_cycles_choose_the_causal_branches_and_live_equals_offline(c
     he_c = run_hysteresis(other["stress_pa"], est["stress_pa_estimate"]).percent
     he_p = run_hysteresis(other["stress_pa"], plain["stress_pa_estimate"]).percent
     assert he_c * 3 <= he_p
-    # Live equals offline for the chosen method: stepping the estimator row by row.
-    live = live_estimator(cal)
-    steps = [live.step(float(v)) for v in other["frequency_hz"]]
-    y = np.array([np.nan if s[0] is None else s[0] for s in steps])
-    u = np.array([np.nan if s[1] is None else s[1] for s in steps])
-    np.testing.assert_array_equal(y, est["stress_pa_estimate"])
-    np.testing.assert_allclose(u, est["stress_pa_uncertainty"], rtol=1e-12)
+    # Live equals offline for the chosen method: stepping the estimator row by row, with gaps and a
+    # reading beyond the margin (no estimate, a gap for the branch labels).
+    f = other["frequency_hz"].copy()
+    f[[5, 6, 60]] = np.nan
+    f[30] = 10 * cal.x_range[1]
+    from fsrlab.runwriter import write_run
+
+    write_run(tmp_path / "holey.csv", {"stress_pa": other["stress_pa"], "frequency_hz": f}, other.metadata)
+    holey = apply_calibration(cal, load_run(tmp_path / "holey.csv"))
+    for xs, ref in ((other["frequency_hz"], est), (f, holey)):
+        live = live_estimator(cal)
+        steps = [live.step(None if np.isnan(v) else float(v)) for v in xs]
+        y = np.array([np.nan if s[0] is None else s[0] for s in steps])
+        u = np.array([np.nan if s[1] is None else s[1] for s in steps])
+        np.testing.assert_array_equal(y, ref["stress_pa_estimate"])
+        np.testing.assert_allclose(u, ref["stress_pa_uncertainty"], rtol=1e-12)
+        np.testing.assert_array_equal(np.array([s[2] for s in steps], float), np.nan_to_num(ref["in_range"]))
+    assert np.isnan(holey["stress_pa_estimate"][[5, 6, 30, 60]]).all()
     # The file records the choice and the causal labels, and reads back to the same estimate.
     p = save_calibration(cal, tmp_path / "cal.json")
     d = json.loads(p.read_text())

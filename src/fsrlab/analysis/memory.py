@@ -573,8 +573,9 @@ class CausalEstimator:
         w = y0 / self.full_scale
         self.state.advance(w)
         if self.branch_state is not None:
-            yb = self.branch_state.step(x)
-            y = math.nan if yb is None else yb
+            y = self.branch_state.step(x)
+            if y is None:  # no finite branch estimate at this reading
+                return None, None, bool(self.lo <= x <= self.hi)
         else:
             y = self.memory.step_estimate(w, self.state) if self.memory is not None else y0
         u = None
