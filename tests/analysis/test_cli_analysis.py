@@ -70,6 +70,10 @@ def test_calibrate_apply_roundtrip_and_compensation(runs, tmp_path, capsys):
                       "degrees_tried", "hysteresis_error_before_percent", "hysteresis_error_after_percent",
                       "model", "lag_s", "cv_rmse", "cv_rmse_percent_fs", "candidates"}  # keys of the real-data calibration
     assert d["degree"] == 3 and len(d["coefficients"]) == 4
+    # The chosen compensation is the candidate with the smallest cross-validated RMSE (property).
+    chosen = d["compensation_choice"]["chosen"]
+    assert chosen in d["compensation_candidates"]
+    assert d["compensation_candidates"][chosen] == min(d["compensation_candidates"].values())
     assert d["hysteresis_error_before_percent"] / d["hysteresis_error_after_percent"] >= 3
     out_csv = tmp_path / "est.csv"
     code, _, _ = run_cli(["apply", cal, runs / "other.csv", "-o", out_csv, "--no-compensation"], capsys)

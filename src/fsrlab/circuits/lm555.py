@@ -253,7 +253,8 @@ def tau_ratio(n_ratio, diode: bool = False, diode_drop_v: float = 0.0, vcc_v: fl
 
     Notes
     -----
-    Without the diode and with the default thresholds this is the paper's eq. (32),
+    Without the diode and with the default thresholds this is eq. (32) as eqs. (23) and (26) give
+    it (the printed eq. (32) has an extra factor N, see docs/errata.md, O1),
     ``τH/τL = ln((2N − 2)/(N − 4))·2(N + 1)/((N + 2)·ln 2)``, which falls monotonically from ∞ at
     N = 4 to 2 as N → ∞. With an ideal diode it is ``2·ln((2N − 2)/(N − 4))/((N + 2)·ln 2)``,
     which falls to 0; the paper's printed eq. (37) has an extra factor N (see docs/errata.md, O2).

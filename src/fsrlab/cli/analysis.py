@@ -199,7 +199,7 @@ def calibrate_cmd(
     reference: str = typer.Option(None, "--reference", help="Reference column: force_n [N] (no sensor area needed) or stress_pa [Pa] (default: stress_pa if the run has it, else force_n)."),
     model: str = typer.Option("auto", "--model", help="Model [name]: auto (every family, chosen by grouped cross-validation), polynomial, conductance-polynomial, conductance-power (F = c + a·G^b through the readout circuit), power, or one candidate such as polynomial-3."),
     degree: str = typer.Option("auto", "--degree", help="Polynomial degree 1..5 [1] (the model is then that polynomial), or auto."),
-    compensate: bool = typer.Option(False, "--compensate", help="Also fit the causal hysteresis compensation (play operators with memory, extension beyond the paper) and report HE [%] before/after."),
+    compensate: bool = typer.Option(False, "--compensate", help="Also fit the causal hysteresis compensation (play operators with memory, or loading/unloading branches when the run is whole cycles, chosen by grouped CV; extension beyond the paper) and report HE [%] before/after."),
     unit: str = typer.Option(None, "--unit", help="Display unit of the errors in the table [N, g, Pa or kPa] (default: the reference's, N or Pa); --json and the file stay SI."),
     lag: str = typer.Option("auto", "--lag", help="Lag of the readout behind the reference [s] (rows without time_s), e.g. 0.02 or 0; auto: estimated by cross-correlation of the changes."),
     max_lag: float = typer.Option(None, "--max-lag", parser=seconds, help="Half-width of the lag search [s], e.g. 0.25 (default 0.25 s, at least 2 rows)."),
@@ -272,7 +272,7 @@ def calibrate_cmd(
            "degrees_tried": None if cal.cv is None else cal.cv.degrees}
     if cal.y_name == "stress_pa":
         out["rmse_pa"] = cal.rmse
-    for key in ("lag_search", "lag_rows", "compensation_candidates", "hysteresis_error_method"):
+    for key in ("lag_search", "lag_rows", "compensation_candidates", "compensation_choice", "hysteresis_error_method"):
         if key in cal.extra:
             out[key] = cal.extra[key]
     if compensate:
@@ -308,6 +308,9 @@ def calibrate_cmd(
     for c in cal.candidates:
         table.add_row(f"CV RMSE {c['model']} ({u})", f"{k * c['cv_rmse']:.4g}")
     if compensate:
+        choice = cal.extra.get("compensation_choice", {})
+        if choice:
+            table.add_row("compensation", f"{choice['chosen']} (chosen by grouped CV)")
         table.add_row("HE of the estimate, plain (%)", f"{out['hysteresis_error_before_percent']:.3f}")
         table.add_row("HE with compensation (%)", f"{out['hysteresis_error_after_percent']:.3f}")
     console.print(table)
