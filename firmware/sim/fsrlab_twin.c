@@ -64,7 +64,7 @@
 #define TICK_CYCLES 16000u      /* I/O and pacing every 1 ms of simulated time */
 #define BYTE_CYCLES 1389u       /* one UART byte at 115200 baud */
 #define QCAP (1u << 16)         /* queued edges (the caller's look-ahead is far shorter) */
-#define ACAP 4096u              /* queued A0 / HX711 values */
+#define ACAP (1u << 16)         /* queued A0 / HX711 values */
 
 typedef struct { uint64_t cycle; int32_t value; } rec_t;
 
@@ -247,12 +247,17 @@ static void read_stdin(int timeout_ms) {
   if (poll(p, 2, timeout_ms) <= 0) return;
   if (p[1].revents & POLLIN) read_uart();
   if (!(p[0].revents & (POLLIN | POLLHUP))) return;
-  if (e_count() > QCAP - sizeof rbuf / 16 || a_tail - a_head > ACAP - sizeof rbuf / 16 ||
-      h_tail - h_head > ACAP - sizeof rbuf / 16) {
+  /* take no more records than every queue has room for (back-pressure on the caller) */
+  size_t room = QCAP - e_count();
+  if (ACAP - (a_tail - a_head) < room) room = ACAP - (a_tail - a_head);
+  if (ACAP - (h_tail - h_head) < room) room = ACAP - (h_tail - h_head);
+  size_t want = room * 16 > rlen ? room * 16 - rlen : 0;
+  if (want > sizeof rbuf - rlen) want = sizeof rbuf - rlen;
+  if (want < 16) {
     if (timeout_ms) usleep(1000); /* queues full: let the simulation drain them */
     return;
   }
-  ssize_t n = read(0, rbuf + rlen, sizeof rbuf - rlen);
+  ssize_t n = read(0, rbuf + rlen, want);
   if (n == 0) { stdin_eof = 1; return; }
   if (n < 0) { if (errno != EINTR && errno != EAGAIN) stdin_eof = 1; return; }
   rlen += (size_t)n;
