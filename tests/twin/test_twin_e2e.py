@@ -117,6 +117,38 @@ def test_range_switch_mid_run_changes_c_off(built):
     assert worst <= 1.0, worst
 
 
+def test_out_of_oscillation_gap_and_notice(built):
+    """A profile past the oscillation limit (N = R_FSR/R < 4, eq. 30; the sensor's R_FSR falls below
+    40 kΩ near 100 kPa): the firmware sends windows without periods, as a real one would, the twin
+    keeps running and says so; the 555 starts again when the stress falls."""
+    import serial
+
+    source = PhysicsSource(StressProfile("triangle", peak_pa=120e3, period_s=1.0))
+    with Twin(source, speed="max") as twin, serial.Serial(twin.port, timeout=0.05) as ser:
+        parser, frames = FrameParser(), []
+        _collect(ser, parser, frames, lambda fr: any(f.kind == "ID" for f in fr))
+        ser.write(b"START\n")
+        _collect(ser, parser, frames, lambda fr: _m_count(fr) >= 14)
+        assert twin.failure is None
+        notices = list(twin.notices)
+    ms = [Measurement.from_frame(f) for f in frames if f.kind == "M"]
+    periods = [m.periods for m in ms]
+    gap = [i for i, p in enumerate(periods) if p == 0]
+    assert gap, periods
+    assert any(p > 0 for p in periods[:gap[0]]) and any(p > 0 for p in periods[gap[-1]:]), periods
+    assert all(m.missed == 0 for m in ms)
+    assert any("out of oscillation" in n for n in notices) and any("oscillates again" in n for n in notices)
+
+
+def test_cli_notice_on_stderr(built):
+    proc = subprocess.run(FSRLAB + ["twin", "--profile", "triangle", "--peak", "120k", "--period", "1s",
+                                    "--speed", "max", "--duration", "2s", "--no-loadcell"],
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.splitlines()[0].startswith("/dev/")
+    assert "out of oscillation" in proc.stderr and "Traceback" not in proc.stderr
+
+
 def test_twin_killed_mid_run_ends_acquire_cleanly(built, tmp_path):
     out = tmp_path / "run.csv"
     twin = subprocess.Popen(FSRLAB + ["twin", "--speed", "max", "--json"], stdout=subprocess.PIPE,

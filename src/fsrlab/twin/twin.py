@@ -340,5 +340,5 @@ class Twin:
         elif not self._silent and chunk.done_s - self._last_rise > self.NO_OSCILLATION_S:
             self._silent = True
             self._notice(f"t = {self._last_rise:.3f} s: the sensor drives the 555 out of oscillation "
-                         "(R_FSR too low for the capacitor to reach 2/3 Vcc: N below the limit); "
+                         "(R_FSR too low for the capacitor to reach 2/3 Vcc: N = R_FSR/R below 4, eq. 30); "
                          "the firmware sends windows without periods")
