@@ -51,8 +51,11 @@ def twin_ratio(freq_hz: float) -> tuple[float, int]:
     frames: list = []
     with Twin(_source(freq_hz), speed="max") as twin, serial.Serial(twin.port, timeout=0.05) as ser:
         parser = FrameParser()
-        while not any(f.kind == "ID" for f in frames):
-            frames.extend(parser.feed(ser.read(4096)))
+        while not any(f.kind == "ID" for f in frames):  # opening the port flushed the boot ID: ask
+            ser.write(b"ID\n")
+            t = time.monotonic() + 0.3
+            while time.monotonic() < t and not any(f.kind == "ID" for f in frames):
+                frames.extend(parser.feed(ser.read(4096)))
         ser.write(b"START\n")
         stop = threading.Event()
 

@@ -76,6 +76,22 @@ def _collect(ser, parser, frames, pred, timeout_s=60.0):
         frames.extend(parser.feed(ser.read(4096)))
 
 
+def _identify(ser, parser, frames, timeout_s=60.0):
+    """Ask ``ID`` until the firmware answers (opening a port flushes what came before, such as the
+    boot ID frame, and bytes sent before the firmware's UART is up are lost, as on an Uno)."""
+    end = time.monotonic() + timeout_s
+    asked = False
+    t = time.monotonic() + 0.3
+    while not any(f.kind == "ID" for f in frames):
+        assert time.monotonic() < end, f"no ID frame; frames: {frames[-3:]}"
+        if time.monotonic() >= t:
+            ser.write(b"ID\n")
+            asked, t = True, time.monotonic() + 0.3
+        frames.extend(parser.feed(ser.read(4096)))
+    if asked:  # the answers to every ID sent: the ID frame, then its ACK
+        _collect(ser, parser, frames, lambda fr: fr[-1].kind == "ACK" and fr[-1].fields[0] == "ID", 5.0)
+
+
 def _m_count(frames):
     return sum(f.kind == "M" for f in frames)
 
@@ -86,9 +102,9 @@ def test_range_switch_mid_run_changes_c_off(built):
     source = PhysicsSource(StressProfile("hold", peak_pa=20e3, period_s=1.0))
     with Twin(source, speed="max") as twin, serial.Serial(twin.port, timeout=0.05) as ser:
         parser, frames = FrameParser(), []
-        _collect(ser, parser, frames, lambda fr: any(f.kind == "ID" for f in fr))
+        _identify(ser, parser, frames)
         ser.write(b"WINDOW 50\n")
-        _collect(ser, parser, frames, lambda fr: any(f.kind == "ACK" for f in fr))
+        _collect(ser, parser, frames, lambda fr: fr[-1].kind == "ACK" and fr[-1].fields[0] == "WINDOW")
         ser.write(b"START\n")
         _collect(ser, parser, frames, lambda fr: _m_count(fr) >= 10)
         ser.write(b"RANGE 1\n")
@@ -126,16 +142,16 @@ def test_out_of_oscillation_gap_and_notice(built):
     source = PhysicsSource(StressProfile("triangle", peak_pa=120e3, period_s=1.0))
     with Twin(source, speed="max") as twin, serial.Serial(twin.port, timeout=0.05) as ser:
         parser, frames = FrameParser(), []
-        _collect(ser, parser, frames, lambda fr: any(f.kind == "ID" for f in fr))
+        _identify(ser, parser, frames)
         ser.write(b"START\n")
-        _collect(ser, parser, frames, lambda fr: _m_count(fr) >= 14)
+        _collect(ser, parser, frames, lambda fr: _m_count(fr) >= 14 and any("again" in n for n in twin.notices))
         assert twin.failure is None
         notices = list(twin.notices)
     ms = [Measurement.from_frame(f) for f in frames if f.kind == "M"]
     periods = [m.periods for m in ms]
     gap = [i for i, p in enumerate(periods) if p == 0]
     assert gap, periods
-    assert any(p > 0 for p in periods[:gap[0]]) and any(p > 0 for p in periods[gap[-1]:]), periods
+    assert any(p > 0 for p in periods[:gap[0]]) and any(p > 0 for p in periods[gap[0]:]), periods
     assert all(m.missed == 0 for m in ms)
     assert any("out of oscillation" in n for n in notices) and any("oscillates again" in n for n in notices)
 

@@ -54,8 +54,8 @@ def match(windows: list[Window], rising_s: np.ndarray, falling_s: np.ndarray, ca
 
     The first window's first edge is searched among the ``candidates`` best fits of its sum of
     periods; with ``end_hint_s`` (the device's clock at the window's end, ``t_ms``, which runs from
-    the firmware's start like the simulated time, within a few ms) only among those that end within
-    50 ms of it (a constant frequency fits everywhere).
+    the firmware's start like the simulated time, within a few ms) among all those that end within
+    50 ms of it instead (a constant frequency fits everywhere equally well).
 
     ``worst`` is the largest error over all windows and both quantities, in units of the window's
     quantization bound (≤ 1: every window within its bound); ``anchor`` the first window's first
@@ -73,8 +73,8 @@ def match(windows: list[Window], rising_s: np.ndarray, falling_s: np.ndarray, ca
     fit = np.abs(s0 - windows[0].sum_period_ticks)
     if end_hint_s is not None:
         fit = np.where(np.abs(r[p0:] / F_CPU - end_hint_s) < 0.05, fit, np.inf)
-    order = np.argsort(fit)[:candidates]
-    order = order[np.isfinite(fit[order])]
+    order = np.argsort(fit, kind="stable")
+    order = order[np.isfinite(fit[order])] if end_hint_s is not None else order[:candidates]
     best = (np.inf, -1)
     for j0 in order:
         j, worst = int(j0), 0.0

@@ -146,10 +146,8 @@ class Twin:
             self._cond.notify_all()
         proc = self._proc
         if proc is not None:
-            try:
-                proc.stdin.close()  # end of stdin ends the harness
-            except OSError:
-                pass
+            if proc.poll() is None:
+                proc.terminate()  # nothing to save in the harness; its pty hangs up
             try:
                 proc.wait(timeout=3)
             except subprocess.TimeoutExpired:
@@ -158,6 +156,12 @@ class Twin:
         for t in self._threads:
             if t is not threading.current_thread():
                 t.join(timeout=3)
+        if proc is not None:
+            try:
+                proc.stdin.close()  # after the feeder has stopped writing to it
+            except OSError:
+                pass
+            proc.stderr.close()
         if self._slave is not None:
             try:
                 os.close(self._slave)
