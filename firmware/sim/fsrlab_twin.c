@@ -354,9 +354,10 @@ int main(int argc, char **argv) {
         next_report = avr->cycle + 5 * TICK_CYCLES;
         fprintf(stderr, "#T %llu\n", (unsigned long long)avr->cycle);
       }
-      if (realtime) {
-        double ahead = (double)avr->cycle / F_CPU_HZ - (now_s() - wall0);
-        if (ahead > 0.002) read_stdin((int)(ahead * 1000)); /* sleep, but answer the host at once */
+      if (realtime) { /* sleep until the wall clock catches up, taking input (and host bytes) meanwhile */
+        double ahead;
+        while (!stdin_eof && (ahead = (double)avr->cycle / F_CPU_HZ - (now_s() - wall0)) > 0.001)
+          read_stdin((int)(ahead * 1000) + 1);
       }
     }
     if (avr->cycle >= limit) {

@@ -217,3 +217,15 @@ def test_no_firmware_api(tmp_path, monkeypatch):
     assert not ok and "make firmware" in reason and "\n" not in reason
     with pytest.raises(RuntimeError, match="make firmware"):
         Twin().open()
+
+
+@pytest.mark.parametrize("args,option", [(["--speed", "fast"], "--speed"), (["--sensor", "foo"], "--sensor"),
+                                         (["--duration", "0"], "--duration"), (["--peak", "-1k"], "--peak"),
+                                         (["--hx711-rate", "20"], "--hx711-rate")])
+def test_cli_bad_options_one_line_exit_2(args, option):
+    from clirun import run_cli
+
+    code, out, err = run_cli(["twin", *args])
+    assert code == 2 and out == ""
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(lines) == 1 and option in lines[0], err
