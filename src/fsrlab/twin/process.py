@@ -2,8 +2,8 @@
 
 The harness (``firmware/build/fsrlab_twin``, source ``firmware/sim/fsrlab_twin.c``) runs the meter's
 firmware (``firmware/build/fsrlab_meter.elf``) in simavr; both are built by ``make firmware``. Paths
-are relative to the repository root (a clean clone after ``make firmware``), or to the directory in
-the environment variable ``FSRLAB_FIRMWARE_BUILD``.
+are relative to the repository root (a clean clone after ``make firmware``; :func:`build_dir`), or
+to the directory in the environment variable ``FSRLAB_FIRMWARE_BUILD``.
 
 Records on the harness's stdin: 16 bytes, little endian: type (1 byte), 3 bytes padding, int32
 value, uint64 CPU cycle (the harness's documentation lists the types).
@@ -26,9 +26,19 @@ SIMAVR_HEADER = Path("/usr/include/simavr/sim_avr.h")
 
 
 def build_dir() -> Path:
-    """Directory of the built firmware and harness (``FSRLAB_FIRMWARE_BUILD`` or ``firmware/build``)."""
+    """Directory of the built firmware and harness.
+
+    ``FSRLAB_FIRMWARE_BUILD`` when set; otherwise ``firmware/build`` of the repository this package
+    lives in (an editable install of a clone), or else of the current directory (a clone next to an
+    installed package).
+    """
     env = os.environ.get("FSRLAB_FIRMWARE_BUILD")
-    return Path(env) if env else ROOT / "firmware" / "build"
+    if env:
+        return Path(env)
+    here, cwd = ROOT / "firmware" / "build", Path.cwd() / "firmware" / "build"
+    if not (here / "fsrlab_twin").exists() and (cwd / "fsrlab_twin").exists():
+        return cwd
+    return here
 
 
 def elf_path() -> Path:
