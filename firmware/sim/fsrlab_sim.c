@@ -38,12 +38,7 @@
  *           ((k * 2796203) mod 2^24) - 2^23, which visits the whole range.
  *   --hx-stop  from time T [s] on the HX711 is unplugged: no more conversions, DOUT pulled high.
  *
- * HX711 model (datasheet, Avia Semiconductor HX711 rev. 2.0): a conversion is ready every 1/SPS;
- * DOUT then goes low. Each SCK rising edge shifts out the next bit, MSB first (DOUT changes at the
- * rising edge and holds until the next one); the 25th rising edge (gain 128, channel A) sets DOUT
- * high until the next conversion. A conversion not read before the next one is replaced. SCK high
- * for more than 60 us powers the chip down (no conversions); SCK low again powers it up, and the
- * next conversion is ready after the settling time, 400 ms at 10 SPS and 50 ms at 80 SPS.
+ * HX711 model: hx711_model.h (shared with fsrlab_twin.c).
  *
  * Edge timing: an edge scheduled at cycle c is seen by the simulated MCU at the end of the
  * instruction running at c (simavr processes its cycle timers between instructions), so each
@@ -64,6 +59,8 @@
 #include <avr_ioport.h>
 #include <avr_uart.h>
 #include <avr_adc.h>
+
+#include "hx711_model.h"
 
 #define F_CPU_HZ 16000000.0
 #define MAX_SEG 64
@@ -155,111 +152,17 @@ static avr_cycle_count_t edge_cb(struct avr_t *a, avr_cycle_count_t when, void *
 }
 
 /* ------------------------------------------------------------------ HX711 on PD2 / PD3 */
+/* The model itself is hx711_model.c (shared with fsrlab_twin.c); here only its values. */
 #define HX_MAX_VALUES 4096
 static int hx_sps;                  /* 0: no HX711 connected */
 static double hx_first = -1, hx_stop = -1;
 static int32_t hx_vals[HX_MAX_VALUES];
 static int hx_nvals;
-static uint64_t hx_k;               /* conversions made */
-static int hx_ready;                /* a conversion waits or is being read */
-static int hx_bit;                  /* SCK rising edges of the read in progress */
-static int32_t hx_val;
-static int hx_down, hx_unplugged, hx_sck;
-static avr_cycle_count_t hx_rise, hx_max_high;
-static uint64_t hx_pulses, hx_stray;
-static avr_irq_t *dout_irq;
 
-/* DOUT is set as the port's external level, not only raised: simavr 1.6 re-applies the internal
- * pull-up (PORTD2 = 1) to the input pin on every write to PORTD (each SCK edge), which would
- * override a level that was merely raised. */
-static void dout(uint32_t level) {
-  avr_ioport_external_t e = {.name = 'D', .mask = 1u << 2, .value = (level ? 1u : 0u) << 2};
-  avr_ioctl(avr, AVR_IOCTL_IOPORT_SET_EXTERNAL('D'), &e);
-  avr_raise_irq(dout_irq, level ? 1 : 0);
-}
-
-static int32_t hx_value(uint64_t k) {
+static int32_t hx_value(uint64_t k, avr_cycle_count_t cycle) {
+  (void)cycle;
   if (hx_nvals) return hx_vals[k % (uint64_t)hx_nvals];
   return (int32_t)((k * 2796203ull) % 16777216ull) - 8388608;
-}
-
-static avr_cycle_count_t hx_period(void) { return (avr_cycle_count_t)llround(F_CPU_HZ / hx_sps); }
-
-static avr_cycle_count_t hx_conv_cb(struct avr_t *a, avr_cycle_count_t when, void *param) {
-  (void)param;
-  if (hx_down || hx_unplugged) return 0;
-  int32_t v = hx_value(hx_k++);
-  if (hx_ready && hx_bit > 0) {
-    fprintf(stderr, "#HX_LOST %llu %d\n", (unsigned long long)a->cycle, v); /* read in progress keeps its data */
-  } else {
-    if (hx_ready) fprintf(stderr, "#HX_LOST %llu %d\n", (unsigned long long)a->cycle, hx_val);
-    hx_val = v;
-    hx_ready = 1;
-    hx_bit = 0;
-    dout(0);
-  }
-  return when + hx_period();
-}
-
-static avr_cycle_count_t hx_unplug_cb(struct avr_t *a, avr_cycle_count_t when, void *param) {
-  (void)when; (void)param;
-  hx_unplugged = 1;
-  hx_ready = 0;
-  avr_cycle_timer_cancel(a, hx_conv_cb, NULL);
-  dout(1);
-  return 0;
-}
-
-static avr_cycle_count_t hx_powerdown_cb(struct avr_t *a, avr_cycle_count_t when, void *param) {
-  (void)when; (void)param;
-  if (!hx_sck || hx_down || hx_unplugged) return 0;
-  hx_down = 1;
-  hx_ready = 0;
-  hx_bit = 0;
-  fprintf(stderr, "#HX_POWERDOWN %llu\n", (unsigned long long)a->cycle);
-  avr_cycle_timer_cancel(a, hx_conv_cb, NULL);
-  dout(1);
-  return 0;
-}
-
-static void sck_cb(struct avr_irq_t *irq, uint32_t value, void *param) {
-  (void)irq; (void)param;
-  int v = value ? 1 : 0;
-  if (v == hx_sck) return;
-  hx_sck = v;
-  if (v) {
-    hx_rise = avr->cycle;
-    if (hx_unplugged || !hx_sps) {
-      hx_stray++;
-      return;
-    }
-    if (!hx_down) avr_cycle_timer_register(avr, 960, hx_powerdown_cb, NULL); /* 60 us */
-    if (hx_down) return;
-    if (!hx_ready) {
-      hx_stray++;
-      return;
-    }
-    hx_bit++;
-    dout(hx_bit <= 24 ? (uint32_t)((hx_val >> (24 - hx_bit)) & 1) : 1u);
-    return;
-  }
-  avr_cycle_count_t d = avr->cycle - hx_rise;
-  if (d > hx_max_high) hx_max_high = d;
-  hx_pulses++;
-  if (hx_unplugged) return;
-  avr_cycle_timer_cancel(avr, hx_powerdown_cb, NULL);
-  if (hx_down) {
-    hx_down = 0;
-    fprintf(stderr, "#HX_POWERUP %llu\n", (unsigned long long)avr->cycle);
-    avr_cycle_timer_register(avr, (avr_cycle_count_t)llround(F_CPU_HZ * (hx_sps == 10 ? 0.4 : 0.05)),
-                             hx_conv_cb, NULL);
-    return;
-  }
-  if (hx_ready && hx_bit == 25) {
-    fprintf(stderr, "#HX %llu %d\n", (unsigned long long)avr->cycle, hx_val);
-    hx_ready = 0;
-    hx_bit = 0;
-  }
 }
 
 /* ------------------------------------------------------------------ UART */
@@ -410,16 +313,7 @@ int main(int argc, char **argv) {
   avr_irq_t *adc0 = avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0);
   if (adc0) avr_raise_irq(adc0, (uint32_t)adc_mv);
 
-  /* HX711: DOUT (PD2) high = not ready, or no HX711 (the pull-up); SCK (PD3) watched */
-  dout_irq = avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 2);
-  dout(1);
-  avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 3), sck_cb, NULL);
-  if (hx_sps) {
-    double first = hx_first >= 0 ? hx_first : 1.0 / hx_sps;
-    avr_cycle_timer_register(avr, (avr_cycle_count_t)llround(first * F_CPU_HZ) + 1, hx_conv_cb, NULL);
-    if (hx_stop >= 0)
-      avr_cycle_timer_register(avr, (avr_cycle_count_t)llround(hx_stop * F_CPU_HZ) + 1, hx_unplug_cb, NULL);
-  }
+  hx_attach(avr, hx_sps, hx_first, hx_stop, hx_value);
 
   if (nseg) {
     ideal_rise = segs[0].t0 * F_CPU_HZ;
@@ -452,9 +346,7 @@ int main(int argc, char **argv) {
     fprintf(stderr, "#PEEK 0x%04x %u %u\n", peeks[i], peeks[i] < 0x8ff ? avr->data[peeks[i]] : 0u,
             peeks[i] < 0x8ff ? (unsigned)(avr->data[peeks[i]] | (avr->data[peeks[i] + 1] << 8)) : 0u);
   fprintf(stderr, "#OCR_SMALL %u %u\n", small_a, small_b);
-  if (hx_sck && avr->cycle - hx_rise > hx_max_high) hx_max_high = avr->cycle - hx_rise;
-  fprintf(stderr, "#HX_SCK %llu %llu %llu\n", (unsigned long long)hx_max_high,
-          (unsigned long long)hx_pulses, (unsigned long long)hx_stray);
+  hx_report();
   fprintf(stderr, "#PD2 %d %d\n", (avr->data[0x2A] >> 2) & 1, (avr->data[0x2B] >> 2) & 1);
   fprintf(stderr, "#PC 0x%x state %d\n", avr->pc, avr->state);
   fprintf(stderr, "#END %llu %d\n", (unsigned long long)avr->cycle, pd4_level);

@@ -1,0 +1,89 @@
+"""``fsrlab twin``: the real firmware in simavr, driven by the sensor and 555 models, on a pty."""
+
+from __future__ import annotations
+
+import sys
+
+import typer
+
+from fsrlab.cli import app
+from fsrlab.cli._common import fail, farads, pascals, plain_numbers, seconds
+from fsrlab.cli.acquisition import (
+    _C_OFF_HELP, _PERIOD_HELP, _PEAK_HELP, _PROFILE_HELP, _RATE_HELP, _SENSOR_HELP, _check_rate, _check_virtual,
+    _sensor_area, _sigterm_as_interrupt, _virtual_device,
+)
+
+
+@app.command("twin")
+def twin(
+    profile: str = typer.Option("triangle", "--profile", help=_PROFILE_HELP),
+    peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS", help=_PEAK_HELP),
+    period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help=_PERIOD_HELP),
+    sensor: str = typer.Option(None, "--sensor", help=_SENSOR_HELP + " The model stays VirtualFSR, with that area."),
+    c_off: float = typer.Option("1n", "--c-off", parser=farads, metavar="CAPACITANCE", help=_C_OFF_HELP),
+    speed: str = typer.Option("realtime", "--speed", help="Pacing of simulated time: realtime (the wall clock) or max (as fast as simavr goes)."),
+    duration: float = typer.Option(None, "--duration", parser=seconds, metavar="TIME", help="Run this long [s] of wall time: 90, 90s, 1.5min, 2h (default: until Ctrl-C)."),
+    seed: int = typer.Option(0, "--seed", help="Random seed of the load cell's noise (an integer)."),
+    no_loadcell: bool = typer.Option(False, "--no-loadcell", help="No HX711 on D2/D3 (ref_ok 0: reference columns empty)."),
+    hx711_rate: int = typer.Option(80, "--hx711-rate", help=_RATE_HELP.replace("Virtual device: t", "T")),
+    json_out: bool = typer.Option(False, "--json", help='Print {"port": PATH} as JSON (one line) instead of the bare path.'),
+) -> None:
+    """Run the digital twin: the meter's real firmware in simavr on a pty; prints its path first.
+
+    D8 carries the edges of the exact LM555 transient of the virtual sensor under the stress
+    profile (with the C_off the firmware switches on D4), A0 the op-amp readout (eq. 38), the HX711
+    on D2/D3 the load cell's reading of the applied force. Open the printed port with
+    `fsrlab acquire --port PATH`, `fsrlab live --port PATH` or any serial monitor. Notices (a profile
+    that drives the sensor out of oscillation) go to stderr. Needs simavr and the built firmware
+    (`make sysdeps`, `make firmware`). Exit code 1, with one line saying why, if the twin fails.
+
+    Examples:
+
+    \b
+      fsrlab twin --profile triangle --peak 50k --period 4s
+      fsrlab twin --speed max --duration 30s --sensor interlink-402 --json
+    """
+    import json
+
+    if duration is not None and not duration > 0:
+        fail(f"must be > 0 s, got {duration:g} s", "--duration")
+    if speed not in ("realtime", "max"):
+        fail(f"must be realtime or max, got {speed!r}", "--speed")
+    if seed < 0:
+        fail(f"must be an integer >= 0, got {seed}", "--seed")
+    _check_rate(hx711_rate)
+    _check_virtual(profile, peak, period, c_off, 0.0, 0.0, None)
+    _, area_m2 = _sensor_area(sensor, None)
+
+    from fsrlab.twin import Twin, twin_available
+
+    ok, reason = twin_available()
+    if not ok:
+        fail(reason)
+    _, source = _virtual_device(profile, peak, period, c_off, None, 0.0, 0.0, load_cell=False, area_m2=area_m2)
+    from fsrlab.acquisition.loadcell import LoadCellModel
+
+    cell = None if no_loadcell else LoadCellModel(rate_sps=hx711_rate)
+    device = Twin(source, speed=speed, seed=seed, loadcell=cell)
+    device.on_notice = lambda text: print(f"fsrlab twin: {text}", file=sys.stderr, flush=True)
+    try:
+        path = device.open()
+    except RuntimeError as err:
+        fail(str(err))
+    import time
+
+    try:
+        typer.echo(json.dumps({"port": path}) if json_out else path)
+        sys.stdout.flush()
+        end = None if duration is None else time.monotonic() + duration
+        with _sigterm_as_interrupt():
+            while device.failure is None and (end is None or time.monotonic() < end):
+                time.sleep(0.1 if end is None else max(0.0, min(0.1, end - time.monotonic())))
+    except KeyboardInterrupt:
+        pass
+    finally:
+        failure = device.failure
+        device.close()
+    if failure is not None:
+        print(f"fsrlab: twin failed: {plain_numbers(failure)}", file=sys.stderr)
+        raise typer.Exit(1)
