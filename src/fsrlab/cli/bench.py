@@ -49,10 +49,8 @@ def bench(
     Examples:
 
     \b
-      fsrlab bench spring --virtual --cycles 3 --period 3s --out spring.csv
-      fsrlab bench weights --virtual --repeat 5 --settle-hold 200ms --out weights.csv --report weights-report
-      fsrlab bench creep --virtual --mass 200g --hold 10s --out creep.csv
-      fsrlab bench spring --port auto --sensor interlink-402 --loadcell lc.json --cycles 5 --out spring.csv
+      fsrlab bench spring --virtual --cycles 3 --period 3s --out spring.csv --report spring-report
+      fsrlab bench weights --port auto --sensor flexiforce-a201 --loadcell lc.json --repeat 5 --out weights.csv
     """
     from fsrlab.acquisition.protocols import CreepPlan, SpringPlan, WeightsPlan, run_protocol, twin_status
     from fsrlab.acquisition.recorder import result_dict

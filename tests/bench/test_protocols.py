@@ -1,0 +1,164 @@
+"""Bench protocols: the plans' properties, and ``fsrlab bench`` end to end on the virtual device.
+
+References: properties each plan must hold by its definition (acquisition/protocols.py: spring
+cycles base → peak → base; dead weights reached from below once per cycle with unloading to 0 in
+between, as for the paper's Tables 4 and 5; a creep hold), and the run file format
+(docs/data-format.md). The end-to-end runs use real pseudo-terminals and run in real time: each
+records a few seconds.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from clirun import run_cli
+from fsrlab.acquisition.protocols import CreepPlan, SpringPlan, WeightsPlan, run_protocol, twin_status
+from fsrlab.runformat import load_run
+
+
+@settings(max_examples=50)
+@given(peak=st.floats(1e3, 1e5), base=st.floats(0, 900), cycles=st.integers(1, 6), period=st.floats(0.5, 10))
+def test_spring_plan_cycles_between_base_and_peak(peak, base, cycles, period):
+    plan = SpringPlan(peak_pa=peak, cycles=cycles, period_s=period, base_pa=base)
+    t = np.linspace(0, plan.duration_s, 40 * cycles + 1)
+    s = plan.stress(t)
+    assert plan.duration_s == pytest.approx(cycles * period)
+    assert np.all(s >= base - 1e-9) and np.all(s <= peak + 1e-9)
+    # Property: every cycle starts and ends at the base and reaches the peak half-way.
+    k = np.arange(cycles)
+    assert plan.stress(k * period) == pytest.approx(np.full(cycles, base))
+    assert plan.stress((k + 0.5) * period) == pytest.approx(np.full(cycles, peak))
+    assert plan.stress(plan.duration_s + period / 3) == pytest.approx(base)  # after the last cycle: unloaded
+
+
+@settings(max_examples=50)
+@given(masses=st.lists(st.integers(1, 2000), min_size=1, max_size=4, unique=True), repeat=st.integers(1, 6))
+def test_weights_plan_reaches_each_mass_from_below_once_per_cycle(masses, repeat):
+    m = tuple(x / 1000 for x in sorted(masses))
+    steps = WeightsPlan(masses_kg=m, repeat=repeat).steps()
+    assert len(steps) == repeat * (2 * len(m) + 1)
+    assert [s.index for s in steps] == list(range(len(steps)))
+    for c in range(repeat):
+        cyc = [s for s in steps if s.cycle == c]
+        assert cyc[0].mass_kg == 0 and cyc[-1].mass_kg == 0  # unloaded between the cycles
+        loading = [s.mass_kg for s in cyc if s.direction > 0]
+        assert loading == [0.0, *m]  # each mass once, from below
+        assert max(s.mass_kg for s in cyc) == m[-1]
+
+
+def test_weights_plan_default_is_the_papers():
+    plan = WeightsPlan()
+    assert plan.masses_kg == (0.2, 0.4) and plan.repeat == 5  # Tables 4 and 5: 200 g and 400 g, five times
+    loads = [s.mass_kg for s in plan.steps() if s.direction > 0 and s.mass_kg > 0]
+    assert loads.count(0.2) == 5 and loads.count(0.4) == 5
+
+
+@given(hold=st.floats(0.1, 1000), before=st.floats(0, 100), after=st.floats(0, 100))
+def test_creep_plan_holds_the_mass_for_the_hold(hold, before, after):
+    plan = CreepPlan(mass_kg=0.3, hold_s=hold, before_s=before, after_s=after)
+    assert plan.duration_s == pytest.approx(before + hold + after)
+    assert plan.mass_at(before + hold / 2) == 0.3
+    assert plan.mass_at(before + hold + after / 2 + 1e-9 * (after == 0)) == 0.0
+    if before > 0:
+        assert plan.mass_at(before / 2) == 0.0
+
+
+@pytest.mark.parametrize("bad", [dict(cycles=0), dict(period_s=0.0), dict(peak_pa=0.0), dict(base_pa=-1.0)])
+def test_spring_plan_refuses_bad_values(bad):
+    with pytest.raises(ValueError):
+        SpringPlan(**bad)
+
+
+@pytest.mark.parametrize("bad", [dict(masses_kg=(0.4, 0.2)), dict(masses_kg=(0.0, 0.2)), dict(masses_kg=()),
+                                 dict(repeat=0)])
+def test_weights_plan_refuses_bad_values(bad):
+    with pytest.raises(ValueError):
+        WeightsPlan(**bad)
+
+
+def test_twin_status_is_a_pair_with_a_reason():
+    ok, reason = twin_status()
+    assert isinstance(ok, bool) and (ok or reason)
+
+
+def test_bench_spring_virtual_end_to_end(tmp_path):
+    out = tmp_path / "spring.csv"
+    code, stdout, err = run_cli(["bench", "spring", "--virtual", "--cycles", "2", "--period", "1s", "--peak", "10k",
+                                 "--seed", "3", "--out", out, "--json"])
+    assert code == 0, err
+    info = json.loads(stdout)
+    assert info["device"] == "virtual" and info["protocol"]["name"] == "spring"
+    run = load_run(out)
+    # 2 s of 20 ms windows (the recorder's own clock: a window or two either way).
+    assert 95 <= run.n_rows <= 102
+    s = run["stress_pa"]
+    assert np.nanmax(s) == pytest.approx(10e3, rel=0.03) and np.nanmin(s) < 300  # the applied triangle
+    f = run["frequency_hz"]
+    assert np.corrcoef(s, f)[0, 1] > 0.95  # the readout follows the load
+    assert load_run(out).metadata["protocol"] == {"name": "spring", "peak_pa": 10e3, "base_pa": 0.0, "cycles": 2,
+                                             "period_s": 1.0, "duration_s": 2.0}
+
+
+def test_bench_weights_virtual_end_to_end(tmp_path):
+    out = tmp_path / "w.csv"
+    code, stdout, err = run_cli(["bench", "weights", "--virtual", "--masses", "200g,400g", "--repeat", "2",
+                                 "--settle-hold", "100ms", "--seed", "4", "--out", out, "--json", "--quiet"])
+    assert code == 0, err
+    info = json.loads(stdout)
+    assert info["recorded"] == 10 and info["skipped"] == 0
+    run = load_run(out)
+    assert set(np.unique(run["load"])) == {0.0, 200.0, 400.0}
+    # Every placement's rows carry its nominal force m·g (standard gravity) and stress over the sensor's area.
+    area = run.metadata["sensor"]["area_m2"]
+    k = run["load"] == 400.0
+    assert run["force_nominal_n"][k] == pytest.approx(0.4 * 9.80665)
+    assert run["stress_pa"][k] == pytest.approx(0.4 * 9.80665 / area)
+    placements = (tmp_path / "w.placements.csv").read_text().splitlines()
+    assert placements[0].startswith("load,sensor,reading") and len(placements) == 1 + 2 * 3  # 0, 200, 400 per cycle
+    f = {ld: run["frequency_hz"][run["load"] == ld].mean() for ld in (0.0, 200.0, 400.0)}
+    assert f[0.0] < f[200.0] < f[400.0]
+
+
+def test_creep_protocol_virtual_holds_the_mass(tmp_path):
+    plan = CreepPlan(mass_kg=0.2, hold_s=1.5, before_s=0.5, after_s=0.5)
+    said = []
+    res = run_protocol(plan, tmp_path / "c.csv", seed=5, announce=said.append)
+    assert res.result.ended == "duration"
+    run = load_run(tmp_path / "c.csv")
+    t, planned = run["time_s"], run["mass_planned_kg"]
+    assert np.all(planned[(t > 0.6) & (t < 1.9)] == 0.2) and np.all(planned[t < 0.45] == 0.0)
+    held = (t > 0.8) & (t < 1.9)
+    assert run["frequency_hz"][held].mean() > 1.5 * run["frequency_hz"][t < 0.45].mean()
+    assert len(said) == 2 and "place 200 g" in said[0] and "remove" in said[1]
+
+
+@pytest.mark.parametrize("args, option", [
+    (["bench", "spin", "--virtual"], "PROTOCOL"),
+    (["bench", "spring"], "--port"),
+    (["bench", "spring", "--virtual", "--port", "/dev/null"], "--port"),
+    (["bench", "spring", "--virtual", "--cycles", "0"], "--cycles"),
+    (["bench", "spring", "--virtual", "--peak", "10 kV"], "--peak"),
+    (["bench", "weights", "--virtual", "--masses", "400g,200g"], "--masses"),
+    (["bench", "weights", "--virtual", "--repeat", "0"], "--repeat"),
+    (["bench", "creep", "--virtual", "--hold", "0s"], "--hold"),
+    (["bench", "spring", "--virtual", "--window", "2.5ms"], "--window"),
+])
+def test_bad_input_is_one_line_naming_the_option(args, option, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run_cli(args)
+    assert code == 2 and out == ""
+    assert len(err.strip().splitlines()) == 1 and option in err and "Traceback" not in err
+    assert not list(tmp_path.iterdir())  # nothing recorded
+
+
+def test_twin_missing_is_one_line(tmp_path, monkeypatch):
+    ok, _ = twin_status()
+    if ok:
+        pytest.skip("the digital twin is available here")
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run_cli(["bench", "spring", "--twin"])
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "--twin" in err and "--virtual" in err
