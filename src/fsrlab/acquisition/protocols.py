@@ -445,16 +445,16 @@ def run_protocol(plan, out, device: str = "virtual", port: str | None = None, se
         health = lambda: dev.failure  # noqa: E731
         area_m2 = sensor.area_m2
         port = dev.open()
-    elif isinstance(plan, (SpringPlan, CreepPlan)):
-        if isinstance(plan, SpringPlan):
-            say(plan.prompt())
-        else:
-            say(f"creep hold: {plan.before_s:g} s unloaded, then {plan.mass_kg * 1e3:g} g for {plan.hold_s:g} s, "
-                f"then {plan.after_s:g} s unloaded; you are told when to place and remove the mass. Press Enter "
-                "to start")
-        _hardware_wait(answer, stop)
     try:
         with SerialLink(port) as link:
+            if not virtual and isinstance(plan, (SpringPlan, CreepPlan)):  # the port is open: ask the person
+                if isinstance(plan, SpringPlan):
+                    say(plan.prompt())
+                else:
+                    say(f"creep hold: {plan.before_s:g} s unloaded, then {plan.mass_kg * 1e3:g} g for "
+                        f"{plan.hold_s:g} s, then {plan.after_s:g} s unloaded; you are told when to place and "
+                        "remove the mass. Press Enter to start")
+                _hardware_wait(answer, stop)
             result = record(link, out, duration, window_ms=window_ms, metadata=meta, reference=reference,
                             on_status=on_status, stop=stop, health=health, overwrite=overwrite,
                             loadcell=loadcell, area_m2=area_m2 if reference is None else None,
