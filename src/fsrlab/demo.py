@@ -251,7 +251,11 @@ def run_demo(out="demo", settings: DemoSettings = DemoSettings(), sensor=None, d
               "cross-validation, with the causal hysteresis compensation; and a known-weight calibration")
     # lag 0: the virtual bench's reference is the stress applied during the same window as the readout. The
     # automatic lag search would take part of the hysteresis loop for a lag (a loop looks like a phase shift).
-    cal = calibrate_run(out / "calibration-run.csv", compensate=True, lag=0.0)
+    try:
+        cal = calibrate_run(out / "calibration-run.csv", compensate=True, lag=0.0)
+    except ValueError as exc:  # a run too short for the compensation: the plain calibration, said
+        say(f"      no compensation: {str(exc).split(': ', 1)[-1]}")
+        cal = calibrate_run(out / "calibration-run.csv", lag=0.0)
     result.files["calibration"] = save_calibration(cal, out / "calibration.json")
     known = None
     try:

@@ -56,3 +56,31 @@ def test_demo_bad_input_is_one_line(args, option, tmp_path, monkeypatch):
     code, out, err = run_cli(args)
     assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and option in err
     assert not list(tmp_path.iterdir())
+
+
+def test_demo_falls_back_to_the_python_device_when_the_twin_fails(tmp_path, monkeypatch):
+    import sys
+    import types
+
+    class BrokenTwin:
+        def __init__(self, source, speed="realtime", seed=0, loadcell=None):
+            pass
+
+        def open(self):
+            raise RuntimeError("simavr exited")
+
+        def close(self):
+            pass
+
+    twin = types.ModuleType("fsrlab.twin")
+    twin.Twin, twin.twin_available = BrokenTwin, lambda: (True, "")
+    monkeypatch.setitem(sys.modules, "fsrlab.twin", twin)
+    lines = []
+    res = run_demo(tmp_path / "demo", DemoSettings(cycles=1, period_s=1.0, repeat=2, settle_hold_s=0.1),
+                   paper=False, progress=lines.append)
+    # One short cycle is too little for the causal compensation: the plain calibration, said.
+    assert any(ln.strip().startswith("no compensation:") for ln in lines)
+    assert "digital twin" in lines[0]  # auto: the twin first, as it says it can run
+    assert any("the digital twin failed (RuntimeError: simavr exited); using the Python virtual device" in ln
+               for ln in lines)
+    assert res.device == "virtual" and "Python virtual device" in res.index.read_text()

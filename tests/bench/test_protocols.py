@@ -162,3 +162,52 @@ def test_twin_missing_is_one_line(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     code, out, err = run_cli(["bench", "spring", "--twin"])
     assert code == 2 and len(err.strip().splitlines()) == 1 and "--twin" in err and "--virtual" in err
+
+
+class _FakeTwin:
+    """A stand-in for ``fsrlab.twin.Twin`` with only the documented API (open, close, failure): the
+    Python virtual device without its load cell, so neither the applied stress nor a force comes back."""
+
+    def __init__(self, source, speed="realtime", seed=0, loadcell=None):
+        from fsrlab.acquisition.virtual_device import VirtualDevice
+
+        assert speed in ("realtime", "max")
+        self._dev = VirtualDevice(source, seed=seed, load_cell=None)
+
+    def open(self):
+        return self._dev.open()
+
+    def close(self):
+        self._dev.close()
+
+    @property
+    def failure(self):
+        return self._dev.failure
+
+
+def test_bench_twin_path_with_a_device_that_sends_no_reference(tmp_path, monkeypatch):
+    import sys
+    import types
+
+    twin = types.ModuleType("fsrlab.twin")
+    twin.Twin, twin.twin_available = _FakeTwin, lambda: (True, "")
+    monkeypatch.setitem(sys.modules, "fsrlab.twin", twin)
+    assert twin_status() == (True, "")
+    out = tmp_path / "t.csv"
+    code, stdout, err = run_cli(["bench", "spring", "--twin", "--cycles", "1", "--period", "1s", "--out", out, "--json"])
+    assert code == 0, err
+    assert json.loads(stdout)["device"] == "twin"
+    run = load_run(out)
+    # The stress comes from the bench's model (the planned triangle, mean over each 20 ms window).
+    t, s = run["time_s"], run["stress_pa"]
+    expected = SpringPlan(peak_pa=10e3, cycles=1, period_s=1.0).stress(t - 0.01)
+    assert np.nanmax(np.abs(s - expected)) < 0.05 * 10e3
+    assert "origin" in run.metadata and "--twin" in run.metadata["origin"]
+    # And a weights run on the twin: places by the run's clock (the twin has no time_since_start).
+    code, stdout, err = run_cli(["bench", "weights", "--twin", "--repeat", "1", "--settle-hold", "60ms", "--quiet",
+                                 "--out", tmp_path / "w.csv", "--json"])
+    assert code == 0, err
+    assert json.loads(stdout)["recorded"] == 5
+    w = load_run(tmp_path / "w.csv")
+    f = [w["frequency_hz"][(w["load"] == ld) & (w["direction"] > 0)].mean() for ld in (0.0, 200.0, 400.0)]
+    assert f[0] < f[1] < f[2]  # each placement's windows are of its own mass

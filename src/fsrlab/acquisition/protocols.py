@@ -444,6 +444,21 @@ def run_protocol(plan, out, device: str = "virtual", port: str | None = None, se
             reference = lambda frame: dev.reference(frame.seq)  # noqa: E731 - the applied stress
         health = lambda: dev.failure  # noqa: E731
         area_m2 = sensor.area_m2
+        if reference is None and loadcell is None and not isinstance(plan, WeightsPlan):
+            # A device that sends neither the applied stress nor a load cell's reading (a twin without
+            # its HX711): the stress the bench's model applied during each window.
+            w_s, hook = window_ms / 1000.0, kwargs.get("on_row")
+
+            def with_stress(m, row):
+                t = float(row["time_s"])
+                row = dict(row)
+                sig = source.window(max(t - w_s, 0.0), t, int(row.get("range") or 0))
+                row["stress_pa"] = sig.stress_pa if math.isfinite(sig.stress_pa) else None
+                return hook(m, row) if hook is not None else row
+            kwargs["on_row"] = with_stress
+            kwargs["extra_columns"] = ["stress_pa", *kwargs.get("extra_columns", [])]
+            meta["notes"] = ("stress_pa: the stress the virtual bench's model applied during each window (the device "
+                             "sends no reference)")
         port = dev.open()
     try:
         with SerialLink(port) as link:
