@@ -310,6 +310,11 @@ def run_demo(out="demo", settings: DemoSettings = DemoSettings(), sensor=None, d
     return result
 
 
+def _num(v) -> str:
+    """A number for the index page ("—" when missing)."""
+    return "—" if v is None else f"{v:.0f}"
+
+
 def _write_index(result: DemoResult, sensor_text: str, s: DemoSettings) -> None:
     """The demo's ``index.html``: what was done, the headline numbers, links to both reports and the files."""
     from fsrlab import __version__
@@ -345,7 +350,11 @@ spring cycles 0 → {s.peak_pa / 1e3:g} kPa → 0 ({s.cycles} × {s.period_s:g} 
 <tr><td>resistive readout (op-amp V0)</td><td>{pct(n.get('he_voltage_percent'))}</td></tr>
 <tr><td>capacitive readout (555 frequency)</td><td>{pct(n.get('he_frequency_percent'))}</td></tr>
 <tr><td>calibrated, compensated estimate</td><td>{pct(n.get('he_estimate_percent'))}</td></tr></table>
-<table><tr><th>readout</th><th>load</th><th>RE1 [%]</th><th>RE2 [%]</th></tr>{re_rows}</table>
+<p></p><table><tr><th>readout</th><th>load</th><th>RE1 [%] (eq. 39)</th><th>RE2 [%]</th></tr>{re_rows}</table>
+<p>Calibration: {html.escape(str(n.get('calibration', {}).get('model')))}, cross-validated RMSE
+{_num(n.get('calibration', {}).get('cv_rmse_pa'))} Pa; known-weight calibration:
+{html.escape(str(n.get('known_weight_calibration', {}).get('model')))}, cross-validated RMSE
+{_num(n.get('known_weight_calibration', {}).get('cv_rmse_pa'))} Pa.</p>
 <p>ISO 376 class: {html.escape(str(n.get('iso376_class')))} (the measurement report says what is missing).</p>
 <h2>Steps</h2><ol>{steps}</ol><h2>Files</h2><ul>{files}</ul></body></html>
 """

@@ -172,3 +172,19 @@ def test_report_of_a_file_that_is_not_a_run_is_one_line(tmp_path):
     p.write_text("load,sensor,reading\n200,1,9.0\n200,1,8.8\n")
     code, out, err = run_cli(["report", p, "--out", tmp_path / "r"])
     assert code == 2 and len(err.strip().splitlines()) == 1 and "p.csv" in err
+
+
+def test_a_narrow_v0_span_is_said_to_limit_its_he(tmp_path):
+    # Reference: the ADC step, protocol.ADC_V_PER_COUNT = 5 V / 1024 ≈ 4.88 mV; a 0.9 V span is ~184 steps
+    # (no note), a 0.05 V span ~10 steps (HE moves in steps of ~10 percentage points).
+    from fsrlab.acquisition.protocol import ADC_V_PER_COUNT
+
+    rep = measure_run(_loop_run(tmp_path / "wide.csv"), calibrate=False)
+    assert {h.quantity: h.note for h in rep.hysteresis}["voltage_v"] is None
+    s = triangle_stress(cycles=2, peak_pa=PEAK, points_per_ramp=50)
+    v = 0.05 + 5e-6 * s  # 0.05 .. 0.10 V
+    write_run(tmp_path / "narrow.csv", {"time_s": 0.02 * np.arange(s.size), "stress_pa": s,
+                                        "frequency_hz": 1000 + 0.1 * s, "voltage_v": v})
+    rep = measure_run(tmp_path / "narrow.csv", calibrate=False)
+    note = {h.quantity: h.note for h in rep.hysteresis}["voltage_v"]
+    assert note is not None and f"spans {0.05 / ADC_V_PER_COUNT:.0f} steps" in note

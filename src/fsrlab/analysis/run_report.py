@@ -51,6 +51,8 @@ class ReadoutHysteresis:
         Why there is no value.
     result : RunHysteresis or None
         The full result (branches, for plots).
+    note : str or None
+        What limits the value (e.g. the ADC's resolution over the readout's span).
     """
 
     quantity: str
@@ -59,11 +61,12 @@ class ReadoutHysteresis:
     cycles: list = field(default_factory=list)
     reason: str | None = None
     result: Any = field(default=None, repr=False)
+    note: str | None = None
 
     def to_dict(self) -> dict:
         """JSON shape."""
         return {"quantity": self.quantity, "label": self.label, "hysteresis_error_percent": self.percent,
-                "cycles_percent": self.cycles, "reason": self.reason}
+                "cycles_percent": self.cycles, "reason": self.reason, "note": self.note}
 
 
 @dataclass
@@ -180,7 +183,18 @@ def _hysteresis(run, quantity: str, label: str) -> ReadoutHysteresis:
         res = hysteresis_of_run(run, quantity)
     except ValueError as exc:
         return ReadoutHysteresis(quantity, label, reason=str(exc).split(": ", 1)[-1])
-    return ReadoutHysteresis(quantity, label, float(res.percent), [float(c.percent) for c in res.cycles], None, res)
+    note = None
+    if quantity == "voltage_v":
+        from fsrlab.acquisition.protocol import ADC_V_PER_COUNT
+
+        v = run[quantity][np.isfinite(run[quantity])]
+        counts = (float(v.max()) - float(v.min())) / ADC_V_PER_COUNT
+        if counts < 100:
+            # Eq. (13) divides a branch difference of whole ADC steps by a span of few steps.
+            note = (f"V0 spans {counts:.0f} steps of the 10-bit ADC ({ADC_V_PER_COUNT * 1e3:.2f} mV each): its HE "
+                    f"moves in steps of about {100 / max(counts, 1):.1f} percentage points")
+    return ReadoutHysteresis(quantity, label, float(res.percent), [float(c.percent) for c in res.cycles], None, res,
+                             note)
 
 
 def placement_means(run, readouts=("frequency_hz", "voltage_v")) -> list[dict]:

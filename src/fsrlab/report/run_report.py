@@ -139,7 +139,7 @@ def build_sections(rep, outdir: Path) -> list[Section]:
              _f(f.cycles[k]) if f and k < len(f.cycles) else "—"] for k in range(n)]
     rows.append(["overall (mean branches)", _f(v.percent) if v else "—", _f(f.percent) if f else "—"])
     rows.append(["paper, Table 3 mean of 4 sensors", f"{t3['traditional_mean']:.2f}", f"{t3['proposed_mean']:.2f}"])
-    reasons = " ".join(f"{h.label}: {h.reason}." for h in rep.hysteresis if h.reason)
+    reasons = " ".join(f"{h.label}: {h.reason or h.note}." for h in rep.hysteresis if h.reason or h.note)
     hyst = Section("hysteresis", "Hysteresis error (eq. 13): resistive vs capacitive readout (as Table 3)",
                    "Eq. (13) per loading-unloading cycle of the run and on the mean branches, for the traditional "
                    "op-amp readout (V0, eq. 38) and the proposed 555 frequency. " + reasons,
