@@ -35,15 +35,14 @@ DEMO_SENSOR = "virtual-fsr"
 FlexiForce A201-like), or ``paper-1`` .. ``paper-4`` (the paper-sensor preset, when installed)."""
 
 
-def demo_sensor(name: str | None = None):
+def demo_sensor(name=None):
     """The virtual sensor of the demo: the one place where it is chosen.
 
     Parameters
     ----------
-    name : str, optional
-        ``virtual-fsr`` (default, :data:`DEMO_SENSOR`) or ``paper-1`` .. ``paper-4``
-        (``fsrlab.physics.paper_sensor.paper_sensor(i)``, when that preset is installed); or a
-        sensor object, returned as is.
+    name : str or object, optional
+        A name for :func:`fsrlab.acquisition.protocols.virtual_sensor` (default :data:`DEMO_SENSOR`),
+        or a sensor object, returned as is.
 
     Returns
     -------
@@ -55,23 +54,9 @@ def demo_sensor(name: str | None = None):
     ValueError
         An unknown name, or a paper sensor when the preset is not installed.
     """
-    name = DEMO_SENSOR if name is None else name
-    if not isinstance(name, str):
-        return name, type(name).__name__
-    key = name.strip().lower()
-    if key == "virtual-fsr":
-        from fsrlab.physics.sensor import VirtualFSR
+    from fsrlab.acquisition.protocols import virtual_sensor
 
-        return VirtualFSR(), "VirtualFSR (FlexiForce A201-like, fsrlab.physics.sensor)"
-    if key.startswith("paper-") and key[6:].isdigit():
-        try:
-            from fsrlab.physics.paper_sensor import paper_sensor
-        except ImportError:
-            raise ValueError(f"sensor: {name!r} needs the paper-sensor preset (fsrlab.physics.paper_sensor), "
-                             "which is not installed; use virtual-fsr") from None
-        i = int(key[6:])
-        return paper_sensor(i), f"paper sensor {i} (fsrlab.physics.paper_sensor)"
-    raise ValueError(f"sensor: must be virtual-fsr or paper-1 .. paper-4, got {name!r}")
+    return virtual_sensor(DEMO_SENSOR if name is None else name)
 
 
 @dataclass(frozen=True)

@@ -213,3 +213,19 @@ def test_bench_twin_path_with_a_device_that_sends_no_reference(tmp_path, monkeyp
     w = load_run(tmp_path / "w.csv")
     f = [w["frequency_hz"][(w["load"] == ld) & (w["direction"] > 0)].mean() for ld in (0.0, 200.0, 400.0)]
     assert f[0] < f[1] < f[2]  # each placement's windows are of its own mass
+
+
+def test_bench_sensor_preset_gives_the_virtual_fsr_its_area(tmp_path):
+    # Reference: the preset's datasheet area (physics/presets.py), 12.7 mm diameter for the FSR 402.
+    from fsrlab.physics.presets import SENSOR_PRESETS
+
+    out = tmp_path / "s.csv"
+    code, _, err = run_cli(["bench", "weights", "--virtual", "--sensor", "interlink-402", "--masses", "200g",
+                            "--repeat", "1", "--settle-hold", "40ms", "--quiet", "--out", out])
+    assert code == 0, err
+    run = load_run(out)
+    area = SENSOR_PRESETS["interlink-402"].area_m2
+    assert area == pytest.approx(np.pi * (12.7e-3 / 2) ** 2, rel=1e-9)
+    assert run.metadata["sensor"]["preset"] == "interlink-402" and run.metadata["sensor"]["area_m2"] == area
+    k = run["load"] == 200.0
+    assert run["stress_pa"][k] == pytest.approx(0.2 * 9.80665 / area)

@@ -31,7 +31,7 @@ from typing import Callable
 from fsrlab.acquisition.weights import Step, plan_steps
 from fsrlab.units import STANDARD_GRAVITY
 
-__all__ = ["PROTOCOLS", "DEVICES", "SpringPlan", "WeightsPlan", "CreepPlan", "twin_status", "open_bench",
+__all__ = ["PROTOCOLS", "DEVICES", "VIRTUAL_SENSORS", "virtual_sensor", "SpringPlan", "WeightsPlan", "CreepPlan", "twin_status", "open_bench",
            "ProtocolRun", "run_protocol"]
 
 PROTOCOLS = ("spring", "weights", "creep")
@@ -192,6 +192,55 @@ class CreepPlan:
         """The sidecar's ``protocol``."""
         return {"name": "creep", "mass_kg": self.mass_kg, "hold_s": self.hold_s, "before_s": self.before_s,
                 "after_s": self.after_s, "duration_s": self.duration_s}
+
+
+VIRTUAL_SENSORS = ("virtual-fsr", "paper-1", "paper-2", "paper-3", "paper-4")
+"""Names of the virtual bench's sensors (:func:`virtual_sensor`); a sensor preset's name
+(:data:`fsrlab.physics.presets.SENSOR_PRESETS`) gives the virtual FSR that preset's area."""
+
+
+def virtual_sensor(name):
+    """The virtual bench's sensor by name.
+
+    Parameters
+    ----------
+    name : str or object
+        ``virtual-fsr`` (:class:`~fsrlab.physics.sensor.VirtualFSR`, FlexiForce A201-like),
+        ``paper-1`` .. ``paper-4`` (``fsrlab.physics.paper_sensor.paper_sensor(i)``, the paper-sensor
+        preset, when installed), a sensor preset's name (the virtual FSR with that sensing area), or
+        a sensor object, returned as is.
+
+    Returns
+    -------
+    (object, str)
+        The sensor (with ``respond`` and ``area_m2``) and its description.
+
+    Raises
+    ------
+    ValueError
+        An unknown name, or a paper sensor when the preset is not installed.
+    """
+    from fsrlab.physics.presets import SENSOR_PRESETS
+    from fsrlab.physics.sensor import VirtualFSR
+
+    if not isinstance(name, str):
+        return name, type(name).__name__
+    key = name.strip().lower()
+    if key == "virtual-fsr":
+        return VirtualFSR(), "VirtualFSR (FlexiForce A201-like, fsrlab.physics.sensor)"
+    if key in SENSOR_PRESETS:
+        area = SENSOR_PRESETS[key].area_m2
+        return VirtualFSR(area_m2=area), f"VirtualFSR on the area of {key} ({area * 1e6:.1f} mm²)"
+    if key.startswith("paper-") and key[6:].isdigit():
+        try:
+            from fsrlab.physics.paper_sensor import paper_sensor
+        except ImportError:
+            raise ValueError(f"sensor: {name!r} needs the paper-sensor preset (fsrlab.physics.paper_sensor), "
+                             "which is not installed; use virtual-fsr") from None
+        i = int(key[6:])
+        return paper_sensor(i), f"paper sensor {i} (fsrlab.physics.paper_sensor)"
+    raise ValueError(f"sensor: must be virtual-fsr, paper-1 .. paper-4 or one of {', '.join(SENSOR_PRESETS)}, "
+                     f"got {name!r}")
 
 
 def twin_status() -> tuple[bool, str]:
@@ -433,7 +482,11 @@ def run_protocol(plan, out, device: str = "virtual", port: str | None = None, se
     reference = health = None
     if virtual:
         dev = open_bench(device, source, seed)
-        meta.update(source.metadata())
+        vmeta = source.metadata()
+        if metadata and "sensor" in metadata:  # the name given, beside the model that stood for it
+            vmeta["sensor"] = {**metadata["sensor"], "virtual_model": vmeta["sensor"]["model"],
+                               "area_m2": sensor.area_m2}
+        meta.update(vmeta)
         meta["origin"] = (f"fsrlab bench {plan.to_dict()['name']} --{device} (virtual bench -> "
                           f"{type(sensor).__name__} -> LM555 and op-amp -> "
                           + ("meter model -> emulated firmware over a pty)" if device == "virtual" else

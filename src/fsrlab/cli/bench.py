@@ -20,7 +20,7 @@ def bench(
     twin: bool = typer.Option(False, "--twin", help="Run on the digital twin (the firmware in simavr on a pty); unattended."),
     port: str = typer.Option(None, "--port", help="Serial port of a real meter (/dev/ttyACM0, COM3, a pty) or 'auto': you are prompted for each step."),
     out: Path = typer.Option(None, "--out", "-o", help="Run file (CSV + NAME.meta.json sidecar; weights: NAME.placements.csv beside it) [default: PROTOCOL.csv]."),
-    sensor: str = typer.Option(None, "--sensor", help="Sensor: a preset name for its sensing area (flexiforce-a201, interlink-402); with --virtual/--twin the virtual FSR gets that area."),
+    sensor: str = typer.Option(None, "--sensor", help="Sensor: a preset for its sensing area (flexiforce-a201, interlink-402; the virtual FSR gets that area), or with --virtual/--twin a virtual sensor: virtual-fsr (default), paper-1 .. paper-4 (the paper-sensor preset, when installed)."),
     peak: float = typer.Option("10k", "--peak", parser=pascals, metavar="STRESS", help="spring: peak stress [Pa]: 10k, 10kPa, 0.05MPa (the paper's bench: 10 kPa)."),
     period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="spring: duration of one cycle [s]: 4s, 500ms, 1min."),
     cycles: int = typer.Option(3, "--cycles", help="spring: loading-unloading cycles [1]: 3, 10."),
@@ -98,7 +98,21 @@ def bench(
         ok, reason = twin_status()
         if not ok:
             fail(f"{reason}; use --virtual for the Python virtual device", "--twin")
-    sensor_meta, area_m2 = _sensor_area(sensor, None)
+    sensor_obj = sensor_meta = area_m2 = None
+    key = (sensor or "").strip().lower()
+    if key == "virtual-fsr" or key.startswith("paper-"):  # a virtual sensor model, not only an area
+        if port is not None:
+            fail(f"{sensor!r} is a virtual sensor; with --port give a preset for the area (flexiforce-a201, "
+                 "interlink-402)", "--sensor")
+        from fsrlab.acquisition.protocols import virtual_sensor
+
+        try:
+            sensor_obj, text = virtual_sensor(key)
+        except ValueError as exc:
+            fail(str(exc).split(": ", 1)[-1], "--sensor")
+        sensor_meta = {"model": text, "area_m2": sensor_obj.area_m2}
+    else:
+        sensor_meta, area_m2 = _sensor_area(sensor, None)
     cal = _load_loadcell(loadcell)
     _check_out(out, overwrite)
     if report is not None:
@@ -117,15 +131,19 @@ def bench(
         def announce(text: str) -> None:
             if not quiet:
                 print(f"fsrlab: virtual bench: {text.split(', then press Enter')[0]}", file=sys.stderr, flush=True)
-    sensor_obj = None
-    if device != "port":
-        sensor_obj = _virtual_sensor(area_m2)
+    if device != "port" and sensor_obj is None:
+        from fsrlab.acquisition.protocols import virtual_sensor
+
+        sensor_obj = virtual_sensor(key or "virtual-fsr")[0]
+    from fsrlab.cli.acquisition import _LiveView
+
     try:
-        with _sigterm_as_interrupt():
+        with _sigterm_as_interrupt(), _LiveView(not quiet and protocol != "weights",
+                                                f"fsrlab bench {protocol} -> {out}") as view:
             run = run_protocol(plan, out, device=device, port=port, sensor=sensor_obj, area_m2=area_m2, seed=seed,
                                window_ms=window_ms, loadcell=cal, announce=announce, confirm=confirm,
                                overwrite=overwrite, settle={"hold_s": settle_hold} if protocol == "weights" else None,
-                               metadata={"sensor": sensor_meta} if sensor_meta else None)
+                               metadata={"sensor": sensor_meta} if sensor_meta else None, on_status=view.update)
     except ValueError as exc:
         # The virtual sensor's model refuses a stress beyond its range (before any device is opened).
         if device != "port" and any(t in str(exc) for t in ("stress_pa", "no valid response", "resistance")):
@@ -156,13 +174,6 @@ def bench(
         print(f"fsrlab: the plan did not finish ({result.ended}): {run.summary['recorded']} steps recorded",
               file=sys.stderr)
         raise typer.Exit(1)
-
-
-def _virtual_sensor(area_m2: float | None):
-    """The virtual bench's sensor: the default virtual FSR, with a preset's area when --sensor names one."""
-    from fsrlab.physics.sensor import VirtualFSR
-
-    return VirtualFSR() if area_m2 is None else VirtualFSR(area_m2=area_m2)
 
 
 def _check_report_dir(report: Path) -> None:
