@@ -7,10 +7,11 @@
    device, and says which;
 2. records two spring runs (``fsrlab bench spring``: a calibration run and a test run) and a
    dead-weight run (``fsrlab bench weights``: 200 g and 400 g placed again and again);
-3. calibrates on the calibration run against its reference (the stress the bench applied; with
-   hardware, the load cell's force over the area), with the causal hysteresis compensation and no
-   lag (the virtual reference is sampled in the readout's own window), and fits a known-weight
-   calibration (a polynomial of degree ≤ 2 through 0 and the masses) on the dead-weight run;
+3. calibrates on the calibration run against the load cell's force when the meter has one (the
+   virtual meter emulates an HX711; else the stress the bench applied), with the causal hysteresis
+   compensation and no lag (the reference is taken in the readout's own window), and fits a
+   known-weight calibration (m·g; a polynomial of degree ≤ 2 through 0 and the masses) on the
+   dead-weight run;
 4. applies the calibration to the test run (the compensated estimate);
 5. writes the measurement report of the test run (:func:`fsrlab.report.run_report.write_run_report`)
    with the dead-weight run's placements;
@@ -232,28 +233,40 @@ def run_demo(out="demo", settings: DemoSettings = DemoSettings(), sensor=None, d
     from fsrlab.analysis.calibration_io import save_calibration
     from fsrlab.analysis.pipeline import apply_calibration, calibrate_run
 
-    t0 = step("calibration: the calibration run against its reference (the applied stress), model chosen by grouped "
-              "cross-validation, with the causal hysteresis compensation; and a known-weight calibration")
-    # lag 0: the virtual bench's reference is the stress applied during the same window as the readout. The
-    # automatic lag search would take part of the hysteresis loop for a lag (a loop looks like a phase shift).
+    import numpy as np
+
+    from fsrlab.runformat import load_run
+
+    calrun = load_run(out / "calibration-run.csv")
+    # The load cell when the meter has one (the virtual meter emulates an HX711): the reference a bench
+    # with hardware has; else the stress the bench applied.
+    reference = "force_n" if "force_n" in calrun and np.isfinite(calrun["force_n"]).mean() > 0.5 else "stress_pa"
+    what = "the load cell's force (HX711)" if reference == "force_n" else "the applied stress"
+    t0 = step(f"calibration: the calibration run against {what}, model chosen by grouped cross-validation, with the "
+              "causal hysteresis compensation; and a known-weight calibration on the dead weights (m·g)")
+    # lag 0: the virtual bench's reference is taken in the same window as the readout. The automatic lag
+    # search would take part of the hysteresis loop for a lag (a loop looks like a phase shift).
     try:
-        cal = calibrate_run(out / "calibration-run.csv", compensate=True, lag=0.0)
+        cal = calibrate_run(calrun, compensate=True, lag=0.0, reference=reference)
     except ValueError as exc:  # a run too short for the compensation: the plain calibration, said
         say(f"      no compensation: {str(exc).split(': ', 1)[-1]}")
-        cal = calibrate_run(out / "calibration-run.csv", lag=0.0)
+        cal = calibrate_run(calrun, lag=0.0, reference=reference)
     result.files["calibration"] = save_calibration(cal, out / "calibration.json")
     known = None
     try:
         # Three load levels (0 and two masses): a polynomial of degree 2 at most.
-        known = calibrate_run(out / "weights-run.csv", degree=min(2, len(weights.masses_kg)))
+        known = calibrate_run(out / "weights-run.csv", degree=min(2, len(weights.masses_kg)), reference="force_n")
         result.files["known-weight calibration"] = save_calibration(known, out / "known-weight-calibration.json")
     except ValueError as exc:
         say(f"      known-weight calibration not possible: {exc}")
-    result.numbers["calibration"] = {"model": cal.model_name, "cv_rmse_pa": cal.cv_rmse, "lag_s": cal.lag_s}
+    result.numbers["calibration"] = {"model": cal.model_name, "reference": cal.y_name, "cv_rmse": cal.cv_rmse,
+                                     "unit": cal.y_unit, "lag_s": cal.lag_s}
     if known is not None:
-        result.numbers["known_weight_calibration"] = {"model": known.model_name, "cv_rmse_pa": known.cv_rmse}
-    done("calibration", t0, f"{cal.model_name}, CV RMSE {cal.cv_rmse:.0f} Pa"
-         + (f"; known weights: {known.model_name}, CV RMSE {known.cv_rmse:.0f} Pa" if known is not None else ""))
+        result.numbers["known_weight_calibration"] = {"model": known.model_name, "reference": known.y_name,
+                                                      "cv_rmse": known.cv_rmse, "unit": known.y_unit}
+    done("calibration", t0, f"{cal.model_name}, CV RMSE {cal.cv_rmse:.3g} {cal.y_unit}"
+         + (f"; known weights: {known.model_name}, CV RMSE {known.cv_rmse:.3g} {known.y_unit}"
+            if known is not None else ""))
 
     # 4. Compensation on the test run.
     from fsrlab.runwriter import write_run
@@ -297,7 +310,15 @@ def run_demo(out="demo", settings: DemoSettings = DemoSettings(), sensor=None, d
 
 def _num(v) -> str:
     """A number for the index page ("—" when missing)."""
-    return "—" if v is None else f"{v:.0f}"
+    return "—" if v is None else f"{v:.3g}"
+
+
+def _cal_text(title: str, c: dict | None) -> str:
+    """One calibration's line on the index page."""
+    if not c:
+        return f"{title}: none"
+    return html.escape(f"{title}: {c['model']} against {c['reference']}, cross-validated RMSE "
+                       f"{_num(c['cv_rmse'])} {c['unit']}")
 
 
 def _write_index(result: DemoResult, sensor_text: str, s: DemoSettings) -> None:
@@ -336,10 +357,8 @@ spring cycles 0 → {s.peak_pa / 1e3:g} kPa → 0 ({s.cycles} × {s.period_s:g} 
 <tr><td>capacitive readout (555 frequency)</td><td>{pct(n.get('he_frequency_percent'))}</td></tr>
 <tr><td>calibrated, compensated estimate</td><td>{pct(n.get('he_estimate_percent'))}</td></tr></table>
 <p></p><table><tr><th>readout</th><th>load</th><th>RE1 [%] (eq. 39)</th><th>RE2 [%]</th></tr>{re_rows}</table>
-<p>Calibration: {html.escape(str(n.get('calibration', {}).get('model')))}, cross-validated RMSE
-{_num(n.get('calibration', {}).get('cv_rmse_pa'))} Pa; known-weight calibration:
-{html.escape(str(n.get('known_weight_calibration', {}).get('model')))}, cross-validated RMSE
-{_num(n.get('known_weight_calibration', {}).get('cv_rmse_pa'))} Pa.</p>
+<p>{_cal_text('Calibration (spring run)', n.get('calibration'))}; {_cal_text('known-weight calibration',
+n.get('known_weight_calibration'))}.</p>
 <p>ISO 376 class: {html.escape(str(n.get('iso376_class')))} (the measurement report says what is missing).</p>
 <h2>Steps</h2><ol>{steps}</ol><h2>Files</h2><ul>{files}</ul></body></html>
 """

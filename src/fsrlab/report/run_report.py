@@ -88,20 +88,21 @@ def _estimate_figure(rep, outdir: Path) -> Figure | None:
     ref = rep.curves.get("estimate_reference")
     if est is None or ref is None or rep.estimate is None:
         return None
-    scale = 1e-3 if rep.reference == "stress_pa" else 1.0
-    unit = "kPa" if rep.reference == "stress_pa" else rep.reference_unit
+    cal = rep.calibration or {}
+    y_name, y_unit = cal.get("y", rep.reference), cal.get("y_unit", rep.reference_unit)
+    scale = 1e-3 if y_name == "stress_pa" else 1.0
+    unit = "kPa" if y_name == "stress_pa" else y_unit
     fig, ax = new_figure(width=6.4, height=4.6)
     ok = np.isfinite(est) & np.isfinite(ref)
     ax.plot(ref[ok] * scale, est[ok] * scale, ".", ms=2.5, color="tab:green", label="estimate")
     lim = [float(np.nanmin(ref[ok])) * scale, float(np.nanmax(ref[ok])) * scale] if ok.any() else [0, 1]
     ax.plot(lim, lim, "k--", lw=1, label="ideal")
-    ax.set_xlabel(f"reference [{unit}]")
+    ax.set_xlabel(f"reference {y_name} [{unit}]")
     ax.set_ylabel(f"estimate [{unit}]")
     ax.set_title(f"calibrated estimate: HE {_f(rep.estimate.percent)} %")
     ax.legend(loc="upper left", fontsize=8)
     name = "estimate.png"
     save(fig, outdir / name)
-    cal = rep.calibration or {}
     return Figure(name, "The compensated estimate against the reference",
                   "The paper fits linear and cubic polynomials of frequency to stress (Figure 17) and does not "
                   "compensate the hysteresis.",
