@@ -188,3 +188,23 @@ def test_a_narrow_v0_span_is_said_to_limit_its_he(tmp_path):
     rep = measure_run(tmp_path / "narrow.csv", calibrate=False)
     note = {h.quantity: h.note for h in rep.hysteresis}["voltage_v"]
     assert note is not None and f"spans {0.05 / ADC_V_PER_COUNT:.0f} steps" in note
+
+
+def test_placements_file_of_table4_gives_the_printed_re(tmp_path, paper):
+    # Reference: the paper's printed Table 4 RE1/RE2 per sensor (integers: a recomputed value matches
+    # when it rounds to the printed one), from its own printed readings (examples/repeatability.csv).
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    rep = measure_run(_loop_run(tmp_path / "loop.csv"), placements=root / "examples" / "repeatability.csv",
+                      calibrate=False)
+    t4 = paper["table4_repeatability_capacitive_kHz"]
+    got = {(p.load_g, p.sensor): p for p in rep.repeatability}
+    assert len(got) == 8
+    for load in ("200g", "400g"):
+        for k in range(4):
+            p = got[(float(load[:-1]), k + 1)]
+            assert p.n == 5 and p.readings == pytest.approx(t4[load]["readings"][k])
+            assert round(p.re1_percent) == t4[load]["RE1_percent"][k]
+            assert round(p.re2_percent) == t4[load]["RE2_percent"][k]
+    assert rep.iso376 is None and "placements file" in rep.iso376_reason

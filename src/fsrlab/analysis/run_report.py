@@ -79,6 +79,8 @@ class PlacementRepeatability:
         The readout column.
     load_g : float
         The mass. [g]
+    sensor : object
+        The sensor's label (placements files may hold several sensors, as Tables 4 and 5).
     n : int
         Placements.
     mean : float
@@ -91,6 +93,7 @@ class PlacementRepeatability:
 
     quantity: str
     load_g: float
+    sensor: Any
     n: int
     mean: float
     re1_percent: float
@@ -99,7 +102,7 @@ class PlacementRepeatability:
 
     def to_dict(self) -> dict:
         """JSON shape."""
-        return {"quantity": self.quantity, "load_g": self.load_g, "n": self.n, "mean": self.mean,
+        return {"quantity": self.quantity, "load_g": self.load_g, "sensor": self.sensor, "n": self.n, "mean": self.mean,
                 "re1_percent": self.re1_percent, "re2_percent": self.re2_percent, "readings": self.readings}
 
 
@@ -247,7 +250,8 @@ def placements_repeatability(placements: list[dict], quantity: str) -> list[Plac
     Returns
     -------
     list of PlacementRepeatability
-        One per load with at least two loading placements, in increasing load.
+        One per load (and sensor, when the rows have ``sensor``) with at least two loading
+        placements, in increasing load.
 
     Notes
     -----
@@ -257,18 +261,18 @@ def placements_repeatability(placements: list[dict], quantity: str) -> list[Plac
     """
     from fsrlab.analysis.repeatability import repeatability
 
-    by_load: dict[float, list[float]] = {}
+    groups: dict[tuple, list[float]] = {}
     for p in placements:
         v = p.get(quantity, math.nan)
         if p["direction"] > 0 and p["load_g"] > 0 and v is not None and math.isfinite(v):
-            by_load.setdefault(p["load_g"], []).append(float(v))
+            groups.setdefault((p["load_g"], p.get("sensor", 1)), []).append(float(v))
     out = []
-    for load in sorted(by_load):
-        x = by_load[load]
+    for load, sensor in sorted(groups, key=lambda k: (k[0], str(k[1]))):
+        x = groups[(load, sensor)]
         if len(x) < 2:
             continue
         r = repeatability(np.asarray(x), ddof=1)  # Eq. (39)
-        out.append(PlacementRepeatability(quantity, load, len(x), float(r.mean), float(r.re1_percent),
+        out.append(PlacementRepeatability(quantity, load, sensor, len(x), float(r.mean), float(r.re1_percent),
                                           float(r.re2_percent), x))
     return out
 
@@ -389,15 +393,19 @@ def measure_run(run, placements=None, weights_run=None, calibration=None, calibr
     elif placements is not None:
         from fsrlab.tables import load_grouped_csv
 
-        loads, _, readings = load_grouped_csv(placements)
+        loads, sensors, readings = load_grouped_csv(placements)
         from fsrlab.tables import read_table
 
         ix, rows, _ = read_table(placements, ("load", "reading"), hint="header load,sensor,reading needed")
         direction = [1] * len(loads)
         if "direction" in ix:
             direction = [int(float(r[ix["direction"]])) if r[ix["direction"]].strip() else 1 for _, r in rows]
-        means = [{"load_g": float(ld), "direction": d, "cycle": 0, "frequency_hz": float(v)}
-                 for ld, d, v in zip(loads, direction, readings)]
+        try:
+            load_g = [float(str(ld).lower().removesuffix("g")) for ld in loads]  # 200 or "200g"
+        except ValueError:
+            raise ValueError(f"{placements}: load: the mass in g (200 or 200g), got {loads[0]!r}") from None
+        means = [{"load_g": ld, "sensor": sn, "direction": d, "cycle": 0, "frequency_hz": float(v)}
+                 for ld, sn, d, v in zip(load_g, sensors, direction, readings)]
         rep.repeatability_source = f"placements file {Path(placements).name} (reading: frequency)"
     if means is None:
         rep.repeatability_reason = ("no dead-weight placements: record them with fsrlab bench weights and pass the run "

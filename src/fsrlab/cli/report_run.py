@@ -20,7 +20,7 @@ def report(
     run: Path = typer.Argument(..., metavar="RUN.csv", help="The recorded run (fsrlab bench, acquire, weights, measure)."),
     out: Path = typer.Option(..., "--out", "-o", help="Directory for index.html, report.json and the PNGs; created if missing."),
     weights_run: Path = typer.Option(None, "--weights", metavar="WEIGHTS.csv", help="A dead-weight run (fsrlab bench weights) for RE1/RE2 of f and V0 and ISO 376 (default: the run itself when it is one)."),
-    placements: Path = typer.Option(None, "--placements", metavar="P.csv", help="A placements CSV (load [g], sensor, reading [Hz]) for RE1/RE2 of the frequency, without a weights run."),
+    placements: Path = typer.Option(None, "--placements", metavar="P.csv", help="A placements CSV (load [g], sensor, reading [Hz]; NAME.placements.csv of fsrlab bench weights, or a table like Table 4) for RE1/RE2 of the frequency per load and sensor, without a weights run."),
     cal: Path = typer.Option(None, "--cal", metavar="CAL.json", help="Calibration JSON (fsrlab calibrate) applied to the run; default: the run calibrated on itself."),
     no_calibration: bool = typer.Option(False, "--no-calibration", help="Leave the calibration part out (no --cal, no self-calibration)."),
     json_out: bool = typer.Option(False, "--json", help="Print the report's numbers (report.json, with HE in %, RE in %, ISO 376 in %) as JSON."),
@@ -36,8 +36,8 @@ def report(
     Examples:
 
     \b
-      fsrlab report spring.csv --weights weights.csv --out spring-report
-      fsrlab report test-run.csv --cal calibration.json --placements weights.placements.csv --out report-run --json
+      fsrlab report examples/bench.csv --out report-run
+      fsrlab report examples/other.csv --cal examples/calibration.json --placements examples/repeatability.csv --out report-run --json
     """
     from fsrlab.report.run_report import write_run_report
 

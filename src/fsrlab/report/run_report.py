@@ -157,11 +157,12 @@ def build_sections(rep, outdir: Path) -> list[Section]:
             key = "table4_repeatability_capacitive_kHz" if p.quantity == "frequency_hz" else \
                 "table5_repeatability_traditional_V"
             printed = paper[key].get(f"{p.load_g:g}g")
-            rrows.append([("f [Hz]" if p.quantity == "frequency_hz" else "V0 [V]"), f"{p.load_g:g} g", p.n,
+            rrows.append([("f [Hz]" if p.quantity == "frequency_hz" else "V0 [V]"), f"{p.load_g:g} g", str(p.sensor), p.n,
                           _f(p.mean, ".4g"), _f(p.re1_percent, ".3f"), _f(p.re2_percent, ".3f"),
                           f"{printed['mean_RE1']:g} / {printed['mean_RE2']:g}" if printed else "—"])
         rtable = Table("RE1 and RE2 per load (eq. 39, sample standard deviation)",
-                       ["readout", "load", "placements", "mean", "RE1 [%]", "RE2 [%]", "paper mean RE1 / RE2 [%]"],
+                       ["readout", "load", "sensor", "placements", "mean", "RE1 [%]", "RE2 [%]",
+                        "paper mean RE1 / RE2 [%]"],
                        rrows, f"From the {rep.repeatability_source}: each mass reached from below once per cycle.")
         rep_sec = Section("repeatability", "Repeatability (eq. 39, as Tables 4 and 5)", tables=[rtable])
     else:
