@@ -229,3 +229,32 @@ def test_bench_sensor_preset_gives_the_virtual_fsr_its_area(tmp_path):
     assert run.metadata["sensor"]["preset"] == "interlink-402" and run.metadata["sensor"]["area_m2"] == area
     k = run["load"] == 200.0
     assert run["stress_pa"][k] == pytest.approx(0.2 * 9.80665 / area)
+
+
+def test_bench_on_a_port_prompts_and_records_with_the_load_cell(tmp_path):
+    # Hardware path through a real pseudo-terminal: the Python virtual device served on its own (the
+    # command sees only a port). Standard input is closed under pytest: every prompt is answered "go on".
+    # Reference: stress_pa = force_n / area with the preset's area (data-format.md), the load cell's
+    # calibration being the virtual HX711's own.
+    from fsrlab.acquisition.virtual_device import PhysicsSource, StressProfile, VirtualDevice
+    from fsrlab.physics.presets import SENSOR_PRESETS
+
+    dev = VirtualDevice(PhysicsSource(StressProfile("triangle", 10e3, 1.0)), seed=6)
+    port = dev.open()
+    try:
+        dev.load_cell.calibration().save(tmp_path / "lc.json")
+        out = tmp_path / "hw.csv"
+        code, stdout, err = run_cli(["bench", "spring", "--port", port, "--cycles", "1", "--period", "1s",
+                                     "--sensor", "flexiforce-a201", "--loadcell", tmp_path / "lc.json",
+                                     "--out", out, "--json"])
+    finally:
+        dev.close()
+    assert code == 0, err
+    assert "start the spring cycles: 1 × (from 0 kPa up to 10 kPa and back)" in err
+    assert json.loads(stdout)["device"] == port
+    run = load_run(out)
+    ok = np.isfinite(run["force_n"])
+    assert ok.mean() > 0.9
+    area = SENSOR_PRESETS["flexiforce-a201"].area_m2
+    assert run["stress_pa"][ok] == pytest.approx(run["force_n"][ok] / area)
+    assert np.nanmax(run["force_n"]) > 0.5 * 10e3 * run.metadata["sensor"]["area_m2"]

@@ -126,6 +126,8 @@ def bench(
         confirm = keyboard.answer
 
         def announce(text: str) -> None:
+            if "press Enter" in text:
+                keyboard.drain()  # a line typed before the question does not answer it
             print(f"fsrlab: {text}", file=sys.stderr, flush=True)
     else:
         def announce(text: str) -> None:
