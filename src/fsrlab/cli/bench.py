@@ -146,6 +146,8 @@ def bench(
                                window_ms=window_ms, loadcell=cal, announce=announce, confirm=confirm,
                                overwrite=overwrite, settle={"hold_s": settle_hold} if protocol == "weights" else None,
                                metadata={"sensor": sensor_meta} if sensor_meta else None, on_status=view.update)
+    except KeyboardInterrupt:  # Ctrl-C before the recording began (while asked to start): nothing recorded
+        raise typer.Abort() from None
     except ValueError as exc:
         # The virtual sensor's model refuses a stress beyond its range (before any device is opened).
         if device != "port" and any(t in str(exc) for t in ("stress_pa", "no valid response", "resistance")):
