@@ -84,3 +84,15 @@ def test_demo_falls_back_to_the_python_device_when_the_twin_fails(tmp_path, monk
     assert any("the digital twin failed (RuntimeError: simavr exited); using the Python virtual device" in ln
                for ln in lines)
     assert res.device == "virtual" and "Python virtual device" in res.index.read_text()
+
+
+def test_demo_command_prints_steps_and_ends_with_the_index(tmp_path):
+    code, out, err = run_cli(["demo", "--out", tmp_path / "d", "--device", "virtual", "--cycles", "2", "--period",
+                              "1.5s", "--repeat", "2", "--no-paper", "--json"])
+    assert code == 0, err
+    info = json.loads(out)
+    assert info["index"] == str(tmp_path / "d" / "index.html") and info["device"] == "virtual"
+    assert [s["step"] for s in info["steps"]][:3] == ["spring runs", "dead weights", "calibration"]
+    assert info["total_s"] == pytest.approx(sum(s["seconds"] for s in info["steps"]))
+    assert info["numbers"]["calibration"]["reference"] == "force_n"  # the emulated load cell
+    assert err.splitlines()[0].startswith("fsrlab demo: [1/6]")
