@@ -208,3 +208,21 @@ def test_placements_file_of_table4_gives_the_printed_re(tmp_path, paper):
             assert round(p.re1_percent) == t4[load]["RE1_percent"][k]
             assert round(p.re2_percent) == t4[load]["RE2_percent"][k]
     assert rep.iso376 is None and "placements file" in rep.iso376_reason
+
+
+def test_creep_part_is_fsrlab_creeps_numbers_and_says_why_when_absent(tmp_path):
+    # Reference: analysis.creep.creep_of_run (fsrlab creep) on examples/creep.csv, whose holds are 2 N
+    # for 30 s and 3.2 N for 45 s (examples/README.md).
+    from pathlib import Path
+
+    from fsrlab.analysis.creep import creep_of_run
+    from fsrlab.runformat import load_run
+
+    path = Path(__file__).resolve().parents[2] / "examples" / "creep.csv"
+    rep = measure_run(path, calibrate=False)
+    f = [c for c in rep.creep if c["quantity"] == "frequency_hz"]
+    assert [round(c["level"], 1) for c in f] == [2.0, 3.2] and [round(c["duration_s"]) for c in f] == [30, 45]
+    ref = creep_of_run(load_run(path), x="frequency_hz")
+    assert [c["drift_percent_per_decade"] for c in f] == [h.drift_percent_per_decade for h in ref.holds]
+    rep = measure_run(_loop_run(tmp_path / "loop.csv"), calibrate=False)
+    assert rep.creep == [] and "fsrlab bench creep" in rep.creep_reason

@@ -10,6 +10,8 @@ resistive one (op-amp V0, eq. 38) as in its Table 3:
   each mass reached from below once per cycle as in Tables 4 and 5;
 - **extension:** the ISO 376 quantities and class (:func:`fsrlab.analysis.iso376.iso376`) when the
   run holds dead-weight series, and what is missing otherwise;
+- **extension:** the creep of each readout over every held load of the run
+  (:func:`fsrlab.analysis.creep.creep_of_run`: drift per decade of time, total drift, time constant);
 - **extension:** the calibration (model chosen by grouped cross-validation, its CV error, lag and
   uncertainty) and the hysteresis error of the compensated estimate
   (:func:`fsrlab.analysis.pipeline.calibrate_run`, :func:`~fsrlab.analysis.pipeline.apply_calibration`).
@@ -132,6 +134,11 @@ class RunReport:
         With ``iso376_reason`` when None, ``iso376_readout`` the column judged.
     iso376_reason : str or None
     iso376_readout : str
+    creep : list of dict
+        Per readout and loaded hold of at least 5 s: ``quantity``, ``level``, ``reference``,
+        ``start_s``, ``duration_s``, ``drift_percent_per_decade``, ``total_drift_percent``, ``tau_s``
+        (None when not determined); empty with ``creep_reason``.
+    creep_reason : str or None
     calibration : dict or None
         ``model``, ``x``, ``y``, ``cv_rmse``, ``r2``, ``lag_s``, ``uncertainty_max``,
         ``uncertainty_median``, ``compensated``, ``source``, ``full_scale``; None with ``calibration_reason``.
@@ -154,6 +161,8 @@ class RunReport:
     iso376: Any = None
     iso376_reason: str | None = None
     iso376_readout: str = "frequency_hz"
+    creep: list = field(default_factory=list)
+    creep_reason: str | None = None
     calibration: dict | None = None
     calibration_reason: str | None = None
     estimate: ReadoutHysteresis | None = None
@@ -173,6 +182,7 @@ class RunReport:
                 "repeatability": [p.to_dict() for p in self.repeatability],
                 "repeatability_source": self.repeatability_source, "repeatability_reason": self.repeatability_reason,
                 "iso376": iso, "iso376_reason": self.iso376_reason,
+                "creep": self.creep, "creep_reason": self.creep_reason,
                 "calibration": self.calibration, "calibration_reason": self.calibration_reason,
                 "estimate": None if self.estimate is None else self.estimate.to_dict()}
 
@@ -331,6 +341,32 @@ def iso376_of_placements(placements: list[dict], quantity: str = "frequency_hz")
         return None, str(exc)
 
 
+def _creep(run, min_hold_s: float = 5.0) -> tuple[list, str | None]:
+    """Creep of each readout over the run's loaded holds, or why there is none."""
+    from fsrlab.analysis.creep import creep_of_run
+
+    if "time_s" not in run:
+        return [], "the run has no time_s column"
+    rows = []
+    for q, _, _ in READOUTS:
+        if q not in run or not np.isfinite(run[q]).any():
+            continue
+        try:
+            rc = creep_of_run(run, x=q, min_hold_s=min_hold_s)
+        except ValueError as exc:
+            return [], f"{str(exc).split(': ', 1)[-1]} (record a hold with fsrlab bench creep)"
+        for h in rc.holds:
+            tau = h.tau_s
+            rows.append({"quantity": q, "level": h.hold.level, "reference": rc.reference,
+                         "reference_unit": rc.reference_unit, "start_s": h.hold.start_s,
+                         "duration_s": h.hold.duration_s, "drift_percent_per_decade": h.drift_percent_per_decade,
+                         "total_drift_percent": h.total_drift_percent,
+                         "tau_s": float(tau) if math.isfinite(tau) else None})
+    if not rows:
+        return [], f"no held load of {min_hold_s:g} s or more (record one with fsrlab bench creep)"
+    return rows, None
+
+
 def _calibration_summary(cal, source: str) -> dict:
     unc = cal.uncertainty
     sig = np.asarray(getattr(unc, "sigma", []), dtype=float)
@@ -421,6 +457,8 @@ def measure_run(run, placements=None, weights_run=None, calibration=None, calibr
         else:
             rep.iso376_reason = ("a placements file holds the loading readings only: ISO 376 needs the run "
                                  "(zero and unloading readings)")
+
+    rep.creep, rep.creep_reason = _creep(run)
 
     # Calibration and the compensated estimate.
     cal, source = None, ""

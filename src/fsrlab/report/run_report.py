@@ -185,6 +185,22 @@ def build_sections(rep, outdir: Path) -> list[Section]:
     else:
         iso = Section("iso376", "ISO 376 quantities and class (extension)", f"Not computed: {rep.iso376_reason}.")
 
+    # Creep.
+    if rep.creep:
+        crows = [["f [Hz]" if c["quantity"] == "frequency_hz" else "V0 [V]", f"{c['start_s']:.1f}",
+                  f"{c['duration_s']:.1f}", f"{c['level']:.4g} {c['reference_unit']}",
+                  _f(c["drift_percent_per_decade"], ".3f"), _f(c["total_drift_percent"], ".3f"),
+                  "not determined" if c["tau_s"] is None else f"{c['tau_s']:.3g}"] for c in rep.creep]
+        creep_sec = Section("creep", "Creep under a held load (extension)",
+                            "Each hold of the reference of at least 5 s (fsrlab.analysis.creep, docs/creep.md): "
+                            "the readout's drift per decade of time (% of its value 1 s into the hold), its total "
+                            "drift over the hold and, when the data determine it, a first-order time constant.",
+                            tables=[Table("Creep per hold", ["readout", "start [s]", "duration [s]", "level",
+                                                             "drift [%/decade]", "total drift [%]", "τ [s]"],
+                                          crows)])
+    else:
+        creep_sec = Section("creep", "Creep under a held load (extension)", f"Not computed: {rep.creep_reason}.")
+
     # Calibration.
     cal = rep.calibration
     if cal is not None:
@@ -210,7 +226,7 @@ def build_sections(rep, outdir: Path) -> list[Section]:
     else:
         calsec = Section("calibration", "Calibration, uncertainty and compensation (extension)",
                          f"Not computed: {rep.calibration_reason}.")
-    return [run, hyst, rep_sec, iso, calsec]
+    return [run, hyst, rep_sec, iso, creep_sec, calsec]
 
 
 def write_run_report(run, outdir, placements=None, weights_run=None, calibration=None,
