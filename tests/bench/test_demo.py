@@ -18,6 +18,7 @@ from fsrlab.demo import DEMO_SENSOR, DemoSettings, demo_sensor, run_demo
 SHORT = DemoSettings(cycles=2, period_s=1.5, repeat=2, settle_hold_s=0.1)
 
 
+@pytest.mark.slow
 def test_demo_runs_the_chain_and_links_both_reports(tmp_path):
     lines = []
     res = run_demo(tmp_path / "demo", SHORT, device="virtual", paper=False, progress=lines.append)
@@ -58,6 +59,7 @@ def test_demo_bad_input_is_one_line(args, option, tmp_path, monkeypatch):
     assert not list(tmp_path.iterdir())
 
 
+@pytest.mark.slow
 def test_demo_falls_back_to_the_python_device_when_the_twin_fails(tmp_path, monkeypatch):
     import sys
     import types
@@ -86,6 +88,7 @@ def test_demo_falls_back_to_the_python_device_when_the_twin_fails(tmp_path, monk
     assert res.device == "virtual" and "Python virtual device" in res.index.read_text()
 
 
+@pytest.mark.slow
 def test_demo_command_prints_steps_and_ends_with_the_index(tmp_path):
     code, out, err = run_cli(["demo", "--out", tmp_path / "d", "--device", "virtual", "--cycles", "2", "--period",
                               "1.5s", "--repeat", "2", "--no-paper", "--json"])

@@ -27,7 +27,7 @@ def bench(
     masses_opt: str = typer.Option("200g,400g", "--masses", metavar="MASSES", help="weights: masses placed, increasing, comma-separated [kg]: 200g,400g (g, kg or mg); the plan is 0 → each → back to 0, per cycle."),
     repeat: int = typer.Option(5, "--repeat", help="weights: how often each mass is placed again [1]: 5 as in Tables 4 and 5."),
     mass: float = typer.Option("200g", "--mass", parser=masses, metavar="MASS", help="creep: the mass held [kg]: 200g, 0.5kg."),
-    hold: float = typer.Option("60s", "--hold", parser=seconds, metavar="TIME", help="creep: how long the mass stays on [s]: 60s, 5min."),
+    hold: float = typer.Option("60s", "--hold", parser=seconds, metavar="TIME", help="creep: how long the mass stays on [s]: 60s, 5min (recorded with up to 2 s unloaded before and 5 s after)."),
     settle_hold: float = typer.Option("1s", "--settle-hold", parser=seconds, metavar="TIME", help="weights: steady time recorded per placement [s]: 1s, 200ms."),
     window: float = typer.Option("20ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], whole ms: 20ms, 100ms."),
     seed: int = typer.Option(None, "--seed", help="Random seed of the virtual meter's noise (an integer)."),
