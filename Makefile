@@ -22,17 +22,10 @@ sysdeps:
 firmware: sysdeps
 	@if [ -f firmware/Makefile ]; then $(MAKE) -C firmware; fi
 
-# The measurement chain on the virtual bench (record, calibrate, apply, hysteresis), then the
-# paper's reproduction report. The recordings run in real time: about 20 s.
+# The measurement chain on a virtual bench (spring cycles and dead weights recorded, calibration,
+# compensation, the measurement report), then the paper's reproduction report: fsrlab demo (about 1 min).
 demo: venv
-	@mkdir -p $(DEMO)
-	$(BIN)/fsrlab acquire --virtual --profile triangle --duration 8.5s --seed 1 --out $(DEMO)/calibration-run.csv --overwrite --quiet
-	$(BIN)/fsrlab acquire --virtual --profile sine --duration 8.5s --seed 2 --out $(DEMO)/test-run.csv --overwrite --quiet
-	$(BIN)/fsrlab calibrate $(DEMO)/calibration-run.csv --compensate -o $(DEMO)/calibration.json
-	$(BIN)/fsrlab apply $(DEMO)/calibration.json $(DEMO)/test-run.csv -o $(DEMO)/test-estimate.csv --overwrite
-	$(BIN)/fsrlab hysteresis $(DEMO)/test-run.csv --quantity frequency_hz
-	$(BIN)/fsrlab hysteresis $(DEMO)/test-estimate.csv --quantity stress_pa_estimate
-	$(BIN)/fsrlab paper --out $(REPORT)
+	$(BIN)/fsrlab demo --out $(DEMO)
 
 test: venv sysdeps firmware
 	$(BIN)/python -m pytest

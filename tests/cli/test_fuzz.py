@@ -65,7 +65,8 @@ COLLECT = os.environ.get("FSRLAB_FUZZ_COLLECT")
 
 # Cases per 10 000 of the slow commands (a valid acquire takes ~0.5 s, a valid design ~60 ms);
 # the rest of the cases are split evenly among the other commands.
-SLOW = {"acquire": 60, "virtual-device": 80, "paper": 30, "design": 500, "weights": 60, "measure": 60, "loadcell": 60}
+SLOW = {"acquire": 60, "virtual-device": 80, "paper": 30, "design": 500, "weights": 60, "measure": 60, "loadcell": 60,
+        "bench": 60, "demo": 10, "report": 60}
 
 
 def _examples(name: str) -> int:
@@ -178,13 +179,23 @@ FORCED = {
     "live": lambda draw: ["--virtual", "--http-port", "0", "--duration", draw(SHORT_DURATIONS)],
     "loadcell": lambda draw: ["--virtual", "--window", "20ms", "--duration",
                               draw(st.sampled_from(["0.1", "0.2s", "0", "-1", "abc", "1m"]))],
+    # bench: one short cycle, two placements, a short hold (or a bad value); the demo only with a bad value
+    # (a valid one runs for a minute).
+    "bench": lambda draw: ["--virtual", "--quiet", "--window", "20ms", "--cycles", draw(st.sampled_from(["1", "0"])),
+                           "--period", draw(st.sampled_from(["0.3s", "0", "abc"])), "--repeat",
+                           draw(st.sampled_from(["1", "0"])), "--settle-hold", "20ms",
+                           "--hold", draw(st.sampled_from(["0.3s", "0", "-1", "abc"]))],
+    "demo": lambda draw: ["--cycles", draw(st.sampled_from(["0", "-1", "abc", "1e9"]))],
 }
 LEFT_OUT = {("oscillator", "--spice"), ("acquire", "--virtual"), ("acquire", "--duration"), ("acquire", "--quiet"),
             ("virtual-device", "--duration"), ("paper", "--out"), ("weights", "--virtual"), ("weights", "--quiet"),
             ("weights", "--window"), ("weights", "--settle-windows"), ("weights", "--hold"), ("weights", "--timeout"),
             ("weights", "--repeat"), ("measure", "--virtual"), ("measure", "--duration"), ("measure", "--quiet"),
             ("loadcell", "--virtual"), ("loadcell", "--window"), ("loadcell", "--duration"),
-            ("live", "--virtual"), ("live", "--http-port"), ("live", "--duration"), ("live", "--open")}
+            ("live", "--virtual"), ("live", "--http-port"), ("live", "--duration"), ("live", "--open"),
+            ("bench", "--virtual"), ("bench", "--quiet"), ("bench", "--window"), ("bench", "--cycles"),
+            ("bench", "--period"), ("bench", "--repeat"), ("bench", "--settle-hold"), ("bench", "--hold"),
+            ("demo", "--cycles")}
 
 # The virtual device's start-up time grows with --period (~20 s at 50k s, a finding: see
 # test_known_virtual_device_start_up_does_not_grow_with_period): periods above 60 s are left out.

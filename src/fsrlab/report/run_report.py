@@ -1,0 +1,266 @@
+"""The measurement report of a recorded run: ``index.html``, ``report.json`` and PNGs (``fsrlab report``).
+
+It renders :func:`fsrlab.analysis.run_report.measure_run` with :mod:`fsrlab.report.html` and
+:mod:`fsrlab.report.figures`; the paper's printed values (Tables 3–5) stand beside the run's own
+for scale, not as a target (a different sensor on a different bench).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+from fsrlab.report.model import Figure, Section, Table
+
+__all__ = ["RunReportFiles", "build_sections", "write_run_report"]
+
+
+@dataclass
+class RunReportFiles:
+    """What :func:`write_run_report` wrote.
+
+    Attributes
+    ----------
+    index : Path
+        ``index.html``.
+    json : Path
+        ``report.json`` (:meth:`RunReport.to_dict`).
+    figures : list of Path
+        The PNGs.
+    report : RunReport
+        The numbers.
+    """
+
+    index: Path
+    json: Path
+    figures: list
+    report: object
+
+
+def _f(v, spec: str = ".2f") -> str:
+    return "—" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, spec)
+
+
+def _loops_figure(rep, outdir: Path) -> Figure | None:
+    from fsrlab.report.figures import new_figure, save
+
+    drawn = [h for h in rep.hysteresis if h.result is not None]
+    if not drawn:
+        return None
+    fig, ax = new_figure(width=11.0, height=4.2)
+    fig.clf()
+    axes = fig.subplots(1, len(drawn))
+    axes = list(axes) if len(drawn) > 1 else [axes]
+    scale = 1e-3 if rep.reference == "stress_pa" else 1.0
+    unit = "kPa" if rep.reference == "stress_pa" else rep.reference_unit
+    for a, h in zip(axes, drawn):
+        a.grid(True, alpha=0.3)
+        r = h.result
+        for c in r.cycles:
+            a.plot(c.stress_pa * scale, c.q_load, "-", color="tab:blue", alpha=0.35, lw=0.9)
+            a.plot(c.stress_pa * scale, c.q_unload, "-", color="tab:orange", alpha=0.35, lw=0.9)
+        if r.overall is not None and r.overall.stress_pa is not None:
+            a.plot(r.overall.stress_pa * scale, r.overall.q_load, "-", color="tab:blue", lw=2, label="loading (mean)")
+            a.plot(r.overall.stress_pa * scale, r.overall.q_unload, "-", color="tab:orange", lw=2,
+                   label="unloading (mean)")
+        a.set_xlabel(f"reference {rep.reference} [{unit}]")
+        q_unit = "Hz" if h.quantity == "frequency_hz" else "V" if h.quantity == "voltage_v" else ""
+        a.set_ylabel(f"{h.quantity} [{q_unit}]")
+        a.set_title(f"{h.label}: HE {h.percent:.2f} %")
+        a.legend(loc="upper left", fontsize=8)
+    name = "loops.png"
+    save(fig, outdir / name)
+    return Figure(name, "Loading and unloading loops of f and V0 against the reference",
+                  "Figure 19a/b: frequency 3–10 kHz and op-amp voltage 0.4–1 V over 0–10 kPa, loading above "
+                  "unloading, for four FlexiForce A201 sensors.",
+                  "Each cycle faint, the mean branches bold. " + "; ".join(
+                      f"{h.label}: HE {_f(h.percent)} % overall" for h in drawn) + ".")
+
+
+def _estimate_figure(rep, outdir: Path) -> Figure | None:
+    import numpy as np
+
+    from fsrlab.report.figures import new_figure, save
+
+    est = rep.curves.get("estimate")
+    ref = rep.curves.get("estimate_reference")
+    if est is None or ref is None or rep.estimate is None:
+        return None
+    cal = rep.calibration or {}
+    y_name, y_unit = cal.get("y", rep.reference), cal.get("y_unit", rep.reference_unit)
+    scale = 1e-3 if y_name == "stress_pa" else 1.0
+    unit = "kPa" if y_name == "stress_pa" else y_unit
+    fig, ax = new_figure(width=6.4, height=4.6)
+    ok = np.isfinite(est) & np.isfinite(ref)
+    ax.plot(ref[ok] * scale, est[ok] * scale, ".", ms=2.5, color="tab:green", label="estimate")
+    lim = [float(np.nanmin(ref[ok])) * scale, float(np.nanmax(ref[ok])) * scale] if ok.any() else [0, 1]
+    ax.plot(lim, lim, "k--", lw=1, label="ideal")
+    ax.set_xlabel(f"reference {y_name} [{unit}]")
+    ax.set_ylabel(f"estimate [{unit}]")
+    ax.set_title(f"calibrated estimate: HE {_f(rep.estimate.percent)} %")
+    ax.legend(loc="upper left", fontsize=8)
+    name = "estimate.png"
+    save(fig, outdir / name)
+    return Figure(name, "The compensated estimate against the reference",
+                  "The paper fits linear and cubic polynomials of frequency to stress (Figure 17) and does not "
+                  "compensate the hysteresis.",
+                  f"Model {cal.get('model')} on {cal.get('x')} ({cal.get('source')}), with the causal hysteresis "
+                  f"compensation: HE of the estimate {_f(rep.estimate.percent)} %.")
+
+
+def build_sections(rep, outdir: Path) -> list[Section]:
+    """The report's sections for a :class:`~fsrlab.analysis.run_report.RunReport` (PNGs written into ``outdir``).
+
+    Parameters
+    ----------
+    rep : RunReport
+        From :func:`fsrlab.analysis.run_report.measure_run`.
+    outdir : Path
+        Where the PNGs go.
+
+    Returns
+    -------
+    list of Section
+    """
+    from fsrlab.reference import paper_values
+
+    paper = paper_values()
+    t3 = paper["table3_hysteresis_error_percent"]
+    run = Section("run", "The run",
+                  f"File {rep.path}: {rep.rows} rows over {_f(rep.duration_s, '.1f')} s; reference column "
+                  f"{rep.reference} [{rep.reference_unit}].")
+
+    # Hysteresis, as Table 3.
+    hs = {h.quantity: h for h in rep.hysteresis}
+    f, v = hs.get("frequency_hz"), hs.get("voltage_v")
+    n = max((len(h.cycles) for h in rep.hysteresis), default=0)
+    rows = [[f"cycle {k + 1}", _f(v.cycles[k]) if v and k < len(v.cycles) else "—",
+             _f(f.cycles[k]) if f and k < len(f.cycles) else "—"] for k in range(n)]
+    rows.append(["overall (mean branches)", _f(v.percent) if v else "—", _f(f.percent) if f else "—"])
+    rows.append(["paper, Table 3 mean of 4 sensors", f"{t3['traditional_mean']:.2f}", f"{t3['proposed_mean']:.2f}"])
+    reasons = " ".join(f"{h.label}: {h.reason or h.note}." for h in rep.hysteresis if h.reason or h.note)
+    hyst = Section("hysteresis", "Hysteresis error (eq. 13): resistive vs capacitive readout (as Table 3)",
+                   "Eq. (13) per loading-unloading cycle of the run and on the mean branches, for the traditional "
+                   "op-amp readout (V0, eq. 38) and the proposed 555 frequency. " + reasons,
+                   tables=[Table("Hysteresis error [%]", ["", "traditional (V0)", "proposed (f)"], rows,
+                                 "The paper's row is its four sensors' mean on its bench, for scale.")])
+    fig = _loops_figure(rep, outdir)
+    if fig is not None:
+        hyst.figures.append(fig)
+
+    # Repeatability, as Tables 4 and 5.
+    if rep.repeatability:
+        rrows = []
+        for p in rep.repeatability:
+            key = "table4_repeatability_capacitive_kHz" if p.quantity == "frequency_hz" else \
+                "table5_repeatability_traditional_V"
+            printed = paper[key].get(f"{p.load_g:g}g")
+            rrows.append([("f [Hz]" if p.quantity == "frequency_hz" else "V0 [V]"), f"{p.load_g:g} g", str(p.sensor), p.n,
+                          _f(p.mean, ".4g"), _f(p.re1_percent, ".3f"), _f(p.re2_percent, ".3f"),
+                          f"{printed['mean_RE1']:g} / {printed['mean_RE2']:g}" if printed else "—"])
+        rtable = Table("RE1 and RE2 per load (eq. 39, sample standard deviation)",
+                       ["readout", "load", "sensor", "placements", "mean", "RE1 [%]", "RE2 [%]",
+                        "paper mean RE1 / RE2 [%]"],
+                       rrows, f"From the {rep.repeatability_source}: each mass reached from below once per cycle.")
+        rep_sec = Section("repeatability", "Repeatability (eq. 39, as Tables 4 and 5)", tables=[rtable])
+    else:
+        rep_sec = Section("repeatability", "Repeatability (eq. 39, as Tables 4 and 5)",
+                          f"Not computed: {rep.repeatability_reason}.")
+
+    # ISO 376.
+    if rep.iso376 is not None:
+        r = rep.iso376
+        names = {"b": "reproducibility b", "b_prime": "repeatability b'", "fc": "interpolation fc",
+                 "f0": "zero f0", "v": "reversibility v", "c": "creep c"}
+        irows = [[names[k], _f(r.worst(k), ".3f"), r.classes.get(k, "—"), r.missing.get(k, "")] for k in names]
+        why = "; ".join(f"{k}: {m}" for k, m in r.missing.items())
+        iso = Section("iso376", "ISO 376 quantities and class (extension)",
+                      f"Instrument class: {r.instrument_class}" + (f" (missing: {why})" if r.instrument_class ==
+                                                                     "incomplete" else "") + ". " + " ".join(r.notes),
+                      tables=[Table(f"ISO 376 on {rep.iso376_readout}, worst over the forces "
+                                    f"{', '.join(format(x, '.3g') for x in r.forces_n)} N",
+                                    ["quantity", "worst [%]", "class reached", "what is missing"], irows)])
+    else:
+        iso = Section("iso376", "ISO 376 quantities and class (extension)", f"Not computed: {rep.iso376_reason}.")
+
+    # Creep.
+    if rep.creep:
+        crows = [["f [Hz]" if c["quantity"] == "frequency_hz" else "V0 [V]", f"{c['start_s']:.1f}",
+                  f"{c['duration_s']:.1f}", f"{c['level']:.4g} {c['reference_unit']}",
+                  _f(c["drift_percent_per_decade"], ".3f"), _f(c["total_drift_percent"], ".3f"),
+                  "not determined" if c["tau_s"] is None else f"{c['tau_s']:.3g}"] for c in rep.creep]
+        creep_sec = Section("creep", "Creep under a held load (extension)",
+                            "Each hold of the reference of at least 5 s (fsrlab.analysis.creep, docs/creep.md): "
+                            "the readout's drift per decade of time (% of its value 1 s into the hold), its total "
+                            "drift over the hold and, when the data determine it, a first-order time constant.",
+                            tables=[Table("Creep per hold", ["readout", "start [s]", "duration [s]", "level",
+                                                             "drift [%/decade]", "total drift [%]", "τ [s]"],
+                                          crows)])
+    else:
+        creep_sec = Section("creep", "Creep under a held load (extension)", f"Not computed: {rep.creep_reason}.")
+
+    # Calibration.
+    cal = rep.calibration
+    if cal is not None:
+        u = cal["y_unit"]
+        crow = [["model (chosen by grouped cross-validation)", cal["model"]], ["readout", cal["x"]],
+                ["reference", f"{cal['y']} [{u}]"], ["source", cal["source"]],
+                ["CV RMSE", f"{_f(cal['cv_rmse'], '.4g')} {u}"], ["R² (in sample)", _f(cal["r2"], ".4f")],
+                ["lag of the readout", f"{_f(cal['lag_s'], '.3f')} s"],
+                ["standard uncertainty, median / largest bin", f"{_f(cal['uncertainty_median'], '.4g')} / "
+                                                                f"{_f(cal['uncertainty_max'], '.4g')} {u}"],
+                ["causal compensation", "yes" if cal["compensated"] else "no"]]
+        if cal.get("compensation_he_percent"):
+            b, a = cal["compensation_he_percent"]
+            crow.append(["HE on the calibration data, plain / compensated", f"{_f(b)} % / {_f(a)} %"])
+        if rep.estimate is not None:
+            crow.append(["HE of the estimate on this run", f"{_f(rep.estimate.percent)} %"
+                         + (f" ({rep.estimate.reason})" if rep.estimate.reason else "")])
+        calsec = Section("calibration", "Calibration, uncertainty and compensation (extension)",
+                         rep.calibration_reason or "", tables=[Table("Calibration", ["", "value"], crow)])
+        fig = _estimate_figure(rep, outdir)
+        if fig is not None:
+            calsec.figures.append(fig)
+    else:
+        calsec = Section("calibration", "Calibration, uncertainty and compensation (extension)",
+                         f"Not computed: {rep.calibration_reason}.")
+    return [run, hyst, rep_sec, iso, creep_sec, calsec]
+
+
+def write_run_report(run, outdir, placements=None, weights_run=None, calibration=None,
+                     calibrate: bool = True) -> RunReportFiles:
+    """Measure a run and write its report (``index.html``, ``report.json``, PNGs) into ``outdir``.
+
+    Parameters
+    ----------
+    run : Run or path
+        The run.
+    outdir : path-like
+        Created if missing.
+    placements, weights_run, calibration, calibrate
+        As :func:`fsrlab.analysis.run_report.measure_run`.
+
+    Returns
+    -------
+    RunReportFiles
+    """
+    from fsrlab.analysis.run_report import measure_run
+    from fsrlab.report.html import render_html
+
+    outdir = Path(outdir)
+    rep = measure_run(run, placements=placements, weights_run=weights_run, calibration=calibration,
+                      calibrate=calibrate)
+    outdir.mkdir(parents=True, exist_ok=True)
+    sections = build_sections(rep, outdir)
+    index = outdir / "index.html"
+    index.write_text(render_html(sections, outdir, title=f"Measurement report: {rep.path.name}",
+                                 command="fsrlab report", errata=False), encoding="utf-8")
+    js = outdir / "report.json"
+    from fsrlab.cli._common import to_jsonable
+
+    js.write_text(json.dumps(to_jsonable(rep.to_dict()), indent=1, allow_nan=False), encoding="utf-8")
+    figures = [outdir / f.filename for s in sections for f in s.figures]
+    return RunReportFiles(index, js, figures, rep)
+

@@ -1,0 +1,101 @@
+"""The demo (``make demo`` = ``fsrlab demo``) with very short recordings: the whole chain runs and links its reports.
+
+References: the chain the module's docstring lists (fsrlab/demo.py) and the files each step must
+leave; the demo's numbers are checked against the measurement report it wrote (report.json), and
+the hysteresis error of the compensated estimate against the raw frequency's (the compensation's
+purpose). The virtual bench runs in real time: about 10 s of recording here.
+"""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from clirun import run_cli
+from fsrlab.demo import DEMO_SENSOR, DemoSettings, demo_sensor, run_demo
+
+SHORT = DemoSettings(cycles=2, period_s=1.5, repeat=2, settle_hold_s=0.1)
+
+
+@pytest.mark.slow
+def test_demo_runs_the_chain_and_links_both_reports(tmp_path):
+    lines = []
+    res = run_demo(tmp_path / "demo", SHORT, device="virtual", paper=False, progress=lines.append)
+    assert res.device == "virtual" and res.index.is_file()
+    for name in ("calibration-run.csv", "test-run.csv", "weights-run.csv", "calibration", "estimate",
+                 "measurement report"):
+        assert res.files[name].is_file(), name
+    page = res.index.read_text()
+    assert "measurement/index.html" in page and "Python virtual device" in page
+    # Step by step, numbered, each with its time.
+    numbered = [ln for ln in lines if ln.startswith("[")]
+    assert [ln.split("]")[0] for ln in numbered] == [f"[{k}/6" for k in range(1, 7)]
+    assert "Python virtual device" in numbered[0]
+    saved = json.loads((tmp_path / "demo" / "measurement" / "report.json").read_text())
+    he = {h["quantity"]: h["hysteresis_error_percent"] for h in saved["hysteresis"]}
+    assert res.numbers["he_frequency_percent"] == he["frequency_hz"]
+    assert res.numbers["he_estimate_percent"] < he["frequency_hz"]
+    assert {p["load_g"] for p in res.numbers["repeatability"]} == {200.0, 400.0}
+
+
+def test_demo_sensor_is_chosen_in_one_place():
+    sensor, text = demo_sensor()
+    assert DEMO_SENSOR == "virtual-fsr" and hasattr(sensor, "respond") and "VirtualFSR" in text
+    with pytest.raises(ValueError, match="sensor"):
+        demo_sensor("no-such-sensor")
+
+
+@pytest.mark.parametrize("args, option", [
+    (["demo", "--device", "spice"], "--device"),
+    (["demo", "--cycles", "0"], "--cycles"),
+    (["demo", "--repeat", "1"], "--repeat"),
+    (["demo", "--sensor", "paper-9x"], "--sensor"),
+])
+def test_demo_bad_input_is_one_line(args, option, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run_cli(args)
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and option in err
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.slow
+def test_demo_falls_back_to_the_python_device_when_the_twin_fails(tmp_path, monkeypatch):
+    import sys
+    import types
+
+    class BrokenTwin:
+        def __init__(self, source, speed="realtime", seed=0, loadcell=None):
+            pass
+
+        def open(self):
+            raise RuntimeError("simavr exited")
+
+        def close(self):
+            pass
+
+    twin = types.ModuleType("fsrlab.twin")
+    twin.Twin, twin.twin_available = BrokenTwin, lambda: (True, "")
+    monkeypatch.setitem(sys.modules, "fsrlab.twin", twin)
+    lines = []
+    res = run_demo(tmp_path / "demo", DemoSettings(cycles=1, period_s=1.0, repeat=2, settle_hold_s=0.1),
+                   paper=False, progress=lines.append)
+    # One short cycle is too little for the causal compensation: the plain calibration, said.
+    assert any(ln.strip().startswith("no compensation:") for ln in lines)
+    assert "digital twin" in lines[0]  # auto: the twin first, as it says it can run
+    assert any("the digital twin failed (RuntimeError: simavr exited); using the Python virtual device" in ln
+               for ln in lines)
+    assert res.device == "virtual" and "Python virtual device" in res.index.read_text()
+
+
+@pytest.mark.slow
+def test_demo_command_prints_steps_and_ends_with_the_index(tmp_path):
+    code, out, err = run_cli(["demo", "--out", tmp_path / "d", "--device", "virtual", "--cycles", "2", "--period",
+                              "1.5s", "--repeat", "2", "--no-paper", "--json"])
+    assert code == 0, err
+    info = json.loads(out)
+    assert info["index"] == str(tmp_path / "d" / "index.html") and info["device"] == "virtual"
+    assert [s["step"] for s in info["steps"]][:3] == ["spring runs", "dead weights", "calibration"]
+    assert info["total_s"] == pytest.approx(sum(s["seconds"] for s in info["steps"]))
+    assert info["numbers"]["calibration"]["reference"] == "force_n"  # the emulated load cell
+    assert err.splitlines()[0].startswith("fsrlab demo: [1/6]")
