@@ -66,7 +66,7 @@ COLLECT = os.environ.get("FSRLAB_FUZZ_COLLECT")
 # Cases per 10 000 of the slow commands (a valid acquire takes ~0.5 s, a valid design ~60 ms);
 # the rest of the cases are split evenly among the other commands.
 SLOW = {"acquire": 60, "virtual-device": 80, "paper": 30, "design": 500, "weights": 60, "measure": 60, "loadcell": 60,
-        "bench": 60, "demo": 10, "report": 60}
+        "bench": 60, "demo": 10, "report": 60, "twin": 40}
 
 
 def _examples(name: str) -> int:
@@ -186,6 +186,8 @@ FORCED = {
                            draw(st.sampled_from(["1", "0"])), "--settle-hold", "20ms",
                            "--hold", draw(st.sampled_from(["0.3s", "0", "-1", "abc"]))],
     "demo": lambda draw: ["--cycles", draw(st.sampled_from(["0", "-1", "abc", "1e9"]))],
+    # the twin (simavr) at full speed for a short wall time
+    "twin": lambda draw: ["--speed", "max", "--duration", draw(SHORT_DURATIONS)],
 }
 LEFT_OUT = {("oscillator", "--spice"), ("acquire", "--virtual"), ("acquire", "--duration"), ("acquire", "--quiet"),
             ("virtual-device", "--duration"), ("paper", "--out"), ("weights", "--virtual"), ("weights", "--quiet"),
@@ -195,11 +197,12 @@ LEFT_OUT = {("oscillator", "--spice"), ("acquire", "--virtual"), ("acquire", "--
             ("live", "--virtual"), ("live", "--http-port"), ("live", "--duration"), ("live", "--open"),
             ("bench", "--virtual"), ("bench", "--quiet"), ("bench", "--window"), ("bench", "--cycles"),
             ("bench", "--period"), ("bench", "--repeat"), ("bench", "--settle-hold"), ("bench", "--hold"),
-            ("demo", "--cycles")}
+            ("demo", "--cycles"), ("twin", "--speed"), ("twin", "--duration")}
 
 # The virtual device's start-up time grows with --period (~20 s at 50k s, a finding: see
 # test_known_virtual_device_start_up_does_not_grow_with_period): periods above 60 s are left out.
-CAPPED = {("acquire", "--period"), ("virtual-device", "--period"), ("measure", "--period"), ("live", "--period")}
+CAPPED = {("acquire", "--period"), ("virtual-device", "--period"), ("measure", "--period"), ("live", "--period"),
+          ("twin", "--period")}
 
 
 def _cap(text: str) -> str:

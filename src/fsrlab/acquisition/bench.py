@@ -160,6 +160,18 @@ class BenchSource:
         self._v = np.asarray(opamp.output_v(r_op), dtype=float)  # Eq. (38)
         self._placed = [0.0] + [np.inf] * (f.size - 1)  # when each placement began (time since START) [s]
 
+    @property
+    def dt_s(self) -> float:
+        """Time between the points of a ramp: the grid on which :meth:`parts` changes. [s]"""
+        return self.ramp_s / (self._n - 1)
+
+    def parts(self, t_s):
+        """Sensor state at times ``t_s`` since START [s]: ``(r_fsr_ohm, c_fsr_farad, a0_v)`` (see
+        :meth:`fsrlab.acquisition.virtual_device.PhysicsSource.parts`); placements not yet made hold the
+        force of the last one."""
+        idx = self._index(np.asarray(t_s, dtype=float))
+        return self._r[idx], self._c[idx], self._v[idx]
+
     def place(self, step: int, t_s: float) -> None:
         """Begin placement ``step`` (0-based, in the planned order) at time ``t_s`` since START [s]."""
         if not 0 <= step < self.forces_n.size:
@@ -169,9 +181,10 @@ class BenchSource:
 
     def metadata(self) -> dict:
         """Sidecar content: ``circuit``, ``opamp``, ``sensor``."""
+        from fsrlab.acquisition.virtual_device import sensor_metadata
+
         return {"circuit": self.circuit.to_dict(), "opamp": self.opamp.to_dict(),
-                "sensor": {"model": "VirtualFSR (FlexiForce A201-like, fsrlab.physics.sensor)",
-                           "area_m2": self.sensor.area_m2}}
+                "sensor": sensor_metadata(self.sensor)}
 
     def _where(self, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Placement in force at each time, and the fraction of its ramp done."""

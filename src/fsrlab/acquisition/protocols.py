@@ -294,9 +294,11 @@ def open_bench(device: str, source, seed: int | None = None):
         ok, reason = twin_status()
         if not ok:
             raise ValueError(f"--twin: {reason}")
+        from fsrlab.acquisition.loadcell import LoadCellModel
         from fsrlab.twin import Twin
 
-        return Twin(source=source, speed="realtime", seed=0 if seed is None else seed)
+        # The load cell the Python virtual device emulates by default, on the twin's HX711 model.
+        return Twin(source=source, speed="realtime", seed=0 if seed is None else seed, loadcell=LoadCellModel())
     raise ValueError(f"device must be virtual or twin, got {device!r}")
 
 

@@ -51,7 +51,7 @@ from fsrlab.physics.params import PAPER_CIRCUIT, PAPER_OPAMP
 from fsrlab.physics.sensor import A201_AREA_M2
 
 __all__ = ["FIRMWARE_VERSION", "Signal", "SignalSource", "ConstantSource", "StressProfile", "PhysicsSource",
-           "Faults", "VirtualDevice", "PROFILE_KINDS", "VIRTUAL_CIRCUIT"]
+           "sensor_metadata", "Faults", "VirtualDevice", "PROFILE_KINDS", "VIRTUAL_CIRCUIT"]
 
 FIRMWARE_VERSION = "1.0.0-virtual"
 """Firmware version the virtual device reports in its ``ID`` frame."""
@@ -177,6 +177,26 @@ VIRTUAL_CIRCUIT = PAPER_CIRCUIT.replace(c_off_farad=1e-9)
 1 nF C_off that ``RANGE 1`` switches in."""
 
 
+def sensor_metadata(sensor) -> dict:
+    """What a run's sidecar says about a virtual sensor.
+
+    Parameters
+    ----------
+    sensor : object
+        A virtual sensor with ``respond`` and ``area_m2`` (``VirtualFSR``, a paper sensor).
+
+    Returns
+    -------
+    dict
+        ``model`` (class and module; the VirtualFSR is FlexiForce A201-like) and ``area_m2`` [m²].
+    """
+    cls = type(sensor)
+    model = f"{cls.__name__} ({cls.__module__})"
+    if cls.__name__ == "VirtualFSR":
+        model = "VirtualFSR (FlexiForce A201-like, fsrlab.physics.sensor)"
+    return {"model": model, "area_m2": float(sensor.area_m2)}
+
+
 class PhysicsSource:
     """Signal from a stress profile through the virtual FSR, the LM555 astable and the op-amp.
 
@@ -228,12 +248,33 @@ class PhysicsSource:
     def metadata(self) -> dict:
         """Sidecar content of a run recorded from this source: ``circuit``, ``opamp``, ``sensor``."""
         return {"circuit": self.circuit.to_dict(), "opamp": self.opamp.to_dict(),
-                "sensor": {"model": "VirtualFSR (FlexiForce A201-like, fsrlab.physics.sensor)",
-                           "area_m2": self.sensor.area_m2}}
+                "sensor": sensor_metadata(self.sensor)}
 
     def force_n(self, t_s) -> np.ndarray:
         """Applied force at times ``t_s`` since START [s]: the profile's stress × the sensor's area. [N]"""
         return self.profile.stress(t_s) * self.sensor.area_m2
+
+    def parts(self, t_s):
+        """Sensor state at times ``t_s``: the source's own samples (grid ``k·dt_s``, hysteresis memory
+        included) held from one sample to the next (zero-order hold).
+
+        Parameters
+        ----------
+        t_s : array_like
+            Times since the start of the profile (≥ 0). [s]
+
+        Returns
+        -------
+        r_fsr_ohm : ndarray
+            R_FSR at the 555's voltage. [Ω]
+        c_fsr_farad : ndarray
+            C_FSR. [F]
+        a0_v : ndarray
+            Op-amp output (eq. 38). [V]
+        """
+        t = np.asarray(t_s, dtype=float)
+        idx = self._index(np.floor(t / self.dt_s + 1e-9) * self.dt_s)  # the grid :meth:`window` samples
+        return self._r[idx], self._c[idx], self._v[idx]
 
     def _index(self, t_s: np.ndarray) -> np.ndarray:
         period = self.profile.period_s

@@ -32,35 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["EdgeChunk", "EdgeStream", "source_parts"]
-
-
-def source_parts(source, t_s):
-    """Sensor state of a :class:`~fsrlab.acquisition.virtual_device.PhysicsSource` at times ``t_s``.
-
-    The source's own samples (its grid ``k·dt_s``, hysteresis memory included) held from one sample
-    to the next (zero-order hold).
-
-    Parameters
-    ----------
-    source : PhysicsSource
-        The virtual sensor under its stress profile.
-    t_s : array_like
-        Times since the start of the profile (≥ 0). [s]
-
-    Returns
-    -------
-    r_fsr_ohm : ndarray
-        R_FSR at the 555's voltage. [Ω]
-    c_fsr_farad : ndarray
-        C_FSR. [F]
-    a0_v : ndarray
-        Op-amp output (eq. 38). [V]
-    """
-    t = np.asarray(t_s, dtype=float)
-    k = np.floor(t / source.dt_s + 1e-9)
-    idx = source._index(k * source.dt_s)  # the source's grid, as PhysicsSource.window samples it
-    return source._r[idx], source._c[idx], source._v[idx]
+__all__ = ["EdgeChunk", "EdgeStream"]
 
 
 @dataclass(frozen=True)
@@ -129,7 +101,7 @@ class EdgeStream:
 
     def parts(self, t_s):
         """R_FSR [Ω] and the timing capacitance C_FSR + C_off·range [F] at times ``t_s`` [s]."""
-        r, c, _ = source_parts(self.source, t_s)
+        r, c, _ = self.source.parts(t_s)
         return r, c + self.c_off_farad * self.range_at(t_s)
 
     def sample_times(self, t0_s: float, t1_s: float) -> np.ndarray:

@@ -78,8 +78,10 @@ class Twin:
 
         if speed not in SPEEDS:
             raise ValueError(f"speed must be one of {', '.join(SPEEDS)}, got {speed!r}")
-        if source is not None and not isinstance(source, PhysicsSource):
-            raise ValueError(f"source must be a PhysicsSource, got {type(source).__name__}")
+        if source is not None and not all(hasattr(source, a) for a in ("parts", "dt_s", "force_n", "circuit",
+                                                                          "metadata")):
+            raise ValueError(f"source must be a PhysicsSource or BenchSource (parts, dt_s, force_n, circuit, "
+                             f"metadata), got {type(source).__name__}")
         if loadcell is not None and not isinstance(loadcell, LoadCellModel):
             raise ValueError(f"loadcell must be a LoadCellModel or None, got {type(loadcell).__name__}")
         self.source = source if source is not None else PhysicsSource()
@@ -192,16 +194,25 @@ class Twin:
         """Simulated time the firmware has reached since its reset. [s]"""
         return self._progress / F_CPU_HZ
 
+    def time_since_start(self) -> float:
+        """The source's clock: simulated time since the firmware's reset (as :attr:`time_s`). [s]"""
+        return self.time_s
+
+    @property
+    def load_cell(self):
+        """The load cell under the sensor (``LoadCellModel``) or None: the name the Python virtual device uses."""
+        return self.loadcell
+
     def metadata(self) -> dict:
         """Sidecar content of a run recorded from the twin: the source's, the firmware's, the twin's."""
         meta = self.source.metadata()
+        profile = getattr(self.source, "profile", None)  # a BenchSource places masses instead
         meta["origin"] = ("fsrlab twin (VirtualFSR -> exact LM555 transient -> D8, op-amp -> A0, "
                           "load cell -> HX711 model; the real firmware in simavr over a pty)")
         meta["twin"] = {"firmware": str(elf_path()), "harness": str(harness_path()), "speed": self.speed,
-                        "seed": self.seed, "profile": {"kind": self.source.profile.kind,
-                                                       "peak_pa": self.source.profile.peak_pa,
-                                                       "period_s": self.source.profile.period_s,
-                                                       "base_pa": self.source.profile.base_pa},
+                        "seed": self.seed, "profile": None if profile is None else {
+                            "kind": profile.kind, "peak_pa": profile.peak_pa, "period_s": profile.period_s,
+                            "base_pa": profile.base_pa},
                         "loadcell": None if self.loadcell is None else {
                             "rate_sps": self.loadcell.rate_sps, "offset_counts": self.loadcell.offset_counts,
                             "scale_counts_per_n": self.loadcell.scale_counts_per_n,
@@ -312,8 +323,6 @@ class Twin:
         """A0 on the source's grid and the HX711's conversions in ``[aux_done, t_end)``."""
         import numpy as np
 
-        from fsrlab.twin.edges import source_parts
-
         t0 = self._aux_done
         if t_end <= t0:
             return b""
@@ -322,7 +331,7 @@ class Twin:
         out = []
         if k.size:
             t = k * dt
-            mv = np.clip(np.rint(source_parts(self.source, t)[2] * 1000.0), 0, 5000).astype(np.int64)
+            mv = np.clip(np.rint(self.source.parts(t)[2] * 1000.0), 0, 5000).astype(np.int64)
             out.append(pack_records("A", mv, np.rint(t * F_CPU_HZ).astype(np.int64)))
         cell = self.loadcell
         if cell is not None:
