@@ -25,6 +25,7 @@ firmware: sysdeps
 # The measurement chain on a virtual bench (spring cycles and dead weights recorded, calibration,
 # compensation, the measurement report), then the paper's reproduction report: fsrlab demo (about 1 min).
 demo: venv
+	@$(MAKE) -s -C firmware >/dev/null 2>&1 || echo "firmware and twin not built (make sysdeps installs the tools): the demo uses the Python virtual device"
 	$(BIN)/fsrlab demo --out $(DEMO)
 
 test: venv sysdeps firmware

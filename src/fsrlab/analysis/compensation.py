@@ -122,6 +122,14 @@ class DirectionAwareCalibration:
     threshold: float
     causal: bool = False
 
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.x_low) and np.isfinite(self.x_high) and self.x_low < self.x_high):
+            raise ValueError(f"x_low, x_high must be finite with x_low < x_high, got {self.x_low!r}, {self.x_high!r}")
+        if self.sign not in (1.0, -1.0):
+            raise ValueError(f"sign must be +1 or -1, got {self.sign!r}")
+        if not 0 < self.threshold < 1:
+            raise ValueError(f"threshold must be a fraction of the readout span in (0, 1), got {self.threshold!r}")
+
     @property
     def band(self) -> float:
         """The causal reversal band, ``threshold`` × the calibrated readout span. [unit of x]"""
