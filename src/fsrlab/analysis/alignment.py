@@ -36,7 +36,7 @@ import numpy as np
 
 from fsrlab.analysis.calibration import cross_validate_degrees
 
-__all__ = ["LagSearch", "shift_reference", "estimate_lag", "SMOOTH_ROWS", "MAX_LAG_S"]
+__all__ = ["LagSearch", "shift_reference", "estimate_lag", "SMOOTH_ROWS", "MAX_LAG_S", "IDENTIFIABLE_SPAN"]
 
 #: Default half-width of the lag search: an HX711 at 10 SPS holds a sample up to 0.1 s, a readout
 #: window is up to 0.1 s; beyond that, on constant-rate triangles, a shift by a fraction of a ramp
@@ -44,6 +44,10 @@ __all__ = ["LagSearch", "shift_reference", "estimate_lag", "SMOOTH_ROWS", "MAX_L
 MAX_LAG_S = 0.25
 #: Rows over which "xcorr" takes the changes of readout and reference. [1]
 SMOOTH_ROWS = 5
+#: "memory": the lag counts as not identifiable when the lags within one standard error of the
+#: minimum span more than this fraction of the search range (a sine drive: 0.4-0.6; the virtual
+#: bench's triangles and the hand-loaded runs: at most 0.1). [1]
+IDENTIFIABLE_SPAN = 0.3
 
 
 @dataclass(frozen=True)
@@ -61,18 +65,34 @@ class LagSearch:
         The criterion at each lag: cross-validated RMSE [unit of y] (``"cv"``), or
         1 − correlation of the changes [1] (``"xcorr"``).
     method : str
-        ``"xcorr"`` or ``"cv"``.
+        ``"memory"``, ``"xcorr"`` or ``"cv"``.
+    plausible_s : tuple of float, optional
+        ``"memory"``: the least and the largest whole-row lag whose error is not worse than the
+        minimum's by more than one standard error of the difference (paired over the
+        cross-validation groups). [s]
+    identifiable : bool
+        ``"memory"``: False when the plausible lags span more than :data:`IDENTIFIABLE_SPAN`
+        of the search range: the run does not tell a lag from a hysteresis loop.
     """
 
     lag_s: float
     lags_s: np.ndarray
     cv_rmse: np.ndarray
     method: str = "cv"
+    plausible_s: tuple | None = None
+    identifiable: bool = True
 
     def to_dict(self) -> dict:
-        """JSON form: the lag, the criterion and the search range."""
-        return {"lag_s": self.lag_s, "method": self.method,
-                "range_s": [float(self.lags_s.min()), float(self.lags_s.max())]}
+        """JSON form: the lag, the criterion, the search range and (``"memory"``) the plausible lags."""
+        out = {"lag_s": self.lag_s, "method": self.method,
+               "range_s": [float(self.lags_s.min()), float(self.lags_s.max())]}
+        if self.plausible_s is not None:
+            out["plausible_s"] = [float(v) for v in self.plausible_s]
+            out["identifiable"] = bool(self.identifiable)
+            if not self.identifiable:
+                out["note"] = ("lag not identifiable on this run: a lag and a hysteresis loop fit it equally well "
+                               "(plausible lags span more than the identifiable span); no lag assumed")
+        return out
 
 
 def shift_reference(t, y, lag_s: float) -> np.ndarray:
@@ -242,6 +262,13 @@ def _memory_search(t, x, y, g, use, steps, dt, sign, folds) -> LagSearch:
     rows = ok & np.all(np.isfinite(a), axis=1)
     rows[: steps + 2] = False
     rows[-(steps + 2):] = False
+    # Rows before the readout has swung both ways by twice the largest threshold hold the operators'
+    # starting state, which no later row has: held out, their cycle is an extrapolation whose error
+    # swamps the criterion (the virtual bench's first cycle: lag -0.235 s instead of 0). Left out
+    # when enough rows remain.
+    settled = rows & (np.arange(rows.size) >= _memory_settled(z, 2 * max(THRESHOLDS)))
+    if np.unique(g[settled]).size >= 2 and settled.sum() >= 10 * a.shape[1]:
+        rows = settled
     idx = np.flatnonzero(rows)
     if idx.size < 10 * a.shape[1]:
         raise ValueError("lag: too few readings to estimate a lag")
@@ -271,4 +298,58 @@ def _memory_search(t, x, y, g, use, steps, dt, sign, folds) -> LagSearch:
             sse += (yf * yf).sum(0) - 2 * (beta * bs[f]).sum(0) + (beta * (grams[f] @ beta)).sum(0)
         return scale * np.sqrt(np.clip(sse, 0.0, None) / idx.size)
 
-    return _grid_search(crits, steps, dt, "memory")
+    # Which whole-row lags the groups cannot tell from the best: out-of-fold squared error per group,
+    # paired against the best lag's (the level of each cycle cancels).
+    coarse = np.arange(-steps, steps + 1) * dt
+    ys = np.column_stack([shift_reference(t, y, lag)[idx] for lag in coarse]) / scale
+    ys = np.where(np.isfinite(ys), ys, 0.0)
+    bs = [parts[f].T @ ys[fold == f] for f in range(k)]
+    btot = sum(bs)
+    ng = int(gi.max()) + 1
+    mse = np.zeros((ng, coarse.size))
+    for f in range(k):
+        res = ys[fold == f] - parts[f] @ (solves[f] @ (btot - bs[f]))
+        np.add.at(mse, gi[fold == f], res * res)
+    mse /= np.bincount(gi, minlength=ng)[:, None]
+    diff = mse - mse[:, [int(np.argmin(mse.mean(0)))]]
+    se = diff.std(0, ddof=1) / np.sqrt(ng)
+    near = coarse[diff.mean(0) <= se]
+    plausible = (float(near.min()), float(near.max()))
+    flat = np.ptp(mse.mean(0)) <= 1e-9 * max(mse.mean(0).max(), 1e-300)  # _grid_search says so
+    if not flat and plausible[1] - plausible[0] > IDENTIFIABLE_SPAN * (coarse[-1] - coarse[0]):
+        # A lag and a loop fit equally well (a smooth periodic drive): no lag is assumed.
+        return LagSearch(0.0, coarse, scale * np.sqrt(mse.mean(0)), "memory", plausible, False)
+    found = _grid_search(crits, steps, dt, "memory")
+    return LagSearch(found.lag_s, found.lags_s, found.cv_rmse, "memory", plausible, True)
+
+
+def _memory_settled(z: np.ndarray, swing: float) -> int:
+    """First row after which every play operator up to ``swing``/2 has moved both ways.
+
+    The readout ``z`` (NaN rows skipped) must rise by ``swing`` above its lowest value so far and
+    then fall by ``swing`` below the highest value since (or fall, then rise). Before that the
+    operators still hold their starting state. ``z.size`` when it never does.
+    """
+    lo = hi = None
+    first = 0  # +1: rose by `swing` first, -1: fell first, 0: neither yet
+    for i, v in enumerate(z.tolist()):
+        if v != v:  # NaN
+            continue
+        if lo is None:
+            lo = hi = v
+            continue
+        if first == 0:
+            lo, hi = min(lo, v), max(hi, v)
+            if v - lo >= swing:
+                first, hi = 1, v
+            elif hi - v >= swing:
+                first, lo = -1, v
+        elif first == 1:
+            hi = max(hi, v)
+            if hi - v >= swing:
+                return i
+        else:
+            lo = min(lo, v)
+            if v - lo >= swing:
+                return i
+    return z.size
