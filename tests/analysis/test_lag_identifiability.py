@@ -129,3 +129,13 @@ def test_memory_settles_after_a_swing_both_ways():
     assert z[i] == pytest.approx(0.36) and i == 164
     assert _memory_settled(np.linspace(0, 1, 50), 0.64) == 50  # one ramp: never
     assert _memory_settled(np.array([np.nan, 1.0, 0.3, 0.95]), 0.64) == 3  # fell first, then rose
+
+
+def test_one_motor_cycle_does_not_identify_the_lag():
+    # Property: one triangle has one reversal; along its ramps a lag is an offset by direction that the
+    # play operators reproduce (the search used to find -150 ms for the generator's +7.75 ms).
+    from fsrlab.analysis.handloaded import fsr_bench_run
+
+    cal = calibrate_run(fsr_bench_run("motor", seed=3, reference_sps=80).run(), x="voltage_v")
+    search = cal.extra["lag_search"]
+    assert cal.lag_s == 0.0 and search["identifiable"] is False and "reversal" in search["note"]

@@ -12,9 +12,30 @@ interpolated in time), by one of three criteria:
   hysteresis cannot (the design is computed once; each lag refits the weights from per-fold sums).
   On a synthetic bench run (:mod:`fsrlab.analysis.synthetic`, seed 1, triangles at a constant
   rate) it finds 0 ms where ``"xcorr"`` finds +100 ms and ``"cv"`` +450 ms; on the hand-loaded
-  runs of :mod:`fsrlab.analysis.handloaded` it finds +5 ms at 80 SPS and −30 ms at 10 SPS (the
-  HX711's sample-and-hold makes the reference late), and a readout delayed by 3 rows moves it by
-  60 ms;
+  runs of :mod:`fsrlab.analysis.handloaded` it finds +10 ms at 80 SPS and −30 ms at 10 SPS (the
+  generator's closed form: +7.75 and −36 ms; the HX711's sample-and-hold makes the reference
+  late), and a readout delayed by 3 rows moves it by 60 ms.
+
+  The rows before the readout has swung both ways by twice the largest play-operator threshold
+  are left out of the criterion: there the operators still hold their starting state, which no
+  later row has, so the cycle that holds them is an extrapolation when it is held out. On the
+  virtual bench's spring runs (4 triangles to 10 kPa, true lag 0) that one held-out cycle's error
+  (230 Pa against 28–36 Pa for the others at lag 0) decided the lag: −0.235 s, and a compensated
+  hysteresis error of 29 % instead of 0.8 %. Without those rows the search finds 0 to ±10 ms there,
+  and a reference delayed by 50 or 120 ms (or a readout) within a quarter row of the delay.
+
+  Identifiability: hysteresis that does not depend on the rate leaves the instant of a reversal
+  where it is, a lag moves it, so only the reversals tell the two apart. Along a ramp a lag is an
+  offset by direction, which the play operators reproduce; on a sine a phase shift is an elliptic
+  loop, which they reproduce too. The search therefore reports ``plausible_s``, the whole-row lags
+  whose out-of-fold error is within one standard error (paired over the cross-validation groups)
+  of the best, and takes the lag as *not identifiable* -- ``lag_s`` 0, ``identifiable`` False and a
+  ``note`` -- when they span more than :data:`IDENTIFIABLE_SPAN` of the search range (a sine drive:
+  0.35 to 0.6 of it; the virtual bench's triangles and the hand-loaded runs: at most 0.12) or when
+  the rows judged hold fewer than :data:`MIN_REVERSALS` reversals (one motor-driven triangle: the
+  search found −150 ms for a true +8 ms). Taking the smallest lag within one standard error of the
+  best instead was tried and not kept: with 4 to 6 cycles it moved a known −50 ms delay to −10 ms
+  and did not find the lag on a sine either.
 * ``"xcorr"``: the largest correlation between the changes over 5 rows (slower than
   tremor, noise and an HX711's sample-and-hold steps) of the readout and of the shifted reference.
   Hysteresis flattens the readout just after a reversal, which this criterion takes for a delay;
@@ -36,7 +57,8 @@ import numpy as np
 
 from fsrlab.analysis.calibration import cross_validate_degrees
 
-__all__ = ["LagSearch", "shift_reference", "estimate_lag", "SMOOTH_ROWS", "MAX_LAG_S", "IDENTIFIABLE_SPAN"]
+__all__ = ["LagSearch", "shift_reference", "estimate_lag", "SMOOTH_ROWS", "MAX_LAG_S", "IDENTIFIABLE_SPAN",
+           "MIN_REVERSALS", "REVERSAL_SWING"]
 
 #: Default half-width of the lag search: an HX711 at 10 SPS holds a sample up to 0.1 s, a readout
 #: window is up to 0.1 s; beyond that, on constant-rate triangles, a shift by a fraction of a ramp
@@ -45,9 +67,14 @@ MAX_LAG_S = 0.25
 #: Rows over which "xcorr" takes the changes of readout and reference. [1]
 SMOOTH_ROWS = 5
 #: "memory": the lag counts as not identifiable when the lags within one standard error of the
-#: minimum span more than this fraction of the search range (a sine drive: 0.4-0.6; the virtual
-#: bench's triangles and the hand-loaded runs: at most 0.1). [1]
+#: minimum span more than this fraction of the search range (a sine drive: 0.35-0.6; the virtual
+#: bench's triangles and the hand-loaded runs: at most 0.12; noisy synthetic triangles: 0.2-0.3). [1]
 IDENTIFIABLE_SPAN = 0.3
+#: "memory": fewest reversals of the readout (by :data:`REVERSAL_SWING` of its range) in the rows
+#: judged for the lag to count as identifiable. [1]
+MIN_REVERSALS = 2
+#: Swing that makes a reversal for :data:`MIN_REVERSALS`, a fraction of the readout's range. [1]
+REVERSAL_SWING = 0.1
 
 
 @dataclass(frozen=True)
@@ -72,7 +99,10 @@ class LagSearch:
         cross-validation groups). [s]
     identifiable : bool
         ``"memory"``: False when the plausible lags span more than :data:`IDENTIFIABLE_SPAN`
-        of the search range: the run does not tell a lag from a hysteresis loop.
+        of the search range, or the rows judged hold fewer than :data:`MIN_REVERSALS` reversals:
+        the run does not tell a lag from a hysteresis loop, and ``lag_s`` is 0.
+    note : str
+        Why the lag is not identifiable (empty when it is).
     """
 
     lag_s: float
@@ -81,6 +111,7 @@ class LagSearch:
     method: str = "cv"
     plausible_s: tuple | None = None
     identifiable: bool = True
+    note: str = ""
 
     def to_dict(self) -> dict:
         """JSON form: the lag, the criterion, the search range and (``"memory"``) the plausible lags."""
@@ -89,9 +120,8 @@ class LagSearch:
         if self.plausible_s is not None:
             out["plausible_s"] = [float(v) for v in self.plausible_s]
             out["identifiable"] = bool(self.identifiable)
-            if not self.identifiable:
-                out["note"] = ("lag not identifiable on this run: a lag and a hysteresis loop fit it equally well "
-                               "(plausible lags span more than the identifiable span); no lag assumed")
+            if self.note:
+                out["note"] = self.note
         return out
 
 
@@ -240,6 +270,7 @@ def _grid_search(criterion, steps: int, dt: float, method: str) -> LagSearch:
 
 def _memory_search(t, x, y, g, use, steps, dt, sign, folds) -> LagSearch:
     """The "memory" criterion: grouped CV RMSE of a model with hysteresis (play operators) at each lag."""
+    from fsrlab.analysis.cycles import turning_points
     from fsrlab.analysis.memory import CREEP_TIME_CONSTANTS_S, THRESHOLDS, causal_features
 
     ok = use & np.isfinite(x)
@@ -316,9 +347,18 @@ def _memory_search(t, x, y, g, use, steps, dt, sign, folds) -> LagSearch:
     near = coarse[diff.mean(0) <= se]
     plausible = (float(near.min()), float(near.max()))
     flat = np.ptp(mse.mean(0)) <= 1e-9 * max(mse.mean(0).max(), 1e-300)  # _grid_search says so
-    if not flat and plausible[1] - plausible[0] > IDENTIFIABLE_SPAN * (coarse[-1] - coarse[0]):
-        # A lag and a loop fit equally well (a smooth periodic drive): no lag is assumed.
-        return LagSearch(0.0, coarse, scale * np.sqrt(mse.mean(0)), "memory", plausible, False)
+    # A lag and a loop differ only where the load reverses: fewer than MIN_REVERSALS reversals in the
+    # rows judged, or plausible lags spanning most of the range (a smooth periodic drive), and no lag
+    # is assumed.
+    reversals = turning_points(z[idx], REVERSAL_SWING).size - 2
+    wide = plausible[1] - plausible[0] > IDENTIFIABLE_SPAN * (coarse[-1] - coarse[0])
+    if not flat and (reversals < MIN_REVERSALS or wide):
+        why = (f"{max(reversals, 0)} reversal(s) of the readout in the rows judged, fewer than {MIN_REVERSALS}"
+               if reversals < MIN_REVERSALS else
+               f"lags from {plausible[0]:+.3g} to {plausible[1]:+.3g} s fit within one standard error of the best")
+        return LagSearch(0.0, coarse, scale * np.sqrt(mse.mean(0)), "memory", plausible, False,
+                         f"lag not identifiable on this run ({why}): a lag and a hysteresis loop fit it alike; "
+                         "no lag assumed (set one with --lag)")
     found = _grid_search(crits, steps, dt, "memory")
     return LagSearch(found.lag_s, found.lags_s, found.cv_rmse, "memory", plausible, True)
 
