@@ -9,7 +9,8 @@
    dead-weight run (``fsrlab bench weights``: 200 g and 400 g placed again and again);
 3. calibrates on the calibration run against the load cell's force when the meter has one (the
    virtual meter emulates an HX711; else the stress the bench applied), with the causal hysteresis
-   compensation and no lag (the reference is taken in the readout's own window), and fits a
+   compensation and the lag searched automatically (it finds 0 within a row: the reference is taken
+   in the readout's own window), and fits a
    known-weight calibration (m·g; a polynomial of degree ≤ 2 through 0 and the masses) on the
    dead-weight run;
 4. applies the calibration to the test run (the compensated estimate);
@@ -244,13 +245,13 @@ def run_demo(out="demo", settings: DemoSettings = DemoSettings(), sensor=None, d
     what = "the load cell's force (HX711)" if reference == "force_n" else "the applied stress"
     t0 = step(f"calibration: the calibration run against {what}, model chosen by grouped cross-validation, with the "
               "causal hysteresis compensation; and a known-weight calibration on the dead weights (m·g)")
-    # lag 0: the virtual bench's reference is taken in the same window as the readout. The automatic lag
-    # search would take part of the hysteresis loop for a lag (a loop looks like a phase shift).
+    # The lag is searched as on any recording; the virtual bench takes the reference in the readout's own
+    # window, so the search finds 0 within a row (docs/calibration.md, "Lag").
     try:
-        cal = calibrate_run(calrun, compensate=True, lag=0.0, reference=reference)
+        cal = calibrate_run(calrun, compensate=True, reference=reference)
     except ValueError as exc:  # a run too short for the compensation: the plain calibration, said
         say(f"      no compensation: {str(exc).split(': ', 1)[-1]}")
-        cal = calibrate_run(calrun, lag=0.0, reference=reference)
+        cal = calibrate_run(calrun, reference=reference)
     result.files["calibration"] = save_calibration(cal, out / "calibration.json")
     known = None
     try:

@@ -12,9 +12,30 @@ interpolated in time), by one of three criteria:
   hysteresis cannot (the design is computed once; each lag refits the weights from per-fold sums).
   On a synthetic bench run (:mod:`fsrlab.analysis.synthetic`, seed 1, triangles at a constant
   rate) it finds 0 ms where ``"xcorr"`` finds +100 ms and ``"cv"`` +450 ms; on the hand-loaded
-  runs of :mod:`fsrlab.analysis.handloaded` it finds +5 ms at 80 SPS and −30 ms at 10 SPS (the
-  HX711's sample-and-hold makes the reference late), and a readout delayed by 3 rows moves it by
-  60 ms;
+  runs of :mod:`fsrlab.analysis.handloaded` it finds +10 ms at 80 SPS and −30 ms at 10 SPS (the
+  generator's closed form: +7.75 and −36 ms; the HX711's sample-and-hold makes the reference
+  late), and a readout delayed by 3 rows moves it by 60 ms.
+
+  The rows before the readout has swung both ways by twice the largest play-operator threshold
+  are left out of the criterion: there the operators still hold their starting state, which no
+  later row has, so the cycle that holds them is an extrapolation when it is held out. On the
+  virtual bench's spring runs (4 triangles to 10 kPa, true lag 0) that one held-out cycle's error
+  (230 Pa against 28–36 Pa for the others at lag 0) decided the lag: −0.235 s, and a compensated
+  hysteresis error of 29 % instead of 0.8 %. Without those rows the search finds 0 to ±10 ms there,
+  and a reference delayed by 50 or 120 ms (or a readout) within a quarter row of the delay.
+
+  Identifiability: hysteresis that does not depend on the rate leaves the instant of a reversal
+  where it is, a lag moves it, so only the reversals tell the two apart. Along a ramp a lag is an
+  offset by direction, which the play operators reproduce; on a sine a phase shift is an elliptic
+  loop, which they reproduce too. The search therefore reports ``plausible_s``, the whole-row lags
+  whose out-of-fold error is within one standard error (paired over the cross-validation groups)
+  of the best, and takes the lag as *not identifiable* -- ``lag_s`` 0, ``identifiable`` False and a
+  ``note`` -- when they span more than :data:`IDENTIFIABLE_SPAN` of the search range (a sine drive:
+  0.35 to 0.6 of it; the virtual bench's triangles and the hand-loaded runs: at most 0.12) or when
+  the rows judged hold fewer than :data:`MIN_REVERSALS` reversals (one motor-driven triangle: the
+  search found −150 ms for a true +8 ms). Taking the smallest lag within one standard error of the
+  best instead was tried and not kept: with 4 to 6 cycles it moved a known −50 ms delay to −10 ms
+  and did not find the lag on a sine either.
 * ``"xcorr"``: the largest correlation between the changes over 5 rows (slower than
   tremor, noise and an HX711's sample-and-hold steps) of the readout and of the shifted reference.
   Hysteresis flattens the readout just after a reversal, which this criterion takes for a delay;
@@ -36,7 +57,8 @@ import numpy as np
 
 from fsrlab.analysis.calibration import cross_validate_degrees
 
-__all__ = ["LagSearch", "shift_reference", "estimate_lag", "SMOOTH_ROWS", "MAX_LAG_S"]
+__all__ = ["LagSearch", "shift_reference", "estimate_lag", "SMOOTH_ROWS", "MAX_LAG_S", "IDENTIFIABLE_SPAN",
+           "MIN_REVERSALS", "REVERSAL_SWING"]
 
 #: Default half-width of the lag search: an HX711 at 10 SPS holds a sample up to 0.1 s, a readout
 #: window is up to 0.1 s; beyond that, on constant-rate triangles, a shift by a fraction of a ramp
@@ -44,6 +66,15 @@ __all__ = ["LagSearch", "shift_reference", "estimate_lag", "SMOOTH_ROWS", "MAX_L
 MAX_LAG_S = 0.25
 #: Rows over which "xcorr" takes the changes of readout and reference. [1]
 SMOOTH_ROWS = 5
+#: "memory": the lag counts as not identifiable when the lags within one standard error of the
+#: minimum span more than this fraction of the search range (a sine drive: 0.35-0.6; the virtual
+#: bench's triangles and the hand-loaded runs: at most 0.12; noisy synthetic triangles: 0.2-0.3). [1]
+IDENTIFIABLE_SPAN = 0.3
+#: "memory": fewest reversals of the readout (by :data:`REVERSAL_SWING` of its range) in the rows
+#: judged for the lag to count as identifiable. [1]
+MIN_REVERSALS = 2
+#: Swing that makes a reversal for :data:`MIN_REVERSALS`, a fraction of the readout's range. [1]
+REVERSAL_SWING = 0.1
 
 
 @dataclass(frozen=True)
@@ -61,18 +92,37 @@ class LagSearch:
         The criterion at each lag: cross-validated RMSE [unit of y] (``"cv"``), or
         1 − correlation of the changes [1] (``"xcorr"``).
     method : str
-        ``"xcorr"`` or ``"cv"``.
+        ``"memory"``, ``"xcorr"`` or ``"cv"``.
+    plausible_s : tuple of float, optional
+        ``"memory"``: the least and the largest whole-row lag whose error is not worse than the
+        minimum's by more than one standard error of the difference (paired over the
+        cross-validation groups). [s]
+    identifiable : bool
+        ``"memory"``: False when the plausible lags span more than :data:`IDENTIFIABLE_SPAN`
+        of the search range, or the rows judged hold fewer than :data:`MIN_REVERSALS` reversals:
+        the run does not tell a lag from a hysteresis loop, and ``lag_s`` is 0.
+    note : str
+        Why the lag is not identifiable (empty when it is).
     """
 
     lag_s: float
     lags_s: np.ndarray
     cv_rmse: np.ndarray
     method: str = "cv"
+    plausible_s: tuple | None = None
+    identifiable: bool = True
+    note: str = ""
 
     def to_dict(self) -> dict:
-        """JSON form: the lag, the criterion and the search range."""
-        return {"lag_s": self.lag_s, "method": self.method,
-                "range_s": [float(self.lags_s.min()), float(self.lags_s.max())]}
+        """JSON form: the lag, the criterion, the search range and (``"memory"``) the plausible lags."""
+        out = {"lag_s": self.lag_s, "method": self.method,
+               "range_s": [float(self.lags_s.min()), float(self.lags_s.max())]}
+        if self.plausible_s is not None:
+            out["plausible_s"] = [float(v) for v in self.plausible_s]
+            out["identifiable"] = bool(self.identifiable)
+            if self.note:
+                out["note"] = self.note
+        return out
 
 
 def shift_reference(t, y, lag_s: float) -> np.ndarray:
@@ -220,6 +270,7 @@ def _grid_search(criterion, steps: int, dt: float, method: str) -> LagSearch:
 
 def _memory_search(t, x, y, g, use, steps, dt, sign, folds) -> LagSearch:
     """The "memory" criterion: grouped CV RMSE of a model with hysteresis (play operators) at each lag."""
+    from fsrlab.analysis.cycles import turning_points
     from fsrlab.analysis.memory import CREEP_TIME_CONSTANTS_S, THRESHOLDS, causal_features
 
     ok = use & np.isfinite(x)
@@ -242,6 +293,13 @@ def _memory_search(t, x, y, g, use, steps, dt, sign, folds) -> LagSearch:
     rows = ok & np.all(np.isfinite(a), axis=1)
     rows[: steps + 2] = False
     rows[-(steps + 2):] = False
+    # Rows before the readout has swung both ways by twice the largest threshold hold the operators'
+    # starting state, which no later row has: held out, their cycle is an extrapolation whose error
+    # swamps the criterion (the virtual bench's first cycle: lag -0.235 s instead of 0). Left out
+    # when enough rows remain.
+    settled = rows & (np.arange(rows.size) >= _memory_settled(z, 2 * max(THRESHOLDS)))
+    if np.unique(g[settled]).size >= 2 and settled.sum() >= 10 * a.shape[1]:
+        rows = settled
     idx = np.flatnonzero(rows)
     if idx.size < 10 * a.shape[1]:
         raise ValueError("lag: too few readings to estimate a lag")
@@ -271,4 +329,67 @@ def _memory_search(t, x, y, g, use, steps, dt, sign, folds) -> LagSearch:
             sse += (yf * yf).sum(0) - 2 * (beta * bs[f]).sum(0) + (beta * (grams[f] @ beta)).sum(0)
         return scale * np.sqrt(np.clip(sse, 0.0, None) / idx.size)
 
-    return _grid_search(crits, steps, dt, "memory")
+    # Which whole-row lags the groups cannot tell from the best: out-of-fold squared error per group,
+    # paired against the best lag's (the level of each cycle cancels).
+    coarse = np.arange(-steps, steps + 1) * dt
+    ys = np.column_stack([shift_reference(t, y, lag)[idx] for lag in coarse]) / scale
+    ys = np.where(np.isfinite(ys), ys, 0.0)
+    bs = [parts[f].T @ ys[fold == f] for f in range(k)]
+    btot = sum(bs)
+    ng = int(gi.max()) + 1
+    mse = np.zeros((ng, coarse.size))
+    for f in range(k):
+        res = ys[fold == f] - parts[f] @ (solves[f] @ (btot - bs[f]))
+        np.add.at(mse, gi[fold == f], res * res)
+    mse /= np.bincount(gi, minlength=ng)[:, None]
+    diff = mse - mse[:, [int(np.argmin(mse.mean(0)))]]
+    se = diff.std(0, ddof=1) / np.sqrt(ng)
+    near = coarse[diff.mean(0) <= se]
+    plausible = (float(near.min()), float(near.max()))
+    flat = np.ptp(mse.mean(0)) <= 1e-9 * max(mse.mean(0).max(), 1e-300)  # _grid_search says so
+    # A lag and a loop differ only where the load reverses: fewer than MIN_REVERSALS reversals in the
+    # rows judged, or plausible lags spanning most of the range (a smooth periodic drive), and no lag
+    # is assumed.
+    reversals = turning_points(z[idx], REVERSAL_SWING).size - 2
+    wide = plausible[1] - plausible[0] > IDENTIFIABLE_SPAN * (coarse[-1] - coarse[0])
+    if not flat and (reversals < MIN_REVERSALS or wide):
+        why = (f"{max(reversals, 0)} reversal(s) of the readout in the rows judged, fewer than {MIN_REVERSALS}"
+               if reversals < MIN_REVERSALS else
+               f"lags from {plausible[0]:+.3g} to {plausible[1]:+.3g} s fit within one standard error of the best")
+        return LagSearch(0.0, coarse, scale * np.sqrt(mse.mean(0)), "memory", plausible, False,
+                         f"lag not identifiable on this run ({why}): a lag and a hysteresis loop fit it alike; "
+                         "no lag assumed (set one with --lag)")
+    found = _grid_search(crits, steps, dt, "memory")
+    return LagSearch(found.lag_s, found.lags_s, found.cv_rmse, "memory", plausible, True)
+
+
+def _memory_settled(z: np.ndarray, swing: float) -> int:
+    """First row after which every play operator up to ``swing``/2 has moved both ways.
+
+    The readout ``z`` (NaN rows skipped) must rise by ``swing`` above its lowest value so far and
+    then fall by ``swing`` below the highest value since (or fall, then rise). Before that the
+    operators still hold their starting state. ``z.size`` when it never does.
+    """
+    lo = hi = None
+    first = 0  # +1: rose by `swing` first, -1: fell first, 0: neither yet
+    for i, v in enumerate(z.tolist()):
+        if v != v:  # NaN
+            continue
+        if lo is None:
+            lo = hi = v
+            continue
+        if first == 0:
+            lo, hi = min(lo, v), max(hi, v)
+            if v - lo >= swing:
+                first, hi = 1, v
+            elif hi - v >= swing:
+                first, lo = -1, v
+        elif first == 1:
+            hi = max(hi, v)
+            if hi - v >= swing:
+                return i
+        else:
+            lo = min(lo, v)
+            if v - lo >= swing:
+                return i
+    return z.size

@@ -405,7 +405,8 @@ def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", comp
         Lag of the readout behind the reference [s] (rows without ``time_s``), or ``"auto"``:
         estimated (:func:`fsrlab.analysis.alignment.estimate_lag`) when the run has a ``time_s``
         column, at least :data:`MIN_LAG_READINGS` usable readings and :data:`MIN_LAG_GROUPS`
-        cycles or time blocks, else 0.
+        cycles or time blocks, else 0; also 0 when the search finds the lag not identifiable on
+        the run (``extra["lag_search"]`` then says why).
     max_lag_s : float, optional
         Half-width of the lag search (default 0.25 s, :data:`fsrlab.analysis.alignment.MAX_LAG_S`). [s]
     compensation_method : {"auto", "memory", "branches"}
