@@ -36,7 +36,9 @@ from fsrlab.physics.params import PAPER_CIRCUIT, PAPER_OPAMP
 from fsrlab.units import STANDARD_GRAVITY
 
 __all__ = ["SpringCycle", "spring_cycle", "DeadWeights", "dead_weights", "figure17_fits", "Experiment",
-           "run_experiment", "preset_targets", "quick_response", "fit_paper_sensor", "FIT_WEIGHTS"]
+           "run_experiment", "preset_targets", "quick_response", "fit_paper_sensor", "fit_paper_preset",
+           "fit_placement_spread", "placement_sensitivities", "FIT_WEIGHTS", "FIT_PARAMETERS",
+           "SHARED_FIT_PARAMETERS", "MASSES_KG"]
 
 #: The dead weights of Tables 4 and 5. [kg]
 MASSES_KG = {"200g": 0.2, "400g": 0.4}
@@ -351,7 +353,7 @@ def quick_response(sensor, points: int = 41, circuit: LM555Circuit = PAPER_CIRCU
 FIT_PARAMETERS = {
     "modulus_pa": (1e5, 1e7, True),
     "k": (1.0, 6.0, False),
-    "area_k": (1.0, 15.0, False),
+    "area_k": (1.0, 40.0, False),
     "area_fraction_0": (1e-6, 1.0, True),
     "area_growth_pa": (5e2, 1e6, True),
     "dielectric_ratio": (1e-2, 1e4, True),
@@ -369,8 +371,88 @@ def _residuals(got: dict, want: dict) -> np.ndarray:
     return np.array(res)
 
 
+#: Parameters shared by the four sensors that :func:`fit_paper_preset` adjusts (same layout as
+#: :data:`FIT_PARAMETERS`): the films in series (voltage dependence), the contact and the area's growth law.
+SHARED_FIT_PARAMETERS = {
+    "layers": (10.0, 400.0, True),
+    "contact_ohm": (1e3, 1e7, True),
+    "contact_stress_pa": (5e2, 1e5, True),
+    "area_exponent": (0.2, 4.0, True),
+}
+
+
+def _codec(names: list, table: dict):
+    lo = np.array([np.log(table[n][0]) if table[n][2] else table[n][0] for n in names])
+    hi = np.array([np.log(table[n][1]) if table[n][2] else table[n][1] for n in names])
+
+    def enc(sensor):
+        return np.array([np.log(getattr(sensor, n)) if table[n][2] else getattr(sensor, n) for n in names])
+
+    def dec(x) -> dict:
+        return {n: float(np.exp(v)) if table[n][2] else float(v) for n, v in zip(names, x)}
+
+    return lo, hi, enc, dec
+
+
+def fit_paper_preset(start=None, max_nfev: int = 300):
+    """Fit the four preset sensors jointly to :func:`preset_targets` (scipy least squares).
+
+    Parameters
+    ----------
+    start : sequence of PaperFSR, optional
+        Starting sensors (default: the stored preset, :func:`fsrlab.physics.paper_sensor.paper_sensors`).
+    max_nfev : int
+        Largest number of evaluations of the 32 residuals.
+
+    Returns
+    -------
+    (list of PaperFSR, list of dict, list of dict)
+        The fitted sensors, their :func:`quick_response` and their targets.
+
+    Notes
+    -----
+    Residuals per sensor: log ratios of the readings (Figure 19 ranges at weight ½, Table 4 means at
+    1) and HE differences in units of 2 pp (Table 3), :data:`FIT_WEIGHTS`; 8 per sensor, 32 in all.
+    Adjusted within bounds by ``scipy.optimize.least_squares`` (trust region reflective): the six
+    :data:`FIT_PARAMETERS` of each sensor and the four :data:`SHARED_FIT_PARAMETERS` common to the
+    four (28 parameters); the rest is :data:`fsrlab.physics.paper_sensor.PAPER_SENSOR_COMMON`.
+    """
+    from scipy.optimize import least_squares
+
+    from fsrlab.physics.paper_sensor import paper_sensors
+
+    base = list(start) if start is not None else paper_sensors()
+    wants = [preset_targets(i) for i in range(1, 5)]
+    own, shared = list(FIT_PARAMETERS), list(SHARED_FIT_PARAMETERS)
+    lo_o, hi_o, enc_o, dec_o = _codec(own, FIT_PARAMETERS)
+    lo_s, hi_s, enc_s, dec_s = _codec(shared, SHARED_FIT_PARAMETERS)
+    lo = np.concatenate([lo_s] + [lo_o] * 4)
+    hi = np.concatenate([hi_s] + [hi_o] * 4)
+    m = len(own)
+
+    def sensors_of(x):
+        common = dec_s(x[:len(shared)])
+        return [b.replace(**common, **dec_o(x[len(shared) + j * m:len(shared) + (j + 1) * m]))
+                for j, b in enumerate(base)]
+
+    def fun(x):
+        out = []
+        for s, want in zip(sensors_of(x), wants):
+            try:
+                out.append(_residuals(quick_response(s), want))
+            except ValueError:
+                out.append(np.full(len(FIT_WEIGHTS), 10.0))
+        return np.concatenate(out)
+
+    x0 = np.concatenate([enc_s(base[0])] + [enc_o(b) for b in base])
+    x0 = np.clip(x0, lo + 1e-9, hi - 1e-9)
+    sol = least_squares(fun, x0, bounds=(lo, hi), max_nfev=max_nfev, x_scale="jac")
+    best = sensors_of(sol.x)
+    return best, [quick_response(s) for s in best], wants
+
+
 def fit_paper_sensor(i: int, start=None, max_nfev: int = 400):
-    """Fit sensor ``i`` of the preset to :func:`preset_targets` (scipy least squares).
+    """Refit the own parameters of sensor ``i`` alone, the shared ones held (scipy least squares).
 
     Parameters
     ----------
@@ -388,10 +470,7 @@ def fit_paper_sensor(i: int, start=None, max_nfev: int = 400):
 
     Notes
     -----
-    Residuals: log ratios of the readings (Figure 19 ranges at weight ½, Table 4 means at 1) and
-    HE differences in units of 2 pp (Table 3); :data:`FIT_PARAMETERS` are adjusted within their
-    bounds by ``scipy.optimize.least_squares`` (trust region reflective); everything else comes
-    from :data:`fsrlab.physics.paper_sensor.PAPER_SENSOR_COMMON`.
+    The residuals of :func:`fit_paper_preset` for one sensor; only :data:`FIT_PARAMETERS` move.
     """
     from scipy.optimize import least_squares
 
@@ -400,26 +479,17 @@ def fit_paper_sensor(i: int, start=None, max_nfev: int = 400):
     base = start if start is not None else paper_sensor(i)
     want = preset_targets(i)
     names = list(FIT_PARAMETERS)
-
-    def to_x(sensor):
-        return np.array([np.log(getattr(sensor, n)) if FIT_PARAMETERS[n][2] else getattr(sensor, n) for n in names])
-
-    def from_x(x):
-        vals = {n: float(np.exp(v)) if FIT_PARAMETERS[n][2] else float(v) for n, v in zip(names, x)}
-        return base.replace(**vals)
-
-    lo = np.array([np.log(FIT_PARAMETERS[n][0]) if FIT_PARAMETERS[n][2] else FIT_PARAMETERS[n][0] for n in names])
-    hi = np.array([np.log(FIT_PARAMETERS[n][1]) if FIT_PARAMETERS[n][2] else FIT_PARAMETERS[n][1] for n in names])
+    lo, hi, enc, dec = _codec(names, FIT_PARAMETERS)
 
     def fun(x):
         try:
-            return _residuals(quick_response(from_x(x)), want)
+            return _residuals(quick_response(base.replace(**dec(x))), want)
         except ValueError:
             return np.full(len(FIT_WEIGHTS), 10.0)
 
-    x0 = np.clip(to_x(base), lo + 1e-9, hi - 1e-9)
+    x0 = np.clip(enc(base), lo + 1e-9, hi - 1e-9)
     sol = least_squares(fun, x0, bounds=(lo, hi), max_nfev=max_nfev, x_scale="jac")
-    best = from_x(sol.x)
+    best = base.replace(**dec(sol.x))
     return best, quick_response(best), want
 
 

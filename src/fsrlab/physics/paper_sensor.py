@@ -459,21 +459,19 @@ class PaperFSR:
 #: s0 and the films in series n set the resistance level and its voltage dependence together with φ0.
 PAPER_SENSOR_COMMON: dict = {
     "s0_m": 5.0e-9,
-    "layers": 60.0,
-    "area_exponent": 1.0,
-    "parasitic_farad": 20e-12,
-    "contact_ohm": 30e3,
-    "contact_stress_pa": 5e3,
+    "parasitic_farad": 10e-12,
     "creep_beta": 0.004,
     "creep_tau_s": 1.0,
 }
 
-#: Fitted parameters of the four paper sensors (scripts/fit_paper_sensor.py, fsrlab.analysis.experiment.fit_paper_sensor).
+#: Fitted parameters of the four paper sensors: printed by scripts/fit_paper_sensor.py
+#: (fsrlab.analysis.experiment.fit_paper_preset, then fit_placement_spread). The first four keys are
+#: shared by the four sensors; modulus_pa and contact_stress_pa end on their fit bounds (docs/experiment.md).
 PAPER_SENSOR_PARAMETERS: tuple = (
-    {"modulus_pa": 239434, "k": 2.32554, "area_k": 15, "area_fraction_0": 0.0222271, "area_growth_pa": 67131.3, "dielectric_ratio": 2.14982, "placement_stress_sd": 0, "placement_contact_sd": 0.275217},
-    {"modulus_pa": 245353, "k": 2.27058, "area_k": 15, "area_fraction_0": 0.0198222, "area_growth_pa": 22732.2, "dielectric_ratio": 2.31329, "placement_stress_sd": 0, "placement_contact_sd": 0.275217},
-    {"modulus_pa": 228527, "k": 2.22131, "area_k": 15, "area_fraction_0": 0.0205715, "area_growth_pa": 38153.4, "dielectric_ratio": 2.1893, "placement_stress_sd": 0, "placement_contact_sd": 0.275217},
-    {"modulus_pa": 233589, "k": 2.86612, "area_k": 15, "area_fraction_0": 0.0187774, "area_growth_pa": 20686.2, "dielectric_ratio": 2.58521, "placement_stress_sd": 0, "placement_contact_sd": 0.275217},
+    {"layers": 18.2938, "contact_ohm": 50452.8, "contact_stress_pa": 100000, "area_exponent": 3.70122, "modulus_pa": 100000, "k": 2.2161, "area_k": 2.73527, "area_fraction_0": 0.000250063, "area_growth_pa": 20011.2, "dielectric_ratio": 12.7786, "placement_stress_sd": 0.0189076, "placement_contact_sd": 0.0700464},
+    {"layers": 18.2938, "contact_ohm": 50452.8, "contact_stress_pa": 100000, "area_exponent": 3.70122, "modulus_pa": 100039, "k": 2.45777, "area_k": 32.5463, "area_fraction_0": 0.00032702, "area_growth_pa": 29699.2, "dielectric_ratio": 14.7512, "placement_stress_sd": 0.0189076, "placement_contact_sd": 0.0700464},
+    {"layers": 18.2938, "contact_ohm": 50452.8, "contact_stress_pa": 100000, "area_exponent": 3.70122, "modulus_pa": 100007, "k": 2.37807, "area_k": 39.805, "area_fraction_0": 0.000365234, "area_growth_pa": 36207.7, "dielectric_ratio": 13.448, "placement_stress_sd": 0.0189076, "placement_contact_sd": 0.0700464},
+    {"layers": 18.2938, "contact_ohm": 50452.8, "contact_stress_pa": 100000, "area_exponent": 3.70122, "modulus_pa": 100308, "k": 3.06002, "area_k": 37.0368, "area_fraction_0": 0.000259776, "area_growth_pa": 24583.9, "dielectric_ratio": 16.3839, "placement_stress_sd": 0.0189076, "placement_contact_sd": 0.0700464},
 )
 
 #: Preset names, in the order of the paper's sensors 1–4 (Table 3).
