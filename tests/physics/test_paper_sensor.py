@@ -122,3 +122,11 @@ def test_interfaces_accepted_by_synthetic_runs():
 
     run = synthetic_run(cycles=1, peak_pa=10e3, points_per_ramp=10, sensor=paper_sensor(1))
     assert np.all(np.isfinite(run.columns["frequency_hz"][1:]))
+
+
+def test_presets_registry_names_the_paper_sensors():
+    from fsrlab.physics.presets import sensor_preset
+
+    for name in PAPER_SENSOR_NAMES:
+        p = sensor_preset(name)
+        assert p.area_m2 == pytest.approx(paper_sensor(name).area_m2)
