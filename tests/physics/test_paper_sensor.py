@@ -64,6 +64,14 @@ def test_area_hysteresis_opens_and_closes():
     assert unload[0] == pytest.approx(load[0]) and unload[-1] == pytest.approx(load[-1])
 
 
+def test_area_factor_cancels_in_rc_without_contact_or_parasitic():
+    # Closed form: R = n·R_A/A and C = ε·d·A/(n s) make R·C independent of A when R_C = C_p = 0.
+    s = paper_sensor(1).replace(contact_ohm=0.0, parasitic_farad=0.0)
+    r1, r2 = s.respond(CYCLE, 2.5), s.respond(CYCLE, 2.5, area_factor=1.3)
+    assert r2.r_fsr_ohm * r2.c_fsr_farad == pytest.approx(r1.r_fsr_ohm * r1.c_fsr_farad, rel=1e-12)
+    assert r2.r_fsr_ohm == pytest.approx(r1.r_fsr_ohm / 1.3, rel=1e-12)
+
+
 def test_conductive_area_capped():
     assert conductive_area(1e9, 1e-4, 0.5, 1e3) == pytest.approx(1e-4)
 
@@ -106,9 +114,11 @@ def test_spread_sensors_differ():
 
 def test_placement_draws_and_names():
     s = paper_sensor("paper-a201-2")
+    s = s.replace(placement_stress_sd=0.01, placement_contact_sd=0.1, placement_area_sd=0.1)
     a = s.placement(np.random.default_rng(1))
     b = s.placement(np.random.default_rng(2))
-    assert a != b and a[1] > 0
+    assert a != b and set(a) == {"stress_factor", "contact_factor", "area_factor"} and a["contact_factor"] > 0
+    s.respond([0.0, 5e3], 2.5, **a)  # the draws are respond's keywords
     with pytest.raises(ValueError, match="paper-a201-1"):
         paper_sensor("nope")
     with pytest.raises(ValueError, match="1-4"):
@@ -130,3 +140,13 @@ def test_presets_registry_names_the_paper_sensors():
     for name in PAPER_SENSOR_NAMES:
         p = sensor_preset(name)
         assert p.area_m2 == pytest.approx(paper_sensor(name).area_m2)
+
+
+def test_virtual_device_source_accepts_a_paper_sensor():
+    from fsrlab.acquisition.virtual_device import PhysicsSource, StressProfile
+    from fsrlab.physics.params import PAPER_CIRCUIT
+
+    # The preset's range: the paper's 0-10 kPa spring cycle.
+    src = PhysicsSource(StressProfile(peak_pa=10e3), sensor=paper_sensor(1), circuit=PAPER_CIRCUIT)
+    sig = src.window(1.0, 1.1, 0)
+    assert np.isfinite(sig.frequency_hz) and sig.frequency_hz > 0

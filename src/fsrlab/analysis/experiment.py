@@ -37,7 +37,7 @@ from fsrlab.units import STANDARD_GRAVITY
 
 __all__ = ["SpringCycle", "spring_cycle", "DeadWeights", "dead_weights", "figure17_fits", "Experiment",
            "run_experiment", "preset_targets", "quick_response", "fit_paper_sensor", "fit_paper_preset",
-           "fit_placement_spread", "placement_sensitivities", "FIT_WEIGHTS", "FIT_PARAMETERS",
+           "fit_placement_spread", "placement_sensitivities", "re2_design", "SPREAD_FIT_PARAMETERS", "FIT_WEIGHTS", "FIT_PARAMETERS",
            "SHARED_FIT_PARAMETERS", "MASSES_KG"]
 
 #: The dead weights of Tables 4 and 5. [kg]
@@ -147,8 +147,8 @@ def dead_weights(sensor, mass_kg: float, placements: int = 5, load_area_m2: floa
     ----------
     sensor : object
         A sensor with ``respond``; if it has ``placement(rng)`` (a
-        :class:`~fsrlab.physics.paper_sensor.PaperFSR`), each placement draws its stress and
-        contact factors, and ``respond`` gets ``time_s`` for creep.
+        :class:`~fsrlab.physics.paper_sensor.PaperFSR`), each placement draws its stress, contact
+        and area factors, and ``respond`` gets ``time_s`` for creep.
     mass_kg : float
         The dead weight. [kg]
     placements : int
@@ -185,8 +185,7 @@ def dead_weights(sensor, mass_kg: float, placements: int = 5, load_area_m2: floa
         stress = np.array([0.0, sigma, sigma])
         kw = {}
         if hasattr(sensor, "placement"):
-            sf, cf = sensor.placement(rng)
-            kw = {"time_s": np.array([0.0, 0.0, t_read]), "stress_factor": sf, "contact_factor": cf}
+            kw = {"time_s": np.array([0.0, 0.0, t_read]), **sensor.placement(rng)}
         r555 = sensor.respond(stress, voltage_v=circuit.fsr_voltage_v, **kw)
         rop = sensor.respond(stress, voltage_v=opamp.fsr_voltage_v, **kw)
         osc = circuit.astable(r555.r_fsr_ohm[-1:], r555.c_fsr_farad[-1:])
@@ -371,6 +370,15 @@ def _residuals(got: dict, want: dict) -> np.ndarray:
     return np.array(res)
 
 
+#: The placement spreads of :class:`~fsrlab.physics.paper_sensor.PaperFSR`, with bounds (log space), shared by
+#: the four sensors; :func:`fit_paper_preset` fits them with ``repeatability=True``.
+SPREAD_FIT_PARAMETERS = {
+    "placement_stress_sd": (1e-4, 0.3, True),
+    "placement_contact_sd": (1e-4, 1.0, True),
+    "placement_area_sd": (1e-4, 1.0, True),
+}
+SPREADS = tuple(SPREAD_FIT_PARAMETERS)
+
 #: Parameters shared by the four sensors that :func:`fit_paper_preset` adjusts (same layout as
 #: :data:`FIT_PARAMETERS`): the films in series (voltage dependence), the contact and the area's growth law.
 SHARED_FIT_PARAMETERS = {
@@ -394,7 +402,7 @@ def _codec(names: list, table: dict):
     return lo, hi, enc, dec
 
 
-def fit_paper_preset(start=None, max_nfev: int = 300):
+def fit_paper_preset(start=None, max_nfev: int = 300, repeatability: bool = False):
     """Fit the four preset sensors jointly to :func:`preset_targets` (scipy least squares).
 
     Parameters
@@ -403,6 +411,9 @@ def fit_paper_preset(start=None, max_nfev: int = 300):
         Starting sensors (default: the stored preset, :func:`fsrlab.physics.paper_sensor.paper_sensors`).
     max_nfev : int
         Largest number of evaluations of the 32 residuals.
+    repeatability : bool
+        Also fit the three placement spreads (:data:`SPREAD_FIT_PARAMETERS`) to the printed mean RE2
+        of Tables 4 and 5 (four more residuals: log ratio of :func:`re2_design`'s prediction).
 
     Returns
     -------
@@ -423,9 +434,10 @@ def fit_paper_preset(start=None, max_nfev: int = 300):
 
     base = list(start) if start is not None else paper_sensors()
     wants = [preset_targets(i) for i in range(1, 5)]
-    own, shared = list(FIT_PARAMETERS), list(SHARED_FIT_PARAMETERS)
+    shared_table = {**SHARED_FIT_PARAMETERS, **(SPREAD_FIT_PARAMETERS if repeatability else {})}
+    own, shared = list(FIT_PARAMETERS), list(shared_table)
     lo_o, hi_o, enc_o, dec_o = _codec(own, FIT_PARAMETERS)
-    lo_s, hi_s, enc_s, dec_s = _codec(shared, SHARED_FIT_PARAMETERS)
+    lo_s, hi_s, enc_s, dec_s = _codec(shared, shared_table)
     lo = np.concatenate([lo_s] + [lo_o] * 4)
     hi = np.concatenate([hi_s] + [hi_o] * 4)
     m = len(own)
@@ -437,11 +449,19 @@ def fit_paper_preset(start=None, max_nfev: int = 300):
 
     def fun(x):
         out = []
-        for s, want in zip(sensors_of(x), wants):
+        sensors = sensors_of(x)
+        for s, want in zip(sensors, wants):
             try:
                 out.append(_residuals(quick_response(s), want))
             except ValueError:
                 out.append(np.full(len(FIT_WEIGHTS), 10.0))
+        if repeatability:
+            try:
+                a, printed, _ = re2_design(sensors)
+                sd2 = np.array([getattr(sensors[0], n) for n in SPREADS]) ** 2
+                out.append(np.log(np.sqrt(a @ sd2) / printed))
+            except ValueError:
+                out.append(np.full(4, 10.0))
         return np.concatenate(out)
 
     x0 = np.concatenate([enc_s(base[0])] + [enc_o(b) for b in base])
@@ -510,27 +530,27 @@ def placement_sensitivities(sensor, mass_kg: float, circuit: LM555Circuit = PAPE
 
     Returns
     -------
-    ndarray, shape (2, 2)
-        Rows: frequency, voltage; columns: stress factor, contact factor. [1]
+    ndarray, shape (2, 3)
+        Rows: frequency, voltage; columns: stress, contact and area factors. [1]
     """
     from fsrlab.physics.paper_sensor import DEAD_WEIGHT_AREA_M2
 
     s = np.array([0.0, mass_kg * STANDARD_GRAVITY / DEAD_WEIGHT_AREA_M2])
 
-    def readings(sf, cf):
-        r25 = sensor.respond(s, circuit.fsr_voltage_v, stress_factor=sf, contact_factor=cf)
-        r5 = sensor.respond(s, opamp.fsr_voltage_v, stress_factor=sf, contact_factor=cf)
+    def readings(**kw):
+        r25 = sensor.respond(s, circuit.fsr_voltage_v, **kw)
+        r5 = sensor.respond(s, opamp.fsr_voltage_v, **kw)
         f = circuit.astable(r25.r_fsr_ohm[-1], r25.c_fsr_farad[-1], check=False).frequency_hz
         return np.log([f, opamp.output_v(r5.r_fsr_ohm[-1])])
 
     up, dn = np.exp(step), np.exp(-step)
-    d_s = (readings(up, 1.0) - readings(dn, 1.0)) / (2 * step)
-    d_c = (readings(1.0, up) - readings(1.0, dn)) / (2 * step)
-    return np.column_stack([d_s, d_c])
+    cols = [(readings(**{k: up}) - readings(**{k: dn})) / (2 * step)
+            for k in ("stress_factor", "contact_factor", "area_factor")]
+    return np.column_stack(cols)
 
 
-def fit_placement_spread(sensors) -> tuple[float, float, dict]:
-    """The placement spreads (stress and contact) from the mean RE2 of Tables 4 and 5 (linearised).
+def fit_placement_spread(sensors) -> tuple[dict, dict]:
+    """The placement spreads (stress, contact, area) from the mean RE2 of Tables 4 and 5 (linearised).
 
     Parameters
     ----------
@@ -539,33 +559,56 @@ def fit_placement_spread(sensors) -> tuple[float, float, dict]:
 
     Returns
     -------
-    (float, float, dict)
-        ``placement_stress_sd``, ``placement_contact_sd`` and the predicted and printed mean RE2
-        per table and load.
+    (dict, dict)
+        ``{"placement_stress_sd", "placement_contact_sd", "placement_area_sd"}`` and the predicted and
+        printed mean RE2 per table and load.
 
     Notes
     -----
-    For small spreads, ``RE2² ≈ 100²·(a²·sd_σ² + b²·sd_c²)`` with ``a, b`` the sensitivities of
-    :func:`placement_sensitivities` (per sensor and load). The two variances are fitted by
-    non-negative least squares to the squared printed mean RE2 of Table 4 (frequency) and
-    Table 5 (voltage) at 200 g and 400 g: four equations, two unknowns. Creep (a random read time)
-    adds a small third term that the fit does not use.
+    For small spreads, ``RE2² ≈ 100²·(a²·sd_σ² + b²·sd_c² + c²·sd_a²)`` with ``a, b, c`` the
+    sensitivities of :func:`placement_sensitivities` (averaged in square over the sensors). The three
+    variances are fitted by non-negative least squares to the squared printed mean RE2 of Table 4
+    (frequency) and Table 5 (voltage) at 200 g and 400 g: four equations, three unknowns. Creep (a
+    random read time) adds a small term that the fit does not use.
     """
     from scipy.optimize import nnls
 
     from fsrlab.reference import paper_values
 
-    p = paper_values()
-    rows, rhs, labels = [], [], []
-    for t_key, row in (("table4_repeatability_capacitive_kHz", 0), ("table5_repeatability_traditional_V", 1)):
-        for label, m in MASSES_KG.items():
-            sens = np.array([placement_sensitivities(s, m)[row] for s in sensors])
-            rows.append(np.mean(sens**2, axis=0) * 1e4)
-            rhs.append(float(p[t_key][label]["mean_RE2"]) ** 2)
-            labels.append((t_key.split("_")[0], label))
-    a, b = np.array(rows), np.array(rhs)
-    var, _ = nnls(a, b)
+    a, printed, labels = re2_design(sensors)
+    var, _ = nnls(a, printed**2)
     pred = np.sqrt(a @ var)
-    return float(np.sqrt(var[0])), float(np.sqrt(var[1])), {
-        f"{t} {lab}": {"printed_re2": float(np.sqrt(r)), "predicted_re2": float(q)}
-        for (t, lab), r, q in zip(labels, b, pred)}
+    return {n: float(np.sqrt(v)) for n, v in zip(SPREADS, var)}, {
+        lab: {"printed_re2": float(r), "predicted_re2": float(q)} for lab, r, q in zip(labels, printed, pred)}
+
+
+def re2_design(sensors) -> tuple[np.ndarray, np.ndarray, list]:
+    """The linearised mean RE2 of Tables 4 and 5: ``RE2 ≈ sqrt(A @ sd²)`` per table and load.
+
+    Parameters
+    ----------
+    sensors : sequence of PaperFSR
+        The sensors, in the order of the tables.
+
+    Returns
+    -------
+    (ndarray, ndarray, list of str)
+        ``A`` of shape (4, 3) [%²] (rows: Table 4 at 200 g, 400 g, Table 5 at 200 g, 400 g; columns:
+        :data:`SPREADS`), the printed mean RE2 [%] and the rows' labels.
+
+    Notes
+    -----
+    ``A = 100²·mean over sensors of S²`` with S the sensitivities of :func:`placement_sensitivities`.
+    """
+    from fsrlab.reference import paper_values
+
+    p = paper_values()
+    sens = {m: np.array([placement_sensitivities(s, m) for s in sensors]) for m in MASSES_KG.values()}
+    rows, printed, labels = [], [], []
+    for t_key, row, name in (("table4_repeatability_capacitive_kHz", 0, "table4"),
+                             ("table5_repeatability_traditional_V", 1, "table5")):
+        for label, m in MASSES_KG.items():
+            rows.append(np.mean(sens[m][:, row, :] ** 2, axis=0) * 1e4)
+            printed.append(float(p[t_key][label]["mean_RE2"]))
+            labels.append(f"{name} {label}")
+    return np.array(rows), np.array(printed), labels

@@ -315,6 +315,9 @@ class PaperFSR:
         Relative standard deviation of the stress a re-placed dead weight exerts (centring, tilt). [1]
     placement_contact_sd : float
         Standard deviation of ln R_C between placements (electrode contact re-made). [1]
+    placement_area_sd : float
+        Standard deviation of the log of the effective area between placements (how the weight's face
+        meets the sensing area: the conductive paths it closes). [1]
 
     Notes
     -----
@@ -353,12 +356,14 @@ class PaperFSR:
     creep_tau_s: float = 1.0
     placement_stress_sd: float = 0.0
     placement_contact_sd: float = 0.0
+    placement_area_sd: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("area_m2", "s0_m", "modulus_pa", "phi0_j", "eps_r", "layers", "area_fraction_0",
                      "area_growth_pa", "area_exponent", "dielectric_ratio", "contact_stress_pa", "creep_tau_s"):
             check_positive(name, getattr(self, name))
-        for name in ("parasitic_farad", "contact_ohm", "creep_beta", "placement_stress_sd", "placement_contact_sd"):
+        for name in ("parasitic_farad", "contact_ohm", "creep_beta", "placement_stress_sd", "placement_contact_sd",
+                     "placement_area_sd"):
             v = getattr(self, name)
             check_finite(name, v)
             if v < 0:
@@ -389,7 +394,7 @@ class PaperFSR:
         return n * np.asarray(resistance_per_area(np.asarray(u_v, dtype=float) / n, s_m, self.phi0_j)) / area_m2
 
     def respond(self, stress_pa, voltage_v: float = 2.5, time_s=None, stress_factor=1.0,
-                contact_factor=1.0) -> PaperResponse:
+                contact_factor=1.0, area_factor=1.0) -> PaperResponse:
         """Electrical response along a stress history.
 
         Parameters
@@ -405,6 +410,8 @@ class PaperFSR:
             Factor on the stress the composite feels (a placement's centring; 1: none). [1]
         contact_factor : float or array_like
             Factor on the contact resistance (a placement's electrode contact; 1: none). [1]
+        area_factor : float or array_like
+            Factor on the effective area, conductive and capacitive alike (a placement's face; 1: none). [1]
 
         Returns
         -------
@@ -423,7 +430,8 @@ class PaperFSR:
         hist = separation_history(eff, s0_m=self.s0_m, modulus_pa=self.modulus_pa, k=self.k)  # Eqs. (1), (9)
         s = hist.separation_m
         area = conductive_area(memory_stress(eff, self.area_k), self.area_m2, self.area_fraction_0,
-                               self.area_growth_pa, self.area_exponent)
+                               self.area_growth_pa, self.area_exponent) * np.asarray(area_factor, dtype=float)
+        area = np.broadcast_to(area, eff.shape)
         rc = contact_resistance(eff, self.contact_ohm, self.contact_stress_pa) * np.asarray(contact_factor, dtype=float)
         rc = np.broadcast_to(rc, eff.shape)
         u, r = series_contact(np.full(eff.shape, float(voltage_v)), rc,
@@ -438,21 +446,31 @@ class PaperFSR:
         """Stress σ = F / A_FSR for force ``force_n`` [N]; returns [Pa]."""
         return np.asarray(force_n, dtype=float) / self.area_m2
 
-    def placement(self, rng) -> tuple[float, float]:
-        """One dead-weight placement: ``(stress_factor, contact_factor)`` drawn from ``rng``.
+    def placement(self, rng) -> dict:
+        """One dead-weight placement: the factors it applies, drawn from ``rng``.
 
         Parameters
         ----------
         rng : numpy.random.Generator
-            Two standard normal draws.
+            Three standard normal draws.
 
         Returns
         -------
-        (float, float)
-            ``1 + sd_σ·z1`` and ``exp(sd_c·z2)``.
+        dict
+            Keyword arguments of :meth:`respond`: ``stress_factor`` = 1 + sd_σ·z1,
+            ``contact_factor`` = exp(sd_c·z2), ``area_factor`` = exp(sd_a·z3).
+
+        Notes
+        -----
+        Extension. Re-placing a weight changes how it meets the sensor: the stress it exerts
+        (centring, tilt), the electrode contact, and the part of the sensing area whose conductive
+        paths it closes. The area enters R_FSR and C_FSR alike, so it cancels in the 555's R·C and
+        stays whole in the op-amp's conductance (as the area's hysteresis does, Table 3).
         """
-        z = rng.standard_normal(2)
-        return 1.0 + self.placement_stress_sd * float(z[0]), float(np.exp(self.placement_contact_sd * z[1]))
+        z = rng.standard_normal(3)
+        return {"stress_factor": 1.0 + self.placement_stress_sd * float(z[0]),
+                "contact_factor": float(np.exp(self.placement_contact_sd * z[1])),
+                "area_factor": float(np.exp(self.placement_area_sd * z[2]))}
 
 
 #: Parameters shared by the four paper sensors (not fitted; see docs/experiment.md). The separation
@@ -468,10 +486,10 @@ PAPER_SENSOR_COMMON: dict = {
 #: (fsrlab.analysis.experiment.fit_paper_preset, then fit_placement_spread). The first four keys are
 #: shared by the four sensors; modulus_pa and contact_stress_pa end on their fit bounds (docs/experiment.md).
 PAPER_SENSOR_PARAMETERS: tuple = (
-    {"layers": 18.2938, "contact_ohm": 50452.8, "contact_stress_pa": 100000, "area_exponent": 3.70122, "modulus_pa": 100000, "k": 2.2161, "area_k": 2.73527, "area_fraction_0": 0.000250063, "area_growth_pa": 20011.2, "dielectric_ratio": 12.7786, "placement_stress_sd": 0.0189076, "placement_contact_sd": 0.0700464},
-    {"layers": 18.2938, "contact_ohm": 50452.8, "contact_stress_pa": 100000, "area_exponent": 3.70122, "modulus_pa": 100039, "k": 2.45777, "area_k": 32.5463, "area_fraction_0": 0.00032702, "area_growth_pa": 29699.2, "dielectric_ratio": 14.7512, "placement_stress_sd": 0.0189076, "placement_contact_sd": 0.0700464},
-    {"layers": 18.2938, "contact_ohm": 50452.8, "contact_stress_pa": 100000, "area_exponent": 3.70122, "modulus_pa": 100007, "k": 2.37807, "area_k": 39.805, "area_fraction_0": 0.000365234, "area_growth_pa": 36207.7, "dielectric_ratio": 13.448, "placement_stress_sd": 0.0189076, "placement_contact_sd": 0.0700464},
-    {"layers": 18.2938, "contact_ohm": 50452.8, "contact_stress_pa": 100000, "area_exponent": 3.70122, "modulus_pa": 100308, "k": 3.06002, "area_k": 37.0368, "area_fraction_0": 0.000259776, "area_growth_pa": 24583.9, "dielectric_ratio": 16.3839, "placement_stress_sd": 0.0189076, "placement_contact_sd": 0.0700464},
+    {"layers": 18.2938, "contact_ohm": 48750.7, "contact_stress_pa": 95560.1, "area_exponent": 3.7552, "modulus_pa": 102079, "k": 2.20532, "area_k": 2.71185, "area_fraction_0": 0.000237397, "area_growth_pa": 19907, "dielectric_ratio": 12.8298, "placement_stress_sd": 0.0132236, "placement_contact_sd": 0.0461557, "placement_area_sd": 0.0001},
+    {"layers": 18.2938, "contact_ohm": 48750.7, "contact_stress_pa": 95560.1, "area_exponent": 3.7552, "modulus_pa": 103119, "k": 2.44522, "area_k": 29.6021, "area_fraction_0": 0.000317159, "area_growth_pa": 29923.4, "dielectric_ratio": 14.7687, "placement_stress_sd": 0.0132236, "placement_contact_sd": 0.0461557, "placement_area_sd": 0.0001},
+    {"layers": 18.2938, "contact_ohm": 48750.7, "contact_stress_pa": 95560.1, "area_exponent": 3.7552, "modulus_pa": 102964, "k": 2.36813, "area_k": 39.805, "area_fraction_0": 0.000353813, "area_growth_pa": 36406, "dielectric_ratio": 13.4745, "placement_stress_sd": 0.0132236, "placement_contact_sd": 0.0461557, "placement_area_sd": 0.0001},
+    {"layers": 18.2938, "contact_ohm": 48750.7, "contact_stress_pa": 95560.1, "area_exponent": 3.7552, "modulus_pa": 103083, "k": 3.04364, "area_k": 37.0803, "area_fraction_0": 0.000252216, "area_growth_pa": 24781.6, "dielectric_ratio": 16.3829, "placement_stress_sd": 0.0132236, "placement_contact_sd": 0.0461557, "placement_area_sd": 0.0001},
 )
 
 #: Preset names, in the order of the paper's sensors 1–4 (Table 3).
@@ -504,6 +522,10 @@ def paper_sensor(which) -> PaperFSR:
 
 def paper_sensors() -> list[PaperFSR]:
     """The four fitted paper sensors, sensors 1–4 of Tables 3–5.
+
+    Fitted over the paper's range, 0–10 kPa at 2.5 V and 5 V; beyond it the area's growth law
+    (power ≈ 3.8) extrapolates steeply (C_FSR ≈ 65 nF at 60 kPa for sensor 1): use them on the
+    paper's bench, not as a general sensor.
 
     Returns
     -------
