@@ -58,28 +58,22 @@ def expected_re2():
 
 
 def test_re2_of_the_right_size(expected_re2):
-    # Aim: within a factor 1.5 of the printed mean RE2. Met for Table 4 at 200 g and Table 5 at 200 g;
-    # the 400 g rows are the documented gap (docs/experiment.md): asserted within a factor 2.2.
+    # Aim: within a factor 1.5 of the printed mean RE2. Met except Table 4 at 400 g, the documented gap
+    # (docs/experiment.md: 1.6 %), asserted within a factor 1.7.
     got, printed = expected_re2
-    for label in ("table4 200g", "table5 200g"):
+    for label in ("table4 200g", "table5 200g", "table5 400g"):
         assert 1 / 1.5 <= got[label] / printed[label] <= 1.5, label
-    for label in ("table4 400g", "table5 400g"):
-        assert 1 / 2.2 <= got[label] / printed[label] <= 2.2, label
+    assert 1 <= got["table4 400g"] / printed["table4 400g"] <= 1.7
     # the paper's ordering: the proposed readout repeats better than the traditional one
     assert got["table4 200g"] < got["table5 200g"] and got["table4 400g"] < got["table5 400g"]
 
 
-def test_documented_gaps(exp, printed, expected_re2):
-    # docs/experiment.md: Table 5's voltages are ~3x below what Figure 19b implies at the same load, and the
-    # frequency's spread relative to the voltage's is ~2.5x the printed one (the 555's period follows R_FSR).
+def test_documented_gaps(exp, printed):
+    # docs/experiment.md: Table 5's voltages are ~3x below what Figure 19b implies at the same load.
     t5 = printed["table5_repeatability_traditional_V"]
     for label, ws in exp.weights.items():
         v_ratio = np.mean([w.voltage_v.mean() for w in ws]) / np.mean(t5[label]["readings"])
         assert v_ratio > 2.0
-    got, want = expected_re2
-    for load in ("200g", "400g"):
-        ratio = (got[f"table4 {load}"] / got[f"table5 {load}"]) / (want[f"table4 {load}"] / want[f"table5 {load}"])
-        assert ratio > 1.5
 
 
 def test_linearised_re2_matches_the_placements(expected_re2):
@@ -123,3 +117,12 @@ def test_any_sensor_runs_through_the_bench():
     c = spring_cycle(VirtualFSR(), peak_pa=50e3, points_per_ramp=20)
     assert c.he_traditional_percent > 0 and c.he_proposed_percent > 0
     assert quick_response(paper_sensor(1))["f400"] > quick_response(paper_sensor(1))["f200"]
+
+
+def test_preset_films_stay_off_the_seams_of_the_tunnelling_equations():
+    # Property: the paper's eqs. (10)-(12) jump where they join (R_A ≈ 2.4x at u = φ0/e); a preset state on a
+    # seam would be an artefact of the piecewise equations, so every film stays in eq. (11)'s range.
+    from fsrlab.analysis.experiment import film_regimes
+
+    for s in paper_sensors():
+        assert film_regimes(s) == {11}, s.name

@@ -477,19 +477,20 @@ class PaperFSR:
 #: s0 and the films in series n set the resistance level and its voltage dependence together with φ0.
 PAPER_SENSOR_COMMON: dict = {
     "s0_m": 5.0e-9,
-    "parasitic_farad": 10e-12,
+    "parasitic_farad": 20e-12,
     "creep_beta": 0.004,
     "creep_tau_s": 1.0,
 }
 
-#: Fitted parameters of the four paper sensors: printed by scripts/fit_paper_sensor.py
-#: (fsrlab.analysis.experiment.fit_paper_preset, then fit_placement_spread). The first four keys are
-#: shared by the four sensors; modulus_pa and contact_stress_pa end on their fit bounds (docs/experiment.md).
+#: Fitted parameters of the four paper sensors, printed by scripts/fit_paper_sensor.py: per sensor the six
+#: own parameters (fsrlab.analysis.experiment.fit_paper_sensor, shared ones held: n = 60 films, so 5 V is
+#: 0.083 V per film, inside eq. (11)'s range; R_C0 = 30 kΩ, σ_c = 5 kPa, p = 1), then the three shared
+#: placement spreads (fit_placement_spread). area_k (25–30) is ill-determined: the area's memory saturates.
 PAPER_SENSOR_PARAMETERS: tuple = (
-    {"layers": 18.2938, "contact_ohm": 48750.7, "contact_stress_pa": 95560.1, "area_exponent": 3.7552, "modulus_pa": 102079, "k": 2.20532, "area_k": 2.71185, "area_fraction_0": 0.000237397, "area_growth_pa": 19907, "dielectric_ratio": 12.8298, "placement_stress_sd": 0.0132236, "placement_contact_sd": 0.0461557, "placement_area_sd": 0.0001},
-    {"layers": 18.2938, "contact_ohm": 48750.7, "contact_stress_pa": 95560.1, "area_exponent": 3.7552, "modulus_pa": 103119, "k": 2.44522, "area_k": 29.6021, "area_fraction_0": 0.000317159, "area_growth_pa": 29923.4, "dielectric_ratio": 14.7687, "placement_stress_sd": 0.0132236, "placement_contact_sd": 0.0461557, "placement_area_sd": 0.0001},
-    {"layers": 18.2938, "contact_ohm": 48750.7, "contact_stress_pa": 95560.1, "area_exponent": 3.7552, "modulus_pa": 102964, "k": 2.36813, "area_k": 39.805, "area_fraction_0": 0.000353813, "area_growth_pa": 36406, "dielectric_ratio": 13.4745, "placement_stress_sd": 0.0132236, "placement_contact_sd": 0.0461557, "placement_area_sd": 0.0001},
-    {"layers": 18.2938, "contact_ohm": 48750.7, "contact_stress_pa": 95560.1, "area_exponent": 3.7552, "modulus_pa": 103083, "k": 3.04364, "area_k": 37.0803, "area_fraction_0": 0.000252216, "area_growth_pa": 24781.6, "dielectric_ratio": 16.3829, "placement_stress_sd": 0.0132236, "placement_contact_sd": 0.0461557, "placement_area_sd": 0.0001},
+    {"layers": 60.0, "contact_ohm": 30000.0, "contact_stress_pa": 5000.0, "area_exponent": 1.0, "modulus_pa": 239433.9041489569, "k": 2.325537181206501, "area_k": 25.207601813231143, "area_fraction_0": 0.022227145154504285, "area_growth_pa": 67132.63480911237, "dielectric_ratio": 2.1498174240328027, "placement_stress_sd": 0.00010000000000000026, "placement_contact_sd": 0.05545153580258893, "placement_area_sd": 0.05389532144854428},
+    {"layers": 60.0, "contact_ohm": 30000.0, "contact_stress_pa": 5000.0, "area_exponent": 1.0, "modulus_pa": 245351.70477575826, "k": 2.2705699749860715, "area_k": 29.97499026245073, "area_fraction_0": 0.019822254443902343, "area_growth_pa": 22733.111754155692, "dielectric_ratio": 2.3133001375390885, "placement_stress_sd": 0.00010000000000000026, "placement_contact_sd": 0.05545153580258893, "placement_area_sd": 0.05389532144854428},
+    {"layers": 60.0, "contact_ohm": 30000.0, "contact_stress_pa": 5000.0, "area_exponent": 1.0, "modulus_pa": 228526.99080902553, "k": 2.2213051493357776, "area_k": 25.206811696277853, "area_fraction_0": 0.020571499387966093, "area_growth_pa": 38154.15528958332, "dielectric_ratio": 2.189306084223522, "placement_stress_sd": 0.00010000000000000026, "placement_contact_sd": 0.05545153580258893, "placement_area_sd": 0.05389532144854428},
+    {"layers": 60.0, "contact_ohm": 30000.0, "contact_stress_pa": 5000.0, "area_exponent": 1.0, "modulus_pa": 233585.99730698363, "k": 2.8660768830424055, "area_k": 29.795413587965577, "area_fraction_0": 0.018777574457736954, "area_growth_pa": 20688.28500217303, "dielectric_ratio": 2.5852426717259194, "placement_stress_sd": 0.00010000000000000026, "placement_contact_sd": 0.05545153580258893, "placement_area_sd": 0.05389532144854428},
 )
 
 #: Preset names, in the order of the paper's sensors 1–4 (Table 3).
@@ -523,9 +524,9 @@ def paper_sensor(which) -> PaperFSR:
 def paper_sensors() -> list[PaperFSR]:
     """The four fitted paper sensors, sensors 1–4 of Tables 3–5.
 
-    Fitted over the paper's range, 0–10 kPa at 2.5 V and 5 V; beyond it the area's growth law
-    (power ≈ 3.8) extrapolates steeply (C_FSR ≈ 65 nF at 60 kPa for sensor 1): use them on the
-    paper's bench, not as a general sensor.
+    Fitted over the paper's range, 0–10 kPa at 2.5 V and 5 V: use them on the paper's bench; beyond
+    10 kPa R_FSR falls fast (sensor 1 at 2.5 V: ≈ 43 kΩ at 20 kPa, ≈ 7 kΩ at 40 kPa, where the
+    paper's 555 with R = 10 kΩ no longer oscillates).
 
     Returns
     -------

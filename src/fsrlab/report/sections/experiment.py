@@ -166,12 +166,13 @@ def _fit_table(sensors, fits: list, targets: list) -> tuple[Table, dict]:
     cols = ["printed number"] + [c for i in range(1, 5) for c in (f"paper {i}", f"fit {i}")]
     table = Table(title="The fitted paper-sensor preset: each printed number it was fitted to, and the fit's value",
                   columns=cols, rows=rows, fmt="{:.3g}",
-                  note="Joint least-squares fit (scipy.optimize.least_squares, scripts/fit_paper_sensor.py) of 28 "
-                       "parameters: per sensor modulus, separation and area unloading exponents, conductive area "
-                       "fraction and growth, dielectric/conductive area ratio; shared films in series, contact "
-                       "resistance and its stress scale, area growth power. Evaluated on the closed forms "
+                  note="Least-squares fit (scipy.optimize.least_squares, scripts/fit_paper_sensor.py) of six "
+                       "parameters per sensor: modulus, separation and area unloading exponents, conductive area "
+                       "fraction and growth, dielectric/conductive area ratio; shared parameters held (60 films, "
+                       "R_C0 = 30 kΩ, σ_c = 5 kPa). Evaluated on the closed forms "
                        "(fsrlab.analysis.experiment.quick_response), no meter. Figure 19's ends are axis ranges, "
-                       "fitted at half weight. Parameters: paper.json experiment.preset.")
+                       "fitted at half weight. Then three placement spreads, shared, to the mean RE2 of Tables 4 "
+                       "and 5. Parameters: paper.json experiment.preset.")
     return table, data
 
 
@@ -199,10 +200,12 @@ def _erratum_x1(exp: Experiment, printed: dict) -> Erratum:
         fsrlab=(f"On a virtual sensor fitted to Table 3 (HE_PM {exp.he_proposed[0]:.1f} %), a single-valued σ(f) on "
                 f"both branches reaches only R² = {f17['both']['linear']:.4f} (linear) and "
                 f"{f17['both']['cubic']:.4f} (cubic): the branch gap is unexplained variance no curve removes. "
-                f"Fitted to the mean of the two branches the same cycle gives {f17['means']['linear']:.4f} and "
-                f"{f17['means']['cubic']:.4f}, close to the printed pair; the loading branch alone gives "
-                f"{f17['loading']['linear']:.4f} and {f17['loading']['cubic']:.4f}. The printed R² values fit data "
-                "without the hysteresis gap (branch means, or one branch), not the loading–unloading cycle of Table 3."),
+                f"The same cycle's loading branch alone gives {f17['loading']['linear']:.4f} and "
+                f"{f17['loading']['cubic']:.4f}, its unloading branch {f17['unloading']['linear']:.4f} and "
+                f"{f17['unloading']['cubic']:.4f}, the mean of the two branches {f17['means']['linear']:.4f} and "
+                f"{f17['means']['cubic']:.4f}. A cubic R² of 0.9974 is reached only without the hysteresis gap "
+                "(one branch, or branch means), not on the loading–unloading cycle of Table 3. The printed linear "
+                "R², 0.9432, sits between: which data the paper fitted is not stated."),
         evidence="fsrlab.analysis.experiment.figure17_fits on the virtual spring cycle (this section, Table "
                  "'Figure 17'); tests/analysis/test_experiment.py::test_figure17_single_valued_fit_is_capped_by_the_gap.")
 
@@ -248,22 +251,22 @@ def build(outdir: Path) -> Section:
         "Table 4's frequencies put the weights on Figure 19a (5–10 kPa), Figure 19b reads 0.6–1 V, while Table 5 "
         "prints 0.18–0.44 V, below Figure 19b's zero-stress 0.4 V; one sensor cannot give both (a different fixture, "
         "supply or gain in §6.2 would, none is printed).",
-        f"Repeatability: the placement spreads (stress, contact, area) fitted to the mean RE2 of Tables 4 and 5 "
-        f"give on average {e4[0]:.1f} % / {e4[1]:.1f} % for the frequency (printed 1 % / 1 %, 200 g / 400 g) and "
-        f"{e5[0]:.1f} % / {e5[1]:.1f} % for the voltage (printed 5 % / 6 %): the voltage's spread is "
-        f"{e5[0] / e4[0]:.1f}× / {e5[1] / e4[1]:.1f}× the frequency's, the paper's 5× / 6×. With D1 the 555's period "
-        "is mostly C_FSR·R_FSR·ln 2 (eq. 34), so the frequency follows R_FSR's placement variation too; only the "
-        "contact resistance, which weighs more at 5 V, tells the readouts apart, and in this preset the area does "
-        "not cancel in R_FSR·C_FSR (the contact takes part of R_FSR), so an area spread does not help. The paper's "
-        "reason, capacitance's independence of voltage, does not apply to a frequency set by R_FSR·C_FSR.",
+        f"Repeatability: the placement spreads fitted to the mean RE2 of Tables 4 and 5 give on average "
+        f"{e4[0]:.2f} % / {e4[1]:.2f} % for the frequency (printed 1 % / 1 %, 200 g / 400 g) and "
+        f"{e5[0]:.2f} % / {e5[1]:.2f} % for the voltage (printed 5 % / 6 %). What separates the readouts is the "
+        "placement's area factor: it enters the op-amp's conductance whole and cancels in the 555's R_FSR·C_FSR up "
+        "to the contact resistance and the parasitic capacitance. At 400 g the contact's share of R_FSR is larger, "
+        "the cancellation weaker, and the frequency's spread stays above the printed 1 %. With D1 the period is "
+        "mostly C_FSR·R_FSR·ln 2 (eq. 34): the frequency does follow R_FSR, so the paper's own reason "
+        "(capacitance's independence of voltage) is not what makes it repeatable here.",
         f"Branch order in Figure 19: every mechanism here (separation and area memory, creep) keeps the composite "
         f"compressed on unloading, so fsrlab reads higher on unloading (f: {order_f}; V0: {order_v}). Figure 19 "
         "is reported as drawn with loading above unloading; the text transcription of the paper does not carry "
         "the figure, so the drawn order was not checked here.",
         f"Figure 19's ends: the fit reaches f(0) = {f0_lo:.2f}–{f0_hi:.2f} kHz for the printed 3 kHz and "
-        f"V0(10 kPa) = {v10_lo:.2f}–{v10_hi:.2f} V for 1 V, Table 4's 200 g readings pulling the other way; the "
-        "moduli and the contact's stress scale sit at or near their fit bounds (the fit wants a softer composite "
-        "and a contact that barely flattens).",
+        f"V0(10 kPa) = {v10_lo:.2f}–{v10_hi:.2f} V for 1 V, Table 4's 200 g readings pulling the other way. The "
+        "shared parameters (films in series, contact, area growth power) are held: freed, the fit moved the films "
+        "onto a seam of the paper's piecewise tunnelling equations (docs/experiment.md).",
         "Figure 17: see erratum X1.",
     ]
     intro = (
@@ -276,7 +279,7 @@ def build(outdir: Path) -> Section:
         "placement-to-placement spread. The area's hysteresis cancels in the 555's R_FSR·C_FSR and stays whole in the "
         "op-amp's conductance: that is the mechanism behind Table 3's ordering.\n\n"
         "The preset was fitted (scripts/fit_paper_sensor.py) to Table 3's rows, Table 4's mean readings and "
-        "Figure 19's ranges; the placement spreads to the mean RE2 of Tables 4 and 5. The experiment then runs "
+        "Figure 19's ranges; the placement spreads (stress, contact, area) to the mean RE2 of Tables 4 and 5. The experiment then runs "
         "through the paper's circuits and fsrlab's meter model and analysis (fsrlab.analysis.experiment): "
         f"Table 3 means {exp.he_traditional.mean():.2f} % / {exp.he_proposed.mean():.2f} % "
         f"(paper 23.35 % / 16.31 %), f {f_rng[0]:.1f}–{f_rng[1]:.1f} kHz and V0 {v_rng[0]:.2f}–{v_rng[1]:.2f} V over "
