@@ -10,6 +10,8 @@ Sources
   π·(4.765 mm)² = 71.3 mm² (the same value as :data:`fsrlab.physics.sensor.A201_AREA_M2`).
 - ``interlink-402``: Interlink Electronics FSR 400 series datasheet, FSR 402 active area 12.7 mm
   (0.5 in) diameter; π·(6.35 mm)² = 126.7 mm².
+- ``paper-a201-1`` … ``paper-a201-4``: the A201's area; their physics (a fitted
+  :class:`~fsrlab.physics.paper_sensor.PaperFSR`) is ``fsrlab.physics.paper_sensor.paper_sensor(name)``.
 """
 
 from __future__ import annotations
@@ -57,6 +59,10 @@ SENSOR_PRESETS: dict[str, SensorPreset] = {
                      "Tekscan FlexiForce A201 datasheet: sensing area 9.53 mm diameter"),
         SensorPreset("interlink-402", "Interlink Electronics FSR 402", 12.7e-3,
                      "Interlink FSR 400 series datasheet: FSR 402 active area 12.7 mm diameter"),
+        # The fitted virtual sensors of the paper's §6 (physics: fsrlab.physics.paper_sensor.paper_sensor(name)).
+        *(SensorPreset(f"paper-a201-{i}", f"Tekscan FlexiForce A201-1, paper sensor {i} (fitted model)", 9.53e-3,
+                       "A201 datasheet area; model fitted to the paper's Tables 3-4 and Figure 19 "
+                       "(fsrlab.physics.paper_sensor)") for i in range(1, 5)),
     )
 }
 """The presets by name."""

@@ -25,6 +25,7 @@ SECTION_MODULES = [
     "fsrlab.report.sections.physics",
     "fsrlab.report.sections.oscillator",
     "fsrlab.report.sections.measurements",
+    "fsrlab.report.sections.experiment",
 ]
 
 

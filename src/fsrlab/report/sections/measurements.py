@@ -1,14 +1,17 @@
-"""Report section: measurement analysis (paper §5–6): Tables 3, 4, 5, Figure 17, compensation, errata M1–M2.
+"""Report section: measurement analysis (paper §5–6): Tables 3, 4, 5 as printed, calibration, compensation, errata M1–M2.
 
 Tables 4 and 5 are recomputed by :mod:`fsrlab.analysis.repeatability` from the printed readings of
-:func:`fsrlab.reference.paper_values`; Figure 17 and the compensation use a synthetic bench run
+:func:`fsrlab.reference.paper_values`; the calibration table and the compensation use a synthetic bench run
 (:mod:`fsrlab.analysis.synthetic`, :mod:`fsrlab.analysis.calibration`,
-:mod:`fsrlab.analysis.compensation`). This module draws and words the results.
+:mod:`fsrlab.analysis.compensation`). This module draws and words the results. Figure 17 and
+Tables 3–5 reproduced on a virtual bench are the experiment section's
+(:mod:`fsrlab.report.sections.experiment`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from decimal import ROUND_HALF_UP, Decimal
 from pathlib import Path
 from typing import Any
 
@@ -72,39 +75,6 @@ def _synthetic() -> _Synthetic:
     )
 
 
-def _fig17(outdir: Path, syn: _Synthetic, printed: dict) -> Figure:
-    import matplotlib
-
-    matplotlib.use("Agg", force=True)
-    import matplotlib.pyplot as plt
-
-    c, lin, cub = syn.columns, syn.fits["linear"], syn.fits["cubic"]
-    f, load = c["frequency_hz"], c["direction"] >= 0
-    fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0), dpi=110, sharey=True)
-    grid = np.linspace(np.nanmin(f), np.nanmax(f), 200)
-    for ax, cal, lab in ((axes[0], lin, "(a) linear"), (axes[1], cub, "(b) cubic")):
-        ax.grid(True, alpha=0.3)
-        ax.plot(f[load] / 1e3, c["stress_pa"][load] / 1e3, ".", ms=3, color="tab:blue", label="loading (synthetic)")
-        ax.plot(f[~load] / 1e3, c["stress_pa"][~load] / 1e3, ".", ms=3, color="tab:orange", label="unloading (synthetic)")
-        ax.plot(grid / 1e3, cal(grid) / 1e3, "k-", lw=1.5, label=f"fit, R² = {cal.r2:.4f}")
-        ax.set_xlabel("f (kHz)")
-        ax.set_title(f"{lab} fit of σ(f), both branches")
-        ax.legend(fontsize=8)
-    axes[0].set_ylabel("σ (kPa)")
-    fig.suptitle("SYNTHETIC data (VirtualFSR → LM555 closed forms → 62.5 ns timer), not the paper's measurements",
-                 fontsize=9)
-    path = save(fig, outdir / "measurements_fig17_calibration.png")
-    s_kpa, f_khz = printed["stress_range_kPa"], printed["frequency_range_kHz"]
-    return Figure(
-        filename=path.name, title="Figure 17: linear and cubic calibration σ(f) (synthetic data)",
-        paper=f"Linear fit R² = {printed['linear']}, cubic R² = {printed['cubic']}, "
-              f"σ {s_kpa[0]}–{s_kpa[1]} kPa, f {f_khz[0]}–{f_khz[1]} kHz (raw data unpublished).",
-        fsrlab=f"On synthetic data (0–50 kPa, {np.nanmin(f) / 1e3:.1f}–{np.nanmax(f) / 1e3:.1f} kHz): linear "
-               f"R² = {lin.r2:.4f}, cubic R² = {cub.r2:.4f} on both branches; on the loading branch alone "
-               f"{syn.fits['loading_linear'].r2:.4f} and {syn.fits['loading_cubic'].r2:.4f}. Same message as the "
-               "paper: the cubic is needed.")
-
-
 def _fig_compensation(outdir: Path, syn: _Synthetic) -> Figure:
     comp, f, s = syn.compensation, syn.columns["frequency_hz"], syn.columns["stress_pa"]
     fig, ax = new_figure(6.4, 4.2)
@@ -126,21 +96,62 @@ def _fig_compensation(outdir: Path, syn: _Synthetic) -> Figure:
                f"{comp.rmse_after_pa / 1e3:.2f} kPa.")
 
 
+def exact_mean(values) -> Decimal:
+    """Mean of printed decimals, computed exactly on their decimal text (no binary rounding).
+
+    Parameters
+    ----------
+    values : sequence of float or str
+        Printed values (a float is taken by its shortest repr, the number as printed).
+
+    Returns
+    -------
+    Decimal
+        The exact mean.
+    """
+    vals = [Decimal(str(v)) for v in values]
+    return sum(vals, Decimal(0)) / len(vals)
+
+
+def shown_as_printed(value: Decimal, places: int = 2) -> str:
+    """``value`` with ``places`` decimals, rounded half up as the paper rounds (23.345 → "23.35").
+
+    Parameters
+    ----------
+    value : Decimal
+        An exact decimal (:func:`exact_mean`).
+    places : int
+        Decimals shown.
+
+    Returns
+    -------
+    str
+        E.g. ``"23.35 (= 23.345)"`` when rounding drops digits, else the value alone.
+    """
+    rounded = value.quantize(Decimal(1).scaleb(-places), rounding=ROUND_HALF_UP)
+    exact = value.normalize()
+    return f"{rounded}" if rounded == exact else f"{rounded} (= {exact})"
+
+
 def _table3(printed: dict, syn: _Synthetic) -> Table:
     trad, prop = printed["traditional"], printed["proposed"]
     rows = [[s, a, b] for s, a, b in zip(printed["sensor"], trad, prop)]
     rows.append(["mean (paper)", printed["traditional_mean"], printed["proposed_mean"]])
-    rows.append(["mean (fsrlab, of the printed rows)", float(np.mean(trad)), float(np.mean(prop))])
+    # Exact decimal means of the printed rows, rounded half up as the paper does: float formatting would
+    # show 23.345 as 23.34 (the binary double of 23.345 lies just below it).
+    rows.append(["mean (fsrlab, of the printed rows)", shown_as_printed(exact_mean(trad)),
+                 shown_as_printed(exact_mean(prop))])
     rows.append(["synthetic run (VirtualFSR, not a sensor of the paper)", syn.he_voltage, syn.he_frequency])
     return Table(
         title="Table 3: hysteresis error, traditional (voltage) vs proposed (frequency) readout, as printed",
         columns=["sensor", "HE traditional (%)", "HE proposed (%)"], rows=rows,
         note="The paper's raw loading/unloading data are not published, so Table 3 cannot be recomputed; "
-             f"its means are checked ({np.mean(trad):g} → {printed['traditional_mean']}, {np.mean(prop):g} → "
-             f"{printed['proposed_mean']}). The last row is fsrlab's synthetic run "
+             f"its means are checked ({exact_mean(trad)} → {printed['traditional_mean']}, {exact_mean(prop)} → "
+             f"{printed['proposed_mean']}, exact decimal means rounded half up). The last row is fsrlab's synthetic run "
              "(eq. 13 via fsrlab hysteresis on VirtualFSR data, 3 cycles 0–50 kPa): illustration only — "
              "the virtual sensor's hysteresis enters through the separation alone, so both readouts show "
-             "similar HE, unlike the paper's sensors.")
+             "similar HE, unlike the paper's sensors. The experiment section reproduces Table 3 with the "
+             "fitted paper sensors, whose conductive area has its own memory.")
 
 
 def _repeatability_table(title: str, check: PrintedTableCheck, unit: str) -> Table:
@@ -235,8 +246,9 @@ def _intro(found: DdofFinding) -> str:
         f"RE1 matches in {found.re1_match}/{found.rows}, RE2 in {found.re2_match_n_minus_1}/{found.rows} with the "
         f"sample standard deviation (n − 1) and {found.re2_match_n}/{found.rows} with divisor n as printed in "
         "eq. (39) (erratum M1).\n\n"
-        "Table 3 and Figure 17 rest on unpublished raw data: Table 3 is shown as printed; the calibration and "
-        "compensation figures use fsrlab's synthetic bench runs and are labelled as such. In ISO 376 terms "
+        "Table 3 and Figure 17 rest on unpublished raw data: Table 3 is shown as printed; the calibration table and "
+        "compensation figure use fsrlab's synthetic bench runs and are labelled as such (the experiment section "
+        "reproduces Figure 17 and Tables 3–5 on a virtual bench). In ISO 376 terms "
         "(fsrlab.analysis.iso376), the re-placement spread of Table 4 (1–3 %) is far beyond the 0.40 % "
         "reproducibility limit of class 2."
     )
@@ -273,7 +285,8 @@ def build(outdir: Path) -> Section:
     found = ddof_finding([t4, t5])
     force = {"capacitive": _force_terms(tab4), "traditional": _force_terms(tab5)}
     syn = _synthetic()
-    figures = [_fig17(outdir, syn, printed["figure17_fit_r2"]), _fig_compensation(outdir, syn)]
+    # Figure 17 itself is drawn from the virtual bench in the experiment section (fsrlab.report.sections.experiment).
+    figures = [_fig_compensation(outdir, syn)]
     tables = [_table3(printed["table3_hysteresis_error_percent"], syn),
               _repeatability_table("Table 4: repeatability, capacitive readout (frequency), printed vs recomputed",
                                    t4, "kHz"),
