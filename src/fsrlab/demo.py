@@ -32,9 +32,11 @@ from typing import Callable
 
 __all__ = ["DEMO_SENSOR", "demo_sensor", "DemoSettings", "DemoResult", "run_demo"]
 
-DEMO_SENSOR = "virtual-fsr"
-"""The sensor the demo runs on (:func:`demo_sensor`): ``virtual-fsr`` (:class:`~fsrlab.physics.sensor.VirtualFSR`,
-FlexiForce A201-like), or ``paper-1`` .. ``paper-4`` (the paper-sensor preset, when installed)."""
+DEMO_SENSOR = "paper-a201-1"
+"""The sensor the demo runs on (:func:`demo_sensor`): ``paper-a201-1`` (the first of the four sensors
+fitted to the paper's §6, :func:`fsrlab.physics.paper_sensor.paper_sensor`; its dead weights load a
+22 mm puck, :data:`~fsrlab.physics.paper_sensor.DEAD_WEIGHT_AREA_M2`), another of ``paper-a201-2`` ..
+``-4``, or ``virtual-fsr`` (:class:`~fsrlab.physics.sensor.VirtualFSR`, FlexiForce A201-like)."""
 
 
 def demo_sensor(name=None):

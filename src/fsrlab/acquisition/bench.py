@@ -126,16 +126,25 @@ class BenchSource:
         Time the force takes from one mass to the next (a hand lowering it). [s]
     ramp_points : int
         Points of the stress history per placement (the sensor's memory is evaluated on them).
+    load_area_m2 : float, optional
+        Area the placed force spreads over on the sensor (a fixture's puck): stress = force / this
+        area. Default: the sensor's ``load_area_m2`` if it has one (the paper sensors), else its
+        ``area_m2``. [m²]
+    seed : int, optional
+        Seed of the placement draws of a sensor with ``placement(rng)`` (the paper sensors: each
+        placement meets the sensor a little differently, Tables 4 and 5).
 
     Notes
     -----
     The sensor model is rate-independent, so its response to the whole planned sequence is computed
     once; :meth:`place` only sets when each placement happens. Before the first placement the force
-    is that of the first one.
+    is that of the first one. Creep under a held mass is not modelled here (the response is computed
+    before the placement times are known).
     """
 
     def __init__(self, forces_n: Sequence[float], sensor=None, circuit: LM555Circuit | None = None,
-                 opamp: OpAmpReadout = PAPER_OPAMP, ramp_s: float = 0.15, ramp_points: int = 16) -> None:
+                 opamp: OpAmpReadout = PAPER_OPAMP, ramp_s: float = 0.15, ramp_points: int = 16,
+                 load_area_m2: float | None = None, seed: int | None = None) -> None:
         from fsrlab.acquisition.virtual_device import VIRTUAL_CIRCUIT
         from fsrlab.physics.sensor import VirtualFSR
 
@@ -148,17 +157,33 @@ class BenchSource:
         self.circuit = circuit if circuit is not None else VIRTUAL_CIRCUIT
         self.opamp = opamp
         self.forces_n, self.ramp_s, self._n = f, float(ramp_s), int(ramp_points)
-        stress = f / self.sensor.area_m2
+        if load_area_m2 is None:
+            load_area_m2 = getattr(self.sensor, "load_area_m2", self.sensor.area_m2)
+        if not (np.isfinite(load_area_m2) and load_area_m2 > 0):
+            raise ValueError(f"load_area_m2 must be > 0 m², got {load_area_m2!r}")
+        self.load_area_m2 = float(load_area_m2)
+        stress = f / self.load_area_m2
         hist = [np.array([stress[0]])] + [np.linspace(stress[k - 1], stress[k], self._n + 1)[1:]
                                           for k in range(1, f.size)]
         sigma = np.concatenate(hist)
-        resp = self.sensor.respond(sigma, voltage_v=self.circuit.fsr_voltage_v)
+        kw = self._placement_draws(f.size, seed)
+        resp = self.sensor.respond(sigma, voltage_v=self.circuit.fsr_voltage_v, **kw)
         self._stress = np.asarray(resp.stress_pa, dtype=float)
         self._r = np.asarray(resp.r_fsr_ohm, dtype=float)
         self._c = np.asarray(resp.c_fsr_farad, dtype=float)
-        r_op = self.sensor.respond(sigma, voltage_v=opamp.fsr_voltage_v).r_fsr_ohm
+        r_op = self.sensor.respond(sigma, voltage_v=opamp.fsr_voltage_v, **kw).r_fsr_ohm
         self._v = np.asarray(opamp.output_v(r_op), dtype=float)  # Eq. (38)
         self._placed = [0.0] + [np.inf] * (f.size - 1)  # when each placement began (time since START) [s]
+
+    def _placement_draws(self, placements: int, seed: int | None) -> dict:
+        """Per-sample ``respond`` keywords of the placement draws (empty for a sensor without them):
+        placement k's factors hold on its ramp and while it rests."""
+        if not hasattr(self.sensor, "placement"):
+            return {}
+        rng = np.random.default_rng(seed)
+        draws = [self.sensor.placement(rng) for _ in range(placements)]
+        owner = np.concatenate([[0]] + [np.full(self._n, k) for k in range(1, placements)])
+        return {key: np.asarray([d[key] for d in draws], dtype=float)[owner] for key in draws[0]}
 
     @property
     def dt_s(self) -> float:
@@ -180,11 +205,11 @@ class BenchSource:
             self._placed[step] = max(float(t_s), self._placed[step - 1])
 
     def metadata(self) -> dict:
-        """Sidecar content: ``circuit``, ``opamp``, ``sensor``."""
+        """Sidecar content: ``circuit``, ``opamp``, ``sensor`` (with the area the masses load)."""
         from fsrlab.acquisition.virtual_device import sensor_metadata
 
         return {"circuit": self.circuit.to_dict(), "opamp": self.opamp.to_dict(),
-                "sensor": sensor_metadata(self.sensor)}
+                "sensor": {**sensor_metadata(self.sensor), "load_area_m2": self.load_area_m2}}
 
     def _where(self, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Placement in force at each time, and the fraction of its ramp done."""

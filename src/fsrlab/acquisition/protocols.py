@@ -194,7 +194,7 @@ class CreepPlan:
                 "after_s": self.after_s, "duration_s": self.duration_s}
 
 
-VIRTUAL_SENSORS = ("virtual-fsr", "paper-1", "paper-2", "paper-3", "paper-4")
+VIRTUAL_SENSORS = ("virtual-fsr", "paper-a201-1", "paper-a201-2", "paper-a201-3", "paper-a201-4")
 """Names of the virtual bench's sensors (:func:`virtual_sensor`); a sensor preset's name
 (:data:`fsrlab.physics.presets.SENSOR_PRESETS`) gives the virtual FSR that preset's area."""
 
@@ -206,9 +206,9 @@ def virtual_sensor(name):
     ----------
     name : str or object
         ``virtual-fsr`` (:class:`~fsrlab.physics.sensor.VirtualFSR`, FlexiForce A201-like),
-        ``paper-1`` .. ``paper-4`` (``fsrlab.physics.paper_sensor.paper_sensor(i)``, the paper-sensor
-        preset, when installed), a sensor preset's name (the virtual FSR with that sensing area), or
-        a sensor object, returned as is.
+        ``paper-a201-1`` .. ``paper-a201-4`` (:func:`fsrlab.physics.paper_sensor.paper_sensor`, the
+        sensors fitted to the paper's §6), another sensor preset's name (the virtual FSR with that
+        sensing area), or a sensor object, returned as is.
 
     Returns
     -------
@@ -218,29 +218,24 @@ def virtual_sensor(name):
     Raises
     ------
     ValueError
-        An unknown name, or a paper sensor when the preset is not installed.
+        An unknown name.
     """
+    from fsrlab.physics.paper_sensor import PAPER_SENSOR_NAMES, paper_sensor
     from fsrlab.physics.presets import SENSOR_PRESETS
     from fsrlab.physics.sensor import VirtualFSR
 
     if not isinstance(name, str):
         return name, type(name).__name__
     key = name.strip().lower()
+
+    if key in PAPER_SENSOR_NAMES:
+        return paper_sensor(key), f"{key} (fitted paper sensor, fsrlab.physics.paper_sensor)"
     if key == "virtual-fsr":
         return VirtualFSR(), "VirtualFSR (FlexiForce A201-like, fsrlab.physics.sensor)"
     if key in SENSOR_PRESETS:
         area = SENSOR_PRESETS[key].area_m2
         return VirtualFSR(area_m2=area), f"VirtualFSR on the area of {key} ({area * 1e6:.1f} mm²)"
-    if key.startswith("paper-") and key[6:].isdigit():
-        try:
-            from fsrlab.physics.paper_sensor import paper_sensor
-        except ImportError:
-            raise ValueError(f"sensor: {name!r} needs the paper-sensor preset (fsrlab.physics.paper_sensor), "
-                             "which is not installed; use virtual-fsr") from None
-        i = int(key[6:])
-        return paper_sensor(i), f"paper sensor {i} (fsrlab.physics.paper_sensor)"
-    raise ValueError(f"sensor: must be virtual-fsr, paper-1 .. paper-4 or one of {', '.join(SENSOR_PRESETS)}, "
-                     f"got {name!r}")
+    raise ValueError(f"sensor: must be virtual-fsr or one of {', '.join(SENSOR_PRESETS)}, got {name!r}")
 
 
 def twin_status() -> tuple[bool, str]:
@@ -431,7 +426,7 @@ def run_protocol(plan, out, device: str = "virtual", port: str | None = None, se
         if virtual:
             from fsrlab.acquisition.bench import BenchSource
 
-            source = bench = BenchSource([s.mass_kg * gravity_m_s2 for s in steps], sensor=sensor)
+            source = bench = BenchSource([s.mass_kg * gravity_m_s2 for s in steps], sensor=sensor, seed=seed)
 
             def place(step):
                 t = device_time()
@@ -443,7 +438,7 @@ def run_protocol(plan, out, device: str = "virtual", port: str | None = None, se
         settle = {**(settle or {})}
         proc = WeightsProcedure(steps, say, answer if not virtual else (lambda: "ok"), place, stop,
                                 gravity_m_s2=gravity_m_s2, use_loadcell=not virtual and loadcell is not None,
-                                area_m2=sensor.area_m2 if virtual else area_m2, **settle)
+                                area_m2=bench.load_area_m2 if virtual else area_m2, **settle)
         kwargs["extra_columns"] = ["step", "direction", "cycle", "force_nominal_n", "force_n"] + (
             ["stress_pa"] if (virtual or area_m2) else []) + ["load", "sensor", "reading"]
         kwargs["on_row"] = proc.on_row
@@ -454,7 +449,7 @@ def run_protocol(plan, out, device: str = "virtual", port: str | None = None, se
         if virtual:
             from fsrlab.acquisition.bench import BenchSource
 
-            source = bench = BenchSource([m * gravity_m_s2 for _, m in segments], sensor=sensor)
+            source = bench = BenchSource([m * gravity_m_s2 for _, m in segments], sensor=sensor, seed=seed)
         done = [0]
 
         def creep_row(m, row):
@@ -498,7 +493,7 @@ def run_protocol(plan, out, device: str = "virtual", port: str | None = None, se
         if hasattr(dev, "reference") and not isinstance(plan, WeightsPlan):
             reference = lambda frame: dev.reference(frame.seq)  # noqa: E731 - the applied stress
         health = lambda: dev.failure  # noqa: E731
-        area_m2 = sensor.area_m2
+        area_m2 = bench.load_area_m2 if bench is not None else sensor.area_m2  # stress = force / loaded area
         if reference is None and loadcell is None and not isinstance(plan, WeightsPlan):
             # A device that sends neither the applied stress nor a load cell's reading (a twin without
             # its HX711): the stress the bench's model applied during each window.

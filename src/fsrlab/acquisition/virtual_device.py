@@ -188,13 +188,15 @@ def sensor_metadata(sensor) -> dict:
     Returns
     -------
     dict
-        ``model`` (class and module; the VirtualFSR is FlexiForce A201-like) and ``area_m2`` [m²].
+        ``model`` (class and module; the VirtualFSR is FlexiForce A201-like), ``name`` (when the
+        sensor has one, e.g. ``paper-a201-1``) and ``area_m2`` [m²].
     """
     cls = type(sensor)
     model = f"{cls.__name__} ({cls.__module__})"
     if cls.__name__ == "VirtualFSR":
         model = "VirtualFSR (FlexiForce A201-like, fsrlab.physics.sensor)"
-    return {"model": model, "area_m2": float(sensor.area_m2)}
+    name = getattr(sensor, "name", None)
+    return {"model": model, **({"name": name} if isinstance(name, str) else {}), "area_m2": float(sensor.area_m2)}
 
 
 class PhysicsSource:

@@ -115,13 +115,14 @@ def _check_virtual(profile: str, peak: float, period: float, c_off: float, corru
 
 
 def _virtual_device(profile: str, peak: float, period: float, c_off: float, seed: int | None,
-                    corrupt: float, drop: float, load_cell: bool = True, rate: int = 80, area_m2: float | None = None):
+                    corrupt: float, drop: float, load_cell: bool = True, rate: int = 80, area_m2: float | None = None,
+                    sensor_model=None):
     from fsrlab.acquisition.loadcell import LoadCellModel
     from fsrlab.acquisition.virtual_device import VIRTUAL_CIRCUIT, Faults, PhysicsSource, StressProfile, VirtualDevice
     from fsrlab.physics.sensor import VirtualFSR
 
     prof = StressProfile(kind=profile, peak_pa=peak, period_s=period)
-    sensor = VirtualFSR() if area_m2 is None else VirtualFSR(area_m2=area_m2)
+    sensor = sensor_model if sensor_model is not None else VirtualFSR() if area_m2 is None else VirtualFSR(area_m2=area_m2)
     cell = LoadCellModel(rate_sps=rate) if load_cell else None
     try:
         source = PhysicsSource(prof, sensor=sensor, circuit=VIRTUAL_CIRCUIT.replace(c_off_farad=c_off))

@@ -20,7 +20,7 @@ def bench(
     twin: bool = typer.Option(False, "--twin", help="Run on the digital twin (the firmware in simavr on a pty); unattended."),
     port: str = typer.Option(None, "--port", help="Serial port of a real meter (/dev/ttyACM0, COM3, a pty) or 'auto': you are prompted for each step."),
     out: Path = typer.Option(None, "--out", "-o", help="Run file (CSV + NAME.meta.json sidecar; weights: NAME.placements.csv beside it) [default: PROTOCOL.csv]."),
-    sensor: str = typer.Option(None, "--sensor", help="Sensor: a preset for its sensing area (flexiforce-a201, interlink-402; the virtual FSR gets that area), or with --virtual/--twin a virtual sensor: virtual-fsr (default), paper-1 .. paper-4 (the paper-sensor preset, when installed)."),
+    sensor: str = typer.Option(None, "--sensor", help="Sensor: a preset for its sensing area (flexiforce-a201, interlink-402; the virtual FSR gets that area), or with --virtual/--twin a virtual sensor: virtual-fsr (default), paper-a201-1 .. paper-a201-4 (the sensors fitted to the paper's §6; with --port only their area)."),
     peak: float = typer.Option("10k", "--peak", parser=pascals, metavar="STRESS", help="spring: peak stress [Pa]: 10k, 10kPa, 0.05MPa (the paper's bench: 10 kPa)."),
     period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="spring: duration of one cycle [s]: 4s, 500ms, 1min."),
     cycles: int = typer.Option(3, "--cycles", help="spring: loading-unloading cycles [1]: 3, 10."),
@@ -100,12 +100,12 @@ def bench(
             fail(f"{reason}; use --virtual for the Python virtual device", "--twin")
     sensor_obj = sensor_meta = area_m2 = None
     key = (sensor or "").strip().lower()
-    if key == "virtual-fsr" or key.startswith("paper-"):  # a virtual sensor model, not only an area
-        if port is not None:
-            fail(f"{sensor!r} is a virtual sensor; with --port give a preset for the area (flexiforce-a201, "
-                 "interlink-402)", "--sensor")
-        from fsrlab.acquisition.protocols import virtual_sensor
+    from fsrlab.acquisition.protocols import VIRTUAL_SENSORS, virtual_sensor
 
+    if key == "virtual-fsr" and port is not None:
+        fail(f"{sensor!r} is a virtual sensor; with --port give a preset for the area (flexiforce-a201, "
+             "interlink-402)", "--sensor")
+    if key in VIRTUAL_SENSORS and port is None:  # a virtual sensor model, not only an area
         try:
             sensor_obj, text = virtual_sensor(key)
         except ValueError as exc:

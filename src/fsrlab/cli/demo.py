@@ -15,7 +15,7 @@ from fsrlab.cli._common import emit_json, fail, seconds
 def demo(
     out: Path = typer.Option(Path("demo"), "--out", "-o", help="Directory for the runs, the calibration, both reports and index.html; created if missing."),
     device: str = typer.Option("auto", "--device", help="The virtual bench: auto (the digital twin when it can run, else the Python virtual device), twin or virtual."),
-    sensor: str = typer.Option(None, "--sensor", help="The virtual sensor: virtual-fsr (default) or paper-1 .. paper-4 (the paper-sensor preset, when installed)."),
+    sensor: str = typer.Option(None, "--sensor", help="The virtual sensor: paper-a201-1 (default) .. paper-a201-4 (fitted to the paper's §6) or virtual-fsr."),
     cycles: int = typer.Option(4, "--cycles", help="Spring cycles per run [1]: 4."),
     period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="Duration of one spring cycle [s]: 4s, 2s."),
     repeat: int = typer.Option(5, "--repeat", help="Placements of each dead weight [1]: 5 as in Tables 4 and 5."),

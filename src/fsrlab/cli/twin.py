@@ -19,7 +19,7 @@ def twin(
     profile: str = typer.Option("triangle", "--profile", help=_PROFILE_HELP),
     peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS", help=_PEAK_HELP),
     period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help=_PERIOD_HELP),
-    sensor: str = typer.Option(None, "--sensor", help=_SENSOR_HELP + " The model stays VirtualFSR, with that area."),
+    sensor: str = typer.Option(None, "--sensor", help=_SENSOR_HELP[:-1] + "; the model stays VirtualFSR, with that area. Or a virtual sensor: virtual-fsr (default), paper-a201-1 .. paper-a201-4 (fitted to the paper's §6, valid to about 10 kPa: use --peak 10k)."),
     c_off: float = typer.Option("1n", "--c-off", parser=farads, metavar="CAPACITANCE", help=_C_OFF_HELP),
     speed: str = typer.Option("realtime", "--speed", help="Pacing of simulated time: realtime (the wall clock) or max (as fast as simavr goes)."),
     duration: float = typer.Option(None, "--duration", parser=seconds, metavar="TIME", help="Run this long [s] of wall time: 90, 90s, 1.5min, 2h (default: until Ctrl-C)."),
@@ -53,14 +53,21 @@ def twin(
         fail(f"must be an integer >= 0, got {seed}", "--seed")
     _check_rate(hx711_rate)
     _check_virtual(profile, peak, period, c_off, 0.0, 0.0, None)
-    _, area_m2 = _sensor_area(sensor, None)
+    from fsrlab.acquisition.protocols import VIRTUAL_SENSORS, virtual_sensor
+
+    model = area_m2 = None
+    if (sensor or "").strip().lower() in VIRTUAL_SENSORS:
+        model, _ = virtual_sensor(sensor)
+    else:
+        _, area_m2 = _sensor_area(sensor, None)
 
     from fsrlab.twin import Twin, twin_available
 
     ok, reason = twin_available()
     if not ok:
         fail(reason)
-    _, source = _virtual_device(profile, peak, period, c_off, None, 0.0, 0.0, load_cell=False, area_m2=area_m2)
+    _, source = _virtual_device(profile, peak, period, c_off, None, 0.0, 0.0, load_cell=False, area_m2=area_m2,
+                                sensor_model=model)
     from fsrlab.acquisition.loadcell import LoadCellModel
 
     cell = None if no_loadcell else LoadCellModel(rate_sps=hx711_rate)

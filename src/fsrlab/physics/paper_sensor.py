@@ -446,6 +446,13 @@ class PaperFSR:
         """Stress σ = F / A_FSR for force ``force_n`` [N]; returns [Pa]."""
         return np.asarray(force_n, dtype=float) / self.area_m2
 
+    @property
+    def load_area_m2(self) -> float:
+        """Area over which the bench's weights load this sensor (:data:`DEAD_WEIGHT_AREA_M2`, an
+        assumption: the paper prints no fixture); the virtual bench spreads a placed mass's force over
+        it. [m²]"""
+        return DEAD_WEIGHT_AREA_M2
+
     def placement(self, rng) -> dict:
         """One dead-weight placement: the factors it applies, drawn from ``rng``.
 
