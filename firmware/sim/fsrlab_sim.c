@@ -61,6 +61,7 @@
 #include <avr_adc.h>
 
 #include "hx711_model.h"
+#include "mcu.h"
 
 #define F_CPU_HZ 16000000.0
 #define MAX_SEG 64
@@ -282,17 +283,8 @@ int main(int argc, char **argv) {
   dup2(2, 1);
   if (!out) { perror(outpath); return 2; }
 
-  elf_firmware_t fw;
-  memset(&fw, 0, sizeof fw);
-  if (elf_read_firmware(elf, &fw) != 0) { fprintf(stderr, "cannot read %s\n", elf); return 2; }
-  avr = avr_make_mcu_by_name("atmega328p");
-  if (!avr) { fprintf(stderr, "simavr has no atmega328p\n"); return 2; }
-  avr_init(avr);
-  avr->frequency = 16000000;
-  avr_load_firmware(avr, &fw);
-  avr->frequency = 16000000;
-  avr->vcc = avr->avcc = avr->aref = 5000;
-  avr->log = 0;
+  avr = mcu_load(elf);
+  if (!avr) return 2;
 
   /* USART0: no stdio echo; capture output, prepare input */
   uint32_t flags = 0;

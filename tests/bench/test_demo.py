@@ -41,7 +41,9 @@ def test_demo_runs_the_chain_and_links_both_reports(tmp_path):
 
 def test_demo_sensor_is_chosen_in_one_place():
     sensor, text = demo_sensor()
-    assert DEMO_SENSOR == "virtual-fsr" and hasattr(sensor, "respond") and "VirtualFSR" in text
+    # The demo runs on the first sensor fitted to the paper's §6 (fsrlab.physics.paper_sensor).
+    assert DEMO_SENSOR == "paper-a201-1" and hasattr(sensor, "respond") and getattr(sensor, "name", "") == DEMO_SENSOR
+    assert DEMO_SENSOR in text
     with pytest.raises(ValueError, match="sensor"):
         demo_sensor("no-such-sensor")
 

@@ -17,7 +17,7 @@ from clirun import run_cli
 from fsrlab.cli import app
 from fsrlab.cli._common import areas, mass_list, masses
 
-COMMANDS = ("loadcell", "weights", "measure", "acquire")
+COMMANDS = ("loadcell", "weights", "measure", "acquire", "bench", "report", "demo", "twin")
 
 
 def _command(name):

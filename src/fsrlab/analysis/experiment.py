@@ -608,11 +608,7 @@ def fit_placement_spread(sensors) -> tuple[dict, dict]:
     the printed mean RE2 of Table 4 (frequency) and Table 5 (voltage) at 200 g and 400 g: four
     equations, three unknowns. Creep (a random read time) adds a small term that the fit does not use.
     """
-    from scipy.optimize import nnls
-
-    from fsrlab.reference import paper_values
-
-    from scipy.optimize import least_squares
+    from scipy.optimize import least_squares, nnls
 
     a, printed, labels = re2_design(sensors)
     var0, _ = nnls(a, printed**2)
