@@ -191,12 +191,6 @@ static avr_cycle_count_t cmd_cb(struct avr_t *a, avr_cycle_count_t when, void *p
   return a->cycle + 1600; /* 100 us per byte */
 }
 
-static avr_cycle_count_t udre_fix_cb(struct avr_t *a, avr_cycle_count_t when, void *param) {
-  (void)when; (void)param;
-  a->data[0xC0] |= 0x20; /* UCSR0A.UDRE0 */
-  return 0;
-}
-
 /* ------------------------------------------------------------------ compare registers */
 static unsigned small_a, small_b;
 static void ocr_write_cb(struct avr_irq_t *irq, uint32_t value, void *param) {
@@ -287,16 +281,7 @@ int main(int argc, char **argv) {
   if (!avr) return 2;
 
   /* USART0: no stdio echo; capture output, prepare input */
-  uint32_t flags = 0;
-  avr_ioctl(avr, AVR_IOCTL_UART_GET_FLAGS('0'), &flags);
-  flags &= ~(uint32_t)(AVR_UART_FLAG_STDIO | AVR_UART_FLAG_POLL_SLEEP);  /* no echo, no usleep */
-  avr_ioctl(avr, AVR_IOCTL_UART_SET_FLAGS('0'), &flags);
-  avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUTPUT), uart_out_cb, NULL);
-  uart_in = avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT);
-  /* UDRE0 is read-only and 1 after a reset (datasheet); simavr 1.6 clears it on any write to
-   * UCSR0A (the firmware sets U2X0) and only sets it again after a byte was sent, so the first
-   * byte would never go. Set it once, 1 ms after reset, when the firmware has set up the USART. */
-  avr_cycle_timer_register(avr, 16000, udre_fix_cb, NULL);
+  uart_in = mcu_uart(avr, uart_out_cb);
 
   /* D4 = PD4 watcher, D8 = PB0 driver, A0 voltage */
   avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 4), pd4_cb, NULL);

@@ -165,12 +165,6 @@ static avr_cycle_count_t feed_cb(struct avr_t *a, avr_cycle_count_t when, void *
   return a->cycle + BYTE_CYCLES;
 }
 
-static avr_cycle_count_t udre_fix_cb(struct avr_t *a, avr_cycle_count_t when, void *param) {
-  (void)when; (void)param;
-  a->data[0xC0] |= 0x20; /* UCSR0A.UDRE0, see fsrlab_sim.c */
-  return 0;
-}
-
 static void read_uart(void) {
   while (itail - ihead < sizeof ibuf) {
     size_t room = sizeof ibuf - (itail - ihead);
@@ -317,13 +311,7 @@ int main(int argc, char **argv) {
   avr = mcu_load(elf);
   if (!avr) return 2;
 
-  uint32_t flags = 0;
-  avr_ioctl(avr, AVR_IOCTL_UART_GET_FLAGS('0'), &flags);
-  flags &= ~(uint32_t)(AVR_UART_FLAG_STDIO | AVR_UART_FLAG_POLL_SLEEP);
-  avr_ioctl(avr, AVR_IOCTL_UART_SET_FLAGS('0'), &flags);
-  avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUTPUT), uart_out_cb, NULL);
-  uart_in = avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT);
-  avr_cycle_timer_register(avr, 16000, udre_fix_cb, NULL);
+  uart_in = mcu_uart(avr, uart_out_cb);
 
   avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 4), pd4_cb, NULL);
   pin_irq = avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('B'), 0);
