@@ -56,7 +56,7 @@ def demo_sensor(name=None):
     Raises
     ------
     ValueError
-        An unknown name, or a paper sensor when the preset is not installed.
+        An unknown name (see :func:`fsrlab.acquisition.protocols.virtual_sensor`).
     """
     from fsrlab.acquisition.protocols import virtual_sensor
 
