@@ -179,6 +179,22 @@ def test_older_calibration_file_loads_and_says_it_is_not_checked(cal, runs, tmp_
     assert code == 0 and err.count("\n") == 1 and "not checked" in err
 
 
+@pytest.mark.parametrize("change, words", [
+    (lambda d: d["chebyshev_coefficients"].__setitem__(0, 1e308), "finite values"),
+    (lambda d: d["compensation"].__setitem__("threshold", 0.0), "threshold"),
+    (lambda d: d["compensation"].__setitem__("sign", 3.0), "sign"),
+])
+def test_damaged_calibration_value_is_one_line_naming_the_file(cal, runs, tmp_path, change, words):
+    # Property: a value no calibration can hold is refused at load, naming the file, and nothing is written.
+    d = json.loads(cal.read_text())
+    assert "compensation" in d  # the bench run's whole cycles: the branch compensation (its threshold, sign)
+    change(d)
+    (tmp_path / "bad.json").write_text(json.dumps(d))
+    code, _, err = run_cli(["apply", tmp_path / "bad.json", runs / "other.csv", "-o", tmp_path / "e.csv"])
+    assert code == 2 and err.count("\n") == 1 and "bad.json" in err and words in err
+    assert not (tmp_path / "e.csv").exists()
+
+
 # --- a readout that does not respond has no hysteresis error ------------------------------
 
 @pytest.mark.parametrize("fault", ["constant", "noise"])

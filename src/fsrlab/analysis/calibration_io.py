@@ -222,9 +222,6 @@ def load_calibration(path: str | os.PathLike) -> Calibration:
     """
     p = Path(path)
     d = read_json_document(p, CALIBRATION_FORMAT, 1, "calibration")
-    bad = _non_finite(d)
-    if bad:
-        raise ValueError(f"{p}: {bad} must be a finite number (the calibration file was changed or damaged)")
     try:
         cal = calibration_from_dict(d)
     except (KeyError, TypeError, ValueError) as exc:
@@ -242,22 +239,3 @@ def load_calibration(path: str | os.PathLike) -> Calibration:
 #: Largest magnitude of a calibrated estimate (far beyond any force [N] or stress [Pa] an FSR sees;
 #: larger values mean a damaged coefficient).
 _MAX_ESTIMATE = 1e30
-
-
-def _non_finite(obj, where: str = "") -> str | None:
-    """The key path of the first number in a JSON document that is NaN, infinite or beyond 1e300
-    (``json`` reads ``NaN`` and ``Infinity``), or None."""
-    if isinstance(obj, dict):
-        items = obj.items()
-    elif isinstance(obj, list):
-        items = ((f"[{i}]", v) for i, v in enumerate(obj))
-    else:
-        if isinstance(obj, float) and not (np.isfinite(obj) and abs(obj) <= 1e300):
-            return where or "a value"
-        return None
-    for k, v in items:
-        sub = f"{where}{k}" if str(k).startswith("[") or not where else f"{where}.{k}"
-        found = _non_finite(v, sub)
-        if found:
-            return found
-    return None
