@@ -55,6 +55,18 @@ def _sensor_area(sensor: str | None, area: float | None) -> tuple[dict | None, f
     return None, None
 
 
+def _virtual_sensor(sensor: str | None):
+    """The sensor model and the sidecar's ``sensor`` when --sensor names a virtual sensor (virtual-fsr,
+    paper-a201-1..4), else ``(None, None)``."""
+    from fsrlab.acquisition.protocols import VIRTUAL_SENSORS, virtual_sensor
+
+    key = (sensor or "").strip().lower()
+    if key not in VIRTUAL_SENSORS:
+        return None, None
+    model, text = virtual_sensor(key)
+    return model, {"model": text, "area_m2": model.area_m2}
+
+
 def _load_loadcell(path: Path | None, option: str = "--loadcell", scaled: bool = True):
     """The load-cell calibration of ``path`` (None: None); one line naming the option otherwise."""
     if path is None:

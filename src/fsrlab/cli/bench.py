@@ -54,7 +54,8 @@ def bench(
     """
     from fsrlab.acquisition.protocols import CreepPlan, SpringPlan, WeightsPlan, run_protocol, twin_status
     from fsrlab.acquisition.recorder import result_dict
-    from fsrlab.cli.acquisition import _check_out, _load_loadcell, _sensor_area, _sigterm_as_interrupt, _window_ms
+    from fsrlab.cli.acquisition import (_check_out, _load_loadcell, _sensor_area, _sigterm_as_interrupt,
+                                        _virtual_sensor, _window_ms)
 
     if protocol not in _PROTOCOLS:
         fail(f"must be one of {', '.join(_PROTOCOLS)}, got {protocol!r}", "PROTOCOL")
@@ -98,20 +99,12 @@ def bench(
         ok, reason = twin_status()
         if not ok:
             fail(f"{reason}; use --virtual for the Python virtual device", "--twin")
-    sensor_obj = sensor_meta = area_m2 = None
-    key = (sensor or "").strip().lower()
-    from fsrlab.acquisition.protocols import VIRTUAL_SENSORS, virtual_sensor
-
-    if key == "virtual-fsr" and port is not None:
+    area_m2 = None
+    if (sensor or "").strip().lower() == "virtual-fsr" and port is not None:
         fail(f"{sensor!r} is a virtual sensor; with --port give a preset for the area (flexiforce-a201, "
              "interlink-402)", "--sensor")
-    if key in VIRTUAL_SENSORS and port is None:  # a virtual sensor model, not only an area
-        try:
-            sensor_obj, text = virtual_sensor(key)
-        except ValueError as exc:
-            fail(str(exc).split(": ", 1)[-1], "--sensor")
-        sensor_meta = {"model": text, "area_m2": sensor_obj.area_m2}
-    else:
+    sensor_obj, sensor_meta = _virtual_sensor(sensor) if port is None else (None, None)
+    if sensor_obj is None:  # with --port a paper sensor's name gives its area
         sensor_meta, area_m2 = _sensor_area(sensor, None)
     cal = _load_loadcell(loadcell)
     _check_out(out, overwrite)
@@ -136,7 +129,7 @@ def bench(
     if device != "port" and sensor_obj is None:
         from fsrlab.acquisition.protocols import virtual_sensor
 
-        sensor_obj = virtual_sensor(key or "virtual-fsr")[0]
+        sensor_obj = virtual_sensor((sensor or "virtual-fsr").strip().lower())[0]
     from fsrlab.cli.acquisition import _LiveView
 
     try:

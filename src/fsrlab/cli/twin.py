@@ -10,7 +10,7 @@ from fsrlab.cli import app
 from fsrlab.cli._common import fail, farads, pascals, plain_numbers, seconds
 from fsrlab.cli.acquisition import (
     _C_OFF_HELP, _PERIOD_HELP, _PEAK_HELP, _PROFILE_HELP, _RATE_HELP, _SENSOR_HELP, _check_rate, _check_virtual,
-    _sensor_area, _sigterm_as_interrupt, _virtual_device,
+    _sensor_area, _sigterm_as_interrupt, _virtual_device, _virtual_sensor,
 )
 
 
@@ -53,13 +53,8 @@ def twin(
         fail(f"must be an integer >= 0, got {seed}", "--seed")
     _check_rate(hx711_rate)
     _check_virtual(profile, peak, period, c_off, 0.0, 0.0, None)
-    from fsrlab.acquisition.protocols import VIRTUAL_SENSORS, virtual_sensor
-
-    model = area_m2 = None
-    if (sensor or "").strip().lower() in VIRTUAL_SENSORS:
-        model, _ = virtual_sensor(sensor)
-    else:
-        _, area_m2 = _sensor_area(sensor, None)
+    model, _ = _virtual_sensor(sensor)
+    area_m2 = None if model is not None else _sensor_area(sensor, None)[1]
 
     from fsrlab.twin import Twin, twin_available
 
