@@ -4,13 +4,13 @@ Task: choose the polynomial degree 1..5 of stress(frequency) by 5-fold cross-val
 whole cycles together (grouped folds) -- the lowest degree within 1 % of the best RMSE, for both --
 then fit the chosen degree on all readings.
 
-- fsrlab: ``fsrlab.analysis.calibration.calibrate(x, y, degree="auto", groups=cycle)``
+- fsrlab: ``fsrlab.calibration.result.calibrate(x, y, degree="auto", groups=cycle)``
   (Chebyshev basis; per-fold sufficient statistics; one QR fit at the end).
 - scikit-learn: for each degree, ``cross_val_score(make_pipeline(PolynomialFeatures(d),
   LinearRegression()), X, y, groups=cycle, cv=GroupKFold(5))``, then ``fit`` of the best degree.
 
 Data: one synthetic cycle (VirtualFSR -> LM555 closed forms -> 62.5 ns timer, 0–50 kPa) repeated
-20 times with fresh 0.2 % frequency noise per cycle (fsrlab.analysis.synthetic).
+20 times with fresh 0.2 % frequency noise per cycle (fsrlab.virtual.synthetic).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ POINTS_PER_RAMP = 25_000  # 50 001 readings per cycle → ≈ 1.0e6 readings
 
 
 def make_data(seed: int = 0):
-    from fsrlab.analysis.synthetic import synthetic_run
+    from fsrlab.virtual.synthetic import synthetic_run
 
     base = synthetic_run(cycles=1, points_per_ramp=POINTS_PER_RAMP, frequency_noise=0.0, seed=seed).columns
     rng = np.random.default_rng(seed)
@@ -37,7 +37,7 @@ def make_data(seed: int = 0):
 
 
 def fsrlab_run(f, s, g):
-    from fsrlab.analysis.calibration import calibrate
+    from fsrlab.calibration.result import calibrate
 
     cal = calibrate(f, s, degree="auto", groups=g, folds=5)
     return cal.degree, cal.cv.rmse

@@ -40,7 +40,8 @@ def _latency() -> tuple[list[float], int]:
     from browser import FIND_JS, chromium, wait_for
 
     from fsrlab.acquisition.serial_link import SerialLink
-    from fsrlab.acquisition.virtual_device import PhysicsSource, StressProfile, VirtualDevice
+    from fsrlab.virtual.sources import PhysicsSource, StressProfile
+    from fsrlab.virtual.device import VirtualDevice
     from fsrlab.live.page import Controller, make_document
     from fsrlab.live.server import start_server
     from fsrlab.live.session import LiveSession

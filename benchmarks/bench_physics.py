@@ -40,7 +40,7 @@ def public_functions_pipeline(u_v: float, n: int):
     """The Table 2 pipeline composed of the public functions, as model_cycle_errors was before the kernel."""
     import numpy as np
 
-    from fsrlab.analysis.hysteresis import _curves_on_grid
+    from fsrlab.metrics.hysteresis import _curves_on_grid
     from fsrlab.physics.electrical import capacitance_per_area, resistance_per_area
     from fsrlab.physics.params import PAPER as p
     from fsrlab.physics.separation import separation_loading, separation_unloading
@@ -123,7 +123,7 @@ def run() -> str:
     import numpy as np
     from reference_physics import table2_row
 
-    from fsrlab.analysis.hysteresis import model_cycle_errors
+    from fsrlab.metrics.hysteresis import model_cycle_errors
 
     model_cycle_errors(2.0, n=1000)  # warm up imports
     public_functions_pipeline(2.0, 1000)
@@ -166,7 +166,7 @@ def run() -> str:
     calls_rate = (N_SCALAR_CALLS + 1) / t_calls
     return (
         f"The Table 2 computation at u = 2 V (eq. 1 and eq. 9 separation, eq. 12 R_A and eq. 15 C_A on both "
-        f"branches, eq. 13 HE with σd refined) over {N_POINTS:,} stresses. `fsrlab.analysis.hysteresis."
+        f"branches, eq. 13 HE with σd refined) over {N_POINTS:,} stresses. `fsrlab.metrics.hysteresis."
         f"model_cycle_errors` splits the grid between the cores (threads; numpy's loops release the GIL) and "
         f"computes both branches in chunks of 16,384 stresses in place with the constants folded (R_A = "
         f"k3·s²/bracket, −B = k1·s: 11 passes and four exponentials per stress), σd's grid point found in "

@@ -1,6 +1,6 @@
 """Calibration on realistic FSR recordings: error on held-out hand-loaded runs, HE of a clean cycle, speed.
 
-Data: :func:`fsrlab.analysis.handloaded.fsr_bench_run` -- an FSR in a 10 kΩ / 5 V divider read
+Data: :func:`fsrlab.virtual.handloaded.fsr_bench_run` -- an FSR in a 10 kΩ / 5 V divider read
 by a 10-bit ADC over 20 ms rows, a load cell read by an HX711 at 80 SPS (the same bench for every
 run: its sample phase, the load-cell offset and its drift, the noise and the loading differ per
 run). The sensor is a Bouc–Wen hysteresis with creep, a dead zone and saturation: *not* the
@@ -42,10 +42,13 @@ def _err(est, ref, rows):
 
 
 def run() -> str:
-    from fsrlab.analysis.alignment import shift_reference
-    from fsrlab.analysis.calibration import calibrate
-    from fsrlab.analysis.handloaded import fsr_bench_run
-    from fsrlab.analysis.pipeline import apply_calibration, calibrate_run, hysteresis_of_run, live_estimator
+    from fsrlab.calibration.alignment import shift_reference
+    from fsrlab.calibration.result import calibrate
+    from fsrlab.virtual.handloaded import fsr_bench_run
+    from fsrlab.calibration.apply import apply_calibration
+    from fsrlab.calibration.fit import calibrate_run
+    from fsrlab.calibration.readout import hysteresis_of_run
+    from fsrlab.calibration.estimator import live_estimator
 
     cal_run = fsr_bench_run("hand", seed=1, duration_s=120, reference_sps=80).run("cal.csv")
     cal = calibrate_run(cal_run, x="voltage_v", compensate=True)

@@ -1,6 +1,6 @@
 """Digital twin (``fsrlab twin``): simulated seconds per wall second at --speed max.
 
-The twin (:class:`fsrlab.twin.Twin`) runs the real firmware in simavr with the LM555's edges
+The twin (:class:`fsrlab.virtual.twin.Twin`) runs the real firmware in simavr with the LM555's edges
 streamed from the exact transient; a host reads the pty (every byte, as ``fsrlab acquire`` would)
 after ``START`` with 100 ms windows. The sensor is held (``hold`` profile) and its capacitance
 scaled so that the 555 runs at 1, 10 and 50 kHz (every RC time constant is proportional to C, so
@@ -29,7 +29,7 @@ WALL_S = 8.0
 def _source(freq_hz: float):
     import numpy as np
 
-    from fsrlab.acquisition.virtual_device import PhysicsSource, StressProfile
+    from fsrlab.virtual.sources import PhysicsSource, StressProfile
 
     class ScaledSource(PhysicsSource):
         """A held stress with C_FSR scaled to put the 555 at ``freq_hz``."""
@@ -47,7 +47,7 @@ def twin_ratio(freq_hz: float) -> tuple[float, int]:
     import serial
 
     from fsrlab.acquisition.protocol import FrameParser
-    from fsrlab.twin import Twin
+    from fsrlab.virtual.twin import Twin
 
     frames: list = []
     with Twin(_source(freq_hz), speed="max") as twin, serial.Serial(twin.port, timeout=0.05) as ser:
@@ -97,7 +97,7 @@ def run() -> str:
     verdict = ("met" if aim >= 2.0 else "not met") + f" ({aim:.2f}× real time at 10 kHz)"
     load = " / ".join(f"{x:.1f}" for x in os.getloadavg())
     return "\n".join([
-        "Twin: `fsrlab.twin.Twin(speed=\"max\")`, host reading the pty after `START` (100 ms windows), "
+        "Twin: `fsrlab.virtual.twin.Twin(speed=\"max\")`, host reading the pty after `START` (100 ms windows), "
         f"{WALL_S:g} s of wall time per frequency. Peer 1: real time (ratio 1). Peer 2: the square-wave "
         "harness `fsrlab_sim` (same firmware, edges generated in C, no pty).",
         "",

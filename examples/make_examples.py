@@ -1,7 +1,7 @@
 """Write the example inputs of this folder (run from the repository root: python examples/make_examples.py).
 
 Everything here is synthetic except repeatability.csv (the paper's printed Table 4). The synthetic
-files come from fsrlab's virtual bench, fsrlab.analysis.synthetic.synthetic_run: the virtual FSR
+files come from fsrlab's virtual bench, fsrlab.virtual.synthetic.synthetic_run: the virtual FSR
 (fsrlab.physics.sensor.VirtualFSR) read through the paper's LM555 circuit (R = 10 kΩ, ideal D1) and
 op-amp, and the meter's model (100 ms windows, 62.5 ns ticks, 0.2 % frequency noise), with the
 seeds given below. calibration.json is what `fsrlab calibrate` writes for bench.csv, so it carries
@@ -26,7 +26,7 @@ ISO_SERIES = (("1", 0, False, 11), ("2", 0, False, 12), ("3", 120, True, 13), ("
 
 def runs() -> None:
     """bench.csv (2 cycles to 50 kPa, seed 1) and other.csv (1 cycle to 55 kPa, beyond bench's range, seed 7)."""
-    from fsrlab.analysis.synthetic import synthetic_run
+    from fsrlab.virtual.synthetic import synthetic_run
 
     synthetic_run(cycles=2, points_per_ramp=25, seed=1).write(HERE / "bench.csv")
     synthetic_run(cycles=1, points_per_ramp=25, peak_pa=55e3, seed=7).write(HERE / "other.csv")
@@ -47,7 +47,7 @@ def repeatability() -> None:
 
 def iso376() -> None:
     """ISO 376 series of the virtual sensor: frequency readings at 8 forces, zero readings before and after."""
-    from fsrlab.analysis.synthetic import synthetic_run
+    from fsrlab.virtual.synthetic import synthetic_run
     from fsrlab.physics.sensor import VirtualFSR
 
     area = VirtualFSR().area_m2
@@ -66,7 +66,7 @@ def creep_readings() -> tuple[float, float]:
 
     The virtual sensor has no creep, so the two differ by the meter's noise only.
     """
-    from fsrlab.analysis.synthetic import synthetic_run
+    from fsrlab.virtual.synthetic import synthetic_run
     from fsrlab.physics.sensor import VirtualFSR
 
     area = VirtualFSR().area_m2
@@ -92,9 +92,9 @@ def creep() -> None:
     noise), written only every other 100 ms window, empty in between, as a load cell read more
     slowly than the readout (an HX711) would leave it. Seeds 21 (meter) and 22 (load cell).
     """
-    from fsrlab.analysis.synthetic import synthetic_run
+    from fsrlab.virtual.synthetic import synthetic_run
     from fsrlab.physics.sensor import VirtualFSR
-    from fsrlab.runwriter import write_run
+    from fsrlab.io.runwriter import write_run
 
     window_s, ramp_s = 0.1, 1.0
     area = VirtualFSR().area_m2

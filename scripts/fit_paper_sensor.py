@@ -1,20 +1,21 @@
 """Fit the "paper sensor" preset (fsrlab.physics.paper_sensor) and print its parameters.
 
-Each sensor's own parameters are fitted to its printed numbers (fsrlab.analysis.experiment.preset_targets:
-Figure 19a/b ranges, Table 4 mean readings, Table 3 row) by fsrlab.analysis.experiment.fit_paper_sensor,
+Each sensor's own parameters are fitted to its printed numbers (fsrlab.paper.preset_fit.preset_targets:
+Figure 19a/b ranges, Table 4 mean readings, Table 3 row) by fsrlab.paper.preset_fit.fit_paper_sensor,
 the shared ones held; then the three placement spreads shared by the four are fitted to the mean RE2 of
-Tables 4 and 5 (linearised, fsrlab.analysis.experiment.fit_placement_spread). The printed literal replaces
+Tables 4 and 5 (linearised, fsrlab.paper.preset_fit.fit_placement_spread). The printed literal replaces
 PAPER_SENSOR_PARAMETERS in src/fsrlab/physics/paper_sensor.py. Run: .venv/bin/python scripts/fit_paper_sensor.py
 (about a minute). ``--joint`` fits the shared parameters and the spreads too
-(fsrlab.analysis.experiment.fit_paper_preset; slow: tens of minutes).
+(fsrlab.paper.preset_fit.fit_paper_preset; slow: tens of minutes).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from fsrlab.analysis.experiment import (FIT_PARAMETERS, SHARED_FIT_PARAMETERS, SPREADS, fit_paper_preset,
-                                        fit_placement_spread, re2_design)
+from fsrlab.paper.preset_fit import (
+    FIT_PARAMETERS, SHARED_FIT_PARAMETERS, SPREADS, fit_paper_preset, fit_placement_spread, re2_design
+)
 
 
 def main(joint: bool = False, max_nfev: int = 300) -> None:
@@ -27,7 +28,7 @@ def main(joint: bool = False, max_nfev: int = 300) -> None:
     max_nfev : int
         Largest number of residual evaluations of the joint fit.
     """
-    from fsrlab.analysis.experiment import fit_paper_sensor, quick_response
+    from fsrlab.paper.preset_fit import fit_paper_sensor, quick_response
 
     if joint:
         fitted, gots, wants = fit_paper_preset(max_nfev=max_nfev, repeatability=True)

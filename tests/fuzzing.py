@@ -80,7 +80,7 @@ BAD_JSON = [None, "abc", 1e308, -1, [], {}, True, float("nan"), float("inf"), 0,
 
 def write_corpus(root: Path) -> None:
     """Small valid inputs of every kind the commands read."""
-    from fsrlab.analysis.synthetic import synthetic_run
+    from fsrlab.virtual.synthetic import synthetic_run
 
     synthetic_run(cycles=2, points_per_ramp=20, seed=1).write(root / "run.csv")
     synthetic_run(cycles=2, points_per_ramp=15, seed=7).write(root / "other.csv")

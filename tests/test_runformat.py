@@ -23,8 +23,8 @@ import numpy as np
 import pytest
 from hypothesis import given, strategies as st
 
-from fsrlab.runformat import RunFormatError, load_run, sidecar_path
-from fsrlab.runwriter import RunWriter, write_run
+from fsrlab.io.runformat import RunFormatError, load_run, sidecar_path
+from fsrlab.io.runwriter import RunWriter, write_run
 from clirun import run_cli
 
 
@@ -162,7 +162,7 @@ def test_sigkill_mid_run_leaves_readable_file(tmp_path):
     path = tmp_path / "killed.csv"
     script = textwrap.dedent(f"""
         import itertools
-        from fsrlab.runwriter import RunWriter
+        from fsrlab.io.runwriter import RunWriter
         w = RunWriter({str(path)!r}, ["time_s", "frequency_hz", "duty_cycle", "seq"], {{"origin": "kill test"}})
         for i in itertools.count():
             w.write({{"time_s": i * 0.001, "frequency_hz": 5000.123456789 + i, "duty_cycle": 0.5123456789, "seq": i}})
@@ -297,7 +297,7 @@ def test_error_example_is_what_fsrlab_prints(tmp_path, monkeypatch):
 
 @pytest.mark.parametrize("name", ["bench.csv", "other.csv", "minimal.csv"])
 def test_shipped_example_runs_load(name):
-    from fsrlab.runformat import load_run
+    from fsrlab.io.runformat import load_run
 
     run = load_run(ROOT / "examples" / name)
     assert run.n_rows >= 3 and "stress_pa" in run and "frequency_hz" in run

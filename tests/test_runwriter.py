@@ -14,8 +14,8 @@ import sys
 
 import pytest
 
-from fsrlab.runformat import load_run, sidecar_path
-from fsrlab.runwriter import RunWriter, write_run
+from fsrlab.io.runformat import load_run, sidecar_path
+from fsrlab.io.runwriter import RunWriter, write_run
 
 
 def _run(path, rows=3):
@@ -82,7 +82,7 @@ def test_a_write_that_fails_half_way_leaves_whole_rows(tmp_path):
     path = tmp_path / "run.csv"
     script = f"""
 import resource, signal
-from fsrlab.runwriter import RunWriter
+from fsrlab.io.runwriter import RunWriter
 signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
 resource.setrlimit(resource.RLIMIT_FSIZE, (1000, 1000))
 w = RunWriter({str(path)!r}, ["time_s", "frequency_hz"])

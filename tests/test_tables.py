@@ -1,4 +1,4 @@
-"""CSV table readers (fsrlab.tables): grouped repeatability readings.
+"""CSV table readers (fsrlab.io.tables): grouped repeatability readings.
 
 Reference: the paper's printed Table 5 readings (real data, tests/data/paper.json) written as a
 long CSV and read back exactly; one-line errors naming file, row and column (docs/data-format.md
@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fsrlab.tables import load_grouped_csv
+from fsrlab.io.tables import load_grouped_csv
 
 
 def test_grouped_csv_reads_the_printed_readings_back(paper, tmp_path):
@@ -70,9 +70,9 @@ ISO = "series,rotation_deg,force_n,reading,direction\n1,0,0,0,1\n1,0,1,1.0,1\n1,
     ("1,0,4,,1", "row 5 (line 6), column 'reading': empty cell"),
 ])
 def test_iso376_csv_rejects_bad_cells_naming_row_and_column(tmp_path, row, needle):
-    # Reference: the ISO 376 reader's contract (fsrlab.tables.load_iso376_csv): one line, file, row, column;
+    # Reference: the ISO 376 reader's contract (fsrlab.io.tables.load_iso376_csv): one line, file, row, column;
     # before, nan and 1e308 readings were accepted and a repeated force silently replaced the first.
-    from fsrlab.tables import load_iso376_csv
+    from fsrlab.io.tables import load_iso376_csv
 
     p = tmp_path / "iso.csv"
     p.write_text(ISO + row + "\n")
@@ -82,7 +82,7 @@ def test_iso376_csv_rejects_bad_cells_naming_row_and_column(tmp_path, row, needl
 
 
 def test_iso376_csv_needs_two_forces(tmp_path):
-    from fsrlab.tables import load_iso376_csv
+    from fsrlab.io.tables import load_iso376_csv
 
     p = tmp_path / "iso.csv"
     p.write_text("series,rotation_deg,force_n,reading\n1,0,0,0\n1,0,1,1.0\n")

@@ -25,9 +25,10 @@ import pytest
 
 from fsrlab.acquisition.recorder import record
 from fsrlab.acquisition.serial_link import SerialLink
-from fsrlab.acquisition.virtual_device import ConstantSource, VirtualDevice
-from fsrlab.runformat import load_run, sidecar_path
-from fsrlab.runwriter import RunWriter
+from fsrlab.virtual.sources import ConstantSource
+from fsrlab.virtual.device import VirtualDevice
+from fsrlab.io.runformat import load_run, sidecar_path
+from fsrlab.io.runwriter import RunWriter
 from clirun import run_cli
 from recording import CLI, rows as _rows, wait as _wait
 

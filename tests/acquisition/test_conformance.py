@@ -23,7 +23,8 @@ from toolcheck import require_file, require_tool
 from fsrlab.acquisition.messages import Measurement
 from fsrlab.acquisition.protocol import FrameParser
 from fsrlab.acquisition.serial_link import SerialLink
-from fsrlab.acquisition.virtual_device import ConstantSource, VirtualDevice
+from fsrlab.virtual.sources import ConstantSource
+from fsrlab.virtual.device import VirtualDevice
 
 FIRMWARE = Path(__file__).resolve().parents[2] / "firmware"
 F_HZ, DUTY, ADC_MV = 5000.0, 0.25, 2000

@@ -18,10 +18,9 @@ from fsrlab.acquisition.protocol import encode_frame
 from fsrlab.acquisition.serial_link import (
     CommandRejected, HandshakeError, LinkError, SerialLink, UsbPort, find_uno,
 )
-from fsrlab.acquisition.virtual_device import (
-    ConstantSource, PhysicsSource, StressProfile, VirtualDevice,
-)
-from fsrlab.physics.params import PAPER_CIRCUIT
+from fsrlab.virtual.sources import ConstantSource, PhysicsSource, StressProfile
+from fsrlab.virtual.device import VirtualDevice
+from fsrlab.circuits.circuit import PAPER_CIRCUIT
 
 
 def _collect(link: SerialLink, n: int, kinds=("M",), limit_s: float = 10.0):
@@ -181,7 +180,7 @@ def test_find_uno_by_usb_identity():
 
 
 def test_device_reset_is_detected_and_counted():
-    from fsrlab.acquisition.virtual_device import Faults
+    from fsrlab.virtual.device import Faults
 
     with VirtualDevice(ConstantSource(), faults=Faults(reset_after=3), seed=5) as dev, SerialLink(dev.port) as link:
         link.handshake()

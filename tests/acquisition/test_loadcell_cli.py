@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from clirun import run_cli
-from fsrlab.runformat import load_run
+from fsrlab.io.runformat import load_run
 
 ROOT = Path(__file__).resolve().parents[2]
 

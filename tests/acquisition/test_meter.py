@@ -1,4 +1,4 @@
-"""The meter's model (fsrlab.acquisition.meter): timer quantization, high-time noise, the 10-bit ADC.
+"""The meter's model (fsrlab.virtual.meter): timer quantization, high-time noise, the 10-bit ADC.
 
 References: independent closed forms of a timer that timestamps rising edges in 62.5 ns ticks (the
 summed length of whole periods is one timestamp difference, so within one tick of periods/f); the
@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from hypothesis import assume, given, settings, strategies as st
 
-from fsrlab.acquisition.meter import MeterState, adc_code, measure
-from fsrlab.acquisition.protocol import F_CPU, TICK_S
+from fsrlab.virtual.meter import MeterState, adc_code, measure
+from fsrlab.hardware import F_CPU, TICK_S
 
 
 @pytest.mark.parametrize("volts, code", [(2.5, 512), (4.999, 1023), (-0.1, 0), (5.2, 1023), (0.0, 0),

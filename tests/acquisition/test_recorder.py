@@ -1,6 +1,6 @@
 """Recording through a real pty: the run file, corruption, resets, unplugging, Ctrl-C, SIGKILL, the CLI.
 
-References: the run format (fsrlab.runformat.load_run, docs/data-format.md), the protocol's
+References: the run format (fsrlab.io.runformat.load_run, docs/data-format.md), the protocol's
 sequence numbers (every lost frame is a gap in ``seq``), and the command line's contract (the JSON
 summary, one-line errors with exit code 2, exit code 1 when the device disappears).
 """
@@ -19,9 +19,10 @@ import pytest
 
 from fsrlab.acquisition.recorder import COLUMNS, record
 from fsrlab.acquisition.serial_link import SerialLink
-from fsrlab.acquisition.virtual_device import ConstantSource, Faults, VirtualDevice
-from fsrlab.physics.params import PAPER_CIRCUIT, PAPER_OPAMP
-from fsrlab.runformat import load_run
+from fsrlab.virtual.sources import ConstantSource
+from fsrlab.virtual.device import Faults, VirtualDevice
+from fsrlab.circuits.circuit import PAPER_CIRCUIT, PAPER_OPAMP
+from fsrlab.io.runformat import load_run
 from clirun import run_cli
 from recording import CLI, rows as _rows, wait as _wait
 

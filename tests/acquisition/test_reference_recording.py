@@ -15,7 +15,7 @@ import pytest
 
 from clirun import run_cli
 from fsrlab.acquisition.loadcell import LoadCellModel
-from fsrlab.runformat import load_run
+from fsrlab.io.runformat import load_run
 
 CELL = LoadCellModel()
 
@@ -65,7 +65,7 @@ def test_a_load_cell_that_stops_answering_is_said_and_its_cells_stay_empty(tmp_p
 
     from fsrlab.acquisition.recorder import record
     from fsrlab.acquisition.serial_link import SerialLink
-    from fsrlab.acquisition.virtual_device import VirtualDevice
+    from fsrlab.virtual.device import VirtualDevice
 
     said = []
     with VirtualDevice(seed=3) as dev, SerialLink(dev.port) as link:
@@ -87,7 +87,7 @@ class _Version1Device:
 
     @staticmethod
     def make(**kwargs):
-        from fsrlab.acquisition.virtual_device import VirtualDevice
+        from fsrlab.virtual.device import VirtualDevice
 
         class V1(VirtualDevice):
             def _send_frame(self, kind, fields, faults=True):

@@ -1,7 +1,7 @@
 """The virtual device's signal and its meter: eq. (38) on A0, and the same statistics as a synthetic run.
 
 References: the paper's eq. (38), |V_out| = R_F/R_FSR·|Vcc| with R_F = 20 kΩ and |Vcc| = 5 V,
-evaluated by hand on the sensor model's R_FSR at 5 V; the synthetic run (fsrlab.analysis.synthetic)
+evaluated by hand on the sensor model's R_FSR at 5 V; the synthetic run (fsrlab.virtual.synthetic)
 as a second, vectorised path through the meter's model, compared statistically (bounds from the
 sampling spread of n windows, stated at each assertion).
 """
@@ -15,10 +15,11 @@ import numpy as np
 import pytest
 
 from fsrlab.acquisition.messages import Measurement
-from fsrlab.acquisition.protocol import ADC_V_PER_COUNT
+from fsrlab.hardware import ADC_V_PER_COUNT
 from fsrlab.acquisition.serial_link import SerialLink
-from fsrlab.acquisition.virtual_device import VIRTUAL_CIRCUIT, PhysicsSource, StressProfile, VirtualDevice
-from fsrlab.analysis.synthetic import synthetic_run
+from fsrlab.virtual.sources import VIRTUAL_CIRCUIT, PhysicsSource, StressProfile
+from fsrlab.virtual.device import VirtualDevice
+from fsrlab.virtual.synthetic import synthetic_run
 from fsrlab.physics.sensor import VirtualFSR
 
 SIGMA = 30e3  # Pa

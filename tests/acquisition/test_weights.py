@@ -1,6 +1,6 @@
 """The guided known-weight calibration: its plan, its stability criterion and its rows.
 
-References: the plan and the criterion as the module states them (fsrlab.acquisition.weights):
+References: the plan and the criterion as the module states them (fsrlab.bench.weights):
 masses up (+1), back down without the top one (−1), per cycle; stable when |mean(second half) −
 mean(first half)| / mean over the last N windows ≤ max_drift; force_n = m·g with g = 9.80665 m/s²
 (standard gravity) and stress = force / area. The procedure is driven by the windows' times, so
@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 from clirun import run_cli
-from fsrlab.acquisition.weights import WeightsProcedure, placements_table, plan_steps
-from fsrlab.runformat import load_run
+from fsrlab.bench.weights import WeightsProcedure, placements_table, plan_steps
+from fsrlab.io.runformat import load_run
 
 G = 9.80665
 AREA = 7.13e-5

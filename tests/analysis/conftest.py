@@ -1,7 +1,7 @@
 """Runs shared by the analysis tests (synthetic, not measurements).
 
 ``runs``: a directory with ``bench.csv`` (3 cycles, seed 1) and ``other.csv`` (2 cycles, seed 7)
-written by fsrlab.analysis.synthetic.synthetic_run (VirtualFSR -> lm555.astable, R = 10 kΩ, ideal
+written by fsrlab.virtual.synthetic.synthetic_run (VirtualFSR -> lm555.astable, R = 10 kΩ, ideal
 D1 -> 100 ms windows, 62.5 ns quantization, 0.2 % frequency noise) in the run format.
 """
 
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import pytest
 
-from fsrlab.analysis.synthetic import synthetic_run
+from fsrlab.virtual.synthetic import synthetic_run
 
 
 @pytest.fixture(scope="session")

@@ -1,8 +1,8 @@
-"""Calibration (fsrlab.analysis.calibration, calibration_io): polynomial fits, grouped cross-validation, files.
+"""Calibration (fsrlab.calibration.polynomial, calibration_io): polynomial fits, grouped cross-validation, files.
 
 References: numpy.polyfit (an independent least-squares implementation) for the fits; explicit
 refits per fold for the sufficient-statistics cross-validation; exact polynomials for recovery.
-Synthetic data (where used) come from fsrlab.analysis.synthetic.synthetic_run: VirtualFSR ->
+Synthetic data (where used) come from fsrlab.virtual.synthetic.synthetic_run: VirtualFSR ->
 lm555.astable (R = 10 kΩ, ideal D1) -> 62.5 ns timer quantization with 0.2 % frequency noise.
 """
 
@@ -14,8 +14,9 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from fsrlab.analysis.calibration import calibrate, cross_validate_degrees, default_groups, fit_metrics, fit_polynomial
-from fsrlab.analysis.calibration_io import load_calibration, save_calibration
+from fsrlab.calibration.result import calibrate
+from fsrlab.calibration.polynomial import cross_validate_degrees, default_groups, fit_metrics, fit_polynomial
+from fsrlab.calibration.document import load_calibration, save_calibration
 
 
 def test_fit_matches_numpy_polyfit_and_power_coefficients():
@@ -86,7 +87,7 @@ def test_paper_like_linear_vs_cubic_on_synthetic_run():
     """Figure 17 contrast (linear R² 0.9432 vs cubic 0.9974 in the paper): on the synthetic run,
     stress vs frequency is curved and hysteretic, so the cubic must beat the line clearly. Property
     test only: the paper's raw data are unpublished, so its R² values are not a target."""
-    from fsrlab.analysis.synthetic import synthetic_run
+    from fsrlab.virtual.synthetic import synthetic_run
 
     c = synthetic_run(cycles=3, peak_pa=50e3, seed=4).columns
     load = c["direction"] >= 0  # loading branch: the curvature alone, without the hysteresis spread
@@ -169,8 +170,8 @@ def test_physics_informed_calibration_on_decoded_capacitance():
     noiseless C_FSR from VirtualFSR; tolerance 2 %: the decode amplifies the 0.2 % frequency noise
     and the duty-cycle quantization by a factor of a few. Reference 2 (property): C_FSR carries only
     the separation's hysteresis, not R_FSR's, so stress(C_FSR) fits better than stress(f)."""
-    from fsrlab.analysis.pipeline import decode_capacitance
-    from fsrlab.analysis.synthetic import synthetic_run
+    from fsrlab.calibration.readout import decode_capacitance
+    from fsrlab.virtual.synthetic import synthetic_run
     from fsrlab.circuits.circuit import LM555Circuit
 
     c = synthetic_run(cycles=3, seed=1).columns
@@ -195,7 +196,7 @@ def test_inverse_roundtrip_and_non_monotonic():
 def test_decode_capacitance_gives_nan_for_an_impossible_reading_not_an_error():
     # Property: without the diode the duty cycle cannot fall below 2/3 (erratum O1's limit), so a
     # reading of 0.5 is impossible; it becomes NaN while its neighbours decode.
-    from fsrlab.analysis.pipeline import decode_capacitance
+    from fsrlab.calibration.readout import decode_capacitance
     from fsrlab.circuits.circuit import LM555Circuit
     from fsrlab.circuits.lm555 import astable
 

@@ -1,7 +1,7 @@
 """Command line of the analysis topic: `fsrlab hysteresis | repeatability | calibrate | apply`.
 
 Through fsrlab.cli.main (exit codes and one-line errors). Data: the paper's Table 4/5 readings
-(real), and synthetic runs from fsrlab.analysis.synthetic.synthetic_run (VirtualFSR ->
+(real), and synthetic runs from fsrlab.virtual.synthetic.synthetic_run (VirtualFSR ->
 lm555.astable -> 62.5 ns quantization, 0.2 % frequency noise) written in the run format.
 """
 
@@ -12,9 +12,9 @@ import json
 import numpy as np
 import pytest
 
-from fsrlab.analysis.synthetic import synthetic_run
+from fsrlab.virtual.synthetic import synthetic_run
 from clirun import run_cli
-from fsrlab.runformat import load_run
+from fsrlab.io.runformat import load_run
 
 
 def test_hysteresis_json_keys(runs, capsys):
@@ -111,7 +111,8 @@ def test_bad_input_one_line_exit_2(runs, tmp_path, capsys, args, needle):
 def test_calibrate_on_decoded_capacitance_stores_the_circuit_and_apply_reuses_it(runs, tmp_path, capsys):
     # Reference: the pipeline called directly on the same run (the CLI only renders), and the
     # circuit the options name (--r over the sidecar's R = 10 kΩ).
-    from fsrlab.analysis.pipeline import apply_calibration, calibrate_run
+    from fsrlab.calibration.apply import apply_calibration
+    from fsrlab.calibration.fit import calibrate_run
     from fsrlab.circuits.circuit import LM555Circuit
 
     cal = tmp_path / "calc.json"

@@ -1,6 +1,6 @@
 """The analysis commands: nothing lost, nothing silently wrong.
 
-Data: synthetic runs from fsrlab.analysis.synthetic.synthetic_run (VirtualFSR -> LM555, R = 10 kΩ,
+Data: synthetic runs from fsrlab.virtual.synthetic.synthetic_run (VirtualFSR -> LM555, R = 10 kΩ,
 ideal D1 -> meter model) written in the run format; references are the runs' own construction
 (a cell set to 1e308 at a known row, a circuit changed to R = 4.7 kΩ, a constant readout) and the
 same command on the run without the fault.
@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 
 from clirun import run_cli
-from fsrlab.analysis.synthetic import synthetic_run
+from fsrlab.virtual.synthetic import synthetic_run
 from fsrlab.circuits.circuit import LM555Circuit
-from fsrlab.physics.params import PAPER_CIRCUIT
-from fsrlab.runformat import load_run, sidecar_path
+from fsrlab.circuits.circuit import PAPER_CIRCUIT
+from fsrlab.io.runformat import load_run, sidecar_path
 
 
 @pytest.fixture(scope="module")
@@ -111,7 +111,7 @@ def test_apply_json_counts_are_true(runs, cal, tmp_path):
     f[[3, 4]] = np.nan
     f[10], f[20], f[30] = 100.0, 1e6, 2e4
     synthetic_run(cycles=2, seed=7).write(tmp_path / "r.csv")
-    from fsrlab.runwriter import write_run
+    from fsrlab.io.runwriter import write_run
 
     meta = json.loads(sidecar_path(runs / "other.csv").read_text())
     write_run(tmp_path / "r.csv", {k: v for k, v in c.items() if k not in ("c_fsr_farad", "r_fsr_ohm")}, meta)

@@ -1,9 +1,9 @@
 """Hysteresis compensation (extension beyond the paper): direction-aware calibration with memory.
 
-Data: fsrlab.analysis.synthetic.synthetic_run -- VirtualFSR (hysteretic separation, eqs. 1, 9 with
+Data: fsrlab.virtual.synthetic.synthetic_run -- VirtualFSR (hysteretic separation, eqs. 1, 9 with
 memory) -> lm555.astable (R = 10 kΩ, ideal D1) -> 100 ms windows, 62.5 ns timer quantization,
 0.2 % frequency noise. Reference: the run's own reference stress; HE by eq. (13) through
-fsrlab.analysis.cycles.run_hysteresis.
+fsrlab.metrics.cycles.run_hysteresis.
 """
 
 from __future__ import annotations
@@ -11,9 +11,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fsrlab.analysis.compensation import DirectionAwareCalibration, compare_compensation, fit_direction_aware
-from fsrlab.analysis.cycles import readout_directions, run_hysteresis
-from fsrlab.analysis.synthetic import synthetic_run
+from fsrlab.calibration.compensation import DirectionAwareCalibration, compare_compensation, fit_direction_aware
+from fsrlab.metrics.cycles import readout_directions, run_hysteresis
+from fsrlab.virtual.synthetic import synthetic_run
 
 
 @pytest.fixture(scope="module")
@@ -42,7 +42,7 @@ def test_turning_point_memory_helps_on_minor_loops(bench):
     """Minor loops (reversals at 20, 40, 5, 30 kPa) were never in the calibration run; the memory rule
     must beat both the plain cubic and branch switching without memory (RMSE against the reference)."""
     comp = fit_direction_aware(bench["frequency_hz"], bench["stress_pa"])
-    from fsrlab.analysis.calibration import calibrate
+    from fsrlab.calibration.result import calibrate
 
     plain = calibrate(bench["frequency_hz"], bench["stress_pa"], degree=3)
 

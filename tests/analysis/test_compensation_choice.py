@@ -3,8 +3,8 @@
 References, by test: hand-worked label sequences (a readout going up and down past a known band);
 causality as a property (the estimate of a prefix of a run equals the first rows of the estimate of
 the whole run); the live estimator stepped row by row against the offline apply (same numbers);
-synthetic runs with clean whole cycles (fsrlab.analysis.synthetic: VirtualFSR -> lm555.astable,
-0.2 % frequency noise) and hand-loaded runs from a Bouc–Wen sensor (fsrlab.analysis.handloaded),
+synthetic runs with clean whole cycles (fsrlab.virtual.synthetic: VirtualFSR -> lm555.astable,
+0.2 % frequency noise) and hand-loaded runs from a Bouc–Wen sensor (fsrlab.virtual.handloaded),
 a model neither compensation assumes.
 """
 
@@ -16,16 +16,19 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from fsrlab.analysis.calibration_io import load_calibration, save_calibration
-from fsrlab.analysis.compensation import (BranchState, DirectionAwareCalibration, causal_readout_directions,
-                                          fit_direction_aware)
-from fsrlab.analysis.cycles import run_hysteresis
-from fsrlab.analysis.handloaded import fsr_bench_run
-from fsrlab.analysis.memory import fold_assignment
-from fsrlab.analysis.pipeline import (BRANCHES, PLAY, apply_calibration, calibrate_run, fit_causal_branches,
-                                      live_estimator, run_groups)
-from fsrlab.analysis.synthetic import synthetic_run
-from fsrlab.runformat import load_run
+from fsrlab.calibration.document import load_calibration, save_calibration
+from fsrlab.calibration.compensation import (
+    BranchState, DirectionAwareCalibration, causal_readout_directions, fit_direction_aware
+)
+from fsrlab.metrics.cycles import run_hysteresis
+from fsrlab.virtual.handloaded import fsr_bench_run
+from fsrlab.calibration.play import fold_assignment
+from fsrlab.calibration.fit import BRANCHES, PLAY, calibrate_run, fit_causal_branches
+from fsrlab.calibration.apply import apply_calibration
+from fsrlab.calibration.estimator import live_estimator
+from fsrlab.calibration.readout import run_groups
+from fsrlab.virtual.synthetic import synthetic_run
+from fsrlab.io.runformat import load_run
 
 
 def test_causal_labels_switch_at_the_reading_that_confirms_the_reversal():
@@ -125,7 +128,7 @@ def test_clean_whole_cycles_choose_the_causal_branches_and_live_equals_offline(c
     f = other["frequency_hz"].copy()
     f[[5, 6, 60]] = np.nan
     f[30] = 10 * cal.x_range[1]
-    from fsrlab.runwriter import write_run
+    from fsrlab.io.runwriter import write_run
 
     write_run(tmp_path / "holey.csv", {"stress_pa": other["stress_pa"], "frequency_hz": f}, other.metadata)
     holey = apply_calibration(cal, load_run(tmp_path / "holey.csv"))
@@ -176,7 +179,7 @@ def test_hand_loaded_runs_keep_the_play_operators(hand):
     assert choice["chosen"] == PLAY and cal.memory is not None and cal.compensation is None
     assert "not tried" in choice["note"]  # partial presses and minor loops: not whole cycles
     # Were the branches cross-validated anyway, on the same folds, they would lose by far.
-    from fsrlab.analysis.alignment import shift_reference
+    from fsrlab.calibration.alignment import shift_reference
 
     x, y = hand["voltage_v"], shift_reference(hand["time_s"], hand["force_n"], cal.lag_s)  # as the fit saw it
     ok = np.isfinite(x) & np.isfinite(y) & ~cal.floor.below(x)

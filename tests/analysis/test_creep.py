@@ -11,7 +11,7 @@ References (independent closed forms, written here, not fsrlab's models):
 * reference profiles made of flat stretches and ramps: the holds are the flat stretches, with
   their times to one reading (one reference interval where the reference has empty cells).
 
-The CLI tests write these runs with fsrlab.runwriter.write_run and compare ``--json`` with the
+The CLI tests write these runs with fsrlab.io.runwriter.write_run and compare ``--json`` with the
 library's result on the same file. examples/creep.csv is checked against the creep put into it
 (examples/make_examples.py: 3 % of the stress felt per decade).
 """
@@ -27,9 +27,10 @@ import numpy as np
 import pytest
 
 from clirun import run_cli
-from fsrlab.analysis.creep import creep, creep_of_run, find_holds, first_order_fit, log_drift
-from fsrlab.runformat import load_run
-from fsrlab.runwriter import write_run
+from fsrlab.metrics.creep import creep, creep_of_run, first_order_fit, log_drift
+from fsrlab.metrics.holds import find_holds
+from fsrlab.io.runformat import load_run
+from fsrlab.io.runwriter import write_run
 
 ROOT = Path(__file__).resolve().parents[2]
 DT = 0.1  # readout window [s]

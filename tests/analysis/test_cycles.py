@@ -1,4 +1,4 @@
-"""Branch and cycle detection (fsrlab.analysis.cycles) on constructed stress sequences.
+"""Branch and cycle detection (fsrlab.metrics.cycles) on constructed stress sequences.
 
 Data: triangle waves of stress (bench-like loading/unloading ramps) built here, with optional
 Gaussian noise and dwell plateaus; the expected turning points are known by construction.
@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 from hypothesis import given, strategies as st
 
-from fsrlab.analysis.cycles import branch_directions, split_cycles, turning_points
+from fsrlab.physics.history import branch_directions, turning_points
+from fsrlab.metrics.cycles import split_cycles
 
 
 def triangle(cycles=3, per_ramp=50, peak=10e3, dwell=0):
@@ -84,9 +85,9 @@ def test_property_cycle_count_and_monotone_labels(n_cycles, per_ramp, peak, seed
     assert set(np.unique(lab)) <= {-1, 1}
 
 
-# --- hysteresis error from runs (eq. 13 through fsrlab.analysis.hysteresis.hysteresis_error) ---
+# --- hysteresis error from runs (eq. 13 through fsrlab.metrics.hysteresis.hysteresis_error) ---
 
-from fsrlab.analysis.cycles import run_hysteresis  # noqa: E402
+from fsrlab.metrics.cycles import run_hysteresis  # noqa: E402
 
 
 def test_run_hysteresis_closed_form():
@@ -114,8 +115,8 @@ def test_run_hysteresis_on_synthetic_bench_run_matches_noiseless_model():
     62.5 ns quantization, 100 ms windows). Reference: the same chain without noise and quantization
     sampled finely (eq. 13 on exact branches). Tolerance 1 percentage point: 3 σ of 0.2 % noise on
     a difference of two readings relative to full scale is ≈ 0.85 pp."""
-    from fsrlab.analysis.hysteresis import hysteresis_error
-    from fsrlab.analysis.synthetic import synthetic_run, triangle_stress
+    from fsrlab.metrics.hysteresis import hysteresis_error
+    from fsrlab.virtual.synthetic import synthetic_run, triangle_stress
     from fsrlab.circuits.lm555 import astable
     from fsrlab.physics.sensor import VirtualFSR
 
@@ -139,7 +140,7 @@ def test_run_without_cycle_is_rejected():
 
 def test_rows_without_reference_stress_are_skipped():
     # Acquisition leaves stress_pa empty (NaN) when the reference has no reading: same result without those rows.
-    from fsrlab.analysis.synthetic import synthetic_run
+    from fsrlab.virtual.synthetic import synthetic_run
 
     c = synthetic_run(cycles=2, seed=11).columns
     s = c["stress_pa"].copy()
@@ -155,7 +156,7 @@ def test_readout_directions_are_branch_directions_with_gaps_filled():
     x = triangle(2, 20)
     holes = x.copy()
     holes[[0, 1, 7, 20, 21, 55]] = np.nan
-    from fsrlab.analysis.cycles import readout_directions
+    from fsrlab.metrics.cycles import readout_directions
 
     lab = readout_directions(holes)
     ok = np.isfinite(holes)
@@ -169,8 +170,8 @@ def test_a_readout_that_does_not_respond_has_no_hysteresis_error():
     # Reference: a constant readout (zero span), one that flickers by one quantization step
     # (10-bit ADC, 5 V / 1024), and 0.2 % white noise: none depends on the stress. The synthetic
     # run's own readouts do (HE ≈ 14 %, see above).
-    from fsrlab.analysis.hysteresis import check_response
-    from fsrlab.analysis.synthetic import synthetic_run
+    from fsrlab.metrics.hysteresis import check_response
+    from fsrlab.virtual.synthetic import synthetic_run
 
     c = synthetic_run(cycles=3, seed=1).columns
     s, rng = c["stress_pa"], np.random.default_rng(3)

@@ -8,8 +8,8 @@ mechanisms cannot close are asserted as documented there, so a change of the mod
 import numpy as np
 import pytest
 
-from fsrlab.analysis.experiment import (SPREADS, dead_weights, fit_paper_sensor, preset_targets, quick_response,
-                                        re2_design, run_experiment, spring_cycle)
+from fsrlab.paper.preset_fit import SPREADS, fit_paper_sensor, preset_targets, quick_response, re2_design
+from fsrlab.paper.experiment import dead_weights, run_experiment, spring_cycle
 from fsrlab.physics.paper_sensor import PAPER_SENSOR_PARAMETERS, paper_sensor, paper_sensors
 from fsrlab.physics.sensor import VirtualFSR
 from fsrlab.reference import paper_values
@@ -79,7 +79,7 @@ def test_documented_gaps(exp, printed):
 def test_linearised_re2_matches_the_placements(expected_re2):
     # Property: the Monte Carlo of five placements (dead_weights: meter noise, creep, the three draws)
     # averages near the linearised spread it was fitted with (E[s] of 5 normals is 0.94 sigma).
-    from fsrlab.analysis.experiment import placement_sensitivities
+    from fsrlab.paper.preset_fit import placement_sensitivities
 
     s, m = paper_sensor(2), 0.2
     sd = np.array([getattr(s, n) for n in SPREADS])
@@ -122,7 +122,7 @@ def test_any_sensor_runs_through_the_bench():
 def test_preset_films_stay_off_the_seams_of_the_tunnelling_equations():
     # Property: the paper's eqs. (10)-(12) jump where they join (R_A ≈ 2.4x at u = φ0/e); a preset state on a
     # seam would be an artefact of the piecewise equations, so every film stays in eq. (11)'s range.
-    from fsrlab.analysis.experiment import film_regimes
+    from fsrlab.paper.preset_fit import film_regimes
 
     for s in paper_sensors():
         assert film_regimes(s) == {11}, s.name

@@ -5,7 +5,7 @@ import pytest
 from hypothesis import assume, given, strategies as st
 from hypothesis.extra.numpy import arrays
 
-from fsrlab.analysis.hysteresis import hysteresis_error, hysteresis_error_curves
+from fsrlab.metrics.hysteresis import hysteresis_error, hysteresis_error_curves
 
 
 def test_linear_branches_with_known_gap():

@@ -1,4 +1,4 @@
-"""ISO 376:2011 quantities (fsrlab.analysis.iso376) on constructed calibrations with known errors.
+"""ISO 376:2011 quantities (fsrlab.metrics.iso376) on constructed calibrations with known errors.
 
 Reference: closed forms of the ISO 376 definitions applied to series built here so that each
 quantity has a known value (e.g. series 2 = series 1 × (1 + 4e-4) gives b' = 0.04 % up to the
@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fsrlab.analysis.iso376 import CLASS_LIMITS, CalibrationSeries, class_reached, iso376
+from fsrlab.metrics.iso376 import CLASS_LIMITS, CalibrationSeries, class_reached, iso376
 
 F = np.linspace(1e3, 10e3, 10)  # ten forces 10 %..100 % of 10 kN
 SENS = 2e-4  # reading per newton (e.g. mV/V per N)
@@ -99,7 +99,7 @@ def test_validation():
 def test_csv_loader_and_cli(tmp_path, capsys):
     import json
 
-    from fsrlab.tables import load_iso376_csv
+    from fsrlab.io.tables import load_iso376_csv
     from fsrlab.cli import main
 
     lines = ["series,rotation_deg,force_n,reading,direction"]

@@ -2,16 +2,16 @@
 
 Three kinds of run, each with its reference lag:
 
-* the virtual bench's spring cycles (:func:`fsrlab.acquisition.protocols.run_protocol`, 10 kPa
+* the virtual bench's spring cycles (:func:`fsrlab.bench.protocols.run_protocol`, 10 kPa
   triangles, as ``fsrlab bench spring --virtual`` and the demo record them): the virtual device
   takes the stress and its HX711 sample in the same window as the readout, so the lag is 0; the
   same run with the reference (or the readout) delayed by 50 ms and 120 ms by interpolation, so
   the lag is −50/−120 ms (or +50/+120 ms);
-* the hand-loaded generator (:func:`fsrlab.analysis.handloaded.fsr_bench_run`): the readout is the
+* the hand-loaded generator (:func:`fsrlab.virtual.handloaded.fsr_bench_run`): the readout is the
   mean of a 20 ms window ending at the row's time behind a 4 ms RC (the force 10 + 4 ms earlier),
   the reference the HX711's latest sample (on average half a sample period old), so the lag is
   0.014 s − 1/(2·SPS): +7.75 ms at 80 SPS, −36 ms at 10 SPS (closed form from the generator);
-* periodic drives of :func:`fsrlab.analysis.synthetic.synthetic_run` (readout and stress of the
+* periodic drives of :func:`fsrlab.virtual.synthetic.synthetic_run` (readout and stress of the
   same row, lag 0), the reference delayed by 50 and 120 ms: triangles (the lag is identifiable at
   the sharp reversals) and a sine (a phase shift of a sine is an elliptic loop, which the play
   operators reproduce: the search must say the lag is not identifiable and assume none).
@@ -26,9 +26,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fsrlab.analysis.alignment import _memory_settled, estimate_lag
-from fsrlab.analysis.pipeline import calibrate_run
-from fsrlab.runformat import Run, load_run
+from fsrlab.calibration.alignment import _memory_settled, estimate_lag
+from fsrlab.calibration.fit import calibrate_run
+from fsrlab.io.runformat import Run, load_run
 
 ROW_S = 0.02  # the virtual bench's and the generators' row period [s]
 
@@ -44,7 +44,7 @@ def _delayed(run: Run, column: str, delay_s: float) -> Run:
 @pytest.fixture(scope="module")
 def spring(tmp_path_factory):
     """4 spring cycles of 4 s to 10 kPa on the virtual bench (the demo's calibration run; 16 s in real time)."""
-    from fsrlab.acquisition.protocols import SpringPlan, run_protocol
+    from fsrlab.bench.protocols import SpringPlan, run_protocol
 
     path = tmp_path_factory.mktemp("spring") / "spring.csv"
     res = run_protocol(SpringPlan(peak_pa=10e3, cycles=4, period_s=4.0), path, device="virtual", seed=1)
@@ -78,7 +78,7 @@ def test_virtual_spring_run_with_a_lag_added(spring, delay_s, column, reference,
 
 @pytest.mark.parametrize("sps", [80.0, 10.0])
 def test_hand_loaded_runs_find_the_generators_lag(sps):
-    from fsrlab.analysis.handloaded import fsr_bench_run
+    from fsrlab.virtual.handloaded import fsr_bench_run
 
     run = fsr_bench_run("hand", seed=1, duration_s=120, reference_sps=sps).run()
     known = 0.010 + 0.004 - 0.5 / sps  # window centre + RC − half the HX711's sample period (module docstring)
@@ -88,7 +88,7 @@ def test_hand_loaded_runs_find_the_generators_lag(sps):
 
 def _periodic(shape: str, delay_s: float):
     """6 cycles of 8 s to 10 kPa through the synthetic chain (0.02 s rows, 0.05 % frequency noise)."""
-    from fsrlab.analysis.synthetic import synthetic_run, triangle_stress
+    from fsrlab.virtual.synthetic import synthetic_run, triangle_stress
 
     n = 200  # rows per ramp
     stress = triangle_stress(cycles=6, peak_pa=10e3, points_per_ramp=n)
@@ -134,7 +134,7 @@ def test_memory_settles_after_a_swing_both_ways():
 def test_one_motor_cycle_does_not_identify_the_lag():
     # Property: one triangle has one reversal; along its ramps a lag is an offset by direction that the
     # play operators reproduce (the search used to find -150 ms for the generator's +7.75 ms).
-    from fsrlab.analysis.handloaded import fsr_bench_run
+    from fsrlab.virtual.handloaded import fsr_bench_run
 
     cal = calibrate_run(fsr_bench_run("motor", seed=3, reference_sps=80).run(), x="voltage_v")
     search = cal.extra["lag_search"]

@@ -1,11 +1,11 @@
-"""The run → calibration → estimate pipeline (fsrlab.analysis.pipeline).
+"""The run → calibration → estimate pipeline (fsrlab.calibration.fit).
 
 References, by test: the array-level functions called by hand with groups derived by
 construction (triangle stress: each cycle is 2·points_per_ramp readings, the bottom turning point
 closing the previous cycle); the calibration's own polynomial evaluated row by row;
 LM555Circuit.decode called directly per range, and the closed-form astable (lm555.astable) that
 made the readings; a calibration file written by hand in the earlier layout. Synthetic runs come
-from fsrlab.analysis.synthetic.synthetic_run (VirtualFSR -> lm555.astable, R = 10 kΩ, ideal D1 ->
+from fsrlab.virtual.synthetic.synthetic_run (VirtualFSR -> lm555.astable, R = 10 kΩ, ideal D1 ->
 62.5 ns timer quantization, 0.2 % frequency noise).
 """
 
@@ -17,23 +17,26 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from fsrlab.analysis.calibration import calibrate
-from fsrlab.analysis.calibration_io import load_calibration, save_calibration
-from fsrlab.analysis.cycles import branch_directions, cycle_numbers, run_hysteresis
-from fsrlab.analysis.pipeline import (
-    live_estimator,
-    apply_calibration, calibrate_run, decode_capacitance, hysteresis_of_run, run_cycles, run_directions,
-    run_groups, run_readout,
+from fsrlab.calibration.result import calibrate
+from fsrlab.calibration.document import load_calibration, save_calibration
+from fsrlab.physics.history import branch_directions, cycle_numbers
+from fsrlab.metrics.cycles import run_hysteresis
+from fsrlab.calibration.estimator import live_estimator
+from fsrlab.calibration.apply import apply_calibration
+from fsrlab.calibration.fit import calibrate_run
+from fsrlab.calibration.readout import (
+    decode_capacitance, hysteresis_of_run, run_cycles, run_directions, run_groups, run_readout
 )
-from fsrlab.analysis.synthetic import synthetic_run
+from fsrlab.virtual.synthetic import synthetic_run
 from fsrlab.circuits.circuit import LM555Circuit
-from fsrlab.runformat import load_run
-from fsrlab.runwriter import write_run
+from fsrlab.io.runformat import load_run
+from fsrlab.io.runwriter import write_run
 
 #: The five lines a Python user writes to calibrate one run and apply it to another.
 SNIPPET = '''\
-from fsrlab.runformat import load_run
-from fsrlab.analysis.pipeline import calibrate_run, apply_calibration
+from fsrlab.io.runformat import load_run
+from fsrlab.calibration.fit import calibrate_run
+from fsrlab.calibration.apply import apply_calibration
 cal = calibrate_run(load_run("bench.csv"), x="frequency_hz", compensate=True)
 est = apply_calibration(cal, load_run("other.csv"))["stress_pa_estimate"]
 '''

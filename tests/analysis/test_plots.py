@@ -17,9 +17,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from fsrlab.analysis.calibration import calibrate  # noqa: E402
-from fsrlab.analysis.cycles import run_hysteresis  # noqa: E402
-from fsrlab.analysis.hysteresis import hysteresis_error, hysteresis_error_curves  # noqa: E402
+from fsrlab.calibration.result import calibrate  # noqa: E402
+from fsrlab.metrics.cycles import run_hysteresis  # noqa: E402
+from fsrlab.metrics.hysteresis import hysteresis_error, hysteresis_error_curves  # noqa: E402
 
 
 @pytest.fixture(autouse=True)
@@ -47,8 +47,8 @@ def test_calibration_plot_draws_data_then_curve_over_the_calibrated_range():
 
 
 def test_calibration_plot_shows_the_compensation_branches():
-    from fsrlab.analysis.compensation import fit_direction_aware
-    from fsrlab.analysis.synthetic import synthetic_run
+    from fsrlab.calibration.compensation import fit_direction_aware
+    from fsrlab.virtual.synthetic import synthetic_run
 
     c = synthetic_run(cycles=2, seed=3).columns
     cal = calibrate(c["frequency_hz"], c["stress_pa"], degree=3)
@@ -100,7 +100,7 @@ def test_run_hysteresis_plot_draws_each_cycle_then_the_mean_branches():
 def test_matplotlib_is_imported_only_by_plot():
     import subprocess
 
-    code = ("import sys; from fsrlab.analysis import pipeline, calibration, cycles, hysteresis; "
+    code = ("import sys; from fsrlab.calibration import fit, result, apply; from fsrlab.metrics import cycles, hysteresis; "
             "print('matplotlib' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "False"

@@ -1,4 +1,4 @@
-"""What a calibration was recorded with, and the differences that refuse a run (fsrlab.analysis.provenance).
+"""What a calibration was recorded with, and the differences that refuse a run (fsrlab.calibration.provenance).
 
 Reference: the LM555 closed forms the differences stand for (fsrlab.circuits.lm555 via
 LM555Circuit.astable): a difference is reported exactly when the same FSR state gives another
@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import pytest
 
-from fsrlab.analysis.provenance import RecordedWith, mismatches
+from fsrlab.calibration.provenance import RecordedWith, mismatches
 from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout
-from fsrlab.physics.params import PAPER_CIRCUIT, PAPER_OPAMP
+from fsrlab.circuits.circuit import PAPER_CIRCUIT, PAPER_OPAMP
 
 C0 = PAPER_CIRCUIT
 C470 = PAPER_CIRCUIT.replace(c_off_farad=470e-12)

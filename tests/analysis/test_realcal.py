@@ -1,6 +1,6 @@
 """Calibration on realistic FSR recordings: families, lag, dead zone, causal compensation, uncertainty.
 
-How the data were made: :func:`fsrlab.analysis.handloaded.fsr_bench_run` simulates an FSR in a
+How the data were made: :func:`fsrlab.virtual.handloaded.fsr_bench_run` simulates an FSR in a
 voltage divider (R_M = 10 kΩ, 5 V, 10-bit ADC averaged over 20 ms rows) under a load cell read by
 an HX711. The sensor is a Bouc–Wen hysteresis (not fsrlab's play operators), with two creep time
 constants, a dead zone below 3 % of full scale, a saturating power-law conductance, an electrical
@@ -17,13 +17,15 @@ import numpy as np
 import pytest
 
 from clirun import run_cli
-from fsrlab.analysis.calibration_io import load_calibration, save_calibration
-from fsrlab.analysis.handloaded import fsr_bench_run
-from fsrlab.analysis.memory import causal_features
-from fsrlab.analysis.models import ConductanceTransform, cross_validate_families, find_floor
-from fsrlab.analysis.pipeline import apply_calibration, calibrate_run, live_estimator
-from fsrlab.runformat import load_run
-from fsrlab.runwriter import write_run
+from fsrlab.calibration.document import load_calibration, save_calibration
+from fsrlab.virtual.handloaded import fsr_bench_run
+from fsrlab.calibration.play import causal_features
+from fsrlab.calibration.models import ConductanceTransform, cross_validate_families, find_floor
+from fsrlab.calibration.apply import apply_calibration
+from fsrlab.calibration.fit import calibrate_run
+from fsrlab.calibration.estimator import live_estimator
+from fsrlab.io.runformat import load_run
+from fsrlab.io.runwriter import write_run
 
 FS_N = 20.0  # the generator's full scale [N]
 
@@ -93,7 +95,7 @@ def test_compensation_lowers_the_cross_validated_error(cal):
 
 def _tared(cal, run):
     """The held-out run's reference aligned by the calibration's lag, and as recorded."""
-    from fsrlab.analysis.alignment import shift_reference
+    from fsrlab.calibration.alignment import shift_reference
 
     y = run["force_n"]
     return shift_reference(run["time_s"], y, cal.lag_s), y
@@ -105,7 +107,7 @@ def _rms_percent(estimate, reference):
 
 
 def test_held_out_error_compensated_beats_plain_and_the_best_polynomial(cal, hand):
-    from fsrlab.analysis.calibration import calibrate
+    from fsrlab.calibration.result import calibrate
 
     c = load_run(hand / "cal.csv")
     fit = ~cal.floor.below(c["voltage_v"]) & np.isfinite(c["force_n"])
@@ -176,7 +178,7 @@ def test_uncertainty_covers_the_held_out_errors(cal, hand):
 
 
 def test_clean_motor_cycle_hysteresis_error_falls(cal, hand):
-    from fsrlab.analysis.pipeline import hysteresis_of_run
+    from fsrlab.calibration.readout import hysteresis_of_run
 
     run = load_run(hand / "motor.csv")
     est = apply_calibration(cal, run)
@@ -345,7 +347,7 @@ def test_calibrate_shows_force_errors_in_grams(hand):
 def test_divider_read_in_adc_counts_gives_the_same_conductance(hand):
     # The same recording with the readout as analogRead counts (V·1023/5) and the sidecar naming
     # that column: the conductance (closed form of the divider) and the calibration are the same.
-    from fsrlab.analysis.models import transform_from_metadata
+    from fsrlab.calibration.models import transform_from_metadata
 
     run = load_run(hand / "held21.csv")
     meta = dict(run.metadata, divider=dict(run.metadata["divider"], column="a0_count"))
@@ -379,7 +381,7 @@ def test_every_lag_criterion_finds_a_known_delay(method):
     # shift_reference: the reference lags, the lag found is negative).
     import numpy as np
 
-    from fsrlab.analysis.alignment import estimate_lag
+    from fsrlab.calibration.alignment import estimate_lag
 
     t = np.arange(2000) * 0.02
     x = np.sin(1.3 * t) + 0.5 * np.sin(0.37 * t)

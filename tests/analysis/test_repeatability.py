@@ -14,9 +14,10 @@ import pytest
 from hypothesis import given, strategies as st
 from hypothesis.extra.numpy import arrays
 
-from fsrlab.analysis.repeatability import (ddof_finding, force_repeatability, grouped_repeatability,
-                                           recompute_printed_table, repeatability)
-from fsrlab.tables import load_grouped_csv
+from fsrlab.metrics.repeatability import (
+    ddof_finding, force_repeatability, grouped_repeatability, recompute_printed_table, repeatability
+)
+from fsrlab.io.tables import load_grouped_csv
 
 TABLES = ["table4_repeatability_capacitive_kHz", "table5_repeatability_traditional_V"]
 LOADS = ["200g", "400g"]

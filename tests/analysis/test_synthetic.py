@@ -1,4 +1,4 @@
-"""Synthetic runs (fsrlab.analysis.synthetic): circuits as objects in and in the sidecar, eq. (38) on
+"""Synthetic runs (fsrlab.virtual.synthetic): circuits as objects in and in the sidecar, eq. (38) on
 the voltage column, the meter's quantization, the cycle numbering.
 
 References: the paper's eq. (38) evaluated by hand (R_F = 20 kΩ, |Vcc| = 5 V, the FSR's resistance
@@ -14,12 +14,12 @@ import math
 import numpy as np
 import pytest
 
-from fsrlab.analysis.cycles import cycle_numbers
-from fsrlab.analysis.synthetic import synthetic_run
+from fsrlab.physics.history import cycle_numbers
+from fsrlab.virtual.synthetic import synthetic_run
 from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout
-from fsrlab.physics.params import PAPER_CIRCUIT, PAPER_OPAMP
+from fsrlab.circuits.circuit import PAPER_CIRCUIT, PAPER_OPAMP
 from fsrlab.physics.sensor import VirtualFSR
-from fsrlab.runformat import load_run
+from fsrlab.io.runformat import load_run
 
 
 def test_sidecar_stores_the_circuits_and_the_run_gives_them_back(tmp_path):

@@ -1,6 +1,6 @@
 """The demo (``make demo`` = ``fsrlab demo``) with very short recordings: the whole chain runs and links its reports.
 
-References: the chain the module's docstring lists (fsrlab/demo.py) and the files each step must
+References: the chain the module's docstring lists (fsrlab/bench/demo.py, fsrlab/report/demo.py) and the files each step must
 leave; the demo's numbers are checked against the measurement report it wrote (report.json), and
 the hysteresis error of the compensated estimate against the raw frequency's (the compensation's
 purpose). The virtual bench runs in real time: about 10 s of recording here.
@@ -13,7 +13,8 @@ import json
 import pytest
 
 from clirun import run_cli
-from fsrlab.demo import DEMO_SENSOR, DemoSettings, demo_sensor, run_demo
+from fsrlab.bench.demo import DEMO_SENSOR, DemoSettings, demo_sensor
+from fsrlab.report.demo import run_demo
 
 SHORT = DemoSettings(cycles=2, period_s=1.5, repeat=2, settle_hold_s=0.1)
 
@@ -76,9 +77,9 @@ def test_demo_falls_back_to_the_python_device_when_the_twin_fails(tmp_path, monk
         def close(self):
             pass
 
-    twin = types.ModuleType("fsrlab.twin")
+    twin = types.ModuleType("fsrlab.virtual.twin")
     twin.Twin, twin.twin_available = BrokenTwin, lambda: (True, "")
-    monkeypatch.setitem(sys.modules, "fsrlab.twin", twin)
+    monkeypatch.setitem(sys.modules, "fsrlab.virtual.twin", twin)
     lines = []
     res = run_demo(tmp_path / "demo", DemoSettings(cycles=1, period_s=1.0, repeat=2, settle_hold_s=0.1),
                    paper=False, progress=lines.append)

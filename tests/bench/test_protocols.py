@@ -16,8 +16,8 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from clirun import run_cli
-from fsrlab.acquisition.protocols import CreepPlan, SpringPlan, WeightsPlan, run_protocol, twin_status
-from fsrlab.runformat import load_run
+from fsrlab.bench.protocols import CreepPlan, SpringPlan, WeightsPlan, run_protocol, twin_status
+from fsrlab.io.runformat import load_run
 
 
 @settings(max_examples=50)
@@ -167,11 +167,11 @@ def test_twin_missing_is_one_line(tmp_path, monkeypatch):
 
 
 class _FakeTwin:
-    """A stand-in for ``fsrlab.twin.Twin`` with only the documented API (open, close, failure): the
+    """A stand-in for ``fsrlab.virtual.twin.Twin`` with only the documented API (open, close, failure): the
     Python virtual device without its load cell, so neither the applied stress nor a force comes back."""
 
     def __init__(self, source, speed="realtime", seed=0, loadcell=None):
-        from fsrlab.acquisition.virtual_device import VirtualDevice
+        from fsrlab.virtual.device import VirtualDevice
 
         assert speed in ("realtime", "max")
         self._dev = VirtualDevice(source, seed=seed, load_cell=None)
@@ -191,9 +191,9 @@ def test_bench_twin_path_with_a_device_that_sends_no_reference(tmp_path, monkeyp
     import sys
     import types
 
-    twin = types.ModuleType("fsrlab.twin")
+    twin = types.ModuleType("fsrlab.virtual.twin")
     twin.Twin, twin.twin_available = _FakeTwin, lambda: (True, "")
-    monkeypatch.setitem(sys.modules, "fsrlab.twin", twin)
+    monkeypatch.setitem(sys.modules, "fsrlab.virtual.twin", twin)
     assert twin_status() == (True, "")
     out = tmp_path / "t.csv"
     code, stdout, err = run_cli(["bench", "spring", "--twin", "--cycles", "1", "--period", "1s", "--out", out, "--json"])
@@ -236,7 +236,8 @@ def test_bench_on_a_port_prompts_and_records_with_the_load_cell(tmp_path):
     # command sees only a port). Standard input is closed under pytest: every prompt is answered "go on".
     # Reference: stress_pa = force_n / area with the preset's area (data-format.md), the load cell's
     # calibration being the virtual HX711's own.
-    from fsrlab.acquisition.virtual_device import PhysicsSource, StressProfile, VirtualDevice
+    from fsrlab.virtual.sources import PhysicsSource, StressProfile
+    from fsrlab.virtual.device import VirtualDevice
     from fsrlab.physics.presets import SENSOR_PRESETS
 
     dev = VirtualDevice(PhysicsSource(StressProfile("triangle", 10e3, 1.0)), seed=6)

@@ -19,9 +19,9 @@ import numpy as np
 import pytest
 
 from clirun import run_cli
-from fsrlab.analysis.run_report import measure_run
-from fsrlab.analysis.synthetic import triangle_stress
-from fsrlab.runwriter import write_run
+from fsrlab.bench.measurement import measure_run
+from fsrlab.virtual.synthetic import triangle_stress
+from fsrlab.io.runwriter import write_run
 
 PEAK = 10e3
 
@@ -141,8 +141,8 @@ def test_report_cli_writes_html_json_and_pngs(tmp_path):
 
 
 def test_report_cli_with_a_calibration_file(tmp_path):
-    from fsrlab.analysis.calibration_io import save_calibration
-    from fsrlab.analysis.pipeline import calibrate_run
+    from fsrlab.calibration.document import save_calibration
+    from fsrlab.calibration.fit import calibrate_run
 
     run = _loop_run(tmp_path / "loop.csv")
     cal = save_calibration(calibrate_run(run, compensate=True, lag=0.0), tmp_path / "cal.json")
@@ -177,7 +177,7 @@ def test_report_of_a_file_that_is_not_a_run_is_one_line(tmp_path):
 def test_a_narrow_v0_span_is_said_to_limit_its_he(tmp_path):
     # Reference: the ADC step, protocol.ADC_V_PER_COUNT = 5 V / 1024 ≈ 4.88 mV; a 0.9 V span is ~184 steps
     # (no note), a 0.05 V span ~10 steps (HE moves in steps of ~10 percentage points).
-    from fsrlab.acquisition.protocol import ADC_V_PER_COUNT
+    from fsrlab.hardware import ADC_V_PER_COUNT
 
     rep = measure_run(_loop_run(tmp_path / "wide.csv"), calibrate=False)
     assert {h.quantity: h.note for h in rep.hysteresis}["voltage_v"] is None
@@ -215,8 +215,8 @@ def test_creep_part_is_fsrlab_creeps_numbers_and_says_why_when_absent(tmp_path):
     # for 30 s and 3.2 N for 45 s (examples/README.md).
     from pathlib import Path
 
-    from fsrlab.analysis.creep import creep_of_run
-    from fsrlab.runformat import load_run
+    from fsrlab.metrics.creep import creep_of_run
+    from fsrlab.io.runformat import load_run
 
     path = Path(__file__).resolve().parents[2] / "examples" / "creep.csv"
     rep = measure_run(path, calibrate=False)

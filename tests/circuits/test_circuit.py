@@ -23,7 +23,7 @@ from fsrlab.circuits.decode import decode
 from fsrlab.circuits.lm555 import astable, sensitivity, thresholds_from_control
 from fsrlab.circuits.spice import netlist, simulate_spice
 from fsrlab.circuits.transient import simulate
-from fsrlab.physics.params import PAPER_CIRCUIT
+from fsrlab.circuits.circuit import PAPER_CIRCUIT
 
 #: Every part away from its default (with D1 the discharge resistance does not matter, see NO_DIODE).
 FULL = LM555Circuit(r_ohm=12e3, c_off_farad=220e-12, diode=True, diode_drop_v=0.3, vcc_v=3.3,
@@ -190,7 +190,7 @@ def test_readout_from_metadata_reads_current_and_earlier_sidecars():
 @pytest.mark.parametrize("vcc", [1e308, 1001.0, float("inf"), 0.0, -5.0])
 def test_supply_beyond_any_555_is_refused_naming_vcc(vcc):
     # Fuzzer finding: Vcc = 1e308 overflowed the thresholds and the message spoke of N "short by -400 %".
-    from fsrlab.circuits.circuit import check_supply
+    from fsrlab.circuits.checks import check_supply
 
     with pytest.raises(ValueError, match=r"vcc_v: must be a supply voltage > 0 V and ≤ 1000 V"):
         check_supply(False, 0.0, vcc)

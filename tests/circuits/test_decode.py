@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 
 from fsrlab.circuits.lm555 import astable, sensitivity
 from fsrlab.circuits.decode import decode
-from fsrlab.acquisition.protocol import TICK_S as TIMER_TICK_S
+from fsrlab.hardware import TICK_S as TIMER_TICK_S
 from fsrlab.circuits.transient import simulate
 
 

@@ -1,6 +1,6 @@
 """`fsrlab design` and the meter's capture limit.
 
-Reference: fsrlab.acquisition.protocol.CAPTURE_MAX_HZ, the firmware's highest frequency with every
+Reference: fsrlab.hardware.CAPTURE_MAX_HZ, the firmware's highest frequency with every
 edge captured (50 kHz supported; 52.5 kHz measured in simavr, docs/performance.md), and the
 closed forms of fsrlab.circuits.lm555 to check a proposal independently.
 """
@@ -12,7 +12,7 @@ import json
 import numpy as np
 
 from clirun import run_cli
-from fsrlab.acquisition.protocol import CAPTURE_MAX_HZ
+from fsrlab.hardware import CAPTURE_MAX_HZ
 from fsrlab.circuits.lm555 import astable
 
 SENSOR = ["design", "--rfsr-min", "100k", "--rfsr-max", "2M", "--cfsr-min", "0.5n", "--cfsr-max", "1.5n"]

@@ -10,7 +10,7 @@ import warnings
 import pytest
 
 from clirun import run_cli
-from fsrlab.analysis.hysteresis import model_cycle_errors
+from fsrlab.metrics.hysteresis import model_cycle_errors
 from fsrlab.physics.params import PAPER
 from fsrlab.physics.separation import separation_loading
 from fsrlab.physics.tunneling import voltage_limit

@@ -16,7 +16,7 @@ from browser import (ARTIFACTS, LiveServer, button_disabled, chromium, click_but
 
 from clirun import run_cli
 
-from fsrlab.runformat import load_run, sidecar_path
+from fsrlab.io.runformat import load_run, sidecar_path
 
 
 @pytest.fixture

@@ -16,7 +16,7 @@ from clirun import run_cli
 
 from fsrlab.acquisition.recorder import COLUMNS, REFERENCE_COLUMNS
 from fsrlab.live.page import Controller
-from fsrlab.runformat import load_run, sidecar_path
+from fsrlab.io.runformat import load_run, sidecar_path
 
 
 def _virtual_session(tmp_path, capacity=20000, profile="triangle"):
@@ -182,11 +182,11 @@ def test_tare_while_the_load_moves_is_refused_saying_why(tmp_path):
 def test_a_calibration_recorded_on_another_range_is_refused_with_the_reason(tmp_path, monkeypatch):
     import json
 
-    from fsrlab.acquisition.virtual_device import VIRTUAL_CIRCUIT
-    from fsrlab.analysis.calibration_io import save_calibration
-    from fsrlab.analysis.pipeline import calibrate_run
-    from fsrlab.analysis.synthetic import synthetic_run
-    from fsrlab.runwriter import write_run
+    from fsrlab.virtual.sources import VIRTUAL_CIRCUIT
+    from fsrlab.calibration.document import save_calibration
+    from fsrlab.calibration.fit import calibrate_run
+    from fsrlab.virtual.synthetic import synthetic_run
+    from fsrlab.io.runwriter import write_run
 
     monkeypatch.chdir(tmp_path)
     run = synthetic_run(cycles=2, points_per_ramp=60, seed=1)  # recorded on range 0 of the virtual circuit

@@ -40,7 +40,7 @@ def test_eq12_equals_the_printed_formula_exactly(u_shape, s_shape):
 
 def _pipeline_from_public_functions(u_v, p, n):
     """The Table 2 pipeline as it was written before the fused kernel: public functions only."""
-    from fsrlab.analysis.hysteresis import _curves_on_grid
+    from fsrlab.metrics.hysteresis import _curves_on_grid
     from fsrlab.physics.electrical import capacitance_per_area, resistance_per_area
     from fsrlab.physics.separation import separation_loading, separation_unloading
 
@@ -73,7 +73,7 @@ def test_table2_kernel_equals_the_public_functions(u, change, n):
 
     from scipy.constants import electron_volt
 
-    from fsrlab.analysis.hysteresis import model_cycle_errors
+    from fsrlab.metrics.hysteresis import model_cycle_errors
 
     change = dict(change)
     if "phi0_ev" in change:
@@ -91,7 +91,7 @@ def test_table2_kernel_equals_the_public_functions(u, change, n):
 
 def test_table2_kernel_raises_like_nanargmax_when_every_point_is_nan():
     # At 5 V eq. (12) fails on every separation of the cycle (voltage_limit): np.nanargmax's error.
-    from fsrlab.analysis.hysteresis import model_cycle_errors
+    from fsrlab.metrics.hysteresis import model_cycle_errors
 
     with pytest.raises(ValueError, match="All-NaN"):
         model_cycle_errors(5.0)
@@ -118,7 +118,7 @@ def test_table2_kernel_split_between_cores_equals_one_pass(monkeypatch, cores):
     # same operations) and finds the same σd (the first of equal maxima, as one pass in order).
     import os
 
-    from fsrlab.analysis.hysteresis import model_cycle_errors
+    from fsrlab.metrics.hysteresis import model_cycle_errors
 
     n = 400_001  # several chunks per thread, the last one partial
     monkeypatch.setattr(os, "cpu_count", lambda: 1)

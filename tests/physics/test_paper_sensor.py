@@ -128,7 +128,7 @@ def test_placement_draws_and_names():
 
 
 def test_interfaces_accepted_by_synthetic_runs():
-    from fsrlab.analysis.synthetic import synthetic_run
+    from fsrlab.virtual.synthetic import synthetic_run
 
     run = synthetic_run(cycles=1, peak_pa=10e3, points_per_ramp=10, sensor=paper_sensor(1))
     assert np.all(np.isfinite(run.columns["frequency_hz"][1:]))
@@ -143,8 +143,8 @@ def test_presets_registry_names_the_paper_sensors():
 
 
 def test_virtual_device_source_accepts_a_paper_sensor():
-    from fsrlab.acquisition.virtual_device import PhysicsSource, StressProfile
-    from fsrlab.physics.params import PAPER_CIRCUIT
+    from fsrlab.virtual.sources import PhysicsSource, StressProfile
+    from fsrlab.circuits.circuit import PAPER_CIRCUIT
 
     # The preset's range: the paper's 0-10 kPa spring cycle.
     src = PhysicsSource(StressProfile(peak_pa=10e3), sensor=paper_sensor(1), circuit=PAPER_CIRCUIT)

@@ -1,5 +1,5 @@
 """The paper's Table 2: hysteresis error of R_A and C_A at u = 3, 2, 1 V (eq. 13), and the barrier height
-that reproduces its printed R_A column (fsrlab.physics.table2, erratum P1)."""
+that reproduces its printed R_A column (fsrlab.paper.table2, erratum P1)."""
 
 import dataclasses
 import math
@@ -7,9 +7,9 @@ import math
 import pytest
 from scipy.constants import electron_volt
 
-from fsrlab.analysis.hysteresis import model_cycle_errors
+from fsrlab.metrics.hysteresis import model_cycle_errors
 from fsrlab.physics.params import PAPER
-from fsrlab.physics.table2 import current_maximum_voltage, cycle_error_table, fit_barrier_height, voltage_sweep
+from fsrlab.paper.table2 import current_maximum_voltage, cycle_error_table, fit_barrier_height, voltage_sweep
 from reference_physics import E, j12, table2_row
 
 U = [3, 2, 1]
@@ -56,7 +56,7 @@ def test_k_4_does_not_reproduce_the_capacitance_column(paper):
     assert abs(model_cycle_errors(2, params).capacitance.percent - printed) > 1
 
 
-# fsrlab.physics.table2: the table as the report shows it, and the barrier height that reproduces it.
+# fsrlab.paper.table2: the table as the report shows it, and the barrier height that reproduces it.
 
 def test_cycle_error_table_matches_the_brute_force_and_the_printed_capacitance_column(paper):
     # References: tests/reference_physics.py (independent scalar brute force, 20000 stresses, ~1e-4
@@ -98,7 +98,7 @@ def test_fit_errors():
         fit_barrier_height([2.0, 6.0, 10.0], U, bounds_ev=(0.24, 0.23))
 
 
-# Extension: HE of R_A and C_A over u (fsrlab.physics.table2.voltage_sweep), erratum P4.
+# Extension: HE of R_A and C_A over u (fsrlab.paper.table2.voltage_sweep), erratum P4.
 
 def _d_ln_j12_ds(u, s, phi0=0.223 * E, ds=1e-15):
     """∂ln J/∂s of eq. (12) by a central difference on the independent scalar reference."""

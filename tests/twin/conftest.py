@@ -26,7 +26,7 @@ def built():
     require_file("/usr/include/simavr/sim_avr.h", "libsimavr-dev (simavr headers)")
     require_file("/usr/share/arduino/hardware/arduino/avr/cores/arduino/Arduino.h", "arduino-core-avr")
     subprocess.run(["make", "-s", "-C", str(ROOT / "firmware")], check=True, capture_output=True, text=True)
-    from fsrlab.twin import twin_available
+    from fsrlab.virtual.twin import twin_available
 
     ok, reason = twin_available()
     assert ok, reason

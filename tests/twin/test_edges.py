@@ -1,4 +1,4 @@
-"""Edge streaming of the digital twin (fsrlab.twin.edges): chunks joined = one run of the transient.
+"""Edge streaming of the digital twin (fsrlab.virtual.twin.edges): chunks joined = one run of the transient.
 
 Reference: fsrlab.circuits.transient.simulate run once over the whole time series (the source's
 grid, zero-order hold, and the C_off switch as one more sample), the exact event-driven transient.
@@ -14,8 +14,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fsrlab.acquisition.virtual_device import PhysicsSource, StressProfile
-from fsrlab.twin.edges import EdgeStream
+from fsrlab.virtual.sources import PhysicsSource, StressProfile
+from fsrlab.virtual.twin.edges import EdgeStream
 
 TOL_S = 1e-12
 

@@ -12,10 +12,10 @@ import csv
 
 import numpy as np
 
-from fsrlab.acquisition.protocols import WeightsPlan, run_protocol
-from fsrlab.acquisition.bench import BenchSource
+from fsrlab.bench.protocols import WeightsPlan, run_protocol
+from fsrlab.virtual.bench_source import BenchSource
 from fsrlab.physics.sensor import VirtualFSR
-from fsrlab.runformat import load_run
+from fsrlab.io.runformat import load_run
 from fsrlab.units import STANDARD_GRAVITY
 
 

@@ -23,9 +23,9 @@ import twin_windows as win
 
 from fsrlab.acquisition.messages import Measurement
 from fsrlab.acquisition.protocol import FrameParser
-from fsrlab.acquisition.virtual_device import PhysicsSource, StressProfile
-from fsrlab.twin import Twin
-from fsrlab.twin.edges import EdgeStream
+from fsrlab.virtual.sources import PhysicsSource, StressProfile
+from fsrlab.virtual.twin import Twin
+from fsrlab.virtual.twin.edges import EdgeStream
 
 FSRLAB = [sys.executable, "-c", "import sys; from fsrlab.cli import main; sys.exit(main())"]
 
@@ -210,7 +210,7 @@ def test_no_firmware_one_line_exit_2(tmp_path):
 
 
 def test_no_firmware_api(tmp_path, monkeypatch):
-    from fsrlab.twin import twin_available
+    from fsrlab.virtual.twin import twin_available
 
     monkeypatch.setenv("FSRLAB_FIRMWARE_BUILD", str(tmp_path / "nothing"))
     ok, reason = twin_available()

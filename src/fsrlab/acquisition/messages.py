@@ -11,7 +11,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from fsrlab.acquisition.protocol import ADC_V_PER_COUNT, F_CPU, M_FIELDS_V2, Frame, ProtocolError, check_fields
+from fsrlab.hardware import ADC_V_PER_COUNT, F_CPU
+from fsrlab.acquisition.protocol import M_FIELDS_V2, Frame, ProtocolError, check_fields
 
 __all__ = ["decode_sums", "Measurement", "Identity", "Ack", "DeviceError"]
 

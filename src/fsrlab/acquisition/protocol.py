@@ -21,6 +21,8 @@ from __future__ import annotations
 import binascii
 from dataclasses import dataclass, field
 
+from fsrlab.hardware import ADC_BITS, ADC_COUNTS, ADC_V_PER_COUNT, ADC_VREF_V, CAPTURE_MAX_HZ, F_CPU, TICK_S
+
 __all__ = [
     "PROTOCOL_VERSION", "SUPPORTED_PROTOCOLS", "M_FIELDS_V1", "M_FIELDS_V2", "HX711_MIN", "HX711_MAX", "F_CPU", "TICK_S", "ADC_BITS", "ADC_COUNTS", "ADC_VREF_V", "ADC_V_PER_COUNT", "DEFAULT_BAUD", "MAX_LINE", "MAX_COMMAND", "SEQ_MODULO",
     "UINT32_MODULO", "CAPTURE_MAX_HZ",
@@ -41,18 +43,6 @@ M_FIELDS_V2 = 11
 """Fields after ``SEQ`` of a version-2 ``M`` frame: version 1's plus ``ref_ok``, ``ref_n``, ``ref_mean``."""
 HX711_MIN, HX711_MAX = -(2**23), 2**23 - 1
 """Range of the HX711's 24-bit two's-complement output (``ref_mean`` of an ``M`` frame). [count]"""
-F_CPU = 16_000_000
-"""ATmega328P clock of the Arduino Uno. [Hz]"""
-TICK_S = 62.5e-9
-"""One Timer1 tick at prescaler 1 (1/F_CPU); all tick counts on the wire use it. [s]"""
-ADC_BITS = 10
-"""Resolution of the Uno's ADC (the ``adc`` field of an ``M`` frame). [bit]"""
-ADC_COUNTS = 2**ADC_BITS
-"""Number of ADC codes, 0..1023."""
-ADC_VREF_V = 5.0
-"""ADC reference: the Uno's default AVcc reference. [V]"""
-ADC_V_PER_COUNT = ADC_VREF_V / ADC_COUNTS
-"""One ADC step, ``Vref/1024`` (code = floor(V·1024/Vref)). [V]"""
 DEFAULT_BAUD = 115200
 """Default line rate, 8N1. [bit/s]"""
 MAX_LINE = 112
@@ -65,13 +55,6 @@ UINT32_MODULO = 2**32
 """Integers on the wire are unsigned 32-bit: ``t_ms`` wraps modulo 2³², tick sums stay below it."""
 WINDOW_MS_MIN, WINDOW_MS_MAX, WINDOW_MS_DEFAULT = 10, 60000, 100
 """Allowed and boot values of the measurement window. [ms]"""
-CAPTURE_MAX_HZ = 50e3
-"""Highest signal frequency the firmware captures every edge of, at 5 to 95 % duty cycle. [Hz]
-
-The supported range, 10 Hz to 50 kHz, is checked in simavr by ``tests/firmware/test_firmware_sim.py``;
-the upward search of ``benchmarks/bench_firmware.py`` (simavr, 4 % steps) measured the last clean
-frequency at 52.5 kHz at 5 and 95 % duty cycle and 54.6 kHz at 50 % (``docs/performance.md``,
-``firmware/README.md``, "Limits"). Above it windows report ``missed > 0``. Not yet measured on an Uno."""
 DEVICE_NAME = "fsrlab-meter"
 """Device name in the ``ID`` frame."""
 

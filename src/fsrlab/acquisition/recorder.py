@@ -1,7 +1,7 @@
 """Record an fsrlab meter into a run file (docs/data-format.md), crash-safe.
 
 :func:`record` identifies the device, sets window and range, starts it and turns every ``M`` frame
-into one row written at once through :class:`fsrlab.runwriter.RunWriter` (one whole line per
+into one row written at once through :class:`fsrlab.io.runwriter.RunWriter` (one whole line per
 system call, ``fsync`` about every second). Consequences:
 
 - An existing run is never replaced unless asked (``overwrite=True``); the check comes before the
@@ -319,8 +319,8 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
     OSError
         The run file could not be created (the device is stopped again).
     """
-    from fsrlab.runformat import sidecar_path
-    from fsrlab.runwriter import RunWriter
+    from fsrlab.io.runformat import sidecar_path
+    from fsrlab.io.runwriter import RunWriter
 
     if not duration_s > 0:
         raise ValueError(f"duration_s must be > 0 s, got {duration_s!r}")

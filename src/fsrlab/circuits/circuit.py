@@ -7,11 +7,11 @@ calibration pipeline pass along, and what the model functions of :mod:`fsrlab.ci
 :mod:`fsrlab.circuits.spice` are evaluated for (:meth:`LM555Circuit.kwargs`: every one of them
 accepts ``**circuit.kwargs()``). The model functions themselves stay pure and vectorised (a design
 sweep passes an array of R), so they take the same parameters as keywords; this module holds the
-one check of those parameters (:func:`check_lm555`). The methods :meth:`LM555Circuit.astable`,
+one check of those parameters (:func:`~fsrlab.circuits.checks.check_lm555`). The methods :meth:`LM555Circuit.astable`,
 :meth:`~LM555Circuit.sensitivity`, :meth:`~LM555Circuit.decode`, :meth:`~LM555Circuit.simulate` and
 :meth:`~LM555Circuit.simulate_spice` are thin delegations to those functions.
 
-The paper's circuit is :data:`fsrlab.physics.params.PAPER_CIRCUIT`.
+The paper's circuits are :data:`PAPER_CIRCUIT` (Fig. 16) and :data:`PAPER_OPAMP` (Fig. 18, eq. 38).
 
 References
 ----------
@@ -24,100 +24,10 @@ import math
 from dataclasses import MISSING, asdict, dataclass, fields, replace
 
 
-__all__ = ["LM555Circuit", "OpAmpReadout", "readout_from_metadata", "check_lm555", "check_fractions", "check_supply",
-           "VCC_MAX_V"]
+from fsrlab.circuits.checks import check_lm555
 
+__all__ = ["LM555Circuit", "OpAmpReadout", "readout_from_metadata", "PAPER_CIRCUIT", "PAPER_OPAMP"]
 
-def check_fractions(lower_fraction: float, upper_fraction: float) -> None:
-    """Raise ``ValueError`` unless ``0 < lower_fraction < upper_fraction < 1``.
-
-    Parameters
-    ----------
-    lower_fraction, upper_fraction : float
-        Comparator thresholds as fractions of Vcc. [1]
-    """
-    if not (0.0 < lower_fraction < upper_fraction < 1.0):
-        raise ValueError(
-            "lower_fraction and upper_fraction: need 0 < lower_fraction < upper_fraction < 1, got "
-            f"{lower_fraction!r} and {upper_fraction!r}"
-        )
-
-
-#: Largest supply the models accept: far beyond any 555 (LM555: 4.5–16 V; CMOS parts 2–18 V), and small
-#: enough that thresholds and currents stay finite in double precision. [V]
-VCC_MAX_V = 1000.0
-
-
-def _finite(x) -> bool:
-    """A finite number (a Python or numpy scalar)."""
-    try:
-        return math.isfinite(float(x))
-    except (TypeError, ValueError):
-        return False
-
-
-def _all(value, ok) -> bool:
-    """Every element of ``value`` (a number or an array) finite and ``ok(element)``.
-
-    Plain numbers are checked without numpy, so building a circuit of numbers (the paper's, at import)
-    does not import it.
-    """
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        return math.isfinite(value) and bool(ok(value))
-    import numpy as np
-
-    v = np.asarray(value, dtype=float)
-    return bool(np.all(np.isfinite(v)) and np.all(ok(v)))
-
-
-def check_supply(diode: bool, diode_drop_v: float, vcc_v: float) -> None:
-    """Raise ``ValueError`` for a bad supply or diode drop (a drop needs the diode).
-
-    Parameters
-    ----------
-    diode : bool
-        D1 present.
-    diode_drop_v : float
-        Forward drop of D1 (≥ 0). [V]
-    vcc_v : float
-        Supply, 0 < Vcc ≤ :data:`VCC_MAX_V`. [V]
-    """
-    if not (_finite(vcc_v) and 0 < vcc_v <= VCC_MAX_V):
-        raise ValueError(f"vcc_v: must be a supply voltage > 0 V and ≤ {VCC_MAX_V:g} V, got {vcc_v!r}")
-    if not (_finite(diode_drop_v) and diode_drop_v >= 0):
-        raise ValueError(f"diode_drop_v: must be a finite forward drop >= 0 V, got {diode_drop_v!r}")
-    if diode_drop_v > 0 and not diode:
-        raise ValueError("diode_drop_v: a forward drop needs diode=True (the drop belongs to D1 in series with R_B)")
-
-
-def check_lm555(r_ohm, c_off_farad, diode: bool, diode_drop_v: float, vcc_v: float,
-                lower_fraction: float, upper_fraction: float, discharge_ohm=0.0) -> None:
-    """The parameter checks shared by every model of the LM555 readout (scalars or arrays).
-
-    Parameters
-    ----------
-    r_ohm : float or array_like
-        R_A = R_B = R (> 0). [Ω]
-    c_off_farad : float or array_like
-        Offset capacitor (≥ 0). [F]
-    diode : bool
-        D1 in series with R_B.
-    diode_drop_v : float
-        Forward drop of D1 (≥ 0, needs ``diode``). [V]
-    vcc_v : float
-        Supply (> 0). [V]
-    lower_fraction, upper_fraction : float
-        Comparator thresholds as fractions of Vcc. [1]
-    discharge_ohm : float or array_like
-        Discharge-transistor on-resistance (≥ 0). [Ω]
-    """
-    check_fractions(lower_fraction, upper_fraction)
-    check_supply(diode, diode_drop_v, vcc_v)
-    for name, value, unit in (("discharge_ohm", discharge_ohm, "Ω"), ("c_off_farad", c_off_farad, "F")):
-        if not _all(value, lambda v: v >= 0):
-            raise ValueError(f"{name}: must be finite and >= 0 {unit}, got {value!r}")
-    if not _all(r_ohm, lambda v: v > 0):
-        raise ValueError(f"r_ohm: must be finite and > 0 Ω, got {r_ohm!r}")
 
 
 def _from_dict(cls, d: dict, kind: str):
@@ -158,7 +68,7 @@ class LM555Circuit:
     Notes
     -----
     The defaults are the LM555's own (5 V supply, internal 1/3–2/3 divider, ideal switch); the
-    paper's circuit is :data:`fsrlab.physics.params.PAPER_CIRCUIT`.
+    paper's circuit is :data:`fsrlab.circuits.circuit.PAPER_CIRCUIT`.
     """
 
     r_ohm: float
@@ -385,3 +295,12 @@ def readout_from_metadata(metadata: dict) -> tuple[LM555Circuit | None, OpAmpRea
     raw.pop("topology", None)
     circuit = LM555Circuit.from_dict(raw) if raw else None
     return circuit, (OpAmpReadout.from_dict(opamp) if opamp is not None else None)
+
+
+#: The proposed readout of the paper's Fig. 16: LM555 with R_A = R_B = R, D1 in series with R_B as an
+#: ideal diode (§5), thresholds 1/3 and 2/3 of a 5 V supply, no C_off. The paper prints no value for R:
+#: R = 10 kΩ is fsrlab's choice (it keeps N = R_FSR/R well above 4 over the sensor's range).
+PAPER_CIRCUIT = LM555Circuit(r_ohm=10e3, c_off_farad=0.0, diode=True, diode_drop_v=0.0, vcc_v=5.0)
+
+#: The traditional readout of the paper's Fig. 18 and eq. (38): R_F = 20 kΩ, the FSR driven from −5 V.
+PAPER_OPAMP = OpAmpReadout(r_f_ohm=20e3, vcc_v=-5.0)

@@ -2,7 +2,7 @@
 
 The duty cycle depends on ``N = R_FSR/R`` alone (paper eqs. 28, 36), so it fixes R_FSR; the
 frequency then fixes the timing capacitance. The uncertainty is the Uno's timer quantization
-(:data:`fsrlab.acquisition.protocol.TICK_S`) propagated through the inversion.
+(:data:`fsrlab.hardware.TICK_S`) propagated through the inversion.
 
 References
 ----------
@@ -16,8 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsrlab.acquisition.protocol import TICK_S
-from fsrlab.circuits.circuit import check_lm555
+from fsrlab.hardware import TICK_S
+from fsrlab.circuits.checks import check_lm555
 from fsrlab.circuits.lm555 import NoOscillationError, minimum_n_ratio
 from fsrlab.circuits.phases import timing_per_rc
 

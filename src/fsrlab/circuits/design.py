@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsrlab.acquisition.protocol import CAPTURE_MAX_HZ, TICK_S
+from fsrlab.hardware import CAPTURE_MAX_HZ, TICK_S
 from fsrlab.circuits.lm555 import astable, minimum_n_ratio, sensitivity
 
 __all__ = ["E12", "DesignResult", "design"]
@@ -120,7 +120,7 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
         Timer tick (62.5 ns on an Uno). [s]
     max_frequency_hz : float or None
         Highest frequency the counter captures every edge of; the band's top is lowered to it.
-        Default: the fsrlab meter's firmware, :data:`fsrlab.acquisition.protocol.CAPTURE_MAX_HZ`
+        Default: the fsrlab meter's firmware, :data:`fsrlab.hardware.CAPTURE_MAX_HZ`
         (50 kHz, measured in simavr). ``None``: no limit (another counter). [Hz]
 
     Returns

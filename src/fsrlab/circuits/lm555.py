@@ -44,7 +44,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsrlab.circuits.circuit import check_fractions, check_lm555, check_supply
+from fsrlab.circuits.checks import check_fractions, check_lm555, check_supply
 from fsrlab.circuits.phases import thevenin, timing_per_rc
 
 __all__ = [

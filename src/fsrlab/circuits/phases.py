@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsrlab.circuits.circuit import check_fractions, check_lm555, check_supply
+from fsrlab.circuits.checks import check_fractions, check_lm555, check_supply
 
 __all__ = ["Thevenin", "thevenin", "timing_per_rc"]
 

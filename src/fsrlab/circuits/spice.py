@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fsrlab.circuits.circuit import check_lm555
+from fsrlab.circuits.checks import check_lm555
 from fsrlab.circuits.lm555 import astable
 from fsrlab.circuits.phases import timing_per_rc
 

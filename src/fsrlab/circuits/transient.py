@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsrlab.circuits.circuit import check_lm555
+from fsrlab.circuits.checks import check_lm555
 from fsrlab.circuits.phases import thevenin
 
 __all__ = ["TransientResult", "simulate"]

@@ -27,12 +27,12 @@ from __future__ import annotations
 import json
 import math
 import re
-import sys
 from contextlib import contextmanager
 from typing import Any, Callable, Iterator
 
 import typer
 
+from fsrlab.io.jsonable import to_jsonable
 from fsrlab.units import parse_eng, parse_quantity
 
 __all__ = ["eng", "ohms", "farads", "volts", "hertz", "pascals", "metres", "electronvolts", "seconds",
@@ -128,35 +128,6 @@ def mass_list(text: str) -> list[float]:
                                      "give the masses in increasing order")
         out.append(v)
     return out
-
-
-def to_jsonable(obj: Any) -> Any:
-    """Convert numpy scalars and arrays, paths and nested containers to JSON types.
-
-    Parameters
-    ----------
-    obj : object
-        Nested dicts, lists, numpy values.
-
-    Returns
-    -------
-    object
-        The same structure made of JSON types; non-finite floats become ``None``.
-    """
-    if isinstance(obj, dict):
-        return {str(k): to_jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [to_jsonable(v) for v in obj]
-    np = sys.modules.get("numpy")  # a numpy value exists only once numpy is imported: no import here
-    if np is not None and isinstance(obj, np.ndarray):
-        return to_jsonable(obj.tolist())
-    if np is not None and isinstance(obj, np.generic):
-        return to_jsonable(obj.item())
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
-    if hasattr(obj, "__fspath__"):
-        return str(obj)
-    return obj
 
 
 def emit_json(obj: Any) -> None:

@@ -58,7 +58,7 @@ def _sensor_area(sensor: str | None, area: float | None) -> tuple[dict | None, f
 def _virtual_sensor(sensor: str | None):
     """The sensor model and the sidecar's ``sensor`` when --sensor names a virtual sensor (virtual-fsr,
     paper-a201-1..4), else ``(None, None)``."""
-    from fsrlab.acquisition.protocols import VIRTUAL_SENSORS, virtual_sensor
+    from fsrlab.bench.protocols import VIRTUAL_SENSORS, virtual_sensor
 
     key = (sensor or "").strip().lower()
     if key not in VIRTUAL_SENSORS:
@@ -109,7 +109,7 @@ def _sigterm_as_interrupt():
 def _check_virtual(profile: str, peak: float, period: float, c_off: float, corrupt: float, drop: float,
                    seed: int | None) -> None:
     """One-line errors, each naming its own option, for the virtual device's options."""
-    from fsrlab.acquisition.virtual_device import PROFILE_KINDS
+    from fsrlab.virtual.sources import PROFILE_KINDS
 
     if profile not in PROFILE_KINDS:
         fail(f"must be one of {', '.join(PROFILE_KINDS)}, got {profile!r}", "--profile")
@@ -130,7 +130,8 @@ def _virtual_device(profile: str, peak: float, period: float, c_off: float, seed
                     corrupt: float, drop: float, load_cell: bool = True, rate: int = 80, area_m2: float | None = None,
                     sensor_model=None):
     from fsrlab.acquisition.loadcell import LoadCellModel
-    from fsrlab.acquisition.virtual_device import VIRTUAL_CIRCUIT, Faults, PhysicsSource, StressProfile, VirtualDevice
+    from fsrlab.virtual.sources import VIRTUAL_CIRCUIT, PhysicsSource, StressProfile
+    from fsrlab.virtual.device import Faults, VirtualDevice
     from fsrlab.physics.sensor import VirtualFSR
 
     prof = StressProfile(kind=profile, peak_pa=peak, period_s=period)
@@ -159,7 +160,7 @@ def _window_ms(window_s: float) -> int:
 
 def _check_out(out: Path, overwrite: bool) -> None:
     """Refuse an output that exists (unless ``overwrite``) or cannot be written, before any device is touched."""
-    from fsrlab.runformat import sidecar_path
+    from fsrlab.io.runformat import sidecar_path
 
     if out.is_dir():
         fail(f"{out} is a directory; give the run's CSV file, e.g. {out / 'run.csv'}", "--out")
@@ -301,7 +302,7 @@ def acquire(
         if sensor_meta:
             virtual_meta["sensor"] = {**sensor_meta, "virtual_model": virtual_meta["sensor"]["model"]}
         metadata = {"origin": "fsrlab acquire --virtual (VirtualFSR -> LM555 astable and op-amp -> meter model "
-                              "fsrlab.acquisition.meter -> emulated firmware over a pty)",
+                              "fsrlab.virtual.meter -> emulated firmware over a pty)",
                     **virtual_meta,
                     "notes": f"virtual stress profile {profile}, peak {peak:g} Pa, period {period:g} s; "
                              "stress_pa is the applied (reference) stress, force_n the emulated load cell's "

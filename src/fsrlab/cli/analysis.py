@@ -1,7 +1,7 @@
 """``fsrlab hysteresis``, ``repeatability``, ``calibrate``, ``apply``, ``iso376``: what a user does with recorded runs.
 
 Thin commands: they parse options and render; runs are calibrated, converted and measured by
-:mod:`fsrlab.analysis.pipeline`; files follow docs/data-format.md. Warnings (an incomplete run,
+:mod:`fsrlab.calibration.fit`; files follow docs/data-format.md. Warnings (an incomplete run,
 skipped rows, an unchecked calibration) go to stderr, each once, when the command has a result;
 a command that fails prints its one error line only.
 """
@@ -44,7 +44,7 @@ def _reading(path: Path) -> Iterator[None]:
 
 def _load(path: Path, skip_bad_rows: bool, warnings: list[str]):
     """Load a run; what the user should know about it goes to ``warnings``."""
-    from fsrlab.runformat import load_run
+    from fsrlab.io.runformat import load_run
 
     with _reading(path):
         run = load_run(path, skip_bad_rows=skip_bad_rows)
@@ -90,7 +90,7 @@ def hysteresis(
       fsrlab hysteresis examples/bench.csv
       fsrlab hysteresis examples/bench.csv --quantity voltage_v --json
     """
-    from fsrlab.analysis.pipeline import hysteresis_of_run
+    from fsrlab.calibration.readout import hysteresis_of_run
 
     if not 0 < threshold < 1:
         fail(f"must be a fraction in (0, 1), got {threshold:g}", "--threshold")
@@ -136,8 +136,8 @@ def repeatability(
       fsrlab repeatability examples/repeatability.csv
       fsrlab repeatability examples/repeatability.csv --ddof 0 --json
     """
-    from fsrlab.analysis.repeatability import grouped_repeatability
-    from fsrlab.tables import load_grouped_csv
+    from fsrlab.metrics.repeatability import grouped_repeatability
+    from fsrlab.io.tables import load_grouped_csv
 
     if ddof not in (0, 1):
         fail(f"must be 0 or 1, got {ddof}", "--ddof")
@@ -224,8 +224,9 @@ def calibrate_cmd(
       fsrlab calibrate examples/minimal.csv
       fsrlab calibrate examples/bench.csv --compensate -o cal.json
     """
-    from fsrlab.analysis.calibration_io import save_calibration
-    from fsrlab.analysis.pipeline import calibrate_run, run_circuit
+    from fsrlab.calibration.document import save_calibration
+    from fsrlab.calibration.fit import calibrate_run
+    from fsrlab.calibration.readout import run_circuit
 
     if degree not in _DEGREES:
         fail(f"must be auto or 1..5, got {degree!r}", "--degree")
@@ -349,10 +350,10 @@ def apply_cmd(
       fsrlab apply examples/calibration.json examples/other.csv -o estimate.csv
       fsrlab apply examples/calibration.json examples/other.csv -o estimate.csv --no-compensation --json --overwrite
     """
-    from fsrlab.analysis.calibration_io import load_calibration
-    from fsrlab.analysis.pipeline import apply_calibration, check_readout
-    from fsrlab.runformat import sidecar_path
-    from fsrlab.runwriter import write_run
+    from fsrlab.calibration.document import load_calibration
+    from fsrlab.calibration.apply import apply_calibration, check_readout
+    from fsrlab.io.runformat import sidecar_path
+    from fsrlab.io.runwriter import write_run
 
     if not (math.isfinite(margin) and margin >= 0):
         fail(f"must be a fraction >= 0 of the calibrated span, got {margin:g}", "--margin")
@@ -422,8 +423,8 @@ def iso376_cmd(
       fsrlab iso376 examples/iso376.csv
       fsrlab iso376 examples/iso376.csv --creep 8396.6,8404.8 --json
     """
-    from fsrlab.analysis.iso376 import iso376
-    from fsrlab.tables import load_iso376_csv
+    from fsrlab.metrics.iso376 import iso376
+    from fsrlab.io.tables import load_iso376_csv
 
     if degree not in (1, 2, 3):
         fail(f"must be 1, 2 or 3, got {degree}", "--degree")

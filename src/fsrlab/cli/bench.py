@@ -52,7 +52,7 @@ def bench(
       fsrlab bench spring --virtual --cycles 3 --period 3s --out spring.csv --report spring-report
       fsrlab bench weights --port auto --sensor flexiforce-a201 --loadcell lc.json --repeat 5 --out weights.csv
     """
-    from fsrlab.acquisition.protocols import CreepPlan, SpringPlan, WeightsPlan, run_protocol, twin_status
+    from fsrlab.bench.protocols import CreepPlan, SpringPlan, WeightsPlan, run_protocol, twin_status
     from fsrlab.acquisition.recorder import result_dict
     from fsrlab.cli.acquisition import (_check_out, _load_loadcell, _sensor_area, _sigterm_as_interrupt,
                                         _virtual_sensor, _window_ms)
@@ -127,7 +127,7 @@ def bench(
             if not quiet:
                 print(f"fsrlab: virtual bench: {text.split(', then press Enter')[0]}", file=sys.stderr, flush=True)
     if device != "port" and sensor_obj is None:
-        from fsrlab.acquisition.protocols import virtual_sensor
+        from fsrlab.bench.protocols import virtual_sensor
 
         sensor_obj = virtual_sensor((sensor or "virtual-fsr").strip().lower())[0]
     from fsrlab.cli.acquisition import _LiveView

@@ -2,7 +2,7 @@
 
 Thin command: it loads the run the way the other analysis commands do (``--skip-bad-rows``, the
 incomplete-run warning: helpers of :mod:`fsrlab.cli.analysis`), calls
-:func:`fsrlab.analysis.creep.creep_of_run` and renders a table, JSON or a figure.
+:func:`fsrlab.metrics.creep.creep_of_run` and renders a table, JSON or a figure.
 """
 
 from __future__ import annotations
@@ -49,7 +49,7 @@ def creep_cmd(
       fsrlab creep examples/creep.csv
       fsrlab creep examples/creep.csv --x voltage_v --min-hold 10s --band 3% --json
     """
-    from fsrlab.analysis.creep import REFERENCES, creep_of_run
+    from fsrlab.metrics.creep import REFERENCES, creep_of_run
 
     if not 0 < band < 0.5:
         fail(f"must be a fraction of full scale in (0, 50 %), got {100 * band:g} %", "--band")

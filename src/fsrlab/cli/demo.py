@@ -37,7 +37,8 @@ def demo(
       fsrlab demo
       fsrlab demo --out /tmp/demo --cycles 2 --period 2s --repeat 2 --no-paper --json
     """
-    from fsrlab.demo import DemoSettings, run_demo
+    from fsrlab.bench.demo import DemoSettings
+    from fsrlab.report.demo import run_demo
 
     if device not in ("auto", "twin", "virtual"):
         fail(f"must be auto, twin or virtual, got {device!r}", "--device")
@@ -51,13 +52,13 @@ def demo(
         if parent.exists() and not parent.is_dir():
             fail(f"{parent} is a file, not a directory", "--out")
     if device == "twin":
-        from fsrlab.acquisition.protocols import twin_status
+        from fsrlab.bench.protocols import twin_status
 
         ok, reason = twin_status()
         if not ok:
             fail(f"{reason}; use --device virtual", "--device")
     if sensor is not None:
-        from fsrlab.demo import demo_sensor
+        from fsrlab.bench.demo import demo_sensor
 
         try:
             demo_sensor(sensor)

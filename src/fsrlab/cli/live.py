@@ -8,7 +8,8 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli._common import areas, fail, farads, mass_list, pascals, seconds, to_jsonable
+from fsrlab.cli._common import areas, fail, farads, mass_list, pascals, seconds
+from fsrlab.io.jsonable import to_jsonable
 from fsrlab.cli.acquisition import _AREA_HELP, _LOADCELL_HELP, _SENSOR_HELP
 from fsrlab.cli.measure import load_frame_calibration
 from fsrlab.units import STANDARD_GRAVITY
@@ -16,7 +17,7 @@ from fsrlab.units import STANDARD_GRAVITY
 
 def _refusal(cal, path, metadata: dict, range_: int) -> str | None:
     """Why a calibration does not fit the meter it would be used with (circuit, range), or None."""
-    from fsrlab.analysis.provenance import mismatches, recorded_with
+    from fsrlab.calibration.provenance import mismatches, recorded_with
 
     if cal.recorded_with is None:
         return None
@@ -28,7 +29,7 @@ def _estimator(cal, area_m2: float | None):
     """``row -> (estimate [N], uncertainty [N])`` by the calibration's causal estimator (compensation included)."""
     import math
 
-    from fsrlab.analysis.pipeline import live_estimator
+    from fsrlab.calibration.estimator import live_estimator
 
     est = live_estimator(cal)
     scale = 1.0 if est.reference == "force_n" else (area_m2 or math.nan)  # stress → force
@@ -117,7 +118,7 @@ def live(
     metadata: dict = {"sensor": sensor_meta} if sensor_meta else {}
     steps = None
     if masses is not None:
-        from fsrlab.acquisition.weights import plan_steps
+        from fsrlab.bench.weights import plan_steps
 
         try:
             masses_kg = mass_list(masses)
@@ -142,7 +143,7 @@ def live(
         if unplug_after is not None:
             if unplug_after < 1:
                 fail(f"must be >= 1 window, got {unplug_after}", "--unplug-after")
-            from fsrlab.acquisition.virtual_device import Faults
+            from fsrlab.virtual.device import Faults
 
             device.faults = Faults(unplug_after=unplug_after)
         if lc is None:

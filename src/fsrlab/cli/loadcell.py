@@ -61,7 +61,7 @@ def loadcell(
       fsrlab loadcell tare --virtual --capacity 5kg -o lc.json
       fsrlab loadcell scale --virtual --mass 500g --cal lc.json
     """
-    from fsrlab.acquisition.bench import NoLoadCell, read_reference
+    from fsrlab.acquisition.loadcell_reading import NoLoadCell, read_reference
     from fsrlab.acquisition.loadcell import LoadCellError, scale_from_readings, tare_from_readings
     from fsrlab.acquisition.serial_link import LinkError, SerialLink
 
@@ -109,7 +109,8 @@ def loadcell(
     force = 0.0 if action == "tare" else mass * gravity
     if virtual:
         from fsrlab.acquisition.loadcell import LoadCellModel
-        from fsrlab.acquisition.virtual_device import ConstantSource, VirtualDevice
+        from fsrlab.virtual.sources import ConstantSource
+        from fsrlab.virtual.device import VirtualDevice
         from fsrlab.physics.sensor import A201_AREA_M2
 
         # The virtual bench: the cell unloaded for a tare, the mass on it for a scale.

@@ -22,7 +22,7 @@ def load_frame_calibration(cal: Path, command: str):
 
     One line naming ``--cal`` (exit 2) when the file is missing, unreadable, or calibrates another readout.
     """
-    from fsrlab.analysis.calibration_io import load_calibration
+    from fsrlab.calibration.document import load_calibration
 
     if cal.is_dir():
         fail(f"{cal} is a directory, not a calibration file", "--cal")
@@ -39,9 +39,9 @@ def load_frame_calibration(cal: Path, command: str):
 
 
 def _estimator(cal):
-    """The causal estimator of a calibration (:func:`fsrlab.analysis.pipeline.live_estimator`): one reading at
+    """The causal estimator of a calibration (:func:`fsrlab.calibration.estimator.live_estimator`): one reading at
     a time, ``step(x) -> (estimate, uncertainty, in_range)``, with the compensation's memory between calls."""
-    from fsrlab.analysis.pipeline import live_estimator
+    from fsrlab.calibration.estimator import live_estimator
 
     return live_estimator(cal)
 

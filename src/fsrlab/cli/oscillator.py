@@ -8,7 +8,7 @@ from typing import Iterator
 
 import typer
 
-from fsrlab.acquisition.protocol import CAPTURE_MAX_HZ
+from fsrlab.hardware import CAPTURE_MAX_HZ
 from fsrlab.cli import app
 from fsrlab.cli._common import emit_json, fail, farads, fraction, hertz, ohms, option_names, seconds, volts
 from fsrlab.units import format_eng

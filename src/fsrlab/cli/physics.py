@@ -57,7 +57,7 @@ def physics(
       fsrlab physics
       fsrlab physics --u 2V --u 5V --sigma-f 200kPa --json
     """
-    from fsrlab.analysis.hysteresis import hysteresis_error_curves, model_cycle_errors
+    from fsrlab.metrics.hysteresis import hysteresis_error_curves, model_cycle_errors
     from fsrlab.physics.electrical import capacitance_per_area
     from fsrlab.physics.separation import separation_loading, separation_unloading
     from fsrlab.physics.tunneling import tunneling_regime

@@ -56,7 +56,7 @@ def twin(
     model, _ = _virtual_sensor(sensor)
     area_m2 = None if model is not None else _sensor_area(sensor, None)[1]
 
-    from fsrlab.twin import Twin, twin_available
+    from fsrlab.virtual.twin import Twin, twin_available
 
     ok, reason = twin_available()
     if not ok:

@@ -68,8 +68,8 @@ def virtual_bench(steps, seed: int | None, area_m2: float | None, gravity_m_s2: 
     procedure's ``place``); the meter has the virtual device's emulated HX711. One line naming ``--masses``
     when the virtual sensor has no response up to the largest mass.
     """
-    from fsrlab.acquisition.bench import BenchSource
-    from fsrlab.acquisition.virtual_device import VirtualDevice
+    from fsrlab.virtual.bench_source import BenchSource
+    from fsrlab.virtual.device import VirtualDevice
     from fsrlab.physics.sensor import VirtualFSR
 
     try:
@@ -129,7 +129,7 @@ def weights(
     """
     from fsrlab.acquisition.recorder import record, result_dict
     from fsrlab.acquisition.serial_link import SerialLink
-    from fsrlab.acquisition.weights import READOUTS, WeightsProcedure, placements_table, plan_steps
+    from fsrlab.bench.weights import READOUTS, WeightsProcedure, placements_table, plan_steps
 
     try:
         masses_kg = mass_list(masses)

@@ -61,7 +61,7 @@ class Controller:
         """The next unused run file name (``suffix`` after the stem: ``-weights`` for a guided calibration)."""
         if self.out is None:
             return None
-        from fsrlab.runformat import sidecar_path
+        from fsrlab.io.runformat import sidecar_path
 
         while True:
             self._count += 1

@@ -3,7 +3,7 @@
 The device thread owns the :class:`~fsrlab.acquisition.serial_link.SerialLink`: it identifies the
 device, configures and starts it, then reads frames, appends each window to a bounded buffer the pages
 read from (:meth:`LiveSession.since`), writes it to a run file while recording (the crash-safe
-:class:`~fsrlab.runwriter.RunWriter`, the rows ``fsrlab acquire`` writes:
+:class:`~fsrlab.io.runwriter.RunWriter`, the rows ``fsrlab acquire`` writes:
 :func:`fsrlab.acquisition.recorder.window_row`), and
 carries out the commands the pages send (range, window, start/stop recording) between reads. A device
 that vanishes ends the session's reading with a reason on the page; a recording in progress is closed
@@ -111,7 +111,7 @@ class LiveSession:
     stall_s : float
         Silence that counts as a stall. [s]
     weights : dict, optional
-        The guided known-weight calibration the page offers: ``steps`` (:func:`fsrlab.acquisition.weights.plan_steps`),
+        The guided known-weight calibration the page offers: ``steps`` (:func:`fsrlab.bench.weights.plan_steps`),
         ``place`` (``place(step) -> time or None``: the virtual bench places the mass), ``x``, ``gravity_m_s2``
         and ``metadata`` for its run's sidecar. None: no guided calibration on the page.
     """
@@ -283,8 +283,8 @@ class LiveSession:
     def _start_weights(self, path: Path) -> None:
         from fsrlab.acquisition.recorder import COLUMNS as RUN_COLUMNS
         from fsrlab.acquisition.recorder import REFERENCE_COLUMNS
-        from fsrlab.acquisition.weights import WeightsProcedure
-        from fsrlab.runwriter import RunWriter
+        from fsrlab.bench.weights import WeightsProcedure
+        from fsrlab.io.runwriter import RunWriter
 
         w = self.weights
         if w is None:
@@ -424,7 +424,7 @@ class LiveSession:
     def _open_recording(self, path: Path) -> None:
         from fsrlab.acquisition.recorder import COLUMNS as RUN_COLUMNS
         from fsrlab.acquisition.recorder import REFERENCE_COLUMNS
-        from fsrlab.runwriter import RunWriter
+        from fsrlab.io.runwriter import RunWriter
 
         if self._writer is not None:
             self._event(f"already recording to {self.status.recording}")

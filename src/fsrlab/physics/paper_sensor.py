@@ -176,7 +176,7 @@ def creep_factor(hold_s, beta: float, tau_s: float):
     Polymer composites under constant stress keep deforming, logarithmically in time (the FSR
     literature's "drift"; the paper mentions creep of CPCs but models none). The factor grows by
     β·ln 10 per decade for t ≫ τ, the form fsrlab's creep analysis fits
-    (:mod:`fsrlab.analysis.creep`, log drift).
+    (:mod:`fsrlab.metrics.creep`, log drift).
     """
     if not beta >= 0:
         raise ValueError(f"beta must be >= 0, got {beta!r}")
@@ -490,7 +490,7 @@ PAPER_SENSOR_COMMON: dict = {
 }
 
 #: Fitted parameters of the four paper sensors, printed by scripts/fit_paper_sensor.py: per sensor the six
-#: own parameters (fsrlab.analysis.experiment.fit_paper_sensor, shared ones held: n = 60 films, so 5 V is
+#: own parameters (fsrlab.paper.preset_fit.fit_paper_sensor, shared ones held: n = 60 films, so 5 V is
 #: 0.083 V per film, inside eq. (11)'s range; R_C0 = 30 kΩ, σ_c = 5 kPa, p = 1), then the three shared
 #: placement spreads (fit_placement_spread). area_k (25–30) is ill-determined: the area's memory saturates.
 PAPER_SENSOR_PARAMETERS: tuple = (

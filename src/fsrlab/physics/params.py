@@ -1,4 +1,7 @@
-"""The paper's printed parameters, in SI units: the one place they live.
+"""The paper's printed sensor parameters, in SI units: the one place they live.
+
+The paper's circuits (Figs. 16 and 18) are values of the circuits layer:
+:data:`fsrlab.circuits.circuit.PAPER_CIRCUIT` and :data:`fsrlab.circuits.circuit.PAPER_OPAMP`.
 
 References
 ----------
@@ -11,9 +14,7 @@ import math
 
 from dataclasses import asdict, dataclass
 
-from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout
-
-__all__ = ["PaperParameters", "PAPER", "PAPER_CIRCUIT", "PAPER_OPAMP", "check_positive", "check_finite"]
+__all__ = ["PaperParameters", "PAPER", "check_positive", "check_finite"]
 
 #: The electronvolt in joules: CODATA 2018, exact since the 2019 SI (e = 1.602176634e-19 C); equal to
 #: ``scipy.constants.electron_volt``, written out so that importing the parameters does not import scipy.
@@ -115,12 +116,3 @@ class PaperParameters:
 
 #: Table 1 of the paper, with k = 2.
 PAPER = PaperParameters()
-
-
-#: The proposed readout of the paper's Fig. 16: LM555 with R_A = R_B = R, D1 in series with R_B as an
-#: ideal diode (§5), thresholds 1/3 and 2/3 of a 5 V supply, no C_off. The paper prints no value for R:
-#: R = 10 kΩ is fsrlab's choice (it keeps N = R_FSR/R well above 4 over the sensor's range).
-PAPER_CIRCUIT = LM555Circuit(r_ohm=10e3, c_off_farad=0.0, diode=True, diode_drop_v=0.0, vcc_v=5.0)
-
-#: The traditional readout of the paper's Fig. 18 and eq. (38): R_F = 20 kΩ, the FSR driven from −5 V.
-PAPER_OPAMP = OpAmpReadout(r_f_ohm=20e3, vcc_v=-5.0)

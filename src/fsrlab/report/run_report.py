@@ -1,6 +1,6 @@
 """The measurement report of a recorded run: ``index.html``, ``report.json`` and PNGs (``fsrlab report``).
 
-It renders :func:`fsrlab.analysis.run_report.measure_run` with :mod:`fsrlab.report.html` and
+It renders :func:`fsrlab.bench.measurement.measure_run` with :mod:`fsrlab.report.html` and
 :mod:`fsrlab.report.figures`; the paper's printed values (Tables 3–5) stand beside the run's own
 for scale, not as a target (a different sensor on a different bench).
 """
@@ -111,12 +111,12 @@ def _estimate_figure(rep, outdir: Path) -> Figure | None:
 
 
 def build_sections(rep, outdir: Path) -> list[Section]:
-    """The report's sections for a :class:`~fsrlab.analysis.run_report.RunReport` (PNGs written into ``outdir``).
+    """The report's sections for a :class:`~fsrlab.bench.measurement.RunReport` (PNGs written into ``outdir``).
 
     Parameters
     ----------
     rep : RunReport
-        From :func:`fsrlab.analysis.run_report.measure_run`.
+        From :func:`fsrlab.bench.measurement.measure_run`.
     outdir : Path
         Where the PNGs go.
 
@@ -192,7 +192,7 @@ def build_sections(rep, outdir: Path) -> list[Section]:
                   _f(c["drift_percent_per_decade"], ".3f"), _f(c["total_drift_percent"], ".3f"),
                   "not determined" if c["tau_s"] is None else f"{c['tau_s']:.3g}"] for c in rep.creep]
         creep_sec = Section("creep", "Creep under a held load (extension)",
-                            "Each hold of the reference of at least 5 s (fsrlab.analysis.creep, docs/creep.md): "
+                            "Each hold of the reference of at least 5 s (fsrlab.metrics.creep, docs/creep.md): "
                             "the readout's drift per decade of time (% of its value 1 s into the hold), its total "
                             "drift over the hold and, when the data determine it, a first-order time constant.",
                             tables=[Table("Creep per hold", ["readout", "start [s]", "duration [s]", "level",
@@ -240,13 +240,13 @@ def write_run_report(run, outdir, placements=None, weights_run=None, calibration
     outdir : path-like
         Created if missing.
     placements, weights_run, calibration, calibrate
-        As :func:`fsrlab.analysis.run_report.measure_run`.
+        As :func:`fsrlab.bench.measurement.measure_run`.
 
     Returns
     -------
     RunReportFiles
     """
-    from fsrlab.analysis.run_report import measure_run
+    from fsrlab.bench.measurement import measure_run
     from fsrlab.report.html import render_html
 
     outdir = Path(outdir)
@@ -258,7 +258,7 @@ def write_run_report(run, outdir, placements=None, weights_run=None, calibration
     index.write_text(render_html(sections, outdir, title=f"Measurement report: {rep.path.name}",
                                  command="fsrlab report", errata=False), encoding="utf-8")
     js = outdir / "report.json"
-    from fsrlab.cli._common import to_jsonable
+    from fsrlab.io.jsonable import to_jsonable
 
     js.write_text(json.dumps(to_jsonable(rep.to_dict()), indent=1, allow_nan=False), encoding="utf-8")
     figures = [outdir / f.filename for s in sections for f in s.figures]

@@ -1,7 +1,7 @@
 """Report section: the paper's experiment (§6) on fsrlab's virtual bench, beside the printed values.
 
 The four fitted "paper sensors" (:func:`fsrlab.physics.paper_sensor.paper_sensors`) run the paper's
-protocols through its two readouts and fsrlab's meter model (:func:`fsrlab.analysis.experiment.run_experiment`):
+protocols through its two readouts and fsrlab's meter model (:func:`fsrlab.paper.experiment.run_experiment`):
 spring cycles 0 → 10 kPa → 0 (Figure 19, Table 3) and five re-placements of 200 g and 400 g
 (Tables 4 and 5); Figure 17's fits are redone on the first sensor's cycle. This module draws and
 words the results; ``data["experiment"]`` puts each printed value beside the reproduced one.
@@ -13,8 +13,10 @@ from pathlib import Path
 
 import numpy as np
 
-from fsrlab.analysis.experiment import (FIT_PARAMETERS, SHARED_FIT_PARAMETERS, SPREADS, Experiment,
-                                        preset_targets, quick_response, re2_design, run_experiment)
+from fsrlab.paper.preset_fit import (
+    FIT_PARAMETERS, SHARED_FIT_PARAMETERS, SPREADS, preset_targets, quick_response, re2_design
+)
+from fsrlab.paper.experiment import Experiment, run_experiment
 from fsrlab.physics.paper_sensor import DEAD_WEIGHT_AREA_M2, PAPER_SENSOR_COMMON, paper_sensors
 from fsrlab.reference import paper_values
 from fsrlab.report.figures import new_figure, save
@@ -50,7 +52,7 @@ def _fig19(outdir: Path, exp: Experiment, key: str, scale: float, unit: str, lab
 def _fig17(outdir: Path, exp: Experiment) -> Path:
     import matplotlib.pyplot as plt
 
-    from fsrlab.analysis.calibration import calibrate
+    from fsrlab.calibration.result import calibrate
 
     c = exp.cycles[0]
     sl, fl, su, fu = c.branches("frequency_hz")
@@ -94,7 +96,7 @@ def _table3(exp: Experiment, printed: dict) -> tuple[Table, dict]:
         columns=["sensor", "HE_TM paper (%)", "HE_TM fsrlab (%)", "residual (pp)", "HE_PM paper (%)",
                  "HE_PM fsrlab (%)", "residual (pp)"],
         rows=rows,
-        note="fsrlab: eq. (13) by fsrlab.analysis.cycles.run_hysteresis on one virtual spring cycle 0 → 10 kPa → 0 "
+        note="fsrlab: eq. (13) by fsrlab.metrics.cycles.run_hysteresis on one virtual spring cycle 0 → 10 kPa → 0 "
              "(40 stepper positions per ramp, one 100 ms meter window each) of each fitted paper sensor; voltage "
              "through eq. (38) (R_F = 20 kΩ, Vcc = −5 V) and the Uno's 10-bit ADC, frequency through the Fig. 16 "
              "LM555 (D1 ideal, R = 10 kΩ) and the 62.5 ns timer. The preset was fitted to these rows on the "
@@ -135,7 +137,7 @@ def _repeat_table(exp: Experiment, printed: dict, key: str, attr: str, re_attr: 
         columns=["load", "sensor", f"mean reading paper ({unit})", f"mean reading fsrlab ({unit})", "ratio",
                  "RE1 paper (%)", "RE1 fsrlab (%)", "RE2 paper (%)", "RE2 fsrlab (%)"],
         rows=rows,
-        note="fsrlab: five virtual re-placements per sensor and load (fsrlab.analysis.experiment.dead_weights): "
+        note="fsrlab: five virtual re-placements per sensor and load (fsrlab.paper.experiment.dead_weights): "
              "each draws the placement's stress factor and contact-resistance factor (the preset's placement "
              "spreads) and a read time of 2–10 s (creep); one 100 ms meter window per reading; eq. (39) with the "
              f"sample standard deviation. The weight loads {DEAD_WEIGHT_AREA_M2 * 1e6:.0f} mm² (an assumption: "
@@ -170,7 +172,7 @@ def _fit_table(sensors, fits: list, targets: list) -> tuple[Table, dict]:
                        "parameters per sensor: modulus, separation and area unloading exponents, conductive area "
                        "fraction and growth, dielectric/conductive area ratio; shared parameters held (60 films, "
                        "R_C0 = 30 kΩ, σ_c = 5 kPa). Evaluated on the closed forms "
-                       "(fsrlab.analysis.experiment.quick_response), no meter. Figure 19's ends are axis ranges, "
+                       "(fsrlab.paper.preset_fit.quick_response), no meter. Figure 19's ends are axis ranges, "
                        "fitted at half weight. Then three placement spreads, shared, to the mean RE2 of Tables 4 "
                        "and 5. Parameters: paper.json experiment.preset.")
     return table, data
@@ -185,7 +187,7 @@ def _fig17_table(exp: Experiment, printed: dict) -> tuple[Table, dict]:
     rows += [[f"fsrlab sensor 1, {label[k]}", v["linear"], v["cubic"]] for k, v in f17.items()]
     table = Table(title="Figure 17: R² of linear and cubic σ(f) fits, paper vs virtual sensor 1",
                   columns=["data fitted", "linear R²", "cubic R²"], rows=rows, fmt="{:.4f}",
-                  note="fsrlab.analysis.experiment.figure17_fits (fsrlab.analysis.calibration.calibrate, degree 1 and "
+                  note="fsrlab.paper.experiment.figure17_fits (fsrlab.calibration.result.calibrate, degree 1 and "
                        "3) on the spring cycle of the Table 3 reproduction.")
     return table, {"printed": {"linear": p["linear"], "cubic": p["cubic"]}, "reproduced": f17}
 
@@ -206,7 +208,7 @@ def _erratum_x1(exp: Experiment, printed: dict) -> Erratum:
                 f"{f17['means']['cubic']:.4f}. A cubic R² of 0.9974 is reached only without the hysteresis gap "
                 "(one branch, or branch means), not on the loading–unloading cycle of Table 3. The printed linear "
                 "R², 0.9432, sits between: which data the paper fitted is not stated."),
-        evidence="fsrlab.analysis.experiment.figure17_fits on the virtual spring cycle (this section, Table "
+        evidence="fsrlab.paper.experiment.figure17_fits on the virtual spring cycle (this section, Table "
                  "'Figure 17'); tests/analysis/test_experiment.py::test_figure17_single_valued_fit_is_capped_by_the_gap.")
 
 
@@ -280,7 +282,7 @@ def build(outdir: Path) -> Section:
         "op-amp's conductance: that is the mechanism behind Table 3's ordering.\n\n"
         "The preset was fitted (scripts/fit_paper_sensor.py) to Table 3's rows, Table 4's mean readings and "
         "Figure 19's ranges; the placement spreads (stress, contact, area) to the mean RE2 of Tables 4 and 5. The experiment then runs "
-        "through the paper's circuits and fsrlab's meter model and analysis (fsrlab.analysis.experiment): "
+        "through the paper's circuits and fsrlab's meter model and analysis (fsrlab.paper.experiment): "
         f"Table 3 means {exp.he_traditional.mean():.2f} % / {exp.he_proposed.mean():.2f} % "
         f"(paper 23.35 % / 16.31 %), f {f_rng[0]:.1f}–{f_rng[1]:.1f} kHz and V0 {v_rng[0]:.2f}–{v_rng[1]:.2f} V over "
         "0–10 kPa (paper ≈ 3–10 kHz, 0.4–1 V).\n\n"

@@ -1,9 +1,9 @@
 """Report section: measurement analysis (paper §5–6): Tables 3, 4, 5 as printed, calibration, compensation, errata M1–M2.
 
-Tables 4 and 5 are recomputed by :mod:`fsrlab.analysis.repeatability` from the printed readings of
+Tables 4 and 5 are recomputed by :mod:`fsrlab.metrics.repeatability` from the printed readings of
 :func:`fsrlab.reference.paper_values`; the calibration table and the compensation use a synthetic bench run
-(:mod:`fsrlab.analysis.synthetic`, :mod:`fsrlab.analysis.calibration`,
-:mod:`fsrlab.analysis.compensation`). This module draws and words the results. Figure 17 and
+(:mod:`fsrlab.virtual.synthetic`, :mod:`fsrlab.calibration.polynomial`,
+:mod:`fsrlab.calibration.compensation`). This module draws and words the results. Figure 17 and
 Tables 3–5 reproduced on a virtual bench are the experiment section's
 (:mod:`fsrlab.report.sections.experiment`).
 """
@@ -17,14 +17,15 @@ from typing import Any
 
 import numpy as np
 
-from fsrlab.analysis.calibration import calibrate
-from fsrlab.analysis.pipeline import decode_capacitance
+from fsrlab.calibration.result import calibrate
+from fsrlab.calibration.readout import decode_capacitance
 from fsrlab.circuits.circuit import readout_from_metadata
-from fsrlab.analysis.compensation import compare_compensation
-from fsrlab.analysis.cycles import run_hysteresis
-from fsrlab.analysis.repeatability import (DdofFinding, ForceRepeatability, PrintedTableCheck, ddof_finding,
-                                           force_repeatability, recompute_printed_table)
-from fsrlab.analysis.synthetic import synthetic_run
+from fsrlab.calibration.compensation import compare_compensation
+from fsrlab.metrics.cycles import run_hysteresis
+from fsrlab.metrics.repeatability import (
+    DdofFinding, ForceRepeatability, PrintedTableCheck, ddof_finding, force_repeatability, recompute_printed_table
+)
+from fsrlab.virtual.synthetic import synthetic_run
 from fsrlab.reference import paper_values
 from fsrlab.report.figures import new_figure, save
 from fsrlab.report.model import Erratum, Figure, Section, Table
@@ -166,7 +167,7 @@ def _repeatability_table(title: str, check: PrintedTableCheck, unit: str) -> Tab
         columns=["load", "sensor", f"readings ({unit})", "RE1 paper (%)", "RE1 fsrlab (%)", "RE2 paper (%)",
                  "RE2 fsrlab, n − 1 (%)", "RE2 fsrlab, n (%)", "matches (n − 1)", "RE2 matches (n)"],
         rows=rows,
-        note="Recomputed by fsrlab.analysis.repeatability.recompute_printed_table (eq. 39) from the paper's printed "
+        note="Recomputed by fsrlab.metrics.repeatability.recompute_printed_table (eq. 39) from the paper's printed "
              "readings (real data). The paper prints integers, so a value matches when it rounds to the printed one "
              "(±0.5). 'mean' rows: arithmetic mean of the four unrounded sensor values, as the paper's "
              "'Average errors'. Erratum M1.",
@@ -234,7 +235,7 @@ def _erratum_m2(cap: ForceRepeatability, trad: ForceRepeatability) -> Erratum:
                 f"rather than the {tx['200g'] / cx['200g']:.1f}× / {tx['400g'] / cx['400g']:.1f}× "
                 "the readout units suggest."),
         evidence="Power-law sensitivity between the two printed loads (two-point estimate, an approximation); "
-                 "computed by fsrlab.analysis.repeatability.force_repeatability from the printed readings.",
+                 "computed by fsrlab.metrics.repeatability.force_repeatability from the printed readings.",
     )
 
 
@@ -249,7 +250,7 @@ def _intro(found: DdofFinding) -> str:
         "Table 3 and Figure 17 rest on unpublished raw data: Table 3 is shown as printed; the calibration table and "
         "compensation figure use fsrlab's synthetic bench runs and are labelled as such (the experiment section "
         "reproduces Figure 17 and Tables 3–5 on a virtual bench). In ISO 376 terms "
-        "(fsrlab.analysis.iso376), the re-placement spread of Table 4 (1–3 %) is far beyond the 0.40 % "
+        "(fsrlab.metrics.iso376), the re-placement spread of Table 4 (1–3 %) is far beyond the 0.40 % "
         "reproducibility limit of class 2."
     )
 

@@ -1,7 +1,7 @@
 """Report section: sensor physics (paper §2–4): Figures 2, 4, 8, Table 2 and their errata.
 
 Table 2, the barrier height that reproduces it and the HE-versus-u sweep (erratum P4) come from
-:mod:`fsrlab.physics.table2`, the
+:mod:`fsrlab.paper.table2`, the
 paper's printed values from :func:`fsrlab.reference.paper_values`; this module draws and words them.
 """
 
@@ -15,8 +15,9 @@ from scipy.constants import electron_volt, epsilon_0
 from fsrlab.physics.electrical import capacitance_per_area, resistance_per_area
 from fsrlab.physics.params import PAPER, PaperParameters
 from fsrlab.physics.separation import separation_history, separation_loading, separation_unloading
-from fsrlab.physics.table2 import (BarrierHeightFit, CycleErrorTable, VoltageSweep, cycle_error_table,
-                                   fit_barrier_height, voltage_sweep)
+from fsrlab.paper.table2 import (
+    BarrierHeightFit, CycleErrorTable, VoltageSweep, cycle_error_table, fit_barrier_height, voltage_sweep
+)
 from fsrlab.physics.tunneling import current_density
 from fsrlab.reference import paper_values
 from fsrlab.report.figures import new_figure, save
@@ -176,7 +177,7 @@ def _erratum_p1(printed: dict, ours: CycleErrorTable, fit: BarrierHeightFit) -> 
         f"{_percents(fit.table.resistance_percent)}, the printed values to their last digit; no choice of k does "
         "(k moves C_A's 1.73 %).",
         "Two independent implementations agree to 1e-4: fsrlab's vectorised model with a refined σd "
-        "(fsrlab.physics.table2) and the plain-scalar brute force of tests/reference_physics.py, compared in "
+        "(fsrlab.paper.table2) and the plain-scalar brute force of tests/reference_physics.py, compared in "
         "tests/physics/test_table2.py. The fitted φ0 also moves Figure 4's curves onto the paper's axes (P2), so the "
         "paper's simulations most likely used φ0 ≈ 0.23 eV, not the printed 0.223 eV.",
     )
@@ -257,7 +258,7 @@ def _erratum_p4(ours: CycleErrorTable, sweep: VoltageSweep, fitted: VoltageSweep
         "(the minimum); above it R_A rises with stress and diverges toward the voltage where eq. (12)'s bracket "
         "reaches 0 at s_f (4.33 V), outside Simmons' high-voltage formula. Capacitance's 1.73 % does not depend "
         "on u.",
-        "fsrlab.physics.table2.voltage_sweep (eq. 13 on a 50 mV grid, crossings refined by Brent's method) against "
+        "fsrlab.paper.table2.voltage_sweep (eq. 13 on a 50 mV grid, crossings refined by Brent's method) against "
         "the independent scalar brute force of tests/reference_physics.py (tests/physics/test_table2.py); u* from "
         "the closed-form condition ∂ln J/∂s = 0 of eq. (12) (current_maximum_voltage), checked against a finite "
         "difference of the reference eq. (12).",

@@ -1,1 +1,0 @@
-"""What a user does with readings: hysteresis and repeatability errors, calibration."""

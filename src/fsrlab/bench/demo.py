@@ -1,0 +1,324 @@
+"""The demo's measurement chain on a virtual bench (``make demo`` / ``fsrlab demo``; the reports: :mod:`fsrlab.report.demo`).
+
+:func:`run_chain` does what a user of fsrlab does with a sensor, with no hardware (steps 1 to 4;
+:func:`fsrlab.report.demo.run_demo` then writes the reports, steps 5 to 7):
+
+1. chooses the bench: the digital twin (the firmware in simavr) when
+   :func:`~fsrlab.bench.protocols.twin_status` says it can run, else the Python virtual
+   device, and says which;
+2. records two spring runs (``fsrlab bench spring``: a calibration run and a test run) and a
+   dead-weight run (``fsrlab bench weights``: 200 g and 400 g placed again and again);
+3. calibrates on the calibration run against the load cell's force when the meter has one (the
+   virtual meter emulates an HX711; else the stress the bench applied), with the causal hysteresis
+   compensation and the lag searched automatically (it finds 0 within a row: the reference is taken
+   in the readout's own window), and fits a
+   known-weight calibration (m·g; a polynomial of degree ≤ 2 through 0 and the masses) on the
+   dead-weight run;
+4. applies the calibration to the test run (the compensated estimate);
+5. writes the measurement report of the test run (:func:`fsrlab.report.run_report.write_run_report`)
+   with the dead-weight run's placements;
+6. writes the reproduction report (:func:`fsrlab.report.paper.write_report`);
+7. writes ``index.html`` linking both.
+
+The sensor is chosen in one place, :func:`demo_sensor`.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+__all__ = ["DEMO_SENSOR", "demo_sensor", "DemoSettings", "DemoResult", "DemoSteps", "DemoChain", "run_chain"]
+
+DEMO_SENSOR = "paper-a201-1"
+"""The sensor the demo runs on (:func:`demo_sensor`): ``paper-a201-1`` (the first of the four sensors
+fitted to the paper's §6, :func:`fsrlab.physics.paper_sensor.paper_sensor`; its dead weights load a
+22 mm puck, :data:`~fsrlab.physics.paper_sensor.DEAD_WEIGHT_AREA_M2`), another of ``paper-a201-2`` ..
+``-4``, or ``virtual-fsr`` (:class:`~fsrlab.physics.sensor.VirtualFSR`, FlexiForce A201-like)."""
+
+
+def demo_sensor(name=None):
+    """The virtual sensor of the demo: the one place where it is chosen.
+
+    Parameters
+    ----------
+    name : str or object, optional
+        A name for :func:`fsrlab.bench.protocols.virtual_sensor` (default :data:`DEMO_SENSOR`),
+        or a sensor object, returned as is.
+
+    Returns
+    -------
+    (object, str)
+        The sensor (with ``respond`` and ``area_m2``) and its description.
+
+    Raises
+    ------
+    ValueError
+        An unknown name (see :func:`fsrlab.bench.protocols.virtual_sensor`).
+    """
+    from fsrlab.bench.protocols import virtual_sensor
+
+    return virtual_sensor(DEMO_SENSOR if name is None else name)
+
+
+@dataclass(frozen=True)
+class DemoSettings:
+    """How long the demo's recordings are (the virtual bench runs in real time).
+
+    Parameters
+    ----------
+    cycles : int
+        Spring cycles per run.
+    period_s : float
+        Duration of one spring cycle. [s]
+    peak_pa : float
+        Peak stress of the spring cycles (the paper's bench: 10 kPa). [Pa]
+    masses_kg : tuple of float
+        Dead weights (the paper: 200 g and 400 g). [kg]
+    repeat : int
+        Placements of each dead weight (the paper: 5).
+    settle_hold_s : float
+        Steady time recorded per placement. [s]
+    window_ms : int
+        Measurement window. [ms]
+    seed : int
+        Noise seed of the first run (the others use the next ones).
+    """
+
+    cycles: int = 4
+    period_s: float = 4.0
+    peak_pa: float = 10e3
+    masses_kg: tuple = (0.2, 0.4)
+    repeat: int = 5
+    settle_hold_s: float = 0.5
+    window_ms: int = 20
+    seed: int = 1
+
+
+@dataclass
+class DemoResult:
+    """What :func:`run_demo` did.
+
+    Attributes
+    ----------
+    index : Path
+        The demo's ``index.html``.
+    device : str
+        ``twin`` or ``virtual``.
+    files : dict
+        Name → path of every file written (runs, calibration, reports).
+    steps : list of (str, float)
+        Each step and its duration. [s]
+    numbers : dict
+        The headline numbers (HE of f, V0 and the estimate, RE, calibration).
+    """
+
+    index: Path
+    device: str
+    files: dict = field(default_factory=dict)
+    steps: list = field(default_factory=list)
+    numbers: dict = field(default_factory=dict)
+
+    @property
+    def total_s(self) -> float:
+        """Total duration. [s]"""
+        return float(sum(t for _, t in self.steps))
+
+
+class DemoSteps:
+    """The demo's numbered steps: says each one as it starts and records how long it took.
+
+    Parameters
+    ----------
+    result : DemoResult
+        Where each step's duration is recorded.
+    total : int
+        Number of steps.
+    say : callable
+        ``say(line)``: the progress lines.
+    """
+
+    def __init__(self, result: DemoResult, total: int, say: Callable[[str], None]):
+        self.result, self.total, self.say = result, total, say
+        self.t_all = time.monotonic()
+        self.k = 0
+
+    def step(self, title: str) -> float:
+        """Say the next step's title; return its start time. [s]"""
+        self.k += 1
+        self.say(f"[{self.k}/{self.total}] {title}")
+        return time.monotonic()
+
+    def done(self, title: str, t0: float, text: str = "") -> None:
+        """Record a step that started at ``t0`` and say how long it took."""
+        dt = time.monotonic() - t0
+        self.result.steps.append((title, dt))
+        self.say(f"      {text + '; ' if text else ''}{dt:.1f} s (total {time.monotonic() - self.t_all:.1f} s)")
+
+
+@dataclass
+class DemoChain:
+    """What the demo's measurement chain produced (steps 1 to 4).
+
+    Attributes
+    ----------
+    result : DemoResult
+        The files and numbers so far.
+    calibration : Calibration
+        The calibration on the spring run.
+    sensor_text : str
+        The sensor's description.
+    steps : DemoSteps
+        The step counter, for the steps that follow.
+    """
+
+    result: DemoResult
+    calibration: Any
+    sensor_text: str
+    steps: DemoSteps
+
+
+def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", total: int = 4,
+              say: Callable[[str], None] = lambda line: None) -> DemoChain:
+    """The demo's measurement chain: bench, spring and dead-weight runs, calibrations, the compensated estimate.
+
+    Parameters
+    ----------
+    out : path-like
+        Output directory (created; files in it are replaced).
+    settings : DemoSettings
+        Durations and loads.
+    sensor : str or object, optional
+        :func:`demo_sensor`'s name or a sensor object (default :data:`DEMO_SENSOR`).
+    device : {"auto", "twin", "virtual"}
+        ``auto``: the twin when available, else the Python virtual device.
+    total : int
+        Number of steps the whole demo has (for the progress lines).
+    say : callable
+        ``say(line)``: what the demo does, step by step.
+
+    Returns
+    -------
+    DemoChain
+
+    Raises
+    ------
+    ValueError
+        A bad setting or sensor, ``device="twin"`` without the twin.
+    RuntimeError
+        A recording that failed (the message says which and why).
+    """
+    from fsrlab.bench.protocols import SpringPlan, WeightsPlan, run_protocol, twin_status
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    s = settings
+    sensor_obj, sensor_text = demo_sensor(sensor)
+    if device not in ("auto", "twin", "virtual"):
+        raise ValueError(f"device: must be auto, twin or virtual, got {device!r}")
+    ok, reason = twin_status()
+    if device == "twin" and not ok:
+        raise ValueError(f"device: the digital twin is not available: {reason}")
+    bench = "twin" if (device == "twin" or (device == "auto" and ok)) else "virtual"
+    result = DemoResult(index=out / "index.html", device=bench)
+    steps = DemoSteps(result, total, say)
+    step, done = steps.step, steps.done
+
+    def recorder(label: str, total_s: float | None):
+        last = [time.monotonic()]
+
+        def on_status(st) -> None:
+            now = time.monotonic()
+            if now - last[0] >= 3.0:
+                last[0] = now
+                say(f"      {label}: {st.elapsed_s:.0f} s" + (f" of {total_s:.0f} s" if total_s else "")
+                    + f", {st.frames} windows")
+        return on_status
+
+    def record(plan, name: str, seed: int, label: str, total_s: float | None, settle=None):
+        nonlocal bench
+        path = out / name
+        try:
+            run = run_protocol(plan, path, device=bench, sensor=sensor_obj, seed=seed, window_ms=s.window_ms,
+                               overwrite=True, on_status=recorder(label, total_s), settle=settle)
+        except Exception as exc:  # noqa: BLE001 - the twin failing: say so and use the Python device
+            if bench != "twin" or device == "twin":
+                raise
+            say(f"      the digital twin failed ({type(exc).__name__}: {exc}); using the Python virtual device")
+            bench = result.device = "virtual"
+            run = run_protocol(plan, path, device=bench, sensor=sensor_obj, seed=seed, window_ms=s.window_ms,
+                               overwrite=True, on_status=recorder(label, total_s), settle=settle)
+        if run.result.failed or not run.result.frames:
+            raise RuntimeError(f"{path}: the recording failed: {run.result.message}")
+        result.files[name] = path
+        return run
+
+    # 1. The bench and the spring runs.
+    spring = SpringPlan(peak_pa=s.peak_pa, cycles=s.cycles, period_s=s.period_s)
+    t0 = step(f"spring cycles on the {'digital twin (firmware in simavr)' if bench == 'twin' else 'Python virtual device'}"
+              f"{'' if bench == 'twin' else ' (the twin is not available: ' + reason + ')'}: sensor {sensor_text}; "
+              f"{s.cycles} cycles 0 → {s.peak_pa / 1e3:g} kPa → 0 of {s.period_s:g} s, twice (calibration run, test run)")
+    r1 = record(spring, "calibration-run.csv", s.seed, "calibration run", spring.duration_s)
+    r2 = record(spring, "test-run.csv", s.seed + 1, "test run", spring.duration_s)
+    done("spring runs", t0, f"{r1.result.frames} + {r2.result.frames} windows on the {bench} bench")
+
+    # 2. Dead weights.
+    weights = WeightsPlan(masses_kg=tuple(s.masses_kg), repeat=s.repeat)
+    t0 = step(f"dead weights: {', '.join(format(m * 1e3, 'g') + ' g' for m in weights.masses_kg)}, "
+              f"each placed {s.repeat} times from below, unloaded in between ({len(weights.steps())} placements)")
+    rw = record(weights, "weights-run.csv", s.seed + 2, "dead weights", None,
+                settle={"hold_s": s.settle_hold_s})
+    result.files["placements"] = rw.placements
+    done("dead weights", t0, f"{rw.summary['recorded']} of {len(weights.steps())} placements recorded")
+
+    # 3. Calibration.
+    from fsrlab.calibration.document import save_calibration
+    from fsrlab.calibration.apply import apply_calibration
+    from fsrlab.calibration.fit import calibrate_run
+
+    import numpy as np
+
+    from fsrlab.io.runformat import load_run
+
+    calrun = load_run(out / "calibration-run.csv")
+    # The load cell when the meter has one (the virtual meter emulates an HX711): the reference a bench
+    # with hardware has; else the stress the bench applied.
+    reference = "force_n" if "force_n" in calrun and np.isfinite(calrun["force_n"]).mean() > 0.5 else "stress_pa"
+    what = "the load cell's force (HX711)" if reference == "force_n" else "the applied stress"
+    t0 = step(f"calibration: the calibration run against {what}, model chosen by grouped cross-validation, with the "
+              "causal hysteresis compensation; and a known-weight calibration on the dead weights (m·g)")
+    # The lag is searched as on any recording; the virtual bench takes the reference in the readout's own
+    # window, so the search finds 0 within a row (docs/calibration.md, "Lag").
+    try:
+        cal = calibrate_run(calrun, compensate=True, reference=reference)
+    except ValueError as exc:  # a run too short for the compensation: the plain calibration, said
+        say(f"      no compensation: {str(exc).split(': ', 1)[-1]}")
+        cal = calibrate_run(calrun, reference=reference)
+    result.files["calibration"] = save_calibration(cal, out / "calibration.json")
+    known = None
+    try:
+        # Three load levels (0 and two masses): a polynomial of degree 2 at most.
+        known = calibrate_run(out / "weights-run.csv", degree=min(2, len(weights.masses_kg)), reference="force_n")
+        result.files["known-weight calibration"] = save_calibration(known, out / "known-weight-calibration.json")
+    except ValueError as exc:
+        say(f"      known-weight calibration not possible: {exc}")
+    result.numbers["calibration"] = {"model": cal.model_name, "reference": cal.y_name, "cv_rmse": cal.cv_rmse,
+                                     "unit": cal.y_unit, "lag_s": cal.lag_s}
+    if known is not None:
+        result.numbers["known_weight_calibration"] = {"model": known.model_name, "reference": known.y_name,
+                                                      "cv_rmse": known.cv_rmse, "unit": known.y_unit}
+    done("calibration", t0, f"{cal.model_name}, CV RMSE {cal.cv_rmse:.3g} {cal.y_unit}"
+         + (f"; known weights: {known.model_name}, CV RMSE {known.cv_rmse:.3g} {known.y_unit}"
+            if known is not None else ""))
+
+    # 4. Compensation on the test run.
+    from fsrlab.io.runwriter import write_run
+
+    t0 = step("compensation: the calibration applied to the test run (causal estimate, row by row)")
+    est = apply_calibration(cal, out / "test-run.csv")
+    result.files["estimate"] = write_run(out / "test-estimate.csv", est.columns, est.metadata, overwrite=True)
+    done("compensation", t0, f"{out / 'test-estimate.csv'}")
+    return DemoChain(result, cal, sensor_text, steps)
+

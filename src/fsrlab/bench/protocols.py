@@ -1,0 +1,538 @@
+"""Bench protocols (``fsrlab bench``): the paper's measurements as plans a bench runs and a person can follow.
+
+**Extension.** The paper (§6.1) loads its sensors with a stepper-driven spring (cycles 0 → 10 kPa
+→ 0, for Figure 19 and Table 3) and with dead weights placed again and again (200 g and 400 g, five
+times, for Tables 4 and 5). fsrlab writes those procedures down as pure plans, and adds a creep hold:
+
+- :class:`SpringPlan`: ``cycles`` triangle cycles from ``base_pa`` to ``peak_pa`` and back, each
+  ``period_s`` long. The virtual bench drives it with a
+  :class:`~fsrlab.virtual.sources.StressProfile`; with hardware the user starts the motor
+  (or loads and unloads by hand) when asked and the run records for ``cycles × period_s``.
+- :class:`WeightsPlan`: dead-weight re-placements, each mass reached from below in each of
+  ``repeat`` cycles and unloaded to zero in between (:func:`~fsrlab.bench.weights.plan_steps`
+  with the unloading, run by :class:`~fsrlab.bench.weights.WeightsProcedure`: the known-weight
+  workflow with its stability criterion).
+- :class:`CreepPlan`: unloaded for ``before_s``, then one mass held for ``hold_s``, then unloaded
+  for ``after_s`` (:mod:`fsrlab.metrics.creep` reads such holds).
+
+:func:`run_protocol` runs a plan on an open meter (a serial port, the Python virtual device or
+the digital twin, :func:`open_bench`) into a run file, through
+:func:`fsrlab.acquisition.recorder.record`.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+from fsrlab.bench.weights import Step, plan_steps
+from fsrlab.units import STANDARD_GRAVITY
+
+__all__ = ["PROTOCOLS", "DEVICES", "VIRTUAL_SENSORS", "virtual_sensor", "SpringPlan", "WeightsPlan", "CreepPlan", "twin_status", "open_bench",
+           "ProtocolRun", "run_protocol"]
+
+PROTOCOLS = ("spring", "weights", "creep")
+"""The bench protocols, as ``fsrlab bench`` names them."""
+
+DEVICES = ("virtual", "twin", "port")
+"""Where a protocol runs: the Python virtual device, the digital twin (firmware in simavr), a serial port."""
+
+
+@dataclass(frozen=True)
+class SpringPlan:
+    """Spring cycles as on the paper's stepper-motor bench (§6.1): base → peak → base, ``cycles`` times.
+
+    Parameters
+    ----------
+    peak_pa : float
+        Largest stress (> base_pa); the paper's bench reaches 10 kPa. [Pa]
+    cycles : int
+        Loading-unloading cycles (≥ 1).
+    period_s : float
+        Duration of one cycle (> 0). [s]
+    base_pa : float
+        Smallest stress (≥ 0). [Pa]
+    """
+
+    peak_pa: float = 10e3
+    cycles: int = 3
+    period_s: float = 4.0
+    base_pa: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.cycles, int) and 1 <= self.cycles <= 100000):
+            raise ValueError(f"cycles must be an integer from 1 to 100000, got {self.cycles!r}")
+        if not (math.isfinite(self.period_s) and self.period_s > 0):
+            raise ValueError(f"period_s must be > 0 s, got {self.period_s!r}")
+        if not (math.isfinite(self.peak_pa) and self.peak_pa > self.base_pa >= 0):
+            raise ValueError(f"peak_pa must exceed base_pa >= 0 Pa, got {self.peak_pa!r} and {self.base_pa!r}")
+
+    @property
+    def duration_s(self) -> float:
+        """Recording time: the whole cycles. [s]"""
+        return self.cycles * self.period_s
+
+    def profile(self):
+        """The virtual bench's :class:`~fsrlab.virtual.sources.StressProfile` (triangle)."""
+        from fsrlab.virtual.sources import StressProfile
+
+        return StressProfile(kind="triangle", peak_pa=self.peak_pa, period_s=self.period_s, base_pa=self.base_pa)
+
+    def stress(self, t_s):
+        """Planned stress at times ``t_s`` since START [s]; the base stress after the last cycle. [Pa]"""
+        import numpy as np
+
+        t = np.asarray(t_s, dtype=float)
+        return np.where((t >= 0) & (t <= self.duration_s), self.profile().stress(t), self.base_pa)
+
+    def prompt(self) -> str:
+        """What a person with hardware is asked to do."""
+        return (f"start the spring cycles: {self.cycles} × (from {self.base_pa / 1e3:g} kPa up to "
+                f"{self.peak_pa / 1e3:g} kPa and back) in {self.period_s:g} s each (motor, or by hand), then press "
+                f"Enter; the run records {self.duration_s:g} s (Ctrl-C ends it early, keeping the rows)")
+
+    def to_dict(self) -> dict:
+        """The sidecar's ``protocol``."""
+        return {"name": "spring", "peak_pa": self.peak_pa, "base_pa": self.base_pa, "cycles": self.cycles,
+                "period_s": self.period_s, "duration_s": self.duration_s}
+
+
+@dataclass(frozen=True)
+class WeightsPlan:
+    """Dead-weight re-placements as for the paper's Tables 4 and 5.
+
+    Parameters
+    ----------
+    masses_kg : tuple of float
+        The masses, increasing and > 0 (paper: 200 g and 400 g). [kg]
+    repeat : int
+        How often each mass is placed again (paper: 5).
+
+    Notes
+    -----
+    Each cycle is 0 → every mass in increasing order → back down to 0, so every mass is reached
+    from below once per cycle (the placements RE1/RE2 of eq. 39 are computed from) and the sensor
+    is unloaded between the cycles.
+    """
+
+    masses_kg: tuple = (0.2, 0.4)
+    repeat: int = 5
+
+    def __post_init__(self) -> None:
+        m = tuple(float(x) for x in self.masses_kg)
+        object.__setattr__(self, "masses_kg", m)
+        if not m or not all(math.isfinite(x) and x > 0 for x in m):
+            raise ValueError(f"masses_kg must be finite masses > 0 kg, got {self.masses_kg!r}")
+        if not (isinstance(self.repeat, int) and 1 <= self.repeat <= 1000):
+            raise ValueError(f"repeat must be an integer from 1 to 1000, got {self.repeat!r}")
+        plan_steps((0.0,) + m, self.repeat, True)  # increasing masses, or the ValueError naming them
+
+    def steps(self) -> list[Step]:
+        """The placements: :func:`~fsrlab.bench.weights.plan_steps` of 0 and the masses, with unloading."""
+        return plan_steps((0.0,) + self.masses_kg, self.repeat, unload=True)
+
+    def to_dict(self) -> dict:
+        """The sidecar's ``protocol``."""
+        return {"name": "weights", "masses_kg": list(self.masses_kg), "repeat": self.repeat,
+                "steps": len(self.steps())}
+
+
+@dataclass(frozen=True)
+class CreepPlan:
+    """A creep hold: unloaded, one mass held for a while, unloaded again.
+
+    Parameters
+    ----------
+    mass_kg : float
+        The mass held (> 0). [kg]
+    hold_s : float
+        How long it stays on (> 0). [s]
+    before_s : float
+        Unloaded time before it is placed (≥ 0). [s]
+    after_s : float
+        Unloaded time recorded after it is removed (recovery, ≥ 0). [s]
+    """
+
+    mass_kg: float = 0.2
+    hold_s: float = 60.0
+    before_s: float = 2.0
+    after_s: float = 5.0
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.mass_kg) and self.mass_kg > 0):
+            raise ValueError(f"mass_kg must be > 0 kg, got {self.mass_kg!r}")
+        if not (math.isfinite(self.hold_s) and self.hold_s > 0):
+            raise ValueError(f"hold_s must be > 0 s, got {self.hold_s!r}")
+        for name in ("before_s", "after_s"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"{name} must be >= 0 s, got {v!r}")
+
+    @property
+    def duration_s(self) -> float:
+        """Recording time. [s]"""
+        return self.before_s + self.hold_s + self.after_s
+
+    def segments(self) -> list[tuple[float, float]]:
+        """``(start [s], mass [kg])`` of each part of the plan, in order."""
+        return [(0.0, 0.0), (self.before_s, self.mass_kg), (self.before_s + self.hold_s, 0.0)]
+
+    def mass_at(self, t_s: float) -> float:
+        """The planned mass at time ``t_s`` since START [s]. [kg]"""
+        mass = 0.0
+        for start, m in self.segments():
+            if t_s >= start:
+                mass = m
+        return mass
+
+    def to_dict(self) -> dict:
+        """The sidecar's ``protocol``."""
+        return {"name": "creep", "mass_kg": self.mass_kg, "hold_s": self.hold_s, "before_s": self.before_s,
+                "after_s": self.after_s, "duration_s": self.duration_s}
+
+
+VIRTUAL_SENSORS = ("virtual-fsr", "paper-a201-1", "paper-a201-2", "paper-a201-3", "paper-a201-4")
+"""Names of the virtual bench's sensors (:func:`virtual_sensor`); a sensor preset's name
+(:data:`fsrlab.physics.presets.SENSOR_PRESETS`) gives the virtual FSR that preset's area."""
+
+
+def virtual_sensor(name):
+    """The virtual bench's sensor by name.
+
+    Parameters
+    ----------
+    name : str or object
+        ``virtual-fsr`` (:class:`~fsrlab.physics.sensor.VirtualFSR`, FlexiForce A201-like),
+        ``paper-a201-1`` .. ``paper-a201-4`` (:func:`fsrlab.physics.paper_sensor.paper_sensor`, the
+        sensors fitted to the paper's §6), another sensor preset's name (the virtual FSR with that
+        sensing area), or a sensor object, returned as is.
+
+    Returns
+    -------
+    (object, str)
+        The sensor (with ``respond`` and ``area_m2``) and its description.
+
+    Raises
+    ------
+    ValueError
+        An unknown name.
+    """
+    from fsrlab.physics.paper_sensor import PAPER_SENSOR_NAMES, paper_sensor
+    from fsrlab.physics.presets import SENSOR_PRESETS
+    from fsrlab.physics.sensor import VirtualFSR
+
+    if not isinstance(name, str):
+        return name, type(name).__name__
+    key = name.strip().lower()
+
+    if key in PAPER_SENSOR_NAMES:
+        return paper_sensor(key), f"{key} (fitted paper sensor, fsrlab.physics.paper_sensor)"
+    if key == "virtual-fsr":
+        return VirtualFSR(), "VirtualFSR (FlexiForce A201-like, fsrlab.physics.sensor)"
+    if key in SENSOR_PRESETS:
+        area = SENSOR_PRESETS[key].area_m2
+        return VirtualFSR(area_m2=area), f"VirtualFSR on the area of {key} ({area * 1e6:.1f} mm²)"
+    raise ValueError(f"sensor: must be virtual-fsr or one of {', '.join(SENSOR_PRESETS)}, got {name!r}")
+
+
+def twin_status() -> tuple[bool, str]:
+    """Whether the digital twin (``fsrlab.virtual.twin``: the firmware in simavr) can run here, and why not.
+
+    Returns
+    -------
+    (bool, str)
+        ``(True, "")`` or ``(False, reason)``: the module is missing, or its own
+        ``twin_available()`` says why not.
+    """
+    try:
+        from fsrlab.virtual.twin import twin_available  # noqa: PLC0415 - optional, built separately
+    except ImportError as exc:
+        return False, f"the digital twin is not part of this installation (fsrlab.virtual.twin: {exc})"
+    try:
+        ok, reason = twin_available()
+    except Exception as exc:  # noqa: BLE001 - any failure of the probe means: not available
+        return False, f"the digital twin's check failed: {type(exc).__name__}: {exc}"
+    return bool(ok), "" if ok else str(reason)
+
+
+def open_bench(device: str, source, seed: int | None = None):
+    """A virtual meter driven by ``source``, not yet opened: the Python virtual device or the twin.
+
+    Parameters
+    ----------
+    device : {"virtual", "twin"}
+        :class:`~fsrlab.virtual.device.VirtualDevice` (a Python model of the firmware
+        on a pty), or ``fsrlab.virtual.twin.Twin`` (the real firmware in simavr on a pty).
+    source : SignalSource
+        What the sensor and the circuits do (``PhysicsSource``, ``BenchSource``).
+    seed : int, optional
+        Random seed of the noise.
+
+    Returns
+    -------
+    object
+        With ``open() -> pty path``, ``close()`` and ``failure``.
+
+    Raises
+    ------
+    ValueError
+        An unknown device, or the twin is not available (the message says why).
+    """
+    if device == "virtual":
+        from fsrlab.virtual.device import VirtualDevice
+
+        return VirtualDevice(source, seed=seed)
+    if device == "twin":
+        ok, reason = twin_status()
+        if not ok:
+            raise ValueError(f"--twin: {reason}")
+        from fsrlab.acquisition.loadcell import LoadCellModel
+        from fsrlab.virtual.twin import Twin
+
+        # The load cell the Python virtual device emulates by default, on the twin's HX711 model.
+        return Twin(source=source, speed="realtime", seed=0 if seed is None else seed, loadcell=LoadCellModel())
+    raise ValueError(f"device must be virtual or twin, got {device!r}")
+
+
+@dataclass
+class ProtocolRun:
+    """What :func:`run_protocol` did.
+
+    Attributes
+    ----------
+    result : RecordResult
+        The recording (rows, drops, how it ended).
+    protocol : dict
+        The plan (its ``to_dict``), as in the sidecar.
+    device : str
+        ``virtual``, ``twin`` or the serial port.
+    summary : dict
+        Per protocol: the weights procedure's ``summary()`` (``weights``), else ``{}``.
+    placements : Path or None
+        ``NAME.placements.csv`` of a weights run.
+    """
+
+    result: object
+    protocol: dict
+    device: str
+    summary: dict = field(default_factory=dict)
+    placements: Path | None = None
+
+
+def _hardware_wait(confirm: Callable[[], str | None], stop: threading.Event) -> None:
+    """Block until the person confirms (Enter) or ``stop`` is set."""
+    while not stop.is_set() and confirm() is None:
+        stop.wait(0.05)
+
+
+def run_protocol(plan, out, device: str = "virtual", port: str | None = None, sensor=None,
+                 area_m2: float | None = None, seed: int | None = None, window_ms: int = 20,
+                 loadcell=None, announce: Callable[[str], None] | None = None,
+                 confirm: Callable[[], str | None] | None = None, overwrite: bool = False,
+                 on_status: Callable | None = None, settle: dict | None = None,
+                 gravity_m_s2: float = STANDARD_GRAVITY, metadata: dict | None = None) -> ProtocolRun:
+    """Run a bench protocol into a run file.
+
+    Parameters
+    ----------
+    plan : SpringPlan, WeightsPlan or CreepPlan
+        What to do.
+    out : path-like
+        The run's CSV (sidecar beside it; a weights run also writes ``NAME.placements.csv``).
+    device : {"virtual", "twin", "port"}
+        The Python virtual device, the digital twin, or hardware on ``port``.
+    port : str, optional
+        Serial port for ``device="port"``.
+    sensor : VirtualFSR, optional
+        The virtual sensor (default ``VirtualFSR()``, or one of ``area_m2``).
+    area_m2 : float, optional
+        Sensing area for stress = force / area (hardware; the virtual sensor's own area otherwise). [m²]
+    seed : int, optional
+        Noise seed of a virtual meter.
+    window_ms : int
+        Measurement window. [ms]
+    loadcell : LoadCellCalibration, optional
+        Load-cell calibration; a virtual meter uses its emulated load cell's own when None.
+    announce : callable, optional
+        ``announce(text)``: prompts and notices (default: none).
+    confirm : callable, optional
+        ``confirm() -> None | "ok" | "skip"``: the person's answer (hardware); the virtual bench
+        answers itself.
+    overwrite : bool
+        Replace an existing run.
+    on_status : callable, optional
+        The recorder's progress callback (:class:`~fsrlab.acquisition.recorder.RecordStatus`).
+    settle : dict, optional
+        Weights only: ``settle_windows``, ``max_drift``, ``timeout_s``, ``hold_s``
+        (:data:`~fsrlab.bench.weights.STABILITY`).
+    gravity_m_s2 : float
+        Local gravity for m·g. [m/s²]
+    metadata : dict, optional
+        More sidecar content.
+
+    Returns
+    -------
+    ProtocolRun
+
+    Raises
+    ------
+    ValueError
+        A bad plan or device, the twin not available, a virtual sensor without a response at the
+        plan's load.
+    FileExistsError, LinkError, OSError
+        As :func:`fsrlab.acquisition.recorder.record`.
+    """
+    from fsrlab.acquisition.recorder import record
+    from fsrlab.acquisition.serial_link import SerialLink
+    from fsrlab.physics.sensor import VirtualFSR
+
+    if device not in DEVICES:
+        raise ValueError(f"device must be one of {', '.join(DEVICES)}, got {device!r}")
+    if device == "port" and not port:
+        raise ValueError("port: a serial port is needed for device='port'")
+    out = Path(out)
+    say = announce or (lambda text: None)
+    answer = confirm or (lambda: "ok")
+    virtual = device != "port"
+    if virtual and sensor is None:
+        sensor = VirtualFSR() if area_m2 is None else VirtualFSR(area_m2=area_m2)
+    meta = {"protocol": plan.to_dict(), **(metadata or {})}
+    stop = threading.Event()
+    kwargs: dict = {}
+    summary: dict = {}
+    proc = None
+    bench = dev = None
+    last_t = [0.0]
+
+    def device_time() -> float:
+        t = dev.time_since_start() if hasattr(dev, "time_since_start") else math.nan
+        return t if math.isfinite(t) else last_t[0]
+
+    # ---- the signal source of a virtual bench, and the hooks of each protocol
+    if isinstance(plan, SpringPlan):
+        duration = plan.duration_s
+        if virtual:
+            from fsrlab.virtual.sources import PhysicsSource
+
+            source = PhysicsSource(plan.profile(), sensor=sensor)
+    elif isinstance(plan, WeightsPlan):
+        from fsrlab.bench.weights import WeightsProcedure
+
+        duration = 10 * 365 * 86400.0  # the plan's end (or Ctrl-C) stops it
+        steps = plan.steps()
+        if virtual:
+            from fsrlab.virtual.bench_source import BenchSource
+
+            source = bench = BenchSource([s.mass_kg * gravity_m_s2 for s in steps], sensor=sensor, seed=seed)
+
+            def place(step):
+                t = device_time()
+                bench.place(step.index, t)
+                return t
+        else:
+            def place(step):
+                return None
+        settle = {**(settle or {})}
+        proc = WeightsProcedure(steps, say, answer if not virtual else (lambda: "ok"), place, stop,
+                                gravity_m_s2=gravity_m_s2, use_loadcell=not virtual and loadcell is not None,
+                                area_m2=bench.load_area_m2 if virtual else area_m2, **settle)
+        kwargs["extra_columns"] = ["step", "direction", "cycle", "force_nominal_n", "force_n"] + (
+            ["stress_pa"] if (virtual or area_m2) else []) + ["load", "sensor", "reading"]
+        kwargs["on_row"] = proc.on_row
+        kwargs["final_metadata"] = lambda: {"weights": proc.summary()}
+    elif isinstance(plan, CreepPlan):
+        duration = plan.duration_s
+        segments = plan.segments()
+        if virtual:
+            from fsrlab.virtual.bench_source import BenchSource
+
+            source = bench = BenchSource([m * gravity_m_s2 for _, m in segments], sensor=sensor, seed=seed)
+        done = [0]
+
+        def creep_row(m, row):
+            t = float(row["time_s"])
+            while done[0] + 1 < len(segments) and t >= segments[done[0] + 1][0]:
+                done[0] += 1
+                mass = segments[done[0]][1]
+                say(f"{'place ' + format(mass * 1e3, 'g') + ' g on the sensor' if mass else 'remove the mass'} now "
+                    f"(t = {segments[done[0]][0]:g} s)")
+                if bench is not None:
+                    bench.place(done[0], device_time())
+            row = dict(row)
+            row["mass_planned_kg"] = segments[done[0]][1]
+            return row
+        kwargs["extra_columns"] = ["mass_planned_kg"]
+        kwargs["on_row"] = creep_row
+    else:
+        raise ValueError(f"plan must be a SpringPlan, WeightsPlan or CreepPlan, got {type(plan).__name__}")
+
+    if "on_row" in kwargs:
+        hook = kwargs["on_row"]
+
+        def on_row(m, row):
+            last_t[0] = float(row["time_s"])  # the run's clock, for a device without time_since_start
+            return hook(m, row)
+        kwargs["on_row"] = on_row
+    reference = health = None
+    if virtual:
+        dev = open_bench(device, source, seed)
+        vmeta = source.metadata()
+        if metadata and "sensor" in metadata:  # the name given, beside the model that stood for it
+            vmeta["sensor"] = {**metadata["sensor"], "virtual_model": vmeta["sensor"]["model"],
+                               "area_m2": sensor.area_m2}
+        meta.update(vmeta)
+        meta["origin"] = (f"fsrlab bench {plan.to_dict()['name']} --{device} (virtual bench -> "
+                          f"{type(sensor).__name__} -> LM555 and op-amp -> "
+                          + ("meter model -> emulated firmware over a pty)" if device == "virtual" else
+                             "the firmware in simavr over a pty)"))
+        if loadcell is None and getattr(dev, "load_cell", None) is not None:
+            loadcell = dev.load_cell.calibration()
+        if hasattr(dev, "reference") and not isinstance(plan, WeightsPlan):
+            reference = lambda frame: dev.reference(frame.seq)  # noqa: E731 - the applied stress
+        health = lambda: dev.failure  # noqa: E731
+        area_m2 = bench.load_area_m2 if bench is not None else sensor.area_m2  # stress = force / loaded area
+        if reference is None and loadcell is None and not isinstance(plan, WeightsPlan):
+            # A device that sends neither the applied stress nor a load cell's reading (a twin without
+            # its HX711): the stress the bench's model applied during each window.
+            w_s, hook = window_ms / 1000.0, kwargs.get("on_row")
+
+            def with_stress(m, row):
+                t = float(row["time_s"])
+                row = dict(row)
+                sig = source.window(max(t - w_s, 0.0), t, int(row.get("range") or 0))
+                row["stress_pa"] = sig.stress_pa if math.isfinite(sig.stress_pa) else None
+                return hook(m, row) if hook is not None else row
+            kwargs["on_row"] = with_stress
+            kwargs["extra_columns"] = ["stress_pa", *kwargs.get("extra_columns", [])]
+            meta["notes"] = ("stress_pa: the stress the virtual bench's model applied during each window (the device "
+                             "sends no reference)")
+        port = dev.open()
+    try:
+        with SerialLink(port) as link:
+            if not virtual and isinstance(plan, (SpringPlan, CreepPlan)):  # the port is open: ask the person
+                if isinstance(plan, SpringPlan):
+                    say(plan.prompt())
+                else:
+                    say(f"creep hold: {plan.before_s:g} s unloaded, then {plan.mass_kg * 1e3:g} g for "
+                        f"{plan.hold_s:g} s, then {plan.after_s:g} s unloaded; you are told when to place and "
+                        "remove the mass. Press Enter to start")
+                _hardware_wait(answer, stop)
+            result = record(link, out, duration, window_ms=window_ms, metadata=meta, reference=reference,
+                            on_status=on_status, stop=stop, health=health, overwrite=overwrite,
+                            loadcell=loadcell, area_m2=area_m2 if reference is None else None,
+                            on_event=say, **kwargs)
+    finally:
+        if dev is not None:
+            dev.close()
+    placements = None
+    if proc is not None:
+        from fsrlab.bench.weights import placements_table
+
+        summary = proc.summary()
+        placements = out.with_name(out.stem + ".placements.csv")
+        placements.write_text(placements_table(summary, "frequency_hz"), encoding="utf-8")
+    return ProtocolRun(result=result, protocol=plan.to_dict(), device=device if virtual else str(port),
+                       summary=summary, placements=placements)

@@ -1,0 +1,193 @@
+"""What a calibration was recorded with, and whether another run was recorded the same way.
+
+A calibration maps one readout to stress for one readout circuit: the frequency of an LM555 with
+R = 10 kΩ says nothing about the stress under R = 4.7 kΩ, and range 1 (C_off switched in) lowers
+every frequency. A calibration therefore records the circuits of the run it was fitted on and the
+ranges its readings were taken on (:class:`RecordedWith`), and :func:`mismatches` tells what
+differs in a run it is applied to. Which differences matter depends on the readout:
+
+=================================  ===========================================================
+``frequency_hz``, ``duty_cycle``   the LM555 circuit on each range the run uses (``c_off_farad``
+                                   counts only where ``range`` is 1); where a circuit is unknown,
+                                   the ranges themselves
+``c_fsr_farad`` (decoded)          the LM555 circuit only (the recorded one, else the one decoded
+                                   through): each reading is decoded on its own range, and C_FSR
+                                   does not depend on the circuit
+``voltage_v``                      the op-amp readout (R_F and its drive voltage)
+any other column                   nothing
+=================================  ===========================================================
+
+A part that one side does not know (a run without a sidecar, a calibration file written before
+fsrlab recorded this) is not compared.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout, readout_from_metadata
+
+__all__ = ["RecordedWith", "recorded_with", "mismatches", "describe_range"]
+
+# How the parts are named and shown in messages (the sidecar's names are for files).
+_PARTS = {"r_ohm": ("R", "Ω"), "c_off_farad": ("C_off", "F"), "diode": ("D1", None),
+          "diode_drop_v": ("D1's drop", "V"), "vcc_v": ("Vcc", "V"), "lower_fraction": ("lower threshold", "·Vcc"),
+          "upper_fraction": ("upper threshold", "·Vcc"), "discharge_ohm": ("discharge resistance", "Ω"),
+          "r_f_ohm": ("R_F", "Ω")}
+_OPAMP_PARTS = {"vcc_v": ("the op-amp's drive", "V")}
+
+
+@dataclass(frozen=True)
+class RecordedWith:
+    """The readout a calibration's data were recorded with.
+
+    Parameters
+    ----------
+    circuit : LM555Circuit or None
+        The run's LM555 circuit (its sidecar's), or None when the run's sidecar has none.
+    opamp : OpAmpReadout or None
+        The run's op-amp readout, or None.
+    ranges : tuple of int or None
+        The values of the run's ``range`` column among the readings used (0: C_off out, 1: in);
+        None for a run without a ``range`` column (C_off in circuit throughout).
+    """
+
+    circuit: LM555Circuit | None = None
+    opamp: OpAmpReadout | None = None
+    ranges: tuple[int, ...] | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form (the calibration file's ``"recorded_with"``)."""
+        return {"circuit": None if self.circuit is None else self.circuit.to_dict(),
+                "opamp": None if self.opamp is None else self.opamp.to_dict(),
+                "range": None if self.ranges is None else list(self.ranges)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "RecordedWith":
+        """Inverse of :meth:`to_dict`."""
+        if not isinstance(d, dict):
+            raise ValueError(f"recorded_with: expected a mapping, got {type(d).__name__}")
+        ranges = d.get("range")
+        if ranges is not None and not (isinstance(ranges, list) and set(ranges) <= {0, 1}):
+            raise ValueError(f"recorded_with.range: must be a list of 0 and 1, got {ranges!r}")
+        return cls(None if d.get("circuit") is None else LM555Circuit.from_dict(d["circuit"]),
+                   None if d.get("opamp") is None else OpAmpReadout.from_dict(d["opamp"]),
+                   None if ranges is None else tuple(sorted(int(r) for r in ranges)))
+
+
+def recorded_with(metadata: dict, range_column=None, used=None) -> RecordedWith:
+    """The readout of a run, from its sidecar and its ``range`` column.
+
+    Parameters
+    ----------
+    metadata : dict
+        The run's sidecar (:attr:`fsrlab.io.runformat.Run.metadata`).
+    range_column : array_like, optional
+        The run's ``range`` column (NaN where empty); None for a run without one.
+    used : array_like of bool, optional
+        The readings that count (e.g. those with a readout and a reference); default all.
+
+    Returns
+    -------
+    RecordedWith
+    """
+    circuit, opamp = readout_from_metadata(metadata)
+    ranges = None
+    if range_column is not None:
+        r = np.asarray(range_column, dtype=float)
+        if used is not None:
+            r = r[np.asarray(used, dtype=bool)]
+        ranges = tuple(int(v) for v in np.unique(r[np.isfinite(r)]))
+    return RecordedWith(circuit, opamp, ranges)
+
+
+def describe_range(ranges: tuple[int, ...]) -> str:
+    """``"range 1 (C_off in)"``, ``"ranges 0 and 1"``: the ranges as a user reads them.
+
+    Parameters
+    ----------
+    ranges : tuple of int
+        Values of a ``range`` column.
+
+    Returns
+    -------
+    str
+    """
+    if not ranges:
+        return "no range"
+    if len(ranges) == 1:
+        return f"range {ranges[0]} ({'C_off in' if ranges[0] else 'C_off out'})"
+    return "ranges " + " and ".join(str(r) for r in ranges)
+
+
+def _part(key: str, value, names: dict) -> str:
+    from fsrlab.units import format_eng
+
+    label, unit = names.get(key, _PARTS.get(key, (key, "")))
+    if unit is None:
+        return f"{label} {'yes' if value else 'no'}"
+    if unit.startswith("·"):
+        return f"{label} = {value:.6g}{unit}"
+    return f"{label} = {format_eng(value, unit, digits=6)}"
+
+
+def _difference(a, b, names: dict | None = None) -> tuple[str, str]:
+    """The parts in which two circuits differ, as ``("R = 4.7 kΩ", "R = 10 kΩ")``."""
+    from dataclasses import asdict
+
+    da, db = asdict(a), asdict(b)
+    keys = [k for k in da if da[k] != db[k]]
+    return (", ".join(_part(k, da[k], names or {}) for k in keys),
+            ", ".join(_part(k, db[k], names or {}) for k in keys))
+
+
+def mismatches(x: str, calibration: RecordedWith, run: RecordedWith,
+               decode_circuit: LM555Circuit | None = None) -> list[tuple[str, str]]:
+    """How a run's readout differs from the one a calibration was recorded with.
+
+    Parameters
+    ----------
+    x : str
+        The calibration's readout (``frequency_hz``, ``duty_cycle``, ``c_fsr_farad``, ``voltage_v``, ...).
+    calibration : RecordedWith
+        What the calibration's data were recorded with.
+    run : RecordedWith
+        The run's (:func:`recorded_with`).
+    decode_circuit : LM555Circuit, optional
+        For ``x = "c_fsr_farad"``: the circuit C_FSR is decoded through, compared with the run's
+        when the calibration does not know the circuit its run was recorded with.
+
+    Returns
+    -------
+    list of (str, str)
+        One ``(the run's, the calibration's)`` pair of descriptions per difference that changes
+        the readout's meaning (see the module's table); empty when nothing that is known differs.
+    """
+    out: list[tuple[str, str]] = []
+    if x == "c_fsr_farad":
+        # Against the circuit the calibration run was recorded with: a part the user corrected
+        # at calibration (--r) is corrected alike in a run recorded on the same bench.
+        cal = calibration.circuit if calibration.circuit is not None else decode_circuit
+        if cal is not None and run.circuit is not None and cal != run.circuit:
+            out.append(_difference(run.circuit, cal))
+    elif x in ("frequency_hz", "duty_cycle"):
+        if run.circuit is not None and calibration.circuit is not None:
+            # The circuit as the meter runs it on each range (C_off only where range is 1).
+            on_cal = ([calibration.circuit.on_range(r) for r in calibration.ranges] if calibration.ranges
+                      else [calibration.circuit])
+            for r in run.ranges or (None,):
+                circuit = run.circuit if r is None else run.circuit.on_range(r)
+                if circuit not in on_cal:
+                    a, b = _difference(circuit, on_cal[0])
+                    out.append((("" if r is None else f"{describe_range((r,))}: ") + a,
+                                (f"{describe_range(calibration.ranges)}: " if calibration.ranges else "") + b))
+                    break
+        elif run.ranges is not None and calibration.ranges is not None and not set(run.ranges) <= set(calibration.ranges):
+            out.append((describe_range(run.ranges), describe_range(calibration.ranges)))
+    elif x == "voltage_v":
+        if run.opamp is not None and calibration.opamp is not None and run.opamp != calibration.opamp:
+            out.append(_difference(run.opamp, calibration.opamp, _OPAMP_PARTS))
+    return out

@@ -1,0 +1,286 @@
+"""Writing runs (docs/data-format.md): rows appended crash-safely, the sidecar replaced atomically.
+
+:class:`RunWriter` appends rows and hands each one to the operating system at once, so a crash or a
+``SIGKILL`` leaves a readable file that lacks at most the rows not yet written; its sidecar is
+rewritten through a temporary file and a rename, and errors name the run's own files. Reading is
+:func:`fsrlab.io.runformat.load_run`.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+import os
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any, Iterable, Mapping, Sequence
+
+import numpy as np
+
+from fsrlab.io.schema import FORMAT, KNOWN_COLUMNS, VERSION, check_columns, sidecar_path
+
+__all__ = ["RunWriter", "write_run"]
+
+
+def _utc_now() -> str:
+    return datetime.now(timezone.utc).isoformat(timespec="seconds").replace("+00:00", "Z")
+
+
+def _format_value(value: Any) -> str:
+    """One cell: plain numbers, shortest round-trip form; ``None``/NaN -> empty (missing)."""
+    if value is None:
+        return ""
+    if isinstance(value, (bool, np.bool_)):
+        return "1" if value else "0"
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    v = float(value)
+    if math.isnan(v):
+        return ""
+    if math.isinf(v):
+        raise ValueError(f"row value must be finite, got {value!r}")
+    if v.is_integer() and abs(v) < 1e15:
+        return str(int(v))
+    return repr(v)
+
+
+def _user_error(exc: OSError, path: Path) -> OSError:
+    """``exc`` about ``path`` (the file the user named), never about a temporary file beside it."""
+    why = "it is a directory" if isinstance(exc, IsADirectoryError) else (exc.strerror or exc)
+    err = type(exc)(f"cannot write '{path}': {why}")
+    err.errno = exc.errno
+    return err
+
+
+def _write_json_atomic(path: Path, obj: dict) -> None:
+    """Replace ``path`` by ``obj`` as JSON in one rename; an error names ``path``, not the temporary."""
+    text = json.dumps(obj, indent=2, allow_nan=False) + "\n"
+    tmp = path.with_name(path.name + ".tmp")
+    try:
+        with open(tmp, "w", encoding="utf-8") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except OSError as exc:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise _user_error(exc, path) from None
+
+
+def _build_metadata(columns: list[str], metadata: Mapping[str, Any] | None) -> dict:
+    meta = dict(metadata or {})
+    units = {c: KNOWN_COLUMNS.get(c, "") for c in columns}
+    units.update({k: str(v) for k, v in dict(meta.pop("units", {}) or {}).items() if k in units})
+    out = {
+        "format": FORMAT,
+        "version": VERSION,
+        "created": meta.pop("created", None) or _utc_now(),
+        "columns": columns,
+        "units": units,
+        "circuit": meta.pop("circuit", {}),
+        "sensor": meta.pop("sensor", {}),
+        "origin": meta.pop("origin", ""),
+        "notes": meta.pop("notes", ""),
+    }
+    out.update(meta)  # anything else the writer wants to keep
+    out["complete"] = False
+    out["rows"] = None
+    return out
+
+
+class RunWriter:
+    """Write a run row by row, crash-safe.
+
+    The header and the sidecar are written when the writer opens. Each :meth:`write` appends one
+    whole line with a single write to the operating system, so a process killed at any moment
+    leaves a file whose rows are all complete; :meth:`sync` also asks the OS to put them on disk
+    (``fsync``), which protects against power loss. A write that fails half-way (disk full, file
+    size limit) is cut back to the last whole row before the error is raised. Closing records the
+    row count and ``"complete": true`` in the sidecar.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The CSV file (``NAME.csv``); the sidecar is ``NAME.meta.json``.
+    columns : sequence of str
+        Column names in order, e.g. ``["time_s", "frequency_hz", "duty_cycle"]``.
+    metadata : mapping, optional
+        Sidecar content: ``units`` (per column, defaults from :data:`KNOWN_COLUMNS`), ``circuit``
+        (e.g. ``{"r_ohm": 10e3, "c_off_farad": 0, "diode": true}``), ``sensor`` (e.g.
+        ``{"model": "FlexiForce A201-1", "area_m2": 7.1e-5}``), ``origin``, ``notes``; other keys are kept.
+    overwrite : bool
+        Replace an existing run (the default). With False, an existing CSV or sidecar raises
+        ``FileExistsError`` naming it, and nothing is written.
+
+    Raises
+    ------
+    FileExistsError
+        ``overwrite=False`` and the CSV or its sidecar exists.
+    OSError
+        The files cannot be written; the message names the CSV or the sidecar, never a temporary file.
+
+    Examples
+    --------
+    >>> with RunWriter("run.csv", ["time_s", "frequency_hz"], {"origin": "virtual"}) as w:  # doctest: +SKIP
+    ...     w.write({"time_s": 0.1, "frequency_hz": 5123.4})
+    """
+
+    def __init__(self, path: str | os.PathLike, columns: Sequence[str], metadata: Mapping[str, Any] | None = None,
+                 overwrite: bool = True):
+        self.path = Path(path)
+        self.columns = check_columns(columns)
+        self._set = set(self.columns)
+        self.metadata = _build_metadata(self.columns, metadata)
+        self.meta_path = sidecar_path(self.path)
+        self.rows = 0
+        self._size = 0  # bytes of whole lines in the CSV
+        if not overwrite:
+            for existing in (self.path, self.meta_path):
+                if os.path.lexists(existing):
+                    raise FileExistsError(f"{existing} exists; a run is replaced only when asked to")
+        had_sidecar = os.path.lexists(self.meta_path)
+        _write_json_atomic(self.meta_path, self.metadata)
+        try:
+            # buffering=0: every write() below is one system call carrying one whole line.
+            self._fd = open(self.path, "wb" if overwrite else "xb", buffering=0)
+        except OSError as exc:
+            if not had_sidecar:  # do not leave a sidecar without its run
+                try:
+                    os.unlink(self.meta_path)
+                except OSError:
+                    pass
+            raise _user_error(exc, self.path) from None
+        self._raw(",".join(self.columns) + "\n")
+        self.sync()
+
+    def _raw(self, text: str) -> None:
+        data = text.encode("utf-8")
+        view = memoryview(data)
+        try:
+            while view:
+                n = self._fd.write(view)
+                view = view[n:]
+        except OSError as exc:
+            try:  # keep the file made of whole lines: cut the part of this write that got through
+                os.ftruncate(self._fd.fileno(), self._size)
+                self._fd.seek(self._size)
+            except OSError:
+                pass
+            raise _user_error(exc, self.path) from None
+        self._size += len(data)
+
+    @property
+    def closed(self) -> bool:
+        """Whether the writer has been closed."""
+        return self._fd.closed
+
+    def write(self, row: Mapping[str, Any]) -> None:
+        """Append one reading.
+
+        Parameters
+        ----------
+        row : mapping
+            Column name -> number; absent columns, ``None`` and NaN are written as empty (missing) cells.
+
+        Raises
+        ------
+        ValueError
+            If ``row`` names a column the run does not have, or holds a non-finite number.
+        OSError
+            If the row cannot be written (the file then still ends with the previous whole row).
+        """
+        unknown = [k for k in row if k not in self._set]
+        if unknown:
+            raise ValueError(f"row: unknown columns {unknown}; the run has {self.columns}")
+        line = ",".join(_format_value(row.get(c)) for c in self.columns) + "\n"
+        self._raw(line)
+        self.rows += 1
+
+    def write_many(self, rows: Iterable[Mapping[str, Any]]) -> None:
+        """Append several readings (see :meth:`write`)."""
+        for row in rows:
+            self.write(row)
+
+    def sync(self) -> None:
+        """Force the rows written so far to disk (``os.fsync``)."""
+        try:
+            os.fsync(self._fd.fileno())
+        except OSError as exc:
+            raise _user_error(exc, self.path) from None
+
+    def update_metadata(self, changes: Mapping[str, Any]) -> None:
+        """Merge ``changes`` into the sidecar and write it now (the run stays open, ``complete: false``).
+
+        Parameters
+        ----------
+        changes : mapping
+            Sidecar keys and their new values, e.g. ``{"gaps": [...]}``.
+        """
+        self.metadata.update(changes)
+        _write_json_atomic(self.meta_path, self.metadata)
+
+    def close(self) -> None:
+        """Sync, close the CSV and mark the sidecar complete with the row count.
+
+        The sidecar says ``"complete": false`` when the last ``fsync`` failed (the rows may not be
+        on disk); the error is raised after the sidecar is written.
+        """
+        if self._fd.closed:
+            return
+        error = None
+        try:
+            self.sync()
+        except OSError as exc:
+            error = exc
+        self._fd.close()
+        self.metadata["complete"] = error is None
+        self.metadata["rows"] = self.rows
+        self.metadata["closed"] = _utc_now()
+        _write_json_atomic(self.meta_path, self.metadata)
+        if error is not None:
+            raise error
+
+    def __enter__(self) -> "RunWriter":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def write_run(path: str | os.PathLike, columns: Mapping[str, Any], metadata: Mapping[str, Any] | None = None,
+              overwrite: bool = True) -> Path:
+    """Write a whole run at once from column arrays.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The CSV file; the sidecar goes next to it.
+    columns : mapping of str to array_like
+        Column name -> 1-D values, all of the same length (NaN = missing).
+    metadata : mapping, optional
+        As for :class:`RunWriter`.
+    overwrite : bool
+        As for :class:`RunWriter`: with False an existing run raises ``FileExistsError``.
+
+    Returns
+    -------
+    Path
+        The CSV file written.
+    """
+    names = list(columns)
+    arrays = [np.asarray(columns[c]) for c in names]
+    n = {a.shape for a in arrays}
+    if len(n) != 1 or arrays[0].ndim != 1:
+        raise ValueError("columns: every column must be a 1-D array of the same length")
+    buf = io.StringIO()
+    for i in range(arrays[0].shape[0]):
+        buf.write(",".join(_format_value(a[i]) for a in arrays))
+        buf.write("\n")
+    with RunWriter(path, names, metadata, overwrite=overwrite) as w:
+        w._raw(buf.getvalue())
+        w.rows = arrays[0].shape[0]
+    return Path(path)

@@ -1,0 +1,108 @@
+"""The run file's schema: its format name and version, the known columns and their units, the sidecar's path.
+
+What every reader and writer of runs shares (:mod:`fsrlab.io.runformat`, :mod:`fsrlab.io.runcells`,
+:mod:`fsrlab.io.runwriter`); ``docs/data-format.md`` is the normative description.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Sequence
+
+__all__ = ["FORMAT", "VERSION", "KNOWN_COLUMNS", "QUANTITY_COLUMNS", "RunFormatError", "check_columns", "sidecar_path",
+           "where"]
+
+#: Value of the sidecar's ``"format"`` key.
+FORMAT = "fsrlab-run"
+#: Version of the format described here.
+VERSION = 1
+
+#: Known columns and their units (``"1"``: dimensionless or a count).
+KNOWN_COLUMNS: dict[str, str] = {
+    "time_s": "s",
+    "frequency_hz": "Hz",
+    "duty_cycle": "1",
+    "voltage_v": "V",
+    "stress_pa": "Pa",
+    "force_n": "N",
+    "stress_pa_uncertainty": "Pa",
+    "force_n_estimate": "N",
+    "force_n_uncertainty": "N",
+    "cycle": "1",
+    "direction": "1",
+    "range": "1",
+    "periods": "1",
+    "missed": "1",
+    "seq": "1",
+    "reference_raw": "count",
+    "force_nominal_n": "N",
+    "step": "1",
+}
+
+#: Readout quantities a calibration or a hysteresis error can be computed on.
+QUANTITY_COLUMNS = ("frequency_hz", "duty_cycle", "voltage_v")
+
+
+class RunFormatError(ValueError):
+    """A run file that does not follow the format; the message is one line naming file, row, column."""
+
+
+def check_columns(columns: Sequence[str]) -> list[str]:
+    """Column names as strings, or ``ValueError`` for an empty, duplicate or unwritable name.
+
+    Parameters
+    ----------
+    columns : sequence of str
+        Header names.
+
+    Returns
+    -------
+    list of str
+    """
+    cols = [str(c) for c in columns]
+    if not cols:
+        raise ValueError("columns must name at least one column")
+    for c in cols:
+        if not c or c != c.strip() or any(ch in c for ch in ',"\r\n'):
+            raise ValueError(f"columns: invalid column name {c!r} (no commas, quotes, newlines or edge spaces)")
+    dup = sorted({c for c in cols if cols.count(c) > 1})
+    if dup:
+        raise ValueError(f"columns: duplicate column names {dup}")
+    return cols
+
+
+def sidecar_path(path: str | os.PathLike) -> Path:
+    """Return the metadata sidecar of a run: ``NAME.csv`` -> ``NAME.meta.json``.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The run's CSV file.
+
+    Returns
+    -------
+    Path
+    """
+    p = Path(path)
+    return p.with_name((p.name[:-4] if p.name.lower().endswith(".csv") else p.name) + ".meta.json")
+
+
+def where(path: Path, row: int, column: str | None) -> str:
+    """Where in a table a problem is, for one-line errors: ``"FILE: row R (line L), column 'C'"``.
+
+    Parameters
+    ----------
+    path : Path
+        The file.
+    row : int
+        1-based data row; the file line is row + 1 (the header is line 1).
+    column : str or None
+        The column, if the problem is in one cell.
+
+    Returns
+    -------
+    str
+    """
+    col = f", column {column!r}" if column is not None else ""
+    return f"{path}: row {row} (line {row + 1}){col}"

@@ -1,0 +1,399 @@
+"""The "paper sensor" preset: what it was fitted to and the fit (``scripts/fit_paper_sensor.py``, docs/experiment.md).
+
+:func:`preset_targets` gives the paper's printed values one sensor of the preset is fitted to (HE of
+both readouts, the readouts at 0 and 10 kPa, the dead weights' readings); :func:`fit_paper_sensor`
+and :func:`fit_paper_preset` fit the parameters of :class:`fsrlab.physics.paper_sensor.PaperFSR` to
+them through the experiment of :mod:`fsrlab.paper.experiment`; :func:`fit_placement_spread` and
+:func:`re2_design` fit the placement spread that gives the repeatability errors RE1/RE2 (eq. 39).
+
+References
+----------
+Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, §6, Tables 3–5.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fsrlab.circuits.circuit import PAPER_CIRCUIT, PAPER_OPAMP, LM555Circuit, OpAmpReadout
+from fsrlab.paper.experiment import MASSES_KG
+from fsrlab.units import STANDARD_GRAVITY
+
+__all__ = ["preset_targets", "quick_response", "fit_paper_sensor", "fit_paper_preset", "fit_placement_spread",
+           "placement_sensitivities", "re2_design", "film_regimes", "SPREAD_FIT_PARAMETERS", "SPREADS", "FIT_WEIGHTS",
+           "FIT_PARAMETERS", "SHARED_FIT_PARAMETERS"]
+
+
+#: Weights of the fit residuals (relative residuals for readings, pp/2 for HE).
+FIT_WEIGHTS = {"f0": 0.5, "f10": 0.5, "v0": 0.5, "v10": 0.5, "f200": 1.0, "f400": 1.0, "he_tm": 1.0, "he_pm": 1.0}
+
+
+def preset_targets(i: int) -> dict:
+    """The printed numbers sensor ``i`` (1–4) of the preset is fitted to.
+
+    Parameters
+    ----------
+    i : int
+        Sensor number 1–4.
+
+    Returns
+    -------
+    dict
+        ``f0``, ``f10`` [Hz]: Figure 19a's range at 0 and 10 kPa (3 and 10 kHz, read off the axis);
+        ``v0``, ``v10`` [V]: Figure 19b's (0.4 and 1 V); ``f200``, ``f400`` [Hz]: Table 4's mean reading
+        of the sensor; ``he_tm``, ``he_pm`` [%]: Table 3's row.
+    """
+    from fsrlab.reference import paper_values
+
+    p = paper_values()
+    t3, t4 = p["table3_hysteresis_error_percent"], p["table4_repeatability_capacitive_kHz"]
+    return {"f0": 3e3, "f10": 10e3, "v0": 0.4, "v10": 1.0,
+            "f200": 1e3 * float(np.mean(t4["200g"]["readings"][i - 1])),
+            "f400": 1e3 * float(np.mean(t4["400g"]["readings"][i - 1])),
+            "he_tm": float(t3["traditional"][i - 1]), "he_pm": float(t3["proposed"][i - 1])}
+
+
+def film_regimes(sensor, circuit: LM555Circuit = PAPER_CIRCUIT, opamp: OpAmpReadout = PAPER_OPAMP) -> set:
+    """The tunnelling equations (10, 11, 12) the films of ``sensor`` use on the paper's bench.
+
+    Parameters
+    ----------
+    sensor : PaperFSR
+        The sensor.
+    circuit, opamp
+        The readouts (their voltages across the FSR).
+
+    Returns
+    -------
+    set of int
+        Regimes met over the 0 → 10 kPa → 0 cycle and the dead weights, at both readouts' voltages
+        (:func:`fsrlab.physics.tunneling.tunneling_regime` of the per-film voltage u/n). ``{11}`` means
+        no state sits on the seams where the paper's piecewise eqs. (10)–(12) jump.
+    """
+    from fsrlab.physics.paper_sensor import DEAD_WEIGHT_AREA_M2
+    from fsrlab.physics.tunneling import tunneling_regime
+
+    up = np.linspace(0.0, 10e3, 21)
+    cycle = np.concatenate([up, up[::-1][1:],
+                            [m * STANDARD_GRAVITY / DEAD_WEIGHT_AREA_M2 for m in MASSES_KG.values()]])
+    out: set = set()
+    for v in (circuit.fsr_voltage_v, opamp.fsr_voltage_v):
+        u = sensor.respond(cycle, voltage_v=v).film_voltage_v / sensor.layers
+        out |= {int(r) for r in np.atleast_1d(tunneling_regime(u, sensor.phi0_j))}
+    return out
+
+
+def quick_response(sensor, points: int = 41, circuit: LM555Circuit = PAPER_CIRCUIT,
+                   opamp: OpAmpReadout = PAPER_OPAMP) -> dict:
+    """The fitted quantities of a sensor without the meter (closed forms only; the fit's inner loop).
+
+    Parameters
+    ----------
+    sensor : PaperFSR
+        The sensor.
+    points : int
+        Stress points per ramp of the 0 → 10 kPa → 0 cycle.
+    circuit, opamp
+        The readouts.
+
+    Returns
+    -------
+    dict
+        Same keys as :func:`preset_targets`; HE by eq. (13) on the two branches at common stresses
+        (:func:`fsrlab.metrics.hysteresis.hysteresis_error`).
+    """
+    from fsrlab.metrics.hysteresis import hysteresis_error
+    from fsrlab.physics.paper_sensor import DEAD_WEIGHT_AREA_M2
+
+    up = np.linspace(0.0, 10e3, points)
+    stress = np.concatenate([up, up[::-1][1:]])
+    r5 = sensor.respond(stress, voltage_v=opamp.fsr_voltage_v)
+    r25 = sensor.respond(stress, voltage_v=circuit.fsr_voltage_v)
+    f = circuit.astable(r25.r_fsr_ohm, r25.c_fsr_farad, check=False).frequency_hz
+    v = opamp.output_v(r5.r_fsr_ohm)
+    n = points
+    he = {}
+    for key, q in (("he_tm", v), ("he_pm", f)):
+        he[key] = float(hysteresis_error(up, q[:n], up[::-1], q[n - 1:]).percent)
+    out = {"f0": float(f[0]), "f10": float(f[n - 1]), "v0": float(v[0]), "v10": float(v[n - 1]), **he}
+    for key, m in (("f200", 0.2), ("f400", 0.4)):
+        s = np.array([0.0, m * STANDARD_GRAVITY / DEAD_WEIGHT_AREA_M2])
+        rr = sensor.respond(s, voltage_v=circuit.fsr_voltage_v)
+        out[key] = float(circuit.astable(rr.r_fsr_ohm[-1], rr.c_fsr_farad[-1], check=False).frequency_hz)
+    return out
+
+
+#: The parameters :func:`fit_paper_sensor` adjusts, with bounds; fitted in log space where marked.
+FIT_PARAMETERS = {
+    "modulus_pa": (1e5, 1e7, True),
+    "k": (1.0, 6.0, False),
+    "area_k": (1.0, 40.0, False),
+    "area_fraction_0": (1e-6, 1.0, True),
+    "area_growth_pa": (5e2, 1e6, True),
+    "dielectric_ratio": (1e-2, 1e4, True),
+}
+
+
+def _residuals(got: dict, want: dict) -> np.ndarray:
+    res = []
+    for key, w in FIT_WEIGHTS.items():
+        if key.startswith("he"):
+            res.append(w * (got[key] - want[key]) / 2.0)
+        else:
+            g = got[key]
+            res.append(w * (np.log(g / want[key]) if np.isfinite(g) and g > 0 else 10.0))
+    return np.array(res)
+
+
+#: The placement spreads of :class:`~fsrlab.physics.paper_sensor.PaperFSR`, with bounds (log space), shared by
+#: the four sensors; :func:`fit_paper_preset` fits them with ``repeatability=True``.
+SPREAD_FIT_PARAMETERS = {
+    "placement_stress_sd": (1e-4, 0.3, True),
+    "placement_contact_sd": (1e-4, 1.0, True),
+    "placement_area_sd": (1e-4, 1.0, True),
+}
+SPREADS = tuple(SPREAD_FIT_PARAMETERS)
+
+#: Parameters shared by the four sensors that :func:`fit_paper_preset` adjusts (same layout as
+#: :data:`FIT_PARAMETERS`): the films in series (voltage dependence), the contact and the area's growth law.
+#: At least 24 films keep 5 V below φ0/e = 0.223 V per film, inside eq. (11)'s range: the paper's
+#: eqs. (10)–(12) do not join (R_A jumps by ≈ 2.4× at u = φ0/e), and a fit left free parks the films
+#: on that seam (see :func:`film_regimes`).
+SHARED_FIT_PARAMETERS = {
+    "layers": (24.0, 400.0, True),
+    "contact_ohm": (1e3, 1e7, True),
+    "contact_stress_pa": (5e2, 1e5, True),
+    "area_exponent": (0.2, 4.0, True),
+}
+
+
+def _codec(names: list, table: dict):
+    lo = np.array([np.log(table[n][0]) if table[n][2] else table[n][0] for n in names])
+    hi = np.array([np.log(table[n][1]) if table[n][2] else table[n][1] for n in names])
+
+    def enc(sensor):
+        return np.array([np.log(getattr(sensor, n)) if table[n][2] else getattr(sensor, n) for n in names])
+
+    def dec(x) -> dict:
+        return {n: float(np.exp(v)) if table[n][2] else float(v) for n, v in zip(names, x)}
+
+    return lo, hi, enc, dec
+
+
+def fit_paper_preset(start=None, max_nfev: int = 300, repeatability: bool = False):
+    """Fit the four preset sensors jointly to :func:`preset_targets` (scipy least squares).
+
+    Parameters
+    ----------
+    start : sequence of PaperFSR, optional
+        Starting sensors (default: the stored preset, :func:`fsrlab.physics.paper_sensor.paper_sensors`).
+    max_nfev : int
+        Largest number of evaluations of the 32 residuals.
+    repeatability : bool
+        Also fit the three placement spreads (:data:`SPREAD_FIT_PARAMETERS`) to the printed mean RE2
+        of Tables 4 and 5 (four more residuals: log ratio of :func:`re2_design`'s prediction).
+
+    Returns
+    -------
+    (list of PaperFSR, list of dict, list of dict)
+        The fitted sensors, their :func:`quick_response` and their targets.
+
+    Notes
+    -----
+    Residuals per sensor: log ratios of the readings (Figure 19 ranges at weight ½, Table 4 means at
+    1) and HE differences in units of 2 pp (Table 3), :data:`FIT_WEIGHTS`; 8 per sensor, 32 in all.
+    Adjusted within bounds by ``scipy.optimize.least_squares`` (trust region reflective): the six
+    :data:`FIT_PARAMETERS` of each sensor and the four :data:`SHARED_FIT_PARAMETERS` common to the
+    four (28 parameters); the rest is :data:`fsrlab.physics.paper_sensor.PAPER_SENSOR_COMMON`.
+    """
+    from scipy.optimize import least_squares
+
+    from fsrlab.physics.paper_sensor import paper_sensors
+
+    base = list(start) if start is not None else paper_sensors()
+    wants = [preset_targets(i) for i in range(1, 5)]
+    shared_table = {**SHARED_FIT_PARAMETERS, **(SPREAD_FIT_PARAMETERS if repeatability else {})}
+    own, shared = list(FIT_PARAMETERS), list(shared_table)
+    lo_o, hi_o, enc_o, dec_o = _codec(own, FIT_PARAMETERS)
+    lo_s, hi_s, enc_s, dec_s = _codec(shared, shared_table)
+    lo = np.concatenate([lo_s] + [lo_o] * 4)
+    hi = np.concatenate([hi_s] + [hi_o] * 4)
+    m = len(own)
+
+    def sensors_of(x):
+        common = dec_s(x[:len(shared)])
+        return [b.replace(**common, **dec_o(x[len(shared) + j * m:len(shared) + (j + 1) * m]))
+                for j, b in enumerate(base)]
+
+    def fun(x):
+        out = []
+        sensors = sensors_of(x)
+        for s, want in zip(sensors, wants):
+            try:
+                # a state on a seam of the piecewise tunnelling equations is not a fit (film_regimes)
+                if film_regimes(s) != {11}:
+                    raise ValueError("films outside eq. (11)'s range")
+                out.append(_residuals(quick_response(s), want))
+            except ValueError:
+                out.append(np.full(len(FIT_WEIGHTS), 10.0))
+        if repeatability:
+            try:
+                a, printed, _ = re2_design(sensors)
+                sd2 = np.array([getattr(sensors[0], n) for n in SPREADS]) ** 2
+                out.append(np.log(np.sqrt(a @ sd2) / printed))
+            except ValueError:
+                out.append(np.full(4, 10.0))
+        return np.concatenate(out)
+
+    x0 = np.concatenate([enc_s(base[0])] + [enc_o(b) for b in base])
+    x0 = np.clip(x0, lo + 1e-9, hi - 1e-9)
+    sol = least_squares(fun, x0, bounds=(lo, hi), max_nfev=max_nfev, x_scale="jac")
+    best = sensors_of(sol.x)
+    return best, [quick_response(s) for s in best], wants
+
+
+def fit_paper_sensor(i: int, start=None, max_nfev: int = 400):
+    """Refit the own parameters of sensor ``i`` alone, the shared ones held (scipy least squares).
+
+    Parameters
+    ----------
+    i : int
+        Sensor number 1–4.
+    start : PaperFSR, optional
+        Starting point (default: the stored preset sensor).
+    max_nfev : int
+        Largest number of model evaluations.
+
+    Returns
+    -------
+    (PaperFSR, dict, dict)
+        The fitted sensor, its :func:`quick_response` and the targets.
+
+    Notes
+    -----
+    The residuals of :func:`fit_paper_preset` for one sensor; only :data:`FIT_PARAMETERS` move.
+    """
+    from scipy.optimize import least_squares
+
+    from fsrlab.physics.paper_sensor import paper_sensor
+
+    base = start if start is not None else paper_sensor(i)
+    want = preset_targets(i)
+    names = list(FIT_PARAMETERS)
+    lo, hi, enc, dec = _codec(names, FIT_PARAMETERS)
+
+    def fun(x):
+        try:
+            return _residuals(quick_response(base.replace(**dec(x))), want)
+        except ValueError:
+            return np.full(len(FIT_WEIGHTS), 10.0)
+
+    x0 = np.clip(enc(base), lo + 1e-9, hi - 1e-9)
+    sol = least_squares(fun, x0, bounds=(lo, hi), max_nfev=max_nfev, x_scale="jac")
+    best = base.replace(**dec(sol.x))
+    return best, quick_response(best), want
+
+
+def placement_sensitivities(sensor, mass_kg: float, circuit: LM555Circuit = PAPER_CIRCUIT,
+                            opamp: OpAmpReadout = PAPER_OPAMP, step: float = 1e-3) -> np.ndarray:
+    """d ln(reading)/d ln(factor) of both readouts to a placement's stress and contact factors.
+
+    Parameters
+    ----------
+    sensor : PaperFSR
+        The sensor.
+    mass_kg : float
+        The dead weight. [kg]
+    circuit, opamp
+        The readouts.
+    step : float
+        Relative step of the central differences. [1]
+
+    Returns
+    -------
+    ndarray, shape (2, 3)
+        Rows: frequency, voltage; columns: stress, contact and area factors. [1]
+    """
+    from fsrlab.physics.paper_sensor import DEAD_WEIGHT_AREA_M2
+
+    s = np.array([0.0, mass_kg * STANDARD_GRAVITY / DEAD_WEIGHT_AREA_M2])
+
+    def readings(**kw):
+        r25 = sensor.respond(s, circuit.fsr_voltage_v, **kw)
+        r5 = sensor.respond(s, opamp.fsr_voltage_v, **kw)
+        f = circuit.astable(r25.r_fsr_ohm[-1], r25.c_fsr_farad[-1], check=False).frequency_hz
+        return np.log([f, opamp.output_v(r5.r_fsr_ohm[-1])])
+
+    up, dn = np.exp(step), np.exp(-step)
+    cols = [(readings(**{k: up}) - readings(**{k: dn})) / (2 * step)
+            for k in ("stress_factor", "contact_factor", "area_factor")]
+    return np.column_stack(cols)
+
+
+def fit_placement_spread(sensors) -> tuple[dict, dict]:
+    """The placement spreads (stress, contact, area) from the mean RE2 of Tables 4 and 5 (linearised).
+
+    Parameters
+    ----------
+    sensors : sequence of PaperFSR
+        The sensors, in the order of the tables.
+
+    Returns
+    -------
+    (dict, dict)
+        ``{"placement_stress_sd", "placement_contact_sd", "placement_area_sd"}`` and the predicted and
+        printed mean RE2 per table and load.
+
+    Notes
+    -----
+    For small spreads, ``RE2² ≈ 100²·(a²·sd_σ² + b²·sd_c² + c²·sd_a²)`` with ``a, b, c`` the
+    sensitivities of :func:`placement_sensitivities` (averaged in square over the sensors). The three
+    spreads are fitted (least squares on the log ratios, each spread within
+    :data:`SPREAD_FIT_PARAMETERS`, started from the non-negative least squares on the squares) to
+    the printed mean RE2 of Table 4 (frequency) and Table 5 (voltage) at 200 g and 400 g: four
+    equations, three unknowns. Creep (a random read time) adds a small term that the fit does not use.
+    """
+    from scipy.optimize import least_squares, nnls
+
+    a, printed, labels = re2_design(sensors)
+    var0, _ = nnls(a, printed**2)
+    lo = np.log([SPREAD_FIT_PARAMETERS[n][0] for n in SPREADS])
+    hi = np.log([SPREAD_FIT_PARAMETERS[n][1] for n in SPREADS])
+    x0 = np.clip(0.5 * np.log(np.maximum(var0, 1e-12)), lo + 1e-9, hi - 1e-9)
+    sol = least_squares(lambda x: np.log(np.sqrt(a @ np.exp(2 * x)) / printed), x0, bounds=(lo, hi))
+    var = np.exp(2 * sol.x)
+    pred = np.sqrt(a @ var)
+    return {n: float(np.sqrt(v)) for n, v in zip(SPREADS, var)}, {
+        lab: {"printed_re2": float(r), "predicted_re2": float(q)} for lab, r, q in zip(labels, printed, pred)}
+
+
+def re2_design(sensors) -> tuple[np.ndarray, np.ndarray, list]:
+    """The linearised mean RE2 of Tables 4 and 5: ``RE2 ≈ sqrt(A @ sd²)`` per table and load.
+
+    Parameters
+    ----------
+    sensors : sequence of PaperFSR
+        The sensors, in the order of the tables.
+
+    Returns
+    -------
+    (ndarray, ndarray, list of str)
+        ``A`` of shape (4, 3) [%²] (rows: Table 4 at 200 g, 400 g, Table 5 at 200 g, 400 g; columns:
+        :data:`SPREADS`), the printed mean RE2 [%] and the rows' labels.
+
+    Notes
+    -----
+    ``A = 100²·mean over sensors of S²`` with S the sensitivities of :func:`placement_sensitivities`.
+    """
+    from fsrlab.reference import paper_values
+
+    p = paper_values()
+    sens = {m: np.array([placement_sensitivities(s, m) for s in sensors]) for m in MASSES_KG.values()}
+    rows, printed, labels = [], [], []
+    for t_key, row, name in (("table4_repeatability_capacitive_kHz", 0, "table4"),
+                             ("table5_repeatability_traditional_V", 1, "table5")):
+        for label, m in MASSES_KG.items():
+            rows.append(np.mean(sens[m][:, row, :] ** 2, axis=0) * 1e4)
+            printed.append(float(p[t_key][label]["mean_RE2"]))
+            labels.append(f"{name} {label}")
+    return np.array(rows), np.array(printed), labels

@@ -1,0 +1,145 @@
+"""``make demo`` / ``fsrlab demo``: the whole measurement chain on a virtual bench, then both reports.
+
+:func:`run_demo` runs the chain of :func:`fsrlab.bench.demo.run_chain` (the bench, the spring and
+dead-weight runs, the calibrations, the compensated estimate of the test run), then
+
+5. writes the measurement report of the test run (:func:`fsrlab.report.run_report.write_run_report`)
+   with the dead-weight run's placements;
+6. writes the reproduction report (:func:`fsrlab.report.paper.write_report`);
+7. writes ``index.html`` linking both.
+"""
+
+from __future__ import annotations
+
+import html
+from pathlib import Path
+from typing import Callable
+
+from fsrlab.bench.demo import DemoResult, DemoSettings, run_chain
+
+__all__ = ["run_demo"]
+
+
+def run_demo(out="demo", settings: DemoSettings = DemoSettings(), sensor=None, device: str = "auto",
+             paper: bool = True, progress: Callable[[str], None] | None = None) -> DemoResult:
+    """Run the measurement chain on a virtual bench and write the reports (see the module's docstring).
+
+    Parameters
+    ----------
+    out : path-like
+        Output directory (created; files in it are replaced).
+    settings : DemoSettings
+        Durations and loads.
+    sensor : str or object, optional
+        :func:`demo_sensor`'s name or a sensor object (default :data:`DEMO_SENSOR`).
+    device : {"auto", "twin", "virtual"}
+        ``auto``: the twin when available, else the Python virtual device.
+    paper : bool
+        Also write the reproduction report (``out/paper``).
+    progress : callable, optional
+        ``progress(line)``: what the demo does, step by step.
+
+    Returns
+    -------
+    DemoResult
+
+    Raises
+    ------
+    ValueError
+        A bad setting or sensor, ``device="twin"`` without the twin.
+    RuntimeError
+        A recording that failed (the message says which and why).
+    """
+    say = progress or (lambda line: None)
+    chain = run_chain(out, settings, sensor, device, 7 if paper else 6, say)
+    result, cal, sensor_text, s = chain.result, chain.calibration, chain.sensor_text, settings
+    step, done = chain.steps.step, chain.steps.done
+    out = Path(out)
+
+    # 5. Measurement report.
+    from fsrlab.report.run_report import write_run_report
+
+    t0 = step("measurement report of the test run: HE of f and V0 (Table 3), RE1/RE2 (eq. 39), ISO 376, calibration")
+    rep = write_run_report(out / "test-run.csv", out / "measurement", weights_run=out / "weights-run.csv",
+                           calibration=cal)
+    result.files["measurement report"] = rep.index
+    hs = {h.quantity: h.percent for h in rep.report.hysteresis}
+    result.numbers.update({"he_frequency_percent": hs.get("frequency_hz"), "he_voltage_percent": hs.get("voltage_v"),
+                           "he_estimate_percent": None if rep.report.estimate is None else rep.report.estimate.percent,
+                           "repeatability": [p.to_dict() for p in rep.report.repeatability],
+                           "iso376_class": None if rep.report.iso376 is None else rep.report.iso376.instrument_class})
+    fmt = lambda v: "—" if v is None else f"{v:.2f} %"  # noqa: E731
+    done("measurement report", t0, f"HE f {fmt(hs.get('frequency_hz'))}, V0 {fmt(hs.get('voltage_v'))}, "
+         f"estimate {fmt(result.numbers['he_estimate_percent'])}")
+
+    # 6. The reproduction report.
+    if paper:
+        from fsrlab.report.paper import write_report
+
+        t0 = step("reproduction report of the paper (fsrlab paper)")
+        pr = write_report(out / "paper", progress=None)
+        result.files["reproduction report"] = pr.index
+        done("reproduction report", t0, f"{len(pr.sections)} sections")
+
+    # 7. The index.
+    t0 = step("index")
+    _write_index(result, sensor_text, s)
+    done("index", t0, str(result.index))
+    return result
+
+
+def _num(v) -> str:
+    """A number for the index page ("—" when missing)."""
+    return "—" if v is None else f"{v:.3g}"
+
+
+def _cal_text(title: str, c: dict | None) -> str:
+    """One calibration's line on the index page."""
+    if not c:
+        return f"{title}: none"
+    return html.escape(f"{title}: {c['model']} against {c['reference']}, cross-validated RMSE "
+                       f"{_num(c['cv_rmse'])} {c['unit']}")
+
+
+def _write_index(result: DemoResult, sensor_text: str, s: DemoSettings) -> None:
+    """The demo's ``index.html``: what was done, the headline numbers, links to both reports and the files."""
+    from fsrlab import __version__
+
+    out = result.index.parent
+    n = result.numbers
+
+    def rel(p) -> str:
+        return html.escape(str(Path(p).relative_to(out)) if Path(p).is_relative_to(out) else str(p))
+
+    def pct(v) -> str:
+        return "—" if v is None else f"{v:.2f} %"
+    links = []
+    for name in ("measurement report", "reproduction report"):
+        if name in result.files:
+            links.append(f"<li><a href='{rel(result.files[name])}'>{name.capitalize()}</a></li>")
+    files = "".join(f"<li>{html.escape(k)}: <a href='{rel(v)}'>{rel(v)}</a></li>" for k, v in result.files.items())
+    steps = "".join(f"<li>{html.escape(t)}: {d:.1f} s</li>" for t, d in result.steps)
+    re_rows = "".join(
+        f"<tr><td>{'f' if p['quantity'] == 'frequency_hz' else 'V0'}</td><td>{p['load_g']:g} g</td>"
+        f"<td>{p['re1_percent']:.3f}</td><td>{p['re2_percent']:.3f}</td></tr>" for p in n.get("repeatability", []))
+    page = f"""<!doctype html><html lang='en'><head><meta charset='utf-8'><title>fsrlab demo</title>
+<style>body{{font-family:system-ui,sans-serif;max-width:900px;margin:2em auto;padding:0 1em;line-height:1.45}}
+table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:.2em .6em}}</style></head><body>
+<h1>fsrlab demo: the measurement chain on a virtual bench</h1>
+<p>fsrlab {html.escape(__version__)}. Bench: {'the digital twin (the firmware in simavr)' if result.device == 'twin'
+    else 'the Python virtual device (a model of the meter on a pty)'}; sensor: {html.escape(sensor_text)};
+spring cycles 0 → {s.peak_pa / 1e3:g} kPa → 0 ({s.cycles} × {s.period_s:g} s per run), dead weights
+{', '.join(format(m * 1e3, 'g') + ' g' for m in s.masses_kg)} × {s.repeat}.</p>
+<ul>{''.join(links)}</ul>
+<h2>Headline numbers (test run)</h2>
+<table><tr><th>hysteresis error (eq. 13)</th><th>value</th></tr>
+<tr><td>resistive readout (op-amp V0)</td><td>{pct(n.get('he_voltage_percent'))}</td></tr>
+<tr><td>capacitive readout (555 frequency)</td><td>{pct(n.get('he_frequency_percent'))}</td></tr>
+<tr><td>calibrated, compensated estimate</td><td>{pct(n.get('he_estimate_percent'))}</td></tr></table>
+<p></p><table><tr><th>readout</th><th>load</th><th>RE1 [%] (eq. 39)</th><th>RE2 [%]</th></tr>{re_rows}</table>
+<p>{_cal_text('Calibration (spring run)', n.get('calibration'))}; {_cal_text('known-weight calibration',
+n.get('known_weight_calibration'))}.</p>
+<p>ISO 376 class: {html.escape(str(n.get('iso376_class')))} (the measurement report says what is missing).</p>
+<h2>Steps</h2><ol>{steps}</ol><h2>Files</h2><ul>{files}</ul></body></html>
+"""
+    result.index.write_text(page, encoding="utf-8")

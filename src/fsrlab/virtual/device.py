@@ -1,0 +1,396 @@
+"""A virtual fsrlab meter: the firmware's protocol over a real pseudo-terminal, fed by the models.
+
+:class:`VirtualDevice` opens a pseudo-terminal pair (``os.openpty``, raw mode), keeps the master
+side and offers the slave's path (``/dev/pts/N``) to any program that opens serial ports. It answers
+``ID``/``START``/``STOP``/``WINDOW``/``RANGE`` as docs/protocol.md prescribes and, while started,
+sends one ``M`` frame per window, in real time.
+
+What the 555 does during a window comes from a *signal source*
+(:class:`~fsrlab.virtual.sources.SignalSource`, :mod:`fsrlab.virtual.sources`), injectable for tests.
+:class:`~fsrlab.virtual.sources.PhysicsSource` is the default: a stress profile (:class:`StressProfile`) drives
+:class:`fsrlab.physics.sensor.VirtualFSR` (stress → R_FSR, C_FSR with hysteresis memory), an
+:class:`~fsrlab.circuits.circuit.LM555Circuit` (→ frequency, duty cycle) and an
+:class:`~fsrlab.circuits.circuit.OpAmpReadout` on A0 (paper eq. 38). The device then measures with
+the meter's model, :func:`fsrlab.virtual.meter.measure`, window by window (the same model makes
+the synthetic runs): rising edges on a continuous phase, edge times with jitter quantized to
+62.5 ns Timer1 ticks, whole periods per window, the high times summed with their quantization
+noise, the 10-bit A0 conversion. The load cell under the sensor and its HX711
+(:mod:`fsrlab.acquisition.loadcell`, :class:`~fsrlab.acquisition.loadcell.LoadCellModel`) see the
+applied force, stress × the sensor's area, and fill the ``M`` frame's reference (protocol version 2:
+``ref_ok``, ``ref_n``, ``ref_mean``) with their own conversion times, noise and lag; ``load_cell=None``
+emulates a meter without an HX711 (``ref_ok`` 0). Optional faults (:class:`Faults`) corrupt, drop or add bytes,
+reset the device or unplug it, for tests.
+
+References
+----------
+.. [1] Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901 (§5 Figs. 13–16, §6 eq. 38).
+"""
+
+from __future__ import annotations
+
+import errno
+import math
+import os
+import select
+import threading
+import time
+import tty
+from collections import OrderedDict
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fsrlab.acquisition.loadcell import LoadCellModel, window_reference
+from fsrlab.virtual.meter import MeterState, measure
+from fsrlab.acquisition.protocol import (
+    DEVICE_NAME, MAX_COMMAND, PROTOCOL_VERSION, SEQ_MODULO, UINT32_MODULO, WINDOW_MS_DEFAULT, CommandError,
+    encode_frame, parse_command
+)
+from fsrlab.hardware import F_CPU
+from fsrlab.physics.sensor import A201_AREA_M2
+
+from fsrlab.virtual.sources import PhysicsSource, Signal, SignalSource
+
+__all__ = ["FIRMWARE_VERSION", "Faults", "VirtualDevice"]
+
+FIRMWARE_VERSION = "1.0.0-virtual"
+"""Firmware version the virtual device reports in its ``ID`` frame."""
+
+
+@dataclass
+class Faults:
+    """Faults the virtual device injects (all off by default).
+
+    Parameters
+    ----------
+    corrupt : float
+        Probability that a frame gets one bit flipped. [1]
+    drop : float
+        Probability that a frame is not sent (its sequence number is used). [1]
+    garbage : float
+        Probability of 1–20 random bytes before a frame. [1]
+    reset_after : int, optional
+        Restart the device (mid-frame) after this many ``M`` frames: the host sees a cut line, the
+        boot ``ID`` with sequence 0, and a stopped device.
+    unplug_after : int, optional
+        Close the pseudo-terminal after this many ``M`` frames (a pulled USB cable).
+    """
+
+    corrupt: float = 0.0
+    drop: float = 0.0
+    garbage: float = 0.0
+    reset_after: int | None = None
+    unplug_after: int | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("corrupt", "drop", "garbage"):
+            v = getattr(self, name)
+            if not 0.0 <= v <= 1.0:
+                raise ValueError(f"{name} must be in 0..1, got {v!r}")
+        for name in ("reset_after", "unplug_after"):
+            v = getattr(self, name)
+            if v is not None and v < 0:
+                raise ValueError(f"{name} must be >= 0 frames, got {v!r}")
+
+
+@dataclass
+class _State:
+    seq: int = 0
+    started: bool = False
+    window_ms: int = WINDOW_MS_DEFAULT
+    current_ms: int = WINDOW_MS_DEFAULT  # length of the window in progress (WINDOW acts on the next one)
+    range_: int = 0
+    window_start: float = 0.0  # device time [s]
+    start_time: float = 0.0
+    meter: MeterState = field(default_factory=MeterState)  # the 555's phase and the last captured edge
+    m_frames: int = 0
+    resets_done: int = 0
+    line: bytearray = field(default_factory=bytearray)
+    overflow: bool = False
+
+
+class VirtualDevice:
+    """The fsrlab meter's protocol on a pseudo-terminal, driven by a signal source.
+
+    Parameters
+    ----------
+    source : SignalSource, optional
+        What the 555 does; default :class:`PhysicsSource` with the default triangle profile.
+    frequency_noise : float
+        Relative standard deviation of the frequency per window (sensor and circuit noise). [1]
+    jitter_s : float
+        Standard deviation of each captured edge time (555 and comparator jitter). [s]
+    adc_noise_v : float
+        Standard deviation of the A0 voltage before 10-bit quantization. [V]
+    faults : Faults, optional
+        Fault injection for tests.
+    seed : int, optional
+        Random seed (noise and faults).
+    load_cell : LoadCellModel or None
+        The load cell and HX711 under the sensor (default :class:`LoadCellModel()`: 80 samples/s);
+        None: no HX711 (``ref_ok`` 0 in every frame). Its noise has a random stream of its own, so
+        the 555's and A0's numbers for a seed do not depend on it.
+
+    Notes
+    -----
+    Use as a context manager, or call :meth:`open` (returns the pty path and runs the device in a
+    thread) and :meth:`close`; :meth:`serve` runs it in the calling thread instead. Times: the
+    device clock starts at :meth:`open` (``t_ms``), the profile's clock at ``START``.
+
+    An exception inside the device (a signal source that raises, say) ends it without a traceback:
+    the pseudo-terminal closes, as a pulled cable, and :attr:`failure` says why.
+    """
+
+    def __init__(self, source: SignalSource | None = None, frequency_noise: float = 1e-3, jitter_s: float = 20e-9,
+                 adc_noise_v: float = 2e-3, faults: Faults | None = None, seed: int | None = None,
+                 load_cell: LoadCellModel | None = LoadCellModel()) -> None:
+        for name, v in (("frequency_noise", frequency_noise), ("jitter_s", jitter_s), ("adc_noise_v", adc_noise_v)):
+            if not v >= 0:
+                raise ValueError(f"{name} must be >= 0, got {v!r}")
+        self.source = source if source is not None else PhysicsSource()
+        self.frequency_noise, self.jitter_s, self.adc_noise_v = frequency_noise, jitter_s, adc_noise_v
+        self.faults = faults or Faults()
+        self._rng = np.random.default_rng(seed)
+        if load_cell is not None and not isinstance(load_cell, LoadCellModel):
+            raise ValueError(f"load_cell must be a LoadCellModel or None, got {type(load_cell).__name__}")
+        self.load_cell = load_cell
+        self._cell_rng = np.random.default_rng(None if seed is None else [seed, 711])
+        self._master: int | None = None
+        self._slave: int | None = None
+        self.port: str | None = None
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._t0 = 0.0
+        self._st = _State()
+        self._truth: OrderedDict[int, float] = OrderedDict()
+        self.frames_sent = 0
+        self.frames_overflowed = 0
+        self.unplugged = False
+        self.error: Exception | None = None
+
+    # ------------------------------------------------------------ lifecycle
+    def open(self, thread: bool = True) -> str:
+        """Create the pseudo-terminal, send the boot ``ID`` and (by default) run in a daemon thread.
+
+        Returns
+        -------
+        str
+            Path of the pty slave for ``serial_for_url``.
+        """
+        master, slave = os.openpty()
+        tty.setraw(slave)  # no echo, no newline translation: bytes pass as on a UART
+        os.set_blocking(master, False)
+        self._master, self._slave = master, slave
+        self.port = os.ttyname(slave)
+        self._t0 = time.monotonic()
+        self._boot()
+        if thread:
+            self._thread = threading.Thread(target=self._loop, name="fsrlab-virtual-device", daemon=True)
+            self._thread.start()
+        return self.port
+
+    def serve(self, duration_s: float | None = None) -> None:
+        """Run in the calling thread until :meth:`close`, Ctrl-C, or ``duration_s`` seconds."""
+        if self._master is None:
+            self.open(thread=False)
+        self._loop(None if duration_s is None else time.monotonic() + duration_s)
+
+    def close(self) -> None:
+        """Stop the device and close the pseudo-terminal."""
+        self._stop.set()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join(timeout=2.0)
+        self._close_fds()
+
+    def unplug(self) -> None:
+        """Close the pseudo-terminal now, as a pulled cable: the host's next read fails."""
+        self.unplugged = True
+        self._stop.set()
+        self._close_fds()
+
+    def _close_fds(self) -> None:
+        for name in ("_master", "_slave"):
+            fd = getattr(self, name)
+            if fd is not None:
+                setattr(self, name, None)
+                try:
+                    os.close(fd)
+                except OSError:
+                    pass
+
+    def __enter__(self) -> "VirtualDevice":
+        if self._master is None:
+            self.open()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    @property
+    def failure(self) -> str | None:
+        """None while the device runs or after a normal end; one line saying why it failed otherwise."""
+        if self.error is None:
+            return None
+        return " ".join(f"device thread failed: {type(self.error).__name__}: {self.error}".split())
+
+    def time_since_start(self) -> float:
+        """Time since ``START`` on the device's clock, the signal source's time (NaN when stopped). [s]"""
+        st = self._st
+        return self._now() - st.start_time if st.started else math.nan
+
+    def _force_at(self, sig: Signal):
+        source_force = getattr(self.source, "force_n", None)
+        if callable(source_force):
+            return source_force
+        f = sig.stress_pa * A201_AREA_M2 if math.isfinite(sig.stress_pa) else 0.0  # a source without a force
+        return lambda t: np.full(np.shape(t), f)
+
+    def reference(self, seq: int) -> float:
+        """Stress [Pa] the device applied during the window sent with sequence number ``seq`` (NaN if unknown)."""
+        return self._truth.get(seq, math.nan)
+
+    # ------------------------------------------------------------ device
+    def _now(self) -> float:
+        return time.monotonic() - self._t0
+
+    def _boot(self) -> None:
+        self._st = _State(resets_done=self._st.resets_done, m_frames=self._st.m_frames)
+        self._send_frame("ID", (DEVICE_NAME, FIRMWARE_VERSION, PROTOCOL_VERSION, F_CPU), faults=False)
+
+    def _send_frame(self, kind: str, fields, faults: bool = True) -> int:
+        st = self._st
+        seq = st.seq
+        st.seq = (st.seq + 1) % SEQ_MODULO
+        data = encode_frame(kind, seq, fields)
+        f, rng = self.faults, self._rng
+        if faults and f.drop and rng.random() < f.drop:
+            return seq
+        if faults and f.corrupt and rng.random() < f.corrupt:
+            b = bytearray(data)
+            b[int(rng.integers(len(b)))] ^= 1 << int(rng.integers(8))
+            data = bytes(b)
+        if faults and f.garbage and rng.random() < f.garbage:
+            data = rng.integers(0, 256, int(rng.integers(1, 21)), dtype=np.uint8).tobytes() + data
+        self._write(data)
+        return seq
+
+    def _write(self, data: bytes) -> None:
+        if self._master is None:
+            return
+        try:
+            os.write(self._master, data)
+            self.frames_sent += 1
+        except BlockingIOError:
+            self.frames_overflowed += 1  # the host does not read: bytes are lost, as on a UART
+        except OSError as exc:
+            if exc.errno not in (errno.EIO, errno.EBADF):
+                raise
+
+    def _handle_line(self, raw: bytes) -> None:
+        st = self._st
+        try:
+            name, value = parse_command(raw)
+        except CommandError as err:
+            self._send_frame("ERR", (err.code, err.token), faults=False)
+            return
+        if name == "ID":  # the ID frame, then the ACK, as the firmware does
+            self._send_frame("ID", (DEVICE_NAME, FIRMWARE_VERSION, PROTOCOL_VERSION, F_CPU), faults=False)
+        elif name == "START" and not st.started:
+            st.started = True
+            st.window_start = st.start_time = self._now()
+            st.current_ms = st.window_ms
+            st.meter = MeterState.started(self._rng)
+        elif name == "STOP":
+            st.started = False
+        elif name == "WINDOW":
+            st.window_ms = int(value)
+            if st.started:  # as the firmware: the window in progress restarts with the new length
+                st.window_start = self._now()
+                st.current_ms = st.window_ms
+                st.meter = st.meter.restarted()
+        elif name == "RANGE":
+            st.range_ = int(value)
+        self._send_frame("ACK", (name,) if value is None else (name, value), faults=False)
+
+    def _feed_commands(self, data: bytes) -> None:
+        st = self._st
+        for byte in data:
+            if byte == 0x0A:
+                if st.overflow:
+                    self._send_frame("ERR", (3, "LINE"), faults=False)
+                else:
+                    self._handle_line(bytes(st.line))
+                st.line.clear()
+                st.overflow = False
+            elif not st.overflow:
+                st.line.append(byte)
+                if len(st.line) > MAX_COMMAND - 1 + st.line.count(b"\r"):
+                    st.overflow = True
+                    st.line.clear()
+
+    def _measure(self, t_end: float) -> None:
+        """Close the current window at device time ``t_end`` and send its ``M`` frame."""
+        st = self._st
+        t0, t1 = st.window_start, t_end
+        sig = self.source.window(t0 - st.start_time, t1 - st.start_time, st.range_)
+        m, st.meter = measure(sig.frequency_hz, sig.duty_cycle, sig.voltage_v, t1 - t0, state=st.meter,
+                              rng=self._rng, start_s=t0, frequency_noise=self.frequency_noise,
+                              jitter_s=self.jitter_s, adc_noise_v=self.adc_noise_v)
+        u32 = UINT32_MODULO - 1
+        ref = window_reference(self.load_cell, self._force_at(sig), t0 - st.start_time, t1 - st.start_time,
+                               rng=self._cell_rng)
+        fields = (int(t1 * 1000) % UINT32_MODULO, st.current_ms, int(m.periods[0]), min(int(m.sum_period_ticks[0]), u32),
+                  min(int(m.sum_high_ticks[0]), u32), 0, int(m.adc[0]), st.range_, ref.ref_ok, ref.ref_n, ref.ref_mean)
+        fault = self.faults
+        st.m_frames += 1
+        if fault.reset_after is not None and st.m_frames > fault.reset_after and st.resets_done == 0:
+            st.resets_done = 1
+            self._write(encode_frame("M", st.seq, fields)[:17])  # cut mid-line by the reset
+            self._boot()
+            return
+        self._truth[st.seq] = sig.stress_pa  # before sending: the host may look it up at once
+        self._send_frame("M", fields)
+        while len(self._truth) > 8192:
+            self._truth.popitem(last=False)
+        if fault.unplug_after is not None and st.m_frames >= fault.unplug_after:
+            self.unplug()
+
+    def _loop(self, deadline: float | None = None) -> None:
+        try:
+            while not self._stop.is_set():
+                if deadline is not None and time.monotonic() >= deadline:
+                    return
+                st = self._st
+                now = self._now()
+                wait = 0.05
+                if st.started:
+                    t_end = st.window_start + st.current_ms / 1000.0
+                    if now >= t_end:
+                        self._measure(t_end)
+                        st = self._st
+                        if st.started:
+                            st.window_start = t_end
+                            st.current_ms = st.window_ms
+                        continue
+                    wait = min(wait, t_end - now)
+                master = self._master
+                if master is None:
+                    return
+                try:
+                    ready, _, _ = select.select([master], [], [], max(wait, 0.0))
+                except (OSError, ValueError):
+                    return
+                if ready:
+                    try:
+                        data = os.read(master, 1024)
+                    except BlockingIOError:
+                        continue
+                    except OSError:
+                        return
+                    self._feed_commands(data)
+        except KeyboardInterrupt:
+            return
+        except Exception as exc:  # noqa: BLE001 - any failure ends the device, as a pulled cable; see failure
+            self.error = exc
+            self._stop.set()
+            self._close_fds()
