@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from fsrlab.calibration.estimator import MARGIN, _causal_branches, live_estimator
+from fsrlab.calibration.heldout_runs import RunCalibration
 from fsrlab.calibration.provenance import mismatches
 from fsrlab.calibration.readout import C_FSR, _as_run, run_readout, run_recorded_with
 from fsrlab.calibration.result import Calibration
@@ -71,8 +72,10 @@ def apply_calibration(cal: Calibration, run, compensation: bool = True, circuit:
 
     Parameters
     ----------
-    cal : Calibration
-        From :func:`calibrate_run` or :func:`fsrlab.calibration.document.load_calibration`.
+    cal : Calibration or RunCalibration
+        From :func:`calibrate_run`, :func:`fsrlab.calibration.heldout_runs.calibrate_runs` (then
+        :meth:`~fsrlab.calibration.heldout_runs.RunCalibration.apply` does the work) or
+        :func:`fsrlab.calibration.document.load_calibration`.
     run : Run or path
         The run to convert; it needs the calibration's readout column (or ``frequency_hz`` and
         ``duty_cycle`` for a calibration on ``c_fsr_farad``).
@@ -115,6 +118,8 @@ def apply_calibration(cal: Calibration, run, compensation: bool = True, circuit:
     one corrupt reading does not bend the compensation's branch detection for the whole run
     (see :meth:`fsrlab.calibration.compensation.DirectionAwareCalibration.predict` for gaps).
     """
+    if isinstance(cal, RunCalibration):
+        return cal.apply(run, margin=margin, force=force, compensation=compensation)
     run = _as_run(run)
     if not margin >= 0:
         raise ValueError(f"margin: must be a fraction >= 0 of the calibrated span, got {margin!r}")

@@ -38,6 +38,8 @@ from typing import Any
 import numpy as np
 
 from fsrlab.calibration.compensation import DirectionAwareCalibration
+from fsrlab.calibration.heldout_runs import METHOD as HELD_OUT
+from fsrlab.calibration.heldout_runs import RunCalibration
 from fsrlab.calibration.models import FamilyModel, Floor
 from fsrlab.calibration.play import MemoryModel
 from fsrlab.calibration.polynomial import CrossValidation, PolynomialModel
@@ -138,12 +140,12 @@ def calibration_from_dict(d: dict) -> Calibration:
         full_scale=None if d.get("full_scale") is None else float(d["full_scale"]))
 
 
-def save_calibration(cal: Calibration, path: str | os.PathLike) -> Path:
+def save_calibration(cal: "Calibration | RunCalibration", path: str | os.PathLike) -> Path:
     """Write a calibration to a JSON file.
 
     Parameters
     ----------
-    cal : Calibration
+    cal : Calibration or RunCalibration
     path : str or path-like
 
     Returns
@@ -153,8 +155,12 @@ def save_calibration(cal: Calibration, path: str | os.PathLike) -> Path:
     return write_calibration_document(cal.to_dict(), path)
 
 
-def load_calibration(path: str | os.PathLike) -> Calibration:
+def load_calibration(path: str | os.PathLike) -> "Calibration | RunCalibration":
     """Read a calibration written by :func:`save_calibration` (or by an earlier fsrlab).
+
+    A file with ``"method": "held-out"`` (``fsrlab calibrate``'s, :mod:`fsrlab.calibration.heldout_runs`)
+    gives a :class:`~fsrlab.calibration.heldout_runs.RunCalibration`; the others a
+    :class:`~fsrlab.calibration.result.Calibration`.
 
     Parameters
     ----------
@@ -174,10 +180,16 @@ def load_calibration(path: str | os.PathLike) -> Calibration:
     p = Path(path)
     d = read_calibration_document(p)
     try:
-        cal = calibration_from_dict(d)
+        cal = RunCalibration.from_dict(d, p) if d.get("method") == HELD_OUT else calibration_from_dict(d)
     except (KeyError, TypeError, ValueError) as exc:
         raise ValueError(f"{p}: calibration file incomplete or malformed ({type(exc).__name__}: {exc})") from None
     lo, hi = cal.x_range
+    if isinstance(cal, RunCalibration):
+        values = cal.model.curve(np.linspace(lo, hi, 65))
+        if not np.all(np.isfinite(values)) or np.max(np.abs(values)) > _MAX_ESTIMATE:
+            raise ValueError(f"{p}: the calibration's curve does not give finite values of {cal.y_name} over its own "
+                             f"readout range {lo:.6g} … {hi:.6g} (values changed or damaged)")
+        return cal
     with np.errstate(all="ignore"):
         values = cal(np.linspace(lo, hi, 65)) if np.isfinite(lo) and np.isfinite(hi) else np.array([np.nan])
     if not np.all(np.isfinite(values)) or np.max(np.abs(values)) > _MAX_ESTIMATE:

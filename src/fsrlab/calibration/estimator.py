@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from fsrlab.calibration.compensation import BranchState
+from fsrlab.calibration.heldout_runs import RunCalibration
 from fsrlab.calibration.play import CausalState, causal_features
 
 if TYPE_CHECKING:
@@ -177,8 +178,9 @@ def live_estimator(cal: Calibration, margin: float = MARGIN, compensation: bool 
 
     Parameters
     ----------
-    cal : Calibration
-        From :func:`calibrate_run` or :func:`fsrlab.calibration.document.load_calibration`.
+    cal : Calibration or RunCalibration
+        From :func:`calibrate_run`, :func:`fsrlab.calibration.heldout_runs.calibrate_runs` or
+        :func:`fsrlab.calibration.document.load_calibration`.
     margin : float
         Beyond the calibrated readout range by more than this fraction of its span, a reading
         gets no estimate. [1]
@@ -198,6 +200,8 @@ def live_estimator(cal: Calibration, margin: float = MARGIN, compensation: bool 
     """
     if not margin >= 0:
         raise ValueError(f"margin: must be a fraction >= 0 of the calibrated span, got {margin!r}")
+    if isinstance(cal, RunCalibration):
+        return cal.estimator(margin, compensation)
     memory = cal.memory if compensation else None
     branches = _causal_branches(cal) if compensation and memory is None else None
     fs = memory.full_scale if memory is not None else (cal.full_scale or 1.0)

@@ -1,0 +1,138 @@
+"""Calibration on real third-party recordings: the held-out calibration against the best plain polynomial.
+
+The recordings are not part of fsrlab (most have no licence that allows redistribution): point
+``FSRLAB_REALDATA`` at a directory of CSV files with the columns ``time_s,reading,force_n`` (time
+[s], the raw readout as recorded, the reference [N]) named as below; without it this benchmark says
+"skipped". Nothing is downloaded. Sources (docs/calibration.md): an FSR in a divider read by
+``analogRead`` with an HX711 load cell, hand-loaded and servo-driven (LucasWestfal/
+FSR_calibration_techniques); a Velostat film pressed by a UR5e arm against a Futek load cell
+(Lupasic/tactile-sensor-velostat); FSRs under a phantom pressed by hand on a force plate
+(priyanshum17/pressure, MIT).
+
+For each train → test pair: :func:`fsrlab.calibration.heldout_runs.calibrate_runs` (what
+``fsrlab calibrate TRAIN.csv --x reading --reference force_n [--compensate]`` runs) on the training
+runs, then its ``apply`` on the test run; RMSE over the loaded rows (reference above
+5 % of the test's maximum) in % of the test's reference span, as a ratio to the best plain polynomial
+(degree 1–5 in the raw readout fitted on the same training rows, the degree that is best **on the
+test run**: an oracle the calibration does not have); the share of loaded rows whose error lies
+within ±2u; the share of loaded rows left without an estimate.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+TITLE = "Calibration on real recordings (held-out selection vs the best plain polynomial)"
+
+#: (name, train files or (file, part), test files or (file, part)); part: "first half" / "second half".
+PAIRS = (
+    ("FSR divider + HX711, hand: first half → second half", [("westfal_fsr__s02_manual", 0)], [("westfal_fsr__s02_manual", 1)]),
+    ("same FSR: hand → servo triangle", ["westfal_fsr__s02_manual"], ["westfal_fsr__s02_motor"]),
+    ("second FSR: hand → servo triangle", ["westfal_fsr__s06_manual"], ["westfal_fsr__s06_motor"]),
+    ("servo triangle → hand", ["westfal_fsr__s02_motor"], ["westfal_fsr__s02_manual"]),
+    ("second FSR: servo triangle → hand", ["westfal_fsr__s06_motor"], ["westfal_fsr__s06_manual"]),
+    ("FSR: two hand sessions → a third", ["westfal_fsr__s04_manual", "westfal_fsr__s05_manual"], ["westfal_fsr__s03_manual"]),
+    ("Velostat, robot presses: first half → second half", [("lupasic_velostat__pike1_force_20_exp1", 0)],
+     [("lupasic_velostat__pike1_force_20_exp1", 1)]),
+    ("Velostat, robot: run 1 → its repeat", ["lupasic_velostat__pike1_force_40_exp1"], ["lupasic_velostat__pike1_force_40_exp2"]),
+    ("force plate FSR: first half → second half", [("forceplate__exp13cQ2_fsr2", 0)], [("forceplate__exp13cQ2_fsr2", 1)]),
+)
+
+
+def _read(root: Path, spec, tmp: Path) -> Path | None:
+    name, part = (spec, None) if isinstance(spec, str) else spec
+    src = root / f"{name}.csv"
+    if not src.exists():
+        return None
+    if part is None:
+        return src
+    d = np.genfromtxt(src, delimiter=",", names=True)
+    n = d.size // 2
+    rows = d[:n] if part == 0 else d[n:]
+    out = tmp / f"{name}-{part}.csv"
+    t0 = rows["time_s"][0]
+    with out.open("w") as fh:
+        fh.write("time_s,reading,force_n\n")
+        for r in rows:
+            fh.write(f"{r['time_s'] - t0:.6f},{r['reading']:.10g},{r['force_n']:.10g}\n")
+    return out
+
+
+def _columns(path: Path):
+    d = np.genfromtxt(path, delimiter=",", names=True)
+    return d["reading"].astype(float), d["force_n"].astype(float)
+
+
+def _best_polynomial(train, test) -> tuple[float, int]:
+    xs = np.concatenate([_columns(p)[0] for p in train])
+    ys = np.concatenate([_columns(p)[1] for p in train])
+    ok = np.isfinite(xs) & np.isfinite(ys)
+    x, y = (np.concatenate(v) for v in zip(*(_columns(p) for p in test)))
+    loaded = y > 0.05 * np.nanmax(y)
+    span = np.nanmax(y) - np.nanmin(y)
+    best = None
+    for d in range(1, 6):
+        p = np.polynomial.Polynomial.fit(xs[ok], ys[ok], d)
+        e = 100 * np.sqrt(np.mean((p(x[loaded]) - y[loaded]) ** 2)) / span
+        best = (e, d) if best is None or e < best[0] else best
+    return best
+
+
+def pair_scores(root: Path, tmp: Path, train_specs, test_specs) -> dict | None:
+    """Ratios, coverage and missing share of one pair (None when a file is absent)."""
+    from fsrlab.calibration.heldout_runs import calibrate_runs
+
+    train = [_read(root, s, tmp) for s in train_specs]
+    test = [_read(root, s, tmp) for s in test_specs]
+    if any(p is None for p in train + test):
+        return None
+    poly, degree = _best_polynomial(train, test)
+    out = {"poly": poly, "degree": degree}
+    for comp in (False, True):
+        cal = calibrate_runs([str(p) for p in train], x="reading", reference="force_n", compensate=comp)
+        errs, us, ys = [], [], []
+        for p in test:
+            run = cal.apply(str(p))
+            y = np.asarray(run["force_n"], float)
+            errs.append(np.asarray(run["force_n_estimate"], float) - y)
+            us.append(np.asarray(run["force_n_uncertainty"], float))
+            ys.append(y)
+        e, u, y = (np.concatenate(v) for v in (errs, us, ys))
+        loaded = y > 0.05 * np.nanmax(y)
+        span = np.nanmax(y) - np.nanmin(y)
+        got = loaded & np.isfinite(e)
+        rmse = 100 * np.sqrt(np.mean(e[got] ** 2)) / span
+        key = "comp" if comp else "plain"
+        out[key] = {"ratio": rmse / poly, "coverage": float(np.mean(np.abs(e[got]) <= 2 * u[got])),
+                    "missing": float(np.mean(~np.isfinite(e[loaded]))), "model": cal.model_name,
+                    "steps": [s for s in cal.selection.steps if "kept" in s]}
+    return out
+
+
+def run() -> str:
+    root = os.environ.get("FSRLAB_REALDATA")
+    if not root or not Path(root).is_dir():
+        return ("skipped: set FSRLAB_REALDATA to a directory of real recordings (time_s,reading,force_n CSV files; "
+                "see this module's docstring)\n")
+    lines = ["| pair | best polynomial (degree) | plain ×, ±2u coverage | `--compensate` ×, ±2u coverage, missing | "
+             "model chosen |", "|---|---:|---:|---:|---|"]
+    ratios = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, tr, te in PAIRS:
+            s = pair_scores(Path(root), Path(tmp), tr, te)
+            if s is None:
+                lines.append(f"| {name} | not found | | | |")
+                continue
+            p, c = s["plain"], s["comp"]
+            ratios.append(c["ratio"])
+            lines.append(f"| {name} | {s['poly']:.2f} % ({s['degree']}) | ×{p['ratio']:.2f}, {100 * p['coverage']:.0f} % | "
+                         f"×{c['ratio']:.2f}, {100 * c['coverage']:.0f} %, {100 * c['missing']:.1f} % | {c['model']} |")
+    if ratios:
+        lines.append("")
+        lines.append(f"Geometric mean of the `--compensate` ratios: ×{np.exp(np.mean(np.log(ratios))):.2f} over "
+                     f"{len(ratios)} pairs; worst ×{max(ratios):.2f}.")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,518 @@
+"""Calibration chosen on held-out recordings: a monotone curve, then memory only where it generalises.
+
+**Extension beyond the paper.** :func:`calibrate_recordings` takes one or more recordings (time,
+readout, reference) and returns a :class:`HeldoutCalibration`. Every choice is scored by
+:mod:`fsrlab.calibration.heldout` (other recordings, or later blocks of one) and taken in order of
+complexity:
+
+1. **static curve** (:mod:`fsrlab.calibration.monotone`): straight line in the readout, then more
+   segments, then the divider's conductance ratio; of the candidates whose held-out error is within
+   one standard error of the best, the simplest;
+2. **lag** between reference and readout: none, unless a shift of whole rows wins;
+3. **hysteresis** (rate-independent): play operators on the curve's level ``u = static(x)/FS``
+   (:mod:`fsrlab.calibration.operators`), additive or growing with the level, their weights all of
+   one sign -- a loop opens one way -- with the curve refitted jointly; the ridge weight chosen by
+   the held-out error;
+4. **creep** (rate-dependent): exponential averages with time constants from 0.5 s to 2 min, their
+   weights of one sign (the time scale is the fit's mix of them).
+
+Steps 2–4 are each kept only when they **win**: held-out mean squared error lower by more than one
+standard error (paired over chunks), lower in most held-out recordings or blocks and higher in none.
+Otherwise the simpler calibration is kept, and the :class:`Selection` says why. On real recordings
+(docs/calibration.md) a rule that kept any gain let a compensation fitted on fast hand presses make
+a slow motor triangle worse; the rule also keeps the compensation where it holds (a hand-loaded
+Bouc–Wen sensor, :mod:`fsrlab.virtual.handloaded`: 0.4–0.7× the error of the plain curve).
+
+The memory is fed with every reading, in time order; what an estimate reports (margin, range) does
+not change it. The uncertainty (:class:`LevelUncertainty`) comes from the held-out errors of the
+chosen model, by level and direction, with a relative term for what changes between recordings.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fsrlab.calibration.heldout import Part, Recording, chunk_ids, held_out_splits, paired_gain, scheme_name
+from fsrlab.calibration.monotone import MonotoneCurve, adc_full_scale, fit_monotone
+from fsrlab.calibration.operators import CREEP_TIME_CONSTANTS_S, PLAY_THRESHOLDS, MemoryState, directions, memory_features
+
+__all__ = ["STATIC_CANDIDATES", "RIDGES", "HeldoutCalibration", "LevelUncertainty", "Selection",
+           "calibrate_recordings"]
+
+#: Static candidates, simplest first: (readout variable, segments). [1]
+STATIC_CANDIDATES = (("readout", 1), ("readout", 2), ("conductance", 1), ("readout", 4), ("conductance", 2),
+                     ("conductance", 4), ("readout", 8), ("conductance", 8))
+#: Ridge weights tried for the memory terms (relative to the number of readings). [1]
+RIDGES = (1e-3, 1e-2, 1e-1, 1.0)
+#: Signs the weights of the play-operator and the creep features may take. A piezoresistive film
+#: conducts more on unloading than on loading at the same force (its estimate is lowered while
+#: ``p − u > 0``), and its reading creeps up under a held load (the estimate is raised just after a
+#: change, ``u − ū > 0``, relative to later). A fit of the opposite sign describes something else --
+#: most often a reference that lags the readout, which the lag step handles. [1]
+HYSTERESIS_SIGNS = (1, -1)
+CREEP_SIGNS = (1, -1)
+#: Lags tried, in rows of the recording (the reference shifted against the readout). [1]
+LAG_ROWS = (-3, -2, -1, 1, 2, 3)
+#: Quantile of the held-out |error| that ±2u covers in each level and direction cell. [1]
+COVERAGE = 0.95
+#: Relative standard uncertainty of an estimate from one recording to the next (the sensor re-seated,
+#: another loading rate, another creep state), added in quadrature: the held-out blocks of a single
+#: recording cannot show it, and two or three recordings show it poorly, so the larger of this and the
+#: spread of the held-out recordings' gains is used. FSR makers state ±2–2.5 % single-part
+#: repeatability and ±6 % part to part; between recordings of the same part, the real recordings of
+#: docs/calibration.md differ by up to about 15 %. [1]
+REPEATABILITY = 0.10
+
+
+@dataclass
+class HeldoutCalibration:
+    """Estimate = curve(x) + Σ weight·feature, the features of the level ``static(x)/full_scale``.
+
+    Parameters
+    ----------
+    static : MonotoneCurve
+        The curve that feeds the memory (fitted alone).
+    curve : MonotoneCurve
+        The curve of the estimate (refitted with the memory; ``static`` itself without memory).
+    thresholds, time_constants : tuple of float
+        The memory's play thresholds [1] and creep time constants [s] (empty: none).
+    weights : ndarray
+        One weight per feature. [unit of the reference]
+    full_scale : float
+        The reference's span on the calibration data. [unit of the reference]
+    row_s : float
+        Median time between readings of the calibration data (the step a gap is taken as). [s]
+    uncertainty : LevelUncertainty or None
+    """
+
+    static: MonotoneCurve
+    curve: MonotoneCurve
+    thresholds: tuple = ()
+    time_constants: tuple = ()
+    weights: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    full_scale: float = 1.0
+    row_s: float = 1.0
+    uncertainty: "LevelUncertainty | None" = None
+    scaled: bool = False
+    uncertainty_plain: "LevelUncertainty | None" = None
+
+    def without_memory(self) -> "HeldoutCalibration":
+        """The static curve alone (the estimate before compensation), with its own uncertainty."""
+        if not self.has_memory:
+            return self
+        return HeldoutCalibration(self.static, self.static, full_scale=self.full_scale, row_s=self.row_s,
+                                  uncertainty=self.uncertainty_plain or self.uncertainty)
+
+    @property
+    def has_memory(self) -> bool:
+        return self.weights.size > 0
+
+    def level(self, x) -> np.ndarray:
+        return self.static(x) / self.full_scale
+
+    def run(self, t, x) -> tuple[np.ndarray, np.ndarray]:
+        """Estimates and directions of a whole recording (readings in time order; NaN gives NaN)."""
+        x = np.asarray(x, dtype=float)
+        u = self.level(x)
+        return self.estimate(t, x, u), directions(u)
+
+    def estimate(self, t, x, u=None, features=None) -> np.ndarray:
+        """The estimates alone; ``u`` (the level) and ``features`` (its :func:`memory_features`) when
+        already computed."""
+        x = np.asarray(x, dtype=float)
+        est = self.curve(x)
+        if self.has_memory:
+            if features is None:
+                u = self.level(x) if u is None else u
+                features = memory_features(u, t, self.thresholds, self.time_constants, self.scaled)
+            est = est + features @ self.weights
+        return est
+
+    def stepper(self) -> "Stepper":
+        """The same estimates one reading at a time."""
+        return Stepper(self)
+
+    def to_dict(self) -> dict:
+        return {"static": self.static.to_dict(), "curve": self.curve.to_dict(), "thresholds": list(self.thresholds),
+                "time_constants_s": list(self.time_constants), "weights": self.weights.tolist(),
+                "full_scale": self.full_scale, "row_s": self.row_s, "level_scaled_hysteresis": self.scaled,
+                "uncertainty": None if self.uncertainty is None else self.uncertainty.to_dict(),
+                "uncertainty_plain": None if self.uncertainty_plain is None else self.uncertainty_plain.to_dict()}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "HeldoutCalibration":
+        thr = tuple(float(v) for v in d.get("thresholds", ()))
+        tau = tuple(float(v) for v in d.get("time_constants_s", ()))
+        w = np.asarray(d.get("weights", []), dtype=float)
+        if w.size != len(thr) + len(tau):
+            raise ValueError("weights: one per play threshold and creep time constant")
+        if any(not 0 < r < 1 for r in thr) or any(not v > 0 for v in tau):
+            raise ValueError("thresholds must lie in (0, 1) and time constants be > 0")
+        fs, row = float(d["full_scale"]), float(d["row_s"])
+        if not (fs > 0 and row > 0):
+            raise ValueError("full_scale and row_s must be > 0")
+        unc, plain = d.get("uncertainty"), d.get("uncertainty_plain")
+        return cls(MonotoneCurve.from_dict(d["static"]), MonotoneCurve.from_dict(d["curve"]), thr, tau, w, fs, row,
+                   None if unc is None else LevelUncertainty.from_dict(unc), bool(d.get("level_scaled_hysteresis", False)),
+                   None if plain is None else LevelUncertainty.from_dict(plain))
+
+
+class Stepper:
+    """One reading at a time: ``step(x, t) -> (estimate, direction)``; None readings keep the memory."""
+
+    def __init__(self, cal: HeldoutCalibration):
+        self.cal = cal
+        self.state = MemoryState(cal.thresholds, cal.time_constants, cal.scaled)
+        self.state.dt_default = cal.row_s
+
+    def step(self, x: float | None, t: float | None = None) -> tuple[float | None, int]:
+        if x is None or not np.isfinite(x):
+            return None, 0
+        cal = self.cal
+        u = float(cal.level(np.array([x]))[0])
+        feats, d = self.state.advance(u, t)
+        est = float(cal.curve(np.array([x]))[0])
+        if cal.has_memory:
+            est += float(np.dot(feats, cal.weights))
+        return est, d
+
+
+@dataclass
+class LevelUncertainty:
+    """Standard uncertainty by level (quantile bins of the estimate) and direction, from held-out errors.
+
+    ``2u`` is the :data:`COVERAGE` quantile of the held-out |error| in each cell (a cell with fewer
+    than ``least`` errors takes its level's, else all of them), never below the quantile of all the
+    held-out errors: the cells sharpen where errors are large, not where few were seen.
+    """
+
+    edges: np.ndarray
+    table: np.ndarray  # shape (bins, 3): direction −1, 0, +1
+    pooled: float
+    relative: float = REPEATABILITY
+
+    @classmethod
+    def fit(cls, err, estimate, direction, bins: int = 4, least: int = 20,
+            relative: float = REPEATABILITY) -> "LevelUncertainty":
+        err, estimate, direction = (np.asarray(v) for v in (err, estimate, direction))
+        q = COVERAGE
+        pooled = float(np.quantile(np.abs(err), q)) / 2
+        edges = np.unique(np.quantile(estimate, np.linspace(0, 1, bins + 1)[1:-1]))
+        lvl = np.searchsorted(edges, estimate)
+        table = np.full((edges.size + 1, 3), pooled)
+        for b in range(edges.size + 1):
+            mb = lvl == b
+            for j, d in enumerate((-1, 0, 1)):
+                m = mb & (direction == d)
+                pick = m if m.sum() >= least else (mb if mb.sum() >= least else None)
+                if pick is not None:
+                    table[b, j] = max(pooled, float(np.quantile(np.abs(err[pick]), q)) / 2)
+        return cls(edges, table, pooled, float(relative))
+
+    def __call__(self, estimate, direction, extrapolated=None) -> np.ndarray:
+        """u of each estimate; ``extrapolated``: how far an estimate went beyond the calibrated curve,
+        added in quadrature as half of it (an extrapolation is uncertain by its own size)."""
+        estimate = np.asarray(estimate, dtype=float)
+        lvl = np.searchsorted(self.edges, np.where(np.isfinite(estimate), estimate, 0.0))
+        u = self.table[lvl, np.asarray(direction, dtype=int) + 1]
+        u = np.sqrt(u ** 2 + (self.relative * estimate) ** 2)
+        if extrapolated is not None:
+            u = np.sqrt(u ** 2 + (np.asarray(extrapolated) / 2) ** 2)
+        return np.where(np.isfinite(estimate), u, np.nan)
+
+    def to_dict(self) -> dict:
+        return {"level_edges": self.edges.tolist(), "u_by_direction": self.table.tolist(), "pooled": self.pooled,
+                "relative": self.relative, "coverage": COVERAGE}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "LevelUncertainty":
+        t = np.asarray(d["u_by_direction"], dtype=float)
+        e = np.asarray(d["level_edges"], dtype=float)
+        rel = float(d.get("relative", 0.0))
+        if t.ndim != 2 or t.shape != (e.size + 1, 3) or np.any(t < 0) or not 0 <= rel < 10:
+            raise ValueError("uncertainty: one row of 3 non-negative values per level bin, relative in [0, 10)")
+        return cls(e, t, float(d["pooled"]), rel)
+
+
+@dataclass
+class Selection:
+    """What was tried and why the calibration is what it is."""
+
+    scheme: str
+    candidates: list = field(default_factory=list)  # {"name", "heldout_rmse"}
+    steps: list = field(default_factory=list)  # {"step", "tried", "gain", "se", "kept", "why"}
+    lag_rows: int = 0
+    heldout_rmse: float = float("nan")
+    heldout_rmse_plain: float = float("nan")
+    gain_spread: float | None = None
+
+    def to_dict(self) -> dict:
+        return {"scheme": self.scheme, "candidates": self.candidates, "steps": self.steps, "lag_rows": self.lag_rows,
+                "heldout_rmse": self.heldout_rmse, "heldout_rmse_plain": self.heldout_rmse_plain,
+                "gain_spread": self.gain_spread}
+
+
+# ----------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class _Choice:
+    variable: str
+    segments: int
+    thresholds: tuple = ()
+    time_constants: tuple = ()
+    ridge: float = 1e-3
+    lag: int = 0
+    scaled: bool = False
+
+    @property
+    def name(self) -> str:
+        mem = (("+hysteresis" + ("·level" if self.scaled else "")) if self.thresholds else "") + \
+            ("+creep" if self.time_constants else "")
+        lag = f", lag {self.lag} rows" if self.lag else ""
+        return f"{self.variable}-{self.segments}{mem}" + (f" (ridge {self.ridge:g}{lag})" if mem else
+                                                          (f" ({lag[2:]})" if lag else ""))
+
+    def but(self, **kw) -> "_Choice":
+        d = dict(self.__dict__)
+        d.update(kw)
+        return _Choice(**d)
+
+
+class _Cache:
+    """Static curves and memory features already computed, per split: the ridge weights and the signs
+    of a step refit only the weights, so each split's curve and features are computed once."""
+
+    def __init__(self):
+        self.statics: dict = {}
+        self.features: dict = {}
+
+    def static(self, key, make):
+        if key not in self.statics:
+            self.statics[key] = make()
+        return self.statics[key]
+
+    def memory(self, key, make):
+        if key not in self.features:
+            self.features[key] = make()
+        return self.features[key]
+
+
+def _fit(parts: list[Part], ch: _Choice, sign: int, adc, cache: _Cache | None = None,
+         split: int = -1) -> HeldoutCalibration:
+    cache = cache or _Cache()
+    x = np.concatenate([p.rec.x[p.rows] for p in parts])
+    y = np.concatenate([_shifted(p.rec, ch.lag)[p.rows] for p in parts])
+    ok = np.isfinite(y)
+    skey = (split, ch.variable, ch.segments, ch.lag)
+    static, fs = cache.static(skey, lambda: (fit_monotone(x[ok], y[ok], ch.variable, ch.segments, sign, adc)[0],
+                                             max(float(np.ptp(y[ok])), 1e-12)))
+    steps = np.concatenate([np.diff(p.rec.t) for p in parts if p.rec.t.size > 1] or [np.ones(1)])
+    row_s = float(np.median(steps))
+    row_s = row_s if row_s > 0 else 1.0
+    if not (ch.thresholds or ch.time_constants):
+        return HeldoutCalibration(static, static, full_scale=fs, row_s=row_s)
+    fkey = skey + (ch.thresholds, ch.time_constants, ch.scaled)
+    feats = cache.memory(fkey, lambda: np.concatenate([
+        memory_features(static(p.rec.x) / fs, p.rec.t, ch.thresholds, ch.time_constants, ch.scaled)[p.rows]
+        for p in parts])[ok])
+    nh, nc = len(ch.thresholds), len(ch.time_constants)
+    best = None
+    for sh in (HYSTERESIS_SIGNS if nh else (1,)):
+        for sc in (CREEP_SIGNS if nc else (1,)):
+            sg = np.array([sh] * nh + [sc] * nc, float)
+            curve, w = fit_monotone(x[ok], y[ok], ch.variable, ch.segments, sign, adc, extra=feats * sg,
+                                    extra_lower=np.zeros(sg.size), extra_lam=ch.ridge)
+            r = float(np.sum((curve(x[ok]) + feats @ (w * sg) - y[ok]) ** 2))
+            if best is None or r < best[0]:
+                best = (r, curve, w * sg)
+    _, curve, w = best
+    return HeldoutCalibration(static, curve, tuple(ch.thresholds), tuple(ch.time_constants), w, fs, row_s,
+                              scaled=ch.scaled)
+
+
+def _shifted(rec: Recording, lag: int) -> np.ndarray:
+    """The reference ``lag`` rows later (positive: the readout lags the reference)."""
+    if lag == 0:
+        return rec.y
+    y = np.full_like(rec.y, np.nan)
+    if lag > 0:
+        y[lag:] = rec.y[:-lag]
+    else:
+        y[:lag] = rec.y[-lag:]
+    return y
+
+
+def _gain_spread(splits, ch: _Choice, sign: int, adc) -> float:
+    """RMS relative gain error of the held-out recordings (least-squares gain of reference on estimate)."""
+    g = []
+    for fit_parts, test_parts in splits:
+        cal = _fit(fit_parts, ch, sign, adc)
+        for p in test_parts:
+            e, _ = cal.run(p.rec.t, p.rec.x)
+            y = _shifted(p.rec, ch.lag)
+            k = p.rows & np.isfinite(y) & (y > 0.05 * cal.full_scale)
+            if k.sum() >= 10 and np.sum(e[k] ** 2) > 0:
+                g.append(float(np.sum(e[k] * y[k]) / np.sum(e[k] ** 2)))
+    return float(np.sqrt(np.mean((np.asarray(g) - 1.0) ** 2))) if g else 0.0
+
+
+def _held_out(splits, ch: _Choice, sign: int, adc, cache: _Cache | None = None):
+    """Held-out errors, chunk ids, estimates and the held-out parts' slices; the first and last rows of every
+    held-out part within the largest lag tried are left out for every choice, so all choices are scored on
+    the same rows."""
+    errs, est = [], []
+    trim = max(abs(k) for k in LAG_ROWS)
+    for i, (fit_parts, test_parts) in enumerate(splits):
+        cal = _fit(fit_parts, ch, sign, adc, cache, i)
+        for j, p in enumerate(test_parts):
+            feats = None
+            if cal.has_memory:
+                key = (i, j, ch.variable, ch.segments, ch.lag, ch.thresholds, ch.time_constants, ch.scaled)
+                feats = cache.memory(key, lambda: memory_features(cal.level(p.rec.x), p.rec.t, cal.thresholds,
+                                                                  cal.time_constants, cal.scaled))
+            e = cal.estimate(p.rec.t, p.rec.x, features=feats)
+            y = _shifted(p.rec, ch.lag)
+            idx = np.flatnonzero(p.rows)
+            rows = p.rows.copy()
+            if idx.size > 2 * trim:
+                rows[idx[:trim]] = rows[idx[-trim:]] = False
+            y = np.where(rows, y, np.nan)
+            rows &= np.isfinite(y)
+            errs.append(e[rows] - y[rows])
+            est.append(e[rows])
+    err = np.concatenate(errs)
+    chunks = np.concatenate([chunk_ids(v.size) + (i * 10_000) for i, v in enumerate(errs)])
+    _, chunks = np.unique(chunks, return_inverse=True)
+    bounds = np.cumsum([0] + [v.size for v in errs])
+    parts = [slice(bounds[i], bounds[i + 1]) for i in range(len(errs))]
+    return err, chunks, np.concatenate(est), parts
+
+
+def _fold_gains(a, b):
+    """Relative MSE saved in each held-out part (recording or block) by b over a."""
+    ea, eb, parts = a[0], b[0], a[3]
+    return [float(np.mean(ea[p] ** 2) - np.mean(eb[p] ** 2)) / max(float(np.mean(ea[p] ** 2)), 1e-300) for p in parts]
+
+
+def _rmse(e):
+    return float(np.sqrt(np.mean(e ** 2))) if e.size else float("inf")
+
+
+def _rank_correlation(x: np.ndarray, y: np.ndarray) -> float:
+    """Rank correlation on dense ranks (ties share one): enough to tell whether the readout rises or falls."""
+    rx = np.unique(x, return_inverse=True)[1].astype(float)  # tied readings share a rank
+    ry = np.unique(y, return_inverse=True)[1].astype(float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return float(np.corrcoef(rx, ry)[0, 1])
+
+
+def _orientation(recs: list[Recording]) -> tuple[int, float | None]:
+    x_all = np.concatenate([r.x[r.usable] for r in recs])
+    y_all = np.concatenate([r.y[r.usable] for r in recs])
+    rho = _rank_correlation(x_all, y_all) if x_all.size > 2 else float("nan")
+    if not np.isfinite(rho) or abs(rho) < 0.1:
+        raise ValueError(f"the readout does not follow the reference (rank correlation {rho:.2f})")
+    return (1 if rho > 0 else -1), adc_full_scale(x_all)
+
+
+def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: int | str = "auto",
+                         variables=("readout", "conductance")) -> tuple[HeldoutCalibration, Selection]:
+    """Choose and fit a calibration on held-out recordings or blocks (see the module's notes).
+
+    Parameters
+    ----------
+    recs : list of Recording
+        One or more recordings of the same sensor and readout, each in time order.
+    compensate : bool
+        Try the memory terms (hysteresis, creep); without, only the static curve (and the lag).
+    lag : int or "auto"
+        Rows the readout lags the reference, or ``"auto"``: 0 unless a shift wins by one standard error.
+    variables : sequence of str
+        Readout variables tried (``conductance`` only for ADC counts).
+
+    Returns
+    -------
+    HeldoutCalibration, Selection
+    """
+    sign, adc = _orientation(recs)
+    splits = held_out_splits(recs)
+    sel = Selection(scheme_name(len(recs)))
+    scored = {}
+    cache = _Cache()
+
+    def score(ch: _Choice):
+        if ch not in scored:
+            scored[ch] = _held_out(splits, ch, sign, adc, cache)
+            if all(c["name"] != ch.name for c in sel.candidates):
+                sel.candidates.append({"name": ch.name, "heldout_rmse": _rmse(scored[ch][0])})
+        return scored[ch]
+
+    fixed_lag = 0 if lag == "auto" else int(lag)
+    statics = [_Choice(v, k, lag=fixed_lag) for v, k in STATIC_CANDIDATES
+               if v in variables and (v != "conductance" or adc is not None)]
+    for ch in statics:
+        score(ch)
+    best = min(statics, key=lambda c: _rmse(scored[c][0]))
+    cur = next(c for c in statics if paired_gain(scored[c][0], scored[best][0], scored[best][1])[0]
+               <= paired_gain(scored[c][0], scored[best][0], scored[best][1])[1] or c == best)
+    for other in statics:
+        if other != cur:
+            scored.pop(other, None)
+    sel.steps.append({"step": "static curve", "tried": len(statics), "chosen": cur.name,
+                      "why": "the simplest within one standard error of the best held-out error "
+                             f"({_rmse(scored[best][0]):.4g}, {best.name})"})
+    sel.heldout_rmse_plain = _rmse(scored[cur][0])
+    plain = cur
+
+    def step(name: str, trials: list[_Choice]) -> None:
+        nonlocal cur
+        cache.features.clear()  # a step's features serve its own trials only
+        for ch in trials:
+            score(ch)
+        ch = min(trials, key=lambda c: _rmse(scored[c][0]))
+        gain, se = paired_gain(scored[cur][0], scored[ch][0], scored[cur][1])
+        folds = _fold_gains(scored[cur], scored[ch])
+        # one standard error, and no held-out recording or block made worse, most made better
+        kept = gain > se and min(folds) >= 0 and sum(f > 0 for f in folds) > len(folds) / 2
+        sel.steps.append({"step": name, "tried": ch.name, "gain": gain, "se": se, "kept": bool(kept),
+                          "heldout_gain_by_part": folds,
+                          "why": (f"held-out MSE lower by {gain:.4g} ± {se:.4g} (more than one standard error), "
+                                  f"lower in {sum(f > 0 for f in folds)} of {len(folds)} held-out parts, higher in none"
+                                  if kept else f"held-out MSE lower by {gain:.4g} ± {se:.4g}, lower in "
+                                  f"{sum(f > 0 for f in folds)} of {len(folds)} held-out parts: not more than one standard "
+                                  "error in most parts without a loss in any, so the simpler calibration is kept")})
+        if kept:
+            cur = ch
+        for other in trials:  # the held-out errors of the trials not kept are no longer needed
+            if other != cur:
+                scored.pop(other, None)
+
+    if lag == "auto":
+        step("lag", [cur.but(lag=k) for k in LAG_ROWS])
+    if compensate:
+        step("hysteresis", [cur.but(thresholds=PLAY_THRESHOLDS, ridge=r, scaled=sc) for sc in (False, True)
+                            for r in RIDGES])
+        step("creep", [cur.but(time_constants=CREEP_TIME_CONSTANTS_S, ridge=r if not cur.thresholds else cur.ridge)
+                       for r in (RIDGES if not cur.thresholds else (cur.ridge,))])
+    sel.lag_rows = cur.lag
+    err, _, est, parts = scored[cur]
+    fs_all = max(float(np.ptp(np.concatenate([r.y[r.usable] for r in recs]))), 1e-12)
+
+    def held_out_directions(est, parts):  # loading/unloading of the held-out estimates, part by part
+        return np.concatenate([directions(est[p] / fs_all) for p in parts])
+
+    dirs = held_out_directions(est, parts)
+    sel.heldout_rmse = _rmse(err)
+    cal = _fit([Part(r, r.usable) for r in recs], cur, sign, adc)
+    rel = REPEATABILITY
+    if len(recs) >= 2:
+        sel.gain_spread = _gain_spread(splits, cur, sign, adc)
+        rel = max(rel, sel.gain_spread)
+    cal.uncertainty = LevelUncertainty.fit(err, est, dirs, relative=rel)
+    if cal.has_memory:
+        static_choice = cur.but(thresholds=(), time_constants=(), scaled=False, ridge=plain.ridge)
+        e0, _, est0, parts0 = score(static_choice)
+        dirs0 = held_out_directions(est0, parts0)
+        cal.uncertainty_plain = LevelUncertainty.fit(e0, est0, dirs0, relative=rel)
+    return cal, sel

@@ -1,0 +1,295 @@
+"""Calibrate from one or more recorded runs by held-out selection, and apply it to another run.
+
+**Extension beyond the paper.** The orchestration of :mod:`fsrlab.calibration.heldout_model` on
+runs: it reads a run's readout, reference and times, and holds no model of its own. Its result,
+:class:`RunCalibration`, is what ``fsrlab calibrate RUN.csv [RUN2.csv ...]`` writes and what
+``fsrlab apply``, ``fsrlab measure`` and ``fsrlab live`` use.
+
+Examples
+--------
+::
+
+    import fsrlab as fl
+    cal = fl.calibrate(["hand.csv", "motor.csv"], x="reading", reference="force_n", compensate=True)
+    out = fl.apply(cal, "other.csv")       # a Run with force_n_estimate and force_n_uncertainty
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from datetime import datetime, timezone
+from pathlib import Path
+
+import numpy as np
+
+from fsrlab.calibration.heldout import Recording
+from fsrlab.calibration.heldout_model import HeldoutCalibration, Selection, calibrate_recordings
+from fsrlab.calibration.provenance import RecordedWith, mismatches, recorded_with
+from fsrlab.io.runformat import KNOWN_COLUMNS, Run, RunFormatError, load_run
+
+__all__ = ["METHOD", "MARGIN", "RunCalibration", "calibrate_runs", "RunEstimator"]
+
+#: The ``method`` of a calibration file written by this module.
+METHOD = "held-out"
+#: Default margin beyond the calibrated readout range, a fraction of its span, within which an
+#: estimate is reported (flagged ``in_range`` 0); the memory is fed with every reading regardless. [1]
+MARGIN = 0.10
+_FILE_KEYS = ("complete", "rows", "closed", "created", "format", "version", "columns")
+
+
+@dataclass
+class RunCalibration:
+    """A held-out calibration of a readout column to a reference column.
+
+    Parameters
+    ----------
+    model : HeldoutCalibration
+    selection : Selection
+        What was tried, how it was scored, and why the calibration is what it is.
+    x_name, y_name, x_unit, y_unit : str
+        Readout and reference columns and their units.
+    sources : list of str
+        The runs it was fitted on.
+    recorded_with : RecordedWith or None
+        The circuit and range the runs were recorded with (checked when applied).
+    n : int
+        Readings fitted.
+    created : str
+        UTC time, ISO 8601.
+    path : Path or None
+        The file it was read from.
+    """
+
+    model: HeldoutCalibration
+    selection: Selection
+    x_name: str
+    y_name: str
+    x_unit: str = ""
+    y_unit: str = ""
+    sources: list = field(default_factory=list)
+    recorded_with: RecordedWith | None = None
+    n: int = 0
+    created: str = ""
+    path: Path | None = None
+
+    @property
+    def x_range(self) -> tuple[float, float]:
+        return self.model.curve.x_range
+
+    @property
+    def full_scale(self) -> float:
+        return self.model.full_scale
+
+    @property
+    def lag_s(self) -> float:
+        return self.selection.lag_rows * self.model.row_s
+
+    @property
+    def model_name(self) -> str:
+        c = self.model.curve
+        mem = ("+hysteresis" if self.model.thresholds else "") + ("+creep" if self.model.time_constants else "")
+        return f"monotone-{c.variable}-{c.segments}{mem}"
+
+    def to_dict(self) -> dict:
+        return {"format": "fsrlab-calibration", "version": 1, "method": METHOD, "model": self.model_name,
+                "x": self.x_name, "y": self.y_name, "units": {"x": self.x_unit, "y": self.y_unit},
+                "readout_range": list(self.x_range), "lag_s": self.lag_s, "n": self.n, "created": self.created,
+                "sources": list(self.sources),
+                "recorded_with": None if self.recorded_with is None else self.recorded_with.to_dict(),
+                "selection": self.selection.to_dict(), "calibration": self.model.to_dict()}
+
+    @classmethod
+    def from_dict(cls, d: dict, path: Path | None = None) -> "RunCalibration":
+        s = d.get("selection") or {}
+        sel = Selection(str(s.get("scheme", "")), list(s.get("candidates", [])), list(s.get("steps", [])),
+                        int(s.get("lag_rows", 0)), float(s.get("heldout_rmse", math.nan)),
+                        float(s.get("heldout_rmse_plain", math.nan)))
+        rw = d.get("recorded_with")
+        units = d.get("units") or {}
+        return cls(HeldoutCalibration.from_dict(d["calibration"]), sel, str(d["x"]), str(d["y"]),
+                   str(units.get("x", "")), str(units.get("y", "")), list(d.get("sources", [])),
+                   None if rw is None else RecordedWith.from_dict(rw), int(d.get("n", 0)), str(d.get("created", "")),
+                   path)
+
+    def estimator(self, margin: float = MARGIN, compensation: bool = True) -> "RunEstimator":
+        """A causal estimator: ``step(reading, t=None) -> (estimate, uncertainty, in_range)``."""
+        return RunEstimator(self, margin, compensation)
+
+    def mismatches(self, run: Run) -> list[str]:
+        """How the run's readout differs from the calibration's (circuit, range, column); empty when alike."""
+        if self.recorded_with is None:
+            return []
+        name = "the calibration" if self.path is None else str(self.path)
+        theirs = recorded_with(run.metadata, run.columns.get("range"))
+        return [f"{run.path} was recorded with {a}, {name} with {b}"
+                for a, b in mismatches(self.x_name, self.recorded_with, theirs, None)]
+
+    def apply(self, run, margin: float = MARGIN, force: bool = False, compensation: bool = True) -> Run:
+        """The run with ``<reference>_estimate``, ``<reference>_uncertainty`` and ``in_range``.
+
+        Every reading feeds the memory, in row order; ``margin`` only decides which estimates are
+        reported (beyond it: empty). Raises ValueError naming both when the run was recorded with
+        another circuit or range, unless ``force``. ``compensation=False``: the static curve alone.
+        """
+        run = run if isinstance(run, Run) else load_run(run)
+        if not margin >= 0:
+            raise ValueError(f"margin: must be a fraction >= 0 of the calibrated span, got {margin!r}")
+        if self.x_name not in run:
+            raise RunFormatError(f"{run.path}: column {self.x_name!r} (the calibration's readout) missing "
+                                 f"(columns: {', '.join(run.columns)})")
+        differences = self.mismatches(run)
+        if differences and not force:
+            raise ValueError(f"{differences[0]}: the readout means another force; calibrate on a run recorded the "
+                             "same way, or force it")
+        x = np.asarray(run[self.x_name], dtype=float)
+        t = run["time_s"] if "time_s" in run else np.arange(x.size) * self.model.row_s
+        model = self.model if compensation else self.model.without_memory()
+        est, u, inside, kept = _estimate(model, self.x_range, t, x, margin)
+        ycol, ucol = f"{self.y_name}_estimate", f"{self.y_name}_uncertainty"
+        given = np.isfinite(x)
+        columns = dict(run.columns)
+        columns[ycol] = np.where(kept, est, np.nan)
+        columns[ucol] = np.where(kept, u, np.nan)
+        columns["in_range"] = np.where(given, inside.astype(float), np.nan)
+        counts = {"estimated": int(np.isfinite(columns[ycol]).sum()), "in_range": int(inside.sum()),
+                  "out_of_range": int((given & ~inside).sum()),
+                  "extrapolated": int((np.isfinite(columns[ycol]) & ~inside).sum()),
+                  "missing": int((~np.isfinite(columns[ycol])).sum()), "no_readout": int((~given).sum()),
+                  "beyond_margin": int((given & ~kept).sum())}
+        meta = {k: v for k, v in run.metadata.items() if k not in _FILE_KEYS}
+        meta["units"] = dict(run.units, **{ycol: self.y_unit, ucol: self.y_unit, "in_range": "1"})
+        meta["calibration"] = {**({} if self.path is None else {"file": str(self.path)}), "x": self.x_name,
+                               "reference": self.y_name, "model": self.model_name if compensation else
+                               f"monotone-{self.model.static.variable}-{self.model.static.segments}", "method": METHOD,
+                               "lag_s": self.lag_s, "created": self.created, "readout_range": list(self.x_range),
+                               "margin": margin, "counts": counts}
+        if differences:
+            meta["calibration"]["forced"] = differences
+        return Run(path=run.path, columns=columns, metadata=meta)
+
+
+def _estimate(m: HeldoutCalibration, x_range, t, x, margin):
+    est, d = m.run(t, x)
+    lo, hi = x_range
+    span = hi - lo
+    inside = np.isfinite(x) & (x >= lo) & (x <= hi)
+    kept = np.isfinite(x) & (x >= lo - margin * span) & (x <= hi + margin * span) if np.isfinite(margin) \
+        else np.isfinite(x)
+    extra = np.abs(m.curve(x) - m.curve(np.clip(x, lo, hi))) if (~inside & np.isfinite(x)).any() else None
+    u = m.uncertainty(est, d, extra) if m.uncertainty is not None else np.full(x.shape, np.nan)
+    return est, u, inside, kept
+
+
+class RunEstimator:
+    """The estimates of :meth:`RunCalibration.apply`, one reading at a time (``fsrlab measure``, ``fsrlab live``)."""
+
+    def __init__(self, cal: RunCalibration, margin: float = MARGIN, compensation: bool = True):
+        if not margin >= 0:
+            raise ValueError(f"margin: must be a fraction >= 0 of the calibrated span, got {margin!r}")
+        self.cal = cal
+        self.model = cal.model if compensation else cal.model.without_memory()
+        self.reference, self.x = cal.y_name, cal.x_name
+        self.stepper = self.model.stepper()
+        self.lo, self.hi = cal.x_range
+        span = self.hi - self.lo
+        self.kept = (self.lo - margin * span, self.hi + margin * span) if math.isfinite(margin) else (-math.inf, math.inf)
+        self._k = 0
+
+    def step(self, readout: float | None, t: float | None = None) -> tuple[float | None, float | None, bool]:
+        """Take one reading (time ``t`` [s], default: the calibration's row step after the last)."""
+        if t is None:
+            t = self._k * self.model.row_s
+        self._k += 1
+        if readout is None or not math.isfinite(float(readout)):
+            return None, None, False
+        x = float(readout)
+        est, d = self.stepper.step(x, t)
+        inside = self.lo <= x <= self.hi
+        if est is None or not self.kept[0] <= x <= self.kept[1]:
+            return None, None, inside
+        u = None
+        m = self.model
+        if m.uncertainty is not None:
+            extra = None
+            if not inside:
+                xc = min(max(x, self.lo), self.hi)
+                extra = np.array([abs(float(m.curve(np.array([x]))[0] - m.curve(np.array([xc]))[0]))])
+            u = float(m.uncertainty(np.array([est]), np.array([d]), extra)[0])
+        return est, u, inside
+
+
+def _recording(run: Run, x: str, reference: str | None) -> tuple[Recording, str, str, str]:
+    if x not in run:
+        raise RunFormatError(f"{run.path}: column {x!r} missing (columns: {', '.join(run.columns)})")
+    ref = reference or ("stress_pa" if "stress_pa" in run else "force_n")
+    if ref not in run:
+        raise RunFormatError(f"{run.path}: no reference column {ref!r} (columns: {', '.join(run.columns)})")
+    t = np.asarray(run["time_s"], dtype=float) if "time_s" in run else np.arange(run.n_rows, dtype=float)
+    rec = Recording(t, np.asarray(run[x], dtype=float), np.asarray(run[ref], dtype=float), str(run.path))
+    return rec, ref, run.units.get(x) or KNOWN_COLUMNS.get(x, ""), run.units.get(ref) or KNOWN_COLUMNS.get(ref, "")
+
+
+def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, compensate: bool = False,
+                   lag: int | str = "auto") -> RunCalibration:
+    """Calibrate a readout to its reference from one or more runs, every choice scored held out.
+
+    Parameters
+    ----------
+    runs : Run, path, or a sequence of them
+        Recordings of the same sensor and readout.
+    x : str
+        Readout column. [its unit]
+    reference : {"force_n", "stress_pa"}, optional
+        Reference column (default: ``stress_pa`` when the runs have it, else ``force_n``).
+    compensate : bool
+        Try the memory terms (hysteresis, then creep); each is kept only when it beats the simpler
+        calibration on held-out recordings or later blocks by more than one standard error.
+    lag : int or "auto"
+        Rows the readout lags the reference; ``"auto"``: none unless a shift wins by one standard error.
+
+    Returns
+    -------
+    RunCalibration
+
+    Raises
+    ------
+    RunFormatError
+        A column a run lacks.
+    ValueError
+        Too few readings, a readout that does not follow the reference, runs of different readouts.
+    """
+    if isinstance(runs, (Run, str, Path)):
+        runs = [runs]
+    runs = [r if isinstance(r, Run) else load_run(r) for r in runs]
+    if not runs:
+        raise ValueError("runs: at least one run")
+    recs, refs, xu, yu = [], set(), "", ""
+    for run in runs:
+        rec, ref, xu, yu = _recording(run, x, reference)
+        recs.append(rec)
+        refs.add(ref)
+        if int(rec.usable.sum()) < 20:
+            raise ValueError(f"{run.path}: {x} and {ref}: fewer than 20 readings with both values present")
+    if len(refs) > 1:
+        raise ValueError(f"runs: the reference differs between runs ({', '.join(sorted(refs))}); name it")
+    ref = refs.pop()
+    neg = np.concatenate([r.y[r.usable] for r in recs])
+    if float(np.mean(neg < 0)) > 0.5:
+        raise ValueError(f"{ref}: the reference is mostly negative: a load cell mounted or wired the wrong way "
+                         "round, or the wrong column")
+    rw = None
+    try:
+        rws = [recorded_with(r.metadata, r.columns.get("range"), rec.usable) for r, rec in zip(runs, recs)]
+        rw = rws[0]
+        for other, run in zip(rws[1:], runs[1:]):
+            diff = mismatches(x, rw, other, None)
+            if diff:
+                raise ValueError(f"{run.path}: recorded with {diff[0][0]}, {runs[0].path} with {diff[0][1]}: "
+                                 "calibrate runs of one readout together")
+    except ValueError:
+        raise
+    model, sel = calibrate_recordings(recs, compensate=compensate, lag=lag)
+    return RunCalibration(model, sel, x, ref, xu, yu, [str(r.path) for r in runs], rw,
+                          int(sum(int(r.usable.sum()) for r in recs)),
+                          datetime.now(timezone.utc).isoformat(timespec="seconds"))

@@ -1,0 +1,267 @@
+"""A monotone static calibration curve that extrapolates sanely.
+
+**Extension beyond the paper.** The force of an FSR rises with its conductance, so the curve from
+readout to force is monotone; a polynomial fitted to it is not, and between and beyond the
+readings it can bend back or shoot off. Here the curve is piecewise linear in a readout variable
+``v`` with knots at quantiles of the calibration readings and non-negative slopes (a bounded
+least-squares fit, with a ridge term on the change of slope between segments):
+
+* ``v`` is the readout itself (oriented so that it rises with force), or, for ``analogRead``
+  counts of a divider (integers within 0..1023 or 0..4095), the divider's conductance ratio
+  ``c/(A − c)`` (the FSR on the supply side: counts rise with force) or ``(A − c)/c`` (the FSR on
+  the ground side, a pull-up: counts fall as force rises, as with Velostat), proportional to the
+  FSR's conductance, which follows a power law of force;
+* below the calibrated readings the curve is flat (an FSR below its activation force reads as no
+  load); above them it continues with the slope of its last segment **per unit of readout** (not of
+  ``v``): a conductance that grows without bound as the reading nears its rail is not followed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["VARIABLES", "adc_full_scale", "readout_variable", "MonotoneCurve", "fit_monotone", "bounded_fit"]
+
+#: The readout variables a curve can be fitted in. [1]
+VARIABLES = ("readout", "conductance")
+#: ADC full scales recognised in integer readings (10, 12, 16 bits). [1]
+_ADC = (1023.0, 4095.0, 65535.0)
+
+
+def adc_full_scale(x) -> float | None:
+    """The full scale of an ADC whose counts ``x`` are (integers in 0..1023, 0..4095 or 0..65535), else None."""
+    x = np.asarray(x, dtype=float)
+    x = x[np.isfinite(x)]
+    if x.size == 0 or x.min() < 0 or not np.all(x == np.round(x)):
+        return None
+    return next((a for a in _ADC if x.max() <= a), None)
+
+
+def readout_variable(x, name: str, sign: int, adc: float | None) -> np.ndarray:
+    """The curve's variable ``v`` of readings ``x`` (rising with force).
+
+    Parameters
+    ----------
+    x : array_like
+        Readings.
+    name : {"readout", "conductance"}
+        ``sign·x``, or the divider conductance ratio (needs ``adc``).
+    sign : {1, -1}
+        +1 when the readout rises with force.
+    adc : float or None
+        ADC full scale of the counts. [counts]
+    """
+    x = np.asarray(x, dtype=float)
+    if name == "readout":
+        return sign * x
+    if name == "conductance" and adc:
+        c = np.clip(x, 0.5, adc - 0.5)  # half a count off each rail: the ratio stays finite
+        return c / (adc - c) if sign > 0 else (adc - c) / c
+
+    raise ValueError(f"variable: must be one of {', '.join(VARIABLES)} (conductance only for ADC counts), got {name!r}")
+
+
+def _basis(v: np.ndarray, knots: np.ndarray, extra: int = 0) -> np.ndarray:
+    """Columns of the monotone piecewise-linear basis: each segment's share of v (the last unbounded).
+
+    Column-major, with ``extra`` columns left empty after them for the caller to fill."""
+    k = knots.size - 1
+    out = np.empty((v.size, k + extra), order="F")
+    for i in range(k):
+        col = out[:, i]
+        np.subtract(v, knots[i], out=col)
+        np.maximum(col, 0.0, out=col)
+        if i < k - 1:
+            np.minimum(col, knots[i + 1] - knots[i], out=col)
+    return out
+
+
+def bounded_fit(a: np.ndarray, y: np.ndarray, lower: np.ndarray, penalty: np.ndarray | None = None) -> np.ndarray:
+    """Least squares ``a·c ≈ y`` with ``c ≥ lower`` and a ridge ``‖penalty·c‖²``, through the normal equations.
+
+    Columns are scaled to unit root mean square first; the normal equations keep the memory to the
+    number of columns squared, whatever the number of readings.
+    """
+    from scipy.optimize import lsq_linear
+
+    gram = a.T @ a
+    scale = np.sqrt(np.diag(gram) / a.shape[0])
+    scale[~(scale > 0)] = 1.0
+    ata = gram / np.outer(scale, scale)
+    atb = (a.T @ y) / scale
+    if penalty is not None and penalty.size:
+        p_s = penalty / scale
+        ata = ata + p_s.T @ p_s
+    k = ata.shape[0]
+    ata = ata + 1e-12 * np.trace(ata) / k * np.eye(k)
+    chol = np.linalg.cholesky(ata)
+    rhs = np.linalg.solve(chol, atb)
+    res = lsq_linear(chol.T, rhs, bounds=(lower * scale, np.inf), method="bvls")
+    return res.x / scale
+
+
+@dataclass
+class MonotoneCurve:
+    """Force (or stress) from a readout: non-decreasing in ``v``, flat below, linear in the readout above.
+
+    Parameters
+    ----------
+    variable : str
+        See :func:`readout_variable`.
+    sign : int
+        +1 when the readout rises with force, −1 when it falls.
+    adc : float or None
+        ADC full scale for ``variable="conductance"``. [counts]
+    knots : ndarray
+        Knots in ``v``.
+    coef : ndarray
+        Intercept, then each segment's slope times its length. [unit of the reference]
+    x_range : (float, float)
+        Readings the curve was fitted on. [unit of the readout]
+    """
+
+    variable: str
+    sign: int
+    adc: float | None
+    knots: np.ndarray
+    coef: np.ndarray
+    x_range: tuple[float, float]
+
+    def design(self, x) -> np.ndarray:
+        """The basis at ``x``: inside the range as fitted, beyond its top end growing linearly in x."""
+        x = np.asarray(x, dtype=float)
+        lo, hi = self.x_range
+        b = _basis(readout_variable(np.clip(x, lo, hi), self.variable, self.sign, self.adc), self.knots)
+        b[:, -1] += self._beyond(x)
+        return b
+
+    def _beyond(self, x: np.ndarray) -> np.ndarray:
+        """How far past the top of the range a reading lies, in v units of the last segment's slope (0 inside)."""
+        lo, hi = self.x_range
+        top = hi if self.sign > 0 else lo
+        # the slope of the last segment per unit of readout: its v-span over its readout span
+        v_top = float(readout_variable(np.array([top]), self.variable, self.sign, self.adc)[0])
+        x_knot = self._readout_at(self.knots[-2])
+        if not (abs(top - x_knot) > 0 and v_top > self.knots[-2]):
+            return np.zeros(x.shape)
+        beyond = np.maximum(self.sign * (x - top), 0.0)
+        return np.where(np.isfinite(beyond), beyond, 0.0) * (v_top - self.knots[-2]) / abs(top - x_knot)
+
+    def _readout_at(self, v: float) -> float:
+        """The reading whose variable is ``v`` (the inverse of :func:`readout_variable`)."""
+        if self.variable == "readout":
+            return float(self.sign * v)
+        a = float(self.adc)
+        return float(a * v / (1.0 + v) if self.sign > 0 else a / (1.0 + v))
+
+    def __call__(self, x) -> np.ndarray:
+        """The curve at readings ``x`` (NaN stays NaN): the basis times the coefficients, evaluated as
+        the piecewise-linear interpolation it is."""
+        x = np.asarray(x, dtype=float)
+        lo, hi = self.x_range
+        ok = np.isfinite(x)
+        xs = np.where(ok, x, lo)
+        v = readout_variable(np.clip(xs, lo, hi), self.variable, self.sign, self.adc)
+        c = self.coef
+        values = c[0] + np.concatenate([[0.0], np.cumsum(c[1:] * np.diff(self.knots))])
+        out = np.interp(v, self.knots, values) + c[-1] * self._beyond(xs)
+        return np.where(ok, out, np.nan)
+
+    @property
+    def segments(self) -> int:
+        return int(self.knots.size - 1)
+
+    def to_dict(self) -> dict:
+        return {"variable": self.variable, "sign": int(self.sign), "adc": self.adc, "knots": self.knots.tolist(),
+                "coefficients": self.coef.tolist(), "readout_range": list(self.x_range)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "MonotoneCurve":
+        knots = np.asarray(d["knots"], dtype=float)
+        coef = np.asarray(d["coefficients"], dtype=float)
+        if knots.size < 2 or coef.size != knots.size or np.any(np.diff(knots) <= 0) or np.any(coef[1:] < 0):
+            raise ValueError("monotone curve: knots must increase, one coefficient per segment plus the intercept, "
+                             "the segments' coefficients >= 0")
+        if int(d["sign"]) not in (1, -1):
+            raise ValueError(f"monotone curve: sign must be 1 or -1, got {d['sign']!r}")
+        lo, hi = (float(v) for v in d["readout_range"])
+        return cls(str(d["variable"]), int(d["sign"]), None if d.get("adc") is None else float(d["adc"]), knots, coef,
+                   (lo, hi))
+
+
+def knots_for(v: np.ndarray, segments: int) -> np.ndarray:
+    """Knots at quantiles of ``v`` (repeated quantiles merged, at least two knots)."""
+    k = np.unique(np.quantile(v, np.linspace(0.0, 1.0, segments + 1)))
+    if k.size < 2:
+        k = np.array([k[0], k[0] + 1.0])
+    return k
+
+
+def smoothness_penalty(knots: np.ndarray, columns: int, lam: float, n: int) -> np.ndarray:
+    """Rows penalising the change of slope between neighbouring segments (column 1 is the first segment).
+
+    A segment's coefficient is its slope times its length; the rows take the slopes' differences
+    times the mean length, so a large weight pulls the curve towards a straight line in ``v``."""
+    segments = knots.size - 1
+    if segments < 2 or lam <= 0:
+        return np.zeros((0, columns))
+    length = np.diff(knots)
+    mean = float(np.mean(length))
+    d = np.zeros((segments - 1, columns))
+    for i in range(segments - 1):
+        d[i, 1 + i], d[i, 2 + i] = -mean / length[i], mean / length[i + 1]
+    return np.sqrt(lam * n) * d
+
+
+def fit_monotone(x, y, variable: str, segments: int, sign: int, adc: float | None, lam: float = 1e-3,
+                 extra: np.ndarray | None = None, extra_lower: np.ndarray | None = None,
+                 extra_lam: float = 0.0) -> tuple[MonotoneCurve, np.ndarray]:
+    """Fit a :class:`MonotoneCurve` (and, optionally, weights of extra columns fitted jointly).
+
+    Parameters
+    ----------
+    x, y : array_like
+        Readings and reference, finite.
+    variable, sign, adc
+        See :func:`readout_variable`.
+    segments : int
+        Number of linear segments (knots at quantiles of the readings). [1]
+    lam : float
+        Ridge weight on the change of slope between segments, relative to the number of readings. [1]
+    extra : ndarray, shape (n, m), optional
+        Further columns (memory features) fitted with the curve.
+    extra_lower : ndarray, shape (m,), optional
+        Lower bounds of their weights (0: non-negative, -inf: free).
+    extra_lam : float
+        Ridge weight on the extra columns' weights, relative to the number of readings. [1]
+
+    Returns
+    -------
+    curve : MonotoneCurve
+    weights : ndarray, shape (m,)
+    """
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    v = readout_variable(x, variable, sign, adc)
+    knots = knots_for(v, segments)
+    curve = MonotoneCurve(variable, sign, adc, knots, np.zeros(knots.size), (float(x.min()), float(x.max())))
+    m = 0 if extra is None else extra.shape[1]
+    seg = knots.size - 1
+    # columns: the constant, the segments, the extra columns
+    a = np.empty((x.size, 1 + seg + m), order="F")
+    a[:, 0] = 1.0
+    a[:, 1:1 + seg] = _basis(v, knots)
+    if m:
+        a[:, 1 + seg:] = extra
+    cols = a.shape[1]
+    pen = [smoothness_penalty(knots, cols, lam, x.size)]
+    if m and extra_lam > 0:
+        r = np.zeros((m, cols))
+        r[:, 1 + seg:] = np.eye(m)
+        pen.append(np.sqrt(extra_lam * x.size) * r)
+    lower = np.r_[-np.inf, np.zeros(seg), extra_lower if m else np.zeros(0)]
+    c = bounded_fit(a, y, lower, np.vstack(pen))
+    curve.coef = c[:1 + seg]
+    return curve, c[1 + seg:]

@@ -1,0 +1,148 @@
+"""The pieces of the held-out calibration: splits, the paired standard error, the monotone curve, the memory.
+
+References: closed forms (play operator on a triangle, exponential average of a step, the divider's
+conductance ratio, a paired mean and its standard error) and properties that must hold (a monotone
+curve never decreases, the fit rows precede the scored rows, stepping equals the batch).
+"""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from fsrlab.calibration.heldout import BLOCKS, Recording, held_out_splits, paired_gain
+from fsrlab.calibration.monotone import MonotoneCurve, adc_full_scale, fit_monotone, readout_variable
+from fsrlab.calibration.operators import MemoryState, directions, memory_features
+
+
+def _rec(n, name=""):
+    t = np.arange(n) * 0.1
+    return Recording(t, np.sin(t), np.cos(t), name)
+
+
+def test_leave_one_recording_out_scores_each_recording_once_on_all_its_rows():
+    recs = [_rec(50, "a"), _rec(60, "b"), _rec(70, "c")]
+    splits = held_out_splits(recs)
+    assert len(splits) == 3
+    scored = [test[0].rec.name for _, test in splits]
+    assert scored == ["a", "b", "c"]
+    for fit, test in splits:
+        assert test[0].rec.name not in [p.rec.name for p in fit]
+        assert test[0].rows.all()
+
+
+def test_forward_chaining_scores_only_rows_after_every_fitted_row():
+    rec = _rec(500)
+    splits = held_out_splits([rec])
+    assert len(splits) == BLOCKS - 2
+    for fit, test in splits:
+        last_fit = np.flatnonzero(fit[0].rows).max()
+        scored = np.flatnonzero(test[0].rows)
+        assert scored.min() == last_fit + 1  # the next contiguous block
+        assert np.all(np.diff(scored) == 1)
+
+
+def test_paired_gain_is_the_mean_chunk_difference_with_its_standard_error():
+    # two chunks of 10 rows: MSE simple 4 and 1, complex 1 and 1 -> differences 3 and 0
+    simple = np.r_[np.full(10, 2.0), np.full(10, 1.0)]
+    complex_ = np.ones(20)
+    chunks = np.repeat([0, 1], 10)
+    gain, se = paired_gain(simple, complex_, chunks)
+    assert gain == pytest.approx(1.5)
+    assert se == pytest.approx(np.std([3.0, 0.0], ddof=1) / math.sqrt(2))
+
+
+def test_adc_counts_are_recognised_and_other_readouts_are_not():
+    assert adc_full_scale(np.array([0, 12, 1023.0])) == 1023.0
+    assert adc_full_scale(np.array([0, 12, 4000.0])) == 4095.0
+    assert adc_full_scale(np.array([0.5, 1.2])) is None  # volts
+    assert adc_full_scale(np.array([-3.0, 2.0])) is None
+
+
+def test_conductance_ratio_of_a_divider_either_way_round():
+    # FSR on the supply side: c = A·G·Rm/(1 + G·Rm) -> c/(A - c) = G·Rm; pull-up: the mirror image
+    g_rm = np.array([0.1, 1.0, 4.0])
+    a = 1023.0
+    c_up = a * g_rm / (1 + g_rm)
+    assert readout_variable(c_up, "conductance", 1, a) == pytest.approx(g_rm)
+    assert readout_variable(a - c_up, "conductance", -1, a) == pytest.approx(g_rm)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(min_value=0, max_value=10_000), st.sampled_from([1, 2, 4, 8]))
+def test_monotone_curve_never_decreases_and_is_flat_below_its_readings(seed, segments):
+    rng = np.random.default_rng(seed)
+    x = np.sort(rng.uniform(0, 800, 200))
+    y = 5 * (x / 800) ** 2 + rng.normal(0, 1.0, x.size)  # noisy enough to pull a free fit downwards
+    curve, _ = fit_monotone(x, y, "readout", segments, 1, None)
+    grid = np.linspace(-100, 1200, 500)
+    v = curve(grid)
+    assert np.all(np.diff(v) >= -1e-9 * max(1.0, np.abs(v).max()))
+    assert curve(np.array([-100.0]))[0] == pytest.approx(curve(np.array([x.min()]))[0])
+
+
+def test_monotone_curve_extrapolates_linearly_in_the_readout_with_its_last_slope():
+    x = np.linspace(0, 800, 400)
+    g = x / (1023 - x)
+    y = 2.0 * g  # a force proportional to the conductance ratio
+    curve, _ = fit_monotone(x, y, "conductance", 4, 1, 1023.0)
+    top = x.max()
+    v = curve(np.array([top, top + 50, top + 100]))
+    assert v[2] - v[1] == pytest.approx(v[1] - v[0], rel=1e-9)  # straight beyond the range
+    knot_x = curve._readout_at(curve.knots[-2])
+    slope = (curve(np.array([top]))[0] - curve(np.array([knot_x]))[0]) / (top - knot_x)
+    assert (v[1] - v[0]) / 50 == pytest.approx(slope, rel=1e-6)
+    # inside the range the conductance curve follows y = 2·G closely
+    assert np.max(np.abs(curve(x) - y)) < 0.05 * np.ptp(y)
+
+
+def test_curve_round_trips_and_refuses_a_decreasing_segment():
+    x = np.linspace(0, 1, 50)
+    curve, _ = fit_monotone(x, 3 * x, "readout", 2, 1, None)
+    again = MonotoneCurve.from_dict(curve.to_dict())
+    assert np.array_equal(again(x), curve(x))
+    bad = curve.to_dict()
+    bad["coefficients"][1] = -1.0
+    with pytest.raises(ValueError, match="coefficients"):
+        MonotoneCurve.from_dict(bad)
+
+
+def test_play_operator_on_a_triangle_follows_its_closed_form():
+    # up 0 -> 1, down to 0: p = u - r while loading, then holds at 1 - r until u < 1 - 2r, then u + r
+    r = 0.1
+    u = np.r_[np.linspace(0, 1, 101), np.linspace(1, 0, 101)[1:]]
+    f = memory_features(u, np.arange(u.size, dtype=float), (r,), ())
+    p = f[:, 0] + u
+    up = u[:101]
+    assert p[:101] == pytest.approx(np.maximum(up - r, 0.0))
+    down = u[101:]
+    assert p[101:] == pytest.approx(np.minimum(1 - r, down + r))
+
+
+def test_exponential_average_of_a_step_follows_its_closed_form():
+    tau, dt = 2.0, 0.1
+    u = np.r_[0.0, np.ones(50)]
+    t = np.arange(u.size) * dt
+    f = memory_features(u, t, (), (tau,))
+    # u − ū after k steps of the unit step: exp(−k·dt/τ)
+    k = np.arange(1, 51)
+    assert f[1:, 0] == pytest.approx(np.exp(-k * dt / tau))
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.integers(min_value=0, max_value=10_000), st.booleans())
+def test_stepping_the_memory_gives_the_batch_features(seed, scaled):
+    rng = np.random.default_rng(seed)
+    u = np.clip(np.cumsum(rng.normal(0, 0.05, 300)), 0, 1)
+    u[rng.integers(0, 300, 10)] = np.nan  # gaps keep the memory
+    t = np.cumsum(rng.uniform(0.05, 0.15, 300))
+    batch = memory_features(u, t, (0.02, 0.1, 0.4), (0.5, 8.0), scaled)
+    d_batch = directions(u)
+    state = MemoryState((0.02, 0.1, 0.4), (0.5, 8.0), scaled)
+    for i in np.flatnonzero(np.isfinite(u)):
+        f, d = state.advance(float(u[i]), float(t[i]))
+        assert f == pytest.approx(batch[i].tolist(), abs=1e-12)
+        assert d == d_batch[i]
+    assert np.all(np.isnan(batch[~np.isfinite(u)]))
