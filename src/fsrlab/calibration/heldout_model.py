@@ -456,12 +456,12 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
     best = min(statics, key=lambda c: _rmse(scored[c][0]))
     cur = next(c for c in statics if paired_gain(scored[c][0], scored[best][0], scored[best][1])[0]
                <= paired_gain(scored[c][0], scored[best][0], scored[best][1])[1] or c == best)
-    for other in statics:
-        if other != cur:
-            scored.pop(other, None)
     sel.steps.append({"step": "static curve", "tried": len(statics), "chosen": cur.name,
                       "why": "the simplest within one standard error of the best held-out error "
                              f"({_rmse(scored[best][0]):.4g}, {best.name})"})
+    for other in statics:
+        if other != cur:
+            scored.pop(other, None)
     sel.heldout_rmse_plain = _rmse(scored[cur][0])
     plain = cur
 
