@@ -46,8 +46,8 @@ def _old_run_ngspice(text: str, output_file: str = "fsrlab_out.raw", timeout_s: 
 def _previous_way():
     import fsrlab.circuits.paper_ratio as paper_ratio
     import fsrlab.circuits.spice as spice
-    import fsrlab.report.figures as figures
-    import fsrlab.report.sections.oscillator as oscillator
+    import fsrlab.reports.figures as figures
+    import fsrlab.reports.sections.oscillator as oscillator
 
     saved = spice.run_ngspice, figures.fixed_layout, paper_ratio.simulate_spice_many, oscillator.prefetch
     spice.run_ngspice = _old_run_ngspice
@@ -61,7 +61,7 @@ def _previous_way():
 
 
 def _build_time() -> float:
-    from fsrlab.report.paper import write_report
+    from fsrlab.reports.paper import write_report
 
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()

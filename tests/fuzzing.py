@@ -1,7 +1,7 @@
 """Pieces of the command-line fuzzer (tests/cli/test_fuzz.py): option values, input files and their
 corruptions, and running one command line in a directory of its own.
 
-Reference: the value spellings of fsrlab.units and cli/_common.py (valid ones), and the run, table
+Reference: the value spellings of fsrlab.units and cli/options.py (valid ones), and the run, table
 and calibration formats of docs/data-format.md (the small valid files written here).
 """
 
@@ -26,7 +26,7 @@ from clirun import run_cli
 # Option values
 # ------------------------------------------------------------------------------------------------
 
-# Values each quantity parser (cli/_common.py) reads, chosen to work together in the commands.
+# Values each quantity parser (cli/options.py) reads, chosen to work together in the commands.
 VALID = {
     "ohms": ["10k", "4k7", "200k", "1M", "1meg", "10kΩ", "100kohm", "2.2e5"],
     "farads": ["1n", "470p", "4.7nF", "1.5n", "0", "4n7"],

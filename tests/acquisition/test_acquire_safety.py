@@ -5,7 +5,7 @@ References: the command line's contract (exit 2 with one line naming the option 
 input, before the device is touched; exit 1 with one line and the rows so far kept when a run
 fails), the run format's sidecar (docs/data-format.md: ``complete``, ``rows``, ``ended``,
 ``gaps``), the protocol's window limits (10..60000 ms, docs/protocol.md) and the quantity parsers
-of the command line (fsrlab.cli._common). Devices are the virtual meter on a real pty, in this
+of the command line (fsrlab.cli.options). Devices are the virtual meter on a real pty, in this
 process or in another one (``fsrlab virtual-device``), stopped and resumed with SIGSTOP/SIGCONT.
 """
 

@@ -173,7 +173,7 @@ def test_find_uno_by_usb_identity():
     other = UsbPort("/dev/ttyUSB1", 0x0403, 0x6001, "FT232R")
     assert find_uno([other, uno]) == "/dev/ttyACM0"
     assert find_uno([clone]) == "/dev/ttyUSB0"
-    with pytest.raises(LinkError, match="no Arduino Uno found.*ttyUSB1"):
+    with pytest.raises(LinkError, match="found no Arduino Uno.*ttyUSB1"):
         find_uno([other])
     with pytest.raises(LinkError, match="several.*ttyACM0.*ttyUSB0"):
         find_uno([uno, clone])

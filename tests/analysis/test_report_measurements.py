@@ -11,7 +11,7 @@ import json
 
 import pytest
 
-from fsrlab.report.sections import measurements
+from fsrlab.reports.sections import measurements
 
 
 @pytest.fixture(scope="module")

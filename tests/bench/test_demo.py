@@ -1,6 +1,6 @@
 """The demo (``make demo`` = ``fsrlab demo``) with very short recordings: the whole chain runs and links its reports.
 
-References: the chain the module's docstring lists (fsrlab/bench/demo.py, fsrlab/report/demo.py) and the files each step must
+References: the chain the module's docstring lists (fsrlab/bench/demo.py, fsrlab/reports/demo.py) and the files each step must
 leave; the demo's numbers are checked against the measurement report it wrote (report.json), and
 the hysteresis error of the compensated estimate against the raw frequency's (the compensation's
 purpose). The virtual bench runs in real time: about 10 s of recording here.
@@ -14,7 +14,7 @@ import pytest
 
 from clirun import run_cli
 from fsrlab.bench.demo import DEMO_SENSOR, DemoSettings, demo_sensor
-from fsrlab.report.demo import run_demo
+from fsrlab.reports.demo import run_demo
 
 SHORT = DemoSettings(cycles=2, period_s=1.5, repeat=2, settle_hold_s=0.1)
 

@@ -1,4 +1,4 @@
-"""The oscillator report section (fsrlab.report.sections.oscillator).
+"""The oscillator report section (fsrlab.reports.sections.oscillator).
 
 References: the paper's §5 statements as printed (fsrlab/data/paper.json) and properties of the
 built section (files written, errata keys, data consistent with fsrlab.circuits.lm555). The
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from fsrlab.circuits.lm555 import tau_ratio
-from fsrlab.report.sections.oscillator import build
+from fsrlab.reports.sections.oscillator import build
 
 
 @pytest.fixture(scope="module")

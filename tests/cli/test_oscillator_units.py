@@ -1,6 +1,6 @@
 """Units of the `oscillator`, `decode` and `design` options.
 
-Reference: the quantity parsers' contract in cli/_common.py and fsrlab.units.parse_quantity (their
+Reference: the quantity parsers' contract in cli/options.py and fsrlab.units.parse_quantity (their
 own tests are tests/test_units.py and tests/cli/test_parsers.py); here each option of the three
 commands must read its own quantity: ``1m`` is refused on resistances and capacitances (1 MΩ or
 1 mΩ?), another quantity's unit is refused, ``10%`` is the fraction 0.10.

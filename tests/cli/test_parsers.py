@@ -1,6 +1,6 @@
-"""Option parsers of cli/_common.py, through ``fsrlab.cli.main`` as a user meets them.
+"""Option parsers of cli/options.py, through ``fsrlab.cli.main`` as a user meets them.
 
-Reference: the parsers' contract in cli/_common.py and docs/architecture.md (one line on stderr that
+Reference: the parsers' contract in cli/options.py and docs/architecture.md (one line on stderr that
 names the option, exit code 2); spellings follow the SI Brochure and part labels (see test_units.py).
 A probe command is added to the app for the duration of each test.
 """
@@ -13,7 +13,7 @@ import typer
 
 from clirun import run_cli
 from fsrlab.cli import app
-from fsrlab.cli._common import (electronvolts, emit_json, fail, farads, fraction, hertz, metres, number, ohms,
+from fsrlab.cli.options import (electronvolts, emit_json, fail, farads, fraction, hertz, metres, number, ohms,
                                 option_names, pascals, plain_numbers, seconds, volts)
 
 PARSERS = {"--r": ohms, "--c": farads, "--v": volts, "--f": hertz, "--p": pascals, "--s": metres,

@@ -2,7 +2,7 @@
 ``weights``, ``measure`` (and ``acquire``'s new options).
 
 References: the help conventions of docs/architecture.md (a [unit] for every numeric option, one or
-two examples at the end, each parsing), and the spellings the parsers of cli/_common.py document
+two examples at the end, each parsing), and the spellings the parsers of cli/options.py document
 (areas: m², cm², mm²; masses: g, kg, mg, a bare 0; mass lists strictly increasing).
 """
 
@@ -15,7 +15,7 @@ import typer
 
 from clirun import run_cli
 from fsrlab.cli import app
-from fsrlab.cli._common import areas, mass_list, masses
+from fsrlab.cli.options import areas, mass_list, masses
 
 COMMANDS = ("loadcell", "weights", "measure", "acquire", "bench", "report", "demo", "twin")
 

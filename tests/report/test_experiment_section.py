@@ -8,9 +8,9 @@ import json
 
 import pytest
 
-from fsrlab.report.paper import SECTION_MODULES
-from fsrlab.report.sections import experiment
-from fsrlab.report.sections.measurements import exact_mean, shown_as_printed
+from fsrlab.reports.paper import SECTION_MODULES
+from fsrlab.reports.sections import experiment
+from fsrlab.reports.sections.measurements import exact_mean, shown_as_printed
 
 
 @pytest.fixture(scope="module")
@@ -20,8 +20,8 @@ def built(tmp_path_factory):
 
 
 def test_registered_after_measurements():
-    i = SECTION_MODULES.index("fsrlab.report.sections.measurements")
-    assert SECTION_MODULES[i + 1] == "fsrlab.report.sections.experiment"
+    i = SECTION_MODULES.index("fsrlab.reports.sections.measurements")
+    assert SECTION_MODULES[i + 1] == "fsrlab.reports.sections.experiment"
 
 
 def test_figures_and_tables(built):
@@ -67,7 +67,7 @@ def test_table3_mean_shown_as_the_paper_rounds():
 
 
 def test_measurements_table3_row_shows_23_35(tmp_path):
-    from fsrlab.report.sections import measurements
+    from fsrlab.reports.sections import measurements
 
     s = measurements.build(tmp_path)
     t3 = next(t for t in s.tables if t.title.startswith("Table 3"))

@@ -1,4 +1,4 @@
-"""The report's fixed figure layout (fsrlab.report.figures.fixed_layout).
+"""The report's fixed figure layout (fsrlab.reports.figures.fixed_layout).
 
 Reference: matplotlib's own measurement of what it draws (each axes' tight bounding box, tick labels,
 axis labels and titles included) must lie inside the figure: a property that fails when a margin is
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import pytest
 
-from fsrlab.report.figures import fixed_layout, new_figure
+from fsrlab.reports.figures import fixed_layout, new_figure
 
 
 @pytest.mark.parametrize("panels, title_lines, suptitle", [(1, 1, False), (2, 2, False), (2, 1, True)])

@@ -1,4 +1,4 @@
-"""The sensor-physics report section (fsrlab.report.sections.physics): erratum P4 and the HE-versus-u sweep.
+"""The sensor-physics report section (fsrlab.reports.sections.physics): erratum P4 and the HE-versus-u sweep.
 
 References: the independent scalar brute force of tests/reference_physics.py (eq. 13 on 20000
 stresses) for the numbers the section quotes, and the paper's §4 statement as printed.
@@ -10,7 +10,7 @@ import json
 
 import pytest
 
-from fsrlab.report.sections.physics import build
+from fsrlab.reports.sections.physics import build
 from reference_physics import E, table2_row
 
 

@@ -40,6 +40,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from fsrlab.acquisition.protocol import HX711_MAX, HX711_MIN
+from fsrlab.errors import FsrlabError
 from fsrlab.units import STANDARD_GRAVITY
 
 __all__ = ["HX711_RATES", "STANDARD_GRAVITY", "TARE_STABILITY", "LoadCellModel", "WindowReference",
@@ -59,8 +60,14 @@ of the cell's span (capacity × scale, when both are known); anything else is an
 (something still moving or settling on the cell) and is refused."""
 
 
-class LoadCellError(ValueError):
-    """A load-cell calibration cannot be made or read; the message says why (one line)."""
+class LoadCellError(FsrlabError, ValueError):
+    """A load-cell calibration cannot be made or read; the message says why (one line).
+
+    Parameters
+    ----------
+    reason, parameter
+        As for :class:`~fsrlab.errors.FsrlabError`: the message and the parameter at fault.
+    """
 
 
 @dataclass(frozen=True)

@@ -14,12 +14,19 @@ import numpy as np
 
 from fsrlab.acquisition.messages import Measurement
 from fsrlab.acquisition.protocol import SEQ_MODULO
+from fsrlab.errors import FsrlabError
 
 __all__ = ["ReferenceReadings", "read_reference", "NoLoadCell"]
 
 
-class NoLoadCell(RuntimeError):
-    """The meter has no load cell to read (protocol version 1, or ``ref_ok`` 0); the message says which."""
+class NoLoadCell(FsrlabError, RuntimeError):
+    """The meter has no load cell to read (protocol version 1, or ``ref_ok`` 0); the message says which.
+
+    Parameters
+    ----------
+    reason, parameter
+        As for :class:`~fsrlab.errors.FsrlabError`: the message and the parameter at fault.
+    """
 
 
 @dataclass(frozen=True)

@@ -21,6 +21,7 @@ from __future__ import annotations
 import binascii
 from dataclasses import dataclass, field
 
+from fsrlab.errors import FsrlabError
 from fsrlab.hardware import ADC_BITS, ADC_COUNTS, ADC_V_PER_COUNT, ADC_VREF_V, CAPTURE_MAX_HZ, F_CPU, TICK_S
 
 __all__ = [
@@ -77,8 +78,14 @@ _HEX = frozenset(b"0123456789ABCDEF")
 _DOLLAR, _NL, _CR, _STAR = 0x24, 0x0A, 0x0D, 0x2A
 
 
-class ProtocolError(ValueError):
-    """A frame or value that the protocol does not allow."""
+class ProtocolError(FsrlabError, ValueError):
+    """A frame or value that the protocol does not allow.
+
+    Parameters
+    ----------
+    reason, parameter
+        As for :class:`~fsrlab.errors.FsrlabError`: the message and the parameter at fault.
+    """
 
 
 class CommandError(ProtocolError):

@@ -17,6 +17,7 @@ from serial.tools import list_ports
 
 from fsrlab.acquisition.messages import Ack, DeviceError, Identity
 from fsrlab.acquisition.protocol import DEFAULT_BAUD, DEVICE_NAME, SUPPORTED_PROTOCOLS, Frame, FrameParser, encode_command
+from fsrlab.errors import FsrlabError
 
 __all__ = ["UNO_USB_IDS", "LinkError", "DeviceGone", "HandshakeError", "CommandRejected", "UsbPort",
            "find_uno", "SerialLink"]
@@ -30,20 +31,44 @@ UNO_USB_IDS: dict[tuple[int, int], str] = {
 """USB vendor:product identities taken as an Uno for ``--port auto``."""
 
 
-class LinkError(OSError):
-    """The serial link cannot be used (port missing, busy, no answer)."""
+class LinkError(FsrlabError, OSError):
+    """The serial link cannot be used (port missing, busy, no answer).
+
+    Parameters
+    ----------
+    reason, parameter
+        As for :class:`~fsrlab.errors.FsrlabError`: the message and the parameter at fault.
+    """
 
 
 class DeviceGone(LinkError):
-    """The device disappeared during use (unplugged, or the pseudo-terminal closed)."""
+    """The device disappeared during use (unplugged, or the pseudo-terminal closed).
+
+    Parameters
+    ----------
+    reason, parameter
+        As for :class:`~fsrlab.errors.FsrlabError`: the message and the parameter at fault.
+    """
 
 
 class HandshakeError(LinkError):
-    """The device did not identify itself as an fsrlab meter speaking this protocol version."""
+    """The device did not identify itself as an fsrlab meter speaking this protocol version.
+
+    Parameters
+    ----------
+    reason, parameter
+        As for :class:`~fsrlab.errors.FsrlabError`: the message and the parameter at fault.
+    """
 
 
 class CommandRejected(LinkError):
-    """The device answered a command with ``$ERR``."""
+    """The device answered a command with ``$ERR``.
+
+    Parameters
+    ----------
+    reason, parameter
+        As for :class:`~fsrlab.errors.FsrlabError`: the message and the parameter at fault.
+    """
 
 
 @dataclass(frozen=True)
@@ -98,10 +123,10 @@ def find_uno(ports: list[UsbPort] | None = None) -> str:
     wanted = ", ".join(f"{v:04X}:{p:04X}" for v, p in UNO_USB_IDS)
     if not matches:
         seen = "; ".join(str(p) for p in ports) or "none"
-        raise LinkError(f"--port auto: no Arduino Uno found (USB ids {wanted}); serial ports present: {seen}")
+        raise LinkError(f"auto found no Arduino Uno (USB ids {wanted}); serial ports present: {seen}", parameter="port")
     if len(matches) > 1:
-        raise LinkError("--port auto: several Uno-like devices found, choose one with --port: "
-                        + "; ".join(str(p) for p in matches))
+        raise LinkError("auto found several Uno-like devices, choose one: " + "; ".join(str(p) for p in matches),
+                        parameter="port")
     return matches[0].device
 
 
@@ -141,7 +166,7 @@ class SerialLink:
             self.serial = serial.serial_for_url(self.port, baudrate=self.baud, timeout=read_timeout_s,
                                                 write_timeout=2.0)
         except (serial.SerialException, OSError, ValueError) as exc:
-            raise LinkError(f"--port: cannot open {self.port}: {exc}") from None
+            raise LinkError(f"cannot open {self.port}: {exc}", parameter="port") from None
         self.parser = FrameParser()
         self.identity: Identity | None = None
         self._backlog: deque[Frame] = deque()

@@ -46,6 +46,7 @@ import numpy as np
 
 from fsrlab.circuits.checks import check_fractions, check_lm555, check_supply
 from fsrlab.circuits.phases import thevenin, timing_per_rc
+from fsrlab.errors import FsrlabError
 
 __all__ = [
     "NoOscillationError",
@@ -60,7 +61,7 @@ __all__ = [
     "sensitivity",
 ]
 
-class NoOscillationError(ValueError):
+class NoOscillationError(FsrlabError, ValueError):
     """The circuit does not oscillate; the message names the failed condition and by how much.
 
     Parameters

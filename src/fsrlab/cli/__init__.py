@@ -15,6 +15,10 @@ import sys
 import typer
 
 from fsrlab import __version__
+from fsrlab.errors import FsrlabError
+
+#: The option of each library parameter an error can name (:attr:`fsrlab.errors.FsrlabError.parameter`).
+PARAMETER_OPTIONS = {"port": "--port"}
 
 app = typer.Typer(
     name="fsrlab",
@@ -98,16 +102,20 @@ def main(argv: list[str] | None = None) -> int:
         print(f"fsrlab: error: {_one_line(exc.format_message())}", file=sys.stderr)
         code = getattr(exc, "exit_code", 2)
     except (ValueError, OSError) as exc:
-        # Our models raise ValueError naming the parameter; files raise OSError.
+        # Our models raise ValueError naming the parameter; files raise OSError. An FsrlabError carries the
+        # parameter at fault: the message names its option instead.
         if os.environ.get("FSRLAB_DEBUG"):
             raise
-        print(f"fsrlab: error: {_one_line(str(exc))}", file=sys.stderr)
+        message = str(exc)
+        if isinstance(exc, FsrlabError) and exc.parameter in PARAMETER_OPTIONS:
+            message = f"{PARAMETER_OPTIONS[exc.parameter]}: {exc.reason}"
+        print(f"fsrlab: error: {_one_line(message)}", file=sys.stderr)
         code = 2
     raise SystemExit(code)
 
 
 def _one_line(message: str) -> str:
-    from fsrlab.cli._common import plain_numbers
+    from fsrlab.cli.options import plain_numbers
 
     # click quotes the option it found ("'--r'"), fail() and option_names do not: one spelling.
     message = re.sub(r"^Invalid value for '(-[^']*)'", r"Invalid value for \1", message.strip())

@@ -17,7 +17,7 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli._common import areas, emit_json, fail, farads, fraction, pascals, plain_numbers, seconds
+from fsrlab.cli.options import areas, emit_json, fail, farads, fraction, pascals, plain_numbers, seconds
 from fsrlab.units import format_eng
 
 _PROFILE_HELP = "Virtual stress profile: triangle, sine, steps or hold."

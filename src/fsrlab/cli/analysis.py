@@ -17,7 +17,7 @@ from typing import Iterator
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli._common import emit_json, fail, farads, fraction, number, ohms, option_names, seconds
+from fsrlab.cli.options import emit_json, fail, farads, fraction, number, ohms, option_names, seconds
 from fsrlab.units import STANDARD_GRAVITY
 
 _DEGREES = ("auto", "1", "2", "3", "4", "5")

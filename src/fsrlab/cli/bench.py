@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli._common import emit_json, fail, mass_list, masses, pascals, plain_numbers, seconds
+from fsrlab.cli.options import emit_json, fail, mass_list, masses, pascals, plain_numbers, seconds
 
 _PROTOCOLS = ("spring", "weights", "creep")
 
@@ -150,7 +150,7 @@ def bench(
     result = run.result
     report_index = None
     if report is not None and not result.failed and result.frames:
-        from fsrlab.report.run_report import write_run_report
+        from fsrlab.reports.run_report import write_run_report
 
         report_index = write_run_report(out, report, placements=run.placements).index
     info = {**result_dict(result), "protocol": run.protocol, "device": run.device,

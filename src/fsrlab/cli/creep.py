@@ -12,7 +12,7 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli._common import emit_json, fail, fraction, option_names, seconds
+from fsrlab.cli.options import emit_json, fail, fraction, option_names, seconds
 from fsrlab.cli.analysis import _SKIP_HELP, _load, _missing, _skipped_json, _warn
 
 _PLOT_SUFFIXES = (".png", ".svg", ".pdf")

@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli._common import emit_json, fail, seconds
+from fsrlab.cli.options import emit_json, fail, seconds
 
 
 @app.command("demo")
@@ -38,7 +38,7 @@ def demo(
       fsrlab demo --out /tmp/demo --cycles 2 --period 2s --repeat 2 --no-paper --json
     """
     from fsrlab.bench.demo import DemoSettings
-    from fsrlab.report.demo import run_demo
+    from fsrlab.reports.demo import run_demo
 
     if device not in ("auto", "twin", "virtual"):
         fail(f"must be auto, twin or virtual, got {device!r}", "--device")

@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli._common import areas, fail, farads, mass_list, pascals, seconds
+from fsrlab.cli.options import areas, fail, farads, mass_list, pascals, seconds
 from fsrlab.io.jsonable import to_jsonable
 from fsrlab.cli.acquisition import _AREA_HELP, _LOADCELL_HELP, _SENSOR_HELP
 from fsrlab.cli.measure import load_frame_calibration

@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli._common import emit_json, fail, masses, plain_numbers, seconds
+from fsrlab.cli.options import emit_json, fail, masses, plain_numbers, seconds
 from fsrlab.cli.acquisition import _check_rate, _load_loadcell, _sigterm_as_interrupt, _window_ms
 
 _GRAVITY_HELP = "Local acceleration of gravity [m/s²], for mass -> force: 9.80665 (standard gravity g_n, the default), 9.81."

@@ -10,7 +10,7 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli._common import areas, emit_json, fail, farads, pascals, plain_numbers, seconds
+from fsrlab.cli.options import areas, emit_json, fail, farads, pascals, plain_numbers, seconds
 from fsrlab.cli.acquisition import (
     _AREA_HELP, _LOADCELL_HELP, _PEAK_HELP, _PERIOD_HELP, _PROFILE_HELP, _SENSOR_HELP, _check_out, _check_virtual,
     _LiveView, _fmt, _load_loadcell, _sensor_area, _sigterm_as_interrupt, _virtual_device, _window_ms,

@@ -10,7 +10,7 @@ import typer
 
 from fsrlab.hardware import CAPTURE_MAX_HZ
 from fsrlab.cli import app
-from fsrlab.cli._common import emit_json, fail, farads, fraction, hertz, ohms, option_names, seconds, volts
+from fsrlab.cli.options import emit_json, fail, farads, fraction, hertz, ohms, option_names, seconds, volts
 from fsrlab.units import format_eng
 
 _NAMES = {"control_v": "--vctrl", "discharge_ohm": "--rdis", "r_ohm": "--r", "r_fsr_ohm": "--rfsr", "c_fsr_farad": "--cfsr", "c_off_farad": "--coff",

@@ -9,7 +9,7 @@ import warnings
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli._common import electronvolts, emit_json, fail, metres, number, option_names, pascals, volts
+from fsrlab.cli.options import electronvolts, emit_json, fail, metres, number, option_names, pascals, volts
 from fsrlab.physics.params import PAPER, electron_volt
 from fsrlab.units import format_eng
 

@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli._common import emit_json, fail
+from fsrlab.cli.options import emit_json, fail
 
 
 @app.command("paper")
@@ -23,7 +23,7 @@ def paper(
       fsrlab paper
       fsrlab paper --out /tmp/fsrlab-report --json
     """
-    from fsrlab.report.paper import write_report
+    from fsrlab.reports.paper import write_report
 
     # A file where the directory should be: say so before building anything.
     for parent in (out, *out.parents):

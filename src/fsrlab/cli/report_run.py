@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli._common import emit_json, fail
+from fsrlab.cli.options import emit_json, fail
 
 
 def _existing(path: Path | None, option: str) -> None:
@@ -39,7 +39,7 @@ def report(
       fsrlab report examples/bench.csv --out report-run
       fsrlab report examples/other.csv --cal examples/calibration.json --placements examples/repeatability.csv --out report-run --json
     """
-    from fsrlab.report.run_report import write_run_report
+    from fsrlab.reports.run_report import write_run_report
 
     _existing(run, "RUN.csv")
     _existing(weights_run, "--weights")

@@ -7,7 +7,7 @@ import sys
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli._common import fail, farads, pascals, plain_numbers, seconds
+from fsrlab.cli.options import fail, farads, pascals, plain_numbers, seconds
 from fsrlab.cli.acquisition import (
     _C_OFF_HELP, _PERIOD_HELP, _PEAK_HELP, _PROFILE_HELP, _RATE_HELP, _SENSOR_HELP, _check_rate, _check_virtual,
     _sensor_area, _sigterm_as_interrupt, _virtual_device, _virtual_sensor,

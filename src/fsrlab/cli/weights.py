@@ -10,12 +10,12 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli._common import emit_json, fail, fraction, mass_list, plain_numbers, seconds
+from fsrlab.cli.options import emit_json, fail, fraction, mass_list, plain_numbers, seconds
 from fsrlab.cli.acquisition import (
     _AREA_HELP, _LOADCELL_HELP, _SENSOR_HELP, _check_out, _load_loadcell, _sensor_area, _sigterm_as_interrupt,
     _window_ms,
 )
-from fsrlab.cli._common import areas
+from fsrlab.cli.options import areas
 from fsrlab.cli.loadcell import _GRAVITY_HELP, _gravity
 
 

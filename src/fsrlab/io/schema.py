@@ -10,6 +10,8 @@ import os
 from pathlib import Path
 from typing import Sequence
 
+from fsrlab.errors import FileFormatError
+
 __all__ = ["FORMAT", "VERSION", "KNOWN_COLUMNS", "QUANTITY_COLUMNS", "RunFormatError", "check_columns", "sidecar_path",
            "where"]
 
@@ -44,8 +46,14 @@ KNOWN_COLUMNS: dict[str, str] = {
 QUANTITY_COLUMNS = ("frequency_hz", "duty_cycle", "voltage_v")
 
 
-class RunFormatError(ValueError):
-    """A run file that does not follow the format; the message is one line naming file, row, column."""
+class RunFormatError(FileFormatError):
+    """A run file that does not follow the format; the message is one line naming file, row, column.
+
+    Parameters
+    ----------
+    reason, parameter
+        As for :class:`~fsrlab.errors.FsrlabError`: the message and the parameter at fault.
+    """
 
 
 def check_columns(columns: Sequence[str]) -> list[str]:

@@ -7,7 +7,7 @@ import html
 from pathlib import Path
 
 from fsrlab import __version__
-from fsrlab.report.model import Section, Table
+from fsrlab.reports.model import Section, Table
 
 __all__ = ["render_html"]
 

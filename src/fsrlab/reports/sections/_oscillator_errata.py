@@ -1,5 +1,5 @@
 """Errata O1–O5 of the oscillator section, worded from the numbers :mod:`fsrlab.circuits.paper_ratio`
-computes (the same entries as docs/errata.md). A helper of :mod:`fsrlab.report.sections.oscillator`,
+computes (the same entries as docs/errata.md). A helper of :mod:`fsrlab.reports.sections.oscillator`,
 not a section builder.
 """
 
@@ -9,7 +9,7 @@ import math
 
 from fsrlab.circuits.lm555 import astable, duty_cycle_limits
 from fsrlab.circuits.paper_ratio import RatioMinimum, SimulatedRatios, TauRatioTable
-from fsrlab.report.model import Erratum
+from fsrlab.reports.model import Erratum
 
 __all__ = ["oscillator_errata"]
 

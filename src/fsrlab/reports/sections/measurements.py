@@ -5,7 +5,7 @@ Tables 4 and 5 are recomputed by :mod:`fsrlab.metrics.repeatability` from the pr
 (:mod:`fsrlab.virtual.synthetic`, :mod:`fsrlab.calibration.polynomial`,
 :mod:`fsrlab.calibration.compensation`). This module draws and words the results. Figure 17 and
 Tables 3–5 reproduced on a virtual bench are the experiment section's
-(:mod:`fsrlab.report.sections.experiment`).
+(:mod:`fsrlab.reports.sections.experiment`).
 """
 
 from __future__ import annotations
@@ -27,8 +27,8 @@ from fsrlab.metrics.repeatability import (
 )
 from fsrlab.virtual.synthetic import synthetic_run
 from fsrlab.reference import paper_values
-from fsrlab.report.figures import new_figure, save
-from fsrlab.report.model import Erratum, Figure, Section, Table
+from fsrlab.reports.figures import new_figure, save
+from fsrlab.reports.model import Erratum, Figure, Section, Table
 
 
 def _loads(printed: dict) -> dict:
@@ -286,7 +286,7 @@ def build(outdir: Path) -> Section:
     found = ddof_finding([t4, t5])
     force = {"capacitive": _force_terms(tab4), "traditional": _force_terms(tab5)}
     syn = _synthetic()
-    # Figure 17 itself is drawn from the virtual bench in the experiment section (fsrlab.report.sections.experiment).
+    # Figure 17 itself is drawn from the virtual bench in the experiment section (fsrlab.reports.sections.experiment).
     figures = [_fig_compensation(outdir, syn)]
     tables = [_table3(printed["table3_hysteresis_error_percent"], syn),
               _repeatability_table("Table 4: repeatability, capacitive readout (frequency), printed vs recomputed",

@@ -19,8 +19,8 @@ from fsrlab.paper.preset_fit import (
 from fsrlab.paper.experiment import Experiment, run_experiment
 from fsrlab.physics.paper_sensor import DEAD_WEIGHT_AREA_M2, PAPER_SENSOR_COMMON, paper_sensors
 from fsrlab.reference import paper_values
-from fsrlab.report.figures import new_figure, save
-from fsrlab.report.model import Erratum, Figure, Section, Table
+from fsrlab.reports.figures import new_figure, save
+from fsrlab.reports.model import Erratum, Figure, Section, Table
 
 _COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:red")
 

@@ -5,7 +5,7 @@ check by :mod:`fsrlab.circuits.paper_ratio` (closed forms of :mod:`fsrlab.circui
 through :mod:`fsrlab.circuits.spice` when it is installed), the frequency decomposition by
 :mod:`fsrlab.circuits.decomposition`, the paper's statements from :func:`fsrlab.reference.paper_values`.
 This module draws and words them; the errata O1–O5 are worded in
-:mod:`fsrlab.report.sections._oscillator_errata`.
+:mod:`fsrlab.reports.sections._oscillator_errata`.
 """
 
 from __future__ import annotations
@@ -22,9 +22,9 @@ from fsrlab.circuits.paper_ratio import (RatioMinimum, SimulatedRatios, TauRatio
                                          tau_ratio_eq37_as_printed, tau_ratio_table)
 from fsrlab.circuits.spice import ngspice_available
 from fsrlab.reference import paper_values
-from fsrlab.report.figures import new_figure, save
-from fsrlab.report.model import Figure, Section, Table
-from fsrlab.report.sections._oscillator_errata import oscillator_errata
+from fsrlab.reports.figures import new_figure, save
+from fsrlab.reports.model import Figure, Section, Table
+from fsrlab.reports.sections._oscillator_errata import oscillator_errata
 
 #: N = R_FSR/R values shown in the table and simulated with ngspice.
 N_TABLE = [4.5, 5.0, 6.0, 8.0, 10.0, 14.0, 20.0, 50.0, 100.0, 1000.0]

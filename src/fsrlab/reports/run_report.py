@@ -1,7 +1,7 @@
 """The measurement report of a recorded run: ``index.html``, ``report.json`` and PNGs (``fsrlab report``).
 
-It renders :func:`fsrlab.bench.measurement.measure_run` with :mod:`fsrlab.report.html` and
-:mod:`fsrlab.report.figures`; the paper's printed values (Tables 3–5) stand beside the run's own
+It renders :func:`fsrlab.bench.measurement.measure_run` with :mod:`fsrlab.reports.html` and
+:mod:`fsrlab.reports.figures`; the paper's printed values (Tables 3–5) stand beside the run's own
 for scale, not as a target (a different sensor on a different bench).
 """
 
@@ -12,7 +12,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from fsrlab.report.model import Figure, Section, Table
+from fsrlab.reports.model import Figure, Section, Table
 
 __all__ = ["RunReportFiles", "build_sections", "write_run_report"]
 
@@ -44,7 +44,7 @@ def _f(v, spec: str = ".2f") -> str:
 
 
 def _loops_figure(rep, outdir: Path) -> Figure | None:
-    from fsrlab.report.figures import new_figure, save
+    from fsrlab.reports.figures import new_figure, save
 
     drawn = [h for h in rep.hysteresis if h.result is not None]
     if not drawn:
@@ -82,7 +82,7 @@ def _loops_figure(rep, outdir: Path) -> Figure | None:
 def _estimate_figure(rep, outdir: Path) -> Figure | None:
     import numpy as np
 
-    from fsrlab.report.figures import new_figure, save
+    from fsrlab.reports.figures import new_figure, save
 
     est = rep.curves.get("estimate")
     ref = rep.curves.get("estimate_reference")
@@ -247,7 +247,7 @@ def write_run_report(run, outdir, placements=None, weights_run=None, calibration
     RunReportFiles
     """
     from fsrlab.bench.measurement import measure_run
-    from fsrlab.report.html import render_html
+    from fsrlab.reports.html import render_html
 
     outdir = Path(outdir)
     rep = measure_run(run, placements=placements, weights_run=weights_run, calibration=calibration,

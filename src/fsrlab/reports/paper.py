@@ -15,17 +15,17 @@ from pathlib import Path
 from typing import Callable
 
 from fsrlab import __version__
-from fsrlab.report.html import render_html
-from fsrlab.report.model import Section
+from fsrlab.reports.html import render_html
+from fsrlab.reports.model import Section
 
 __all__ = ["SECTION_MODULES", "ReportResult", "build_sections", "write_report"]
 
 #: Section builders in report order. Add yours here.
 SECTION_MODULES = [
-    "fsrlab.report.sections.physics",
-    "fsrlab.report.sections.oscillator",
-    "fsrlab.report.sections.measurements",
-    "fsrlab.report.sections.experiment",
+    "fsrlab.reports.sections.physics",
+    "fsrlab.reports.sections.oscillator",
+    "fsrlab.reports.sections.measurements",
+    "fsrlab.reports.sections.experiment",
 ]
 
 

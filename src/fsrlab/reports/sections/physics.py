@@ -20,8 +20,8 @@ from fsrlab.paper.table2 import (
 )
 from fsrlab.physics.tunneling import current_density
 from fsrlab.reference import paper_values
-from fsrlab.report.figures import new_figure, save
-from fsrlab.report.model import Erratum, Figure, Section, Table
+from fsrlab.reports.figures import new_figure, save
+from fsrlab.reports.model import Erratum, Figure, Section, Table
 
 _UM2 = 1e-12  # m² per µm²
 

@@ -1,8 +1,8 @@
 """What a report section is made of: figures, tables, errata and machine-readable data.
 
-A section builder (a module in :mod:`fsrlab.report.sections`) writes its PNGs into the output
-directory and returns a :class:`Section`; :mod:`fsrlab.report.paper` collects the sections and
-:mod:`fsrlab.report.html` renders them.
+A section builder (a module in :mod:`fsrlab.reports.sections`) writes its PNGs into the output
+directory and returns a :class:`Section`; :mod:`fsrlab.reports.paper` collects the sections and
+:mod:`fsrlab.reports.html` renders them.
 """
 
 from __future__ import annotations

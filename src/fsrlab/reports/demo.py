@@ -3,9 +3,9 @@
 :func:`run_demo` runs the chain of :func:`fsrlab.bench.demo.run_chain` (the bench, the spring and
 dead-weight runs, the calibrations, the compensated estimate of the test run), then
 
-5. writes the measurement report of the test run (:func:`fsrlab.report.run_report.write_run_report`)
+5. writes the measurement report of the test run (:func:`fsrlab.reports.run_report.write_run_report`)
    with the dead-weight run's placements;
-6. writes the reproduction report (:func:`fsrlab.report.paper.write_report`);
+6. writes the reproduction report (:func:`fsrlab.reports.paper.write_report`);
 7. writes ``index.html`` linking both.
 """
 
@@ -57,7 +57,7 @@ def run_demo(out="demo", settings: DemoSettings = DemoSettings(), sensor=None, d
     out = Path(out)
 
     # 5. Measurement report.
-    from fsrlab.report.run_report import write_run_report
+    from fsrlab.reports.run_report import write_run_report
 
     t0 = step("measurement report of the test run: HE of f and V0 (Table 3), RE1/RE2 (eq. 39), ISO 376, calibration")
     rep = write_run_report(out / "test-run.csv", out / "measurement", weights_run=out / "weights-run.csv",
@@ -74,7 +74,7 @@ def run_demo(out="demo", settings: DemoSettings = DemoSettings(), sensor=None, d
 
     # 6. The reproduction report.
     if paper:
-        from fsrlab.report.paper import write_report
+        from fsrlab.reports.paper import write_report
 
         t0 = step("reproduction report of the paper (fsrlab paper)")
         pr = write_report(out / "paper", progress=None)

@@ -1,1 +1,0 @@
-"""The reproduction report: each capability contributes a section (see :mod:`fsrlab.report.paper`)."""

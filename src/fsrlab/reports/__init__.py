@@ -1,0 +1,1 @@
+"""The reproduction report: each capability contributes a section (see :mod:`fsrlab.reports.paper`)."""
