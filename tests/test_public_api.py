@@ -22,11 +22,11 @@ def test_import_fsrlab_loads_no_numpy():
 def test_the_names_a_user_calibrates_with_resolve():
     from fsrlab.calibration.apply import apply_calibration
     from fsrlab.calibration.document import load_calibration, save_calibration
-    from fsrlab.calibration.fit import calibrate_run
+    from fsrlab.calibration.heldout_runs import calibrate_runs
     from fsrlab.io.runformat import load_run
     from fsrlab.reports.run_report import write_run_report
 
-    assert fl.load_run is load_run and fl.calibrate is calibrate_run and fl.apply is apply_calibration
+    assert fl.load_run is load_run and fl.calibrate is calibrate_runs and fl.apply is apply_calibration
     assert fl.load_calibration is load_calibration and fl.save_calibration is save_calibration
     # The function, even after the reports package has been imported (it sets no attribute named report).
     import fsrlab.reports.paper  # noqa: F401

@@ -35,7 +35,7 @@ def test_minimal_csv_works_for_hysteresis_and_calibrate(tmp_path, capsys):
     p.write_text("\n".join(lines) + "\n")
     code, out, _ = run_cli(["hysteresis", p, "--json"], capsys)
     assert code == 0 and len(json.loads(out)["cycles"]) == 2
-    code, out, _ = run_cli(["calibrate", p, "--x", "frequency_hz", "--json"], capsys)
+    code, out, _ = run_cli(["calibrate", p, "--x", "frequency_hz", "--method", "cv", "--json"], capsys)
     assert code == 0
     # The earlier keys stay; the calibration on real data adds model, lag_s, cv_rmse, cv_rmse_percent_fs, candidates.
     assert set(json.loads(out)) >= {"degree", "r2", "rmse_pa", "max_error_percent_fs", "coefficients", "readout_range",

@@ -62,7 +62,7 @@ def test_generator_is_deterministic_and_shows_what_real_recordings_show():
 
 def test_hand_loaded_run_calibrates_with_compensate_from_the_command_line(hand, tmp_path):
     # This run used to stop with "cycles: the branches share no stress range".
-    code, out, err = run_cli(["calibrate", hand / "cal.csv", "--x", "voltage_v", "--compensate", "-o",
+    code, out, err = run_cli(["calibrate", hand / "cal.csv", "--x", "voltage_v", "--method", "cv", "--compensate", "-o",
                               tmp_path / "cal.json", "--json"])
     assert code == 0, err
     d = json.loads(out)
@@ -264,7 +264,7 @@ def test_force_reference_without_area_in_hysteresis(hand, tmp_path):
 def _bad(tmp_path, columns, meta=None, args=()):
     p = tmp_path / "bad.csv"
     write_run(p, columns, meta or {}, overwrite=True)
-    code, out, err = run_cli(["calibrate", p, "--x", "voltage_v", *args])
+    code, out, err = run_cli(["calibrate", p, "--x", "voltage_v", "--method", "cv", *args])
     assert code == 2 and out == "" and err.count("\n") == 1, err
     return err
 
@@ -337,10 +337,11 @@ def test_stress_reference_from_force_and_area(hand):
 
 
 def test_calibrate_shows_force_errors_in_grams(hand):
-    code, out, err = run_cli(["calibrate", hand / "held21.csv", "--x", "voltage_v", "--unit", "g", "--lag", "0"])
+    code, out, err = run_cli(["calibrate", hand / "held21.csv", "--x", "voltage_v", "--method", "cv", "--unit", "g",
+                              "--lag", "0"])
     assert code == 0, err
     assert "CV RMSE (g)" in out
-    code, out, err = run_cli(["calibrate", hand / "held21.csv", "--x", "voltage_v", "--unit", "kPa"])
+    code, out, err = run_cli(["calibrate", hand / "held21.csv", "--x", "voltage_v", "--method", "cv", "--unit", "kPa"])
     assert code == 2 and out == "" and "--unit" in err
 
 

@@ -21,6 +21,7 @@ import numpy as np
 
 from fsrlab.calibration.estimator import MARGIN, _causal_branches, live_estimator
 from fsrlab.calibration.heldout_runs import RunCalibration
+from fsrlab.errors import ProvenanceError
 from fsrlab.calibration.provenance import mismatches
 from fsrlab.calibration.readout import C_FSR, _as_run, run_readout, run_recorded_with
 from fsrlab.calibration.result import Calibration
@@ -118,9 +119,13 @@ def apply_calibration(cal: Calibration, run, compensation: bool = True, circuit:
     one corrupt reading does not bend the compensation's branch detection for the whole run
     (see :meth:`fsrlab.calibration.compensation.DirectionAwareCalibration.predict` for gaps).
     """
-    if isinstance(cal, RunCalibration):
-        return cal.apply(run, margin=margin, force=force, compensation=compensation)
     run = _as_run(run)
+    if isinstance(cal, RunCalibration):
+        differences = check_readout(cal, run, circuit)
+        if differences and not force:
+            raise ProvenanceError(f"{differences[0]}: the readout means another force there; calibrate on a run "
+                                  "recorded the same way, or force it")
+        return cal.estimate_run(run, margin=margin, compensation=compensation, forced=differences)
     if not margin >= 0:
         raise ValueError(f"margin: must be a fraction >= 0 of the calibrated span, got {margin!r}")
     if cal.x_name not in run and cal.x_name != C_FSR:

@@ -412,7 +412,8 @@ def _orientation(recs: list[Recording]) -> tuple[int, float | None]:
     y_all = np.concatenate([r.y[r.usable] for r in recs])
     rho = _rank_correlation(x_all, y_all) if x_all.size > 2 else float("nan")
     if not np.isfinite(rho) or abs(rho) < 0.1:
-        raise ValueError(f"the readout does not follow the reference (rank correlation {rho:.2f})")
+        raise ValueError("the readout does not respond to the reference" + (
+            " (it does not change)" if not np.isfinite(rho) else f" (rank correlation {rho:.2f})"))
     return (1 if rho > 0 else -1), adc_full_scale(x_all)
 
 

@@ -11,7 +11,7 @@ Examples
 
     import fsrlab as fl
     cal = fl.calibrate(["hand.csv", "motor.csv"], x="reading", reference="force_n", compensate=True)
-    out = fl.apply(cal, "other.csv")       # a Run with force_n_estimate and force_n_uncertainty
+    out = fl.apply(cal, fl.load_run("other.csv"))   # a Run with force_n_estimate and force_n_uncertainty
 """
 
 from __future__ import annotations
@@ -83,12 +83,14 @@ class RunCalibration:
 
     @property
     def lag_s(self) -> float:
-        return self.selection.lag_rows * self.model.row_s
+        return float(f"{self.selection.lag_rows * self.model.row_s:.10g}")  # without the float noise of the step
 
     @property
     def model_name(self) -> str:
         c = self.model.curve
-        mem = ("+hysteresis" if self.model.thresholds else "") + ("+creep" if self.model.time_constants else "")
+        m = self.model
+        mem = (("+hysteresis" + ("·level" if m.scaled else "")) if m.thresholds else "") + \
+            ("+creep" if m.time_constants else "")
         return f"monotone-{c.variable}-{c.segments}{mem}"
 
     def to_dict(self) -> dict:
@@ -116,32 +118,21 @@ class RunCalibration:
         """A causal estimator: ``step(reading, t=None) -> (estimate, uncertainty, in_range)``."""
         return RunEstimator(self, margin, compensation)
 
-    def mismatches(self, run: Run) -> list[str]:
-        """How the run's readout differs from the calibration's (circuit, range, column); empty when alike."""
-        if self.recorded_with is None:
-            return []
-        name = "the calibration" if self.path is None else str(self.path)
-        theirs = recorded_with(run.metadata, run.columns.get("range"))
-        return [f"{run.path} was recorded with {a}, {name} with {b}"
-                for a, b in mismatches(self.x_name, self.recorded_with, theirs, None)]
-
-    def apply(self, run, margin: float = MARGIN, force: bool = False, compensation: bool = True) -> Run:
+    def estimate_run(self, run: Run, margin: float = MARGIN, compensation: bool = True,
+                     forced: list | None = None) -> Run:
         """The run with ``<reference>_estimate``, ``<reference>_uncertainty`` and ``in_range``.
 
         Every reading feeds the memory, in row order; ``margin`` only decides which estimates are
-        reported (beyond it: empty). Raises ValueError naming both when the run was recorded with
-        another circuit or range, unless ``force``. ``compensation=False``: the static curve alone.
+        reported (beyond it: empty). ``compensation=False``: the static curve alone. No provenance
+        check here: :func:`fsrlab.calibration.apply.apply_calibration` checks the run first
+        (``forced``: the differences it was told to ignore, kept in the metadata).
         """
-        run = run if isinstance(run, Run) else load_run(run)
         if not margin >= 0:
             raise ValueError(f"margin: must be a fraction >= 0 of the calibrated span, got {margin!r}")
         if self.x_name not in run:
             raise RunFormatError(f"{run.path}: column {self.x_name!r} (the calibration's readout) missing "
                                  f"(columns: {', '.join(run.columns)})")
-        differences = self.mismatches(run)
-        if differences and not force:
-            raise ValueError(f"{differences[0]}: the readout means another force; calibrate on a run recorded the "
-                             "same way, or force it")
+        differences = forced or []
         x = np.asarray(run[self.x_name], dtype=float)
         t = run["time_s"] if "time_s" in run else np.arange(x.size) * self.model.row_s
         model = self.model if compensation else self.model.without_memory()
@@ -156,7 +147,7 @@ class RunCalibration:
                   "out_of_range": int((given & ~inside).sum()),
                   "extrapolated": int((np.isfinite(columns[ycol]) & ~inside).sum()),
                   "missing": int((~np.isfinite(columns[ycol])).sum()), "no_readout": int((~given).sum()),
-                  "beyond_margin": int((given & ~kept).sum())}
+                  "not_decodable": 0, "beyond_margin": int((given & ~kept).sum()), "below_activation": 0}
         meta = {k: v for k, v in run.metadata.items() if k not in _FILE_KEYS}
         meta["units"] = dict(run.units, **{ycol: self.y_unit, ucol: self.y_unit, "in_range": "1"})
         meta["calibration"] = {**({} if self.path is None else {"file": str(self.path)}), "x": self.x_name,
@@ -289,7 +280,11 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
                                  "calibrate runs of one readout together")
     except ValueError:
         raise
-    model, sel = calibrate_recordings(recs, compensate=compensate, lag=lag)
+    try:
+        model, sel = calibrate_recordings(recs, compensate=compensate, lag=lag)
+    except ValueError as exc:
+        names = ", ".join(str(r.path) for r in runs)
+        raise ValueError(f"{names}: {x} and {ref}: {exc}") from None
     return RunCalibration(model, sel, x, ref, xu, yu, [str(r.path) for r in runs], rw,
                           int(sum(int(r.usable.sum()) for r in recs)),
                           datetime.now(timezone.utc).isoformat(timespec="seconds"))

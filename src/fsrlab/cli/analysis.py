@@ -194,36 +194,55 @@ def _unit_option(unit: str | None, reference: str) -> tuple[str, float]:
 
 @app.command("calibrate")
 def calibrate_cmd(
-    run_file: Path = typer.Argument(..., metavar="RUN.csv", help="A run with the reference force_n [N] or stress_pa [Pa] and the readout; time_s [s] optional (row order otherwise)."),
-    x: str = typer.Option("frequency_hz", "--x", help="Readout to calibrate: any numeric column, e.g. frequency_hz [Hz], duty_cycle [1], voltage_v [V], or c_fsr_farad [F]: C_FSR decoded from frequency_hz and duty_cycle (physics-informed)."),
+    run_files: list[Path] = typer.Argument(..., metavar="RUN.csv [RUN2.csv ...]", help="One or more runs of the same sensor and readout, each with the reference force_n [N] or stress_pa [Pa] and the readout; time_s [s] optional (row order otherwise)."),
+    x: str = typer.Option("frequency_hz", "--x", help="Readout to calibrate: any numeric column, e.g. frequency_hz [Hz], duty_cycle [1], voltage_v [V], reading [counts] (a run from fsrlab import), or c_fsr_farad [F]: C_FSR decoded from frequency_hz and duty_cycle (physics-informed, --method cv)."),
     reference: str = typer.Option(None, "--reference", help="Reference column: force_n [N] (no sensor area needed) or stress_pa [Pa] (default: stress_pa if the run has it, else force_n)."),
-    model: str = typer.Option("auto", "--model", help="Model [name]: auto (every family, chosen by grouped cross-validation), polynomial, conductance-polynomial, conductance-power (F = c + a·G^b through the readout circuit), power, or one candidate such as polynomial-3."),
-    degree: str = typer.Option("auto", "--degree", help="Polynomial degree 1..5 [1] (the model is then that polynomial), or auto."),
-    compensate: bool = typer.Option(False, "--compensate", help="Also fit the causal hysteresis compensation (play operators with memory, or loading/unloading branches when the run is whole cycles, chosen by grouped CV; extension beyond the paper) and report HE [%] before/after."),
+    method: str = typer.Option("auto", "--method", help="How choices are scored [name]: held-out (on other runs, or on later blocks of one run; each added term kept only when it wins there: docs/calibration.md), cv (grouped cross-validation inside one run, with --model, --degree, --folds, --max-lag, c_fsr_farad), or auto: cv when one of those is given, else held-out."),
+    model: str = typer.Option("auto", "--model", help="Model [name] (--method cv): auto (every family, chosen by grouped cross-validation), polynomial, conductance-polynomial, conductance-power (F = c + a·G^b through the readout circuit), power, or one candidate such as polynomial-3."),
+    degree: str = typer.Option("auto", "--degree", help="Polynomial degree 1..5 [1] (--method cv; the model is then that polynomial), or auto."),
+    compensate: bool = typer.Option(False, "--compensate", help="Also try the causal hysteresis compensation (play operators with memory, and creep; extension beyond the paper): kept only when it lowers the held-out error by more than its standard error (--method cv: chosen by grouped CV, HE [%] before/after)."),
     unit: str = typer.Option(None, "--unit", help="Display unit of the errors in the table [N, g, Pa or kPa] (default: the reference's, N or Pa); --json and the file stay SI."),
-    lag: str = typer.Option("auto", "--lag", help="Lag of the readout behind the reference [s] (rows without time_s), e.g. 0.02 or 0; auto: estimated by cross-correlation of the changes."),
-    max_lag: float = typer.Option(None, "--max-lag", parser=seconds, help="Half-width of the lag search [s], e.g. 0.25 (default 0.25 s, at least 2 rows)."),
-    folds: int = typer.Option(5, "--folds", help="Cross-validation folds [1], ≥ 2 (fewer when the run has fewer cycles or blocks)."),
+    lag: str = typer.Option("auto", "--lag", help="Lag of the readout behind the reference [s] (rows without time_s), e.g. 0.02 or 0; auto: none unless a shift of whole rows wins held out (--method cv: searched by cross-validation)."),
+    max_lag: float = typer.Option(None, "--max-lag", parser=seconds, help="Half-width of the lag search [s] (--method cv), e.g. 0.25 (default 0.25 s, at least 2 rows)."),
+    folds: int = typer.Option(5, "--folds", help="Cross-validation folds [1] (--method cv), ≥ 2 (fewer when the run has fewer cycles or blocks)."),
     r: float = typer.Option(None, "--r", parser=ohms, help="555 R for --x c_fsr_farad [Ω], e.g. 10k (default: the run's sidecar, else 10k)."),
     c_off: float = typer.Option(None, "--c-off", parser=farads, help="C_off for --x c_fsr_farad [F], e.g. 470p (default: sidecar, else 0)."),
     skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=_SKIP_HELP),
     output: Path = typer.Option(None, "--output", "-o", help="Write the calibration to this JSON file."),
-    json_out: bool = typer.Option(False, "--json", help="Print JSON: model, lag_s [s], cv_rmse [reference unit], cv_rmse_percent_fs [%], candidates, ..."),
+    json_out: bool = typer.Option(False, "--json", help="Print JSON: model, method, how choices were scored and each step's result, held-out RMSE [reference unit and % FS], lag_s [s], candidates, ..."),
 ) -> None:
-    """Calibrate readout → force or stress: model families by grouped CV, lag, dead zone, uncertainty.
+    """Calibrate readout → force or stress, every choice scored where it will be used.
 
-    The candidates are polynomials of degree 1–5 (paper Figure 17 uses 1 and 3), and, through the
-    readout circuit (a divider or op-amp in the sidecar, or decoded C_FSR), the FSR's conductance
-    as a power law or a low-degree polynomial. Readings at the readout's floor are "below
-    activation". The calibration file records the calibrated readout range and the circuit and
-    range the run was recorded with, which fsrlab apply checks. See docs/calibration.md.
+    Default (held-out): a monotone curve (readout, or a divider's conductance for analogRead
+    counts), then a lag, hysteresis and creep terms, each kept only when it beats the simpler
+    calibration on another run (or, with one run, on later blocks of it) by more than one standard
+    error -- otherwise the simpler calibration is written and the output says why. The uncertainty
+    comes from those held-out errors. With --method cv (one run): polynomials and conductance
+    families by grouped cross-validation, the dead zone, the branch or play-operator compensation.
+    The file records the readout range and the circuit and range the runs were recorded with,
+    which fsrlab apply checks. See docs/calibration.md.
 
     Examples (files under examples/ in the fsrlab source tree):
 
     \b
-      fsrlab calibrate examples/minimal.csv
       fsrlab calibrate examples/bench.csv --compensate -o cal.json
+      fsrlab calibrate examples/bench.csv examples/other.csv --x frequency_hz --compensate --json
     """
+    cv_only = {"--model": model != "auto", "--degree": degree != "auto", "--folds": folds != 5,
+               "--max-lag": max_lag is not None, "--r": r is not None, "--c-off": c_off is not None,
+               "--x c_fsr_farad": x == "c_fsr_farad"}
+    if method not in ("auto", "held-out", "cv"):
+        fail(f"must be auto, held-out or cv, got {method!r}", "--method")
+    asked = [k for k, v in cv_only.items() if v]
+    if method == "held-out" and asked:
+        fail(f"{asked[0]} needs --method cv (or auto)", "--method")
+    if method == "held-out" or (method == "auto" and not asked):
+        _calibrate_held_out(run_files, x, reference, compensate, unit, lag, skip_bad_rows, output, json_out)
+        return
+    if len(run_files) > 1:
+        fail(f"--method cv calibrates one run, got {len(run_files)}: several runs are calibrated with --method "
+             "held-out", "--method")
+    run_file = run_files[0]
     from fsrlab.calibration.document import save_calibration
     from fsrlab.calibration.fit import calibrate_run
     from fsrlab.calibration.readout import run_circuit
@@ -320,6 +339,77 @@ def calibrate_cmd(
     if cal.cv is not None and cal.cv.untried:
         console.print(f"polynomial degrees {', '.join(map(str, cal.cv.untried))} not tried: the smallest training fold "
                       f"has too few readings to determine them ({cal.n} readings, {cal.cv.folds} folds)")
+    if output is not None:
+        console.print(f"wrote {output}")
+
+
+def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, compensate: bool, unit: str | None,
+                        lag: str, skip_bad_rows: bool, output: Path | None, json_out: bool) -> None:
+    """``fsrlab calibrate`` by held-out scoring (:func:`fsrlab.calibration.heldout_runs.calibrate_runs`)."""
+    import numpy as np
+
+    from fsrlab.calibration.document import save_calibration
+    from fsrlab.calibration.heldout_runs import calibrate_runs
+
+    warnings: list[str] = []
+    runs = []
+    for run_file in run_files:
+        run = _load(run_file, skip_bad_rows, warnings)
+        if x not in run:
+            _missing(run_file, run, x, option="--x")
+        _reference_option(run_file, run, reference)
+        runs.append(run)
+    ref = reference or ("stress_pa" if all("stress_pa" in r for r in runs) else "force_n")
+    _unit_option(unit, ref)
+    lag_rows: int | str = "auto"
+    if lag != "auto":
+        try:
+            lag_s = number(lag)
+        except typer.BadParameter as exc:
+            fail(f"must be auto or a lag in seconds such as 0.02, got {lag!r} ({exc.message})", "--lag")
+        if not math.isfinite(lag_s):
+            fail(f"must be auto or a finite lag in seconds, got {lag!r}", "--lag")
+        first = runs[0]
+        step = float(np.median(np.diff(first["time_s"]))) if "time_s" in first and first.n_rows > 1 else 1.0
+        lag_rows = int(round(lag_s / step)) if step > 0 else 0
+    cal = calibrate_runs(runs, x=x, reference=ref, compensate=compensate, lag=lag_rows)
+    sel = cal.selection
+    fs = cal.full_scale
+    refused = [s for s in sel.steps if s["step"] in ("hysteresis", "creep") and not s["kept"]]
+    out = {"method": "held-out", "scheme": sel.scheme, "model": cal.model_name, "reference": cal.y_name,
+           "unit": cal.y_unit, "runs": [str(p) for p in run_files], "lag_s": cal.lag_s, "lag_rows": sel.lag_rows,
+           "heldout_rmse": sel.heldout_rmse, "heldout_rmse_percent_fs": 100 * sel.heldout_rmse / fs,
+           "heldout_rmse_plain": sel.heldout_rmse_plain, "full_scale": fs, "readout_range": list(cal.x_range),
+           "compensated": cal.model.has_memory, "uncertainty_relative": cal.model.uncertainty.relative,
+           "gain_spread": sel.gain_spread, "steps": sel.steps, "candidates": sel.candidates}
+    if output is not None:
+        save_calibration(cal, output)
+    _warn(warnings)
+    if json_out:
+        emit_json(out)
+        return
+    from rich.console import Console
+    from rich.table import Table
+
+    u, k = _unit_option(unit, cal.y_name)
+    console = Console()
+    table = Table(title=f"Calibration {cal.y_name}({x}), {', '.join(p.name for p in run_files)}")
+    table.add_column("quantity")
+    table.add_column("value", justify="right")
+    table.add_row("model", cal.model_name)
+    table.add_row("choices scored by", sel.scheme)
+    table.add_row("lag (s)", f"{cal.lag_s:.4g}")
+    table.add_row(f"held-out RMSE ({u})", f"{k * sel.heldout_rmse:.4g}")
+    table.add_row("held-out RMSE (% FS)", f"{out['heldout_rmse_percent_fs']:.3f}")
+    if cal.model.has_memory:
+        table.add_row(f"held-out RMSE without compensation ({u})", f"{k * sel.heldout_rmse_plain:.4g}")
+    table.add_row(f"readout range ({cal.x_unit or '1'})", f"{cal.x_range[0]:.6g} … {cal.x_range[1]:.6g}")
+    table.add_row("relative uncertainty between runs (%)", f"{100 * cal.model.uncertainty.relative:.3g}")
+    for s in sel.steps[1:]:
+        table.add_row(f"{s['step']}: {s['tried']}", "kept" if s["kept"] else "not kept")
+    console.print(table)
+    if compensate and refused:
+        console.print(f"compensation: {refused[0]['step']} not kept: {refused[0]['why']}")
     if output is not None:
         console.print(f"wrote {output}")
 

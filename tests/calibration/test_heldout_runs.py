@@ -1,0 +1,128 @@
+"""The held-out calibration on runs: file, apply, live stepping, provenance and the command line.
+
+References: properties that must hold (the file gives the same estimates, stepping one reading at
+a time gives the batch's numbers, a run of another circuit is refused) and the generator's truth
+(:mod:`fsrlab.virtual.handloaded`) for the command line's choices.
+"""
+
+import json
+
+import numpy as np
+import pytest
+
+from clirun import run_cli
+from fsrlab.calibration.apply import apply_calibration
+from fsrlab.calibration.document import load_calibration, save_calibration
+from fsrlab.calibration.estimator import live_estimator
+from fsrlab.calibration.heldout_runs import RunCalibration, calibrate_runs
+from fsrlab.errors import ProvenanceError
+from fsrlab.io.runformat import load_run
+from fsrlab.io.runwriter import write_run
+from fsrlab.virtual.handloaded import fsr_bench_run
+
+
+def _write(path, kind, seed, **kw):
+    run = fsr_bench_run(kind, seed=seed, **kw)
+    cols = {"time_s": run.columns["time_s"], "reading": np.round(run.columns["voltage_v"] / 5.0 * 1023),
+            "force_n": run.columns["force_n"]}
+    write_run(path, cols, {"units": {"time_s": "s", "reading": "counts", "force_n": "N"}})
+    return path
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    d = tmp_path_factory.mktemp("heldout")
+    return {"hand": _write(d / "hand.csv", "hand", 1), "hand2": _write(d / "hand2.csv", "hand", 2, duration_s=40),
+            "motor": _write(d / "motor.csv", "motor", 3)}
+
+
+@pytest.fixture(scope="module")
+def cal(runs):
+    return calibrate_runs([runs["hand"]], x="reading", reference="force_n", compensate=True)
+
+
+def test_the_file_gives_the_same_estimates(cal, runs, tmp_path):
+    path = save_calibration(cal, tmp_path / "cal.json")
+    again = load_calibration(path)
+    assert isinstance(again, RunCalibration) and again.path == path
+    a = apply_calibration(cal, runs["motor"])["force_n_estimate"]
+    b = apply_calibration(again, runs["motor"])["force_n_estimate"]
+    assert np.array_equal(a, b, equal_nan=True)
+
+
+def test_stepping_gives_the_batch_estimates_and_uncertainties(cal, runs):
+    run = load_run(runs["motor"])
+    batch = apply_calibration(cal, run)
+    est = live_estimator(cal)
+    stepped = [est.step(x, t) for x, t in zip(run["reading"], run["time_s"])]
+    e = np.array([np.nan if s[0] is None else s[0] for s in stepped])
+    u = np.array([np.nan if s[1] is None else s[1] for s in stepped])
+    assert np.allclose(e, batch["force_n_estimate"], rtol=0, atol=1e-9, equal_nan=True)
+    assert np.allclose(u, batch["force_n_uncertainty"], rtol=0, atol=1e-9, equal_nan=True)
+
+
+def test_margin_only_decides_what_is_reported_not_the_memory(cal, runs):
+    """A narrow margin leaves the estimates beyond it empty; those it reports are the wide margin's."""
+    run = load_run(runs["motor"])
+    wide = apply_calibration(cal, run, margin=np.inf)["force_n_estimate"]
+    narrow = apply_calibration(cal, run, margin=0.0)["force_n_estimate"]
+    kept = np.isfinite(narrow)
+    assert np.array_equal(narrow[kept], wide[kept])
+
+
+def test_a_run_of_another_circuit_is_refused(runs, tmp_path):
+    """A calibration of the 555's frequency records the circuit its run was recorded with; a run with
+    another R (so the same frequency means another force) is refused, and applied only when forced."""
+    src = load_run(runs["hand"])
+    circuit = {"topology": "lm555-astable", "r_ohm": 10000.0, "c_off_farad": 0.0, "diode": True, "diode_drop_v": 0.0}
+    cols = {"time_s": src["time_s"], "frequency_hz": 1000 + src["reading"], "force_n": src["force_n"]}
+    units = {"time_s": "s", "frequency_hz": "Hz", "force_n": "N"}
+    mine = write_run(tmp_path / "mine.csv", cols, {"units": units, "circuit": circuit})
+    other = write_run(tmp_path / "other.csv", cols, {"units": units, "circuit": dict(circuit, r_ohm=22000.0)})
+    cal = calibrate_runs([mine], x="frequency_hz", reference="force_n")
+    assert cal.recorded_with is not None and cal.recorded_with.circuit is not None
+    with pytest.raises(ProvenanceError, match="22"):
+        apply_calibration(cal, other)
+    forced = apply_calibration(cal, other, force=True)
+    assert np.isfinite(forced["force_n_estimate"]).any() and forced.metadata["calibration"]["forced"]
+    code, _, err = run_cli(["apply", tmp_path / "cal.json" if save_calibration(cal, tmp_path / "cal.json") else "",
+                            other, "-o", tmp_path / "out.csv"])
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "22" in err
+
+
+def test_cli_calibrates_several_runs_leaving_one_out(runs, tmp_path):
+    out = tmp_path / "cal.json"
+    code, stdout, err = run_cli(["calibrate", runs["hand"], runs["hand2"], runs["motor"], "--x", "reading",
+                                 "--reference", "force_n", "--compensate", "-o", out, "--json"])
+    assert code == 0, err
+    doc = json.loads(stdout)
+    assert doc["method"] == "held-out" and doc["scheme"] == "leave one recording out"
+    assert [s["step"] for s in doc["steps"]] == ["static curve", "lag", "hysteresis", "creep"]
+    assert json.loads(out.read_text())["method"] == "held-out"
+
+
+def test_cli_says_in_one_line_why_the_compensation_was_not_kept(tmp_path):
+    """A sensor without memory: the compensation is tried, not kept, and the table says why."""
+    rng = np.random.default_rng(7)
+    t = np.arange(3000) * 0.02
+    force = 10 * np.abs(np.sin(2 * np.pi * t / 7.3))
+    reading = np.round(1023 * (force / 12) ** 0.7 / (1 + (force / 12) ** 0.7) + rng.normal(0, 3, t.size))
+    p = write_run(tmp_path / "static.csv", {"time_s": t, "reading": reading, "force_n": force + rng.normal(0, .3, t.size)},
+                  {"units": {"time_s": "s", "reading": "counts", "force_n": "N"}})
+    code, stdout, err = run_cli(["calibrate", p, "--x", "reading", "--compensate"])
+    assert code == 0, err
+    lines = [ln for ln in stdout.replace("\n", " ").split("compensation: ")[1:]]
+    assert lines and "not kept" in lines[0] and "simpler calibration is kept" in lines[0]
+
+
+@pytest.mark.parametrize("args, option", [
+    (["--method", "held-out", "--degree", "3"], "--method"),
+    (["--method", "nope"], "--method"),
+    (["--method", "cv", "{other}"], "--method"),
+    (["--lag", "soon"], "--lag"),
+])
+def test_cli_bad_method_options_give_one_line(runs, args, option):
+    args = [runs["hand2"] if a == "{other}" else a for a in args]
+    code, stdout, err = run_cli(["calibrate", runs["hand"], "--x", "reading", *args])
+    assert code == 2
+    assert len(err.strip().splitlines()) == 1 and option in err
