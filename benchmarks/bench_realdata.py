@@ -11,7 +11,7 @@ FSR_calibration_techniques); a Velostat film pressed by a UR5e arm against a Fut
 
 For each train → test pair: :func:`fsrlab.calibration.heldout_runs.calibrate_runs` (what
 ``fsrlab calibrate TRAIN.csv --x reading --reference force_n [--compensate]`` runs) on the training
-runs, then its ``apply`` on the test run; RMSE over the loaded rows (reference above
+runs, then :func:`fsrlab.calibration.apply.apply_calibration` (``fsrlab apply``) on the test run; RMSE over the loaded rows (reference above
 5 % of the test's maximum) in % of the test's reference span, as a ratio to the best plain polynomial
 (degree 1–5 in the raw readout fitted on the same training rows, the degree that is best **on the
 test run**: an oracle the calibration does not have); the share of loaded rows whose error lies
@@ -84,6 +84,7 @@ def _best_polynomial(train, test) -> tuple[float, int]:
 
 def pair_scores(root: Path, tmp: Path, train_specs, test_specs) -> dict | None:
     """Ratios, coverage and missing share of one pair (None when a file is absent)."""
+    from fsrlab.calibration.apply import apply_calibration
     from fsrlab.calibration.heldout_runs import calibrate_runs
 
     train = [_read(root, s, tmp) for s in train_specs]
@@ -96,7 +97,7 @@ def pair_scores(root: Path, tmp: Path, train_specs, test_specs) -> dict | None:
         cal = calibrate_runs([str(p) for p in train], x="reading", reference="force_n", compensate=comp)
         errs, us, ys = [], [], []
         for p in test:
-            run = cal.apply(str(p))
+            run = apply_calibration(cal, str(p))
             y = np.asarray(run["force_n"], float)
             errs.append(np.asarray(run["force_n_estimate"], float) - y)
             us.append(np.asarray(run["force_n_uncertainty"], float))

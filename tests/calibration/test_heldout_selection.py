@@ -86,10 +86,12 @@ def test_lag_zero_is_kept_unless_a_shift_wins():
     force = 5 + 5 * np.sin(2 * np.pi * t / 3.1) * np.sin(2 * np.pi * t / 17)
     x = 200 + 60 * force + rng.normal(0, 2, t.size)
     y = force + rng.normal(0, 0.05, t.size)
-    _, sel = calibrate_recordings([Recording(t, x, y)], compensate=False)
+    _, sel = calibrate_recordings([Recording(t, x, y)], compensate=False, lag="auto")
     assert sel.lag_rows == 0
     delayed = np.r_[np.full(2, np.nan), y[:-2]]  # the reference 2 rows behind the readout
     _, sel = calibrate_recordings([Recording(t, x, delayed)], compensate=False)
+    assert sel.lag_rows == 0 and not any(s["step"] == "lag" for s in sel.steps)  # not searched unless asked
+    _, sel = calibrate_recordings([Recording(t, x, delayed)], compensate=False, lag="auto")
     assert sel.lag_rows == -2
     lag_step = next(s for s in sel.steps if s["step"] == "lag")
     assert lag_step["kept"]

@@ -277,6 +277,7 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
     from fsrlab.calibration.document import save_calibration
     from fsrlab.calibration.apply import apply_calibration
     from fsrlab.calibration.fit import calibrate_run
+    from fsrlab.calibration.heldout_runs import calibrate_runs
 
     import numpy as np
 
@@ -287,15 +288,13 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
     # with hardware has; else the stress the bench applied.
     reference = "force_n" if "force_n" in calrun and np.isfinite(calrun["force_n"]).mean() > 0.5 else "stress_pa"
     what = "the load cell's force (HX711)" if reference == "force_n" else "the applied stress"
-    t0 = step(f"calibration: the calibration run against {what}, model chosen by grouped cross-validation, with the "
-              "causal hysteresis compensation; and a known-weight calibration on the dead weights (m·g)")
-    # The lag is searched as on any recording; the virtual bench takes the reference in the readout's own
-    # window, so the search finds 0 within a row (docs/calibration.md, "Lag").
-    try:
-        cal = calibrate_run(calrun, compensate=True, reference=reference)
-    except ValueError as exc:  # a run too short for the compensation: the plain calibration, said
-        say(f"      no compensation: {str(exc).split(': ', 1)[-1]}")
-        cal = calibrate_run(calrun, reference=reference)
+    t0 = step(f"calibration: the calibration run against {what}, every choice (curve, lag, hysteresis and creep "
+              "compensation) scored on later blocks of the run and kept only when it wins there; and a known-weight "
+              "calibration on the dead weights (m·g)")
+    cal = calibrate_runs(calrun, x="frequency_hz", reference=reference, compensate=True)
+    refused = [s for s in cal.selection.steps if s["step"] in ("hysteresis", "creep") and not s["kept"]]
+    if refused:
+        say(f"      {refused[0]['step']} not kept: {refused[0]['why']}")
     result.files["calibration"] = save_calibration(cal, out / "calibration.json")
     known = None
     try:
@@ -304,12 +303,13 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
         result.files["known-weight calibration"] = save_calibration(known, out / "known-weight-calibration.json")
     except ValueError as exc:
         say(f"      known-weight calibration not possible: {exc}")
-    result.numbers["calibration"] = {"model": cal.model_name, "reference": cal.y_name, "cv_rmse": cal.cv_rmse,
-                                     "unit": cal.y_unit, "lag_s": cal.lag_s}
+    result.numbers["calibration"] = {"model": cal.model_name, "reference": cal.y_name,
+                                     "cv_rmse": cal.selection.heldout_rmse, "unit": cal.y_unit, "lag_s": cal.lag_s,
+                                     "scheme": cal.selection.scheme}
     if known is not None:
         result.numbers["known_weight_calibration"] = {"model": known.model_name, "reference": known.y_name,
                                                       "cv_rmse": known.cv_rmse, "unit": known.y_unit}
-    done("calibration", t0, f"{cal.model_name}, CV RMSE {cal.cv_rmse:.3g} {cal.y_unit}"
+    done("calibration", t0, f"{cal.model_name}, held-out RMSE {cal.selection.heldout_rmse:.3g} {cal.y_unit}"
          + (f"; known weights: {known.model_name}, CV RMSE {known.cv_rmse:.3g} {known.y_unit}"
             if known is not None else ""))
 

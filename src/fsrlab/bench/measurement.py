@@ -14,7 +14,7 @@ resistive one (op-amp V0, eq. 38) as in its Table 3:
   (:func:`fsrlab.metrics.creep.creep_of_run`: drift per decade of time, total drift, time constant);
 - **extension:** the calibration (model chosen by grouped cross-validation, its CV error, lag and
   uncertainty) and the hysteresis error of the compensated estimate
-  (:func:`fsrlab.calibration.fit.calibrate_run`, :func:`~fsrlab.calibration.apply.apply_calibration`).
+  (:func:`fsrlab.calibration.heldout_runs.calibrate_runs`, :func:`~fsrlab.calibration.apply.apply_calibration`).
 
 Each part that the data do not allow is None with a one-line reason.
 """
@@ -368,6 +368,15 @@ def _creep(run, min_hold_s: float = 5.0) -> tuple[list, str | None]:
 
 
 def _calibration_summary(cal, source: str) -> dict:
+    from fsrlab.calibration.heldout_runs import RunCalibration
+
+    if isinstance(cal, RunCalibration):
+        m = cal.model
+        return {"model": cal.model_name, "x": cal.x_name, "y": cal.y_name, "y_unit": cal.y_unit,
+                "cv_rmse": cal.selection.heldout_rmse, "r2": cal.r2, "lag_s": cal.lag_s,
+                "uncertainty_max": float(m.uncertainty.table.max()), "uncertainty_median": float(np.median(m.uncertainty.table)),
+                "compensated": m.has_memory, "compensation_he_percent": None, "full_scale": cal.full_scale,
+                "source": source, "scheme": cal.selection.scheme}
     unc = cal.uncertainty
     sig = np.asarray(getattr(unc, "sigma", []), dtype=float)
     sig = sig[np.isfinite(sig)]
@@ -409,7 +418,7 @@ def measure_run(run, placements=None, weights_run=None, calibration=None, calibr
         An unreadable run, placements file or calibration (the message names the file).
     """
     from fsrlab.calibration.apply import apply_calibration
-    from fsrlab.calibration.fit import calibrate_run
+    from fsrlab.calibration.heldout_runs import calibrate_runs
     from fsrlab.calibration.readout import run_reference
     from fsrlab.io.runformat import load_run
 
@@ -471,8 +480,8 @@ def measure_run(run, placements=None, weights_run=None, calibration=None, calibr
         source = f"given ({Path(cal.path).name})" if getattr(cal, "path", None) else "given"
     elif calibrate:
         try:
-            cal = calibrate_run(run, compensate=True)
-            source = "fitted on this run (cross-validated by cycle)"
+            cal = calibrate_runs(run, compensate=True)
+            source = f"fitted on this run (choices scored by {cal.selection.scheme})"
         except ValueError as exc:
             rep.calibration_reason = f"the run cannot be calibrated on itself: {str(exc).split(': ', 1)[-1]}"
     else:

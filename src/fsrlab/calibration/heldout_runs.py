@@ -55,6 +55,8 @@ class RunCalibration:
         The circuit and range the runs were recorded with (checked when applied).
     n : int
         Readings fitted.
+    r2 : float
+        Coefficient of determination of the estimate on the readings fitted (in sample). [1]
     created : str
         UTC time, ISO 8601.
     path : Path or None
@@ -72,6 +74,7 @@ class RunCalibration:
     n: int = 0
     created: str = ""
     path: Path | None = None
+    r2: float = float("nan")
 
     @property
     def x_range(self) -> tuple[float, float]:
@@ -96,7 +99,8 @@ class RunCalibration:
     def to_dict(self) -> dict:
         return {"format": "fsrlab-calibration", "version": 1, "method": METHOD, "model": self.model_name,
                 "x": self.x_name, "y": self.y_name, "units": {"x": self.x_unit, "y": self.y_unit},
-                "readout_range": list(self.x_range), "lag_s": self.lag_s, "n": self.n, "created": self.created,
+                "readout_range": list(self.x_range), "lag_s": self.lag_s, "n": self.n, "r2": self.r2,
+                "created": self.created,
                 "sources": list(self.sources),
                 "recorded_with": None if self.recorded_with is None else self.recorded_with.to_dict(),
                 "selection": self.selection.to_dict(), "calibration": self.model.to_dict()}
@@ -112,7 +116,7 @@ class RunCalibration:
         return cls(HeldoutCalibration.from_dict(d["calibration"]), sel, str(d["x"]), str(d["y"]),
                    str(units.get("x", "")), str(units.get("y", "")), list(d.get("sources", [])),
                    None if rw is None else RecordedWith.from_dict(rw), int(d.get("n", 0)), str(d.get("created", "")),
-                   path)
+                   path, float(d.get("r2", math.nan)))
 
     def estimator(self, margin: float = MARGIN, compensation: bool = True) -> "RunEstimator":
         """A causal estimator: ``step(reading, t=None) -> (estimate, uncertainty, in_range)``."""
@@ -222,7 +226,7 @@ def _recording(run: Run, x: str, reference: str | None) -> tuple[Recording, str,
 
 
 def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, compensate: bool = False,
-                   lag: int | str = "auto") -> RunCalibration:
+                   lag: int | str = 0) -> RunCalibration:
     """Calibrate a readout to its reference from one or more runs, every choice scored held out.
 
     Parameters
@@ -237,7 +241,8 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
         Try the memory terms (hysteresis, then creep); each is kept only when it beats the simpler
         calibration on held-out recordings or later blocks by more than one standard error.
     lag : int or "auto"
-        Rows the readout lags the reference; ``"auto"``: none unless a shift wins by one standard error.
+        Rows the readout lags the reference (default 0: the estimate is of the reference as recorded);
+        ``"auto"``: searched, and kept only when a shift of whole rows wins held out.
 
     Returns
     -------
@@ -285,6 +290,9 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
     except ValueError as exc:
         names = ", ".join(str(r.path) for r in runs)
         raise ValueError(f"{names}: {x} and {ref}: {exc}") from None
+    est = np.concatenate([model.run(r.t, r.x)[0][r.usable] for r in recs])
+    y = np.concatenate([r.y[r.usable] for r in recs])
+    r2 = float(1 - np.sum((est - y) ** 2) / np.sum((y - y.mean()) ** 2)) if np.ptp(y) > 0 else math.nan
     return RunCalibration(model, sel, x, ref, xu, yu, [str(r.path) for r in runs], rw,
                           int(sum(int(r.usable.sum()) for r in recs)),
-                          datetime.now(timezone.utc).isoformat(timespec="seconds"))
+                          datetime.now(timezone.utc).isoformat(timespec="seconds"), r2=r2)

@@ -202,7 +202,7 @@ def calibrate_cmd(
     degree: str = typer.Option("auto", "--degree", help="Polynomial degree 1..5 [1] (--method cv; the model is then that polynomial), or auto."),
     compensate: bool = typer.Option(False, "--compensate", help="Also try the causal hysteresis compensation (play operators with memory, and creep; extension beyond the paper): kept only when it lowers the held-out error by more than its standard error (--method cv: chosen by grouped CV, HE [%] before/after)."),
     unit: str = typer.Option(None, "--unit", help="Display unit of the errors in the table [N, g, Pa or kPa] (default: the reference's, N or Pa); --json and the file stay SI."),
-    lag: str = typer.Option("auto", "--lag", help="Lag of the readout behind the reference [s] (rows without time_s), e.g. 0.02 or 0; auto: none unless a shift of whole rows wins held out (--method cv: searched by cross-validation)."),
+    lag: str = typer.Option(None, "--lag", help="Lag of the readout behind the reference [s] (rows without time_s), e.g. 0.02, 0 or auto (searched; kept only when a shift of whole rows wins held out). Default 0: the estimate is of the reference as recorded (--method cv: auto, searched by cross-validation)."),
     max_lag: float = typer.Option(None, "--max-lag", parser=seconds, help="Half-width of the lag search [s] (--method cv), e.g. 0.25 (default 0.25 s, at least 2 rows)."),
     folds: int = typer.Option(5, "--folds", help="Cross-validation folds [1] (--method cv), ≥ 2 (fewer when the run has fewer cycles or blocks)."),
     r: float = typer.Option(None, "--r", parser=ohms, help="555 R for --x c_fsr_farad [Ω], e.g. 10k (default: the run's sidecar, else 10k)."),
@@ -237,12 +237,13 @@ def calibrate_cmd(
     if method == "held-out" and asked:
         fail(f"{asked[0]} needs --method cv (or auto)", "--method")
     if method == "held-out" or (method == "auto" and not asked):
-        _calibrate_held_out(run_files, x, reference, compensate, unit, lag, skip_bad_rows, output, json_out)
+        _calibrate_held_out(run_files, x, reference, compensate, unit, lag or "0", skip_bad_rows, output, json_out)
         return
     if len(run_files) > 1:
         fail(f"--method cv calibrates one run, got {len(run_files)}: several runs are calibrated with --method "
              "held-out", "--method")
     run_file = run_files[0]
+    lag = lag or "auto"
     from fsrlab.calibration.document import save_calibration
     from fsrlab.calibration.fit import calibrate_run
     from fsrlab.calibration.readout import run_circuit

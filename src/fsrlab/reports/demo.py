@@ -97,7 +97,8 @@ def _cal_text(title: str, c: dict | None) -> str:
     """One calibration's line on the index page."""
     if not c:
         return f"{title}: none"
-    return html.escape(f"{title}: {c['model']} against {c['reference']}, cross-validated RMSE "
+    how = f"held-out RMSE ({c['scheme']})" if c.get("scheme") else "cross-validated RMSE"
+    return html.escape(f"{title}: {c['model']} against {c['reference']}, {how} "
                        f"{_num(c['cv_rmse'])} {c['unit']}")
 
 

@@ -205,9 +205,11 @@ def build_sections(rep, outdir: Path) -> list[Section]:
     cal = rep.calibration
     if cal is not None:
         u = cal["y_unit"]
-        crow = [["model (chosen by grouped cross-validation)", cal["model"]], ["readout", cal["x"]],
-                ["reference", f"{cal['y']} [{u}]"], ["source", cal["source"]],
-                ["CV RMSE", f"{_f(cal['cv_rmse'], '.4g')} {u}"], ["R² (in sample)", _f(cal["r2"], ".4f")],
+        held = cal.get("scheme")
+        crow = [[f"model (chosen by {'held-out error: ' + held if held else 'grouped cross-validation'})", cal["model"]],
+                ["readout", cal["x"]], ["reference", f"{cal['y']} [{u}]"], ["source", cal["source"]],
+                ["held-out RMSE" if held else "CV RMSE", f"{_f(cal['cv_rmse'], '.4g')} {u}"],
+                ["R² (in sample)", _f(cal["r2"], ".4f")],
                 ["lag of the readout", f"{_f(cal['lag_s'], '.3f')} s"],
                 ["standard uncertainty, median / largest bin", f"{_f(cal['uncertainty_median'], '.4g')} / "
                                                                 f"{_f(cal['uncertainty_max'], '.4g')} {u}"],
