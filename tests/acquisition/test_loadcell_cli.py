@@ -14,6 +14,7 @@ import shutil
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from clirun import run_cli
 from fsrlab.io.runformat import load_run
@@ -83,3 +84,28 @@ def test_measure_records_the_estimate_beside_the_load_cell(tmp_path, monkeypatch
     ok = np.isfinite(run["stress_pa_estimate"])
     assert np.allclose(run["force_n_estimate"][ok], run["stress_pa_estimate"][ok] * area)  # force = stress × area
     assert np.all(np.isfinite(run["force_n"]))  # the emulated load cell beside it
+
+
+@pytest.mark.parametrize("recorded, named", [
+    ({"range": 1, "circuit": {}}, "range 1"),  # the virtual circuit, but C_off switched in
+    ({"range": 0, "circuit": {"r_ohm": 4.7e3}}, "R = 4.7 kΩ"),  # another R on the same range
+])
+def test_measure_refuses_a_calibration_made_on_another_circuit_or_range(tmp_path, monkeypatch, recorded, named):
+    # The provenance check of fsrlab apply (calibration.apply.readout_differences), before any window is read:
+    # the virtual meter runs VIRTUAL_CIRCUIT on range 0.
+    from fsrlab.calibration.document import save_calibration
+    from fsrlab.calibration.fit import calibrate_run
+    from fsrlab.io.runwriter import write_run
+    from fsrlab.virtual.sources import VIRTUAL_CIRCUIT
+    from fsrlab.virtual.synthetic import synthetic_run
+
+    monkeypatch.chdir(tmp_path)
+    run = synthetic_run(cycles=2, points_per_ramp=60, seed=1)
+    circuit = VIRTUAL_CIRCUIT.replace(**recorded["circuit"])
+    write_run("cal-run.csv", {**run.columns, "range": np.full(len(run.columns["time_s"]), recorded["range"])},
+              {"circuit": circuit.to_dict()})
+    save_calibration(calibrate_run("cal-run.csv", x="frequency_hz", lag=0.0), "cal.json")
+    code, out, err = run_cli(["measure", "--virtual", "--cal", "cal.json", "--duration", "1s", "--quiet",
+                              "-o", "live.csv"])
+    assert code == 2 and err.count("\n") == 1 and "--cal" in err and named in err, err
+    assert "the meter has" in err and not (tmp_path / "live.csv").exists()

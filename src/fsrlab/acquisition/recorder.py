@@ -35,19 +35,17 @@ import math
 import os
 import threading
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Sequence
 
 from fsrlab.acquisition.messages import Identity, Measurement
-from fsrlab.acquisition.protocol import (
-    SEQ_MODULO, UINT32_MODULO, WINDOW_MS_DEFAULT, WINDOW_MS_MAX, WINDOW_MS_MIN, Frame, ParserStats,
-)
+from fsrlab.acquisition.protocol import WINDOW_MS_DEFAULT, WINDOW_MS_MAX, WINDOW_MS_MIN, Frame, ParserStats
 from fsrlab.acquisition.serial_link import DeviceGone, LinkError, SerialLink
+from fsrlab.acquisition.stream import Gap, WindowStream, window_row
 
 __all__ = ["COLUMNS", "REFERENCE_COLUMNS", "FAILED_ENDINGS", "Gap", "RecordStatus", "RecordResult", "default_stall_s", "record",
-           "window_row",
-           "result_dict", "stats_dict"]
+           "window_row", "result_dict"]
 
 COLUMNS = ("time_s", "frequency_hz", "duty_cycle", "voltage_v", "periods", "missed", "range", "seq")
 """Run columns written for every window (``stress_pa`` is added when a reference is given)."""
@@ -73,27 +71,6 @@ def default_stall_s(window_ms: int) -> float:
         [s]
     """
     return max(5 * window_ms / 1000.0, 2.0)
-
-
-@dataclass(frozen=True)
-class Gap:
-    """A stretch of the run in which the link delivered no frame for longer than the stall time.
-
-    Attributes
-    ----------
-    start_s : float
-        When the last frame before the silence arrived (or START, if none had), host clock since
-        START. [s]
-    length_s : float
-        From ``start_s`` to the next frame, or to the end of the run if none came. [s]
-    """
-
-    start_s: float
-    length_s: float
-
-    def to_dict(self) -> dict:
-        """``{"start_s", "length_s"}`` rounded to ms, as the sidecar's ``gaps`` holds them."""
-        return {"start_s": round(self.start_s, 3), "length_s": round(self.length_s, 3)}
 
 
 @dataclass(frozen=True)
@@ -183,51 +160,6 @@ class RecordResult:
 
 class _Failure(Exception):
     """Ends the recording loop with ``ended="failed"`` and this message."""
-
-
-def window_row(m: Measurement, time_s: float, has_ref: bool, loadcell=None, area_m2: float | None = None,
-               stress_pa: float | None = None) -> dict:
-    """One run row for a measurement window (what ``record`` writes, before ``on_row``).
-
-    Parameters
-    ----------
-    m : Measurement
-        The window.
-    time_s : float
-        Its time in the run. [s]
-    has_ref : bool
-        The device sends a reference (protocol 2): ``reference_raw`` and ``force_n`` are filled, empty
-        (None, never 0) for a window without an HX711 conversion.
-    loadcell : LoadCellCalibration, optional
-        Converts raw counts to ``force_n``; without it ``force_n`` stays empty.
-    area_m2 : float, optional
-        Sensor area: ``stress_pa = force_n / area``. [m²]
-    stress_pa : float, optional
-        A known reference stress (the virtual device's); written as ``stress_pa`` when given. [Pa]
-
-    Returns
-    -------
-    dict
-        Column → value (None: an empty cell).
-    """
-    row = {"time_s": time_s, "frequency_hz": m.frequency_hz, "duty_cycle": m.duty_cycle, "voltage_v": m.adc_v,
-           "periods": m.periods, "missed": m.missed, "range": m.range, "seq": m.seq}
-    if stress_pa is not None:
-        row["stress_pa"] = stress_pa if math.isfinite(stress_pa) else None
-    if has_ref:
-        raw = m.ref_mean if m.ref_n > 0 else None  # empty, never 0, without a conversion
-        force = loadcell.force(raw) if raw is not None and loadcell is not None else None
-        row["reference_raw"], row["force_n"] = raw, force
-        if area_m2 is not None:
-            row["stress_pa"] = force / area_m2 if force is not None else None
-    return row
-
-
-def _configure(link: SerialLink, window_ms: int, range_: int) -> int:
-    """Send the settings and START; return the sequence number the first window will carry."""
-    link.set_window(window_ms)
-    link.set_range(range_)
-    return (link.start().seq + 1) % SEQ_MODULO
 
 
 def _empty_reason(ended: str, window_ms: int, duration_s: float, bad: int, lost: int) -> str:
@@ -342,9 +274,20 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
                 raise FileExistsError(f"{existing} exists; a run is replaced only when asked to")
     ident = link.handshake(timeout_s=handshake_timeout_s)
     link.stop()  # a device left running by a previous session: start from a clean state
-    first_seq = _configure(link, window_ms, range_)
     has_ref = ident.protocol_version >= 2
     stress_from_force = reference is None and area_m2 is not None and loadcell is not None and has_ref
+
+    def save_gaps(now: float) -> None:
+        # The open gap's length so far is on disk too, in case the process dies during it.
+        shown = stream.gaps + ([stream.open_gap(now)] if stream.in_gap else [])
+        try:
+            writer.update_metadata({"gaps": [g.to_dict() for g in shown]})
+        except OSError as exc:
+            raise _Failure(str(exc)) from None
+
+    stream = WindowStream(link, window_ms, range_, has_ref, stall_s, loadcell, area_m2 if stress_from_force else None,
+                          reference, on_event=on_event, on_gap=save_gaps)
+    first_seq = stream.configure()
     columns = list(COLUMNS) + (["stress_pa"] if reference is not None or stress_from_force else [])
     columns += [c for c in (REFERENCE_COLUMNS if has_ref else ()) if c not in columns]
     columns += [c for c in extra_columns if c not in columns]
@@ -370,30 +313,14 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
             pass
         raise
     t_start = time.monotonic()
+    stream.begin(t_start)
     t_end = t_start + duration_s
     frames, ended, message, dropped, no_ref = 0, "duration", "", 0, 0
-    cell_ok: int | None = None  # the HX711's last state (ref_ok), to say when it goes or comes back
-    anchor_ms: int | None = None  # device t_ms at START (start of the first window after it)
-    offset_s = 0.0
     last: Measurement | None = None
     recent: list[float] = []
     next_status = t_start
     next_sync = t_start + sync_interval_s
-    gaps: list[Gap] = []
-    silent_since = t_start  # arrival of the last frame (START before the first one)
-    in_gap = False
-
-    def event(text: str) -> None:
-        if on_event is not None:
-            on_event(text)
-
-    def save_gaps(now: float) -> None:
-        # The open gap's length so far is on disk too, in case the process dies during it.
-        shown = gaps + ([Gap(silent_since - t_start, now - silent_since)] if in_gap else [])
-        try:
-            writer.update_metadata({"gaps": [g.to_dict() for g in shown]})
-        except OSError as exc:
-            raise _Failure(str(exc)) from None
+    gaps = stream.gaps
 
     try:
         try:
@@ -406,41 +333,7 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
                     break
                 if health is not None and (reason := health()):
                     raise _Failure(reason)
-                restart = False
-                batch = link.read_frames()
-                if batch:
-                    now = time.monotonic()
-                    if in_gap:
-                        in_gap = False
-                        gaps.append(Gap(silent_since - t_start, now - silent_since))
-                        save_gaps(now)
-                        event(f"device back after {now - silent_since:.1f} s without a frame")
-                    silent_since = now
-                elif not in_gap and now - silent_since >= stall_s:
-                    in_gap = True
-                    save_gaps(now)
-                    event(f"no frame from the device for {now - silent_since:.1f} s "
-                          f"(since {silent_since - t_start:.1f} s into the run)")
-                for frame in batch:
-                    if frame.reset:
-                        restart = True
-                        anchor_ms = None
-                    if frame.kind != "M":
-                        continue
-                    m = Measurement.from_frame(frame)
-                    if anchor_ms is None:
-                        anchor_ms = (m.t_ms - m.window_ms) % UINT32_MODULO
-                        offset_s = max(time.monotonic() - t_start - m.window_ms / 1000.0, 0.0) if frames else 0.0
-                    row = window_row(m, offset_s + ((m.t_ms - anchor_ms) % UINT32_MODULO) / 1000.0, has_ref,
-                                     loadcell, area_m2 if stress_from_force else None,
-                                     reference(frame) if reference is not None else None)
-                    if has_ref and m.ref_ok != cell_ok:
-                        if m.ref_ok == 0:
-                            event(f"no load cell: the meter reports no HX711 (ref_ok 0) from {row['time_s']:.1f} s into "
-                                  "the run; reference_raw and force_n stay empty")
-                        elif cell_ok == 0:
-                            event(f"load cell answering again from {row['time_s']:.1f} s into the run")
-                        cell_ok = m.ref_ok
+                for frame, m, row in stream.windows():
                     if on_row is not None:
                         row = on_row(m, row)
                         if row is None:
@@ -453,10 +346,9 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
                     except OSError as exc:
                         raise _Failure(str(exc)) from None
                     frames += 1
+                    stream.written = frames
                     last = m
                     recent.append(time.monotonic())
-                if restart:
-                    _configure(link, window_ms, range_)
                 now = time.monotonic()
                 if now >= next_sync:
                     try:
@@ -491,8 +383,9 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
                 pass
     finally:
         duration = time.monotonic() - t_start
+        in_gap = stream.in_gap
         if in_gap:
-            gaps.append(Gap(silent_since - t_start, t_start + duration - silent_since))
+            gaps.append(Gap(stream.silent_since - t_start, t_start + duration - stream.silent_since))
         st = parser.stats()
         if ended not in ("disconnected", "error", "failed"):
             if frames == 0:
@@ -552,18 +445,3 @@ def result_dict(result: RecordResult) -> dict:
     if result.reference:
         out["no_reference"] = result.no_reference
     return out
-
-
-def stats_dict(stats: ParserStats) -> dict:
-    """Parser counters as a plain dict.
-
-    Parameters
-    ----------
-    stats : ParserStats
-        Counters of a :class:`~fsrlab.acquisition.protocol.FrameParser`.
-
-    Returns
-    -------
-    dict
-    """
-    return asdict(stats)

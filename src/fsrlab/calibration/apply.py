@@ -21,14 +21,14 @@ import numpy as np
 
 from fsrlab.calibration.estimator import MARGIN, _causal_branches, live_estimator
 from fsrlab.calibration.heldout_runs import RunCalibration
-from fsrlab.errors import ProvenanceError
-from fsrlab.calibration.provenance import mismatches
+from fsrlab.calibration.provenance import RecordedWith, mismatches
 from fsrlab.calibration.readout import C_FSR, _as_run, run_readout, run_recorded_with
 from fsrlab.calibration.result import Calibration
 from fsrlab.circuits.circuit import LM555Circuit
+from fsrlab.errors import ProvenanceError
 from fsrlab.io.runformat import Run, RunFormatError
 
-__all__ = ["ESTIMATE_COLUMN", "IN_RANGE_COLUMN", "check_readout", "apply_calibration"]
+__all__ = ["ESTIMATE_COLUMN", "IN_RANGE_COLUMN", "readout_differences", "check_readout", "apply_calibration"]
 
 #: Column that :func:`apply_calibration` adds: the calibrated stress. [Pa]
 ESTIMATE_COLUMN = "stress_pa_estimate"
@@ -40,8 +40,44 @@ IN_RANGE_COLUMN = "in_range"
 _FILE_KEYS = ("complete", "rows", "closed", "created", "format", "version", "columns")
 
 
+def readout_differences(cal: Calibration, recorded: RecordedWith, subject: str,
+                        circuit: LM555Circuit | None = None) -> list[str]:
+    """The one provenance check: how a readout differs from the one a calibration was recorded with.
+
+    ``fsrlab apply`` (through :func:`check_readout`), ``fsrlab measure`` and ``fsrlab live`` all refuse a
+    calibration through this function: the circuit (the LM555's parts, C_off on each range, the op-amp
+    readout) and the range the data come from, for the calibration's readout column
+    (:func:`fsrlab.calibration.provenance.mismatches`).
+
+    Parameters
+    ----------
+    cal : Calibration
+        The calibration (its ``recorded_with``, readout column and, for C_FSR, its decoding circuit).
+    recorded : RecordedWith
+        What the data it would be used on are recorded with: a run's
+        (:func:`~fsrlab.calibration.readout.run_recorded_with`) or a meter's
+        (:func:`~fsrlab.calibration.provenance.recorded_with` of its circuit and range).
+    subject : str
+        The start of each sentence, naming the data: ``"run.csv was recorded with"``, ``"the meter has"``.
+    circuit : LM555Circuit, optional
+        The circuit C_FSR is decoded through, when not the calibration's.
+
+    Returns
+    -------
+    list of str
+        One sentence per difference, ``"<subject> <theirs>, <calibration> with <its>"``; empty when nothing
+        known differs or when the calibration does not record what it was recorded with.
+    """
+    if cal.recorded_with is None:
+        return []
+    name = "the calibration" if cal.path is None else str(cal.path)
+    decode = (circuit if circuit is not None else cal.circuit) if cal.x_name == C_FSR else None
+    found = mismatches(cal.x_name, cal.recorded_with, recorded, decode)
+    return [f"{subject} {a}, {name} with {b}" for a, b in found]
+
+
 def check_readout(cal: Calibration, run: Run, circuit: LM555Circuit | None = None) -> list[str]:
-    """How a run's readout differs from the one a calibration was recorded with.
+    """How a run's readout differs from the one a calibration was recorded with (:func:`readout_differences`).
 
     Parameters
     ----------
@@ -59,12 +95,7 @@ def check_readout(cal: Calibration, run: Run, circuit: LM555Circuit | None = Non
         :func:`fsrlab.calibration.provenance.mismatches`); empty when nothing known differs or when
         the calibration does not record what it was recorded with (``cal.recorded_with`` None).
     """
-    if cal.recorded_with is None:
-        return []
-    name = "the calibration" if cal.path is None else str(cal.path)
-    decode = (circuit if circuit is not None else cal.circuit) if cal.x_name == C_FSR else None
-    found = mismatches(cal.x_name, cal.recorded_with, run_recorded_with(run), decode)
-    return [f"{run.path} was recorded with {a}, {name} with {b}" for a, b in found]
+    return readout_differences(cal, run_recorded_with(run), f"{run.path} was recorded with", circuit)
 
 
 def apply_calibration(cal: Calibration, run, compensation: bool = True, circuit: LM555Circuit | None = None,
@@ -75,7 +106,7 @@ def apply_calibration(cal: Calibration, run, compensation: bool = True, circuit:
     ----------
     cal : Calibration or RunCalibration
         From :func:`calibrate_run`, :func:`fsrlab.calibration.heldout_runs.calibrate_runs` (then
-        :meth:`~fsrlab.calibration.heldout_runs.RunCalibration.apply` does the work) or
+        :meth:`~fsrlab.calibration.heldout_runs.RunCalibration.estimate_run` does the work) or
         :func:`fsrlab.calibration.document.load_calibration`.
     run : Run or path
         The run to convert; it needs the calibration's readout column (or ``frequency_hz`` and
@@ -120,12 +151,6 @@ def apply_calibration(cal: Calibration, run, compensation: bool = True, circuit:
     (see :meth:`fsrlab.calibration.compensation.DirectionAwareCalibration.predict` for gaps).
     """
     run = _as_run(run)
-    if isinstance(cal, RunCalibration):
-        differences = check_readout(cal, run, circuit)
-        if differences and not force:
-            raise ProvenanceError(f"{differences[0]}: the readout means another force there; calibrate on a run "
-                                  "recorded the same way, or force it")
-        return cal.estimate_run(run, margin=margin, compensation=compensation, forced=differences)
     if not margin >= 0:
         raise ValueError(f"margin: must be a fraction >= 0 of the calibrated span, got {margin!r}")
     if cal.x_name not in run and cal.x_name != C_FSR:
@@ -133,8 +158,11 @@ def apply_calibration(cal: Calibration, run, compensation: bool = True, circuit:
                              f"(columns: {', '.join(run.columns)})")
     differences = check_readout(cal, run, circuit)
     if differences and not force:
-        raise ValueError(f"{differences[0]}: the readout means another stress; calibrate on a run recorded the "
-                         "same way, or force it")
+        quantity = "force" if cal.y_name == "force_n" else "stress"
+        raise ProvenanceError(f"{differences[0]}: the readout means another {quantity}; calibrate on a run recorded "
+                              "the same way, or force it")
+    if isinstance(cal, RunCalibration):
+        return cal.estimate_run(run, margin=margin, compensation=compensation, forced=differences)
     values, _ = run_readout(run, cal.x_name, circuit if circuit is not None else cal.circuit)
     given = np.isfinite(values)
     lo, hi = cal.x_range

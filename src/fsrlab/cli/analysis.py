@@ -443,6 +443,7 @@ def apply_cmd(
     """
     from fsrlab.calibration.document import load_calibration
     from fsrlab.calibration.apply import apply_calibration, check_readout
+    from fsrlab.errors import ProvenanceError
     from fsrlab.io.runformat import sidecar_path
     from fsrlab.io.runwriter import write_run
 
@@ -465,8 +466,8 @@ def apply_cmd(
                         f"earlier fsrlab, or not from a run): {run_file} is not checked against them")
     differences = check_readout(cal, run)
     if differences and not force:
-        raise ValueError(f"{differences[0]}: the same readout means another stress there; calibrate on a run "
-                         "recorded the same way, or give --force to apply anyway")
+        raise ProvenanceError(f"{differences[0]}: the same readout means another stress there; calibrate on a run "
+                              "recorded the same way, or give --force to apply anyway")
     est = apply_calibration(cal, run, compensation=not no_compensation, margin=margin, force=force)
     info = est.metadata["calibration"]
     for difference in info.get("forced", []):

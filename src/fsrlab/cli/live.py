@@ -11,18 +11,14 @@ from fsrlab.cli import app
 from fsrlab.cli.options import areas, fail, farads, mass_list, pascals, seconds
 from fsrlab.io.jsonable import to_jsonable
 from fsrlab.cli.acquisition import _AREA_HELP, _LOADCELL_HELP, _SENSOR_HELP
-from fsrlab.cli.measure import load_frame_calibration
+from fsrlab.cli.measure import load_frame_calibration, meter_differences
 from fsrlab.units import STANDARD_GRAVITY
 
 
-def _refusal(cal, path, metadata: dict, range_: int) -> str | None:
-    """Why a calibration does not fit the meter it would be used with (circuit, range), or None."""
-    from fsrlab.calibration.provenance import mismatches, recorded_with
-
-    if cal.recorded_with is None:
-        return None
-    found = mismatches(cal.x_name, cal.recorded_with, recorded_with(metadata, [range_]))
-    return "; ".join(f"the meter has {a}, {path} was recorded with {b}" for a, b in found) or None
+def _refusal(cal, metadata: dict, range_: int) -> str | None:
+    """Why a calibration does not fit the meter it would be used with (circuit, range), or None
+    (:func:`fsrlab.calibration.apply.readout_differences`, the check of ``apply`` and ``measure``)."""
+    return "; ".join(meter_differences(cal, metadata, range_)) or None
 
 
 def _estimator(cal, area_m2: float | None):
@@ -160,7 +156,7 @@ def live(
                                                                    "repeat": repeat, "unload": unload}}}
     estimator, refusal = None, None
     if calibration is not None:
-        refusal = _refusal(calibration, cal, metadata, range_)
+        refusal = _refusal(calibration, metadata, range_)
         if refusal:
             print(f"fsrlab: {cal} refused: {refusal}; the page shows no estimate", file=sys.stderr)
         else:

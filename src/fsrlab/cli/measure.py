@@ -38,6 +38,15 @@ def load_frame_calibration(cal: Path, command: str):
     return calibration
 
 
+def meter_differences(cal, metadata: dict, range_: int) -> list[str]:
+    """How the meter a calibration would be used with (its circuit in ``metadata``, its range) differs from the
+    readout the calibration was recorded with: :func:`fsrlab.calibration.apply.readout_differences`."""
+    from fsrlab.calibration.apply import readout_differences
+    from fsrlab.calibration.provenance import recorded_with
+
+    return readout_differences(cal, recorded_with(metadata, [range_]), "the meter has")
+
+
 def _estimator(cal):
     """The causal estimator of a calibration (:func:`fsrlab.calibration.estimator.live_estimator`): one reading at
     a time, ``step(x) -> (estimate, uncertainty, in_range)``, with the compensation's memory between calls."""
@@ -117,6 +126,12 @@ def measure(
         port = device.open()
         metadata = {"origin": "fsrlab measure --virtual", **source.metadata(), **metadata}
         area_m2 = source.sensor.area_m2
+    differences = meter_differences(calibration, metadata, 0)  # measure records on range 0
+    if differences:
+        if device is not None:
+            device.close()
+        fail(f"{differences[0]}: the readout means another stress there; calibrate on a run recorded the same way",
+             "--cal")
     ref = est.reference  # "stress_pa" or "force_n"
     to_force = (lambda v: v) if ref == "force_n" else ((lambda v: v * area_m2) if area_m2 else None)
     columns = [f"{ref}_estimate", "in_range"] + (["force_n_estimate"] if ref != "force_n" and to_force else [])

@@ -14,7 +14,7 @@ import math
 import os
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import Any, Iterable, Mapping, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -199,11 +199,6 @@ class RunWriter:
         line = ",".join(_format_value(row.get(c)) for c in self.columns) + "\n"
         self._raw(line)
         self.rows += 1
-
-    def write_many(self, rows: Iterable[Mapping[str, Any]]) -> None:
-        """Append several readings (see :meth:`write`)."""
-        for row in rows:
-            self.write(row)
 
     def sync(self) -> None:
         """Force the rows written so far to disk (``os.fsync``)."""

@@ -21,6 +21,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
+from fsrlab.acquisition.stream import WindowStream
+
 __all__ = ["LiveSession", "LiveStatus", "COLUMNS", "TARE_S"]
 
 #: Time over which a tare from the page collects the load cell's conversions. [s]
@@ -147,6 +149,7 @@ class LiveSession:
         self._t0 = time.monotonic()
         self._recent: deque = deque()
         self.identity = None
+        self._stream: WindowStream | None = None
 
     # ----------------------------------------------------------------- pages
     def since(self, cursor: int) -> tuple[int, dict[str, list]]:
@@ -195,9 +198,11 @@ class LiveSession:
             st.device = f"{ident.name} {ident.firmware_version} (protocol {ident.protocol_version})"
             self._has_ref = ident.protocol_version >= 2
             self.link.stop()
-            self.link.set_window(st.window_ms)
-            self.link.set_range(st.range)
-            self.link.start()
+            self._stream = WindowStream(self.link, st.window_ms, st.range, self._has_ref, self.stall_s, self.loadcell,
+                                        None, self.reference, on_event=self._event, on_gap=self._gap,
+                                        on_reset=lambda: self._event("device restarted; its settings sent again"))
+            self._stream.configure()
+            self._stream.begin()
             st.state, st.message = "running", f"reading {self.link.port}"
             self._loop()
         except DeviceGone as exc:
@@ -221,43 +226,25 @@ class LiveSession:
                     pass
                 st.state, st.message = "stopped", "session closed"
 
+    def _gap(self, now: float) -> None:
+        """A gap began or ended on the stream: count the silences longer than the stall time."""
+        if self._stream.in_gap:
+            self.status.stalls += 1
+
     def _loop(self) -> None:
-        from fsrlab.acquisition.messages import Measurement
-        from fsrlab.acquisition.protocol import UINT32_MODULO
-        from fsrlab.acquisition.recorder import window_row
+        """Read the stream (:class:`~fsrlab.acquisition.stream.WindowStream`, the recorder's loop) until closed."""
+        from fsrlab.acquisition.serial_link import DeviceGone
 
         st = self.status
         parser = self.link.parser
-        anchor_ms = None
-        silent_since = time.monotonic()
-        in_stall = False
+        stream = self._stream
         while not self._stop.is_set():
             if self.health is not None and (reason := self.health()):
-                from fsrlab.acquisition.serial_link import DeviceGone
-
                 raise DeviceGone(reason)
             self._do_commands()
-            batch = self.link.read_frames()
-            now = time.monotonic()
-            if batch:
-                if in_stall:
-                    self._event(f"device back after {now - silent_since:.1f} s")
-                in_stall, silent_since = False, now
-            elif not in_stall and now - silent_since >= self.stall_s:
-                in_stall = True
-                st.stalls += 1
-                self._event(f"no frame for {now - silent_since:.1f} s")
-            for frame in batch:
-                if frame.reset:
-                    anchor_ms = None
-                    self._event("device restarted")
-                if frame.kind != "M":
-                    continue
-                m = Measurement.from_frame(frame)
-                if anchor_ms is None:
-                    anchor_ms = (m.t_ms - m.window_ms) % UINT32_MODULO
-                row = window_row(m, ((m.t_ms - anchor_ms) % UINT32_MODULO) / 1000.0, self._has_ref, self.loadcell,
-                                 None, self.reference(frame) if self.reference is not None else None)
+            for frame, m, row in stream.windows():
+                now = time.monotonic()
+                stream.written += 1
                 row["reference"] = self._force(row)
                 est, unc = self.estimator(row) if self.estimator is not None else (math.nan, math.nan)
                 row["estimate"] = est if est is not None else math.nan
@@ -273,6 +260,7 @@ class LiveSession:
                     st.missed += m.missed
                     st.range = m.range
                 self._recent.append(now)
+            now = time.monotonic()
             while self._recent and self._recent[0] < now - 1.0:
                 self._recent.popleft()
             span = min(now - self._t0, 1.0)
@@ -377,6 +365,8 @@ class LiveSession:
             self._event(str(exc))
             return
         self.loadcell = dataclasses.replace(old, offset_counts=new.offset_counts, created=new.created, tare=new.tare)
+        if self._stream is not None:  # the rows from now on use the new offset
+            self._stream.loadcell = self.loadcell
         self._event(f"tare: offset {old.offset_counts:.0f} → {new.offset_counts:.0f} counts "
                     f"({len(counts)} conversions; in this session only)")
 
@@ -396,11 +386,11 @@ class LiveSession:
                 return
             try:
                 if name == "range":
-                    self.link.set_range(int(value))
+                    self._stream.set_range(int(value))
                     st.range = int(value)
                     self._event(f"range {int(value)} (C_off {'in' if value else 'out'})")
                 elif name == "window":
-                    self.link.set_window(int(value))
+                    self._stream.set_window(int(value))
                     st.window_ms = int(value)
                     self._event(f"window {int(value)} ms")
                 elif name == "record":
