@@ -15,7 +15,8 @@ runs, then :func:`fsrlab.calibration.apply.apply_calibration` (``fsrlab apply``)
 5 % of the test's maximum) in % of the test's reference span, as a ratio to the best plain polynomial
 (degree 1–5 in the raw readout fitted on the same training rows, the degree that is best **on the
 test run**: an oracle the calibration does not have); the share of loaded rows whose error lies
-within ±2u; the share of loaded rows left without an estimate.
+within ±2u; the share of loaded rows left without an estimate. Beside it, measured in the same run,
+the in-run cross-validated calibration (``--method cv --compensate``, one training run only).
 """
 
 from __future__ import annotations
@@ -92,7 +93,25 @@ def pair_scores(root: Path, tmp: Path, train_specs, test_specs) -> dict | None:
     if any(p is None for p in train + test):
         return None
     poly, degree = _best_polynomial(train, test)
-    out = {"poly": poly, "degree": degree}
+    out = {"poly": poly, "degree": degree, "cv": None}
+    if len(train) == 1:  # the in-run cross-validated calibration (--method cv), one run only
+        from fsrlab.calibration.fit import calibrate_run
+
+        try:
+            old = calibrate_run(str(train[0]), x="reading", reference="force_n", compensate=True)
+        except ValueError:
+            old = None
+        if old is not None:
+            e, y = [], []
+            for p in test:
+                run = apply_calibration(old, str(p))
+                e.append(np.asarray(run["force_n_estimate"], float) - np.asarray(run["force_n"], float))
+                y.append(np.asarray(run["force_n"], float))
+            e, y = np.concatenate(e), np.concatenate(y)
+            loaded = y > 0.05 * np.nanmax(y)
+            got = loaded & np.isfinite(e)
+            out["cv"] = {"ratio": 100 * np.sqrt(np.mean(e[got] ** 2)) / (np.nanmax(y) - np.nanmin(y)) / poly,
+                         "missing": float(np.mean(~np.isfinite(e[loaded])))}
     for comp in (False, True):
         cal = calibrate_runs([str(p) for p in train], x="reading", reference="force_n", compensate=comp)
         errs, us, ys = [], [], []
@@ -120,18 +139,21 @@ def run() -> str:
         return ("skipped: set FSRLAB_REALDATA to a directory of real recordings (time_s,reading,force_n CSV files; "
                 "see this module's docstring)\n")
     lines = ["| pair | best polynomial (degree) | plain ×, ±2u coverage | `--compensate` ×, ±2u coverage, missing | "
-             "model chosen |", "|---|---:|---:|---:|---|"]
+             "model chosen | `--method cv --compensate` ×, missing |", "|---|---:|---:|---:|---|---:|"]
     ratios = []
     with tempfile.TemporaryDirectory() as tmp:
         for name, tr, te in PAIRS:
             s = pair_scores(Path(root), Path(tmp), tr, te)
             if s is None:
-                lines.append(f"| {name} | not found | | | |")
+                lines.append(f"| {name} | not found | | | | |")
                 continue
             p, c = s["plain"], s["comp"]
             ratios.append(c["ratio"])
+            old = s["cv"]
+            cv = f"×{old['ratio']:.2f}, {100 * old['missing']:.1f} %" if old else "— (one run only)"
             lines.append(f"| {name} | {s['poly']:.2f} % ({s['degree']}) | ×{p['ratio']:.2f}, {100 * p['coverage']:.0f} % | "
-                         f"×{c['ratio']:.2f}, {100 * c['coverage']:.0f} %, {100 * c['missing']:.1f} % | {c['model']} |")
+                         f"×{c['ratio']:.2f}, {100 * c['coverage']:.0f} %, {100 * c['missing']:.1f} % | {c['model']} | "
+                         f"{cv} |")
     if ratios:
         lines.append("")
         lines.append(f"Geometric mean of the `--compensate` ratios: ×{np.exp(np.mean(np.log(ratios))):.2f} over "

@@ -18,7 +18,8 @@ complexity:
    one sign -- a loop opens one way -- with the curve refitted jointly; the ridge weight chosen by
    the held-out error;
 4. **creep** (rate-dependent): exponential averages with time constants from 0.5 s to 2 min, their
-   weights of one sign (the time scale is the fit's mix of them).
+   weights of one sign (the time scale is the fit's mix of them), growing with the level when the
+   hysteresis does.
 
 Steps 2–4 are each kept only when they **win**: held-out mean squared error lower by more than one
 standard error (paired over chunks), lower in most held-out recordings or blocks and higher in none.

@@ -101,8 +101,8 @@ def memory_features(u, t, thresholds=PLAY_THRESHOLDS, time_constants=CREEP_TIME_
     time_constants : sequence of float
         Creep time constants. [s]
     scaled : bool
-        Multiply the play features by the level (a loop whose width grows with the load, as the
-        relative hysteresis of an FSR's conductance gives).
+        Multiply the features by the level: a loop whose width, and a creep whose size, grow with
+        the load, as an FSR's hysteresis and creep stated in % of the reading give.
 
     Returns
     -------
@@ -120,7 +120,7 @@ def memory_features(u, t, thresholds=PLAY_THRESHOLDS, time_constants=CREEP_TIME_
         out[rows, j] = (_play(ul, float(r)) - ul) * (np.maximum(ul, 0.0) if scaled else 1.0)
     dt = _steps(t[rows]) if t.size == u.size else np.ones(rows.size)
     for m, tau in enumerate(time_constants):
-        out[rows, len(thresholds) + m] = ul - _ema(ul, dt, float(tau))
+        out[rows, len(thresholds) + m] = (ul - _ema(ul, dt, float(tau))) * (np.maximum(ul, 0.0) if scaled else 1.0)
     return out
 
 
@@ -185,4 +185,4 @@ class MemoryState:
         elif hi < self.pd:
             self.pd, d = hi, -1
         k = max(u, 0.0) if self.scaled else 1.0
-        return [(p - u) * k for p in self.p] + [u - s for s in self.s], d
+        return [(p - u) * k for p in self.p] + [(u - s) * k for s in self.s], d
