@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from fsrlab.calibration.estimator import MARGIN, _causal_branches, live_estimator
+from fsrlab.calibration.heldout_runs import MARGIN as HELD_OUT_MARGIN
 from fsrlab.calibration.heldout_runs import RunCalibration
 from fsrlab.calibration.provenance import RecordedWith, mismatches
 from fsrlab.calibration.readout import C_FSR, _as_run, run_readout, run_recorded_with
@@ -99,7 +100,7 @@ def check_readout(cal: Calibration, run: Run, circuit: LM555Circuit | None = Non
 
 
 def apply_calibration(cal: Calibration, run, compensation: bool = True, circuit: LM555Circuit | None = None,
-                      margin: float = MARGIN, force: bool = False) -> Run:
+                      margin: float | None = None, force: bool = False) -> Run:
     """The run with the stress its calibration estimates, ready for :func:`fsrlab.io.runwriter.write_run`.
 
     Parameters
@@ -115,10 +116,12 @@ def apply_calibration(cal: Calibration, run, compensation: bool = True, circuit:
         Use the calibration's direction-aware compensation when it holds one (else the polynomial).
     circuit : LM555Circuit, optional
         Circuit for decoding C_FSR (default: the calibration's, else the run's, see :func:`run_circuit`).
-    margin : float
+    margin : float, optional
         How far beyond the calibrated readout range an estimate is still written, as a fraction
-        of the range's span (default :data:`MARGIN`, 10 %; ``inf``: never left empty); beyond it
-        the estimate is left empty. [1]
+        of the range's span (``inf``: never left empty); beyond it the estimate is left empty.
+        Default: :data:`MARGIN` (10 %) for a cross-validated calibration, every reading for a
+        held-out one (its curve extrapolates linearly in the readout and its uncertainty grows by
+        half the extrapolated amount). [1]
     force : bool
         Apply even where the run's readout differs from the calibration's (:func:`check_readout`).
 
@@ -151,6 +154,8 @@ def apply_calibration(cal: Calibration, run, compensation: bool = True, circuit:
     (see :meth:`fsrlab.calibration.compensation.DirectionAwareCalibration.predict` for gaps).
     """
     run = _as_run(run)
+    if margin is None:
+        margin = HELD_OUT_MARGIN if isinstance(cal, RunCalibration) else MARGIN
     if not margin >= 0:
         raise ValueError(f"margin: must be a fraction >= 0 of the calibrated span, got {margin!r}")
     if cal.x_name not in run and cal.x_name != C_FSR:

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from fsrlab.calibration.compensation import BranchState
+from fsrlab.calibration.heldout_runs import MARGIN as cal_margin
 from fsrlab.calibration.heldout_runs import RunCalibration
 from fsrlab.calibration.play import CausalState, causal_features
 
@@ -173,7 +174,7 @@ class CausalEstimator:
         return y, u, in_range, reason
 
 
-def live_estimator(cal: Calibration, margin: float = MARGIN, compensation: bool = True):
+def live_estimator(cal: Calibration, margin: float | None = None, compensation: bool = True):
     """A causal estimator of a calibration: readings in, estimates out, one at a time.
 
     Parameters
@@ -198,10 +199,11 @@ def live_estimator(cal: Calibration, margin: float = MARGIN, compensation: bool 
         polynomials when those were chosen (:func:`calibrate_run`); a calibration with only the
         earlier offline branch compensation (older files) steps without compensation.
     """
+    if isinstance(cal, RunCalibration):
+        return cal.estimator(cal_margin if margin is None else margin, compensation)
+    margin = MARGIN if margin is None else margin
     if not margin >= 0:
         raise ValueError(f"margin: must be a fraction >= 0 of the calibrated span, got {margin!r}")
-    if isinstance(cal, RunCalibration):
-        return cal.estimator(margin, compensation)
     memory = cal.memory if compensation else None
     branches = _causal_branches(cal) if compensation and memory is None else None
     fs = memory.full_scale if memory is not None else (cal.full_scale or 1.0)

@@ -33,8 +33,10 @@ __all__ = ["METHOD", "MARGIN", "RunCalibration", "calibrate_runs", "RunEstimator
 #: The ``method`` of a calibration file written by this module.
 METHOD = "held-out"
 #: Default margin beyond the calibrated readout range, a fraction of its span, within which an
-#: estimate is reported (flagged ``in_range`` 0); the memory is fed with every reading regardless. [1]
-MARGIN = 0.10
+#: estimate is reported (flagged ``in_range`` 0): every reading, since the curve extrapolates linearly
+#: in the readout and the uncertainty grows by half the extrapolated amount; the memory is fed with
+#: every reading whatever the margin. [1]
+MARGIN = float("inf")
 _FILE_KEYS = ("complete", "rows", "closed", "created", "format", "version", "columns")
 
 
@@ -158,7 +160,7 @@ class RunCalibration:
                                "reference": self.y_name, "model": self.model_name if compensation else
                                f"monotone-{self.model.static.variable}-{self.model.static.segments}", "method": METHOD,
                                "lag_s": self.lag_s, "created": self.created, "readout_range": list(self.x_range),
-                               "margin": margin, "counts": counts}
+                               "margin": margin if math.isfinite(margin) else None, "counts": counts}
         if differences:
             meta["calibration"]["forced"] = differences
         return Run(path=run.path, columns=columns, metadata=meta)

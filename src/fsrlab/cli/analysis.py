@@ -421,7 +421,7 @@ def apply_cmd(
     run_file: Path = typer.Argument(..., metavar="RUN.csv", help="The run to convert."),
     output: Path = typer.Option(..., "--output", "-o", help="Output run: the input columns plus <reference>_estimate and <reference>_uncertainty [N or Pa] and in_range [1]."),
     no_compensation: bool = typer.Option(False, "--no-compensation", help="Use the plain model even if the calibration holds a compensation."),
-    margin: float = typer.Option(0.10, "--margin", parser=fraction, help="How far beyond the calibrated readout range an estimate is still written [1, a fraction of the range's span], 0.1 or 10%; beyond it the estimate is left empty. Every reading outside the range has in_range = 0."),
+    margin: float = typer.Option(None, "--margin", parser=fraction, help="How far beyond the calibrated readout range an estimate is still written [1, a fraction of the range's span], e.g. 0.1 or 10%; beyond it the estimate is left empty (default: every reading for a held-out calibration, 10% for --method cv). Every reading outside the range has in_range = 0."),
     force: bool = typer.Option(False, "--force", help="Apply even to a run recorded with another circuit or range than the calibration."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing output run and its sidecar; without it an existing one stops the command."),
     skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=_SKIP_HELP + " Skipped rows are not written."),
@@ -447,7 +447,7 @@ def apply_cmd(
     from fsrlab.io.runformat import sidecar_path
     from fsrlab.io.runwriter import write_run
 
-    if not (math.isfinite(margin) and margin >= 0):
+    if margin is not None and not (math.isfinite(margin) and margin >= 0):
         fail(f"must be a fraction >= 0 of the calibrated span, got {margin:g}", "--margin")
     with _reading(cal_file):
         cal = load_calibration(cal_file)
@@ -482,16 +482,18 @@ def apply_cmd(
                                                           "below_activation")},
                    "in_range": n["in_range"], "out_of_range": n["out_of_range"],
                    "extrapolated": n["extrapolated"], "readout_range": info["readout_range"],
-                   "margin_percent": 100 * margin, "method": info["method"], "model": info["model"],
+                   "margin_percent": None if info["margin"] is None else 100 * info["margin"],
+                   "method": info["method"], "model": info["model"],
                    "reference": cal.y_name, "unit": cal.y_unit, "lag_s": info["lag_s"],
                    "columns": [estimate_col, f"{cal.y_name}_uncertainty", "in_range"], **_skipped_json(run)})
         return
     lo, hi = info["readout_range"]
     lines = [f"wrote {output} ({est.n_rows} rows, {estimate_col} by {info['method']})"]
     if n["extrapolated"] or n["beyond_margin"]:
+        beyond = ("" if info["margin"] is None else f", {n['beyond_margin']} beyond the {100 * info['margin']:g} % "
+                  "margin left empty")
         lines.append(f"  outside the calibrated readout range {lo:.6g} … {hi:.6g} {cal.x_unit}: "
-                     f"{n['extrapolated']} extrapolated (in_range = 0), {n['beyond_margin']} beyond the "
-                     f"{100 * margin:g} % margin left empty")
+                     f"{n['extrapolated']} extrapolated (in_range = 0){beyond}")
     if n["below_activation"]:
         lines.append(f"  below activation (readout at its floor, no estimate): {n['below_activation']} rows")
     if n["no_readout"] or n["not_decodable"]:
