@@ -5,7 +5,8 @@ cannot see what changes from one recording to the next -- the loading rate, the 
 creep state -- and flatters every added complexity. Here a choice is scored where it will be used:
 
 * with two or more recordings, **leave one recording out**: fit on the others, score on it;
-* within a single recording, **forward chaining**: cut it into :data:`BLOCKS` contiguous blocks,
+* within a single recording, **forward chaining**: cut it into :data:`BLOCKS` contiguous blocks
+  (holding equal numbers of rows with both the readout and the reference),
   fit on the first k and score on block k + 1 (k = 2..BLOCKS−1), so the score is always on later
   readings than the fit.
 
@@ -67,7 +68,12 @@ def held_out_splits(recs: list[Recording]) -> list[tuple[list[Part], list[Part]]
                 for i in range(len(recs))]
     rec = recs[0]
     n = rec.t.size
-    edges = np.linspace(0, n, BLOCKS + 1).astype(int)
+    # block edges at equal counts of usable rows: a stretch without a reference makes no empty block
+    used = np.flatnonzero(rec.usable)
+    if used.size < BLOCKS:
+        raise ValueError(f"fewer than {BLOCKS} readings with both the readout and the reference")
+    cut = used[np.linspace(0, used.size, BLOCKS + 1).astype(int)[1:-1]]
+    edges = np.r_[0, cut, n]
     idx = np.arange(n)
     return [([Part(rec, rec.usable & (idx < edges[k]))], [Part(rec, rec.usable & (idx >= edges[k]) & (idx < edges[k + 1]))])
             for k in range(2, BLOCKS)]

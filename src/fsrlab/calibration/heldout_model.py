@@ -400,7 +400,8 @@ def _held_out(splits, ch: _Choice, sign: int, adc, cache: _Cache | None = None):
 def _fold_gains(a, b):
     """Relative MSE saved in each held-out part (recording or block) by b over a."""
     ea, eb, parts = a[0], b[0], a[3]
-    return [float(np.mean(ea[p] ** 2) - np.mean(eb[p] ** 2)) / max(float(np.mean(ea[p] ** 2)), 1e-300) for p in parts]
+    return [float(np.mean(ea[p] ** 2) - np.mean(eb[p] ** 2)) / max(float(np.mean(ea[p] ** 2)), 1e-300)
+            for p in parts if p.stop > p.start]
 
 
 def _rmse(e):
@@ -418,6 +419,8 @@ def _rank_correlation(x: np.ndarray, y: np.ndarray) -> float:
 def _orientation(recs: list[Recording]) -> tuple[int, float | None]:
     x_all = np.concatenate([r.x[r.usable] for r in recs])
     y_all = np.concatenate([r.y[r.usable] for r in recs])
+    if x_all.size > 2 and not np.ptp(y_all) > 0:
+        raise ValueError("the reference does not change: nothing to calibrate against")
     rho = _rank_correlation(x_all, y_all) if x_all.size > 2 else float("nan")
     if not np.isfinite(rho) or abs(rho) < 0.1:
         raise ValueError("the readout does not respond to the reference" + (
