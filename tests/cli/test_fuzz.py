@@ -562,7 +562,7 @@ def test_known_finding(ident, corpus, tmp_path):
 
 
 @pytest.mark.xfail(strict=False, reason="virtual-device (and acquire --virtual) --period 50k --duration 0.1 takes "
-                   "~20 s before serving: start-up time grows with --period (acquisition/virtual_device.py); the "
+                   "~20 s before serving: start-up time grows with --period (virtual/device.py); the "
                    "fuzzer caps --period at 60 s (CAPPED)")
 def test_known_virtual_device_start_up_does_not_grow_with_period(tmp_path):
     import subprocess
