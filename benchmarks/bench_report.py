@@ -5,7 +5,7 @@ one after another when the oscillator section is built, each writing its wavefor
 15 digits) read with ``np.loadtxt``; every figure laid out by ``tight_layout`` (which renders the figure
 once more to measure it). The current way: ngspice runs side by side (``simulate_spice_many``, as many
 as the cores), started before the first section so they run while the physics figures draw
-(``prefetch``), binary raw output (``read_raw``), fixed figure layouts (``report.figures.fixed_layout``).
+(``prefetch``), binary raw output (``read_raw``), fixed figure layouts (``reports.figures.fixed_layout``).
 
 Both build the same sections in-process after a warm-up (imports and caches loaded), best of N each.
 The aim is for the whole command, process start-up included: ``fsrlab paper`` ≤ 3.5 s,

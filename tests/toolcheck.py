@@ -15,7 +15,7 @@ import pytest
 IN_CI = os.environ.get("CI", "").lower() in {"1", "true", "yes"}
 
 
-def _missing(what: str, hint: str) -> None:
+def missing_column(what: str, hint: str) -> None:
     message = f"{what} is not installed ({hint}; `make sysdeps` installs it)"
     if IN_CI:
         pytest.fail(f"CI=true: {message}")
@@ -26,7 +26,7 @@ def require_tool(name: str) -> str:
     """Return the path of executable ``name``, or skip (fail in CI) when it is missing."""
     path = shutil.which(name)
     if path is None:
-        _missing(f"`{name}`", "needed by this test")
+        missing_column(f"`{name}`", "needed by this test")
     return path
 
 
@@ -34,5 +34,5 @@ def require_file(path: str | os.PathLike, hint: str) -> Path:
     """Return ``path`` when it exists, or skip (fail in CI) naming ``hint``."""
     p = Path(path)
     if not p.exists():
-        _missing(str(p), hint)
+        missing_column(str(p), hint)
     return p

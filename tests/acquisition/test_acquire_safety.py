@@ -231,14 +231,14 @@ class _FailingSource(ConstantSource):
 def test_a_failing_device_thread_ends_the_run_with_one_line_and_the_rows_kept(tmp_path, monkeypatch):
     import fsrlab.cli.acquisition as cli_acq
 
-    original = cli_acq._virtual_device
+    original = cli_acq.make_virtual_device
 
     def failing(*args, **kwargs):
         device, source = original(*args, **kwargs)
         device.source = _FailingSource(after=10)
         return device, source
 
-    monkeypatch.setattr(cli_acq, "_virtual_device", failing)
+    monkeypatch.setattr(cli_acq, "make_virtual_device", failing)
     out = tmp_path / "run.csv"
     code, stdout, stderr = run_cli(["acquire", "--virtual", "--duration", "30", "--window", "20ms", "--out", out,
                                     "--quiet", "--json"])
@@ -255,7 +255,7 @@ def test_a_failing_device_thread_ends_the_run_with_one_line_and_the_rows_kept(tm
 def test_a_failing_virtual_device_command_says_why_in_one_line(monkeypatch):
     import fsrlab.cli.acquisition as cli_acq
 
-    original = cli_acq._virtual_device
+    original = cli_acq.make_virtual_device
     ports: list[str] = []
 
     def failing(*args, **kwargs):
@@ -270,7 +270,7 @@ def test_a_failing_virtual_device_command_says_why_in_one_line(monkeypatch):
         device.open = open_
         return device, source
 
-    monkeypatch.setattr(cli_acq, "_virtual_device", failing)
+    monkeypatch.setattr(cli_acq, "make_virtual_device", failing)
 
     def host():  # a program that opens the port and starts the meter
         _wait(lambda: bool(ports))

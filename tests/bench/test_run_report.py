@@ -211,7 +211,7 @@ def test_placements_file_of_table4_gives_the_printed_re(tmp_path, paper):
 
 
 def test_creep_part_is_fsrlab_creeps_numbers_and_says_why_when_absent(tmp_path):
-    # Reference: analysis.creep.creep_of_run (fsrlab creep) on examples/creep.csv, whose holds are 2 N
+    # Reference: metrics.creep.creep_of_run (fsrlab creep) on examples/creep.csv, whose holds are 2 N
     # for 30 s and 3.2 N for 45 s (examples/README.md).
     from pathlib import Path
 

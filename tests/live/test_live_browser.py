@@ -145,7 +145,7 @@ def test_local_page_needs_no_token_and_serves_nothing_else():
 
 def test_guided_known_weights_from_the_page_write_a_run_calibrate_accepts(driver, tmp_path):
     # The virtual bench places each mass when the page's Placed is clicked; the procedure waits for a
-    # steady readout and keeps 1 s of windows per placement (acquisition.weights). Reference: the plan
+    # steady readout and keeps 1 s of windows per placement (bench.weights). Reference: the plan
     # (mass × g per step, loading then unloading) and fsrlab calibrate reading the run back.
     out = tmp_path / "w.csv"
     server = LiveServer("--virtual", "--seed", "2", "--window", "20ms", "--out", str(out),

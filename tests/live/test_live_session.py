@@ -21,10 +21,10 @@ from fsrlab.io.runformat import load_run, sidecar_path
 
 def _virtual_session(tmp_path, capacity=20000, profile="triangle"):
     from fsrlab.acquisition.serial_link import SerialLink
-    from fsrlab.cli.acquisition import _virtual_device
+    from fsrlab.cli.acquisition import make_virtual_device
     from fsrlab.live.session import LiveSession
 
-    device, source = _virtual_device(profile, 50e3, 2.0, 1e-9, 7, 0.0, 0.0, True, 80, None)
+    device, source = make_virtual_device(profile, 50e3, 2.0, 1e-9, 7, 0.0, 0.0, True, 80, None)
     port = device.open()
     cal = device.load_cell.calibration()
     session = LiveSession(SerialLink(port), window_ms=20, capacity=capacity,

@@ -1,230 +1,23 @@
 """``fsrlab acquire`` and ``fsrlab virtual-device``: record an fsrlab meter, or emulate one on a pty.
 
-Also the pieces the other recording commands share (``loadcell``, ``weights``, ``measure``): the
-sensor and its area (``--sensor``/``--area``), the load-cell calibration (``--loadcell``), the virtual
-device's load cell (``--no-loadcell``, ``--hx711-rate``).
+The options the recording commands share (the sensor and its area, the load-cell calibration, the virtual
+device) are :mod:`fsrlab.cli.options`.
 """
 
 from __future__ import annotations
 
-import math
-import os
-import signal
 import sys
-from contextlib import contextmanager
 from pathlib import Path
 
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli.options import areas, emit_json, fail, farads, fraction, pascals, plain_numbers, seconds
-from fsrlab.units import format_eng
-
-_PROFILE_HELP = "Virtual stress profile: triangle, sine, steps or hold."
-_PEAK_HELP = "Peak stress of the profile [Pa]: 50k, 50kPa, 0.1MPa."
-_PERIOD_HELP = "Cycle time of the profile [s]: 4, 4s, 500ms, 1.5min."
-_C_OFF_HELP = "C_off switched in by range 1 [F]: 1n, 1nF, 470p."
-_CORRUPT_HELP = "Probability that a frame gets a bit flipped [1]: 0..1 or a percentage, 0.05 or 5%."
-_DROP_HELP = "Probability that a frame is not sent [1]: 0..1 or a percentage, 0.05 or 5%."
-_SEED_HELP = "Random seed of the virtual device's noise and faults (an integer)."
-_SENSOR_HELP = ("Sensor preset, for its sensing area (stress = force / area): flexiforce-a201 (9.53 mm diameter, "
-                "71.3 mm²) or interlink-402 (12.7 mm diameter, 126.7 mm²).")
-_AREA_HELP = "Sensing area [m²] instead of a preset: 71.3mm2, 0.713cm2, 7.13e-5m2."
-_LOADCELL_HELP = ("Load-cell calibration JSON (fsrlab loadcell tare/scale): HX711 counts -> force_n [N]. "
-                  "Default with --virtual: the virtual load cell's own parameters.")
-_NO_LOADCELL_HELP = "Virtual device: emulate a meter without an HX711 (ref_ok 0: reference columns empty)."
-_RATE_HELP = "Virtual device: the HX711's output data rate [samples/s]: 10 or 80."
-
-
-def _sensor_area(sensor: str | None, area: float | None) -> tuple[dict | None, float | None]:
-    """The sidecar's ``sensor`` and the area [m²] from --sensor or --area (None, None: neither)."""
-    if sensor is not None and area is not None:
-        fail("give --sensor or --area, not both", "--sensor")
-    if sensor is not None:
-        from fsrlab.physics.presets import SENSOR_PRESETS
-
-        key = sensor.strip().lower()
-        if key not in SENSOR_PRESETS:
-            fail(f"must be one of {', '.join(SENSOR_PRESETS)}, got {sensor!r}", "--sensor")
-        preset = SENSOR_PRESETS[key]
-        return preset.to_dict(), preset.area_m2
-    if area is not None:
-        if not 1e-8 <= area <= 1.0:
-            fail(f"must be from 0.01 mm² to 1 m², got {area:g} m²", "--area")
-        return {"model": "unnamed sensor (--area)", "area_m2": area}, area
-    return None, None
-
-
-def _virtual_sensor(sensor: str | None):
-    """The sensor model and the sidecar's ``sensor`` when --sensor names a virtual sensor (virtual-fsr,
-    paper-a201-1..4), else ``(None, None)``."""
-    from fsrlab.bench.protocols import VIRTUAL_SENSORS, virtual_sensor
-
-    key = (sensor or "").strip().lower()
-    if key not in VIRTUAL_SENSORS:
-        return None, None
-    model, text = virtual_sensor(key)
-    return model, {"model": text, "area_m2": model.area_m2}
-
-
-def _load_loadcell(path: Path | None, option: str = "--loadcell", scaled: bool = True):
-    """The load-cell calibration of ``path`` (None: None); one line naming the option otherwise."""
-    if path is None:
-        return None
-    from fsrlab.acquisition.loadcell import LoadCellError, load_loadcell
-
-    if not path.exists():
-        fail(f"{path} does not exist; write one with fsrlab loadcell tare", option)
-    try:
-        cal = load_loadcell(path)
-    except (LoadCellError, OSError) as exc:
-        fail(str(exc), option)
-    if scaled and not cal.scaled:
-        fail(f"{path} has a tare but no scale factor: run fsrlab loadcell scale --mass 500g --cal {path}", option)
-    return cal
-
-
-def _check_rate(rate: int) -> None:
-    if rate not in (10, 80):
-        fail(f"must be 10 or 80 samples/s (the HX711's RATE pin), got {rate}", "--hx711-rate")
-
-
-@contextmanager
-def _sigterm_as_interrupt():
-    """Let SIGTERM end a recording like Ctrl-C (file closed, device stopped)."""
-    def handler(signum, frame):  # noqa: ARG001
-        raise KeyboardInterrupt
-
-    try:
-        previous = signal.signal(signal.SIGTERM, handler)
-    except ValueError:  # not the main thread (e.g. called from a test thread): leave it
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-
-
-def _check_virtual(profile: str, peak: float, period: float, c_off: float, corrupt: float, drop: float,
-                   seed: int | None) -> None:
-    """One-line errors, each naming its own option, for the virtual device's options."""
-    from fsrlab.virtual.sources import PROFILE_KINDS
-
-    if profile not in PROFILE_KINDS:
-        fail(f"must be one of {', '.join(PROFILE_KINDS)}, got {profile!r}", "--profile")
-    if not peak > 0:
-        fail(f"must be > 0 Pa, got {peak:g} Pa", "--peak")
-    if not period > 0:
-        fail(f"must be > 0 s, got {period:g} s", "--period")
-    if not c_off >= 0:
-        fail(f"must be >= 0 F, got {c_off:g} F", "--c-off")
-    for name, v in (("--corrupt", corrupt), ("--drop", drop)):
-        if not 0 <= v <= 1:
-            fail(f"must be in 0..1, got {v:g}", name)
-    if seed is not None and seed < 0:
-        fail(f"must be an integer >= 0, got {seed}", "--seed")
-
-
-def _virtual_device(profile: str, peak: float, period: float, c_off: float, seed: int | None,
-                    corrupt: float, drop: float, load_cell: bool = True, rate: int = 80, area_m2: float | None = None,
-                    sensor_model=None):
-    from fsrlab.acquisition.loadcell import LoadCellModel
-    from fsrlab.virtual.sources import VIRTUAL_CIRCUIT, PhysicsSource, StressProfile
-    from fsrlab.virtual.device import Faults, VirtualDevice
-    from fsrlab.physics.sensor import VirtualFSR
-
-    prof = StressProfile(kind=profile, peak_pa=peak, period_s=period)
-    sensor = sensor_model if sensor_model is not None else VirtualFSR() if area_m2 is None else VirtualFSR(area_m2=area_m2)
-    cell = LoadCellModel(rate_sps=rate) if load_cell else None
-    try:
-        source = PhysicsSource(prof, sensor=sensor, circuit=VIRTUAL_CIRCUIT.replace(c_off_farad=c_off))
-    except ValueError:  # the sensor model has no valid response up to this stress
-        fail(f"the virtual sensor model has no valid response up to {format_eng(peak, 'Pa')} (its resistance would not "
-             "be positive); choose a smaller peak, e.g. 50k", "--peak")
-    return VirtualDevice(source, faults=Faults(corrupt=corrupt, drop=drop), seed=seed, load_cell=cell), source
-
-
-def _window_ms(window_s: float) -> int:
-    """The window in whole milliseconds, as the meter takes it (10 ms .. 60 s)."""
-    from fsrlab.acquisition.protocol import WINDOW_MS_MAX, WINDOW_MS_MIN
-
-    ms = round(window_s * 1000.0, 6)
-    if not WINDOW_MS_MIN <= ms <= WINDOW_MS_MAX:
-        fail(f"must be {WINDOW_MS_MIN} ms to {WINDOW_MS_MAX // 1000} s, got {window_s:g} s", "--window")
-    if ms != int(ms):
-        fail(f"the meter counts whole milliseconds, got {ms:g} ms: write {math.floor(ms)}ms or {math.ceil(ms)}ms",
-             "--window")
-    return int(ms)
-
-
-def _check_out(out: Path, overwrite: bool) -> None:
-    """Refuse an output that exists (unless ``overwrite``) or cannot be written, before any device is touched."""
-    from fsrlab.io.runformat import sidecar_path
-
-    if out.is_dir():
-        fail(f"{out} is a directory; give the run's CSV file, e.g. {out / 'run.csv'}", "--out")
-    if not overwrite:
-        for existing in (out, sidecar_path(out)):
-            if os.path.lexists(existing):
-                fail(f"{existing} exists; pass --overwrite to replace the run", "--out")
-    parent = out.parent if str(out.parent) else Path(".")
-    if not parent.is_dir():
-        fail(f"directory {parent} does not exist", "--out")
-    if not os.access(parent, os.W_OK):
-        fail(f"cannot write in directory {parent} (permission denied)", "--out")
-
-
-def _fmt(value: float, spec: str) -> str:
-    return "—" if value is None or not math.isfinite(value) else format(value, spec)
-
-
-class _LiveView:
-    """Rich live table of the recording on stderr (frames/s, frequency, duty cycle, dropped), and notices."""
-
-    def __init__(self, enabled: bool, title: str) -> None:
-        from rich.console import Console
-
-        self.console = Console(stderr=True)
-        self.enabled = enabled and self.console.is_terminal
-        self.title = title
-        self.live = None
-
-    def __enter__(self) -> "_LiveView":
-        if self.enabled:
-            from rich.live import Live
-
-            self.live = Live(self._render(None), console=self.console, transient=True, refresh_per_second=8)
-            self.live.__enter__()
-        return self
-
-    def _render(self, st):
-        from rich.table import Table
-
-        table = Table(title=self.title, show_header=True, header_style="bold")
-        for col in ("time (s)", "frames", "frames/s", "frequency (Hz)", "duty cycle (%)", "dropped", "corrupt", "resets"):
-            table.add_column(col, justify="right")
-        if st is not None:
-            table.add_row(f"{st.elapsed_s:.1f}", str(st.frames), f"{st.frames_per_s:.1f}", _fmt(st.frequency_hz, ".1f"),
-                          _fmt(st.duty_cycle * 100 if st.duty_cycle == st.duty_cycle else math.nan, ".2f"),
-                          str(st.dropped), str(st.bad_frames), str(st.resets))
-        return table
-
-    def update(self, st) -> None:
-        if self.live is not None:
-            self.live.update(self._render(st))
-
-    def notice(self, text: str) -> None:
-        """One line on stderr, above the live table when there is one (shown even with --quiet)."""
-        if self.live is not None:
-            self.console.print(f"fsrlab: {text}", markup=False, highlight=False)
-        else:
-            print(f"fsrlab: {text}", file=sys.stderr, flush=True)
-
-    def __exit__(self, *exc) -> None:
-        if self.live is not None:
-            self.live.__exit__(*exc)
-
+from fsrlab.cli.options import (
+    AREA_HELP, C_OFF_HELP, CORRUPT_HELP, DROP_HELP, LiveView, LOADCELL_HELP, NO_LOADCELL_HELP, PEAK_HELP,
+    PERIOD_HELP, PROFILE_HELP, RATE_HELP, SEED_HELP, SENSOR_HELP, areas, check_out, check_rate, check_virtual,
+    emit_json, fail, farads, fraction, loadcell_option, make_virtual_device, pascals, plain_numbers, seconds,
+    sensor_area, sigterm_as_interrupt, window_ms_option,
+)
 
 @app.command("acquire")
 def acquire(
@@ -237,18 +30,18 @@ def acquire(
     stall: float = typer.Option(None, "--stall", parser=seconds, metavar="TIME", help="No frame for this long [s] is reported as a gap (default: 5 windows, at least 2s); a device still silent at the end fails the run (exit 1)."),
     range_: int = typer.Option(0, "--range", help="C_off range switch [1]: 0 (off) or 1 (C_off connected)."),
     baud: int = typer.Option(115200, "--baud", help="Line rate [bit/s]; protocol v1: 115200."),
-    profile: str = typer.Option("triangle", "--profile", help=_PROFILE_HELP),
-    peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS", help="Virtual device: " + _PEAK_HELP[0].lower() + _PEAK_HELP[1:]),
-    period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="Virtual device: " + _PERIOD_HELP[0].lower() + _PERIOD_HELP[1:]),
-    c_off: float = typer.Option("1n", "--c-off", parser=farads, metavar="CAPACITANCE", help="Virtual circuit: " + _C_OFF_HELP),
-    seed: int = typer.Option(None, "--seed", help=_SEED_HELP),
-    corrupt: float = typer.Option("0", "--corrupt", parser=fraction, metavar="FRACTION", help="Virtual device (tests): " + _CORRUPT_HELP[0].lower() + _CORRUPT_HELP[1:]),
-    drop: float = typer.Option("0", "--drop", parser=fraction, metavar="FRACTION", help="Virtual device (tests): " + _DROP_HELP[0].lower() + _DROP_HELP[1:]),
-    sensor: str = typer.Option(None, "--sensor", help=_SENSOR_HELP),
-    area: float = typer.Option(None, "--area", parser=areas, metavar="AREA", help=_AREA_HELP),
-    loadcell: Path = typer.Option(None, "--loadcell", metavar="LC.json", help=_LOADCELL_HELP),
-    no_loadcell: bool = typer.Option(False, "--no-loadcell", help=_NO_LOADCELL_HELP),
-    hx711_rate: int = typer.Option(80, "--hx711-rate", help=_RATE_HELP),
+    profile: str = typer.Option("triangle", "--profile", help=PROFILE_HELP),
+    peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS", help="Virtual device: " + PEAK_HELP[0].lower() + PEAK_HELP[1:]),
+    period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="Virtual device: " + PERIOD_HELP[0].lower() + PERIOD_HELP[1:]),
+    c_off: float = typer.Option("1n", "--c-off", parser=farads, metavar="CAPACITANCE", help="Virtual circuit: " + C_OFF_HELP),
+    seed: int = typer.Option(None, "--seed", help=SEED_HELP),
+    corrupt: float = typer.Option("0", "--corrupt", parser=fraction, metavar="FRACTION", help="Virtual device (tests): " + CORRUPT_HELP[0].lower() + CORRUPT_HELP[1:]),
+    drop: float = typer.Option("0", "--drop", parser=fraction, metavar="FRACTION", help="Virtual device (tests): " + DROP_HELP[0].lower() + DROP_HELP[1:]),
+    sensor: str = typer.Option(None, "--sensor", help=SENSOR_HELP),
+    area: float = typer.Option(None, "--area", parser=areas, metavar="AREA", help=AREA_HELP),
+    loadcell: Path = typer.Option(None, "--loadcell", metavar="LC.json", help=LOADCELL_HELP),
+    no_loadcell: bool = typer.Option(False, "--no-loadcell", help=NO_LOADCELL_HELP),
+    hx711_rate: int = typer.Option(80, "--hx711-rate", help=RATE_HELP),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No live display (notices of gaps still go to stderr)."),
     json_out: bool = typer.Option(False, "--json", help='Print {"frames", "dropped", "duration_s", "file"} as JSON, and "no_reference" (windows without a load-cell conversion) for a protocol-2 device.'),
 ) -> None:
@@ -274,7 +67,7 @@ def acquire(
         fail("give exactly one of --port PORT|auto and --virtual", "--port")
     if not duration > 0:
         fail(f"must be > 0 s, got {duration:g} s", "--duration")
-    window_ms = _window_ms(window)
+    window_ms = window_ms_option(window)
     if stall is not None and not stall > window_ms / 1000.0:
         fail(f"must be longer than one window ({window_ms / 1000.0:g} s), got {stall:g} s", "--stall")
     if range_ not in (0, 1):
@@ -284,16 +77,16 @@ def acquire(
     for name, v in (("--corrupt", corrupt), ("--drop", drop)):
         if not 0 <= v <= 1:
             fail(f"must be in 0..1, got {v:g}", name)
-    _check_rate(hx711_rate)
-    sensor_meta, area_m2 = _sensor_area(sensor, area)
-    cal = _load_loadcell(loadcell)
-    _check_out(out, overwrite)
+    check_rate(hx711_rate)
+    sensor_meta, area_m2 = sensor_area(sensor, area)
+    cal = loadcell_option(loadcell)
+    check_out(out, overwrite)
     device = None
     metadata: dict = {"sensor": sensor_meta} if sensor_meta else {}
     reference = health = None
     if virtual:
-        _check_virtual(profile, peak, period, c_off, corrupt, drop, seed)
-        device, source = _virtual_device(profile, peak, period, c_off, seed, corrupt, drop, not no_loadcell,
+        check_virtual(profile, peak, period, c_off, corrupt, drop, seed)
+        device, source = make_virtual_device(profile, peak, period, c_off, seed, corrupt, drop, not no_loadcell,
                                          hx711_rate, area_m2)
         if cal is None and device.load_cell is not None:
             cal = device.load_cell.calibration()
@@ -311,8 +104,8 @@ def acquire(
         reference = lambda frame: device.reference(frame.seq)  # noqa: E731
         health = lambda: device.failure  # noqa: E731
     try:
-        with SerialLink(port, baud=baud) as link, _sigterm_as_interrupt(), \
-                _LiveView(not quiet, f"fsrlab acquire {link.port} -> {out}") as view:
+        with SerialLink(port, baud=baud) as link, sigterm_as_interrupt(), \
+                LiveView(not quiet, f"fsrlab acquire {link.port} -> {out}") as view:
             result = record(link, out, duration, window_ms=window_ms, range_=range_, metadata=metadata,
                             reference=reference, on_status=view.update, on_event=view.notice, stall_s=stall,
                             health=health, overwrite=overwrite, loadcell=cal, area_m2=area_m2)
@@ -334,13 +127,13 @@ def acquire(
 @app.command("virtual-device")
 def virtual_device(
     duration: float = typer.Option(None, "--duration", parser=seconds, metavar="TIME", help="Run this long [s]: 90, 90s, 1.5min, 2h (default: until Ctrl-C)."),
-    profile: str = typer.Option("triangle", "--profile", help=_PROFILE_HELP),
-    peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS", help=_PEAK_HELP),
-    period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help=_PERIOD_HELP),
-    c_off: float = typer.Option("1n", "--c-off", parser=farads, metavar="CAPACITANCE", help=_C_OFF_HELP),
-    seed: int = typer.Option(None, "--seed", help=_SEED_HELP),
-    corrupt: float = typer.Option("0", "--corrupt", parser=fraction, metavar="FRACTION", help=_CORRUPT_HELP),
-    drop: float = typer.Option("0", "--drop", parser=fraction, metavar="FRACTION", help=_DROP_HELP),
+    profile: str = typer.Option("triangle", "--profile", help=PROFILE_HELP),
+    peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS", help=PEAK_HELP),
+    period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help=PERIOD_HELP),
+    c_off: float = typer.Option("1n", "--c-off", parser=farads, metavar="CAPACITANCE", help=C_OFF_HELP),
+    seed: int = typer.Option(None, "--seed", help=SEED_HELP),
+    corrupt: float = typer.Option("0", "--corrupt", parser=fraction, metavar="FRACTION", help=CORRUPT_HELP),
+    drop: float = typer.Option("0", "--drop", parser=fraction, metavar="FRACTION", help=DROP_HELP),
     json_out: bool = typer.Option(False, "--json", help='Print {"port": PATH} as JSON (one line) instead of the bare path.'),
 ) -> None:
     """Emulate an fsrlab meter on a pseudo-terminal; prints its path (open it with --port PATH or any serial tool).
@@ -357,13 +150,13 @@ def virtual_device(
 
     if duration is not None and not duration > 0:
         fail(f"must be > 0 s, got {duration:g} s", "--duration")
-    _check_virtual(profile, peak, period, c_off, corrupt, drop, seed)
-    device, _ = _virtual_device(profile, peak, period, c_off, seed, corrupt, drop)
+    check_virtual(profile, peak, period, c_off, corrupt, drop, seed)
+    device, _ = make_virtual_device(profile, peak, period, c_off, seed, corrupt, drop)
     path = device.open(thread=False)
     typer.echo(json.dumps({"port": path}) if json_out else path)
     sys.stdout.flush()
     try:
-        with _sigterm_as_interrupt():
+        with sigterm_as_interrupt():
             device.serve(duration)
     except KeyboardInterrupt:
         pass

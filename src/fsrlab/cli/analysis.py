@@ -10,63 +10,18 @@ from __future__ import annotations
 
 import math
 
-from contextlib import contextmanager
 from pathlib import Path
-from typing import Iterator
 
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli.options import emit_json, fail, farads, fraction, number, ohms, option_names, seconds
+from fsrlab.cli.options import (
+    SKIP_HELP, emit_json, fail, farads, fraction, load_run_warned, missing_column, number, ohms, option_names,
+    reading_file, seconds, skipped_json, warn,
+)
 from fsrlab.units import STANDARD_GRAVITY
 
 _DEGREES = ("auto", "1", "2", "3", "4", "5")
-
-_SKIP_HELP = ("Leave out each row with a bad cell (non-numeric, nan or inf, a value its column cannot hold such "
-              "as 1e308 Hz) and count it, instead of stopping at the first; rows out of time order still stop.")
-
-
-def _warn(warnings: list[str]) -> None:
-    for message in dict.fromkeys(warnings):
-        typer.echo(f"fsrlab: warning: {message}", err=True)
-
-
-@contextmanager
-def _reading(path: Path) -> Iterator[None]:
-    """A file that cannot be read: one line naming it ("cannot read 'bench.csv': No such file or directory")."""
-    try:
-        yield
-    except IsADirectoryError:
-        raise ValueError(f"'{path}' is a directory, not a file") from None
-    except OSError as exc:
-        raise ValueError(f"cannot read '{path}': {exc.strerror or exc}") from None
-
-
-def _load(path: Path, skip_bad_rows: bool, warnings: list[str]):
-    """Load a run; what the user should know about it goes to ``warnings``."""
-    from fsrlab.io.runformat import load_run
-
-    with _reading(path):
-        run = load_run(path, skip_bad_rows=skip_bad_rows)
-    if run.skipped:
-        first = run.skipped[0].reason
-        more = f" (and {len(run.skipped) - 1} more)" if len(run.skipped) > 1 else ""
-        warnings.append(f"skipped {len(run.skipped)} bad row{'s' if len(run.skipped) > 1 else ''} "
-                        f"(--skip-bad-rows): {first}{more}")
-    note = run.incomplete()
-    if note:
-        warnings.append(note)
-    return run
-
-
-def _skipped_json(run) -> dict:
-    return {"skipped_rows": len(run.skipped),
-            "skipped": [{"row": b.row, "column": b.column, "reason": b.reason} for b in run.skipped]}
-
-
-def _missing(path: Path, run, column: str, what: str = "", option: str | None = None) -> None:
-    fail(f"{path}: column {column!r}{what} missing (columns: {', '.join(run.columns)})", option)
-
 
 @app.command("hysteresis")
 def hysteresis(
@@ -75,7 +30,7 @@ def hysteresis(
     threshold: float = typer.Option(0.05, "--threshold", parser=fraction, help="Stress reversal threshold [1, a fraction of the stress span], 0.05 or 5%; used without a direction column."),
     reference: str = typer.Option(None, "--reference", help="Reference the branches follow: force_n [N] (no sensor area needed) or stress_pa [Pa] (default: stress_pa if the run has it, else force_n)."),
     unit: str = typer.Option(None, "--unit", help="Display unit of the reference level at the largest difference [N, g, Pa or kPa] (default kPa for stress, N for force); --json stays SI."),
-    skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=_SKIP_HELP),
+    skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=SKIP_HELP),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Hysteresis error (eq. 13) of a run, per loading-unloading cycle and overall.
@@ -95,17 +50,17 @@ def hysteresis(
     if not 0 < threshold < 1:
         fail(f"must be a fraction in (0, 1), got {threshold:g}", "--threshold")
     warnings: list[str] = []
-    run = _load(run_file, skip_bad_rows, warnings)
+    run = load_run_warned(run_file, skip_bad_rows, warnings)
     if quantity not in run:
-        _missing(run_file, run, quantity, option="--quantity")
+        missing_column(run_file, run, quantity, option="--quantity")
     _reference_option(run_file, run, reference)
     ref = reference or ("stress_pa" if "stress_pa" in run else "force_n")
     shown, factor = _unit_option(unit if unit is not None else ("kPa" if ref == "stress_pa" else None), ref)
     res = hysteresis_of_run(run, quantity, threshold, reference=ref)
-    _warn(warnings)
+    warn(warnings)
     if json_out:
         extra = {} if ref == "stress_pa" else {"reference": "force_n", "force_at_max_n": res.stress_at_max_pa}
-        emit_json({**res.to_dict(), **extra, **(_skipped_json(run) if skip_bad_rows else {})})
+        emit_json({**res.to_dict(), **extra, **(skipped_json(run) if skip_bad_rows else {})})
         return
     from rich.console import Console
     from rich.table import Table
@@ -141,7 +96,7 @@ def repeatability(
 
     if ddof not in (0, 1):
         fail(f"must be 0 or 1, got {ddof}", "--ddof")
-    with _reading(file):
+    with reading_file(file):
         loads, sensors, readings = load_grouped_csv(file)
     res = grouped_repeatability(loads, sensors, readings, ddof=ddof)
     if json_out:
@@ -174,9 +129,9 @@ def _reference_option(run_file: Path, run, reference: str | None) -> None:
         raise ValueError(f"{run_file}: no reference: column 'force_n' [N] or 'stress_pa' [Pa] missing (columns: "
                          f"{', '.join(run.columns)})")
     if reference == "force_n" and "force_n" not in run:
-        _missing(run_file, run, "force_n", " (the reference)", "--reference")
+        missing_column(run_file, run, "force_n", " (the reference)", "--reference")
     if reference == "stress_pa" and "stress_pa" not in run and "force_n" not in run:
-        _missing(run_file, run, "stress_pa", " (the reference)", "--reference")
+        missing_column(run_file, run, "stress_pa", " (the reference)", "--reference")
 
 
 def _unit_option(unit: str | None, reference: str) -> tuple[str, float]:
@@ -207,7 +162,7 @@ def calibrate_cmd(
     folds: int = typer.Option(5, "--folds", help="Cross-validation folds [1] (--method cv), ≥ 2 (fewer when the run has fewer cycles or blocks)."),
     r: float = typer.Option(None, "--r", parser=ohms, help="555 R for --x c_fsr_farad [Ω], e.g. 10k (default: the run's sidecar, else 10k)."),
     c_off: float = typer.Option(None, "--c-off", parser=farads, help="C_off for --x c_fsr_farad [F], e.g. 470p (default: sidecar, else 0)."),
-    skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=_SKIP_HELP),
+    skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=SKIP_HELP),
     output: Path = typer.Option(None, "--output", "-o", help="Write the calibration to this JSON file."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON: model, method, how choices were scored and each step's result, held-out RMSE [reference unit and % FS], lag_s [s], candidates, ..."),
 ) -> None:
@@ -261,9 +216,9 @@ def calibrate_cmd(
         except typer.BadParameter as exc:
             fail(f"must be auto or a lag in seconds such as 0.02, got {lag!r} ({exc.message})", "--lag")
     warnings: list[str] = []
-    run = _load(run_file, skip_bad_rows, warnings)
+    run = load_run_warned(run_file, skip_bad_rows, warnings)
     if x not in run and x != "c_fsr_farad":
-        _missing(run_file, run, x, option="--x")
+        missing_column(run_file, run, x, option="--x")
     _reference_option(run_file, run, reference)
     _unit_option(unit, reference or ("stress_pa" if "stress_pa" in run else "force_n"))
     circuit = None
@@ -299,10 +254,10 @@ def calibrate_cmd(
     if compensate:
         out["hysteresis_error_before_percent"], out["hysteresis_error_after_percent"] = cal.compensation_he_percent
     if skip_bad_rows:
-        out.update(_skipped_json(run))
+        out.update(skipped_json(run))
     if output is not None:
         save_calibration(cal, output)
-    _warn(warnings)
+    warn(warnings)
     if json_out:
         emit_json(out)
         return
@@ -424,7 +379,7 @@ def apply_cmd(
     margin: float = typer.Option(None, "--margin", parser=fraction, help="How far beyond the calibrated readout range an estimate is still written [1, a fraction of the range's span], e.g. 0.1 or 10%; beyond it the estimate is left empty (default: every reading for a held-out calibration, 10% for --method cv). Every reading outside the range has in_range = 0."),
     force: bool = typer.Option(False, "--force", help="Apply even to a run recorded with another circuit or range than the calibration."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing output run and its sidecar; without it an existing one stops the command."),
-    skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=_SKIP_HELP + " Skipped rows are not written."),
+    skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=SKIP_HELP + " Skipped rows are not written."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON: rows written, estimated, missing (with the reasons), in and out of the readout range."),
 ) -> None:
     """Apply a calibration to a run: adds <reference>_estimate, <reference>_uncertainty and in_range.
@@ -449,12 +404,12 @@ def apply_cmd(
 
     if margin is not None and not (math.isfinite(margin) and margin >= 0):
         fail(f"must be a fraction >= 0 of the calibrated span, got {margin:g}", "--margin")
-    with _reading(cal_file):
+    with reading_file(cal_file):
         cal = load_calibration(cal_file)
     warnings: list[str] = []
-    run = _load(run_file, skip_bad_rows, warnings)
+    run = load_run_warned(run_file, skip_bad_rows, warnings)
     if cal.x_name not in run and cal.x_name != "c_fsr_farad":
-        _missing(run_file, run, cal.x_name, " (the calibration's readout)")
+        missing_column(run_file, run, cal.x_name, " (the calibration's readout)")
     if output.resolve() == run_file.resolve():
         fail("must differ from the input run", "--output")
     if not overwrite:
@@ -474,7 +429,7 @@ def apply_cmd(
         warnings.append(f"applied with --force although {difference}")
     write_run(output, est.columns, est.metadata, overwrite=True)
     n = info["counts"]
-    _warn(warnings)
+    warn(warnings)
     estimate_col = f"{cal.y_name}_estimate"
     if json_out:
         emit_json({"output": str(output), "rows": est.n_rows, "estimated": n["estimated"], "missing": n["missing"],
@@ -485,7 +440,7 @@ def apply_cmd(
                    "margin_percent": None if info["margin"] is None else 100 * info["margin"],
                    "method": info["method"], "model": info["model"],
                    "reference": cal.y_name, "unit": cal.y_unit, "lag_s": info["lag_s"],
-                   "columns": [estimate_col, f"{cal.y_name}_uncertainty", "in_range"], **_skipped_json(run)})
+                   "columns": [estimate_col, f"{cal.y_name}_uncertainty", "in_range"], **skipped_json(run)})
         return
     lo, hi = info["readout_range"]
     lines = [f"wrote {output} ({est.n_rows} rows, {estimate_col} by {info['method']})"]
@@ -531,7 +486,7 @@ def iso376_cmd(
             creep_readings = tuple(number(c.strip()) for c in cells)
         except typer.BadParameter as exc:
             fail(f"write two finite readings as I30,I300, got {creep!r} ({exc.message})", "--creep")
-    with _reading(file):
+    with reading_file(file):
         forces, series = load_iso376_csv(file)
     with option_names({"creep_readings": "--creep", "interpolation_degree": "--degree"}):
         res = iso376(forces, series, creep_readings, degree)

@@ -8,7 +8,10 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli.options import emit_json, fail, mass_list, masses, pascals, plain_numbers, seconds
+from fsrlab.cli.options import (
+    Keyboard, LiveView, check_out, emit_json, fail, loadcell_option, mass_list, masses, pascals, plain_numbers,
+    seconds, sensor_area, sigterm_as_interrupt, virtual_sensor_option, window_ms_option,
+)
 
 _PROTOCOLS = ("spring", "weights", "creep")
 
@@ -54,15 +57,13 @@ def bench(
     """
     from fsrlab.bench.protocols import CreepPlan, SpringPlan, WeightsPlan, run_protocol, twin_status
     from fsrlab.acquisition.recorder import result_dict
-    from fsrlab.cli.acquisition import (_check_out, _load_loadcell, _sensor_area, _sigterm_as_interrupt,
-                                        _virtual_sensor, _window_ms)
 
     if protocol not in _PROTOCOLS:
         fail(f"must be one of {', '.join(_PROTOCOLS)}, got {protocol!r}", "PROTOCOL")
     if int(virtual) + int(twin) + int(port is not None) != 1:
         fail("give exactly one of --virtual, --twin and --port PORT|auto", "--port")
     out = out if out is not None else Path(f"{protocol}.csv")
-    window_ms = _window_ms(window)
+    window_ms = window_ms_option(window)
     if seed is not None and seed < 0:
         fail(f"must be an integer >= 0, got {seed}", "--seed")
     try:
@@ -103,19 +104,18 @@ def bench(
     if (sensor or "").strip().lower() == "virtual-fsr" and port is not None:
         fail(f"{sensor!r} is a virtual sensor; with --port give a preset for the area (flexiforce-a201, "
              "interlink-402)", "--sensor")
-    sensor_obj, sensor_meta = _virtual_sensor(sensor) if port is None else (None, None)
+    sensor_obj, sensor_meta = virtual_sensor_option(sensor) if port is None else (None, None)
     if sensor_obj is None:  # with --port a paper sensor's name gives its area
-        sensor_meta, area_m2 = _sensor_area(sensor, None)
-    cal = _load_loadcell(loadcell)
-    _check_out(out, overwrite)
+        sensor_meta, area_m2 = sensor_area(sensor, None)
+    cal = loadcell_option(loadcell)
+    check_out(out, overwrite)
     if report is not None:
         _check_report_dir(report)
     device = "virtual" if virtual else "twin" if twin else "port"
     confirm = None
     if device == "port":
-        from fsrlab.cli.weights import _Keyboard
 
-        keyboard = _Keyboard()
+        keyboard = Keyboard()
         confirm = keyboard.answer
 
         def announce(text: str) -> None:
@@ -130,10 +130,9 @@ def bench(
         from fsrlab.bench.protocols import virtual_sensor
 
         sensor_obj = virtual_sensor((sensor or "virtual-fsr").strip().lower())[0]
-    from fsrlab.cli.acquisition import _LiveView
 
     try:
-        with _sigterm_as_interrupt(), _LiveView(not quiet and protocol != "weights",
+        with sigterm_as_interrupt(), LiveView(not quiet and protocol != "weights",
                                                 f"fsrlab bench {protocol} -> {out}") as view:
             run = run_protocol(plan, out, device=device, port=port, sensor=sensor_obj, area_m2=area_m2, seed=seed,
                                window_ms=window_ms, loadcell=cal, announce=announce, confirm=confirm,

@@ -12,8 +12,10 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli.options import emit_json, fail, fraction, option_names, seconds
-from fsrlab.cli.analysis import _SKIP_HELP, _load, _missing, _skipped_json, _warn
+from fsrlab.cli.options import (
+    SKIP_HELP, emit_json, fail, fraction, load_run_warned, missing_column, option_names, seconds, skipped_json,
+    warn,
+)
 
 _PLOT_SUFFIXES = (".png", ".svg", ".pdf")
 
@@ -31,7 +33,7 @@ def creep_cmd(
     band: float = typer.Option(0.02, "--band", parser=fraction, help="Half-width of the hold band [1, a fraction of full scale = the largest |reference|], 0.02 or 2%; in (0, 50 %)."),
     settle: float = typer.Option(None, "--settle", parser=seconds, help="Time after each hold's start left out of the fits, while the load settles [s], e.g. 0.5s; shorter than --min-hold (default: 0.5 s, at most a fifth of --min-hold)."),
     plot: Path = typer.Option(None, "--plot", metavar="FILE.png", help="Also draw the readout against log time per hold into this figure [.png, .svg or .pdf]."),
-    skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=_SKIP_HELP),
+    skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=SKIP_HELP),
     json_out: bool = typer.Option(False, "--json", help="Print JSON (units in the keys; null where not determined)."),
 ) -> None:
     """Creep of a readout under held loads: drift per decade of time and time constant, per hold.
@@ -67,11 +69,11 @@ def creep_cmd(
         if plot.is_dir():
             fail(f"'{plot}' is a directory, not a file", "--plot")
     warnings: list[str] = []
-    run = _load(run_file, skip_bad_rows, warnings)
+    run = load_run_warned(run_file, skip_bad_rows, warnings)
     if x not in run:
-        _missing(run_file, run, x, option="--x")
+        missing_column(run_file, run, x, option="--x")
     if reference is not None and reference not in run:
-        _missing(run_file, run, reference, option="--reference")
+        missing_column(run_file, run, reference, option="--reference")
     held = reference or next((c for c in REFERENCES if c in run), None)
     if x in ("time_s", held):
         fail(f"must be a readout column, not the {'time' if x == 'time_s' else 'reference'} {x!r}", "--x")
@@ -79,9 +81,9 @@ def creep_cmd(
         res = creep_of_run(run, x=x, reference=reference, band=band, min_hold_s=min_hold, settle_s=settle)
     if plot is not None:
         _save_plot(res, plot)
-    _warn(warnings)
+    warn(warnings)
     if json_out:
-        emit_json({**res.to_dict(), **(_skipped_json(run) if skip_bad_rows else {}),
+        emit_json({**res.to_dict(), **(skipped_json(run) if skip_bad_rows else {}),
                    **({"plot": str(plot)} if plot is not None else {})})
         return
     from rich.console import Console

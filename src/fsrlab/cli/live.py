@@ -8,10 +8,12 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli.options import areas, fail, farads, mass_list, pascals, seconds
+from fsrlab.cli.options import (
+    AREA_HELP, LOADCELL_HELP, SENSOR_HELP, areas, check_out, check_virtual, fail, farads, load_frame_calibration,
+    loadcell_option, make_virtual_device, mass_list, meter_differences, pascals, seconds, sensor_area,
+    virtual_bench, window_ms_option,
+)
 from fsrlab.io.jsonable import to_jsonable
-from fsrlab.cli.acquisition import _AREA_HELP, _LOADCELL_HELP, _SENSOR_HELP
-from fsrlab.cli.measure import load_frame_calibration, meter_differences
 from fsrlab.units import STANDARD_GRAVITY
 
 
@@ -65,9 +67,9 @@ def live(
     period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="Virtual device: period of the profile [s], e.g. 4s."),
     c_off: float = typer.Option("1n", "--c-off", parser=farads, metavar="CAPACITANCE", help="Virtual circuit: C_off [F], e.g. 1n."),
     seed: int = typer.Option(None, "--seed", help="Virtual device: random seed [1] (default: a fresh one)."),
-    loadcell: Path = typer.Option(None, "--loadcell", help=_LOADCELL_HELP),
-    sensor: str = typer.Option(None, "--sensor", help=_SENSOR_HELP),
-    area: float = typer.Option(None, "--area", parser=areas, metavar="AREA", help=_AREA_HELP),
+    loadcell: Path = typer.Option(None, "--loadcell", help=LOADCELL_HELP),
+    sensor: str = typer.Option(None, "--sensor", help=SENSOR_HELP),
+    area: float = typer.Option(None, "--area", parser=areas, metavar="AREA", help=AREA_HELP),
     masses: str = typer.Option(None, "--masses", metavar="MASSES", help="Offer the guided known-weight calibration on the page with these masses, increasing, comma-separated [kg]: 0,100g,200g,400g (g, kg or mg; 0 needs no unit). With --virtual a virtual bench places each mass when the page says Placed."),
     repeat: int = typer.Option(1, "--repeat", help="Guided calibration: cycles of placements [1], e.g. 3."),
     unload: bool = typer.Option(False, "--unload", help="Guided calibration: also unload in reverse (for hysteresis)."),
@@ -88,12 +90,10 @@ def live(
       fsrlab live --port auto --cal cal.json --out run.csv
       fsrlab live --virtual --host 0.0.0.0 --http-port 8080
     """
-    from fsrlab.cli.acquisition import (_check_out, _check_virtual, _load_loadcell, _sensor_area, _virtual_device,
-                                        _window_ms)
 
     if virtual == (port is not None):
         fail("give exactly one of --port PORT|auto and --virtual", "--port")
-    window_ms = _window_ms(window)
+    window_ms = window_ms_option(window)
     if range_ not in (0, 1):
         fail(f"must be 0 or 1, got {range_}", "--range")
     if not 0 <= http_port <= 65535:
@@ -101,9 +101,9 @@ def live(
     if duration is not None and not duration > 0:
         fail(f"must be > 0 s, got {duration:g} s", "--duration")
     if out is not None:
-        _check_out(out, overwrite=False)
-    sensor_meta, area_m2 = _sensor_area(sensor, area)
-    lc = _load_loadcell(loadcell)
+        check_out(out, overwrite=False)
+    sensor_meta, area_m2 = sensor_area(sensor, area)
+    lc = loadcell_option(loadcell)
     calibration = load_frame_calibration(cal, "live") if cal is not None else None
     from fsrlab.acquisition.serial_link import SerialLink
     from fsrlab.live.page import Controller, make_document
@@ -129,13 +129,12 @@ def live(
         steps = plan_steps(masses_kg, repeat, unload)
     place = None
     if virtual:
-        _check_virtual(profile, peak, period, c_off, 0.0, 0.0, seed)
+        check_virtual(profile, peak, period, c_off, 0.0, 0.0, seed)
         if steps is not None:  # a virtual bench that places the masses of the plan
-            from fsrlab.cli.weights import virtual_bench
 
             device, source, place = virtual_bench(steps, seed, area_m2, STANDARD_GRAVITY)
         else:
-            device, source = _virtual_device(profile, peak, period, c_off, seed, 0.0, 0.0, True, 80, area_m2)
+            device, source = make_virtual_device(profile, peak, period, c_off, seed, 0.0, 0.0, True, 80, area_m2)
         if unplug_after is not None:
             if unplug_after < 1:
                 fail(f"must be >= 1 window, got {unplug_after}", "--unplug-after")

@@ -8,26 +8,10 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli.options import emit_json, fail, masses, plain_numbers, seconds
-from fsrlab.cli.acquisition import _check_rate, _load_loadcell, _sigterm_as_interrupt, _window_ms
-
-_GRAVITY_HELP = "Local acceleration of gravity [m/s²], for mass -> force: 9.80665 (standard gravity g_n, the default), 9.81."
-
-
-def _gravity(text: str | float) -> float:
-    """Acceleration of gravity [m/s²]: a plain number, or with m/s2 / m/s²."""
-    t = str(text).strip()
-    for suffix in ("m/s²", "m/s2", "m/s^2"):
-        if t.endswith(suffix):
-            t = t[: -len(suffix)].strip()
-    try:
-        value = float(t)
-    except ValueError:
-        raise typer.BadParameter(f"cannot read {text!r} as an acceleration; write e.g. 9.80665 or 9.81m/s2") from None
-    if not 9.7 <= value <= 9.9:
-        raise typer.BadParameter(f"{value:g} m/s² is not an acceleration of gravity on Earth (9.7 to 9.9 m/s²)")
-    return value
-
+from fsrlab.cli.options import (
+    GRAVITY_HELP, check_rate, emit_json, fail, gravity_value, loadcell_option, masses, plain_numbers, seconds,
+    sigterm_as_interrupt, window_ms_option,
+)
 
 @app.command("loadcell")
 def loadcell(
@@ -38,7 +22,7 @@ def loadcell(
     out: Path = typer.Option(None, "--out", "-o", metavar="LC.json", help="tare: the load-cell calibration file to write (LC.json)."),
     cal: Path = typer.Option(None, "--cal", metavar="LC.json", help="scale: the tare's calibration file (LC.json); the scale factor is added to it (or written to -o)."),
     mass: float = typer.Option(None, "--mass", parser=masses, metavar="MASS", help="scale: the known mass on the cell [kg]: 500g, 0.5kg, 250mg."),
-    gravity: float = typer.Option("9.80665", "--gravity", parser=_gravity, metavar="ACCELERATION", help=_GRAVITY_HELP),
+    gravity: float = typer.Option("9.80665", "--gravity", parser=gravity_value, metavar="ACCELERATION", help=GRAVITY_HELP),
     capacity: float = typer.Option(None, "--capacity", parser=masses, metavar="MASS", help="tare: the cell's rated capacity [kg], stored (a scale mass below 5 % of it warns): 5kg, 1kg, 500g."),
     duration: float = typer.Option("3s", "--duration", parser=seconds, metavar="TIME", help="Reading time [s]: 3s, 5, 1.5s."),
     window: float = typer.Option("100ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], whole ms: 100ms, 0.5s."),
@@ -72,11 +56,11 @@ def loadcell(
         fail("give exactly one of --port PORT|auto and --virtual", "--port")
     if not duration > 0:
         fail(f"must be > 0 s, got {duration:g} s", "--duration")
-    window_ms = _window_ms(window)
+    window_ms = window_ms_option(window)
     if duration < 5 * window_ms / 1000.0:
         fail(f"must be at least 5 windows ({5 * window_ms / 1000.0:g} s) to judge the reading's stability, "
              f"got {duration:g} s", "--duration")
-    _check_rate(hx711_rate)
+    check_rate(hx711_rate)
     if seed is not None and seed < 0:
         fail(f"must be an integer >= 0, got {seed}", "--seed")
     tare = None
@@ -95,7 +79,7 @@ def loadcell(
             fail("scale needs the known mass > 0 on the cell, e.g. --mass 500g", "--mass")
         if capacity is not None:
             fail("the capacity is given at the tare (fsrlab loadcell tare --capacity 5kg)", "--capacity")
-        tare = _load_loadcell(cal, "--cal", scaled=False)
+        tare = loadcell_option(cal, "--cal", scaled=False)
         target = out if out is not None else cal
     if target.is_dir():
         fail(f"{target} is a directory; give a file, e.g. {target / 'lc.json'}", "--out" if out is not None else "--cal")
@@ -118,7 +102,7 @@ def loadcell(
                                load_cell=LoadCellModel(rate_sps=hx711_rate))
         port = device.open()
     try:
-        with SerialLink(port) as link, _sigterm_as_interrupt():
+        with SerialLink(port) as link, sigterm_as_interrupt():
             if not virtual:
                 what = "nothing on the load cell" if action == "tare" else f"{mass * 1e3:g} g on the load cell"
                 print(f"fsrlab: reading for {duration:g} s with {what}; keep it still", file=sys.stderr)

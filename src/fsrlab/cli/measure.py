@@ -10,42 +10,12 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli.options import areas, emit_json, fail, farads, pascals, plain_numbers, seconds
-from fsrlab.cli.acquisition import (
-    _AREA_HELP, _LOADCELL_HELP, _PEAK_HELP, _PERIOD_HELP, _PROFILE_HELP, _SENSOR_HELP, _check_out, _check_virtual,
-    _LiveView, _fmt, _load_loadcell, _sensor_area, _sigterm_as_interrupt, _virtual_device, _window_ms,
+from fsrlab.cli.options import (
+    AREA_HELP, LiveView, LOADCELL_HELP, PEAK_HELP, PERIOD_HELP, PROFILE_HELP, SENSOR_HELP, areas, check_out,
+    check_virtual, emit_json, fail, farads, fmt_value, load_frame_calibration, loadcell_option, make_virtual_device,
+    meter_differences, pascals, plain_numbers, seconds, sensor_area, sigterm_as_interrupt, window_ms_option,
 )
 from fsrlab.units import STANDARD_GRAVITY
-
-def load_frame_calibration(cal: Path, command: str):
-    """The calibration of ``--cal`` for a command that reads the meter's frames (frequency, duty, voltage).
-
-    One line naming ``--cal`` (exit 2) when the file is missing, unreadable, or calibrates another readout.
-    """
-    from fsrlab.calibration.document import load_calibration
-
-    if cal.is_dir():
-        fail(f"{cal} is a directory, not a calibration file", "--cal")
-    if not cal.exists():
-        fail(f"{cal} does not exist; write one with fsrlab calibrate RUN.csv -o {cal}", "--cal")
-    try:
-        calibration = load_calibration(cal)
-    except (ValueError, OSError) as exc:
-        fail(str(exc), "--cal")
-    if calibration.x_name not in ("frequency_hz", "duty_cycle", "voltage_v"):
-        fail(f"{cal} calibrates {calibration.x_name}; fsrlab {command} reads frequency_hz, duty_cycle or voltage_v",
-             "--cal")
-    return calibration
-
-
-def meter_differences(cal, metadata: dict, range_: int) -> list[str]:
-    """How the meter a calibration would be used with (its circuit in ``metadata``, its range) differs from the
-    readout the calibration was recorded with: :func:`fsrlab.calibration.apply.readout_differences`."""
-    from fsrlab.calibration.apply import readout_differences
-    from fsrlab.calibration.provenance import recorded_with
-
-    return readout_differences(cal, recorded_with(metadata, [range_]), "the meter has")
-
 
 def _estimator(cal):
     """The causal estimator of a calibration (:func:`fsrlab.calibration.estimator.live_estimator`): one reading at
@@ -55,7 +25,7 @@ def _estimator(cal):
     return live_estimator(cal)
 
 
-class _Live(_LiveView):
+class _Live(LiveView):
     """Live line of the force on stderr (rich, redrawn in place) when stderr is a terminal; notices as acquire's."""
 
     def _render(self, st) -> str:
@@ -75,12 +45,12 @@ def measure(
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing run and its sidecar."),
     duration: float = typer.Option(None, "--duration", parser=seconds, metavar="TIME", help="Measure this long [s]: 10s, 1.5min (default: until Ctrl-C)."),
     window: float = typer.Option("100ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], whole ms: 100ms, 0.25."),
-    sensor: str = typer.Option(None, "--sensor", help=_SENSOR_HELP),
-    area: float = typer.Option(None, "--area", parser=areas, metavar="AREA", help=_AREA_HELP),
-    loadcell: Path = typer.Option(None, "--loadcell", metavar="LC.json", help=_LOADCELL_HELP),
-    profile: str = typer.Option("triangle", "--profile", help=_PROFILE_HELP),
-    peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS", help="Virtual device: " + _PEAK_HELP[0].lower() + _PEAK_HELP[1:]),
-    period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="Virtual device: " + _PERIOD_HELP[0].lower() + _PERIOD_HELP[1:]),
+    sensor: str = typer.Option(None, "--sensor", help=SENSOR_HELP),
+    area: float = typer.Option(None, "--area", parser=areas, metavar="AREA", help=AREA_HELP),
+    loadcell: Path = typer.Option(None, "--loadcell", metavar="LC.json", help=LOADCELL_HELP),
+    profile: str = typer.Option("triangle", "--profile", help=PROFILE_HELP),
+    peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS", help="Virtual device: " + PEAK_HELP[0].lower() + PEAK_HELP[1:]),
+    period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="Virtual device: " + PERIOD_HELP[0].lower() + PERIOD_HELP[1:]),
     c_off: float = typer.Option("1n", "--c-off", parser=farads, metavar="CAPACITANCE", help="Virtual circuit: C_off switched in by range 1 [F]: 1n, 470p."),
     seed: int = typer.Option(None, "--seed", help="Random seed of the virtual meter's noise (an integer)."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No live display."),
@@ -107,20 +77,20 @@ def measure(
         fail("give exactly one of --port PORT|auto and --virtual", "--port")
     if duration is not None and not duration > 0:
         fail(f"must be > 0 s, got {duration:g} s", "--duration")
-    window_ms = _window_ms(window)
+    window_ms = window_ms_option(window)
     calibration = load_frame_calibration(cal, "measure")
     try:
         est = _estimator(calibration)
     except ValueError as exc:
         fail(f"{cal}: {exc}", "--cal")
-    sensor_meta, area_m2 = _sensor_area(sensor, area)
-    lc = _load_loadcell(loadcell)
-    _check_out(out, overwrite)
+    sensor_meta, area_m2 = sensor_area(sensor, area)
+    lc = loadcell_option(loadcell)
+    check_out(out, overwrite)
     device = None
     metadata: dict = {"sensor": sensor_meta} if sensor_meta else {}
     if virtual:
-        _check_virtual(profile, peak, period, c_off, 0.0, 0.0, seed)
-        device, source = _virtual_device(profile, peak, period, c_off, seed, 0.0, 0.0, True, 80, area_m2)
+        check_virtual(profile, peak, period, c_off, 0.0, 0.0, seed)
+        device, source = make_virtual_device(profile, peak, period, c_off, seed, 0.0, 0.0, True, 80, area_m2)
         if lc is None:
             lc = device.load_cell.calibration()
         port = device.open()
@@ -157,15 +127,15 @@ def measure(
             last.update({"time_s": row["time_s"], ref + "_estimate": e, "force_n": force,
                          "force_g": None if force is None else force / g * 1e3, "in_range": bool(inside),
                          "reference_force_n": row.get("force_n")})
-            text = (f"force {_fmt(force, '.3f')} N = {_fmt(None if force is None else force / g * 1e3, '.0f')} g"
-                    if to_force else f"stress {_fmt(e, '.0f')} Pa (no area: give --sensor or --area for a force)")
+            text = (f"force {fmt_value(force, '.3f')} N = {fmt_value(None if force is None else force / g * 1e3, '.0f')} g"
+                    if to_force else f"stress {fmt_value(e, '.0f')} Pa (no area: give --sensor or --area for a force)")
             if row.get("force_n") is not None:
                 text += f"   load cell {row['force_n']:.3f} N"
             live.show(text + ("" if inside else "   (outside the calibrated range)"))
             return row
 
         try:
-            with SerialLink(port) as link, _sigterm_as_interrupt():
+            with SerialLink(port) as link, sigterm_as_interrupt():
                 result = record(link, out, duration if duration is not None else 10 * 365 * 86400.0, window_ms=window_ms,
                                 metadata=metadata, on_event=live.notice,
                                 health=(lambda: device.failure) if device is not None else None, overwrite=overwrite,
@@ -178,8 +148,8 @@ def measure(
     if json_out:
         emit_json(info)
     else:
-        shown = (f"last force {_fmt(last.get('force_n'), '.3f')} N" if to_force else
-                 f"last stress {_fmt(last.get(ref + '_estimate'), '.0f')} Pa")
+        shown = (f"last force {fmt_value(last.get('force_n'), '.3f')} N" if to_force else
+                 f"last stress {fmt_value(last.get(ref + '_estimate'), '.0f')} Pa")
         typer.echo(f"{out}: {result.frames} windows, {counts['estimated']} estimated, {counts['out_of_range']} outside "
                    f"the calibrated range; {shown}")
     if result.failed:

@@ -1,4 +1,7 @@
-"""Shared pieces of the command modules: option parsers, JSON output, one-line errors.
+"""What the command modules share: option parsers, JSON output, one-line errors, and the options and helpers of
+the recording commands (sensor and area, load cell, virtual device, window, output, live view, run loading).
+
+A command module imports these from here, never another command module's names.
 
 Option parsers, for ``typer.Option(..., parser=...)``; each turns a bad value into a usage error
 that :func:`fsrlab.cli.main` prints as one line naming the option ("fsrlab: error: Invalid value
@@ -26,14 +29,20 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import queue
 import re
+import signal
+import sys
+import threading
 from contextlib import contextmanager
+from pathlib import Path
 from typing import Any, Callable, Iterator
 
 import typer
 
 from fsrlab.io.jsonable import to_jsonable
-from fsrlab.units import parse_eng, parse_quantity
+from fsrlab.units import format_eng, parse_eng, parse_quantity
 
 __all__ = ["eng", "ohms", "farads", "volts", "hertz", "pascals", "metres", "electronvolts", "seconds",
            "fraction", "number", "areas", "masses", "mass_list", "emit_json", "to_jsonable", "fail", "option_names", "plain_numbers"]
@@ -195,3 +204,373 @@ def option_names(mapping: dict[str, str]) -> Iterator[None]:
         # No option leads the message: one line as it is ("fsrlab: error: ..."), not click's bare
         # "Invalid value: ...", which reads as if an option had been named.
         raise ValueError(message) from None
+
+
+# ------------------------------------------------------------------ pieces the commands share
+
+PROFILE_HELP = "Virtual stress profile: triangle, sine, steps or hold."
+PEAK_HELP = "Peak stress of the profile [Pa]: 50k, 50kPa, 0.1MPa."
+PERIOD_HELP = "Cycle time of the profile [s]: 4, 4s, 500ms, 1.5min."
+C_OFF_HELP = "C_off switched in by range 1 [F]: 1n, 1nF, 470p."
+CORRUPT_HELP = "Probability that a frame gets a bit flipped [1]: 0..1 or a percentage, 0.05 or 5%."
+DROP_HELP = "Probability that a frame is not sent [1]: 0..1 or a percentage, 0.05 or 5%."
+SEED_HELP = "Random seed of the virtual device's noise and faults (an integer)."
+SENSOR_HELP = ("Sensor preset, for its sensing area (stress = force / area): flexiforce-a201 (9.53 mm diameter, "
+                "71.3 mm²) or interlink-402 (12.7 mm diameter, 126.7 mm²).")
+AREA_HELP = "Sensing area [m²] instead of a preset: 71.3mm2, 0.713cm2, 7.13e-5m2."
+LOADCELL_HELP = ("Load-cell calibration JSON (fsrlab loadcell tare/scale): HX711 counts -> force_n [N]. "
+                  "Default with --virtual: the virtual load cell's own parameters.")
+NO_LOADCELL_HELP = "Virtual device: emulate a meter without an HX711 (ref_ok 0: reference columns empty)."
+RATE_HELP = "Virtual device: the HX711's output data rate [samples/s]: 10 or 80."
+
+
+def sensor_area(sensor: str | None, area: float | None) -> tuple[dict | None, float | None]:
+    """The sidecar's ``sensor`` and the area [m²] from --sensor or --area (None, None: neither)."""
+    if sensor is not None and area is not None:
+        fail("give --sensor or --area, not both", "--sensor")
+    if sensor is not None:
+        from fsrlab.physics.presets import SENSOR_PRESETS
+
+        key = sensor.strip().lower()
+        if key not in SENSOR_PRESETS:
+            fail(f"must be one of {', '.join(SENSOR_PRESETS)}, got {sensor!r}", "--sensor")
+        preset = SENSOR_PRESETS[key]
+        return preset.to_dict(), preset.area_m2
+    if area is not None:
+        if not 1e-8 <= area <= 1.0:
+            fail(f"must be from 0.01 mm² to 1 m², got {area:g} m²", "--area")
+        return {"model": "unnamed sensor (--area)", "area_m2": area}, area
+    return None, None
+
+
+def virtual_sensor_option(sensor: str | None):
+    """The sensor model and the sidecar's ``sensor`` when --sensor names a virtual sensor (virtual-fsr,
+    paper-a201-1..4), else ``(None, None)``."""
+    from fsrlab.bench.protocols import VIRTUAL_SENSORS, virtual_sensor
+
+    key = (sensor or "").strip().lower()
+    if key not in VIRTUAL_SENSORS:
+        return None, None
+    model, text = virtual_sensor(key)
+    return model, {"model": text, "area_m2": model.area_m2}
+
+
+def loadcell_option(path: Path | None, option: str = "--loadcell", scaled: bool = True):
+    """The load-cell calibration of ``path`` (None: None); one line naming the option otherwise."""
+    if path is None:
+        return None
+    from fsrlab.acquisition.loadcell import LoadCellError, load_loadcell
+
+    if not path.exists():
+        fail(f"{path} does not exist; write one with fsrlab loadcell tare", option)
+    try:
+        cal = load_loadcell(path)
+    except (LoadCellError, OSError) as exc:
+        fail(str(exc), option)
+    if scaled and not cal.scaled:
+        fail(f"{path} has a tare but no scale factor: run fsrlab loadcell scale --mass 500g --cal {path}", option)
+    return cal
+
+
+def check_rate(rate: int) -> None:
+    if rate not in (10, 80):
+        fail(f"must be 10 or 80 samples/s (the HX711's RATE pin), got {rate}", "--hx711-rate")
+
+
+@contextmanager
+def sigterm_as_interrupt():
+    """Let SIGTERM end a recording like Ctrl-C (file closed, device stopped)."""
+    def handler(signum, frame):  # noqa: ARG001
+        raise KeyboardInterrupt
+
+    try:
+        previous = signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not the main thread (e.g. called from a test thread): leave it
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def check_virtual(profile: str, peak: float, period: float, c_off: float, corrupt: float, drop: float,
+                   seed: int | None) -> None:
+    """One-line errors, each naming its own option, for the virtual device's options."""
+    from fsrlab.virtual.sources import PROFILE_KINDS
+
+    if profile not in PROFILE_KINDS:
+        fail(f"must be one of {', '.join(PROFILE_KINDS)}, got {profile!r}", "--profile")
+    if not peak > 0:
+        fail(f"must be > 0 Pa, got {peak:g} Pa", "--peak")
+    if not period > 0:
+        fail(f"must be > 0 s, got {period:g} s", "--period")
+    if not c_off >= 0:
+        fail(f"must be >= 0 F, got {c_off:g} F", "--c-off")
+    for name, v in (("--corrupt", corrupt), ("--drop", drop)):
+        if not 0 <= v <= 1:
+            fail(f"must be in 0..1, got {v:g}", name)
+    if seed is not None and seed < 0:
+        fail(f"must be an integer >= 0, got {seed}", "--seed")
+
+
+def make_virtual_device(profile: str, peak: float, period: float, c_off: float, seed: int | None,
+                    corrupt: float, drop: float, load_cell: bool = True, rate: int = 80, area_m2: float | None = None,
+                    sensor_model=None):
+    from fsrlab.acquisition.loadcell import LoadCellModel
+    from fsrlab.virtual.sources import VIRTUAL_CIRCUIT, PhysicsSource, StressProfile
+    from fsrlab.virtual.device import Faults, VirtualDevice
+    from fsrlab.physics.sensor import VirtualFSR
+
+    prof = StressProfile(kind=profile, peak_pa=peak, period_s=period)
+    sensor = sensor_model if sensor_model is not None else VirtualFSR() if area_m2 is None else VirtualFSR(area_m2=area_m2)
+    cell = LoadCellModel(rate_sps=rate) if load_cell else None
+    try:
+        source = PhysicsSource(prof, sensor=sensor, circuit=VIRTUAL_CIRCUIT.replace(c_off_farad=c_off))
+    except ValueError:  # the sensor model has no valid response up to this stress
+        fail(f"the virtual sensor model has no valid response up to {format_eng(peak, 'Pa')} (its resistance would not "
+             "be positive); choose a smaller peak, e.g. 50k", "--peak")
+    return VirtualDevice(source, faults=Faults(corrupt=corrupt, drop=drop), seed=seed, load_cell=cell), source
+
+
+def window_ms_option(window_s: float) -> int:
+    """The window in whole milliseconds, as the meter takes it (10 ms .. 60 s)."""
+    from fsrlab.acquisition.protocol import WINDOW_MS_MAX, WINDOW_MS_MIN
+
+    ms = round(window_s * 1000.0, 6)
+    if not WINDOW_MS_MIN <= ms <= WINDOW_MS_MAX:
+        fail(f"must be {WINDOW_MS_MIN} ms to {WINDOW_MS_MAX // 1000} s, got {window_s:g} s", "--window")
+    if ms != int(ms):
+        fail(f"the meter counts whole milliseconds, got {ms:g} ms: write {math.floor(ms)}ms or {math.ceil(ms)}ms",
+             "--window")
+    return int(ms)
+
+
+def check_out(out: Path, overwrite: bool) -> None:
+    """Refuse an output that exists (unless ``overwrite``) or cannot be written, before any device is touched."""
+    from fsrlab.io.runformat import sidecar_path
+
+    if out.is_dir():
+        fail(f"{out} is a directory; give the run's CSV file, e.g. {out / 'run.csv'}", "--out")
+    if not overwrite:
+        for existing in (out, sidecar_path(out)):
+            if os.path.lexists(existing):
+                fail(f"{existing} exists; pass --overwrite to replace the run", "--out")
+    parent = out.parent if str(out.parent) else Path(".")
+    if not parent.is_dir():
+        fail(f"directory {parent} does not exist", "--out")
+    if not os.access(parent, os.W_OK):
+        fail(f"cannot write in directory {parent} (permission denied)", "--out")
+
+
+def fmt_value(value: float, spec: str) -> str:
+    return "—" if value is None or not math.isfinite(value) else format(value, spec)
+
+
+class LiveView:
+    """Rich live table of the recording on stderr (frames/s, frequency, duty cycle, dropped), and notices."""
+
+    def __init__(self, enabled: bool, title: str) -> None:
+        from rich.console import Console
+
+        self.console = Console(stderr=True)
+        self.enabled = enabled and self.console.is_terminal
+        self.title = title
+        self.live = None
+
+    def __enter__(self) -> "LiveView":
+        if self.enabled:
+            from rich.live import Live
+
+            self.live = Live(self._render(None), console=self.console, transient=True, refresh_per_second=8)
+            self.live.__enter__()
+        return self
+
+    def _render(self, st):
+        from rich.table import Table
+
+        table = Table(title=self.title, show_header=True, header_style="bold")
+        for col in ("time (s)", "frames", "frames/s", "frequency (Hz)", "duty cycle (%)", "dropped", "corrupt", "resets"):
+            table.add_column(col, justify="right")
+        if st is not None:
+            table.add_row(f"{st.elapsed_s:.1f}", str(st.frames), f"{st.frames_per_s:.1f}", fmt_value(st.frequency_hz, ".1f"),
+                          fmt_value(st.duty_cycle * 100 if st.duty_cycle == st.duty_cycle else math.nan, ".2f"),
+                          str(st.dropped), str(st.bad_frames), str(st.resets))
+        return table
+
+    def update(self, st) -> None:
+        if self.live is not None:
+            self.live.update(self._render(st))
+
+    def notice(self, text: str) -> None:
+        """One line on stderr, above the live table when there is one (shown even with --quiet)."""
+        if self.live is not None:
+            self.console.print(f"fsrlab: {text}", markup=False, highlight=False)
+        else:
+            print(f"fsrlab: {text}", file=sys.stderr, flush=True)
+
+    def __exit__(self, *exc) -> None:
+        if self.live is not None:
+            self.live.__exit__(*exc)
+
+
+class Keyboard:
+    """The user's answers: lines typed on stdin, read by a daemon thread (the recording never waits on them)."""
+
+    def __init__(self) -> None:
+        self._lines: queue.Queue = queue.Queue()
+        self._eof_said = False
+        threading.Thread(target=self._read, name="fsrlab-weights-stdin", daemon=True).start()
+
+    def _read(self) -> None:
+        try:
+            for line in sys.stdin:
+                self._lines.put(line)
+        except (OSError, ValueError):  # no usable stdin (closed, or a test's captured one)
+            pass
+        self._lines.put(None)  # end of input: every later question is answered "ok"
+
+    def drain(self) -> None:
+        """Forget what was typed before the question."""
+        while True:
+            try:
+                if self._lines.get_nowait() is None:
+                    self._lines.put(None)
+                    return
+            except queue.Empty:
+                return
+
+    def answer(self) -> str | None:
+        """None (nothing typed yet), "skip" (s) or "ok" (anything else, or the end of the input)."""
+        try:
+            line = self._lines.get_nowait()
+        except queue.Empty:
+            return None
+        if line is None:
+            self._lines.put(None)
+            if not self._eof_said:
+                self._eof_said = True
+                print("fsrlab: standard input closed: every later step goes on without waiting for Enter",
+                      file=sys.stderr, flush=True)
+            return "ok"
+        return "skip" if line.strip().lower() in ("s", "skip") else "ok"
+
+
+def virtual_bench(steps, seed: int | None, area_m2: float | None, gravity_m_s2: float):
+    """A virtual meter on a bench that places the plan's masses: ``(device, bench, place)``.
+
+    ``place(step)`` starts that placement on the bench and returns its time since START [s] (the
+    procedure's ``place``); the meter has the virtual device's emulated HX711. One line naming ``--masses``
+    when the virtual sensor has no response up to the largest mass.
+    """
+    from fsrlab.virtual.bench_source import BenchSource
+    from fsrlab.virtual.device import VirtualDevice
+    from fsrlab.physics.sensor import VirtualFSR
+
+    try:
+        bench = BenchSource([s.mass_kg * gravity_m_s2 for s in steps],
+                            sensor=VirtualFSR() if area_m2 is None else VirtualFSR(area_m2=area_m2))
+    except ValueError:
+        fail(f"the virtual sensor model has no valid response up to {max(s.mass_kg for s in steps) * 1e3:g} g on "
+             "its area; choose smaller masses", "--masses")
+    device = VirtualDevice(bench, seed=seed)
+
+    def place(step) -> float:
+        t = device.time_since_start()
+        bench.place(step.index, t)
+        return t
+    return device, bench, place
+
+
+GRAVITY_HELP = "Local acceleration of gravity [m/s²], for mass -> force: 9.80665 (standard gravity g_n, the default), 9.81."
+
+
+def gravity_value(text: str | float) -> float:
+    """Acceleration of gravity [m/s²]: a plain number, or with m/s2 / m/s²."""
+    t = str(text).strip()
+    for suffix in ("m/s²", "m/s2", "m/s^2"):
+        if t.endswith(suffix):
+            t = t[: -len(suffix)].strip()
+    try:
+        value = float(t)
+    except ValueError:
+        raise typer.BadParameter(f"cannot read {text!r} as an acceleration; write e.g. 9.80665 or 9.81m/s2") from None
+    if not 9.7 <= value <= 9.9:
+        raise typer.BadParameter(f"{value:g} m/s² is not an acceleration of gravity on Earth (9.7 to 9.9 m/s²)")
+    return value
+
+
+SKIP_HELP = ("Leave out each row with a bad cell (non-numeric, nan or inf, a value its column cannot hold such "
+              "as 1e308 Hz) and count it, instead of stopping at the first; rows out of time order still stop.")
+
+
+def warn(warnings: list[str]) -> None:
+    for message in dict.fromkeys(warnings):
+        typer.echo(f"fsrlab: warning: {message}", err=True)
+
+
+@contextmanager
+def reading_file(path: Path) -> Iterator[None]:
+    """A file that cannot be read: one line naming it ("cannot read 'bench.csv': No such file or directory")."""
+    try:
+        yield
+    except IsADirectoryError:
+        raise ValueError(f"'{path}' is a directory, not a file") from None
+    except OSError as exc:
+        raise ValueError(f"cannot read '{path}': {exc.strerror or exc}") from None
+
+
+def load_run_warned(path: Path, skip_bad_rows: bool, warnings: list[str]):
+    """Load a run; what the user should know about it goes to ``warnings``."""
+    from fsrlab.io.runformat import load_run
+
+    with reading_file(path):
+        run = load_run(path, skip_bad_rows=skip_bad_rows)
+    if run.skipped:
+        first = run.skipped[0].reason
+        more = f" (and {len(run.skipped) - 1} more)" if len(run.skipped) > 1 else ""
+        warnings.append(f"skipped {len(run.skipped)} bad row{'s' if len(run.skipped) > 1 else ''} "
+                        f"(--skip-bad-rows): {first}{more}")
+    note = run.incomplete()
+    if note:
+        warnings.append(note)
+    return run
+
+
+def skipped_json(run) -> dict:
+    return {"skipped_rows": len(run.skipped),
+            "skipped": [{"row": b.row, "column": b.column, "reason": b.reason} for b in run.skipped]}
+
+
+def missing_column(path: Path, run, column: str, what: str = "", option: str | None = None) -> None:
+    fail(f"{path}: column {column!r}{what} missing (columns: {', '.join(run.columns)})", option)
+
+
+def load_frame_calibration(cal: Path, command: str):
+    """The calibration of ``--cal`` for a command that reads the meter's frames (frequency, duty, voltage).
+
+    One line naming ``--cal`` (exit 2) when the file is missing, unreadable, or calibrates another readout.
+    """
+    from fsrlab.calibration.document import load_calibration
+
+    if cal.is_dir():
+        fail(f"{cal} is a directory, not a calibration file", "--cal")
+    if not cal.exists():
+        fail(f"{cal} does not exist; write one with fsrlab calibrate RUN.csv -o {cal}", "--cal")
+    try:
+        calibration = load_calibration(cal)
+    except (ValueError, OSError) as exc:
+        fail(str(exc), "--cal")
+    if calibration.x_name not in ("frequency_hz", "duty_cycle", "voltage_v"):
+        fail(f"{cal} calibrates {calibration.x_name}; fsrlab {command} reads frequency_hz, duty_cycle or voltage_v",
+             "--cal")
+    return calibration
+
+
+def meter_differences(cal, metadata: dict, range_: int) -> list[str]:
+    """How the meter a calibration would be used with (its circuit in ``metadata``, its range) differs from the
+    readout the calibration was recorded with: :func:`fsrlab.calibration.apply.readout_differences`."""
+    from fsrlab.calibration.apply import readout_differences
+    from fsrlab.calibration.provenance import recorded_with
+
+    return readout_differences(cal, recorded_with(metadata, [range_]), "the meter has")

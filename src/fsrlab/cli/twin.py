@@ -7,25 +7,25 @@ import sys
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli.options import fail, farads, pascals, plain_numbers, seconds
-from fsrlab.cli.acquisition import (
-    _C_OFF_HELP, _PERIOD_HELP, _PEAK_HELP, _PROFILE_HELP, _RATE_HELP, _SENSOR_HELP, _check_rate, _check_virtual,
-    _sensor_area, _sigterm_as_interrupt, _virtual_device, _virtual_sensor,
+from fsrlab.cli.options import (
+    C_OFF_HELP, PEAK_HELP, PERIOD_HELP, PROFILE_HELP, RATE_HELP, SENSOR_HELP, check_rate, check_virtual, fail,
+    farads, make_virtual_device, pascals, plain_numbers, seconds, sensor_area, sigterm_as_interrupt,
+    virtual_sensor_option,
 )
 
 
 @app.command("twin")
 def twin(
-    profile: str = typer.Option("triangle", "--profile", help=_PROFILE_HELP),
-    peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS", help=_PEAK_HELP),
-    period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help=_PERIOD_HELP),
-    sensor: str = typer.Option(None, "--sensor", help=_SENSOR_HELP[:-1] + "; the model stays VirtualFSR, with that area. Or a virtual sensor: virtual-fsr (default), paper-a201-1 .. paper-a201-4 (fitted to the paper's §6, valid to about 10 kPa: use --peak 10k)."),
-    c_off: float = typer.Option("1n", "--c-off", parser=farads, metavar="CAPACITANCE", help=_C_OFF_HELP),
+    profile: str = typer.Option("triangle", "--profile", help=PROFILE_HELP),
+    peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS", help=PEAK_HELP),
+    period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help=PERIOD_HELP),
+    sensor: str = typer.Option(None, "--sensor", help=SENSOR_HELP[:-1] + "; the model stays VirtualFSR, with that area. Or a virtual sensor: virtual-fsr (default), paper-a201-1 .. paper-a201-4 (fitted to the paper's §6, valid to about 10 kPa: use --peak 10k)."),
+    c_off: float = typer.Option("1n", "--c-off", parser=farads, metavar="CAPACITANCE", help=C_OFF_HELP),
     speed: str = typer.Option("realtime", "--speed", help="Pacing of simulated time: realtime (the wall clock) or max (as fast as simavr goes)."),
     duration: float = typer.Option(None, "--duration", parser=seconds, metavar="TIME", help="Run this long [s] of wall time: 90, 90s, 1.5min, 2h (default: until Ctrl-C)."),
     seed: int = typer.Option(0, "--seed", help="Random seed of the load cell's noise (an integer)."),
     no_loadcell: bool = typer.Option(False, "--no-loadcell", help="No HX711 on D2/D3 (ref_ok 0: reference columns empty)."),
-    hx711_rate: int = typer.Option(80, "--hx711-rate", help=_RATE_HELP.replace("Virtual device: t", "T")),
+    hx711_rate: int = typer.Option(80, "--hx711-rate", help=RATE_HELP.replace("Virtual device: t", "T")),
     json_out: bool = typer.Option(False, "--json", help='Print {"port": PATH} as JSON (one line) instead of the bare path.'),
 ) -> None:
     """Run the digital twin: the meter's real firmware in simavr on a pty; prints its path first.
@@ -51,17 +51,17 @@ def twin(
         fail(f"must be realtime or max, got {speed!r}", "--speed")
     if seed < 0:
         fail(f"must be an integer >= 0, got {seed}", "--seed")
-    _check_rate(hx711_rate)
-    _check_virtual(profile, peak, period, c_off, 0.0, 0.0, None)
-    model, _ = _virtual_sensor(sensor)
-    area_m2 = None if model is not None else _sensor_area(sensor, None)[1]
+    check_rate(hx711_rate)
+    check_virtual(profile, peak, period, c_off, 0.0, 0.0, None)
+    model, _ = virtual_sensor_option(sensor)
+    area_m2 = None if model is not None else sensor_area(sensor, None)[1]
 
     from fsrlab.virtual.twin import Twin, twin_available
 
     ok, reason = twin_available()
     if not ok:
         fail(reason)
-    _, source = _virtual_device(profile, peak, period, c_off, None, 0.0, 0.0, load_cell=False, area_m2=area_m2,
+    _, source = make_virtual_device(profile, peak, period, c_off, None, 0.0, 0.0, load_cell=False, area_m2=area_m2,
                                 sensor_model=model)
     from fsrlab.acquisition.loadcell import LoadCellModel
 
@@ -78,7 +78,7 @@ def twin(
         typer.echo(json.dumps({"port": path}) if json_out else path)
         sys.stdout.flush()
         end = None if duration is None else time.monotonic() + duration
-        with _sigterm_as_interrupt():
+        with sigterm_as_interrupt():
             while device.failure is None and (end is None or time.monotonic() < end):
                 time.sleep(0.1 if end is None else max(0.0, min(0.1, end - time.monotonic())))
     except KeyboardInterrupt:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import queue
 import sys
 import threading
 from pathlib import Path
@@ -10,81 +9,12 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli.options import emit_json, fail, fraction, mass_list, plain_numbers, seconds
-from fsrlab.cli.acquisition import (
-    _AREA_HELP, _LOADCELL_HELP, _SENSOR_HELP, _check_out, _load_loadcell, _sensor_area, _sigterm_as_interrupt,
-    _window_ms,
+from fsrlab.cli.options import (
+    AREA_HELP, GRAVITY_HELP, Keyboard, SENSOR_HELP, check_out, emit_json, fail, fraction, gravity_value,
+    loadcell_option, mass_list, plain_numbers, seconds, sensor_area, sigterm_as_interrupt, virtual_bench,
+    window_ms_option,
 )
 from fsrlab.cli.options import areas
-from fsrlab.cli.loadcell import _GRAVITY_HELP, _gravity
-
-
-class _Keyboard:
-    """The user's answers: lines typed on stdin, read by a daemon thread (the recording never waits on them)."""
-
-    def __init__(self) -> None:
-        self._lines: queue.Queue = queue.Queue()
-        self._eof_said = False
-        threading.Thread(target=self._read, name="fsrlab-weights-stdin", daemon=True).start()
-
-    def _read(self) -> None:
-        try:
-            for line in sys.stdin:
-                self._lines.put(line)
-        except (OSError, ValueError):  # no usable stdin (closed, or a test's captured one)
-            pass
-        self._lines.put(None)  # end of input: every later question is answered "ok"
-
-    def drain(self) -> None:
-        """Forget what was typed before the question."""
-        while True:
-            try:
-                if self._lines.get_nowait() is None:
-                    self._lines.put(None)
-                    return
-            except queue.Empty:
-                return
-
-    def answer(self) -> str | None:
-        """None (nothing typed yet), "skip" (s) or "ok" (anything else, or the end of the input)."""
-        try:
-            line = self._lines.get_nowait()
-        except queue.Empty:
-            return None
-        if line is None:
-            self._lines.put(None)
-            if not self._eof_said:
-                self._eof_said = True
-                print("fsrlab: standard input closed: every later step goes on without waiting for Enter",
-                      file=sys.stderr, flush=True)
-            return "ok"
-        return "skip" if line.strip().lower() in ("s", "skip") else "ok"
-
-
-def virtual_bench(steps, seed: int | None, area_m2: float | None, gravity_m_s2: float):
-    """A virtual meter on a bench that places the plan's masses: ``(device, bench, place)``.
-
-    ``place(step)`` starts that placement on the bench and returns its time since START [s] (the
-    procedure's ``place``); the meter has the virtual device's emulated HX711. One line naming ``--masses``
-    when the virtual sensor has no response up to the largest mass.
-    """
-    from fsrlab.virtual.bench_source import BenchSource
-    from fsrlab.virtual.device import VirtualDevice
-    from fsrlab.physics.sensor import VirtualFSR
-
-    try:
-        bench = BenchSource([s.mass_kg * gravity_m_s2 for s in steps],
-                            sensor=VirtualFSR() if area_m2 is None else VirtualFSR(area_m2=area_m2))
-    except ValueError:
-        fail(f"the virtual sensor model has no valid response up to {max(s.mass_kg for s in steps) * 1e3:g} g on "
-             "its area; choose smaller masses", "--masses")
-    device = VirtualDevice(bench, seed=seed)
-
-    def place(step) -> float:
-        t = device.time_since_start()
-        bench.place(step.index, t)
-        return t
-    return device, bench, place
 
 
 @app.command("weights")
@@ -96,15 +26,15 @@ def weights(
     repeat: int = typer.Option(1, "--repeat", help="Cycles of placements [1], for repeatability (RE1, RE2 as in Tables 4 and 5): 1, 3, 5."),
     unload: bool = typer.Option(False, "--unload", help="After the largest mass, unload in reverse (direction -1), for hysteresis."),
     loadcell: Path = typer.Option(None, "--loadcell", metavar="LC.json", help="Load-cell calibration JSON: force_n is then the load cell's reading, force_nominal_n stays m·g."),
-    sensor: str = typer.Option(None, "--sensor", help=_SENSOR_HELP),
-    area: float = typer.Option(None, "--area", parser=areas, metavar="AREA", help=_AREA_HELP),
+    sensor: str = typer.Option(None, "--sensor", help=SENSOR_HELP),
+    area: float = typer.Option(None, "--area", parser=areas, metavar="AREA", help=AREA_HELP),
     x: str = typer.Option("frequency_hz", "--x", help="Readout judged for stability and written as reading: frequency_hz [Hz], duty_cycle [1] or voltage_v [V]."),
     window: float = typer.Option("100ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], whole ms: 20ms, 100ms, 0.25."),
     settle_windows: int = typer.Option(10, "--settle-windows", help="Windows over which the readout's drift is judged [1]: 10 (at least 2)."),
     max_drift: float = typer.Option("0.5%", "--max-drift", parser=fraction, metavar="FRACTION", help="Stable when the readout's relative drift over --settle-windows is at most this [1]: 0.5%, 0.002."),
     timeout: float = typer.Option("30s", "--timeout", parser=seconds, metavar="TIME", help="Not stable after this long [s]: ask again (then skip the step): 30s, 1min."),
     hold: float = typer.Option("1s", "--hold", parser=seconds, metavar="TIME", help="Steady time recorded per step [s]: 1s, 2s, 500ms."),
-    gravity: float = typer.Option("9.80665", "--gravity", parser=_gravity, metavar="ACCELERATION", help=_GRAVITY_HELP),
+    gravity: float = typer.Option("9.80665", "--gravity", parser=gravity_value, metavar="ACCELERATION", help=GRAVITY_HELP),
     seed: int = typer.Option(None, "--seed", help="Random seed of the virtual meter's noise (an integer)."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing run and its sidecar."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Virtual bench: do not print its steps (prompts for a person are always shown)."),
@@ -143,7 +73,7 @@ def weights(
         fail(f"must be 1 to 1000 cycles, got {repeat}", "--repeat")
     if x not in READOUTS:
         fail(f"must be one of {', '.join(READOUTS)}, got {x!r}", "--x")
-    window_ms = _window_ms(window)
+    window_ms = window_ms_option(window)
     if not 2 <= settle_windows <= 10000:
         fail(f"must be 2 to 10000 windows, got {settle_windows}", "--settle-windows")
     if not 0 < max_drift <= 1:
@@ -155,9 +85,9 @@ def weights(
         fail(f"must be one window ({window_ms / 1000.0:g} s) to 1 h, got {hold:g} s", "--hold")
     if seed is not None and seed < 0:
         fail(f"must be an integer >= 0, got {seed}", "--seed")
-    sensor_meta, area_m2 = _sensor_area(sensor, area)
-    cal = _load_loadcell(loadcell)
-    _check_out(out, overwrite)
+    sensor_meta, area_m2 = sensor_area(sensor, area)
+    cal = loadcell_option(loadcell)
+    check_out(out, overwrite)
     steps = plan_steps(masses_kg, repeat, unload)
     stop = threading.Event()
     device = bench = None
@@ -179,7 +109,7 @@ def weights(
         def confirmed() -> str:
             return "ok"
     else:
-        keyboard = _Keyboard()
+        keyboard = Keyboard()
 
         def announce(text: str) -> None:
             print(f"fsrlab: {text}", file=sys.stderr, flush=True)
@@ -205,7 +135,7 @@ def weights(
     # No time limit: a person may take long to place a mass; the plan's end (or Ctrl-C) stops it.
     budget = 10 * 365 * 86400.0
     try:
-        with SerialLink(port) as link, _sigterm_as_interrupt():
+        with SerialLink(port) as link, sigterm_as_interrupt():
             result = record(link, out, budget, window_ms=window_ms, metadata=metadata, stop=stop,
                             on_event=lambda text: print(f"fsrlab: {text}", file=sys.stderr, flush=True),
                             health=(lambda: device.failure) if device is not None else None, overwrite=overwrite,

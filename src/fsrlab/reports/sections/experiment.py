@@ -209,7 +209,7 @@ def _erratum_x1(exp: Experiment, printed: dict) -> Erratum:
                 "(one branch, or branch means), not on the loading–unloading cycle of Table 3. The printed linear "
                 "R², 0.9432, sits between: which data the paper fitted is not stated."),
         evidence="fsrlab.paper.experiment.figure17_fits on the virtual spring cycle (this section, Table "
-                 "'Figure 17'); tests/analysis/test_experiment.py::test_figure17_single_valued_fit_is_capped_by_the_gap.")
+                 "'Figure 17'); tests/paper/test_experiment.py::test_figure17_single_valued_fit_is_capped_by_the_gap.")
 
 
 def build(outdir: Path) -> Section:

@@ -213,7 +213,7 @@ def _erratum_m1(t4: PrintedTableCheck, t5: PrintedTableCheck, found: DdofFinding
                 f"integer with the sample standard deviation (n − 1): {found.re2_match_n_minus_1}/{found.rows}. "
                 f"With divisor n as printed in eq. (39): {found.re2_match_n}/{found.rows}; misses: {'; '.join(misses)}. "
                 f"RE1 matches in {found.re1_match}/{found.rows}. fsrlab defaults to n − 1 (ddof=1) and offers n."),
-        evidence="Recomputation in this section (Tables 4 and 5 below) and tests/analysis/test_repeatability.py.",
+        evidence="Recomputation in this section (Tables 4 and 5 below) and tests/metrics/test_repeatability.py.",
     )
 
 

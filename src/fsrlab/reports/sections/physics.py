@@ -178,7 +178,7 @@ def _erratum_p1(printed: dict, ours: CycleErrorTable, fit: BarrierHeightFit) -> 
         "(k moves C_A's 1.73 %).",
         "Two independent implementations agree to 1e-4: fsrlab's vectorised model with a refined σd "
         "(fsrlab.paper.table2) and the plain-scalar brute force of tests/reference_physics.py, compared in "
-        "tests/physics/test_table2.py. The fitted φ0 also moves Figure 4's curves onto the paper's axes (P2), so the "
+        "tests/paper/test_table2.py. The fitted φ0 also moves Figure 4's curves onto the paper's axes (P2), so the "
         "paper's simulations most likely used φ0 ≈ 0.23 eV, not the printed 0.223 eV.",
     )
 
@@ -259,7 +259,7 @@ def _erratum_p4(ours: CycleErrorTable, sweep: VoltageSweep, fitted: VoltageSweep
         "reaches 0 at s_f (4.33 V), outside Simmons' high-voltage formula. Capacitance's 1.73 % does not depend "
         "on u.",
         "fsrlab.paper.table2.voltage_sweep (eq. 13 on a 50 mV grid, crossings refined by Brent's method) against "
-        "the independent scalar brute force of tests/reference_physics.py (tests/physics/test_table2.py); u* from "
+        "the independent scalar brute force of tests/reference_physics.py (tests/paper/test_table2.py); u* from "
         "the closed-form condition ∂ln J/∂s = 0 of eq. (12) (current_maximum_voltage), checked against a finite "
         "difference of the reference eq. (12).",
     )

@@ -8,7 +8,7 @@ of edges. The parts are held constant between the samples of the source's grid (
 C_off switch the firmware drives on D4 (a change becomes one more sample time; the charge is
 conserved across the step, the transient's default).
 
-Continuity (the property tested in tests/twin/test_edges.py: chunks joined = one run of
+Continuity (the property tested in tests/virtual/twin/test_edges.py: chunks joined = one run of
 ``simulate`` over the whole time series): a chunk is cut where the transient's state is known
 exactly, so the next one starts from it:
 

@@ -2,7 +2,7 @@
 
 Reference: the paper's printed Table 5 readings (real data, tests/data/paper.json) written as a
 long CSV and read back exactly; one-line errors naming file, row and column (docs/data-format.md
-style). The ISO 376 reader is tested with its computation in tests/analysis/test_iso376.py.
+style). The ISO 376 reader is tested with its computation in tests/metrics/test_iso376.py.
 """
 
 from __future__ import annotations

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 from toolcheck import require_file, require_tool
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 sys.path.insert(0, str(ROOT / "firmware" / "sim"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 

@@ -139,3 +139,15 @@ def test_one_motor_cycle_does_not_identify_the_lag():
     cal = calibrate_run(fsr_bench_run("motor", seed=3, reference_sps=80).run(), x="voltage_v")
     search = cal.extra["lag_search"]
     assert cal.lag_s == 0.0 and search["identifiable"] is False and "reversal" in search["note"]
+
+
+@pytest.mark.parametrize("method", ["memory", "cv", "xcorr"])
+def test_every_lag_criterion_finds_a_known_delay(method):
+    # Reference: a readout-free construction: the reference is the readout delayed by 60 ms (3 rows of
+    # 20 ms) through a linear map; every criterion must find that shift (the sign convention of
+    # shift_reference: the reference lags, the lag found is negative).
+    t = np.arange(2000) * 0.02
+    x = np.sin(1.3 * t) + 0.5 * np.sin(0.37 * t)
+    y = 3.0 * np.interp(t - 0.06, t, x) + 1.0
+    found = estimate_lag(t, x, y, np.arange(2000) // 200, method=method)
+    assert found.lag_s == pytest.approx(-0.06, abs=1e-9)

@@ -252,7 +252,7 @@ def test_incomplete_run_says_so_and_names_its_last_row(tmp_path):
     w2.close()
     assert load_run(tmp_path / "c.csv").incomplete() is None
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 DOC = (ROOT / "docs" / "data-format.md").read_text(encoding="utf-8")
 
 # One bad run.csv per line of the doc's error example, in the doc's order.

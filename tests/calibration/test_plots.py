@@ -2,7 +2,7 @@
 
 Reference: the result objects' numbers (calibration polynomial over its calibrated range, the
 branches eq. 13 compared, σd and the difference there) read back from the matplotlib lines (Agg
-backend, no display). Data: the closed-form loop of tests/analysis/test_cycles.py (HE = a/(4 σf)
+backend, no display). Data: the closed-form loop of tests/metrics/test_cycles.py (HE = a/(4 σf)
 exactly) and synthetic_run (VirtualFSR -> lm555.astable -> 62.5 ns timer).
 """
 

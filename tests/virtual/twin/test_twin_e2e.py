@@ -2,7 +2,7 @@
 
 Reference: the exact event-driven transient (fsrlab.circuits.transient.simulate) run once over the
 whole run (the source's grid, and the C_off switch at the time the harness reported D4), compared
-window by window with what the firmware measured (tests/twin/twin_windows.py: per-window values and the
+window by window with what the firmware measured (tests/virtual/twin/twin_windows.py: per-window values and the
 quantization bound). simavr (the firmware itself) is the device under test. The twin runs with
 --speed max; the simulated time in this file adds up to about 40 s.
 """

@@ -1,4 +1,5 @@
-"""Calibration on realistic FSR recordings: families, lag, dead zone, causal compensation, uncertainty.
+"""Calibration on realistic FSR recordings: families, lag, dead zone, causal compensation, uncertainty (the model
+families, the play operators and the lag criteria on closed forms: test_models.py, test_play.py, test_alignment.py).
 
 How the data were made: :func:`fsrlab.virtual.handloaded.fsr_bench_run` simulates an FSR in a
 voltage divider (R_M = 10 kΩ, 5 V, 10-bit ADC averaged over 20 ms rows) under a load cell read by
@@ -19,8 +20,6 @@ import pytest
 from clirun import run_cli
 from fsrlab.calibration.document import load_calibration, save_calibration
 from fsrlab.virtual.handloaded import fsr_bench_run
-from fsrlab.calibration.play import causal_features
-from fsrlab.calibration.models import ConductanceTransform, cross_validate_families, find_floor
 from fsrlab.calibration.apply import apply_calibration
 from fsrlab.calibration.fit import calibrate_run
 from fsrlab.calibration.estimator import live_estimator
@@ -201,50 +200,6 @@ def test_lag_follows_a_delay_added_by_construction(hand):
     assert calibrate_run(delayed, x="voltage_v").lag_s - base == pytest.approx(k * dt, abs=0.5 * dt)
 
 
-def test_power_law_through_a_divider_is_recovered():
-    # Other data: an exact power law F = 0.5 + 30·G^0.8 [N, G in mS] through a 10 kΩ / 5 V divider.
-    g = np.linspace(0.01e-3, 0.5e-3, 400)
-    f = 0.5 + 30 * (g / 1e-3) ** 0.8
-    tr = ConductanceTransform("divider", 10e3, 5.0)
-    v = 5.0 * 10e3 * g / (1 + 10e3 * g)  # the divider's closed form
-    sel = cross_validate_families(v, f, np.arange(v.size) % 5, 5, tr)
-    assert sel.best.name == "conductance-power"
-    assert sel.best.params["b"] == pytest.approx(0.8, rel=0.03)  # the exponent grid's spacing is 5.5 %
-    np.testing.assert_allclose(sel.best(v), f, rtol=0.04)
-
-
-def test_floor_is_found_only_where_the_readout_sticks():
-    # Other data: a ramp whose first 50 of 500 readings sit at 0 V (a dead zone), and the same
-    # ramp without it.
-    f = np.linspace(0, 10, 500)
-    v = np.round(np.clip(f - 1.0, 0, None) * 0.3 / (5 / 1023)) * (5 / 1023)
-    fl = find_floor(v, f)
-    assert fl is not None and fl.sign == 1 and fl.below(v).sum() == int((v == 0).sum())
-    assert find_floor(np.linspace(1, 2, 500), f) is None
-
-
-def test_play_operators_follow_their_closed_form():
-    # Reference: the play operator's definition. Loading from rest to w: p = w - r; after a
-    # reversal p holds until w has fallen by 2r, then p = w + r.
-    w = np.concatenate([np.linspace(0, 0.5, 51), np.linspace(0.5, 0.2, 31)[1:]])
-    r = 0.05
-    p, _, d = causal_features(w, (r,), ())
-    up = w[:51]
-    np.testing.assert_allclose(p[:51, 0], np.maximum(up - r, 0), atol=1e-15)
-    down = w[51:]
-    np.testing.assert_allclose(p[51:, 0], np.minimum(0.45, down + r), atol=1e-15)
-
-
-def test_reversal_detection_survives_noise():
-    # A slow ramp up then down with noise of ±0.4 % FS (smaller than the 1 % direction threshold):
-    # the direction must change once (one reversal), never flicker.
-    rng = np.random.default_rng(0)
-    w = np.concatenate([np.linspace(0, 0.8, 800), np.linspace(0.8, 0.1, 700)]) + rng.uniform(-0.004, 0.004, 1500)
-    _, _, d = causal_features(w, (), ())
-    moving = d[d != 0]
-    assert np.count_nonzero(np.diff(moving)) == 1
-
-
 def test_force_reference_without_area_in_hysteresis(hand, tmp_path):
     run = load_run(hand / "motor.csv")
     meta = {k: v for k, v in run.metadata.items() if k != "sensor"}  # no sensor area
@@ -375,17 +330,3 @@ def test_plain_estimate_has_its_own_larger_uncertainty(cal, hand):
     np.testing.assert_array_equal(apply_calibration(back, run, compensation=False)["force_n_uncertainty"], plain)
 
 
-@pytest.mark.parametrize("method", ["memory", "cv", "xcorr"])
-def test_every_lag_criterion_finds_a_known_delay(method):
-    # Reference: a readout-free construction: the reference is the readout delayed by 60 ms (3 rows of
-    # 20 ms) through a linear map; every criterion must find that shift (the sign convention of
-    # shift_reference: the reference lags, the lag found is negative).
-    import numpy as np
-
-    from fsrlab.calibration.alignment import estimate_lag
-
-    t = np.arange(2000) * 0.02
-    x = np.sin(1.3 * t) + 0.5 * np.sin(0.37 * t)
-    y = 3.0 * np.interp(t - 0.06, t, x) + 1.0
-    found = estimate_lag(t, x, y, np.arange(2000) // 200, method=method)
-    assert found.lag_s == pytest.approx(-0.06, abs=1e-9)

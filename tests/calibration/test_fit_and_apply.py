@@ -148,7 +148,7 @@ def test_apply_uses_the_compensation_unless_told_not_to(runs, tmp_path):
     live = live_estimator(cal)
     stepped = [live.step(v)[0] for v in other["frequency_hz"]]
     np.testing.assert_allclose(est["stress_pa_estimate"], [np.nan if v is None else v for v in stepped], rtol=1e-12)
-    # Clean whole cycles: the grouped CV keeps the causal branches (tests/analysis/test_compensation_choice.py).
+    # Clean whole cycles: the grouped CV keeps the causal branches (tests/calibration/test_compensation_choice.py).
     assert cal.extra["compensation_choice"]["chosen"] == "branches (causal)" and cal.memory is None
     assert est.metadata["calibration"]["method"].startswith("causal branch compensation")
     plain = apply_calibration(cal, other, compensation=False)
