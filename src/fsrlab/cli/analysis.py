@@ -192,8 +192,9 @@ def calibrate_cmd(
     if method == "held-out" and asked:
         fail(f"{asked[0]} needs --method cv (or auto)", "--method")
     if method == "held-out" or (method == "auto" and not asked):
-        _calibrate_held_out(run_files, x, reference, compensate, unit, lag or "0", skip_bad_rows, output, json_out)
-        return
+        if _calibrate_held_out(run_files, x, reference, compensate, unit, lag or "0", skip_bad_rows, output, json_out,
+                               fall_back=method == "auto"):
+            return
     if len(run_files) > 1:
         fail(f"--method cv calibrates one run, got {len(run_files)}: several runs are calibrated with --method "
              "held-out", "--method")
@@ -300,23 +301,32 @@ def calibrate_cmd(
 
 
 def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, compensate: bool, unit: str | None,
-                        lag: str, skip_bad_rows: bool, output: Path | None, json_out: bool) -> None:
-    """``fsrlab calibrate`` by held-out scoring (:func:`fsrlab.calibration.heldout_runs.calibrate_runs`)."""
+                        lag: str, skip_bad_rows: bool, output: Path | None, json_out: bool, fall_back: bool) -> bool:
+    """``fsrlab calibrate`` by held-out scoring (:func:`fsrlab.calibration.heldout_runs.calibrate_runs`).
+
+    Returns False, having done nothing, when ``fall_back`` and a single run is too short for held-out
+    scoring: the caller then calibrates it by in-run cross-validation (and says so)."""
     import numpy as np
 
     from fsrlab.calibration.document import save_calibration
-    from fsrlab.calibration.heldout_runs import calibrate_runs
+    from fsrlab.calibration.heldout_runs import MIN_READINGS, calibrate_runs
 
     warnings: list[str] = []
     runs = []
     for run_file in run_files:
-        run = _load(run_file, skip_bad_rows, warnings)
+        run = load_run_warned(run_file, skip_bad_rows, warnings)
         if x not in run:
-            _missing(run_file, run, x, option="--x")
+            missing_column(run_file, run, x, option="--x")
         _reference_option(run_file, run, reference)
         runs.append(run)
     ref = reference or ("stress_pa" if all("stress_pa" in r for r in runs) else "force_n")
     _unit_option(unit, ref)
+    if fall_back and len(runs) == 1 and ref in runs[0]:
+        both = np.isfinite(runs[0][x]) & np.isfinite(runs[0][ref])
+        if int(both.sum()) < MIN_READINGS:
+            typer.echo(f"fsrlab: note: {run_files[0]} has {int(both.sum())} readings, fewer than the {MIN_READINGS} "
+                       "held-out scoring needs: calibrated by cross-validation inside the run (--method cv)", err=True)
+            return False
     lag_rows: int | str = "auto"
     if lag != "auto":
         try:
@@ -340,10 +350,10 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
            "gain_spread": sel.gain_spread, "steps": sel.steps, "candidates": sel.candidates}
     if output is not None:
         save_calibration(cal, output)
-    _warn(warnings)
+    warn(warnings)
     if json_out:
         emit_json(out)
-        return
+        return True
     from rich.console import Console
     from rich.table import Table
 
@@ -368,6 +378,7 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
         console.print(f"compensation: {refused[0]['step']} not kept: {refused[0]['why']}")
     if output is not None:
         console.print(f"wrote {output}")
+    return True
 
 
 @app.command("apply")
