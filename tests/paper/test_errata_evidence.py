@@ -47,3 +47,20 @@ def test_counterexample_loop_keeps_high_r2_with_table3_hysteresis():
     assert cx["he_percent"] == pytest.approx(14.2, abs=1e-9)
     assert cx["cubic"] == pytest.approx(r2(3), abs=1e-6) and cx["cubic"] > 0.996
     assert cx["linear"] == pytest.approx(r2(1), abs=1e-6) and 0.93 < cx["linear"] < 0.95
+
+
+def test_printed_eps0_changes_no_hysteresis_error():
+    # Table 1 prints ε0 = 8.85e-12; fsrlab uses CODATA's. Eq. (13) divides by Q(σf), eq. (15) is linear in ε0:
+    # HE of C_A is the same to rounding, and R_A (eqs. 16-18) does not contain ε0.
+    from scipy.constants import epsilon_0
+
+    from fsrlab.metrics.hysteresis import hysteresis_error
+    from fsrlab.physics.params import PAPER
+    from fsrlab.physics.separation import separation_loading, separation_unloading
+
+    sig = np.linspace(0, PAPER.sigma_f_pa, 401)
+    sl = separation_loading(sig, PAPER.s0_m, PAPER.modulus_pa)
+    su = separation_unloading(sig, PAPER.sigma_f_pa, PAPER.s0_m, PAPER.modulus_pa, PAPER.k)
+    he = [hysteresis_error(sig, PAPER.eps_r * e0 / sl, sig, PAPER.eps_r * e0 / su).percent for e0 in (8.85e-12, epsilon_0)]
+    assert he[0] == pytest.approx(he[1], rel=1e-12)
+    assert 8.85e-12 / epsilon_0 - 1 == pytest.approx(-4.7e-4, abs=0.1e-4)

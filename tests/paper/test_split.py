@@ -82,4 +82,4 @@ def test_tolerances_as_stated(kind, printed, predicted, ok):
 
 def test_tolerances_are_stated_in_the_docs():
     text = DOCS.read_text(encoding="utf-8")
-    assert "±25 %" in text and "factor 2 or 1 pp" in text and "|ΔR²| ≤ 0.01" in text
+    assert "±25 %" in text and "factor 2 or 1 pp" in text and "ΔR²\\| ≤ 0.01" in text
