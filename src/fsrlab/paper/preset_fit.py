@@ -19,8 +19,9 @@ from fsrlab.circuits.circuit import PAPER_CIRCUIT, PAPER_OPAMP, LM555Circuit, Op
 from fsrlab.paper.experiment import MASSES_KG
 from fsrlab.units import STANDARD_GRAVITY
 
-__all__ = ["preset_targets", "TARGET_SOURCES", "fit_target_list", "HELD_PARAMETERS", "quick_response", "fit_paper_sensor", "fit_paper_preset", "fit_placement_spread",
-           "placement_sensitivities", "re2_design", "re2_design_per_sensor", "film_regimes", "SPREAD_FIT_PARAMETERS", "SPREADS", "FIT_WEIGHTS",
+__all__ = ["preset_targets", "TARGET_SOURCES", "fit_target_list", "HELD_PARAMETERS", "quick_response",
+           "fit_paper_sensor", "fit_paper_preset", "fit_placement_spread", "placement_sensitivities", "re2_design",
+           "re2_design_per_sensor", "film_regimes", "SPREAD_FIT_PARAMETERS", "SPREADS", "FIT_WEIGHTS",
            "FIT_PARAMETERS", "SHARED_FIT_PARAMETERS"]
 
 
