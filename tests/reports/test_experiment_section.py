@@ -1,7 +1,7 @@
 """Report section 'experiment' (§6 on the virtual bench) and the Table 3 mean display of 'measurements'.
 
 References: the paper's printed values (fsrlab/data/paper.json) that the section must put beside each
-reproduced value; the exact decimal mean of Table 3's printed rows (23.345, which the paper rounds to 23.35).
+virtual-bench value; the exact decimal mean of Table 3's printed rows (23.345, which the paper rounds to 23.35).
 """
 
 import json
@@ -32,30 +32,40 @@ def test_figures_and_tables(built):
     for f in s.figures:
         assert (out / f.filename).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and (out / f.filename).stat().st_size > 10_000
     tables = " ".join(t.title for t in s.tables)
-    for name in ("Table 3", "Table 4", "Table 5", "Figure 17", "preset"):
+    for name in ("Table 3", "Table 4", "Table 5", "Figure 17", "preset", "Targets", "Predictions"):
         assert name in tables
+    assert s.tables[0].title.startswith("Targets") and s.tables[1].title.startswith("Predictions")
+
+
+def test_nothing_fitted_is_called_reproduced(built):
+    # Every row of Table 3 is a target of the preset's fit (fsrlab.paper.preset_fit.FIT_WEIGHTS he_tm, he_pm).
+    s, _ = built
+    text = " ".join([s.intro] + [t.title + " " + t.note for t in s.tables] + [f.fsrlab for f in s.figures])
+    assert "reproduced" not in text.lower().replace("not reproduced", "")
+    assert "Table 3 (fitted)" in " ".join(t.title for t in s.tables)
+    assert "Fitted, not reproduced" in s.intro
     assert [e.key for e in s.errata] == ["X1"]
 
 
-def test_paper_json_experiment_has_printed_beside_reproduced(built, paper):
+def test_paper_json_experiment_has_printed_beside_virtual_bench(built, paper):
     s, _ = built
     d = json.loads(json.dumps(s.data, allow_nan=False))["experiment"]
     t3 = paper["table3_hysteresis_error_percent"]
     assert d["table3"]["traditional"]["printed"] == t3["traditional"]
     assert d["table3"]["proposed"]["printed"] == t3["proposed"]
-    assert len(d["table3"]["traditional"]["reproduced"]) == 4
+    assert len(d["table3"]["traditional"]["virtual_bench"]) == 4
     assert d["table3"]["mean"]["traditional"]["printed"] == t3["traditional_mean"]
     for key, name in (("table4", "table4_repeatability_capacitive_kHz"), ("table5", "table5_repeatability_traditional_V")):
         for load in ("200g", "400g"):
             assert d[key][load]["readings"]["printed"] == paper[name][load]["readings"]
             assert d[key][load]["mean_RE2_percent"]["printed"] == paper[name][load]["mean_RE2"]
-            assert len(d[key][load]["readings"]["reproduced"]) == 4
+            assert len(d[key][load]["readings"]["virtual_bench"]) == 4
     assert d["figure17"]["printed"] == {"linear": 0.9432, "cubic": 0.9974}
-    assert set(d["figure17"]["reproduced"]) == {"both", "loading", "unloading", "means"}
+    assert set(d["figure17"]["virtual_bench"]) == {"both", "loading", "unloading", "means"}
     fit = d["preset"]["fit"]
     assert fit["he_tm"]["printed"] == t3["traditional"]
     assert all(abs(r) < 0.05 for r in fit["he_tm"]["residual"])  # the preset is fitted to these rows
-    assert len(d["preset"]["parameters"]) == 4 and d["not_reproduced"]
+    assert len(d["preset"]["parameters"]) == 4 and d["misses"]
 
 
 def test_table3_mean_shown_as_the_paper_rounds():

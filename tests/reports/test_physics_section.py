@@ -37,6 +37,8 @@ def test_p4_and_the_voltage_sweep(section):
     # §4's "in all cases": false at 3 V with Table 1's φ0 (1.47 % < 1.73 %), true with the fitted φ0.
     p4 = sec.errata[-1]
     assert "1.47 %" in p4.fsrlab and "1.73 %" in p4.fsrlab and "1.40 % at 2/3·Vcc" in p4.fsrlab
+    # the qualifier: eq. (12) at B ≈ 1 (1.00–1.07 at 3 V, tests/paper/test_errata_evidence.py), reverse term ≈ 0.3
+    assert "B = 1.00–1.07 at 3 V" in p4.fsrlab and "0.38–0.28 of the forward" in p4.fsrlab
     assert table2_row(10 / 3, 20000)[0] == pytest.approx(1.40, abs=0.005)
 
 

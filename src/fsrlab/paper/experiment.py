@@ -35,7 +35,7 @@ from fsrlab.circuits.circuit import PAPER_CIRCUIT, PAPER_OPAMP
 from fsrlab.units import STANDARD_GRAVITY
 
 __all__ = ["SpringCycle", "spring_cycle", "DeadWeights", "dead_weights", "figure17_fits", "Experiment",
-           "run_experiment", "MASSES_KG"]
+           "run_experiment", "MASSES_KG", "figure17_counterexample"]
 
 #: The dead weights of Tables 4 and 5. [kg]
 MASSES_KG = {"200g": 0.2, "400g": 0.4}
@@ -220,6 +220,47 @@ def figure17_fits(cycle: SpringCycle) -> dict:
             "unloading": (fu, su), "means": (0.5 * (fl + fu_at), sl)}
     return {name: {"linear": float(calibrate(x, y, degree=1).r2), "cubic": float(calibrate(x, y, degree=3).r2)}
             for name, (x, y) in sets.items()}
+
+
+def figure17_counterexample(he_percent: float = 14.2, width: float = 0.03, points: int = 41) -> dict:
+    """A loop with Table 3's hysteresis whose σ(f) fits still reach R² ≈ 0.94 (linear) and ≈ 0.997 (cubic).
+
+    Parameters
+    ----------
+    he_percent : float
+        HE of the frequency, eq. (13) (Table 3's smallest HE_PM is 14.23 %). [%]
+    width : float
+        Width of the gap along the stress, as a fraction of the range: the gap is
+        ``x·exp(−x/width)·(1 − x)``, x = σ/10 kPa, scaled to ``he_percent``. [1]
+    points : int
+        Stresses per branch.
+
+    Returns
+    -------
+    dict
+        ``he_percent`` (recomputed by eq. 13), ``linear``, ``cubic`` (R² of σ on f over both branches).
+
+    Notes
+    -----
+    Extension (fsrlab), for erratum X1. The loading branch f = 3 kHz + 7 kHz·√(σ/10 kPa) (3–10 kHz over
+    0–10 kPa, as Figure 19a) is steep at low stress, where the gap sits: a large frequency gap there
+    is a small stress error. A both-branch fit of a loop with a 14 % HE can therefore reach the printed
+    R² values; the virtual sensors' gap, spread over the range, cannot.
+    """
+    from fsrlab.calibration.result import calibrate
+    from fsrlab.metrics.hysteresis import hysteresis_error
+
+    x = np.linspace(0.0, 1.0, points)
+    s = 10e3 * x
+    f_load = 3e3 + 7e3 * np.sqrt(x)
+    gap = x * np.exp(-x / width) * (1 - x)
+    gap /= gap.max()
+    unit = hysteresis_error(s, f_load, s[::-1], (f_load + 1e3 * gap)[::-1]).percent
+    f_unload = f_load + 1e3 * gap * he_percent / unit
+    he = hysteresis_error(s, f_load, s[::-1], f_unload[::-1]).percent
+    f_all, s_all = np.concatenate([f_load, f_unload]), np.concatenate([s, s])
+    return {"he_percent": float(he), "linear": float(calibrate(f_all, s_all, degree=1).r2),
+            "cubic": float(calibrate(f_all, s_all, degree=3).r2), "width": width}
 
 
 @dataclass

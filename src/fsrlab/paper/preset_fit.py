@@ -19,13 +19,100 @@ from fsrlab.circuits.circuit import PAPER_CIRCUIT, PAPER_OPAMP, LM555Circuit, Op
 from fsrlab.paper.experiment import MASSES_KG
 from fsrlab.units import STANDARD_GRAVITY
 
-__all__ = ["preset_targets", "quick_response", "fit_paper_sensor", "fit_paper_preset", "fit_placement_spread",
-           "placement_sensitivities", "re2_design", "film_regimes", "SPREAD_FIT_PARAMETERS", "SPREADS", "FIT_WEIGHTS",
+__all__ = ["preset_targets", "TARGET_SOURCES", "fit_target_list", "HELD_PARAMETERS", "quick_response",
+           "fit_paper_sensor", "fit_paper_preset", "fit_placement_spread", "placement_sensitivities", "re2_design",
+           "re2_design_per_sensor", "film_regimes", "SPREAD_FIT_PARAMETERS", "SPREADS", "FIT_WEIGHTS",
            "FIT_PARAMETERS", "SHARED_FIT_PARAMETERS"]
 
 
 #: Weights of the fit residuals (relative residuals for readings, pp/2 for HE).
 FIT_WEIGHTS = {"f0": 0.5, "f10": 0.5, "v0": 0.5, "v10": 0.5, "f200": 1.0, "f400": 1.0, "he_tm": 1.0, "he_pm": 1.0}
+
+
+#: Where each key of :func:`preset_targets` comes from: (source, quantity, unit of the value).
+TARGET_SOURCES = {
+    "f0": ("Figure 19a", "frequency at 0 kPa (lower end of the axis range)", "Hz"),
+    "f10": ("Figure 19a", "frequency at 10 kPa (upper end of the axis range)", "Hz"),
+    "v0": ("Figure 19b", "op-amp V0 at 0 kPa (lower end of the axis range)", "V"),
+    "v10": ("Figure 19b", "op-amp V0 at 10 kPa (upper end of the axis range)", "V"),
+    "f200": ("Table 4", "mean of the five 200 g frequency readings", "Hz"),
+    "f400": ("Table 4", "mean of the five 400 g frequency readings", "Hz"),
+    "he_tm": ("Table 3", "HE of the traditional readout (op-amp V0), eq. (13)", "%"),
+    "he_pm": ("Table 3", "HE of the proposed readout (555 frequency), eq. (13)", "%"),
+}
+
+#: Values of the preset held in every fit, and how they were chosen (docs/experiment.md).
+HELD_PARAMETERS = {
+    "layers": "60 films: chosen after the joint fit against the same targets (fit_paper_preset), bounded to "
+              "keep each film inside eq. (11)'s range",
+    "contact_ohm": "30 kΩ: chosen with the same targets in view (joint fit), then held",
+    "contact_stress_pa": "5 kPa: chosen with the same targets in view (joint fit), then held",
+    "area_exponent": "1: chosen with the same targets in view (joint fit), then held",
+    "dead_weight_area_m2": "392 mm²: set so that 400 g gives 10 kPa, because Table 4's 400 g mean (10.36 kHz) "
+                           "sits at the top of Figure 19a (10 kHz at 10 kPa)",
+}
+
+
+def fit_target_list() -> list:
+    """Every printed number the preset's fits use, once each: the fit's own list of targets.
+
+    Returns
+    -------
+    list of dict
+        One entry per printed number (or per printed set, for a sensor's five readings): ``id``
+        (unique), ``source``, ``quantity``, ``unit``, ``printed`` (the value the fit aims at, in
+        ``unit``), ``printed_values`` (the printed numbers behind it), ``key`` (the fit's residual:
+        a key of :data:`FIT_WEIGHTS` or a label of :func:`re2_design`), ``sensors`` (the sensors whose
+        fit uses it, 1–4) and ``tunes`` (what it sets).
+
+    Notes
+    -----
+    Built from :data:`FIT_WEIGHTS`, :func:`preset_targets` and :func:`re2_design`'s rows, so the list
+    follows the fit. Figure 19's four axis ends are one printed number each, used by all four sensors.
+    The dead-weight area and the held shared values (:data:`HELD_PARAMETERS`) were chosen against
+    these same numbers; they appear in ``tunes``.
+    """
+    from fsrlab.reference import paper_values
+
+    p = paper_values()
+    held = "held shared values (" + ", ".join(k for k in HELD_PARAMETERS if k != "dead_weight_area_m2") + ")"
+    wants = [preset_targets(i) for i in range(1, 5)]
+    out = []
+    for key in FIT_WEIGHTS:
+        source, quantity, unit = TARGET_SOURCES[key]
+        if key in ("f0", "f10", "v0", "v10"):
+            tunes = [f"own parameters of sensors 1–4 (weight {FIT_WEIGHTS[key]:g})", held]
+            if key == "f10":
+                tunes.append("dead_weight_area_m2")
+            out.append({"id": f"{source.lower().replace(' ', '')}.{key}", "source": source, "quantity": quantity,
+                        "unit": unit, "printed": wants[0][key], "printed_values": [wants[0][key]], "key": key,
+                        "sensors": [1, 2, 3, 4], "tunes": tunes})
+            continue
+        for i, want in enumerate(wants, start=1):
+            if key in ("f200", "f400"):
+                load = f"{key[1:]}g"
+                printed_values = p["table4_repeatability_capacitive_kHz"][load]["readings"][i - 1]
+                printed_values = [1e3 * float(v) for v in printed_values]
+                ident = f"table4.{load}.sensor{i}.mean_reading"
+            else:
+                side = "traditional" if key == "he_tm" else "proposed"
+                printed_values = [float(p["table3_hysteresis_error_percent"][side][i - 1])]
+                ident = f"table3.{side}.sensor{i}"
+            tunes = [f"own parameters of sensor {i}", held]
+            if key == "f400":
+                tunes.append("dead_weight_area_m2")
+            out.append({"id": ident, "source": source, "quantity": f"{quantity}, sensor {i}", "unit": unit,
+                        "printed": want[key], "printed_values": printed_values, "key": key, "sensors": [i],
+                        "tunes": tunes})
+    for t_key, name in (("table4_repeatability_capacitive_kHz", "table4"),
+                        ("table5_repeatability_traditional_V", "table5")):
+        for load in MASSES_KG:
+            v = float(p[t_key][load]["mean_RE2"])
+            out.append({"id": f"{name}.{load}.mean_RE2", "source": name.replace("table", "Table "),
+                        "quantity": f"mean RE2 of the four sensors at {load}, eq. (39)", "unit": "%", "printed": v,
+                        "printed_values": [v], "key": f"{name} {load}", "sensors": [1, 2, 3, 4],
+                        "tunes": list(SPREADS)})
+    return out
 
 
 def preset_targets(i: int) -> dict:
@@ -134,9 +221,9 @@ FIT_PARAMETERS = {
 }
 
 
-def _residuals(got: dict, want: dict) -> np.ndarray:
+def _residuals(got: dict, want: dict, weights: dict | None = None) -> np.ndarray:
     res = []
-    for key, w in FIT_WEIGHTS.items():
+    for key, w in (FIT_WEIGHTS if weights is None else weights).items():
         if key.startswith("he"):
             res.append(w * (got[key] - want[key]) / 2.0)
         else:
@@ -252,7 +339,7 @@ def fit_paper_preset(start=None, max_nfev: int = 300, repeatability: bool = Fals
     return best, [quick_response(s) for s in best], wants
 
 
-def fit_paper_sensor(i: int, start=None, max_nfev: int = 400):
+def fit_paper_sensor(i: int, start=None, max_nfev: int = 400, weights: dict | None = None):
     """Refit the own parameters of sensor ``i`` alone, the shared ones held (scipy least squares).
 
     Parameters
@@ -263,6 +350,9 @@ def fit_paper_sensor(i: int, start=None, max_nfev: int = 400):
         Starting point (default: the stored preset sensor).
     max_nfev : int
         Largest number of model evaluations.
+    weights : dict, optional
+        Residual weights by target key (default :data:`FIT_WEIGHTS`); a key left out is not fitted
+        (the held-out fit of :mod:`fsrlab.paper.holdout` leaves out Table 4's readings).
 
     Returns
     -------
@@ -279,14 +369,15 @@ def fit_paper_sensor(i: int, start=None, max_nfev: int = 400):
 
     base = start if start is not None else paper_sensor(i)
     want = preset_targets(i)
+    weights = FIT_WEIGHTS if weights is None else dict(weights)
     names = list(FIT_PARAMETERS)
     lo, hi, enc, dec = _codec(names, FIT_PARAMETERS)
 
     def fun(x):
         try:
-            return _residuals(quick_response(base.replace(**dec(x))), want)
+            return _residuals(quick_response(base.replace(**dec(x))), want, weights)
         except ValueError:
-            return np.full(len(FIT_WEIGHTS), 10.0)
+            return np.full(len(weights), 10.0)
 
     x0 = np.clip(enc(base), lo + 1e-9, hi - 1e-9)
     sol = least_squares(fun, x0, bounds=(lo, hi), max_nfev=max_nfev, x_scale="jac")
@@ -385,15 +476,34 @@ def re2_design(sensors) -> tuple[np.ndarray, np.ndarray, list]:
     -----
     ``A = 100²·mean over sensors of S²`` with S the sensitivities of :func:`placement_sensitivities`.
     """
+    a, printed, labels, _ = re2_design_per_sensor(sensors)
+    return a, printed, labels
+
+
+def re2_design_per_sensor(sensors) -> tuple[np.ndarray, np.ndarray, list, np.ndarray]:
+    """:func:`re2_design` and the same design per sensor (one pass over the sensitivities).
+
+    Parameters
+    ----------
+    sensors : sequence of PaperFSR
+        The sensors, in the order of the tables.
+
+    Returns
+    -------
+    (ndarray, ndarray, list of str, ndarray)
+        :func:`re2_design`'s three values and ``A_i`` of shape (4, n_sensors, 3) [%²]: sensor i's
+        expected RE2 is ``sqrt(A_i[row, i] @ sd²)``.
+    """
     from fsrlab.reference import paper_values
 
     p = paper_values()
     sens = {m: np.array([placement_sensitivities(s, m) for s in sensors]) for m in MASSES_KG.values()}
-    rows, printed, labels = [], [], []
+    rows, per, printed, labels = [], [], [], []
     for t_key, row, name in (("table4_repeatability_capacitive_kHz", 0, "table4"),
                              ("table5_repeatability_traditional_V", 1, "table5")):
         for label, m in MASSES_KG.items():
+            per.append(sens[m][:, row, :] ** 2 * 1e4)
             rows.append(np.mean(sens[m][:, row, :] ** 2, axis=0) * 1e4)
             printed.append(float(p[t_key][label]["mean_RE2"]))
             labels.append(f"{name} {label}")
-    return np.array(rows), np.array(printed), labels
+    return np.array(rows), np.array(printed), labels, np.array(per)

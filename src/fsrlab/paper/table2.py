@@ -32,7 +32,7 @@ from fsrlab.physics.params import PAPER, PaperParameters, check_positive
 from fsrlab.physics.separation import separation_loading
 from fsrlab.physics.tunneling import voltage_limit
 
-__all__ = ["CycleErrorTable", "cycle_error_table", "BarrierHeightFit", "fit_barrier_height",
+__all__ = ["simmons_terms", "CycleErrorTable", "cycle_error_table", "BarrierHeightFit", "fit_barrier_height",
            "current_maximum_voltage", "VoltageSweep", "voltage_sweep"]
 
 
@@ -217,6 +217,37 @@ def current_maximum_voltage(s_m: float, phi0_j: float = PAPER.phi0_j) -> float:
 
     lo, hi = phi0_j / e * (1 + 1e-9), float(voltage_limit(s_m, phi0_j)) * (1 - 1e-12)
     return float(brentq(side, lo, hi, xtol=1e-12, rtol=1e-12))
+
+
+def simmons_terms(u_v, s_m, phi0_j: float = PAPER.phi0_j):
+    """Eq. (12)'s exponent B and the ratio of its reverse to its forward term.
+
+    Parameters
+    ----------
+    u_v : float or array_like
+        Voltage across the film, > φ0/e. [V]
+    s_m : float or array_like
+        Interparticle separation. [m]
+    phi0_j : float
+        Barrier height φ0. [J]
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        ``B = 8π s √(2m) φ0^(3/2) / (2.96 h e u)`` [1] and ``r·exp(−B√r)/exp(−B)`` with
+        ``r = 1 + 2eu/φ0`` [1].
+
+    Notes
+    -----
+    Extension (fsrlab), for erratum P4. Simmons' high-voltage formula is the large-B limit: the
+    forward term exp(−B) dominates when B ≫ 1. With B ≈ 1 the reverse term is comparable to the
+    forward one and the formula is at the edge of its range.
+    """
+    u = np.asarray(u_v, dtype=float)
+    s = np.asarray(s_m, dtype=float)
+    b = 8 * math.pi * s * math.sqrt(2 * m_e) * phi0_j**1.5 / (2.96 * h * e * u)  # Eq. (12)
+    r = 1 + 2 * e * u / phi0_j
+    return b, r * np.exp(-b * (np.sqrt(r) - 1))
 
 
 @dataclass(frozen=True)

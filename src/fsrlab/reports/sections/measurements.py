@@ -4,7 +4,7 @@ Tables 4 and 5 are recomputed by :mod:`fsrlab.metrics.repeatability` from the pr
 :func:`fsrlab.reference.paper_values`; the calibration table and the compensation use a synthetic bench run
 (:mod:`fsrlab.virtual.synthetic`, :mod:`fsrlab.calibration.polynomial`,
 :mod:`fsrlab.calibration.compensation`). This module draws and words the results. Figure 17 and
-Tables 3–5 reproduced on a virtual bench are the experiment section's
+Tables 3–5 on a virtual bench (fitted to part of them, predicting the rest) are the experiment section's
 (:mod:`fsrlab.reports.sections.experiment`).
 """
 
@@ -151,8 +151,8 @@ def _table3(printed: dict, syn: _Synthetic) -> Table:
              f"{printed['proposed_mean']}, exact decimal means rounded half up). The last row is fsrlab's synthetic run "
              "(eq. 13 via fsrlab hysteresis on VirtualFSR data, 3 cycles 0–50 kPa): illustration only — "
              "the virtual sensor's hysteresis enters through the separation alone, so both readouts show "
-             "similar HE, unlike the paper's sensors. The experiment section reproduces Table 3 with the "
-             "fitted paper sensors, whose conductive area has its own memory.")
+             "similar HE, unlike the paper's sensors. The experiment section fits paper sensors to "
+             "Table 3 (their conductive area has its own memory) and predicts the rest of §6 with them.")
 
 
 def _repeatability_table(title: str, check: PrintedTableCheck, unit: str) -> Table:
@@ -249,7 +249,7 @@ def _intro(found: DdofFinding) -> str:
         "eq. (39) (erratum M1).\n\n"
         "Table 3 and Figure 17 rest on unpublished raw data: Table 3 is shown as printed; the calibration table and "
         "compensation figure use fsrlab's synthetic bench runs and are labelled as such (the experiment section "
-        "reproduces Figure 17 and Tables 3–5 on a virtual bench). In ISO 376 terms "
+        "runs Figure 17 and Tables 3–5 on a virtual bench: fitted targets and predictions apart). In ISO 376 terms "
         "(fsrlab.metrics.iso376), the re-placement spread of Table 4 (1–3 %) is far beyond the 0.40 % "
         "reproducibility limit of class 2."
     )
