@@ -35,7 +35,19 @@ CHUNKS = 8
 
 @dataclass
 class Recording:
-    """One recording: time [s], readout, reference (NaN where missing), and a name for messages."""
+    """One recording, in time order.
+
+    Parameters
+    ----------
+    t : ndarray
+        Time of each reading. [s]
+    x : ndarray
+        Readout (NaN where missing). [its unit]
+    y : ndarray
+        Reference (NaN where missing). [N or Pa]
+    name : str
+        A name for messages.
+    """
 
     t: np.ndarray
     x: np.ndarray
@@ -49,20 +61,45 @@ class Recording:
 
 @dataclass
 class Part:
-    """A recording and the rows of it that count (fitted, or scored)."""
+    """A recording and the rows of it that count (fitted, or scored).
+
+    Parameters
+    ----------
+    rec : Recording
+        The whole recording (its memory runs over every reading).
+    rows : ndarray of bool
+        The rows that count.
+    """
 
     rec: Recording
     rows: np.ndarray
 
 
 def scheme_name(n_recordings: int) -> str:
-    """How choices are scored for this many recordings."""
+    """How choices are scored for this many recordings.
+
+    Parameters
+    ----------
+    n_recordings : int
+        Number of recordings calibrated together. [1]
+    """
     return ("leave one recording out" if n_recordings >= 2
             else f"forward chaining (fit on earlier blocks, score on the next; {BLOCKS} blocks)")
 
 
 def held_out_splits(recs: list[Recording]) -> list[tuple[list[Part], list[Part]]]:
-    """The (fit, score) splits of :func:`scheme_name`'s scheme."""
+    """The (fit, score) splits of :func:`scheme_name`'s scheme.
+
+    Parameters
+    ----------
+    recs : list of Recording
+        The recordings.
+
+    Returns
+    -------
+    list of (list of Part, list of Part)
+        The parts to fit on and the parts to score on, per split.
+    """
     if len(recs) >= 2:
         return [([Part(r, r.usable) for j, r in enumerate(recs) if j != i], [Part(recs[i], recs[i].usable)])
                 for i in range(len(recs))]
@@ -87,6 +124,13 @@ def chunk_ids(n: int) -> np.ndarray:
 
 def paired_gain(err_simple: np.ndarray, err_complex: np.ndarray, chunks: np.ndarray) -> tuple[float, float]:
     """Mean squared error saved by the complex choice, and its standard error, paired over chunks.
+
+    Parameters
+    ----------
+    err_simple, err_complex : ndarray
+        Held-out errors of the simpler and the more complex choice on the same rows. [unit]
+    chunks : ndarray of int
+        The contiguous chunk of each row (0..k−1).
 
     Returns
     -------

@@ -93,6 +93,11 @@ class HeldoutCalibration:
     row_s : float
         Median time between readings of the calibration data (the step a gap is taken as). [s]
     uncertainty : LevelUncertainty or None
+        The uncertainty of the estimate.
+    scaled : bool
+        Whether the memory features grow with the level (:func:`memory_features`).
+    uncertainty_plain : LevelUncertainty or None
+        The uncertainty of the static curve alone (with memory only).
     """
 
     static: MonotoneCurve
@@ -194,6 +199,17 @@ class LevelUncertainty:
     ``2u`` is the :data:`COVERAGE` quantile of the held-out |error| in each cell (a cell with fewer
     than ``least`` errors takes its level's, else all of them), never below the quantile of all the
     held-out errors: the cells sharpen where errors are large, not where few were seen.
+
+    Parameters
+    ----------
+    edges : ndarray
+        Level bin edges (quantiles of the held-out estimates). [unit of the reference]
+    table : ndarray, shape (bins, 3)
+        u per level bin and direction (−1, 0, +1), without the relative term. [unit of the reference]
+    pooled : float
+        Half the quantile of all the held-out |errors|. [unit of the reference]
+    relative : float
+        Relative standard uncertainty between recordings, added in quadrature. [1]
     """
 
     edges: np.ndarray
@@ -246,7 +262,23 @@ class LevelUncertainty:
 
 @dataclass
 class Selection:
-    """What was tried and why the calibration is what it is."""
+    """What was tried and why the calibration is what it is.
+
+    Parameters
+    ----------
+    scheme : str
+        How choices were scored (:func:`fsrlab.calibration.heldout.scheme_name`).
+    candidates : list of dict
+        Every candidate tried: ``name`` and ``heldout_rmse``. [unit of the reference]
+    steps : list of dict
+        Each step: ``step``, ``tried``, ``gain``, ``se``, ``heldout_gain_by_part``, ``kept``, ``why``.
+    lag_rows : int
+        The lag applied. [rows]
+    heldout_rmse, heldout_rmse_plain : float
+        Held-out RMSE of the calibration chosen and of its static curve. [unit of the reference]
+    gain_spread : float or None
+        RMS relative gain error of the held-out recordings (two or more recordings). [1]
+    """
 
     scheme: str
     candidates: list = field(default_factory=list)  # {"name", "heldout_rmse"}

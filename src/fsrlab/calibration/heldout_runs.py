@@ -182,7 +182,18 @@ def _estimate(m: HeldoutCalibration, x_range, t, x, margin):
 
 
 class RunEstimator:
-    """The estimates of :meth:`RunCalibration.apply`, one reading at a time (``fsrlab measure``, ``fsrlab live``)."""
+    """The estimates of :meth:`RunCalibration.estimate_run`, one reading at a time (``fsrlab measure``, ``fsrlab live``).
+
+    Parameters
+    ----------
+    cal : RunCalibration
+        The calibration.
+    margin : float
+        Beyond the calibrated readout range by more than this fraction of its span, no estimate is
+        reported (the memory still takes the reading). [1]
+    compensation : bool
+        Use the memory terms when the calibration has them.
+    """
 
     def __init__(self, cal: RunCalibration, margin: float = MARGIN, compensation: bool = True):
         if not margin >= 0:

@@ -31,7 +31,13 @@ _ADC = (1023.0, 4095.0, 65535.0)
 
 
 def adc_full_scale(x) -> float | None:
-    """The full scale of an ADC whose counts ``x`` are (integers in 0..1023, 0..4095 or 0..65535), else None."""
+    """The full scale of an ADC whose counts ``x`` are (integers in 0..1023, 0..4095 or 0..65535), else None.
+
+    Parameters
+    ----------
+    x : array_like
+        Readings (NaN ignored).
+    """
     x = np.asarray(x, dtype=float)
     x = x[np.isfinite(x)]
     if x.size == 0 or x.min() < 0 or not np.all(x == np.round(x)):
@@ -83,6 +89,21 @@ def bounded_fit(a: np.ndarray, y: np.ndarray, lower: np.ndarray, penalty: np.nda
 
     Columns are scaled to unit root mean square first; the normal equations keep the memory to the
     number of columns squared, whatever the number of readings.
+
+    Parameters
+    ----------
+    a : ndarray, shape (n, k)
+        Design matrix.
+    y : ndarray, shape (n,)
+        Targets.
+    lower : ndarray, shape (k,)
+        Lower bound of each coefficient (``-inf``: free).
+    penalty : ndarray, shape (m, k), optional
+        Ridge rows.
+
+    Returns
+    -------
+    ndarray, shape (k,)
     """
     from scipy.optimize import lsq_linear
 

@@ -126,7 +126,13 @@ def memory_features(u, t, thresholds=PLAY_THRESHOLDS, time_constants=CREEP_TIME_
 
 def directions(u) -> np.ndarray:
     """+1 loading, −1 unloading, 0 still or missing: the movement of a play operator of
-    :data:`DIRECTION_THRESHOLD` (noise smaller than it is no reversal)."""
+    :data:`DIRECTION_THRESHOLD` (noise smaller than it is no reversal).
+
+    Parameters
+    ----------
+    u : array_like
+        Level, a fraction of full scale, in time order (NaN: missing). [1]
+    """
     u = np.asarray(u, dtype=float)
     d = np.zeros(u.size, dtype=int)
     rows = np.flatnonzero(np.isfinite(u))
@@ -144,6 +150,8 @@ class MemoryState:
     Parameters
     ----------
     thresholds, time_constants : sequence of float
+        As for :func:`memory_features`.
+    scaled : bool
         As for :func:`memory_features`.
     """
 
