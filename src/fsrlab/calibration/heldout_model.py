@@ -460,8 +460,18 @@ def _orientation(recs: list[Recording]) -> tuple[int, float | None]:
     return (1 if rho > 0 else -1), adc_full_scale(x_all)
 
 
+def _rail(recs: list[Recording], rail: float | None, adc: float | None) -> float | None:
+    """The readout's full scale for the conductance variable: the one given (a divider's supply for
+    its voltage), else the ADC's found in the counts; None when neither (or readings beyond it)."""
+    if rail is None:
+        return adc
+    top = max(float(np.nanmax(r.x)) for r in recs)
+    return float(rail) if rail > 0 and top < rail else None
+
+
 def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: int | str = 0,
-                         variables=("readout", "conductance")) -> tuple[HeldoutCalibration, Selection]:
+                         variables=("readout", "conductance"), rail: float | None = None
+                         ) -> tuple[HeldoutCalibration, Selection]:
     """Choose and fit a calibration on held-out recordings or blocks (see the module's notes).
 
     Parameters
@@ -473,13 +483,17 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
     lag : int or "auto"
         Rows the readout lags the reference (default 0), or ``"auto"``: 0 unless a shift wins.
     variables : sequence of str
-        Readout variables tried (``conductance`` only for ADC counts).
+        Readout variables tried (``conductance`` only with a rail: ADC counts, or ``rail`` given).
+    rail : float, optional
+        The readout's full scale when it is not ADC counts: a divider's supply voltage for its
+        voltage (the conductance ratio is then V/(Vcc − V), or its mirror). [unit of the readout]
 
     Returns
     -------
     HeldoutCalibration, Selection
     """
     sign, adc = _orientation(recs)
+    adc = _rail(recs, rail, adc)
     splits = held_out_splits(recs)
     sel = Selection(scheme_name(len(recs)))
     scored = {}

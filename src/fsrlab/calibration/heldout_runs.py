@@ -230,6 +230,23 @@ class RunEstimator:
         return est, u, inside
 
 
+def _divider_rail(run: Run, x: str) -> float | None:
+    """The full scale of a divider's readout from the run's sidecar (``divider``: ``vcc_v``, and the
+    ``column`` holding ``adc_bits``-bit counts): the supply for ``voltage_v``, the largest count for
+    that column; None otherwise."""
+    div = run.metadata.get("divider") if isinstance(run.metadata, dict) else None
+    if not isinstance(div, dict):
+        return None
+    try:
+        if x == "voltage_v" and div.get("vcc_v") is not None:
+            return float(div["vcc_v"])
+        if div.get("column") == x:
+            return float(2 ** int(div.get("adc_bits", 10)) - 1)
+    except (TypeError, ValueError):
+        return None
+    return None
+
+
 def _recording(run: Run, x: str, reference: str | None) -> tuple[Recording, str, str, str]:
     if x not in run:
         raise RunFormatError(f"{run.path}: column {x!r} missing (columns: {', '.join(run.columns)})")
@@ -303,7 +320,7 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
     except ValueError:
         raise
     try:
-        model, sel = calibrate_recordings(recs, compensate=compensate, lag=lag)
+        model, sel = calibrate_recordings(recs, compensate=compensate, lag=lag, rail=_divider_rail(runs[0], x))
     except ValueError as exc:
         names = ", ".join(str(r.path) for r in runs)
         raise ValueError(f"{names}: {x} and {ref}: {exc}") from None

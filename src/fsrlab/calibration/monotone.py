@@ -57,13 +57,15 @@ def readout_variable(x, name: str, sign: int, adc: float | None) -> np.ndarray:
     sign : {1, -1}
         +1 when the readout rises with force.
     adc : float or None
-        ADC full scale of the counts. [counts]
+        Full scale of the readout: an ADC's largest count, or a divider's supply for its voltage. [unit
+        of the readout]
     """
     x = np.asarray(x, dtype=float)
     if name == "readout":
         return sign * x
     if name == "conductance" and adc:
-        c = np.clip(x, 0.5, adc - 0.5)  # half a count off each rail: the ratio stays finite
+        eps = adc / 2046.0  # half a count of a 10-bit ADC off each rail: the ratio stays finite
+        c = np.clip(x, eps, adc - eps)
         return c / (adc - c) if sign > 0 else (adc - c) / c
 
     raise ValueError(f"variable: must be one of {', '.join(VARIABLES)} (conductance only for ADC counts), got {name!r}")
