@@ -210,12 +210,7 @@ def calibrate_cmd(
         fail(f"must be one of {', '.join(_MODELS)}; got {model!r}", "--model")
     if folds < 2:
         fail(f"must be >= 2, got {folds}", "--folds")
-    lag_value: float | str = "auto"
-    if lag != "auto":
-        try:
-            lag_value = number(lag)
-        except typer.BadParameter as exc:
-            fail(f"must be auto or a lag in seconds such as 0.02, got {lag!r} ({exc.message})", "--lag")
+    lag_value = _lag_option(lag)
     warnings: list[str] = []
     run = load_run_warned(run_file, skip_bad_rows, warnings)
     if x not in run and x != "c_fsr_farad":
@@ -300,6 +295,19 @@ def calibrate_cmd(
         console.print(f"wrote {output}")
 
 
+def _lag_option(lag: str) -> float | str:
+    """``--lag``: "auto" or a finite number of seconds (one line naming the option otherwise)."""
+    if lag == "auto":
+        return lag
+    try:
+        value = number(lag)
+    except typer.BadParameter as exc:
+        fail(f"must be auto or a lag in seconds such as 0.02, got {lag!r} ({exc.message})", "--lag")
+    if not math.isfinite(value):
+        fail(f"must be auto or a finite lag in seconds, got {lag!r}", "--lag")
+    return value
+
+
 def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, compensate: bool, unit: str | None,
                         lag: str, skip_bad_rows: bool, output: Path | None, json_out: bool, fall_back: bool) -> bool:
     """``fsrlab calibrate`` by held-out scoring (:func:`fsrlab.calibration.heldout_runs.calibrate_runs`).
@@ -328,13 +336,8 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
                        "held-out scoring needs: calibrated by cross-validation inside the run (--method cv)", err=True)
             return False
     lag_rows: int | str = "auto"
-    if lag != "auto":
-        try:
-            lag_s = number(lag)
-        except typer.BadParameter as exc:
-            fail(f"must be auto or a lag in seconds such as 0.02, got {lag!r} ({exc.message})", "--lag")
-        if not math.isfinite(lag_s):
-            fail(f"must be auto or a finite lag in seconds, got {lag!r}", "--lag")
+    lag_s = _lag_option(lag)
+    if lag_s != "auto":
         first = runs[0]
         step = float(np.median(np.diff(first["time_s"]))) if "time_s" in first and first.n_rows > 1 else 1.0
         lag_rows = int(round(lag_s / step)) if step > 0 else 0
