@@ -38,8 +38,8 @@ TIME_UNITS = {k: 1.0 / v for k, v in _PER_SECOND.items()}
 #: The international pound (0.45359237 kg exactly, 1959 agreement; NIST SP 811 B.8). [kg]
 _POUND_KG = 0.45359237
 #: Newtons per unit of a force column; gram- and kilogram-force and lbf through the standard gravity. [N]
-_FORCE = {"N": (1.0, 1.0), "mN": (1.0, 1e3), "g": (STANDARD_GRAVITY, 1e3), "kg": (STANDARD_GRAVITY, 1.0),
-          "lbf": (_POUND_KG * STANDARD_GRAVITY, 1.0)}  # (times, divided by): one rounding for g and mN
+_FORCE = {"g": (STANDARD_GRAVITY, 1e3), "kg": (STANDARD_GRAVITY, 1.0), "N": (1.0, 1.0),
+          "lbf": (_POUND_KG * STANDARD_GRAVITY, 1.0), "mN": (1.0, 1e3)}  # (times, divided by): one rounding for g and mN
 FORCE_UNITS = {k: m / d for k, (m, d) in _FORCE.items()}
 #: Readout units kept as they are: option spelling -> unit written to the sidecar.
 READING_UNITS = {"counts": "count", "V": "V", "mV": "mV", "ohm": "Ω", "kohm": "kΩ"}
@@ -261,7 +261,7 @@ _UNIT_WORDS = {
 
 
 def _tokens(text: str) -> set[str]:
-    spaced = re.sub(r"([a-z])([A-Z])", r"\1 \2", text).lower()
+    spaced = re.sub(r"([a-z]{2,})([A-Z])", r"\1 \2", text).lower()  # sensorValue, forceN; not mV, kOhm
     return set(re.findall(r"[a-zµμω]+", spaced)) | set(re.findall(r"[a-z]+\d+", spaced))
 
 
@@ -634,7 +634,8 @@ def import_foreign(sensor: str | os.PathLike, reference: str | os.PathLike | Non
         if rate is not None and not (np.isfinite(rate) and rate > 0):
             raise ValueError(f"{name}: must be > 0 Hz, got {rate:g}")
     if reference is None and (reference_time is not None or reference_rate_hz is not None):
-        raise ValueError("reference: a reference time or rate is given without a reference file")
+        raise ValueError(f"{'reference_time' if reference_time is not None else 'reference_rate_hz'}: given "
+                         "without a reference file")
     if not np.isfinite(offset_s):
         raise ValueError(f"offset_s: must be a finite time, got {offset_s!r}")
     notes: list[str] = []

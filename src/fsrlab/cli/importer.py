@@ -19,8 +19,8 @@ _ROLE_OPTIONS = {"time": "--time (or --rate)", "reading": "--reading", "force": 
                  "reference_time": "--reference-time (or --reference-rate)", "offset": "--offset-s"}
 _PARAMETERS = {"time_unit": "--time-unit", "reference_time_unit": "--reference-time-unit",
                "reading_unit": "--reading-unit", "force_unit": "--force-unit", "rate_hz": "--rate",
-               "reference_rate_hz": "--reference-rate", "offset_s": "--offset-s", "skip_lines": "--skip-lines",
-               "reference": "--reference", "output": "--output"}
+               "reference_rate_hz": "--reference-rate", "reference_time": "--reference-time",
+               "offset_s": "--offset-s", "skip_lines": "--skip-lines", "output": "--output"}
 
 
 def _check_output(output: Path, inputs: list[Path], overwrite: bool) -> None:
@@ -95,19 +95,21 @@ def import_cmd(
         if not path.exists():
             fail(f"{path} does not exist", option)
     try:
-        with option_names(_PARAMETERS):
-            imported = import_foreign(sensor, reference, time=time, time_unit=time_unit, rate_hz=rate,
-                                      reading=reading, reading_unit=reading_unit, force=force,
-                                      force_unit=force_unit, reference_time=reference_time,
-                                      reference_time_unit=reference_time_unit, reference_rate_hz=reference_rate,
-                                      offset_s=offset, header=header, skip_lines=skip_lines)
-    except ForeignFormatError as exc:
+        imported = import_foreign(sensor, reference, time=time, time_unit=time_unit, rate_hz=rate, reading=reading,
+                                  reading_unit=reading_unit, force=force, force_unit=force_unit,
+                                  reference_time=reference_time, reference_time_unit=reference_time_unit,
+                                  reference_rate_hz=reference_rate, offset_s=offset, header=header,
+                                  skip_lines=skip_lines)
+    except ForeignFormatError as exc:  # a file's problem: file, line, column, and the option that settles it
         hint = f" ({_ROLE_OPTIONS[exc.role]})" if exc.role in _ROLE_OPTIONS else ""
         raise ValueError(f"{exc}{hint}") from None
+    except ValueError as exc:  # a parameter's problem: its option's name
+        with option_names(_PARAMETERS):
+            raise exc from None
     except OSError as exc:
         raise ValueError(f"cannot read '{exc.filename or sensor}': {exc.strerror or exc}") from None
     with option_names(_PARAMETERS):
-        write_imported(imported, output, overwrite=overwrite)
+        write_imported(imported, output, overwrite=overwrite)  # an OSError names the run or its sidecar
     summary = {"output": str(output), "rows": imported.rows, "matched": imported.matched,
                "columns": list(imported.columns), "units": imported.units, "mapping": imported.mapping,
                "rate_hz": imported.rate_hz, "offset_s": imported.offset_s, "sources": imported.sources,
