@@ -77,7 +77,7 @@ def import_cmd(
 
     \b
       fsrlab import examples/foreign_fsr.csv -o run.csv
-      fsrlab import examples/foreign_fsr.csv --reference examples/foreign_loadcell.csv --offset-s 0 -o run.csv --json
+      fsrlab import examples/foreign_fsr.csv --reference examples/foreign_loadcell.csv --time time_ms --force force_N -o run.csv --json
     """
     from fsrlab.foreign import ForeignFormatError, import_foreign, write_imported
 
