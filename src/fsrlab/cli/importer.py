@@ -1,7 +1,7 @@
 """``fsrlab import``: a foreign CSV (a user's own sketch, data logger, spreadsheet) made into a run.
 
-Thin: the options go to :func:`fsrlab.foreign.import_foreign`, the run is written by
-:func:`fsrlab.foreign.write_imported`; this module checks the output path and renders.
+Thin: the options go to :func:`fsrlab.io.foreign.import_foreign`, the run is written by
+:func:`fsrlab.io.foreign.write_imported`; this module checks the output path and renders.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli._common import emit_json, fail, hertz, option_names, seconds
+from fsrlab.cli.options import check_out, emit_json, fail, hertz, option_names, seconds
 
 # The option a user gives to settle a question about a column (ForeignFormatError.role).
 _ROLE_OPTIONS = {"time": "--time (or --rate)", "reading": "--reading", "force": "--force",
@@ -23,23 +23,15 @@ _PARAMETERS = {"time_unit": "--time-unit", "reference_time_unit": "--reference-t
                "offset_s": "--offset-s", "skip_lines": "--skip-lines", "output": "--output"}
 
 
-def _check_output(output: Path, inputs: list[Path], overwrite: bool) -> None:
-    from fsrlab.runformat import sidecar_path
+def _check_inputs(output: Path, inputs: list[Path]) -> None:
+    """The run and its sidecar are written beside the inputs, never over one of them."""
+    from fsrlab.io.schema import sidecar_path
 
     for target in (output, sidecar_path(output)):
         for source in inputs:
             if os.path.lexists(source) and os.path.lexists(target) and os.path.samefile(source, target) \
                     or target.resolve() == source.resolve():
                 fail(f"{target} is the input {source}; the run is written beside it, never over it", "--output")
-    if output.is_dir():
-        fail(f"{output} is a directory; give the run's CSV file, e.g. {output / 'run.csv'}", "--output")
-    if not overwrite:
-        for existing in (output, sidecar_path(output)):
-            if os.path.lexists(existing):
-                fail(f"{existing} exists; pass --overwrite to replace it", "--output")
-    parent = output.parent if str(output.parent) else Path(".")
-    if not parent.is_dir():
-        fail(f"directory {parent} does not exist", "--output")
 
 
 @app.command("import")
@@ -79,10 +71,11 @@ def import_cmd(
       fsrlab import examples/foreign_fsr.csv -o run.csv
       fsrlab import examples/foreign_fsr.csv --reference examples/foreign_loadcell.csv --time time_ms --force force_N -o run.csv --json
     """
-    from fsrlab.foreign import ForeignFormatError, import_foreign, write_imported
+    from fsrlab.io.foreign import ForeignFormatError, import_foreign, write_imported
 
     inputs = [sensor] + ([reference] if reference is not None else [])
-    _check_output(output, inputs, overwrite)
+    _check_inputs(output, inputs)
+    check_out(output, overwrite, option="--output")
     if rate is not None and not rate > 0:
         fail(f"must be > 0 Hz, got {rate:g}", "--rate")
     if reference_rate is not None and not reference_rate > 0:

@@ -1,22 +1,18 @@
-"""Foreign CSV files made into runs: a user's own Arduino sketch, data logger or spreadsheet export.
+"""Foreign CSV files made into runs: which column is which, their units, two files aligned, the run written.
 
-:func:`read_table` reads the text (UTF-8, UTF-16 with its BOM, or Latin-1), leaves out blank and
-``#`` comment lines, sniffs the delimiter (tab, semicolon, comma, or runs of white space) and the
-decimal comma, and tells a header row (and a units row under it) from data. :func:`import_foreign`
-finds or takes the time, readout and force columns of one file, or of two (a sensor file and a
-reference file from another logger, aligned on their time stamps by :func:`interpolate_reference`),
-converts them (time to seconds, force to newtons with the standard gravity of :mod:`fsrlab.units`)
+:func:`import_foreign` reads one file, or two (a sensor file and a reference file from another
+logger), with :func:`fsrlab.io.foreign_read.read_table`; finds or takes the time, readout and force
+columns; converts them (time to seconds, force to newtons with the standard gravity of
+:mod:`fsrlab.units`); aligns the reference on the sensor's time stamps (:func:`interpolate_reference`)
 and returns the columns ``time_s`` [s], ``reading`` [its own unit] and ``force_n`` [N] with the
 sidecar describing where they came from; :func:`write_imported` writes them through
-:func:`fsrlab.runwriter.write_run`. Every problem in a file is a :class:`ForeignFormatError` of
+:func:`fsrlab.io.runwriter.write_run`. Every problem in a file is a :class:`ForeignFormatError` of
 one line naming the file, the line (1-based, as a text editor shows it) and the column.
 (docs/data-format.md, "Foreign files")
 """
 
 from __future__ import annotations
 
-import csv
-import hashlib
 import os
 import re
 from dataclasses import dataclass, field
@@ -26,6 +22,8 @@ from typing import Sequence
 
 import numpy as np
 
+from fsrlab.io.foreign_read import ForeignFormatError, Table, is_number, read_table
+from fsrlab.io.runcells import COLUMN_LIMITS, OTHER_LIMIT
 from fsrlab.units import STANDARD_GRAVITY
 
 __all__ = ["TIME_UNITS", "FORCE_UNITS", "READING_UNITS", "ForeignFormatError", "Table", "read_table",
@@ -47,32 +45,9 @@ READING_UNITS = {"counts": "count", "V": "V", "mV": "mV", "ohm": "Ω", "kohm": "
 _ALIASES = {"µs": "us", "μs": "us", "sec": "s", "count": "counts", "ω": "ohm", "ohms": "ohm", "kω": "kohm",
             "kohms": "kohm", "gf": "g", "kgf": "kg"}
 
-# What a run can hold in these columns (fsrlab.runcells.COLUMN_LIMITS; "reading" is not listed there
-# and gets its OTHER_LIMIT): a cell beyond is refused here, where its line is known.
-_LIMITS = {"time_s": 1e15, "reading": 1e100, "force_n": 1e9}
-
-_NUMBER = re.compile(r"^[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?$")
-_COMMA_NUMBER = re.compile(r"^[+-]?\d*,\d+(?:[eE][+-]?\d+)?$")
-_NOT_FINITE = re.compile(r"^[+-]?(?:nan|inf|infinity)$", re.IGNORECASE)
-_DELIMITERS = ("\t", ";", ",", " ")  # in this order of preference when several split the lines alike
-_DELIMITER_NAMES = {"\t": "tab", ";": "semicolon", ",": "comma", " ": "white space"}
-
-
-class ForeignFormatError(ValueError):
-    """A foreign file that cannot be imported; one line naming the file, the line and the column.
-
-    Parameters
-    ----------
-    message : str
-        The line.
-    role : str, optional
-        The mapping the user can give to settle it (``"time"``, ``"reading"``, ``"force"``,
-        ``"reference_time"``), when the problem is which column is which.
-    """
-
-    def __init__(self, message: str, role: str | None = None):
-        super().__init__(message)
-        self.role = role
+# What a run can hold in these columns ("reading" is not listed in COLUMN_LIMITS and gets its
+# OTHER_LIMIT): a cell beyond is refused here, where its line is known.
+_LIMITS = {"time_s": COLUMN_LIMITS["time_s"][1], "reading": OTHER_LIMIT, "force_n": COLUMN_LIMITS["force_n"][1]}
 
 
 def _unit(value: str | None, table: dict, parameter: str) -> str | None:
@@ -85,155 +60,6 @@ def _unit(value: str | None, table: dict, parameter: str) -> str | None:
     if key is None:
         raise ValueError(f"{parameter}: {text!r} is not one of {', '.join(table)}")
     return key
-
-
-@dataclass
-class Table:
-    """The cells of a foreign file, as text.
-
-    Parameters
-    ----------
-    path : Path
-        The file.
-    names : list of str
-        Header name of each column ("" without a header, or for an empty header cell).
-    header_line : int or None
-        File line of the header (1-based), None without one.
-    units_row : list of str
-        The units row under the header (e.g. ``s;N;V``), empty when there is none.
-    cells : list of list of str
-        Data rows, their cells stripped.
-    lines : list of int
-        File line of each data row (1-based, as a text editor counts, comments and blanks included).
-    delimiter : str
-        ``","``, ``";"``, ``"\\t"`` or ``" "`` (runs of white space).
-    decimal : str
-        ``"."`` or ``","`` (decimal comma).
-    encoding : str
-        ``"utf-8"``, ``"utf-16"`` or ``"latin-1"``.
-    """
-
-    path: Path
-    names: list[str]
-    header_line: int | None
-    units_row: list[str]
-    cells: list[list[str]]
-    lines: list[int]
-    delimiter: str
-    decimal: str
-    encoding: str
-
-    @property
-    def n_columns(self) -> int:
-        """Columns of the widest row or of the header."""
-        return max([len(self.names), *(len(r) for r in self.cells)], default=0)
-
-    def label(self, j: int) -> str:
-        """Column ``j`` (0-based) as a message names it: ``column 'fsr' (2)`` or ``column 2``."""
-        name = self.names[j] if j < len(self.names) else ""
-        return f"column {name!r} ({j + 1})" if name else f"column {j + 1}"
-
-    def describe(self) -> dict:
-        """How the file was read, for the sidecar and ``--json``."""
-        return {"file": str(self.path), "delimiter": _DELIMITER_NAMES[self.delimiter], "decimal": self.decimal,
-                "header_line": self.header_line, "rows": len(self.cells), "encoding": self.encoding,
-                "sha256": hashlib.sha256(self.path.read_bytes()).hexdigest()}
-
-
-def _decode(path: Path) -> tuple[str, str]:
-    raw = path.read_bytes()
-    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):  # a spreadsheet's "Unicode text"
-        return raw.decode("utf-16"), "utf-16"
-    try:
-        text, encoding = raw.decode("utf-8-sig"), "utf-8"
-    except UnicodeDecodeError:
-        text, encoding = raw.decode("latin-1"), "latin-1"  # a Windows logger's °C or µ: never fails
-    if "\x00" in text:
-        raise ForeignFormatError(f"{path}: not a text file (NUL bytes)")
-    return text, encoding
-
-
-def _split(line: str, delimiter: str) -> list[str]:
-    if delimiter == " ":
-        return line.split()
-    return [c.strip() for c in next(csv.reader([line], delimiter=delimiter))]
-
-
-def _sniff(lines: Sequence[str]) -> str:
-    """The delimiter that splits most lines into the same number (> 1) of cells."""
-    best, best_key = ",", (0.0, 0)
-    for rank, d in enumerate(_DELIMITERS):
-        counts = [len(_split(ln, d)) for ln in lines]
-        values, freq = np.unique(counts, return_counts=True)
-        k = int(np.argmax(freq))
-        if values[k] > 1:
-            key = (freq[k] / len(counts), -rank)
-            if key > best_key:
-                best, best_key = d, key
-    return best
-
-
-def _is_number(cell: str) -> bool:
-    return bool(_NUMBER.match(cell) or _COMMA_NUMBER.match(cell) or _NOT_FINITE.match(cell))
-
-
-def read_table(path: str | os.PathLike, header: bool | None = None, skip_lines: int = 0) -> Table:
-    """Read a foreign CSV file's cells.
-
-    Parameters
-    ----------
-    path : str or path-like
-        The file.
-    header : bool, optional
-        Whether the first line read is a header; None: it is when one of its cells is not a number.
-    skip_lines : int
-        Lines to leave out at the top (a logger's preamble), before comments and blanks are. [lines]
-
-    Returns
-    -------
-    Table
-
-    Raises
-    ------
-    ForeignFormatError
-        An empty file (no data rows), a file that is not text, duplicate header names.
-    OSError
-        The file cannot be read.
-    """
-    p = Path(path)
-    if skip_lines < 0:
-        raise ValueError(f"skip_lines: must be >= 0, got {skip_lines}")
-    text, encoding = _decode(p)
-    numbered = [(k, ln) for k, ln in enumerate(re.split(r"\r\n|\r|\n", text), start=1)
-                if k > skip_lines and ln.strip() and not ln.lstrip().startswith("#")]
-    if not numbered:
-        raise ForeignFormatError(f"{p}: empty file (no header and no data rows"
-                                 + (f" after the {skip_lines} skipped lines)" if skip_lines else ")"))
-    delimiter = _sniff([ln for _, ln in numbered[:50]])
-    rows = [(k, _split(ln, delimiter)) for k, ln in numbered]
-    if header is None:
-        header = any(c and not _is_number(c) for c in rows[0][1])
-    names: list[str] = []
-    header_line, units_row = None, []
-    if header:
-        header_line, names = rows[0][0], rows[0][1]
-        rows = rows[1:]
-        seen: dict[str, int] = {}
-        for j, name in enumerate(names):
-            if name and name in seen:
-                raise ForeignFormatError(f"{p}: line {header_line} (header), column {name!r} ({seen[name] + 1} and "
-                                         f"{j + 1}): the same header name twice; each column needs its own name")
-            seen.setdefault(name, j)
-        # A units row under the header ("s;N;V"): no cell of it is a number.
-        if rows and any(rows[0][1]) and not any(_is_number(c) for c in rows[0][1] if c):
-            units_row = rows[0][1]
-            rows = rows[1:]
-    if not rows:
-        raise ForeignFormatError(f"{p}: no data rows" + (f" (line {header_line} is the header)" if header_line else ""))
-    decimal = "," if any(_COMMA_NUMBER.match(c) for _, r in rows[:200] for c in r) else "."
-    return Table(path=p, names=names, header_line=header_line, units_row=units_row,
-                 cells=[r for _, r in rows], lines=[k for k, _ in rows], delimiter=delimiter, decimal=decimal,
-                 encoding=encoding)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -376,43 +202,16 @@ def _choose_headless(table: Table, roles, out, taken) -> dict[str, tuple[int, st
 # Cells to numbers
 # ------------------------------------------------------------------------------------------------
 
-def _where(table: Table, i: int, j: int) -> str:
-    return f"{table.path}: line {table.lines[i]}, {table.label(j)}"
-
-
-def _cell(table: Table, i: int, j: int) -> str:
-    row = table.cells[i]
-    if j >= len(row):
-        raise ForeignFormatError(f"{_where(table, i, j)}: missing cell (the line has {len(row)} cells, "
-                                 f"{_DELIMITER_NAMES[table.delimiter]}-separated)")
-    return row[j]
-
-
-def _number(table: Table, i: int, j: int, text: str, expected: str) -> float:
-    cell = text.replace(",", ".") if table.decimal == "," else text
-    if _NOT_FINITE.match(cell):
-        raise ForeignFormatError(f"{_where(table, i, j)}: {text!r} is not a finite number "
-                                 "(leave the cell empty for a missing value)")
-    if not _NUMBER.match(cell):
-        point = "decimal comma" if table.decimal == "," else "decimal point"
-        raise ForeignFormatError(f"{_where(table, i, j)}: non-numeric cell {text!r}, expected {expected} "
-                                 f"(a plain number, {point})")
-    value = float(cell)
-    if not np.isfinite(value):
-        raise ForeignFormatError(f"{_where(table, i, j)}: {text!r} is beyond any finite number")
-    return value
-
-
 def _values(table: Table, j: int, factor: tuple[float, float], column: str, unit: str) -> np.ndarray:
     """A value column in its run unit; an empty cell is missing (NaN)."""
     out = np.full(len(table.cells), np.nan)
     limit = _LIMITS[column]
     for i in range(len(table.cells)):
-        text = _cell(table, i, j)
+        text = table.cell(i, j)
         if text:
-            out[i] = _number(table, i, j, text, f"a number in {unit}") * factor[0] / factor[1]
+            out[i] = table.number(i, j, text, f"a number in {unit}") * factor[0] / factor[1]
             if abs(out[i]) > limit:
-                raise ForeignFormatError(f"{_where(table, i, j)}: {text} {unit} is beyond what a run's {column} can "
+                raise ForeignFormatError(f"{table.where(i, j)}: {text} {unit} is beyond what a run's {column} can "
                                          f"hold (±{limit:g}; docs/data-format.md)")
     return out
 
@@ -437,24 +236,24 @@ def _times(table: Table, j: int, unit: str) -> tuple[np.ndarray, str]:
     t = np.empty(len(table.cells))
     kind = ""
     for i in range(len(table.cells)):
-        text = _cell(table, i, j)
+        text = table.cell(i, j)
         if not text:
-            raise ForeignFormatError(f"{_where(table, i, j)}: empty cell, expected a time (every row needs one)")
-        stamp = None if _is_number(text) else _clock(text)
+            raise ForeignFormatError(f"{table.where(i, j)}: empty cell, expected a time (every row needs one)")
+        stamp = None if is_number(text) else _clock(text)
         if not kind:
             kind = "clock" if stamp is not None else "number"
         if kind == "clock":
             if stamp is None:
-                raise ForeignFormatError(f"{_where(table, i, j)}: {text!r} is not a date-time or time of day "
+                raise ForeignFormatError(f"{table.where(i, j)}: {text!r} is not a date-time or time of day "
                                          f"like the column's first ({table.cells[0][j]!r})")
             t[i] = stamp
         else:
-            t[i] = _number(table, i, j, text, f"a time in {unit}") / _PER_SECOND[unit]
+            t[i] = table.number(i, j, text, f"a time in {unit}") / _PER_SECOND[unit]
             if abs(t[i]) > _LIMITS["time_s"]:
-                raise ForeignFormatError(f"{_where(table, i, j)}: {text} {unit} is beyond what a run's time_s can hold")
+                raise ForeignFormatError(f"{table.where(i, j)}: {text} {unit} is beyond what a run's time_s can hold")
         if i and not t[i] > t[i - 1]:
-            raise ForeignFormatError(f"{_where(table, i, j)}: time does not increase ({text!r} after "
-                                     f"{_cell(table, i - 1, j)!r} on line {table.lines[i - 1]}); rows must be in "
+            raise ForeignFormatError(f"{table.where(i, j)}: time does not increase ({text!r} after "
+                                     f"{table.cell(i - 1, j)!r} on line {table.lines[i - 1]}); rows must be in "
                                      "time order, each at its own time")
     return t, ("date-time" if kind == "clock" else unit)
 
@@ -708,7 +507,7 @@ def _force(table: Table, choice: tuple[int, str], unit: str | None, notes: list,
 
 
 def write_imported(imported: Imported, path: str | os.PathLike, overwrite: bool = False) -> Path:
-    """Write an import as a run (``NAME.csv`` and ``NAME.meta.json``) with :func:`fsrlab.runwriter.write_run`.
+    """Write an import as a run (``NAME.csv`` and ``NAME.meta.json``) with :func:`fsrlab.io.runwriter.write_run`.
 
     Parameters
     ----------
@@ -730,8 +529,8 @@ def write_imported(imported: Imported, path: str | os.PathLike, overwrite: bool 
     FileExistsError
         The run exists and ``overwrite`` is False.
     """
-    from fsrlab.runformat import sidecar_path
-    from fsrlab.runwriter import write_run
+    from fsrlab.io.runwriter import write_run
+    from fsrlab.io.schema import sidecar_path
 
     out = Path(path)
     for target in (out, sidecar_path(out)):
