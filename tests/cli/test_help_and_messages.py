@@ -1,14 +1,17 @@
-"""Help text and error messages of `oscillator`, `decode`, `design`, `physics` and `paper`.
+"""Help text and error messages of `oscillator`, `decode`, `design`, `physics`, `paper` and `import`.
 
 References: the options' own help strings and the commands' docstrings (cli/oscillator.py,
-cli/physics.py, cli/report.py); the contract of docs/architecture.md (bad input: one line on stderr
-naming the option, exit code 2, plain numbers); the Python warnings format ("RuntimeWarning:").
+cli/physics.py, cli/report.py, cli/importer.py); the files shipped under examples/ (examples/README.md);
+the contract of docs/architecture.md (bad input: one line on stderr naming the option, exit code 2,
+plain numbers); the Python warnings format ("RuntimeWarning:").
 """
 
 from __future__ import annotations
 
 import json
 import re
+import shutil
+from pathlib import Path
 
 import pytest
 import typer
@@ -16,7 +19,8 @@ import typer
 from clirun import run_cli
 from fsrlab.cli import app
 
-COMMANDS = ("oscillator", "decode", "design", "physics", "paper")
+ROOT = Path(__file__).resolve().parents[2]
+COMMANDS = ("oscillator", "decode", "design", "physics", "paper", "import")
 
 
 def _command(name):
@@ -27,7 +31,7 @@ def _takes_a_number(param) -> bool:
     descriptor = param.type_descriptor
     annotation = descriptor.annotation
     numeric = annotation in (float, int) or str(annotation) in ("list[float]", "list[int]")
-    return not param.is_flag and (numeric or descriptor.parameter_info.parser is not None)
+    return not getattr(param, "is_flag", False) and (numeric or descriptor.parameter_info.parser is not None)
 
 
 def _help(name: str) -> str:
@@ -48,8 +52,8 @@ def test_every_numeric_option_shows_its_unit_in_help(name):
 
 
 def _examples(name: str) -> list[list[str]]:
-    """The example command lines of the help's description (its last paragraph before Options)."""
-    description = _help(name).split("\nOptions:")[0].rstrip()
+    """The example command lines of the help's description (its last paragraph before Arguments or Options)."""
+    description = _help(name).split("\nOptions:")[0].split("\nArguments:")[0].rstrip()
     last = description.split("\n\n")[-1]
     return [line.split()[1:] for line in last.splitlines() if line.strip().startswith("fsrlab ")]
 
@@ -67,6 +71,7 @@ EXAMPLES = [" ".join(args) for name in COMMANDS if name != "paper" for args in _
 
 @pytest.mark.parametrize("example", EXAMPLES)
 def test_examples_run(example, tmp_path, monkeypatch):
+    shutil.copytree(ROOT / "examples", tmp_path / "examples")  # the examples name files under examples/
     monkeypatch.chdir(tmp_path)
     code, out, err = run_cli(example.split())
     assert (code, err) == (0, ""), err

@@ -346,21 +346,21 @@ def window_ms_option(window_s: float) -> int:
     return int(ms)
 
 
-def check_out(out: Path, overwrite: bool) -> None:
+def check_out(out: Path, overwrite: bool, option: str = "--out") -> None:
     """Refuse an output that exists (unless ``overwrite``) or cannot be written, before any device is touched."""
     from fsrlab.io.runformat import sidecar_path
 
     if out.is_dir():
-        fail(f"{out} is a directory; give the run's CSV file, e.g. {out / 'run.csv'}", "--out")
+        fail(f"{out} is a directory; give the run's CSV file, e.g. {out / 'run.csv'}", option)
     if not overwrite:
         for existing in (out, sidecar_path(out)):
             if os.path.lexists(existing):
-                fail(f"{existing} exists; pass --overwrite to replace the run", "--out")
+                fail(f"{existing} exists; pass --overwrite to replace the run", option)
     parent = out.parent if str(out.parent) else Path(".")
     if not parent.is_dir():
-        fail(f"directory {parent} does not exist", "--out")
+        fail(f"directory {parent} does not exist", option)
     if not os.access(parent, os.W_OK):
-        fail(f"cannot write in directory {parent} (permission denied)", "--out")
+        fail(f"cannot write in directory {parent} (permission denied)", option)
 
 
 def fmt_value(value: float, spec: str) -> str:

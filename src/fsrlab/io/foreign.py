@@ -1,0 +1,550 @@
+"""Foreign CSV files made into runs: which column is which, their units, two files aligned, the run written.
+
+:func:`import_foreign` reads one file, or two (a sensor file and a reference file from another
+logger), with :func:`fsrlab.io.foreign_read.read_table`; finds or takes the time, readout and force
+columns; converts them (time to seconds, force to newtons with the standard gravity of
+:mod:`fsrlab.units`); aligns the reference on the sensor's time stamps (:func:`interpolate_reference`)
+and returns the columns ``time_s`` [s], ``reading`` [its own unit] and ``force_n`` [N] with the
+sidecar describing where they came from; :func:`write_imported` writes them through
+:func:`fsrlab.io.runwriter.write_run`. Every problem in a file is a :class:`ForeignFormatError` of
+one line naming the file, the line (1-based, as a text editor shows it) and the column.
+(docs/data-format.md, "Foreign files")
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from dataclasses import dataclass, field
+from datetime import datetime, time as clock_time, timezone
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from fsrlab.io.foreign_read import ForeignFormatError, Table, is_number, read_table
+from fsrlab.io.runcells import COLUMN_LIMITS, OTHER_LIMIT
+from fsrlab.units import STANDARD_GRAVITY
+
+__all__ = ["TIME_UNITS", "FORCE_UNITS", "READING_UNITS", "ForeignFormatError", "Table", "read_table",
+           "interpolate_reference", "Imported", "import_foreign", "write_imported"]
+
+#: Units of a time column per second: a cell is divided by it (50 ms -> 0.05 s, correctly rounded). [1/s]
+_PER_SECOND = {"s": 1.0, "ms": 1e3, "us": 1e6}
+#: Seconds per unit of a time column. [s]
+TIME_UNITS = {k: 1.0 / v for k, v in _PER_SECOND.items()}
+#: The international pound (0.45359237 kg exactly, 1959 agreement; NIST SP 811 B.8). [kg]
+_POUND_KG = 0.45359237
+#: Newtons per unit of a force column; gram- and kilogram-force and lbf through the standard gravity. [N]
+_FORCE = {"g": (STANDARD_GRAVITY, 1e3), "kg": (STANDARD_GRAVITY, 1.0), "N": (1.0, 1.0),
+          "lbf": (_POUND_KG * STANDARD_GRAVITY, 1.0), "mN": (1.0, 1e3)}  # (times, divided by): one rounding for g and mN
+FORCE_UNITS = {k: m / d for k, (m, d) in _FORCE.items()}
+#: Readout units kept as they are: option spelling -> unit written to the sidecar.
+READING_UNITS = {"counts": "count", "V": "V", "mV": "mV", "ohm": "Ω", "kohm": "kΩ"}
+
+_ALIASES = {"µs": "us", "μs": "us", "sec": "s", "count": "counts", "ω": "ohm", "ohms": "ohm", "kω": "kohm",
+            "kohms": "kohm", "gf": "g", "kgf": "kg"}
+
+# What a run can hold in these columns ("reading" is not listed in COLUMN_LIMITS and gets its
+# OTHER_LIMIT): a cell beyond is refused here, where its line is known.
+_LIMITS = {"time_s": COLUMN_LIMITS["time_s"][1], "reading": OTHER_LIMIT, "force_n": COLUMN_LIMITS["force_n"][1]}
+
+
+def _unit(value: str | None, table: dict, parameter: str) -> str | None:
+    """The canonical spelling of a unit of ``table`` (case-insensitive, a few aliases), or ValueError."""
+    if value is None:
+        return None
+    text = str(value).strip()
+    lower = {k.lower(): k for k in table}
+    key = lower.get(text.lower()) or lower.get(_ALIASES.get(text.lower(), "").lower())
+    if key is None:
+        raise ValueError(f"{parameter}: {text!r} is not one of {', '.join(table)}")
+    return key
+
+
+# ------------------------------------------------------------------------------------------------
+# Which column is which
+# ------------------------------------------------------------------------------------------------
+
+_WORDS = {
+    "time": ({"time", "timestamp", "elapsed", "millis", "micros", "datetime", "date", "clock", "ms", "us", "µs",
+              "μs", "msec", "usec"}, {"s", "sec", "secs", "seconds", "t"}),
+    "force": ({"force", "load", "loadcell", "weight", "mass", "reference", "ref", "hx711", "newton", "newtons",
+               "gram", "grams", "lbf", "lbs", "kgf", "gf", "kilograms"}, {"n", "g", "kg", "mn", "lb", "f"}),
+    "reading": ({"fsr", "analog", "analogread", "adc", "reading", "raw", "sensor", "counts", "voltage", "volts",
+                 "resistance", "value", "val", "velostat", "pressure", "a0", "a1", "a2", "a3", "a4", "a5", "a6", "a7"},
+                {"v", "mv", "ohm", "ohms", "kohm", "ω", "kω"}),
+}
+_INDEX_NAMES = {"n", "i", "index", "sample", "no", "nr", "row", "idx", "#", "id"}
+_UNIT_WORDS = {
+    "time": [("us", {"us", "µs", "μs", "micros", "usec", "microseconds"}), ("ms", {"ms", "millis", "msec", "milliseconds"}),
+             ("s", {"s", "sec", "secs", "seconds"})],
+    "force": [("mN", {"mn"}), ("kg", {"kg", "kgf", "kilograms"}), ("lbf", {"lbf", "lb", "lbs"}),
+              ("g", {"g", "gf", "gram", "grams"}), ("N", {"n", "newton", "newtons"})],
+    "reading": [("mV", {"mv"}), ("kohm", {"kohm", "kω", "kohms"}), ("ohm", {"ohm", "ohms", "ω", "resistance"}),
+                ("V", {"v", "volts", "voltage"}), ("counts", {"counts", "count", "adc", "analog", "analogread"})],
+}
+
+
+def _tokens(text: str) -> set[str]:
+    spaced = re.sub(r"([a-z]{2,})([A-Z])", r"\1 \2", text).lower()  # sensorValue, forceN; not mV, kOhm
+    return set(re.findall(r"[a-zµμω]+", spaced)) | set(re.findall(r"[a-z]+\d+", spaced))
+
+
+def _score(table: Table, j: int, role: str) -> int:
+    """How strongly column ``j``'s header (and units row) says ``role``: 2 per strong word, 1 per weak."""
+    name = table.names[j] if j < len(table.names) else ""
+    if _is_index(table, j):
+        return 0
+    if role == "time" and name.strip().lower() == "t":  # "t" alone; "t" among other words is weak
+        return 2
+    unit = table.units_row[j] if j < len(table.units_row) else ""
+    words = _tokens(f"{name} {unit}")
+    strong, weak = _WORDS[role]
+    return 2 * len(words & strong) + len(words & weak)
+
+
+def _is_index(table: Table, j: int) -> bool:
+    """A sample counter ("n", "index", "#"): never taken for a role unless given."""
+    return j < len(table.names) and table.names[j].strip().lower() in _INDEX_NAMES
+
+
+def _unit_from_header(table: Table, j: int, role: str) -> str | None:
+    name = table.names[j] if j < len(table.names) else ""
+    unit = table.units_row[j] if j < len(table.units_row) else ""
+    words = _tokens(f"{name} {unit}")
+    return next((u for u, spellings in _UNIT_WORDS[role] if words & spellings), None)
+
+
+def _resolve(table: Table, spec: str | int, what: str) -> int:
+    """The 0-based index of the column given by header name or 1-based number."""
+    text = str(spec).strip()
+    if text and text in table.names:  # header names are unique (read_table)
+        return table.names.index(text)
+    folded = [n.lower() for n in table.names]
+    if text and folded.count(text.lower()) == 1:
+        return folded.index(text.lower())
+    if text.isdigit() and 1 <= int(text) <= table.n_columns:
+        return int(text) - 1
+    where = f"line {table.header_line} (header)" if table.header_line else f"line {table.lines[0]}"
+    listing = ", ".join(f"{j + 1} {n!r}" if n else str(j + 1) for j, n in
+                        enumerate(table.names + [""] * (table.n_columns - len(table.names))))
+    raise ForeignFormatError(f"{table.path}: {where}: no column {text!r} for the {what} "
+                             f"(give a header name or a number 1..{table.n_columns}; columns: {listing})",
+                             role=what.replace(" ", "_"))
+
+
+def _increasing_column(table: Table, j: int) -> bool:
+    try:
+        t = np.array([float(r[j].replace(",", ".")) for r in table.cells])
+    except (ValueError, IndexError):
+        return False
+    return t.size > 1 and bool(np.all(np.diff(t) > 0))
+
+
+def _choose(table: Table, roles: Sequence[str], given: dict[str, str | int | None]) -> dict[str, tuple[int, str]]:
+    """Column of each role: (index, how it was chosen); a role not found is left out."""
+    out: dict[str, tuple[int, str]] = {}
+    for role in roles:
+        if given.get(role) is not None:
+            j = _resolve(table, given[role], role.replace("_", " "))
+            clash = next((r for r, (k, _) in out.items() if k == j), None)
+            if clash:
+                raise ForeignFormatError(f"{table.path}: {table.label(j)} is given as both the {clash.replace('_', ' ')} "
+                                         f"and the {role.replace('_', ' ')}", role=role)
+            out[role] = (j, "given")
+    taken = {j for j, _ in out.values()}
+    if table.header_line is None:
+        return _choose_headless(table, roles, out, taken)
+    for role in roles:
+        if role in out:
+            continue
+        kind = role.removeprefix("reference_")
+        scores = {j: _score(table, j, kind) for j in range(table.n_columns) if j not in taken and not _is_index(table, j)}
+        top = max(scores.values(), default=0)
+        best = [j for j, s in scores.items() if s == top]
+        if top >= 2 and len(best) == 1:
+            out[role] = (best[0], f"found: the header says {table.names[best[0]]!r}")
+        elif top >= 2:
+            raise ForeignFormatError(f"{table.path}: line {table.header_line} (header): "
+                                     f"{' and '.join(table.label(j) for j in best)} could each be the "
+                                     f"{kind}; say which", role=role)
+        elif kind in ("reading", "force") and len(scores) == 1 and (kind == "reading" or role == "force"
+                                                                      and "reading" not in roles):
+            j = next(iter(scores))
+            out[role] = (j, "found: the only column left")
+        else:
+            continue
+        taken.add(out[role][0])
+    return out
+
+
+def _choose_headless(table: Table, roles, out, taken) -> dict[str, tuple[int, str]]:
+    """Without a header: one column is the value; two are time and value when the first increases."""
+    free = [j for j in range(table.n_columns) if j not in taken]
+    value = "reading" if "reading" in roles else "force"
+    time_role = next((r for r in roles if r.endswith("time")), None)
+    if value in out and time_role in out:
+        return out
+    if value not in out and len(free) == 1:
+        out[value] = (free[0], "found: the only column (no header)")
+    elif (value not in out and time_role and time_role not in out and len(free) == 2
+          and _increasing_column(table, free[0])):
+        out[time_role] = (free[0], "found: the first column increases (no header)")
+        out[value] = (free[1], "found: the second column (no header)")
+    elif value not in out:
+        raise ForeignFormatError(f"{table.path}: line {table.lines[0]}: no header and {len(free)} columns: "
+                                 f"say which column (1..{table.n_columns}) is the {value}", role=value)
+    return out
+
+
+# ------------------------------------------------------------------------------------------------
+# Cells to numbers
+# ------------------------------------------------------------------------------------------------
+
+def _values(table: Table, j: int, factor: tuple[float, float], column: str, unit: str) -> np.ndarray:
+    """A value column in its run unit; an empty cell is missing (NaN)."""
+    out = np.full(len(table.cells), np.nan)
+    limit = _LIMITS[column]
+    for i in range(len(table.cells)):
+        text = table.cell(i, j)
+        if text:
+            out[i] = table.number(i, j, text, f"a number in {unit}") * factor[0] / factor[1]
+            if abs(out[i]) > limit:
+                raise ForeignFormatError(f"{table.where(i, j)}: {text} {unit} is beyond what a run's {column} can "
+                                         f"hold (±{limit:g}; docs/data-format.md)")
+    return out
+
+
+def _clock(text: str) -> float | None:
+    """Seconds of an ISO date-time (UTC when it has no zone) or of a time of day; None if neither."""
+    try:
+        stamp = datetime.fromisoformat(text)
+    except ValueError:
+        try:
+            t = clock_time.fromisoformat(text)
+        except ValueError:
+            return None
+        return t.hour * 3600 + t.minute * 60 + t.second + t.microsecond * 1e-6
+    if stamp.tzinfo is None:
+        stamp = stamp.replace(tzinfo=timezone.utc)
+    return stamp.timestamp()
+
+
+def _times(table: Table, j: int, unit: str) -> tuple[np.ndarray, str]:
+    """Time [s] of every row, strictly increasing: numbers in ``unit``, or date-times; and their kind."""
+    t = np.empty(len(table.cells))
+    kind = ""
+    for i in range(len(table.cells)):
+        text = table.cell(i, j)
+        if not text:
+            raise ForeignFormatError(f"{table.where(i, j)}: empty cell, expected a time (every row needs one)")
+        stamp = None if is_number(text) else _clock(text)
+        if not kind:
+            kind = "clock" if stamp is not None else "number"
+        if kind == "clock":
+            if stamp is None:
+                raise ForeignFormatError(f"{table.where(i, j)}: {text!r} is not a date-time or time of day "
+                                         f"like the column's first ({table.cells[0][j]!r})")
+            t[i] = stamp
+        else:
+            t[i] = table.number(i, j, text, f"a time in {unit}") / _PER_SECOND[unit]
+            if abs(t[i]) > _LIMITS["time_s"]:
+                raise ForeignFormatError(f"{table.where(i, j)}: {text} {unit} is beyond what a run's time_s can hold")
+        if i and not t[i] > t[i - 1]:
+            raise ForeignFormatError(f"{table.where(i, j)}: time does not increase ({text!r} after "
+                                     f"{table.cell(i - 1, j)!r} on line {table.lines[i - 1]}); rows must be in "
+                                     "time order, each at its own time")
+    return t, ("date-time" if kind == "clock" else unit)
+
+
+def interpolate_reference(t: np.ndarray, t_ref: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Reference values at the times ``t``, linear between neighbouring reference samples.
+
+    Parameters
+    ----------
+    t : array_like
+        Times at which the reference is wanted. [s]
+    t_ref : array_like
+        The reference's times, strictly increasing. [s]
+    values : array_like
+        The reference's values at ``t_ref`` (NaN: missing).
+
+    Returns
+    -------
+    ndarray
+        Same shape as ``t``: NaN outside ``[t_ref[0], t_ref[-1]]`` (no extrapolation) and between
+        two samples of which one is missing; at a reference sample's own time, its value.
+    """
+    t = np.asarray(t, dtype=float)
+    t_ref = np.asarray(t_ref, dtype=float)
+    values = np.asarray(values, dtype=float)
+    out = np.full(t.shape, np.nan)
+    if t_ref.size == 0:
+        return out
+    if t_ref.size == 1:
+        return np.where(t == t_ref[0], values[0], np.nan)
+    inside = (t >= t_ref[0]) & (t <= t_ref[-1])
+    k = np.clip(np.searchsorted(t_ref, t, side="right") - 1, 0, t_ref.size - 2)
+    w = (t - t_ref[k]) / (t_ref[k + 1] - t_ref[k])
+    with np.errstate(invalid="ignore"):
+        linear = values[k] + w * (values[k + 1] - values[k])
+    # At a sample's own time the neighbour does not matter (it may be missing).
+    linear = np.where(w == 0, values[k], np.where(w == 1, values[k + 1], linear))
+    out[inside] = linear[inside]
+    return out
+
+
+# ------------------------------------------------------------------------------------------------
+# The import
+# ------------------------------------------------------------------------------------------------
+
+@dataclass
+class Imported:
+    """A foreign file (or two) as the columns of a run.
+
+    Parameters
+    ----------
+    columns : dict of str to ndarray
+        ``time_s`` [s] (absent when neither a time column nor a rate was there), ``reading`` [its
+        unit], ``force_n`` [N] (absent when no force was found or given).
+    units : dict of str to str
+        Unit of each column.
+    mapping : dict
+        Per role (``time``, ``reading``, ``force``, ``reference_time``): ``file``, ``column`` (header
+        name or ""), ``index`` (1-based), ``unit`` and ``how`` (``given``, ``found: ...``), or for a
+        time from a rate ``rate_hz``.
+    sources : list of dict
+        How each file was read (:meth:`Table.describe`), sensor first.
+    rows : int
+        Rows of the run (the sensor file's data rows).
+    matched : int or None
+        Rows with a reference force from the reference file (None: one file).
+    rate_hz : float or None
+        The sample rate given, or the median rate of the time stamps. [Hz]
+    offset_s : float
+        Added to the reference's times. [s]
+    notes : list of str
+        What was assumed (a unit the header does not say).
+    """
+
+    columns: dict[str, np.ndarray]
+    units: dict[str, str]
+    mapping: dict[str, dict]
+    sources: list[dict]
+    rows: int
+    matched: int | None
+    rate_hz: float | None
+    offset_s: float = 0.0
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def metadata(self) -> dict:
+        """The run's sidecar: units, origin (the source files) and ``import`` (mapping, rate, counts)."""
+        files = [s["file"] for s in self.sources]
+        origin = f"fsrlab import: {files[0]}" + (f", reference {files[1]}" if len(files) > 1 else "")
+        return {"units": dict(self.units), "origin": origin,
+                "import": {"sources": self.sources, "mapping": self.mapping, "rate_hz": self.rate_hz,
+                           "offset_s": self.offset_s, "rows": self.rows, "matched": self.matched,
+                           "notes": self.notes}}
+
+
+def _entry(table: Table, role: str, j: int, how: str, unit: str) -> dict:
+    name = table.names[j] if j < len(table.names) else ""
+    return {"file": str(table.path), "column": name, "index": j + 1, "unit": unit, "how": how}
+
+
+def _time_of(table: Table, role: str, chosen: dict, unit: str | None, rate_hz: float | None, notes: list,
+             mapping: dict) -> np.ndarray | None:
+    if role in chosen and rate_hz is not None:
+        raise ValueError(f"{'reference_' if role.startswith('reference') else ''}rate_hz: {table.path} has a time "
+                         f"column ({table.label(chosen[role][0])}); give either the column or a rate")
+    if rate_hz is not None:
+        mapping[role] = {"file": str(table.path), "rate_hz": rate_hz, "how": "given"}
+        return np.arange(len(table.cells)) / rate_hz
+    if role not in chosen:
+        return None
+    j, how = chosen[role]
+    if unit is None:
+        unit = _unit_from_header(table, j, "time")
+        if unit is None:
+            unit = "s"
+            notes.append(f"{table.path}: {table.label(j)} taken in s (its header does not say)")
+    t, said = _times(table, j, unit)
+    mapping[role] = _entry(table, role, j, how, said)
+    return t
+
+
+def _median_rate(t: np.ndarray | None) -> float | None:
+    if t is None or t.size < 2:
+        return None
+    return float(1.0 / np.median(np.diff(t)))
+
+
+def import_foreign(sensor: str | os.PathLike, reference: str | os.PathLike | None = None, *,
+                   time: str | int | None = None, time_unit: str | None = None, rate_hz: float | None = None,
+                   reading: str | int | None = None, reading_unit: str | None = None,
+                   force: str | int | None = None, force_unit: str | None = None,
+                   reference_time: str | int | None = None, reference_time_unit: str | None = None,
+                   reference_rate_hz: float | None = None, offset_s: float = 0.0,
+                   header: bool | None = None, skip_lines: int = 0) -> Imported:
+    """Turn a foreign CSV file (and a reference file) into the columns and sidecar of a run.
+
+    Parameters
+    ----------
+    sensor : str or path-like
+        The sensor's file: the readout, and the force when there is no reference file.
+    reference : str or path-like, optional
+        A second file with the reference force, from another logger; aligned on the time stamps.
+    time, reading, force, reference_time : str or int, optional
+        Columns by header name or 1-based number; None: found from the header (``time``, ``ms``,
+        ``millis``; ``fsr``, ``analog``, ``adc``, ``reading``; ``force``, ``load``, ``N``, ``g``...).
+        ``force`` is in the reference file when there is one.
+    time_unit, reference_time_unit : {'s', 'ms', 'us'}, optional
+        Unit of a numeric time column (default: what its header says, else s).
+    rate_hz, reference_rate_hz : float, optional
+        Sample rate of a file without a time column: row k is at k / rate. [Hz]
+    reading_unit : {'counts', 'V', 'mV', 'ohm', 'kohm'}, optional
+        Unit of the readout, kept as it is (default: what its header says, else counts).
+    force_unit : {'g', 'kg', 'N', 'lbf', 'mN'}, optional
+        Unit of the force column, converted to N with g0 = 9.80665 m/s² (default: what its header
+        says, else N).
+    offset_s : float
+        Added to the reference's times before alignment. [s]
+    header : bool, optional
+        Whether each file's first line is a header (None: guessed, see :func:`read_table`).
+    skip_lines : int
+        Lines left out at the top of each file. [lines]
+
+    Returns
+    -------
+    Imported
+
+    Raises
+    ------
+    ValueError
+        A parameter out of its range (the message starts with its name); :class:`ForeignFormatError`
+        for a file's problem (file, line, column).
+    """
+    units = {"time_unit": (time_unit, TIME_UNITS), "reference_time_unit": (reference_time_unit, TIME_UNITS),
+             "reading_unit": (reading_unit, READING_UNITS), "force_unit": (force_unit, FORCE_UNITS)}
+    time_unit, reference_time_unit, reading_unit, force_unit = (_unit(v, t, k) for k, (v, t) in units.items())
+    for name, rate in (("rate_hz", rate_hz), ("reference_rate_hz", reference_rate_hz)):
+        if rate is not None and not (np.isfinite(rate) and rate > 0):
+            raise ValueError(f"{name}: must be > 0 Hz, got {rate:g}")
+    if reference is None and (reference_time is not None or reference_rate_hz is not None):
+        raise ValueError(f"{'reference_time' if reference_time is not None else 'reference_rate_hz'}: given "
+                         "without a reference file")
+    if not np.isfinite(offset_s):
+        raise ValueError(f"offset_s: must be a finite time, got {offset_s!r}")
+    notes: list[str] = []
+    mapping: dict[str, dict] = {}
+    sens = read_table(sensor, header, skip_lines)
+    ref = read_table(reference, header, skip_lines) if reference is not None else None
+    # A rate given means the rows are evenly spaced: no time column is looked for.
+    roles = (("time",) if time is not None or rate_hz is None else ()) + (("force",) if ref is None else ()) + ("reading",)
+    chosen = _choose(sens, roles, {"time": time, "reading": reading, "force": force if ref is None else None})
+    if "reading" not in chosen:
+        raise ForeignFormatError(f"{sens.path}: no readout column found ({_header_text(sens)}); say which column is "
+                                 "the reading", role="reading")
+    if ref is not None and "time" not in chosen and rate_hz is None:
+        raise ForeignFormatError(f"{sens.path}: no time column found ({_header_text(sens)}); two files are aligned "
+                                 "on their times: say which column is the time, or give the sample rate", role="time")
+    t = _time_of(sens, "time", chosen, time_unit, rate_hz, notes, mapping)
+    columns: dict[str, np.ndarray] = {}
+    out_units: dict[str, str] = {}
+    if t is not None:
+        columns["time_s"], out_units["time_s"] = t, "s"
+    j, how = chosen["reading"]
+    unit = reading_unit or _unit_from_header(sens, j, "reading") or "counts"
+    columns["reading"], out_units["reading"] = _values(sens, j, (1.0, 1.0), "reading", unit), READING_UNITS[unit]
+    mapping["reading"] = _entry(sens, "reading", j, how, unit)
+    matched = None
+    if ref is None:
+        if "force" in chosen:
+            columns["force_n"] = _force(sens, chosen["force"], force_unit, notes, mapping)
+    else:
+        rroles = (("reference_time",) if reference_time is not None or reference_rate_hz is None else ()) + ("force",)
+        rchosen = _choose(ref, rroles, {"reference_time": reference_time, "force": force})
+        if "reference_time" not in rchosen and reference_rate_hz is None:
+            raise ForeignFormatError(f"{ref.path}: no time column found ({_header_text(ref)}); say which column is "
+                                     "the reference's time, or give its sample rate", role="reference_time")
+        if "force" not in rchosen:
+            raise ForeignFormatError(f"{ref.path}: no force column found ({_header_text(ref)}); say which column "
+                                     "is the force", role="force")
+        t_ref = _time_of(ref, "reference_time", rchosen, reference_time_unit, reference_rate_hz, notes, mapping)
+        f_ref = _force(ref, rchosen["force"], force_unit, notes, mapping)
+        columns["force_n"] = interpolate_reference(t, t_ref + offset_s, f_ref)
+        matched = int(np.isfinite(columns["force_n"]).sum())
+        if not np.isfinite(interpolate_reference(t, t_ref + offset_s, np.zeros_like(t_ref))).any():
+            raise ForeignFormatError(f"{ref.path}: no time in common with {sens.path} (sensor {t[0]:.6g} … "
+                                     f"{t[-1]:.6g} s, reference {t_ref[0] + offset_s:.6g} … {t_ref[-1] + offset_s:.6g} s "
+                                     f"with the offset of {offset_s:g} s): the two clocks differ; shift the reference "
+                                     "by an offset", role="offset")
+    if "force_n" in columns:
+        out_units["force_n"] = "N"
+    sources = [sens.describe()] + ([ref.describe()] if ref is not None else [])
+    return Imported(columns=columns, units=out_units, mapping=mapping, sources=sources, rows=len(sens.cells),
+                    matched=matched, rate_hz=rate_hz if rate_hz is not None else _median_rate(t),
+                    offset_s=float(offset_s), notes=notes)
+
+
+def _header_text(table: Table) -> str:
+    if table.header_line is None:
+        return f"no header, {table.n_columns} columns"
+    return f"header on line {table.header_line}: {', '.join(repr(n) for n in table.names)}"
+
+
+def _force(table: Table, choice: tuple[int, str], unit: str | None, notes: list, mapping: dict) -> np.ndarray:
+    j, how = choice
+    if unit is None:
+        unit = _unit_from_header(table, j, "force")
+        if unit is None:
+            unit = "N"
+            notes.append(f"{table.path}: {table.label(j)} taken in N (its header does not say)")
+    mapping["force"] = _entry(table, "force", j, how, unit)
+    return _values(table, j, _FORCE[unit], "force_n", unit)
+
+
+def write_imported(imported: Imported, path: str | os.PathLike, overwrite: bool = False) -> Path:
+    """Write an import as a run (``NAME.csv`` and ``NAME.meta.json``) with :func:`fsrlab.io.runwriter.write_run`.
+
+    Parameters
+    ----------
+    imported : Imported
+        From :func:`import_foreign`.
+    path : str or path-like
+        The run's CSV file.
+    overwrite : bool
+        Replace an existing run; never one of the source files.
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    ValueError
+        ``output: ...`` when the run or its sidecar would replace a source file.
+    FileExistsError
+        The run exists and ``overwrite`` is False.
+    """
+    from fsrlab.io.runwriter import write_run
+    from fsrlab.io.schema import sidecar_path
+
+    out = Path(path)
+    for target in (out, sidecar_path(out)):
+        for source in imported.sources:
+            if _same_file(target, Path(source["file"])):
+                raise ValueError(f"output: {target} is the source file {source['file']}; write the run elsewhere")
+    return write_run(out, imported.columns, imported.metadata, overwrite=overwrite)
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        if a.exists() and b.exists():
+            return os.path.samefile(a, b)
+    except OSError:
+        pass
+    return a.resolve() == b.resolve()
+

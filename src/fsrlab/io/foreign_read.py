@@ -1,0 +1,256 @@
+"""Reading a foreign CSV file's cells: a user's own Arduino sketch, data logger or spreadsheet export.
+
+:func:`read_table` reads the text (UTF-8, UTF-16 with its BOM, or Latin-1), leaves out blank and
+``#`` comment lines, sniffs the delimiter (tab, semicolon, comma, or runs of white space) and the
+decimal comma, and tells a header row (and a units row under it) from data. The :class:`Table` it
+returns turns a cell into a number in the file's own dialect (:meth:`Table.number`). Every problem in
+a file is a :class:`ForeignFormatError` of one line naming the file, the line (1-based, as a text
+editor shows it) and the column. Which column is which, and what the cells mean, is
+:mod:`fsrlab.io.foreign`. (docs/data-format.md, "Foreign files")
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import os
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from fsrlab.errors import FileFormatError
+
+__all__ = ["ForeignFormatError", "Table", "read_table", "is_number"]
+
+_NUMBER = re.compile(r"^[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?$")
+_COMMA_NUMBER = re.compile(r"^[+-]?\d*,\d+(?:[eE][+-]?\d+)?$")
+_NOT_FINITE = re.compile(r"^[+-]?(?:nan|inf|infinity)$", re.IGNORECASE)
+_DELIMITERS = ("\t", ";", ",", " ")  # in this order of preference when several split the lines alike
+_DELIMITER_NAMES = {"\t": "tab", ";": "semicolon", ",": "comma", " ": "white space"}
+
+
+class ForeignFormatError(FileFormatError):
+    """A foreign file that cannot be imported; one line naming the file, the line and the column.
+
+    Parameters
+    ----------
+    message : str
+        The line.
+    role : str, optional
+        The mapping the user can give to settle it (``"time"``, ``"reading"``, ``"force"``,
+        ``"reference_time"``, ``"offset"``), when the problem is which column is which or how two
+        files line up.
+    """
+
+    def __init__(self, message: str, role: str | None = None):
+        super().__init__(message)
+        self.role = role
+
+
+def is_number(cell: str) -> bool:
+    """Whether a cell reads as a number: decimal point or comma, exponent, or nan/inf.
+
+    Parameters
+    ----------
+    cell : str
+        The cell, stripped.
+
+    Returns
+    -------
+    bool
+    """
+    return bool(_NUMBER.match(cell) or _COMMA_NUMBER.match(cell) or _NOT_FINITE.match(cell))
+
+
+@dataclass
+class Table:
+    """The cells of a foreign file, as text.
+
+    Parameters
+    ----------
+    path : Path
+        The file.
+    names : list of str
+        Header name of each column ("" without a header, or for an empty header cell).
+    header_line : int or None
+        File line of the header (1-based), None without one.
+    units_row : list of str
+        The units row under the header (e.g. ``s;N;V``), empty when there is none.
+    cells : list of list of str
+        Data rows, their cells stripped.
+    lines : list of int
+        File line of each data row (1-based, as a text editor counts, comments and blanks included).
+    delimiter : str
+        ``","``, ``";"``, ``"\\t"`` or ``" "`` (runs of white space).
+    decimal : str
+        ``"."`` or ``","`` (decimal comma).
+    encoding : str
+        ``"utf-8"``, ``"utf-16"`` or ``"latin-1"``.
+    """
+
+    path: Path
+    names: list[str]
+    header_line: int | None
+    units_row: list[str]
+    cells: list[list[str]]
+    lines: list[int]
+    delimiter: str
+    decimal: str
+    encoding: str
+
+    @property
+    def n_columns(self) -> int:
+        """Columns of the widest row or of the header."""
+        return max([len(self.names), *(len(r) for r in self.cells)], default=0)
+
+    def label(self, j: int) -> str:
+        """Column ``j`` (0-based) as a message names it: ``column 'fsr' (2)`` or ``column 2``."""
+        name = self.names[j] if j < len(self.names) else ""
+        return f"column {name!r} ({j + 1})" if name else f"column {j + 1}"
+
+    def where(self, i: int, j: int) -> str:
+        """Data row ``i``, column ``j`` (0-based) as a message names it: ``x.csv: line 4, column 'fsr' (2)``."""
+        return f"{self.path}: line {self.lines[i]}, {self.label(j)}"
+
+    def cell(self, i: int, j: int) -> str:
+        """The text of data row ``i``, column ``j`` (0-based); ForeignFormatError when the row is short."""
+        row = self.cells[i]
+        if j >= len(row):
+            raise ForeignFormatError(f"{self.where(i, j)}: missing cell (the line has {len(row)} cells, "
+                                     f"{_DELIMITER_NAMES[self.delimiter]}-separated)")
+        return row[j]
+
+    def number(self, i: int, j: int, text: str, expected: str) -> float:
+        """The finite number a cell's ``text`` holds in the file's decimal separator.
+
+        Parameters
+        ----------
+        i, j : int
+            Data row and column (0-based), for the message.
+        text : str
+            The cell (:meth:`cell`), not empty.
+        expected : str
+            What the column holds, for the message (``"a number in g"``).
+
+        Returns
+        -------
+        float
+
+        Raises
+        ------
+        ForeignFormatError
+            A cell that is not a plain number, or nan/inf, or beyond a float.
+        """
+        cell = text.replace(",", ".") if self.decimal == "," else text
+        if _NOT_FINITE.match(cell):
+            raise ForeignFormatError(f"{self.where(i, j)}: {text!r} is not a finite number "
+                                     "(leave the cell empty for a missing value)")
+        if not _NUMBER.match(cell):
+            point = "decimal comma" if self.decimal == "," else "decimal point"
+            raise ForeignFormatError(f"{self.where(i, j)}: non-numeric cell {text!r}, expected {expected} "
+                                     f"(a plain number, {point})")
+        value = float(cell)
+        if not np.isfinite(value):
+            raise ForeignFormatError(f"{self.where(i, j)}: {text!r} is beyond any finite number")
+        return value
+
+    def describe(self) -> dict:
+        """How the file was read, for the sidecar and ``--json``."""
+        return {"file": str(self.path), "delimiter": _DELIMITER_NAMES[self.delimiter], "decimal": self.decimal,
+                "header_line": self.header_line, "rows": len(self.cells), "encoding": self.encoding,
+                "sha256": hashlib.sha256(self.path.read_bytes()).hexdigest()}
+
+
+def _decode(path: Path) -> tuple[str, str]:
+    raw = path.read_bytes()
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):  # a spreadsheet's "Unicode text"
+        return raw.decode("utf-16"), "utf-16"
+    try:
+        text, encoding = raw.decode("utf-8-sig"), "utf-8"
+    except UnicodeDecodeError:
+        text, encoding = raw.decode("latin-1"), "latin-1"  # a Windows logger's °C or µ: never fails
+    if "\x00" in text:
+        raise ForeignFormatError(f"{path}: not a text file (NUL bytes)")
+    return text, encoding
+
+
+def _split(line: str, delimiter: str) -> list[str]:
+    if delimiter == " ":
+        return line.split()
+    return [c.strip() for c in next(csv.reader([line], delimiter=delimiter))]
+
+
+def _sniff(lines: Sequence[str]) -> str:
+    """The delimiter that splits most lines into the same number (> 1) of cells."""
+    best, best_key = ",", (0.0, 0)
+    for rank, d in enumerate(_DELIMITERS):
+        counts = [len(_split(ln, d)) for ln in lines]
+        values, freq = np.unique(counts, return_counts=True)
+        k = int(np.argmax(freq))
+        if values[k] > 1:
+            key = (freq[k] / len(counts), -rank)
+            if key > best_key:
+                best, best_key = d, key
+    return best
+
+
+def read_table(path: str | os.PathLike, header: bool | None = None, skip_lines: int = 0) -> Table:
+    """Read a foreign CSV file's cells.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file.
+    header : bool, optional
+        Whether the first line read is a header; None: it is when one of its cells is not a number.
+    skip_lines : int
+        Lines to leave out at the top (a logger's preamble), before comments and blanks are. [lines]
+
+    Returns
+    -------
+    Table
+
+    Raises
+    ------
+    ForeignFormatError
+        An empty file (no data rows), a file that is not text, duplicate header names.
+    OSError
+        The file cannot be read.
+    """
+    p = Path(path)
+    if skip_lines < 0:
+        raise ValueError(f"skip_lines: must be >= 0, got {skip_lines}")
+    text, encoding = _decode(p)
+    numbered = [(k, ln) for k, ln in enumerate(re.split(r"\r\n|\r|\n", text), start=1)
+                if k > skip_lines and ln.strip() and not ln.lstrip().startswith("#")]
+    if not numbered:
+        raise ForeignFormatError(f"{p}: empty file (no header and no data rows"
+                                 + (f" after the {skip_lines} skipped lines)" if skip_lines else ")"))
+    delimiter = _sniff([ln for _, ln in numbered[:50]])
+    rows = [(k, _split(ln, delimiter)) for k, ln in numbered]
+    if header is None:
+        header = any(c and not is_number(c) for c in rows[0][1])
+    names: list[str] = []
+    header_line, units_row = None, []
+    if header:
+        header_line, names = rows[0][0], rows[0][1]
+        rows = rows[1:]
+        seen: dict[str, int] = {}
+        for j, name in enumerate(names):
+            if name and name in seen:
+                raise ForeignFormatError(f"{p}: line {header_line} (header), column {name!r} ({seen[name] + 1} and "
+                                         f"{j + 1}): the same header name twice; each column needs its own name")
+            seen.setdefault(name, j)
+        # A units row under the header ("s;N;V"): no cell of it is a number.
+        if rows and any(rows[0][1]) and not any(is_number(c) for c in rows[0][1] if c):
+            units_row = rows[0][1]
+            rows = rows[1:]
+    if not rows:
+        raise ForeignFormatError(f"{p}: no data rows" + (f" (line {header_line} is the header)" if header_line else ""))
+    decimal = "," if any(_COMMA_NUMBER.match(c) for _, r in rows[:200] for c in r) else "."
+    return Table(path=p, names=names, header_line=header_line, units_row=units_row,
+                 cells=[r for _, r in rows], lines=[k for k, _ in rows], delimiter=delimiter, decimal=decimal,
+                 encoding=encoding)
