@@ -175,6 +175,29 @@ def _empty_reason(ended: str, window_ms: int, duration_s: float, bad: int, lost:
     return "the device sent no measurement"
 
 
+def _ending(ended: str, message: str, frames: int, duration: float, gaps: list, in_gap: bool, empty_reason: str,
+            path: Path) -> tuple[str, str]:
+    """How a recording ended, in one word and one line: an empty run and a device silent at the end are failures."""
+    if ended not in ("disconnected", "error", "failed"):
+        if frames == 0:
+            message = f"no valid window recorded in {duration:.1f} s: {empty_reason}; {path} has its header only"
+            ended = "empty"
+        elif in_gap:
+            ended = "stalled"
+            message = (f"the device sent nothing from {gaps[-1].start_s:.1f} s into the run to the end "
+                       f"({gaps[-1].length_s:.1f} s)")
+    if not message:
+        message = {"duration": f"recorded {frames} windows in {duration:.1f} s",
+                   "interrupted": f"interrupted: {frames} windows kept",
+                   "stopped": f"stopped: {frames} windows kept"}[ended]
+        if gaps:
+            message += (f", {len(gaps)} gap{'s' if len(gaps) > 1 else ''} without frames "
+                        f"({sum(g.length_s for g in gaps):.1f} s)")
+    elif ended != "empty":
+        message = f"{message}; {frames} windows kept in {path}"
+    return ended, " ".join(message.split())
+
+
 def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS_DEFAULT, range_: int = 0,
            metadata: dict | None = None, reference: Callable[[Frame], float] | None = None,
            on_status: Callable[[RecordStatus], None] | None = None, stop: threading.Event | None = None,
@@ -387,26 +410,8 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
         if in_gap:
             gaps.append(Gap(stream.silent_since - t_start, t_start + duration - stream.silent_since))
         st = parser.stats()
-        if ended not in ("disconnected", "error", "failed"):
-            if frames == 0:
-                message = (f"no valid window recorded in {duration:.1f} s: "
-                           + _empty_reason(ended, window_ms, duration_s, st.bad_frames - bad0, st.lost - lost0)
-                           + f"; {path} has its header only")
-                ended = "empty"
-            elif in_gap:
-                ended = "stalled"
-                message = (f"the device sent nothing from {gaps[-1].start_s:.1f} s into the run to the end "
-                           f"({gaps[-1].length_s:.1f} s)")
-        if not message:
-            message = {"duration": f"recorded {frames} windows in {duration:.1f} s",
-                       "interrupted": f"interrupted: {frames} windows kept",
-                       "stopped": f"stopped: {frames} windows kept"}[ended]
-            if gaps:
-                message += (f", {len(gaps)} gap{'s' if len(gaps) > 1 else ''} without frames "
-                            f"({sum(g.length_s for g in gaps):.1f} s)")
-        elif ended != "empty":
-            message = f"{message}; {frames} windows kept in {path}"
-        message = " ".join(message.split())
+        empty_reason = _empty_reason(ended, window_ms, duration_s, st.bad_frames - bad0, st.lost - lost0)
+        ended, message = _ending(ended, message, frames, duration, gaps, in_gap, empty_reason, path)
         writer.metadata["acquisition"].update(
             {"ended": ended, "frames": frames, "dropped": dropped, "resets": st.resets,
              "bad_checksum": st.bad_checksum, "malformed": st.malformed, "garbage_bytes": st.garbage_bytes,
