@@ -47,6 +47,21 @@ def test_recording_writes_a_valid_run(tmp_path):
     assert meta["acquisition"]["window_ms"] == 20 and meta["acquisition"]["protocol_version"] == 2
 
 
+def test_device_clock_recording_is_exact_and_loses_nothing(tmp_path):
+    """A virtual device at ``speed="max"`` recorded with ``clock="device"``: 2 s of 20 ms windows on
+    the device's clock are exactly 100 rows ending at 2 s, none lost, whatever the host's speed."""
+    with VirtualDevice(seed=1, speed="max") as dev, SerialLink(dev.port) as link:
+        result = record(link, tmp_path / "run.csv", 2.0, window_ms=20, reference=lambda f: dev.reference(f.seq),
+                        clock="device")
+    run = load_run(tmp_path / "run.csv")
+    assert result.ended == "duration" and result.dropped == 0 and result.run_s == 2.0
+    assert run.n_rows == result.frames == 100 and np.all(np.diff(run["seq"]) == 1)
+    assert run["time_s"] == pytest.approx(0.02 * np.arange(1, 101), abs=1e-12)
+    acq = run.metadata["acquisition"]
+    assert acq["clock"] == "device" and acq["run_s"] == 2.0
+    assert np.all(np.isfinite(run["stress_pa"]))
+
+
 def test_corrupted_link_is_counted_and_never_reaches_the_file(tmp_path):
     """Bit flips, dropped frames and garbage on the link: every row in the file is a valid window,
     and the gaps in ``seq`` add up exactly to the frames the recorder reports as dropped."""

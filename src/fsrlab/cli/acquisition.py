@@ -26,6 +26,8 @@ _PERIOD_HELP = "Cycle time of the profile [s]: 4, 4s, 500ms, 1.5min."
 _C_OFF_HELP = "C_off switched in by range 1 [F]: 1n, 1nF, 470p."
 _CORRUPT_HELP = "Probability that a frame gets a bit flipped [1]: 0..1 or a percentage, 0.05 or 5%."
 _DROP_HELP = "Probability that a frame is not sent [1]: 0..1 or a percentage, 0.05 or 5%."
+_SPEED_HELP = ("With --virtual: realtime (one window per window length of wall time, as hardware) or max (as fast as "
+               "this computer runs the device; --duration and the run's times are the device's simulated clock).")
 _SEED_HELP = "Random seed of the virtual device's noise and faults (an integer)."
 _SENSOR_HELP = ("Sensor preset, for its sensing area (stress = force / area): flexiforce-a201 (9.53 mm diameter, "
                 "71.3 mm²) or interlink-402 (12.7 mm diameter, 126.7 mm²).")
@@ -128,7 +130,7 @@ def _check_virtual(profile: str, peak: float, period: float, c_off: float, corru
 
 def _virtual_device(profile: str, peak: float, period: float, c_off: float, seed: int | None,
                     corrupt: float, drop: float, load_cell: bool = True, rate: int = 80, area_m2: float | None = None,
-                    sensor_model=None):
+                    sensor_model=None, speed: str = "realtime"):
     from fsrlab.acquisition.loadcell import LoadCellModel
     from fsrlab.virtual.sources import VIRTUAL_CIRCUIT, PhysicsSource, StressProfile
     from fsrlab.virtual.device import Faults, VirtualDevice
@@ -142,7 +144,16 @@ def _virtual_device(profile: str, peak: float, period: float, c_off: float, seed
     except ValueError:  # the sensor model has no valid response up to this stress
         fail(f"the virtual sensor model has no valid response up to {format_eng(peak, 'Pa')} (its resistance would not "
              "be positive); choose a smaller peak, e.g. 50k", "--peak")
-    return VirtualDevice(source, faults=Faults(corrupt=corrupt, drop=drop), seed=seed, load_cell=cell), source
+    return VirtualDevice(source, faults=Faults(corrupt=corrupt, drop=drop), seed=seed, load_cell=cell,
+                         speed=speed), source
+
+
+def _check_speed(speed: str, virtual: bool, flag: str = "--virtual") -> None:
+    """One line naming ``--speed`` for a pacing other than realtime/max, or max on hardware."""
+    if speed not in ("realtime", "max"):
+        fail(f"must be realtime or max, got {speed!r}", "--speed")
+    if speed == "max" and not virtual:
+        fail(f"max is for a virtual bench ({flag}); hardware runs in real time", "--speed")
 
 
 def _window_ms(window_s: float) -> int:
@@ -230,6 +241,7 @@ class _LiveView:
 def acquire(
     port: str = typer.Option(None, "--port", help="Serial port (/dev/ttyACM0, COM3, a pty) or 'auto' to find an Uno by USB id."),
     virtual: bool = typer.Option(False, "--virtual", help="Record from a virtual device (pty, physics and 555 models) instead of hardware."),
+    speed: str = typer.Option("realtime", "--speed", help=_SPEED_HELP),
     duration: float = typer.Option("60s", "--duration", parser=seconds, metavar="TIME", help="Recording time [s]: 90, 90s, 1.5min, 2h, 500ms (a bare m is refused: minutes or milliseconds?)."),
     out: Path = typer.Option(Path("run.csv"), "--out", "-o", help="Run file (CSV + NAME.meta.json sidecar, docs/data-format.md)."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing run file and its sidecar; without it an existing one stops the command before the device is touched."),
@@ -250,7 +262,7 @@ def acquire(
     no_loadcell: bool = typer.Option(False, "--no-loadcell", help=_NO_LOADCELL_HELP),
     hx711_rate: int = typer.Option(80, "--hx711-rate", help=_RATE_HELP),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No live display (notices of gaps still go to stderr)."),
-    json_out: bool = typer.Option(False, "--json", help='Print {"frames", "dropped", "duration_s", "file"} as JSON, and "no_reference" (windows without a load-cell conversion) for a protocol-2 device.'),
+    json_out: bool = typer.Option(False, "--json", help='Print {"frames", "dropped", "duration_s", "file"} as JSON, "no_reference" (windows without a load-cell conversion) for a protocol-2 device, and "run_s" (the run\'s length on the device\'s clock) with --speed max.'),
 ) -> None:
     """Record measurement windows (frequency, duty cycle, A0 voltage) from an fsrlab meter into a run file.
 
@@ -265,6 +277,7 @@ def acquire(
 
     \b
       fsrlab acquire --virtual --duration 10s --window 20ms --out bench.csv
+      fsrlab acquire --virtual --speed max --duration 10min --out long.csv
       fsrlab acquire --port auto --duration 1.5min --window 100ms --range 1 --out bench.csv --overwrite
     """
     from fsrlab.acquisition.recorder import record, result_dict
@@ -272,6 +285,7 @@ def acquire(
 
     if virtual == (port is not None):
         fail("give exactly one of --port PORT|auto and --virtual", "--port")
+    _check_speed(speed, virtual)
     if not duration > 0:
         fail(f"must be > 0 s, got {duration:g} s", "--duration")
     window_ms = _window_ms(window)
@@ -294,7 +308,7 @@ def acquire(
     if virtual:
         _check_virtual(profile, peak, period, c_off, corrupt, drop, seed)
         device, source = _virtual_device(profile, peak, period, c_off, seed, corrupt, drop, not no_loadcell,
-                                         hx711_rate, area_m2)
+                                         hx711_rate, area_m2, speed=speed)
         if cal is None and device.load_cell is not None:
             cal = device.load_cell.calibration()
         port = device.open()
@@ -315,7 +329,8 @@ def acquire(
                 _LiveView(not quiet, f"fsrlab acquire {link.port} -> {out}") as view:
             result = record(link, out, duration, window_ms=window_ms, range_=range_, metadata=metadata,
                             reference=reference, on_status=view.update, on_event=view.notice, stall_s=stall,
-                            health=health, overwrite=overwrite, loadcell=cal, area_m2=area_m2)
+                            health=health, overwrite=overwrite, loadcell=cal, area_m2=area_m2,
+                            clock="device" if speed == "max" else "host")
     finally:
         if device is not None:
             device.close()
