@@ -277,7 +277,6 @@ def acquire(
 
     \b
       fsrlab acquire --virtual --duration 10s --window 20ms --out bench.csv
-      fsrlab acquire --virtual --speed max --duration 10min --out long.csv
       fsrlab acquire --port auto --duration 1.5min --window 100ms --range 1 --out bench.csv --overwrite
     """
     from fsrlab.acquisition.recorder import record, result_dict

@@ -51,7 +51,6 @@ def bench(
 
     \b
       fsrlab bench spring --virtual --cycles 3 --period 3s --out spring.csv --report spring-report
-      fsrlab bench weights --twin --speed max --out weights.csv
       fsrlab bench weights --port auto --sensor flexiforce-a201 --loadcell lc.json --repeat 5 --out weights.csv
     """
     from fsrlab.bench.protocols import CreepPlan, SpringPlan, WeightsPlan, run_protocol, twin_status

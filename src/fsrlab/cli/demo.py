@@ -37,7 +37,6 @@ def demo(
     \b
       fsrlab demo
       fsrlab demo --out /tmp/demo --cycles 2 --period 2s --repeat 2 --no-paper --json
-      fsrlab demo --speed realtime
     """
     from fsrlab.bench.demo import DemoSettings
     from fsrlab.reports.demo import run_demo
