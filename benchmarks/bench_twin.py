@@ -128,8 +128,10 @@ def run() -> str:
         "so a `--speed realtime` twin keeps up at all three frequencies here.",
         "",
         f"Where the time goes, independent of the load: per CPU second of its own process the twin's harness "
-        f"simulates {rc10:.2f} s at 10 kHz and `fsrlab_sim` (simavr and the firmware, nothing else) {sc10:.2f} s, "
-        "so even with a core to itself the twin cannot pass what simavr runs per CPU second. `perf record` of "
+        f"simulates {rc10:.2f} s at 10 kHz and `fsrlab_sim` (simavr and the firmware, nothing else) {sc10:.2f} s "
+        f"({rc10 / sc10:.0%}: the rest of the harness's CPU goes to the edges' cycle timers and to polling its "
+        "input and the pty every simulated millisecond), so even with a core to itself and no overhead the twin "
+        "could not pass what simavr runs per CPU second. `perf record` of "
         "`fsrlab_sim` puts nearly all samples in `libsimavr` (the instruction loop `avr_run_one`, the cycle "
         "timers, the peripherals' register callbacks: the firmware polls Timer2, the USART and the ADC in its "
         "background loop, so every simulated cycle is an instruction simavr executes); the harness's `main` "

@@ -27,7 +27,7 @@ _C_OFF_HELP = "C_off switched in by range 1 [F]: 1n, 1nF, 470p."
 _CORRUPT_HELP = "Probability that a frame gets a bit flipped [1]: 0..1 or a percentage, 0.05 or 5%."
 _DROP_HELP = "Probability that a frame is not sent [1]: 0..1 or a percentage, 0.05 or 5%."
 _SPEED_HELP = ("With --virtual: realtime (one window per window length of wall time, as hardware) or max (as fast as "
-               "this computer runs the device; --duration and the run's times are the device's simulated clock).")
+               "this computer runs the device; the recording time and the run's times are then the device's simulated clock).")
 _SEED_HELP = "Random seed of the virtual device's noise and faults (an integer)."
 _SENSOR_HELP = ("Sensor preset, for its sensing area (stress = force / area): flexiforce-a201 (9.53 mm diameter, "
                 "71.3 mm²) or interlink-402 (12.7 mm diameter, 126.7 mm²).")
