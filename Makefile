@@ -23,7 +23,7 @@ firmware: sysdeps
 	@if [ -f firmware/Makefile ]; then $(MAKE) -C firmware; fi
 
 # The measurement chain on a virtual bench (spring cycles and dead weights recorded, calibration,
-# compensation, the measurement report), then the paper's reproduction report: fsrlab demo (about 1 min).
+# compensation, the measurement report), then the paper's reproduction report: fsrlab demo (the bench faster than real time, --speed max).
 demo: venv
 	@$(MAKE) -s -C firmware >/dev/null 2>&1 || echo "firmware and twin not built (make sysdeps installs the tools): the demo uses the Python virtual device"
 	$(BIN)/fsrlab demo --out $(DEMO)

@@ -41,3 +41,21 @@ def test_command_line_start_does_not_import_numpy(module):
     code = f"import sys, {module}; print('numpy' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "False"
+
+
+@pytest.mark.parametrize("args, absent", [
+    (["--help"], ("numpy", "pydantic", "scipy", "matplotlib")),
+    (["oscillator", "--help"], ("numpy", "pydantic")),
+    (["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1n", "--json"], ("pydantic", "scipy")),
+])
+def test_command_line_runs_without_heavy_packages(args, absent):
+    # The whole command as a user starts it (a subprocess), then sys.modules: `fsrlab --help` needs no
+    # numpy, and no command's option parsing needs pydantic (fsrlab.cli's light coercion; typer would
+    # import it, ~0.1 s). The oscillator's closed form needs numpy, not scipy.
+    code = ("import atexit, json, sys\n"
+            f"atexit.register(lambda: print(json.dumps(sorted(m for m in {absent!r} if m in sys.modules)), file=sys.stderr))\n"
+            "from fsrlab.cli import main\n"
+            f"main({args!r})\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stderr.strip().splitlines()[-1]) == []

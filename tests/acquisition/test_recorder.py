@@ -47,6 +47,35 @@ def test_recording_writes_a_valid_run(tmp_path):
     assert meta["acquisition"]["window_ms"] == 20 and meta["acquisition"]["protocol_version"] == 2
 
 
+def test_device_clock_recording_is_exact_and_loses_nothing(tmp_path):
+    """A virtual device at ``speed="max"`` recorded with ``clock="device"``: 2 s of 20 ms windows on
+    the device's clock are exactly 100 rows ending at 2 s, none lost, whatever the host's speed."""
+    with VirtualDevice(seed=1, speed="max") as dev, SerialLink(dev.port) as link:
+        result = record(link, tmp_path / "run.csv", 2.0, window_ms=20, reference=lambda f: dev.reference(f.seq),
+                        clock="device")
+    run = load_run(tmp_path / "run.csv")
+    assert result.ended == "duration" and result.dropped == 0 and result.run_s == 2.0
+    assert run.n_rows == result.frames == 100 and np.all(np.diff(run["seq"]) == 1)
+    assert run["time_s"] == pytest.approx(0.02 * np.arange(1, 101), abs=1e-12)
+    acq = run.metadata["acquisition"]
+    assert acq["clock"] == "device" and acq["run_s"] == 2.0
+    assert np.all(np.isfinite(run["stress_pa"]))
+
+
+def test_device_clock_continues_through_a_device_reset(tmp_path):
+    """On the device's clock the windows after a reset continue the run's time axis from the last one
+    (the host's clock plays no part): a device restarting after 20 windows still gives 1 s of 20 ms
+    windows as exactly 50 rows, 0.02 s apart, the settings sent again once."""
+    with VirtualDevice(ConstantSource(), faults=Faults(reset_after=20), seed=2, speed="max") as dev, \
+            SerialLink(dev.port) as link:
+        result = record(link, tmp_path / "run.csv", 1.0, window_ms=20, clock="device")
+    run = load_run(tmp_path / "run.csv")
+    assert result.ended == "duration" and result.stats.resets == 1 and result.run_s == 1.0
+    assert run.n_rows == result.frames == 50
+    assert run["time_s"] == pytest.approx(0.02 * np.arange(1, 51), abs=1e-12)
+    assert run["seq"][20] < run["seq"][19]  # the device's sequence restarted
+
+
 def test_corrupted_link_is_counted_and_never_reaches_the_file(tmp_path):
     """Bit flips, dropped frames and garbage on the link: every row in the file is a valid window,
     and the gaps in ``seq`` add up exactly to the frames the recorder reports as dropped."""

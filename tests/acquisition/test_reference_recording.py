@@ -22,8 +22,8 @@ CELL = LoadCellModel()
 
 def test_virtual_run_carries_force_from_the_load_cell(tmp_path):
     out = tmp_path / "run.csv"
-    code, stdout, err = run_cli(["acquire", "--virtual", "--quiet", "--duration", "1.5", "--window", "50ms",
-                                 "--profile", "hold", "--peak", "30k", "--sensor", "interlink-402", "-o", str(out),
+    code, stdout, err = run_cli(["acquire", "--virtual", "--speed", "max", "--quiet", "--duration", "1.5", "--window",
+                                 "50ms", "--profile", "hold", "--peak", "30k", "--sensor", "interlink-402", "-o", str(out),
                                  "--json"])
     assert code == 0, err
     run = load_run(out)
@@ -40,8 +40,8 @@ def test_virtual_run_carries_force_from_the_load_cell(tmp_path):
 
 def test_slow_or_missing_hx711_leaves_cells_empty_and_counts_them(tmp_path):
     out = tmp_path / "slow.csv"
-    code, stdout, err = run_cli(["acquire", "--virtual", "--quiet", "--duration", "1.5", "--window", "50ms",
-                                 "--hx711-rate", "10", "-o", str(out), "--json"])
+    code, stdout, err = run_cli(["acquire", "--virtual", "--speed", "max", "--quiet", "--duration", "1.5", "--window",
+                                 "50ms", "--hx711-rate", "10", "-o", str(out), "--json"])
     assert code == 0, err
     run = load_run(out)
     empty = np.isnan(run["reference_raw"])

@@ -89,14 +89,16 @@ def test_twin_status_is_a_pair_with_a_reason():
 
 def test_bench_spring_virtual_end_to_end(tmp_path):
     out = tmp_path / "spring.csv"
-    code, stdout, err = run_cli(["bench", "spring", "--virtual", "--cycles", "2", "--period", "1s", "--peak", "10k",
-                                 "--seed", "3", "--out", out, "--json"])
+    code, stdout, err = run_cli(["bench", "spring", "--virtual", "--speed", "max", "--cycles", "2", "--period", "1s",
+                                 "--peak", "10k", "--seed", "3", "--out", out, "--json"])
     assert code == 0, err
     info = json.loads(stdout)
     assert info["device"] == "virtual" and info["protocol"]["name"] == "spring"
+    assert info["run_s"] == 2.0 and info["dropped"] == 0
     run = load_run(out)
-    # 2 s of 20 ms windows (the recorder's own clock: a window or two either way).
-    assert 95 <= run.n_rows <= 102
+    # 2 s of 20 ms windows on the device's clock (--speed max): exactly 100, ending at 2 s.
+    assert run.n_rows == 100
+    assert run["time_s"] == pytest.approx(0.02 * np.arange(1, 101), abs=1e-12)
     s = run["stress_pa"]
     assert np.nanmax(s) == pytest.approx(10e3, rel=0.03) and np.nanmin(s) < 300  # the applied triangle
     f = run["frequency_hz"]
@@ -107,7 +109,7 @@ def test_bench_spring_virtual_end_to_end(tmp_path):
 
 def test_bench_weights_virtual_end_to_end(tmp_path):
     out = tmp_path / "w.csv"
-    code, stdout, err = run_cli(["bench", "weights", "--virtual", "--masses", "200g,400g", "--repeat", "2",
+    code, stdout, err = run_cli(["bench", "weights", "--virtual", "--speed", "max", "--masses", "200g,400g", "--repeat", "2",
                                  "--settle-hold", "100ms", "--seed", "4", "--out", out, "--json", "--quiet"])
     assert code == 0, err
     info = json.loads(stdout)
@@ -128,8 +130,8 @@ def test_bench_weights_virtual_end_to_end(tmp_path):
 def test_creep_protocol_virtual_holds_the_mass(tmp_path):
     plan = CreepPlan(mass_kg=0.2, hold_s=1.5, before_s=0.5, after_s=0.5)
     said = []
-    res = run_protocol(plan, tmp_path / "c.csv", seed=5, announce=said.append)
-    assert res.result.ended == "duration"
+    res = run_protocol(plan, tmp_path / "c.csv", seed=5, announce=said.append, speed="max")
+    assert res.result.ended == "duration" and res.result.run_s == pytest.approx(plan.duration_s)
     run = load_run(tmp_path / "c.csv")
     t, planned = run["time_s"], run["mass_planned_kg"]
     assert np.all(planned[(t > 0.6) & (t < 1.9)] == 0.2) and np.all(planned[t < 0.45] == 0.0)
@@ -148,6 +150,8 @@ def test_creep_protocol_virtual_holds_the_mass(tmp_path):
     (["bench", "weights", "--virtual", "--repeat", "0"], "--repeat"),
     (["bench", "creep", "--virtual", "--hold", "0s"], "--hold"),
     (["bench", "spring", "--virtual", "--window", "2.5ms"], "--window"),
+    (["bench", "spring", "--virtual", "--speed", "fast"], "--speed"),
+    (["bench", "spring", "--port", "/dev/null", "--speed", "max"], "--speed"),
 ])
 def test_bad_input_is_one_line_naming_the_option(args, option, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
@@ -259,3 +263,8 @@ def test_bench_on_a_port_prompts_and_records_with_the_load_cell(tmp_path):
     area = SENSOR_PRESETS["flexiforce-a201"].area_m2
     assert run["stress_pa"][ok] == pytest.approx(run["force_n"][ok] / area)
     assert np.nanmax(run["force_n"]) > 0.5 * 10e3 * run.metadata["sensor"]["area_m2"]
+
+
+def test_hardware_runs_in_real_time_only(tmp_path):
+    with pytest.raises(ValueError, match="speed"):
+        run_protocol(SpringPlan(), tmp_path / "s.csv", device="port", port="/dev/null", speed="max")

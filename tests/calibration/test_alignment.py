@@ -43,12 +43,12 @@ def _delayed(run: Run, column: str, delay_s: float) -> Run:
 
 @pytest.fixture(scope="module")
 def spring(tmp_path_factory):
-    """4 spring cycles of 4 s to 10 kPa on the virtual bench (the demo's calibration run; 16 s in real time)."""
+    """4 spring cycles of 4 s to 10 kPa on the virtual bench (the demo's calibration run), faster than real time."""
     from fsrlab.bench.protocols import SpringPlan, run_protocol
 
     path = tmp_path_factory.mktemp("spring") / "spring.csv"
-    res = run_protocol(SpringPlan(peak_pa=10e3, cycles=4, period_s=4.0), path, device="virtual", seed=1)
-    assert res.result.frames > 700  # 800 windows of 20 ms
+    res = run_protocol(SpringPlan(peak_pa=10e3, cycles=4, period_s=4.0), path, device="virtual", seed=1, speed="max")
+    assert res.result.frames == 800  # 16 s of 20 ms windows on the device's clock
     return load_run(path)
 
 

@@ -100,3 +100,39 @@ def test_the_click_command_is_built_once_per_set_of_commands():
     finally:
         app.registered_commands[:] = [i for i in app.registered_commands if i.name != "probe-cache"]
     assert "probe-cache" not in _click_command().commands
+
+
+def test_light_coercion_gives_what_typers_pydantic_coercion_gives():
+    # Reference: typer's own coercion (typer._coercion.build_runtime_param, pydantic TypeAdapters) on the
+    # same values: every option's default and a few typed values, for every command.
+    from pathlib import Path
+
+    import typer
+    from typer._coercion import build_runtime_param
+    from typer._click.exceptions import BadParameter
+
+    from fsrlab.cli import app
+
+    group = typer.main.get_command(app)
+    samples = {bool: [True, False], int: [0, 7], float: [0.0, 2.5, 3], str: ["abc"], Path: [Path("x.csv"), "y.csv"]}
+    checked = 0
+    for name, command in group.commands.items():
+        ctx = command.make_context(name, ["--help"], resilient_parsing=True)
+        for param in command.params:
+            desc = getattr(param, "type_descriptor", None)
+            if desc is None:
+                continue
+            values = [v for v in [param.default] if v is not None and not callable(v)]
+            values += samples.get(desc.annotation, []) if desc.parameter_info.parser is None else []
+            for value in values:
+                def outcome(runtime):
+                    try:
+                        out = runtime.coerce(value, param=param, ctx=ctx)
+                        return type(out), out
+                    except BadParameter as exc:
+                        return "error", exc.format_message()
+                light = outcome(param.get_runtime_param())
+                full = outcome(build_runtime_param(desc))
+                assert light == full, (name, param.name, value)
+                checked += 1
+    assert checked > 200

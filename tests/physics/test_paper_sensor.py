@@ -150,3 +150,28 @@ def test_virtual_device_source_accepts_a_paper_sensor():
     src = PhysicsSource(StressProfile(peak_pa=10e3), sensor=paper_sensor(1), circuit=PAPER_CIRCUIT)
     sig = src.window(1.0, 1.1, 0)
     assert np.isfinite(sig.frequency_hz) and sig.frequency_hz > 0
+
+
+def test_series_contact_stopping_early_is_bisection_bit_for_bit():
+    """series_contact stops once the bracket is two adjacent floats; the reference is the plain
+    60-step bisection written out here: the same bits, with fewer evaluations of R(u)."""
+    from fsrlab.physics.paper_sensor import paper_sensor, series_contact
+
+    sensor = paper_sensor("paper-a201-1")
+    sigma = np.linspace(0.0, 50e3, 200)
+    resp = sensor.respond(sigma, voltage_v=2.5)
+    calls = [0]
+
+    def film(u):
+        calls[0] += 1
+        return sensor.film_resistance(u, resp.separation_m, resp.area_m2)
+
+    v, rc = np.full(sigma.shape, 2.5), resp.contact_ohm
+    lo, hi = np.zeros(v.shape), v.copy()
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        up = mid + rc * mid / film(mid) - v > 0
+        hi, lo = np.where(up, mid, hi), np.where(up, lo, mid)
+    calls[0] = 0
+    u, r = series_contact(v, rc, film)
+    assert np.array_equal(u, 0.5 * (lo + hi)) and calls[0] < 60

@@ -57,13 +57,13 @@ def test_opamp_voltage_is_eq38_at_5_v():
 def test_virtual_device_and_synthetic_run_agree(range_):
     """The same constant signal (the sensor held at 30 kPa, 10 ms windows, the same noise settings)
     through the virtual device window by window and through synthetic_run all at once. The first
-    window after START (it only opens a period) is left out. Bounds for n ≈ 150 windows: means
+    window after START (it only opens a period) is left out; the device runs on its simulated clock (``speed="max"``). Bounds for n ≈ 150 windows: means
     within 4 standard errors of their difference; standard deviations within a factor 1.4 (the
     ratio of two sample deviations of 150 normal values stays within exp(±3.3/√149) = 0.76..1.31
     with probability 0.999)."""
     n, noise = 151, dict(frequency_noise=1e-3, jitter_s=20e-9)
     src = PhysicsSource(StressProfile("hold", peak_pa=SIGMA, period_s=1.0))
-    with VirtualDevice(src, adc_noise_v=2e-3, seed=3, **noise) as dev:
+    with VirtualDevice(src, adc_noise_v=2e-3, seed=3, speed="max", **noise) as dev:
         ms = _measurements(dev, n, 10, range_)[1:]
     syn = synthetic_run(stress_pa=np.full(n, SIGMA), window_s=0.01, voltage_noise_v=2e-3, seed=3,
                         circuit=VIRTUAL_CIRCUIT.on_range(range_), **noise).columns
@@ -81,3 +81,25 @@ def test_virtual_device_and_synthetic_run_agree(range_):
     # Both read the same A0 codes (2 mV of noise on a fixed voltage: two or three adjacent codes).
     codes = np.unique(np.concatenate([dev_cols["voltage_v"], syn["voltage_v"]]) / ADC_V_PER_COUNT)
     assert codes.size <= 4 and np.ptp(codes) <= 3
+
+
+def test_max_speed_waits_for_the_host_and_keeps_the_time_axis():
+    """``speed="max"``: frames come one window apart on the device's clock (t_ms: whole windows from
+    START, no drift), none is lost while the host does not read, and the device never has more than
+    MAX_UNREAD bytes plus one frame (the protocol's longest line, MAX_LINE) waiting for the host."""
+    from fsrlab.acquisition.protocol import MAX_LINE
+
+    with VirtualDevice(PhysicsSource(), seed=4, speed="max") as dev, SerialLink(dev.port) as link:
+        link.handshake()
+        link.set_window(10)
+        start = link.start()
+        time.sleep(0.3)  # the host reads nothing meanwhile
+        assert dev._unread() <= VirtualDevice.MAX_UNREAD + MAX_LINE
+        frames, end = [], time.monotonic() + 30.0
+        while len(frames) < 300 and time.monotonic() < end:  # the limit only guards against a hang
+            frames += [f for f in link.read_frames() if f.kind == "M"]
+        link.stop()
+    ms = [Measurement.from_frame(f) for f in frames[:300]]
+    assert [f.seq for f in frames[:300]] == list(range(start.seq + 1, start.seq + 301))
+    t = np.array([m.t_ms for m in ms])
+    assert np.all(np.diff(t) == 10) and all(m.window_ms == 10 for m in ms)

@@ -42,7 +42,7 @@ from typing import Callable, Sequence
 from fsrlab.acquisition.messages import Identity, Measurement
 from fsrlab.acquisition.protocol import WINDOW_MS_DEFAULT, WINDOW_MS_MAX, WINDOW_MS_MIN, Frame, ParserStats
 from fsrlab.acquisition.serial_link import DeviceGone, LinkError, SerialLink
-from fsrlab.acquisition.stream import Gap, WindowStream, window_row
+from fsrlab.acquisition.stream import CLOCKS, Gap, WindowStream, window_row
 
 __all__ = ["COLUMNS", "REFERENCE_COLUMNS", "FAILED_ENDINGS", "Gap", "RecordStatus", "RecordResult", "default_stall_s", "record",
            "window_row", "result_dict"]
@@ -80,7 +80,7 @@ class RecordStatus:
     Attributes
     ----------
     elapsed_s : float
-        Time since START. [s]
+        Time since START on the recording's clock (``record``'s ``clock``). [s]
     frames : int
         Rows written.
     frames_per_s : float
@@ -116,7 +116,8 @@ class RecordResult:
     dropped : int
         Frames lost on the link during the recording (sequence gaps: never arrived or corrupted).
     duration_s : float
-        Time from START to the end. [s]
+        Time from START to the end on this computer's clock (with ``clock="device"`` the run's own
+        length is the sidecar's ``acquisition.run_s``). [s]
     file : Path
         The run file.
     ended : str
@@ -138,6 +139,8 @@ class RecordResult:
     no_reference : int
         Rows written without a load-cell conversion (``reference_raw`` empty): no HX711, a
         disconnected one, or a slow one between conversions.
+    run_s : float or None
+        With ``clock="device"``: the last window's ``time_s``, the run's length on the device's clock. [s]
     """
 
     frames: int
@@ -151,6 +154,7 @@ class RecordResult:
     gaps: tuple[Gap, ...] = ()
     reference: bool = False
     no_reference: int = 0
+    run_s: float | None = None
 
     @property
     def failed(self) -> bool:
@@ -175,6 +179,29 @@ def _empty_reason(ended: str, window_ms: int, duration_s: float, bad: int, lost:
     return "the device sent no measurement"
 
 
+def _ending(ended: str, message: str, frames: int, duration: float, gaps: list, in_gap: bool, empty_reason: str,
+            path: Path) -> tuple[str, str]:
+    """How a recording ended, in one word and one line: an empty run and a device silent at the end are failures."""
+    if ended not in ("disconnected", "error", "failed"):
+        if frames == 0:
+            message = f"no valid window recorded in {duration:.1f} s: {empty_reason}; {path} has its header only"
+            ended = "empty"
+        elif in_gap:
+            ended = "stalled"
+            message = (f"the device sent nothing from {gaps[-1].start_s:.1f} s into the run to the end "
+                       f"({gaps[-1].length_s:.1f} s)")
+    if not message:
+        message = {"duration": f"recorded {frames} windows in {duration:.1f} s",
+                   "interrupted": f"interrupted: {frames} windows kept",
+                   "stopped": f"stopped: {frames} windows kept"}[ended]
+        if gaps:
+            message += (f", {len(gaps)} gap{'s' if len(gaps) > 1 else ''} without frames "
+                        f"({sum(g.length_s for g in gaps):.1f} s)")
+    elif ended != "empty":
+        message = f"{message}; {frames} windows kept in {path}"
+    return ended, " ".join(message.split())
+
+
 def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS_DEFAULT, range_: int = 0,
            metadata: dict | None = None, reference: Callable[[Frame], float] | None = None,
            on_status: Callable[[RecordStatus], None] | None = None, stop: threading.Event | None = None,
@@ -183,7 +210,7 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
            on_event: Callable[[str], None] | None = None, health: Callable[[], str | None] | None = None,
            overwrite: bool = False, loadcell=None, area_m2: float | None = None,
            extra_columns: Sequence[str] = (), on_row: Callable[[Measurement, dict], dict | None] | None = None,
-           final_metadata: Callable[[], dict] | None = None) -> RecordResult:
+           final_metadata: Callable[[], dict] | None = None, clock: str = "host") -> RecordResult:
     """Record ``duration_s`` seconds of measurement windows into a run file.
 
     Parameters
@@ -193,7 +220,7 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
     path : str or path-like
         The run's CSV (``NAME.csv``; the sidecar ``NAME.meta.json`` is written beside it).
     duration_s : float
-        Recording time after START (> 0). [s]
+        Recording time after START (> 0), on the clock ``clock`` names. [s]
     window_ms : int
         Measurement window, 10..60000. [ms]
     range_ : int
@@ -235,6 +262,11 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
         windows only). It may set ``stop`` to end the recording.
     final_metadata : callable, optional
         ``final_metadata() -> dict`` merged into the sidecar when the run is closed (however it ends).
+    clock : {"host", "device"}
+        What ``duration_s`` and the progress's ``elapsed_s`` count: ``host``, this computer's clock
+        (hardware, or a virtual meter in real time); ``device``, the run's own time axis (``time_s``,
+        from the device's ``t_ms``): the run ends with the first window that reaches ``duration_s``,
+        for a virtual meter faster than real time. Stalls are wall time either way.
 
     Returns
     -------
@@ -256,6 +288,9 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
 
     if not duration_s > 0:
         raise ValueError(f"duration_s must be > 0 s, got {duration_s!r}")
+    if clock not in CLOCKS:
+        raise ValueError(f"clock must be host or device, got {clock!r}")
+    on_device = clock == "device"
     if not WINDOW_MS_MIN <= window_ms <= WINDOW_MS_MAX:
         raise ValueError(f"window_ms must be in {WINDOW_MS_MIN}..{WINDOW_MS_MAX} ms, got {window_ms!r}")
     if range_ not in (0, 1):
@@ -286,7 +321,8 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
             raise _Failure(str(exc)) from None
 
     stream = WindowStream(link, window_ms, range_, has_ref, stall_s, loadcell, area_m2 if stress_from_force else None,
-                          reference, on_event=on_event, on_gap=save_gaps)
+                          reference, on_event=on_event, on_gap=save_gaps, clock=clock,
+                          end_s=duration_s if on_device else None)
     first_seq = stream.configure()
     columns = list(COLUMNS) + (["stress_pa"] if reference is not None or stress_from_force else [])
     columns += [c for c in (REFERENCE_COLUMNS if has_ref else ()) if c not in columns]
@@ -299,7 +335,7 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
     meta.setdefault("origin", f"fsrlab acquire from {link.port}")
     meta["acquisition"] = {"port": link.port, "baud": link.baud, "device": ident.name,
                            "firmware_version": ident.firmware_version, "protocol_version": ident.protocol_version,
-                           "window_ms": window_ms, "range": range_, "duration_s": duration_s,
+                           "window_ms": window_ms, "range": range_, "duration_s": duration_s, "clock": clock,
                            "stall_s": stall_s, "first_seq": first_seq}
     meta["gaps"] = []
     parser = link.parser
@@ -314,7 +350,7 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
         raise
     t_start = time.monotonic()
     stream.begin(t_start)
-    t_end = t_start + duration_s
+    t_end = t_start + duration_s if not on_device else math.inf  # on the device clock the stream ends the run
     frames, ended, message, dropped, no_ref = 0, "duration", "", 0, 0
     last: Measurement | None = None
     recent: list[float] = []
@@ -326,7 +362,7 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
         try:
             while True:
                 now = time.monotonic()
-                if now >= t_end:
+                if now >= t_end or stream.complete:
                     break
                 if stop is not None and stop.is_set():
                     ended = "stopped"
@@ -359,7 +395,8 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
                 if on_status is not None and now >= next_status:
                     recent = [t for t in recent if t > now - 1.0]
                     span = min(now - t_start, 1.0)
-                    on_status(RecordStatus(now - t_start, frames, len(recent) / span if span > 0 else 0.0,
+                    elapsed = stream.run_s if on_device else now - t_start
+                    on_status(RecordStatus(elapsed, frames, len(recent) / span if span > 0 else 0.0,
                                            last.frequency_hz if last else math.nan,
                                            last.duty_cycle if last else math.nan,
                                            parser.lost - lost0, parser.bad_frames, parser.resets))
@@ -387,30 +424,14 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
         if in_gap:
             gaps.append(Gap(stream.silent_since - t_start, t_start + duration - stream.silent_since))
         st = parser.stats()
-        if ended not in ("disconnected", "error", "failed"):
-            if frames == 0:
-                message = (f"no valid window recorded in {duration:.1f} s: "
-                           + _empty_reason(ended, window_ms, duration_s, st.bad_frames - bad0, st.lost - lost0)
-                           + f"; {path} has its header only")
-                ended = "empty"
-            elif in_gap:
-                ended = "stalled"
-                message = (f"the device sent nothing from {gaps[-1].start_s:.1f} s into the run to the end "
-                           f"({gaps[-1].length_s:.1f} s)")
-        if not message:
-            message = {"duration": f"recorded {frames} windows in {duration:.1f} s",
-                       "interrupted": f"interrupted: {frames} windows kept",
-                       "stopped": f"stopped: {frames} windows kept"}[ended]
-            if gaps:
-                message += (f", {len(gaps)} gap{'s' if len(gaps) > 1 else ''} without frames "
-                            f"({sum(g.length_s for g in gaps):.1f} s)")
-        elif ended != "empty":
-            message = f"{message}; {frames} windows kept in {path}"
-        message = " ".join(message.split())
+        empty_reason = _empty_reason(ended, window_ms, duration_s, st.bad_frames - bad0, st.lost - lost0)
+        ended, message = _ending(ended, message, frames, duration, gaps, in_gap, empty_reason, path)
         writer.metadata["acquisition"].update(
             {"ended": ended, "frames": frames, "dropped": dropped, "resets": st.resets,
              "bad_checksum": st.bad_checksum, "malformed": st.malformed, "garbage_bytes": st.garbage_bytes,
              "recorded_s": round(duration, 3)})
+        if on_device:
+            writer.metadata["acquisition"]["run_s"] = round(stream.run_s, 3)
         if has_ref:
             writer.metadata["acquisition"]["no_reference"] = no_ref
         writer.metadata["gaps"] = [g.to_dict() for g in gaps]
@@ -422,7 +443,7 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
                 writer.metadata["final_metadata_error"] = f"{type(exc).__name__}: {exc}"
         writer.close()
     return RecordResult(frames, dropped, duration, path, ended, message, parser.stats(), ident, tuple(gaps),
-                        has_ref, no_ref)
+                        has_ref, no_ref, stream.run_s if on_device else None)
 
 
 def result_dict(result: RecordResult) -> dict:
@@ -438,10 +459,13 @@ def result_dict(result: RecordResult) -> dict:
     dict
         ``frames``, ``dropped``, ``duration_s`` [s] (rounded to ms) and ``file``, in this order; then,
         for a device with a reference (protocol version 2), ``no_reference``: rows without a load-cell
-        conversion.
+        conversion; for a recording on the device's clock (a virtual bench at ``speed="max"``),
+        ``run_s``: the run's length on that clock [s] (``duration_s`` is this computer's).
     """
     out = {"frames": result.frames, "dropped": result.dropped, "duration_s": round(result.duration_s, 3),
            "file": str(result.file)}
     if result.reference:
         out["no_reference"] = result.no_reference
+    if result.run_s is not None:
+        out["run_s"] = round(result.run_s, 3)
     return out

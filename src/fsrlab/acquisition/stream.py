@@ -9,6 +9,13 @@ the device restarts (a reset frame: the boot ``ID`` with sequence 0), sends the 
 START again, so that recording goes on. :func:`fsrlab.acquisition.recorder.record` (``acquire``,
 ``measure``, ``bench``, ``weights``) and :class:`fsrlab.live.session.LiveSession` (``live``) both read
 through it: a reset, a stall and an unplugged device behave the same everywhere.
+
+The time axis follows one of two clocks (:data:`CLOCKS`). On the ``host`` clock (hardware, or a
+virtual meter in real time) a run's length is this computer's time, and the windows after a reset
+continue from it. On the ``device`` clock (a virtual meter faster than real time, ``speed="max"``)
+the run's own time axis is the only one: the windows after a reset continue from the last one, and
+with ``end_s`` the stream yields no window after the first that reaches it (:attr:`WindowStream.complete`).
+Stalls are wall time on either clock.
 """
 
 from __future__ import annotations
@@ -21,7 +28,12 @@ from typing import Callable, Iterator
 from fsrlab.acquisition.messages import Measurement
 from fsrlab.acquisition.protocol import SEQ_MODULO, UINT32_MODULO, Frame
 
-__all__ = ["Gap", "WindowStream", "configure", "window_row"]
+__all__ = ["CLOCKS", "Gap", "WindowStream", "configure", "window_row"]
+
+CLOCKS = ("host", "device")
+"""What a run's time axis and length count: this computer's clock, or the device's own (its ``t_ms``)."""
+
+_END_TOL_S = 1e-9  # a window's time_s is a sum of milliseconds: reaching end_s allows for rounding
 
 
 @dataclass(frozen=True)
@@ -131,6 +143,12 @@ class WindowStream:
         ``on_gap(now)`` each time a gap begins or ends (e.g. to store the gaps in the sidecar at once).
     on_reset : callable, optional
         ``on_reset()`` when the device has restarted and its settings have been sent again.
+    clock : {"host", "device"}
+        The time axis (:data:`CLOCKS`): after a reset, the windows continue from the host clock's time
+        since START (``host``) or from the last window's ``time_s`` (``device``).
+    end_s : float, optional
+        On the ``device`` clock: the run's length; the first window whose ``time_s`` reaches it is the
+        last one yielded. [s]
 
     Attributes
     ----------
@@ -142,14 +160,24 @@ class WindowStream:
         Arrival of the last frame (``time.monotonic()``), START before the first one. [s]
     written : int
         Rows the caller kept so far (it counts them): the time axis of the windows after a reset
-        continues from the host clock once a row has been kept.
+        continues (from the clock's time) once a row has been kept.
+    run_s : float
+        The last window's ``time_s`` (0 before the first). [s]
+    complete : bool
+        On the ``device`` clock with ``end_s``: a window has reached ``end_s``, the run is complete.
     """
 
     def __init__(self, link, window_ms: int, range_: int, has_ref: bool, stall_s: float, loadcell=None,
                  area_m2: float | None = None, reference: Callable[[Frame], float] | None = None,
                  on_event: Callable[[str], None] | None = None, on_gap: Callable[[float], None] | None = None,
-                 on_reset: Callable[[], None] | None = None) -> None:
+                 on_reset: Callable[[], None] | None = None, clock: str = "host",
+                 end_s: float | None = None) -> None:
+        if clock not in CLOCKS:
+            raise ValueError(f"clock must be host or device, got {clock!r}")
+        if end_s is not None and clock != "device":
+            raise ValueError("end_s: a run ends on its own time axis only on the device clock")
         self.link = link
+        self.clock, self.end_s = clock, end_s
         self.window_ms, self.range = int(window_ms), int(range_)
         self.has_ref, self.stall_s = has_ref, float(stall_s)
         self.loadcell, self.area_m2, self.reference = loadcell, area_m2, reference
@@ -158,6 +186,7 @@ class WindowStream:
         self.in_gap = False
         self.t_start = self.silent_since = time.monotonic()
         self.written = 0
+        self.run_s = 0.0
         self._anchor_ms: int | None = None  # device t_ms at START (start of the first window after it)
         self._offset_s = 0.0
         self._cell_ok: int | None = None  # the HX711's last state (ref_ok), to say when it goes or comes back
@@ -184,6 +213,11 @@ class WindowStream:
         """The gap in progress, its length so far (None when the link is not silent)."""
         return Gap(self.silent_since - self.t_start, now - self.silent_since) if self.in_gap else None
 
+    @property
+    def complete(self) -> bool:
+        """Whether a window has reached ``end_s`` (never on the host clock)."""
+        return self.end_s is not None and self.run_s >= self.end_s - _END_TOL_S
+
     def _event(self, text: str) -> None:
         if self.on_event is not None:
             self.on_event(text)
@@ -192,7 +226,8 @@ class WindowStream:
         """Read what the link has; yield each ``M`` frame, its measurement and its run row.
 
         The row is :func:`window_row`'s, ``time_s`` on the stream's time
-        axis. After the last window of a read that held a reset, the settings are sent again.
+        axis. After the last window of a read that held a reset, the settings are sent again. Once the
+        run is :attr:`complete`, the windows still read are left out.
 
         Yields
         ------
@@ -217,6 +252,8 @@ class WindowStream:
                         f"(since {self.silent_since - self.t_start:.1f} s into the run)")
         restart = False
         for frame in batch:
+            if self.complete:
+                return  # the device clock reached the run's end: the windows after it are not part of it
             if frame.reset:
                 restart = True
                 self._anchor_ms = None
@@ -225,10 +262,14 @@ class WindowStream:
             m = Measurement.from_frame(frame)
             if self._anchor_ms is None:
                 self._anchor_ms = (m.t_ms - m.window_ms) % UINT32_MODULO
-                self._offset_s = (max(time.monotonic() - self.t_start - m.window_ms / 1000.0, 0.0)
-                                  if self.written else 0.0)
-            row = window_row(m, self._offset_s + ((m.t_ms - self._anchor_ms) % UINT32_MODULO) / 1000.0,
-                             self.has_ref, self.loadcell, self.area_m2,
+                if not self.written:
+                    self._offset_s = 0.0
+                elif self.clock == "device":
+                    self._offset_s = self.run_s
+                else:
+                    self._offset_s = max(time.monotonic() - self.t_start - m.window_ms / 1000.0, 0.0)
+            self.run_s = self._offset_s + ((m.t_ms - self._anchor_ms) % UINT32_MODULO) / 1000.0
+            row = window_row(m, self.run_s, self.has_ref, self.loadcell, self.area_m2,
                              self.reference(frame) if self.reference is not None else None)
             if self.has_ref and m.ref_ok != self._cell_ok:
                 if m.ref_ok == 0:

@@ -7,7 +7,9 @@
    :func:`~fsrlab.bench.protocols.twin_status` says it can run, else the Python virtual
    device, and says which;
 2. records two spring runs (``fsrlab bench spring``: a calibration run and a test run) and a
-   dead-weight run (``fsrlab bench weights``: 200 g and 400 g placed again and again);
+   dead-weight run (``fsrlab bench weights``: 200 g and 400 g placed again and again); at
+   ``speed="max"`` (the default) the bench runs faster than real time and the three runs are
+   recorded at once, each on its own virtual meter (their time axes are the simulated clocks);
 3. calibrates on the calibration run against the load cell's force when the meter has one (the
    virtual meter emulates an HX711; else the stress the bench applied), with the causal hysteresis
    compensation and the lag searched automatically (it finds 0 within a row: the reference is taken
@@ -65,7 +67,7 @@ def demo_sensor(name=None):
 
 @dataclass(frozen=True)
 class DemoSettings:
-    """How long the demo's recordings are (the virtual bench runs in real time).
+    """How long the demo's recordings are and how fast the virtual bench runs them.
 
     Parameters
     ----------
@@ -85,6 +87,9 @@ class DemoSettings:
         Measurement window. [ms]
     seed : int
         Noise seed of the first run (the others use the next ones).
+    speed : {"realtime", "max"}
+        ``max``: the virtual bench as fast as the machine runs it, the three runs at once;
+        ``realtime``: one after the other, as hardware would (:data:`fsrlab.bench.protocols.SPEEDS`).
     """
 
     cycles: int = 4
@@ -95,6 +100,7 @@ class DemoSettings:
     settle_hold_s: float = 0.5
     window_ms: int = 20
     seed: int = 1
+    speed: str = "max"
 
 
 @dataclass
@@ -210,7 +216,9 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
     RuntimeError
         A recording that failed (the message says which and why).
     """
-    from fsrlab.bench.protocols import SpringPlan, WeightsPlan, run_protocol, twin_status
+    from concurrent.futures import Future, ThreadPoolExecutor
+
+    from fsrlab.bench.protocols import SPEEDS, SpringPlan, WeightsPlan, run_protocol, twin_status
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -218,6 +226,8 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
     sensor_obj, sensor_text = demo_sensor(sensor)
     if device not in ("auto", "twin", "virtual"):
         raise ValueError(f"device: must be auto, twin or virtual, got {device!r}")
+    if s.speed not in SPEEDS:
+        raise ValueError(f"speed: must be one of {', '.join(SPEEDS)}, got {s.speed!r}")
     ok, reason = twin_status()
     if device == "twin" and not ok:
         raise ValueError(f"device: the digital twin is not available: {reason}")
@@ -240,36 +250,60 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
     def record(plan, name: str, seed: int, label: str, total_s: float | None, settle=None):
         nonlocal bench
         path = out / name
+        used = bench  # (runs recorded at once: another one may fall back meanwhile)
         try:
-            run = run_protocol(plan, path, device=bench, sensor=sensor_obj, seed=seed, window_ms=s.window_ms,
-                               overwrite=True, on_status=recorder(label, total_s), settle=settle)
+            run = run_protocol(plan, path, device=used, sensor=sensor_obj, seed=seed, window_ms=s.window_ms,
+                               overwrite=True, on_status=recorder(label, total_s), settle=settle, speed=s.speed)
         except Exception as exc:  # noqa: BLE001 - the twin failing: say so and use the Python device
-            if bench != "twin" or device == "twin":
+            if used != "twin" or device == "twin":
                 raise
-            say(f"      the digital twin failed ({type(exc).__name__}: {exc}); using the Python virtual device")
+            say(f"      {label}: the digital twin failed ({type(exc).__name__}: {exc}); using the Python virtual device")
             bench = result.device = "virtual"
-            run = run_protocol(plan, path, device=bench, sensor=sensor_obj, seed=seed, window_ms=s.window_ms,
-                               overwrite=True, on_status=recorder(label, total_s), settle=settle)
+            run = run_protocol(plan, path, device="virtual", sensor=sensor_obj, seed=seed, window_ms=s.window_ms,
+                               overwrite=True, on_status=recorder(label, total_s), settle=settle, speed=s.speed)
         if run.result.failed or not run.result.frames:
             raise RuntimeError(f"{path}: the recording failed: {run.result.message}")
         result.files[name] = path
         return run
 
-    # 1. The bench and the spring runs.
+    # 1. The bench and the spring runs. Faster than real time, the three recordings run at once (each its own
+    # meter and time axis): the machine's cores share the simulations.
     spring = SpringPlan(peak_pa=s.peak_pa, cycles=s.cycles, period_s=s.period_s)
+    weights = WeightsPlan(masses_kg=tuple(s.masses_kg), repeat=s.repeat)
+    at_once = s.speed == "max"
+    pool = ThreadPoolExecutor(3, thread_name_prefix="fsrlab-demo-bench") if at_once else None
+
+    def later(*args, **kwargs) -> Future:
+        if pool is not None:
+            return pool.submit(record, *args, **kwargs)
+        f: Future = Future()
+        f.set_result(record(*args, **kwargs))
+        return f
+
+    pace = "faster than real time, the three runs at once" if at_once else "in real time"
     t0 = step(f"spring cycles on the {'digital twin (firmware in simavr)' if bench == 'twin' else 'Python virtual device'}"
               f"{'' if bench == 'twin' else ' (the twin is not available: ' + reason + ')'}: sensor {sensor_text}; "
-              f"{s.cycles} cycles 0 → {s.peak_pa / 1e3:g} kPa → 0 of {s.period_s:g} s, twice (calibration run, test run)")
-    r1 = record(spring, "calibration-run.csv", s.seed, "calibration run", spring.duration_s)
-    r2 = record(spring, "test-run.csv", s.seed + 1, "test run", spring.duration_s)
-    done("spring runs", t0, f"{r1.result.frames} + {r2.result.frames} windows on the {bench} bench")
+              f"{s.cycles} cycles 0 → {s.peak_pa / 1e3:g} kPa → 0 of {s.period_s:g} s, twice (calibration run, test run); "
+              f"{pace}")
+    try:
+        f1 = later(spring, "calibration-run.csv", s.seed, "calibration run", spring.duration_s)
+        f2 = later(spring, "test-run.csv", s.seed + 1, "test run", spring.duration_s)
+        fw = later(weights, "weights-run.csv", s.seed + 2, "dead weights", None,
+                   settle={"hold_s": s.settle_hold_s}) if at_once else None
+        r1, r2 = f1.result(), f2.result()
+        done("spring runs", t0, f"{r1.result.frames} + {r2.result.frames} windows on the {bench} bench")
 
-    # 2. Dead weights.
-    weights = WeightsPlan(masses_kg=tuple(s.masses_kg), repeat=s.repeat)
-    t0 = step(f"dead weights: {', '.join(format(m * 1e3, 'g') + ' g' for m in weights.masses_kg)}, "
-              f"each placed {s.repeat} times from below, unloaded in between ({len(weights.steps())} placements)")
-    rw = record(weights, "weights-run.csv", s.seed + 2, "dead weights", None,
-                settle={"hold_s": s.settle_hold_s})
+        # 2. Dead weights.
+        t0 = step(f"dead weights: {', '.join(format(m * 1e3, 'g') + ' g' for m in weights.masses_kg)}, "
+                  f"each placed {s.repeat} times from below, unloaded in between ({len(weights.steps())} placements)")
+        if fw is None:
+            fw = later(weights, "weights-run.csv", s.seed + 2, "dead weights", None, settle={"hold_s": s.settle_hold_s})
+        rw = fw.result()
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=True)
+    for name in ("calibration-run.csv", "test-run.csv", "weights-run.csv"):  # in the plan's order, however they ended
+        result.files[name] = result.files.pop(name)
     result.files["placements"] = rw.placements
     done("dead weights", t0, f"{rw.summary['recorded']} of {len(weights.steps())} placements recorded")
 

@@ -31,7 +31,7 @@ from typing import Callable
 from fsrlab.bench.weights import Step, plan_steps
 from fsrlab.units import STANDARD_GRAVITY
 
-__all__ = ["PROTOCOLS", "DEVICES", "VIRTUAL_SENSORS", "virtual_sensor", "SpringPlan", "WeightsPlan", "CreepPlan", "twin_status", "open_bench",
+__all__ = ["PROTOCOLS", "DEVICES", "SPEEDS", "VIRTUAL_SENSORS", "virtual_sensor", "SpringPlan", "WeightsPlan", "CreepPlan", "twin_status", "open_bench",
            "ProtocolRun", "run_protocol"]
 
 PROTOCOLS = ("spring", "weights", "creep")
@@ -39,6 +39,10 @@ PROTOCOLS = ("spring", "weights", "creep")
 
 DEVICES = ("virtual", "twin", "port")
 """Where a protocol runs: the Python virtual device, the digital twin (firmware in simavr), a serial port."""
+
+SPEEDS = ("realtime", "max")
+"""Pacing of a virtual bench: ``realtime`` (as hardware, for a person watching) or ``max`` (as fast as the
+machine runs it; the run's time axis stays the simulated one)."""
 
 
 @dataclass(frozen=True)
@@ -258,7 +262,7 @@ def twin_status() -> tuple[bool, str]:
     return bool(ok), "" if ok else str(reason)
 
 
-def open_bench(device: str, source, seed: int | None = None):
+def open_bench(device: str, source, seed: int | None = None, speed: str = "realtime"):
     """A virtual meter driven by ``source``, not yet opened: the Python virtual device or the twin.
 
     Parameters
@@ -270,6 +274,8 @@ def open_bench(device: str, source, seed: int | None = None):
         What the sensor and the circuits do (``PhysicsSource``, ``BenchSource``).
     seed : int, optional
         Random seed of the noise.
+    speed : {"realtime", "max"}
+        Pacing of the simulated time (:data:`SPEEDS`).
 
     Returns
     -------
@@ -279,12 +285,14 @@ def open_bench(device: str, source, seed: int | None = None):
     Raises
     ------
     ValueError
-        An unknown device, or the twin is not available (the message says why).
+        An unknown device or speed, or the twin is not available (the message says why).
     """
+    if speed not in SPEEDS:
+        raise ValueError(f"speed must be one of {', '.join(SPEEDS)}, got {speed!r}")
     if device == "virtual":
         from fsrlab.virtual.device import VirtualDevice
 
-        return VirtualDevice(source, seed=seed)
+        return VirtualDevice(source, seed=seed, speed=speed)
     if device == "twin":
         ok, reason = twin_status()
         if not ok:
@@ -293,7 +301,7 @@ def open_bench(device: str, source, seed: int | None = None):
         from fsrlab.virtual.twin import Twin
 
         # The load cell the Python virtual device emulates by default, on the twin's HX711 model.
-        return Twin(source=source, speed="realtime", seed=0 if seed is None else seed, loadcell=LoadCellModel())
+        return Twin(source=source, speed=speed, seed=0 if seed is None else seed, loadcell=LoadCellModel())
     raise ValueError(f"device must be virtual or twin, got {device!r}")
 
 
@@ -333,7 +341,8 @@ def run_protocol(plan, out, device: str = "virtual", port: str | None = None, se
                  loadcell=None, announce: Callable[[str], None] | None = None,
                  confirm: Callable[[], str | None] | None = None, overwrite: bool = False,
                  on_status: Callable | None = None, settle: dict | None = None,
-                 gravity_m_s2: float = STANDARD_GRAVITY, metadata: dict | None = None) -> ProtocolRun:
+                 gravity_m_s2: float = STANDARD_GRAVITY, metadata: dict | None = None,
+                 speed: str = "realtime") -> ProtocolRun:
     """Run a bench protocol into a run file.
 
     Parameters
@@ -372,6 +381,10 @@ def run_protocol(plan, out, device: str = "virtual", port: str | None = None, se
         Local gravity for m·g. [m/s²]
     metadata : dict, optional
         More sidecar content.
+    speed : {"realtime", "max"}
+        A virtual bench's pacing (:data:`SPEEDS`): ``max`` records as fast as the machine runs the
+        device, the run's duration and times on the device's simulated clock (``record``'s
+        ``clock="device"``); hardware is ``realtime`` only.
 
     Returns
     -------
@@ -393,6 +406,10 @@ def run_protocol(plan, out, device: str = "virtual", port: str | None = None, se
         raise ValueError(f"device must be one of {', '.join(DEVICES)}, got {device!r}")
     if device == "port" and not port:
         raise ValueError("port: a serial port is needed for device='port'")
+    if speed not in SPEEDS:
+        raise ValueError(f"speed must be one of {', '.join(SPEEDS)}, got {speed!r}")
+    if device == "port" and speed != "realtime":
+        raise ValueError("speed: hardware runs in real time; speed='max' is for a virtual bench")
     out = Path(out)
     say = announce or (lambda text: None)
     answer = confirm or (lambda: "ok")
@@ -478,7 +495,7 @@ def run_protocol(plan, out, device: str = "virtual", port: str | None = None, se
         kwargs["on_row"] = on_row
     reference = health = None
     if virtual:
-        dev = open_bench(device, source, seed)
+        dev = open_bench(device, source, seed, speed)
         vmeta = source.metadata()
         if metadata and "sensor" in metadata:  # the name given, beside the model that stood for it
             vmeta["sensor"] = {**metadata["sensor"], "virtual_model": vmeta["sensor"]["model"],
@@ -523,7 +540,7 @@ def run_protocol(plan, out, device: str = "virtual", port: str | None = None, se
             result = record(link, out, duration, window_ms=window_ms, metadata=meta, reference=reference,
                             on_status=on_status, stop=stop, health=health, overwrite=overwrite,
                             loadcell=loadcell, area_m2=area_m2 if reference is None else None,
-                            on_event=say, **kwargs)
+                            on_event=say, clock="device" if speed == "max" else "host", **kwargs)
     finally:
         if dev is not None:
             dev.close()

@@ -74,6 +74,63 @@ def _click_command():
     return _CLICK[key]
 
 
+def _light_coercion() -> None:
+    """Give plain options (bool, int, float, str, Path, or a ``parser=``) a coercion without pydantic.
+
+    typer (≥ 0.29) checks every option's value once more after click has read it, through a pydantic
+    ``TypeAdapter`` it builds the first time the option is used: importing pydantic and building the
+    adapters is ~0.1 s of a short command's start (cProfile), the largest part of ``fsrlab oscillator``'s.
+    For these options typer's adapter does something simple: with ``parser=`` it returns
+    ``parser(value)``; for a value that already has the annotated type it returns it; a Path goes
+    through ``coerce_cli_path``. This does the same directly, and hands anything else (another type
+    or value, ranges, choices, files, a parser raising ValueError) to typer's own coercion.
+    ``tests/cli/test_main.py`` compares both on every option of every command.
+    """
+    import os
+    from dataclasses import dataclass
+    from pathlib import Path
+
+    from typer._coercion import RuntimeParam, build_runtime_param
+    from typer._param_types import coerce_cli_path
+    from typer.core import _TyperParameter
+
+    if getattr(_TyperParameter, "_fsrlab_light", False):
+        return
+
+    @dataclass(frozen=True)
+    class Plain(RuntimeParam):
+        def _coerce_value(self, value, param, ctx):
+            ann, parser = self.annotation, self.parameter_info.parser
+            try:
+                if parser is not None:
+                    return parser(value)
+                if type(value) is ann:
+                    return value
+                if ann is float and type(value) is int:
+                    return float(value)
+                if ann is Path and isinstance(value, (str, os.PathLike)):
+                    return coerce_cli_path(value if isinstance(value, Path) else Path(value), self.parameter_info,
+                                           path_type=Path, param=param, ctx=ctx)
+            except ValueError:
+                pass  # typer's coercion words it
+            return build_runtime_param(param.type_descriptor)._coerce_value(value, param=param, ctx=ctx)
+
+    def get_runtime_param(self):
+        if self._runtime_param is None:
+            desc = self.type_descriptor
+            plain = (desc.parameter_info.parser is not None and not (desc.is_list or desc.is_tuple)) or (
+                desc.annotation in (bool, int, float, str, Path) and not (desc.is_file or desc.is_choice or desc.is_ranged))
+            self._runtime_param = (Plain(parameter_info=desc.parameter_info, annotation=desc.annotation) if plain
+                                   else build_runtime_param(desc))
+        return self._runtime_param
+
+    _TyperParameter.get_runtime_param = get_runtime_param
+    _TyperParameter._fsrlab_light = True
+
+
+_light_coercion()
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; usage errors and invalid values end with one line and exit code 2.
 

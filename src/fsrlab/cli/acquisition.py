@@ -14,15 +14,17 @@ import typer
 from fsrlab.cli import app
 from fsrlab.cli.options import (
     AREA_HELP, C_OFF_HELP, CORRUPT_HELP, DROP_HELP, LiveView, LOADCELL_HELP, NO_LOADCELL_HELP, PEAK_HELP,
-    PERIOD_HELP, PROFILE_HELP, RATE_HELP, SEED_HELP, SENSOR_HELP, areas, check_out, check_rate, check_virtual,
-    emit_json, fail, farads, fraction, loadcell_option, make_virtual_device, pascals, plain_numbers, seconds,
-    sensor_area, sigterm_as_interrupt, window_ms_option,
+    PERIOD_HELP, PROFILE_HELP, RATE_HELP, SEED_HELP, SENSOR_HELP, SPEED_HELP, areas, check_out, check_rate,
+    check_speed, check_virtual, emit_json, fail, farads, fraction, loadcell_option, make_virtual_device, pascals,
+    plain_numbers, seconds, sensor_area, sigterm_as_interrupt, window_ms_option,
 )
+
 
 @app.command("acquire")
 def acquire(
     port: str = typer.Option(None, "--port", help="Serial port (/dev/ttyACM0, COM3, a pty) or 'auto' to find an Uno by USB id."),
     virtual: bool = typer.Option(False, "--virtual", help="Record from a virtual device (pty, physics and 555 models) instead of hardware."),
+    speed: str = typer.Option("realtime", "--speed", help=SPEED_HELP),
     duration: float = typer.Option("60s", "--duration", parser=seconds, metavar="TIME", help="Recording time [s]: 90, 90s, 1.5min, 2h, 500ms (a bare m is refused: minutes or milliseconds?)."),
     out: Path = typer.Option(Path("run.csv"), "--out", "-o", help="Run file (CSV + NAME.meta.json sidecar, docs/data-format.md)."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing run file and its sidecar; without it an existing one stops the command before the device is touched."),
@@ -43,7 +45,7 @@ def acquire(
     no_loadcell: bool = typer.Option(False, "--no-loadcell", help=NO_LOADCELL_HELP),
     hx711_rate: int = typer.Option(80, "--hx711-rate", help=RATE_HELP),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No live display (notices of gaps still go to stderr)."),
-    json_out: bool = typer.Option(False, "--json", help='Print {"frames", "dropped", "duration_s", "file"} as JSON, and "no_reference" (windows without a load-cell conversion) for a protocol-2 device.'),
+    json_out: bool = typer.Option(False, "--json", help='Print {"frames", "dropped", "duration_s", "file"} as JSON, "no_reference" (windows without a load-cell conversion) for a protocol-2 device, and "run_s" (the run\'s length on the device\'s clock) with --speed max.'),
 ) -> None:
     """Record measurement windows (frequency, duty cycle, A0 voltage) from an fsrlab meter into a run file.
 
@@ -65,6 +67,7 @@ def acquire(
 
     if virtual == (port is not None):
         fail("give exactly one of --port PORT|auto and --virtual", "--port")
+    check_speed(speed, virtual)
     if not duration > 0:
         fail(f"must be > 0 s, got {duration:g} s", "--duration")
     window_ms = window_ms_option(window)
@@ -87,7 +90,7 @@ def acquire(
     if virtual:
         check_virtual(profile, peak, period, c_off, corrupt, drop, seed)
         device, source = make_virtual_device(profile, peak, period, c_off, seed, corrupt, drop, not no_loadcell,
-                                         hx711_rate, area_m2)
+                                             hx711_rate, area_m2, speed=speed)
         if cal is None and device.load_cell is not None:
             cal = device.load_cell.calibration()
         port = device.open()
@@ -108,7 +111,8 @@ def acquire(
                 LiveView(not quiet, f"fsrlab acquire {link.port} -> {out}") as view:
             result = record(link, out, duration, window_ms=window_ms, range_=range_, metadata=metadata,
                             reference=reference, on_status=view.update, on_event=view.notice, stall_s=stall,
-                            health=health, overwrite=overwrite, loadcell=cal, area_m2=area_m2)
+                            health=health, overwrite=overwrite, loadcell=cal, area_m2=area_m2,
+                            clock="device" if speed == "max" else "host")
     finally:
         if device is not None:
             device.close()

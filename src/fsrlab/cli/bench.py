@@ -9,8 +9,8 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli.options import (
-    Keyboard, LiveView, check_out, emit_json, fail, loadcell_option, mass_list, masses, pascals, plain_numbers,
-    seconds, sensor_area, sigterm_as_interrupt, virtual_sensor_option, window_ms_option,
+    Keyboard, LiveView, check_out, check_speed, emit_json, fail, loadcell_option, mass_list, masses, pascals,
+    plain_numbers, seconds, sensor_area, sigterm_as_interrupt, virtual_sensor_option, window_ms_option,
 )
 
 _PROTOCOLS = ("spring", "weights", "creep")
@@ -21,6 +21,7 @@ def bench(
     protocol: str = typer.Argument(..., metavar="PROTOCOL", help="spring (cycles 0 → peak → 0), weights (dead-weight re-placements, Tables 4/5) or creep (a held mass)."),
     virtual: bool = typer.Option(False, "--virtual", help="Run on the Python virtual device (a model of the meter on a pty); unattended."),
     twin: bool = typer.Option(False, "--twin", help="Run on the digital twin (the firmware in simavr on a pty); unattended."),
+    speed: str = typer.Option("realtime", "--speed", help="With --virtual or --twin: realtime (as hardware, for watching) or max (as fast as this computer runs the bench; the run's times stay the simulated clock)."),
     port: str = typer.Option(None, "--port", help="Serial port of a real meter (/dev/ttyACM0, COM3, a pty) or 'auto': you are prompted for each step."),
     out: Path = typer.Option(None, "--out", "-o", help="Run file (CSV + NAME.meta.json sidecar; weights: NAME.placements.csv beside it) [default: PROTOCOL.csv]."),
     sensor: str = typer.Option(None, "--sensor", help="Sensor: a preset for its sensing area (flexiforce-a201, interlink-402; the virtual FSR gets that area), or with --virtual/--twin a virtual sensor: virtual-fsr (default), paper-a201-1 .. paper-a201-4 (the sensors fitted to the paper's §6; with --port only their area)."),
@@ -62,6 +63,7 @@ def bench(
         fail(f"must be one of {', '.join(_PROTOCOLS)}, got {protocol!r}", "PROTOCOL")
     if int(virtual) + int(twin) + int(port is not None) != 1:
         fail("give exactly one of --virtual, --twin and --port PORT|auto", "--port")
+    check_speed(speed, virtual or twin, "--virtual or --twin")
     out = out if out is not None else Path(f"{protocol}.csv")
     window_ms = window_ms_option(window)
     if seed is not None and seed < 0:
@@ -137,7 +139,8 @@ def bench(
             run = run_protocol(plan, out, device=device, port=port, sensor=sensor_obj, area_m2=area_m2, seed=seed,
                                window_ms=window_ms, loadcell=cal, announce=announce, confirm=confirm,
                                overwrite=overwrite, settle={"hold_s": settle_hold} if protocol == "weights" else None,
-                               metadata={"sensor": sensor_meta} if sensor_meta else None, on_status=view.update)
+                               metadata={"sensor": sensor_meta} if sensor_meta else None, on_status=view.update,
+                               speed=speed)
     except KeyboardInterrupt:  # Ctrl-C before the recording began (while asked to start): nothing recorded
         raise typer.Abort() from None
     except ValueError as exc:

@@ -222,6 +222,8 @@ LOADCELL_HELP = ("Load-cell calibration JSON (fsrlab loadcell tare/scale): HX711
                   "Default with --virtual: the virtual load cell's own parameters.")
 NO_LOADCELL_HELP = "Virtual device: emulate a meter without an HX711 (ref_ok 0: reference columns empty)."
 RATE_HELP = "Virtual device: the HX711's output data rate [samples/s]: 10 or 80."
+SPEED_HELP = ("With --virtual: realtime (one window per window length of wall time, as hardware) or max (as fast as "
+              "this computer runs the device; the recording time and the run's times are then the device's simulated clock).")
 
 
 def sensor_area(sensor: str | None, area: float | None) -> tuple[dict | None, float | None]:
@@ -316,7 +318,7 @@ def check_virtual(profile: str, peak: float, period: float, c_off: float, corrup
 
 def make_virtual_device(profile: str, peak: float, period: float, c_off: float, seed: int | None,
                     corrupt: float, drop: float, load_cell: bool = True, rate: int = 80, area_m2: float | None = None,
-                    sensor_model=None):
+                    sensor_model=None, speed: str = "realtime"):
     from fsrlab.acquisition.loadcell import LoadCellModel
     from fsrlab.virtual.sources import VIRTUAL_CIRCUIT, PhysicsSource, StressProfile
     from fsrlab.virtual.device import Faults, VirtualDevice
@@ -330,7 +332,16 @@ def make_virtual_device(profile: str, peak: float, period: float, c_off: float, 
     except ValueError:  # the sensor model has no valid response up to this stress
         fail(f"the virtual sensor model has no valid response up to {format_eng(peak, 'Pa')} (its resistance would not "
              "be positive); choose a smaller peak, e.g. 50k", "--peak")
-    return VirtualDevice(source, faults=Faults(corrupt=corrupt, drop=drop), seed=seed, load_cell=cell), source
+    return VirtualDevice(source, faults=Faults(corrupt=corrupt, drop=drop), seed=seed, load_cell=cell,
+                         speed=speed), source
+
+
+def check_speed(speed: str, virtual: bool, flag: str = "--virtual") -> None:
+    """One line naming ``--speed`` for a pacing other than realtime/max, or max on hardware."""
+    if speed not in ("realtime", "max"):
+        fail(f"must be realtime or max, got {speed!r}", "--speed")
+    if speed == "max" and not virtual:
+        fail(f"max is for a virtual bench ({flag}); hardware runs in real time", "--speed")
 
 
 def window_ms_option(window_s: float) -> int:

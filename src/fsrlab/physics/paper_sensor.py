@@ -85,7 +85,8 @@ def series_contact(voltage_v, r_contact_ohm, film_resistance, iterations: int = 
         ``film_resistance(u)`` → resistance of the composite at voltage u (same shape as u),
         positive and not increasing in u (tunnelling). [Ω]
     iterations : int
-        Bisection steps (60 halve the bracket to ~1e-18 of V).
+        Bisection steps (60 halve the bracket to ~1e-18 of V; it stops sooner once the bracket is
+        two adjacent floats, when further steps could not change it).
 
     Returns
     -------
@@ -114,6 +115,8 @@ def series_contact(voltage_v, r_contact_ohm, film_resistance, iterations: int = 
     else:
         for _ in range(iterations):
             mid = 0.5 * (lo + hi)
+            if np.all((mid == lo) | (mid == hi)):  # a fixed point: the remaining steps change nothing
+                break
             g = mid + rc * mid / film_resistance(mid) - v  # Fig. 3: V = u + R_C·I
             up = g > 0
             hi = np.where(up, mid, hi)

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import importlib
 import json
+import os
+import pickle
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Callable
@@ -18,7 +20,7 @@ from fsrlab import __version__
 from fsrlab.reports.html import render_html
 from fsrlab.reports.model import Section
 
-__all__ = ["SECTION_MODULES", "ReportResult", "build_sections", "write_report"]
+__all__ = ["SECTION_MODULES", "SIDE_SECTIONS", "ReportResult", "build_sections", "write_report"]
 
 #: Section builders in report order. Add yours here.
 SECTION_MODULES = [
@@ -27,6 +29,10 @@ SECTION_MODULES = [
     "fsrlab.reports.sections.measurements",
     "fsrlab.reports.sections.experiment",
 ]
+
+#: Sections built in a second process (forked) on a machine with more than one core, while this one builds
+#: the others and ngspice runs: about half of the drawing and computing each (docs/performance.md).
+SIDE_SECTIONS = ("fsrlab.reports.sections.physics", "fsrlab.reports.sections.measurements")
 
 
 @dataclass
@@ -53,7 +59,51 @@ class ReportResult:
         return [self.index.parent / f.filename for s in self.sections for f in s.figures]
 
 
-def build_sections(outdir: Path, progress: Callable[[str], None] | None = None) -> list[Section]:
+class _Side:
+    """Section builders run in a forked child process; their Sections come back pickled through a pipe."""
+
+    def __init__(self, names: list[str], outdir: Path) -> None:
+        self.names, self.pid, self._result = names, None, None
+        if not names:
+            return
+        read, write = os.pipe()
+        pid = os.fork()
+        if pid == 0:  # the child: build, send, leave without running the parent's clean-up
+            os.close(read)
+            code = 0
+            try:
+                try:
+                    payload = pickle.dumps(("ok", [importlib.import_module(n).build(outdir) for n in names]))
+                except BaseException as exc:  # noqa: BLE001 - the parent raises it
+                    code = 1
+                    try:
+                        payload = pickle.dumps(("error", exc))
+                    except Exception:  # noqa: BLE001 - an exception that does not pickle: its text
+                        payload = pickle.dumps(("error", RuntimeError(f"{type(exc).__name__}: {exc}")))
+                with os.fdopen(write, "wb") as fh:
+                    fh.write(payload)
+            finally:
+                os._exit(code)
+        os.close(write)
+        self.pid, self._read = pid, read
+
+    def result(self, name: str) -> Section:
+        """The Section of ``name`` (waits for the child the first time)."""
+        if self._result is None:
+            with os.fdopen(self._read, "rb") as fh:
+                data = fh.read()
+            os.waitpid(self.pid, 0)
+            if not data:
+                raise RuntimeError("report: the process building " + ", ".join(self.names) + " ended without a result")
+            status, value = pickle.loads(data)
+            if status != "ok":
+                raise value
+            self._result = dict(zip(self.names, value))
+        return self._result[name]
+
+
+def build_sections(outdir: Path, progress: Callable[[str], None] | None = None,
+                   parallel: bool | None = None) -> list[Section]:
     """Run every section builder of :data:`SECTION_MODULES` into ``outdir``.
 
     Parameters
@@ -61,24 +111,38 @@ def build_sections(outdir: Path, progress: Callable[[str], None] | None = None) 
     outdir : Path
         Directory the builders write their PNGs into.
     progress : callable, optional
-        Called with each section's name before it is built.
+        Called with each section's name before it is built (this process's sections first, those with
+        a ``prefetch`` last among them, then those collected from the second process).
+    parallel : bool, optional
+        Build :data:`SIDE_SECTIONS` in a forked second process; default: where ``fork`` exists and
+        the machine has more than one core.
 
     Returns
     -------
     list of Section
+        In the order of :data:`SECTION_MODULES`, whichever process built them.
     """
     modules = [importlib.import_module(name) for name in SECTION_MODULES]
+    if parallel is None:
+        parallel = hasattr(os, "fork") and (os.cpu_count() or 1) > 1
+    side = _Side([m.__name__ for m in modules if parallel and m.__name__ in SIDE_SECTIONS
+                  and not hasattr(m, "prefetch")], outdir)  # forked before any thread starts
     # Slow external work (ngspice) starts first and runs while the other sections draw.
     started = {m.__name__: m.prefetch() for m in modules if hasattr(m, "prefetch")}
-    sections = []
-    for module in modules:
+    built = {}
+    # This process's sections first, those waiting for external work (ngspice) last, then those of the
+    # second process (built meanwhile).
+    for module in sorted(modules, key=lambda m: (m.__name__ in side.names, m.__name__ in started)):
+        name = module.__name__
         if progress:
-            progress(module.__name__.rsplit(".", 1)[-1])
-        if module.__name__ in started:
-            sections.append(module.build(outdir, prefetched=started[module.__name__]))
+            progress(name.rsplit(".", 1)[-1])
+        if name in side.names:
+            built[name] = side.result(name)
+        elif name in started:
+            built[name] = module.build(outdir, prefetched=started[name])
         else:
-            sections.append(module.build(outdir))
-    return sections
+            built[name] = module.build(outdir)
+    return [built[m.__name__] for m in modules]
 
 
 def write_report(outdir: str | Path, progress: Callable[[str], None] | None = None) -> ReportResult:

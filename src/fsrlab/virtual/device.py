@@ -3,7 +3,10 @@
 :class:`VirtualDevice` opens a pseudo-terminal pair (``os.openpty``, raw mode), keeps the master
 side and offers the slave's path (``/dev/pts/N``) to any program that opens serial ports. It answers
 ``ID``/``START``/``STOP``/``WINDOW``/``RANGE`` as docs/protocol.md prescribes and, while started,
-sends one ``M`` frame per window, in real time.
+sends one ``M`` frame per window: in real time (``speed="realtime"``), or as fast as the host reads
+them (``speed="max"``: the device's clock is simulated and moves one window at a time, each frame
+written once the host has read all but a few of the ones before, so nothing is lost and the
+windows' times are the same simulated time axis).
 
 What the 555 does during a window comes from a *signal source*
 (:class:`~fsrlab.virtual.sources.SignalSource`, :mod:`fsrlab.virtual.sources`), injectable for tests.
@@ -29,9 +32,11 @@ References
 from __future__ import annotations
 
 import errno
+import fcntl
 import math
 import os
 import select
+import termios
 import threading
 import time
 import tty
@@ -51,7 +56,10 @@ from fsrlab.physics.sensor import A201_AREA_M2
 
 from fsrlab.virtual.sources import PhysicsSource, Signal, SignalSource
 
-__all__ = ["FIRMWARE_VERSION", "Faults", "VirtualDevice"]
+__all__ = ["FIRMWARE_VERSION", "SPEEDS", "Faults", "VirtualDevice"]
+
+SPEEDS = ("realtime", "max")
+"""Pacing of the device's clock: ``realtime`` (the wall clock) or ``max`` (simulated, as fast as the host reads)."""
 
 FIRMWARE_VERSION = "1.0.0-virtual"
 """Firmware version the virtual device reports in its ``ID`` frame."""
@@ -130,6 +138,11 @@ class VirtualDevice:
         The load cell and HX711 under the sensor (default :class:`LoadCellModel()`: 80 samples/s);
         None: no HX711 (``ref_ok`` 0 in every frame). Its noise has a random stream of its own, so
         the 555's and A0's numbers for a seed do not depend on it.
+    speed : {"realtime", "max"}
+        ``realtime``: one window per window length of wall time. ``max``: the device's clock is
+        simulated; the next window is measured and sent as soon as the host has read the frames
+        before it (at most :attr:`MAX_UNREAD` bytes left unread), so a recording takes as long as
+        the host needs. Either way the frames' times (``t_ms``) and the signal are the device's clock.
 
     Notes
     -----
@@ -141,9 +154,16 @@ class VirtualDevice:
     the pseudo-terminal closes, as a pulled cable, and :attr:`failure` says why.
     """
 
+    MAX_UNREAD = 256
+    """``speed="max"``: the next window waits while the host has more bytes than this unread (a few frames). [B]"""
+
     def __init__(self, source: SignalSource | None = None, frequency_noise: float = 1e-3, jitter_s: float = 20e-9,
                  adc_noise_v: float = 2e-3, faults: Faults | None = None, seed: int | None = None,
-                 load_cell: LoadCellModel | None = LoadCellModel()) -> None:
+                 load_cell: LoadCellModel | None = LoadCellModel(), speed: str = "realtime") -> None:
+        if speed not in SPEEDS:
+            raise ValueError(f"speed must be one of {', '.join(SPEEDS)}, got {speed!r}")
+        self.speed = speed
+        self._sim_s = 0.0  # the device's clock with speed="max" [s]
         for name, v in (("frequency_noise", frequency_noise), ("jitter_s", jitter_s), ("adc_noise_v", adc_noise_v)):
             if not v >= 0:
                 raise ValueError(f"{name} must be >= 0, got {v!r}")
@@ -251,7 +271,16 @@ class VirtualDevice:
 
     # ------------------------------------------------------------ device
     def _now(self) -> float:
+        if self.speed == "max":
+            return self._sim_s
         return time.monotonic() - self._t0
+
+    def _unread(self) -> int:
+        """Bytes written to the pty that the host has not read yet."""
+        try:
+            return int.from_bytes(fcntl.ioctl(self._slave, termios.FIONREAD, b"\0\0\0\0"), "little")
+        except (OSError, TypeError):
+            return 0
 
     def _boot(self) -> None:
         self._st = _State(resets_done=self._st.resets_done, m_frames=self._st.m_frames)
@@ -339,7 +368,8 @@ class VirtualDevice:
         u32 = UINT32_MODULO - 1
         ref = window_reference(self.load_cell, self._force_at(sig), t0 - st.start_time, t1 - st.start_time,
                                rng=self._cell_rng)
-        fields = (int(t1 * 1000) % UINT32_MODULO, st.current_ms, int(m.periods[0]), min(int(m.sum_period_ticks[0]), u32),
+        t_ms = round(t1 * 1000) if self.speed == "max" else int(t1 * 1000)  # (max: whole ms already)
+        fields = (t_ms % UINT32_MODULO, st.current_ms, int(m.periods[0]), min(int(m.sum_period_ticks[0]), u32),
                   min(int(m.sum_high_ticks[0]), u32), 0, int(m.adc[0]), st.range_, ref.ref_ok, ref.ref_n, ref.ref_mean)
         fault = self.faults
         st.m_frames += 1
@@ -365,14 +395,24 @@ class VirtualDevice:
                 wait = 0.05
                 if st.started:
                     t_end = st.window_start + st.current_ms / 1000.0
+                    if self.speed == "max":
+                        t_end = round(t_end * 1000.0) / 1000.0  # whole ms, as the firmware's clock: no drift
+                        if self._unread() <= self.MAX_UNREAD:
+                            # The clock moves to the window's end first: a mass placed while this window is
+                            # measured (time_since_start) counts from its end, as in real time.
+                            self._sim_s = now = max(now, t_end)
+                            wait = 0.0  # commands first (non-blocking), then this window
+                        else:
+                            wait = 0.0005  # the host is reading: look again soon
                     if now >= t_end:
                         self._measure(t_end)
                         st = self._st
                         if st.started:
                             st.window_start = t_end
                             st.current_ms = st.window_ms
-                        continue
-                    wait = min(wait, t_end - now)
+                        if self.speed != "max":
+                            continue
+                    wait = min(wait, max(t_end - now, 0.0))
                 master = self._master
                 if master is None:
                     return

@@ -35,7 +35,7 @@ def test_bench_source_parts_are_what_its_windows_average():
 def test_weights_protocol_on_the_twin(built, tmp_path):
     out = tmp_path / "w.csv"
     plan = WeightsPlan(masses_kg=(0.2, 0.4), repeat=1)
-    run = run_protocol(plan, out, device="twin", seed=3, settle={"hold_s": 0.3})
+    run = run_protocol(plan, out, device="twin", seed=3, settle={"hold_s": 0.3}, speed="max")
     assert run.device == "twin" and not run.result.failed
     assert run.result.dropped == 0
     data = load_run(out)
