@@ -90,8 +90,8 @@ def test_demo_falls_back_to_the_python_device_when_the_twin_fails(tmp_path, monk
     lines = []
     res = run_demo(tmp_path / "demo", DemoSettings(cycles=1, period_s=1.0, repeat=2, settle_hold_s=0.1),
                    paper=False, progress=lines.append)
-    # One short cycle is too little for the causal compensation: the plain calibration, said.
-    assert any(ln.strip().startswith("no compensation:") for ln in lines)
+    # One short cycle: the compensation does not win on the later blocks, so the plain curve, and why.
+    assert any(ln.strip().startswith(("hysteresis not kept:", "creep not kept:")) for ln in lines)
     assert "digital twin" in lines[0]  # auto: the twin first, as it says it can run
     assert any("the digital twin failed (RuntimeError: simavr exited); using the Python virtual device" in ln
                for ln in lines)
