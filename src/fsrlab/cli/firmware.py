@@ -69,7 +69,7 @@ def sketch(
         folder = write_sketch(directory, overwrite=overwrite)
     except FileExistsError as exc:
         fail(str(exc), "DIR")
-    typer.echo(str(folder / f"{SKETCH_NAME}.ino"))
+    typer.echo(str((folder / f"{SKETCH_NAME}.ino").resolve()))
 
 
 @firmware_app.command("flash")
