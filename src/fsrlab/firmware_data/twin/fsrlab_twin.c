@@ -1,6 +1,6 @@
 /*
  * fsrlab_twin: the fsrlab meter firmware (.elf) in simavr as an ATmega328P at 16 MHz, driven by a
- * stream of inputs computed elsewhere (fsrlab.twin: the virtual sensor through the LM555 transient),
+ * stream of inputs computed elsewhere (fsrlab.virtual.twin: the virtual sensor through the LM555 transient),
  * with its UART on a file descriptor (the master side of a pseudo-terminal the caller owns).
  *
  * Usage:
