@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # Installs the real parts fsrlab is checked against: ngspice (circuit validation),
-# the AVR toolchain and Debian's Arduino core (firmware build), simavr (firmware runs
+# the AVR toolchain and Debian's Arduino core (firmware build), avrdude (flashing an Uno), simavr (firmware runs
 # in a simulated ATmega328P), Chromium and its WebDriver (browser tests of `fsrlab live`).
 # Installs only what is missing; needs root (or sudo).
 set -u
-packages=(ngspice gcc-avr avr-libc arduino-core-avr simavr libsimavr-dev chromium chromium-driver)
+packages=(ngspice gcc-avr avr-libc arduino-core-avr avrdude simavr libsimavr-dev chromium chromium-driver)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -4,6 +4,7 @@
 
 #include <sim_avr.h>
 #include <sim_elf.h>
+#include <sim_hex.h>
 #include <sim_io.h>
 #include <sim_cycle_timers.h>
 #include <avr_uart.h>
@@ -14,7 +15,12 @@ avr_t *mcu_load(const char *elf)
 {
   elf_firmware_t fw;
   memset(&fw, 0, sizeof fw);
-  if (elf_read_firmware(elf, &fw) != 0) { fprintf(stderr, "cannot read %s\n", elf); return NULL; }
+  size_t n = strlen(elf);
+  if (n > 4 && !strcmp(elf + n - 4, ".hex")) {
+    /* the image as flashed (what the package ships): .text and .data's initial values from 0 */
+    fw.flash = read_ihex_file(elf, &fw.flashsize, &fw.flashbase);
+    if (!fw.flash || fw.flashbase != 0) { fprintf(stderr, "cannot read %s\n", elf); return NULL; }
+  } else if (elf_read_firmware(elf, &fw) != 0) { fprintf(stderr, "cannot read %s\n", elf); return NULL; }
   avr_t *avr = avr_make_mcu_by_name("atmega328p");
   if (!avr) { fprintf(stderr, "simavr has no atmega328p\n"); return NULL; }
   avr_init(avr);

@@ -8,7 +8,8 @@
 #include <sim_avr.h>
 #include <sim_irq.h>
 
-/* The MCU running `elf`, or NULL after one line on stderr saying why. */
+/* The MCU running `elf` (an ELF file, or an Intel hex file when the name ends in .hex), or NULL after
+ * one line on stderr saying why. */
 avr_t *mcu_load(const char *elf);
 
 /* USART0 without simavr's stdio echo and poll sleep; every byte the firmware sends goes to `out_cb`.

@@ -92,7 +92,8 @@ class UsbPort:
 
     def __str__(self) -> str:
         ident = f"{self.vid:04X}:{self.pid:04X}" if self.vid is not None and self.pid is not None else "no USB id"
-        return f"{self.device} ({ident}, {self.description})"
+        described = self.description and self.description != "n/a"
+        return f"{self.device} ({ident}, {self.description})" if described else f"{self.device} ({ident})"
 
 
 def _ports() -> list[UsbPort]:

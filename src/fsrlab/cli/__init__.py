@@ -33,7 +33,7 @@ app = typer.Typer(
 
 # Topic modules that add commands to ``app``; a topic not written yet is simply absent.
 COMMAND_MODULES = ("report", "physics", "oscillator", "analysis", "acquisition", "loadcell", "weights", "measure",
-                   "creep", "live", "twin", "bench", "report_run", "demo", "importer")
+                   "creep", "live", "twin", "bench", "report_run", "demo", "importer", "firmware", "ports", "doctor")
 for _name in COMMAND_MODULES:
     try:
         importlib.import_module(f"{__name__}.{_name}")

@@ -35,7 +35,9 @@ def twin(
     on D2/D3 the load cell's reading of the applied force. Open the printed port with
     `fsrlab acquire --port PATH`, `fsrlab live --port PATH` or any serial monitor. Notices (a profile
     that drives the sensor out of oscillation) go to stderr. Needs simavr and the built firmware
-    (`make sysdeps`, `make firmware`). Exit code 1, with one line saying why, if the twin fails.
+    (`make sysdeps`, `make firmware`), or, from an installed package, a C compiler and simavr's
+    headers (the harness is built on first use; `fsrlab doctor` says). Exit code 1, with one line
+    saying why, if the twin fails.
 
     Examples:
 

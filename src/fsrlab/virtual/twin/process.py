@@ -3,7 +3,9 @@
 The harness (``firmware/build/fsrlab_twin``, source ``firmware/sim/fsrlab_twin.c``) runs the meter's
 firmware (``firmware/build/fsrlab_meter.elf``) in simavr; both are built by ``make firmware``. Paths
 are relative to the repository root (a clean clone after ``make firmware``; :func:`build_dir`), or
-to the directory in the environment variable ``FSRLAB_FIRMWARE_BUILD``.
+to the directory in the environment variable ``FSRLAB_FIRMWARE_BUILD``. An installed package, which
+has no ``firmware/build``, builds the harness on first use into the user's cache folder and runs
+the shipped ``fsrlab_meter.hex`` (:mod:`fsrlab.virtual.twin.build`).
 
 Records on the harness's stdin: 16 bytes, little endian: type (1 byte), 3 bytes padding, int32
 value, uint64 CPU cycle (the harness's documentation lists the types).
@@ -30,7 +32,8 @@ def build_dir() -> Path:
 
     ``FSRLAB_FIRMWARE_BUILD`` when set; otherwise ``firmware/build`` of the repository this package
     lives in (an editable install of a clone), or else of the current directory (a clone next to an
-    installed package).
+    installed package), or else the harness built in the user's cache folder
+    (:func:`fsrlab.virtual.twin.build.cached_build`).
     """
     env = os.environ.get("FSRLAB_FIRMWARE_BUILD")
     if env:
@@ -38,12 +41,18 @@ def build_dir() -> Path:
     here, cwd = ROOT / "firmware" / "build", Path.cwd() / "firmware" / "build"
     if not (here / "fsrlab_twin").exists() and (cwd / "fsrlab_twin").exists():
         return cwd
+    if not (here / "fsrlab_twin").exists():
+        from fsrlab.virtual.twin.build import cached_build
+
+        return cached_build() or here
     return here
 
 
 def elf_path() -> Path:
-    """The firmware image, ``fsrlab_meter.elf``."""
-    return build_dir() / "fsrlab_meter.elf"
+    """The firmware image, ``fsrlab_meter.elf`` (the cache's build: ``fsrlab_meter.hex``)."""
+    d = build_dir()
+    elf = d / "fsrlab_meter.elf"
+    return d / "fsrlab_meter.hex" if not elf.exists() and (d / "fsrlab_meter.hex").exists() else elf
 
 
 def harness_path() -> Path:
@@ -60,6 +69,13 @@ def twin_available() -> tuple[bool, str]:
         ``(True, "")``, or ``(False, reason)``: one line saying what is missing and how to get it
         (``make sysdeps`` for simavr, ``make firmware`` for the firmware and its harness).
     """
+    if not os.environ.get("FSRLAB_FIRMWARE_BUILD") and not harness_path().exists() \
+            and not (ROOT / "firmware" / "Makefile").exists():
+        from fsrlab.virtual.twin.build import build_harness  # an installed package: build on first use
+
+        built, reason = build_harness()
+        if built is None:
+            return False, reason
     harness, elf = harness_path(), elf_path()
     if not harness.exists() or not elf.exists():
         missing = harness if not harness.exists() else elf
