@@ -197,9 +197,10 @@ def save_calibration(cal: Calibration, path: str | os.PathLike) -> Path:
     -------
     Path
     """
-    p = Path(path)
-    p.write_text(json.dumps(calibration_to_dict(cal), indent=2, allow_nan=False) + "\n", encoding="utf-8")
-    return p
+    from fsrlab.outputs import write_text_atomic
+
+    # Through a temporary file and a rename: an interrupted write leaves the old file or none.
+    return write_text_atomic(path, json.dumps(calibration_to_dict(cal), indent=2, allow_nan=False) + "\n")
 
 
 def load_calibration(path: str | os.PathLike) -> Calibration:

@@ -18,6 +18,7 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli._common import emit_json, fail, farads, fraction, number, ohms, option_names, seconds
+from fsrlab.cli._outputs import OVERWRITE_HELP, checked, out_path
 from fsrlab.units import STANDARD_GRAVITY
 
 _DEGREES = ("auto", "1", "2", "3", "4", "5")
@@ -207,7 +208,8 @@ def calibrate_cmd(
     r: float = typer.Option(None, "--r", parser=ohms, help="555 R for --x c_fsr_farad [Ω], e.g. 10k (default: the run's sidecar, else 10k)."),
     c_off: float = typer.Option(None, "--c-off", parser=farads, help="C_off for --x c_fsr_farad [F], e.g. 470p (default: sidecar, else 0)."),
     skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=_SKIP_HELP),
-    output: Path = typer.Option(None, "--output", "-o", help="Write the calibration to this JSON file."),
+    output: Path = typer.Option(None, "--output", "-o", parser=out_path, help="Write the calibration to this JSON file."),
+    overwrite: bool = typer.Option(False, "--overwrite", help=OVERWRITE_HELP),
     json_out: bool = typer.Option(False, "--json", help="Print JSON: model, lag_s [s], cv_rmse [reference unit], cv_rmse_percent_fs [%], candidates, ..."),
 ) -> None:
     """Calibrate readout → force or stress: model families by grouped CV, lag, dead zone, uncertainty.
@@ -239,6 +241,8 @@ def calibrate_cmd(
             lag_value = number(lag)
         except typer.BadParameter as exc:
             fail(f"must be auto or a lag in seconds such as 0.02, got {lag!r} ({exc.message})", "--lag")
+    if output is not None:
+        checked(output, "--output", overwrite=overwrite, inputs=[run_file])
     warnings: list[str] = []
     run = _load(run_file, skip_bad_rows, warnings)
     if x not in run and x != "c_fsr_farad":
@@ -327,11 +331,11 @@ def calibrate_cmd(
 def apply_cmd(
     cal_file: Path = typer.Argument(..., metavar="CAL.json", help="A calibration written by fsrlab calibrate -o."),
     run_file: Path = typer.Argument(..., metavar="RUN.csv", help="The run to convert."),
-    output: Path = typer.Option(..., "--output", "-o", help="Output run: the input columns plus <reference>_estimate and <reference>_uncertainty [N or Pa] and in_range [1]."),
+    output: Path = typer.Option(..., "--output", "-o", parser=out_path, help="Output run: the input columns plus <reference>_estimate and <reference>_uncertainty [N or Pa] and in_range [1]."),
     no_compensation: bool = typer.Option(False, "--no-compensation", help="Use the plain model even if the calibration holds a compensation."),
     margin: float = typer.Option(0.10, "--margin", parser=fraction, help="How far beyond the calibrated readout range an estimate is still written [1, a fraction of the range's span], 0.1 or 10%; beyond it the estimate is left empty. Every reading outside the range has in_range = 0."),
     force: bool = typer.Option(False, "--force", help="Apply even to a run recorded with another circuit or range than the calibration."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing output run and its sidecar; without it an existing one stops the command."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing output run and its sidecar; without it an existing one stops the command. An input (or its sidecar) is never replaced."),
     skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=_SKIP_HELP + " Skipped rows are not written."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON: rows written, estimated, missing (with the reasons), in and out of the readout range."),
 ) -> None:
@@ -351,7 +355,7 @@ def apply_cmd(
     """
     from fsrlab.analysis.calibration_io import load_calibration
     from fsrlab.analysis.pipeline import apply_calibration, check_readout
-    from fsrlab.runformat import sidecar_path
+    from fsrlab.outputs import atomic_run
     from fsrlab.runwriter import write_run
 
     if not (math.isfinite(margin) and margin >= 0):
@@ -362,12 +366,7 @@ def apply_cmd(
     run = _load(run_file, skip_bad_rows, warnings)
     if cal.x_name not in run and cal.x_name != "c_fsr_farad":
         _missing(run_file, run, cal.x_name, " (the calibration's readout)")
-    if output.resolve() == run_file.resolve():
-        fail("must differ from the input run", "--output")
-    if not overwrite:
-        for existing in (output, sidecar_path(output)):
-            if existing.exists():
-                fail(f"{existing} exists; pass --overwrite to replace it", "--output")
+    checked(output, "--output", overwrite=overwrite, inputs=[cal_file, run_file], kind="run")
     if cal.recorded_with is None:
         warnings.append(f"{cal_file} does not record the circuit and range its data were recorded with (written by an "
                         f"earlier fsrlab, or not from a run): {run_file} is not checked against them")
@@ -379,7 +378,8 @@ def apply_cmd(
     info = est.metadata["calibration"]
     for difference in info.get("forced", []):
         warnings.append(f"applied with --force although {difference}")
-    write_run(output, est.columns, est.metadata, overwrite=True)
+    with atomic_run(output) as tmp:
+        write_run(tmp, est.columns, est.metadata, overwrite=True)
     n = info["counts"]
     _warn(warnings)
     estimate_col = f"{cal.y_name}_estimate"
