@@ -8,7 +8,6 @@ device's load cell (``--no-loadcell``, ``--hx711-rate``).
 from __future__ import annotations
 
 import math
-import os
 import signal
 import sys
 from contextlib import contextmanager
@@ -18,6 +17,7 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli._common import areas, emit_json, fail, farads, fraction, pascals, plain_numbers, seconds
+from fsrlab.cli._outputs import out_path
 from fsrlab.units import format_eng
 
 _PROFILE_HELP = "Virtual stress profile: triangle, sine, steps or hold."
@@ -157,21 +157,12 @@ def _window_ms(window_s: float) -> int:
     return int(ms)
 
 
-def _check_out(out: Path, overwrite: bool) -> None:
-    """Refuse an output that exists (unless ``overwrite``) or cannot be written, before any device is touched."""
-    from fsrlab.runformat import sidecar_path
+def _check_out(out: Path, overwrite: bool, inputs=()) -> None:
+    """Refuse an output that exists (unless ``overwrite``), is an input or an input's sidecar, or cannot be
+    written, before any device is touched (the output policy, :mod:`fsrlab.outputs`)."""
+    from fsrlab.cli._outputs import checked
 
-    if out.is_dir():
-        fail(f"{out} is a directory; give the run's CSV file, e.g. {out / 'run.csv'}", "--out")
-    if not overwrite:
-        for existing in (out, sidecar_path(out)):
-            if os.path.lexists(existing):
-                fail(f"{existing} exists; pass --overwrite to replace the run", "--out")
-    parent = out.parent if str(out.parent) else Path(".")
-    if not parent.is_dir():
-        fail(f"directory {parent} does not exist", "--out")
-    if not os.access(parent, os.W_OK):
-        fail(f"cannot write in directory {parent} (permission denied)", "--out")
+    checked(out, "--out", overwrite=overwrite, inputs=inputs, kind="run")
 
 
 def _fmt(value: float, spec: str) -> str:
@@ -230,7 +221,7 @@ def acquire(
     port: str = typer.Option(None, "--port", help="Serial port (/dev/ttyACM0, COM3, a pty) or 'auto' to find an Uno by USB id."),
     virtual: bool = typer.Option(False, "--virtual", help="Record from a virtual device (pty, physics and 555 models) instead of hardware."),
     duration: float = typer.Option("60s", "--duration", parser=seconds, metavar="TIME", help="Recording time [s]: 90, 90s, 1.5min, 2h, 500ms (a bare m is refused: minutes or milliseconds?)."),
-    out: Path = typer.Option(Path("run.csv"), "--out", "-o", help="Run file (CSV + NAME.meta.json sidecar, docs/data-format.md)."),
+    out: Path = typer.Option(Path("run.csv"), "--out", "-o", parser=out_path, help="Run file (CSV + NAME.meta.json sidecar, docs/data-format.md)."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing run file and its sidecar; without it an existing one stops the command before the device is touched."),
     window: float = typer.Option("100ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], 10ms to 60s in whole milliseconds (the meter counts ms): 20ms, 100ms, 0.25, 1s."),
     stall: float = typer.Option(None, "--stall", parser=seconds, metavar="TIME", help="No frame for this long [s] is reported as a gap (default: 5 windows, at least 2s); a device still silent at the end fails the run (exit 1)."),
@@ -286,7 +277,7 @@ def acquire(
     _check_rate(hx711_rate)
     sensor_meta, area_m2 = _sensor_area(sensor, area)
     cal = _load_loadcell(loadcell)
-    _check_out(out, overwrite)
+    _check_out(out, overwrite, inputs=[loadcell])
     device = None
     metadata: dict = {"sensor": sensor_meta} if sensor_meta else {}
     reference = health = None

@@ -9,6 +9,7 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli._common import areas, fail, farads, mass_list, pascals, seconds, to_jsonable
+from fsrlab.cli._outputs import out_path
 from fsrlab.cli.acquisition import _AREA_HELP, _LOADCELL_HELP, _SENSOR_HELP
 from fsrlab.cli.measure import load_frame_calibration
 from fsrlab.units import STANDARD_GRAVITY
@@ -55,7 +56,7 @@ def _json_line(obj) -> None:
 def live(
     port: str = typer.Option(None, "--port", help="Serial port of the meter (/dev/ttyACM0, COM3, a pty) or 'auto'."),
     virtual: bool = typer.Option(False, "--virtual", help="Show a virtual device (pty, physics and 555 models) instead of hardware."),
-    out: Path = typer.Option(None, "--out", "-o", help="Run file for the page's 'Start recording' (CSV + sidecar); later recordings get -2, -3, ...; never replaced. Without it recording is off."),
+    out: Path = typer.Option(None, "--out", "-o", parser=out_path, help="Run file for the page's 'Start recording' (CSV + sidecar); later recordings get -2, -3, ...; never replaced. Without it recording is off."),
     cal: Path = typer.Option(None, "--cal", help="Calibration JSON (fsrlab calibrate -o): the page also shows the estimate and its uncertainty."),
     host: str = typer.Option("127.0.0.1", "--host", help="Interface to serve on: 127.0.0.1 (this computer only) or e.g. 0.0.0.0; any other than 127.0.0.1 needs the random token printed with the URL."),
     http_port: int = typer.Option(5006, "--http-port", help="TCP port of the page [1], 1..65535, or 0 for any free one."),
@@ -104,7 +105,13 @@ def live(
     if duration is not None and not duration > 0:
         fail(f"must be > 0 s, got {duration:g} s", "--duration")
     if out is not None:
-        _check_out(out, overwrite=False)
+        from fsrlab.outputs import OutputError, check_output
+
+        try:
+            check_output(out, "--out", inputs=[cal, loadcell], kind="run")
+        except OutputError as exc:  # live has no --overwrite: it never replaces a run
+            fail(exc.message.replace("pass --overwrite to replace it", "live never replaces a run: give a new name"),
+                 "--out")
     sensor_meta, area_m2 = _sensor_area(sensor, area)
     lc = _load_loadcell(loadcell)
     calibration = load_frame_calibration(cal, "live") if cal is not None else None

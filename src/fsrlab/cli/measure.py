@@ -11,6 +11,7 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli._common import areas, emit_json, fail, farads, pascals, plain_numbers, seconds
+from fsrlab.cli._outputs import out_path
 from fsrlab.cli.acquisition import (
     _AREA_HELP, _LOADCELL_HELP, _PEAK_HELP, _PERIOD_HELP, _PROFILE_HELP, _SENSOR_HELP, _check_out, _check_virtual,
     _LiveView, _fmt, _load_loadcell, _sensor_area, _sigterm_as_interrupt, _virtual_device, _window_ms,
@@ -62,7 +63,7 @@ def measure(
     cal: Path = typer.Option(..., "--cal", metavar="CAL.json", help="Calibration JSON from fsrlab calibrate -o (readout -> stress_pa [Pa] or force_n [N])."),
     port: str = typer.Option(None, "--port", help="Serial port of the meter (/dev/ttyACM0, COM3, a pty) or 'auto'."),
     virtual: bool = typer.Option(False, "--virtual", help="Measure a virtual meter (its sensor follows --profile)."),
-    out: Path = typer.Option(Path("measure.csv"), "--out", "-o", help="Run file with the estimate (CSV + NAME.meta.json)."),
+    out: Path = typer.Option(Path("measure.csv"), "--out", "-o", parser=out_path, help="Run file with the estimate (CSV + NAME.meta.json)."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing run and its sidecar."),
     duration: float = typer.Option(None, "--duration", parser=seconds, metavar="TIME", help="Measure this long [s]: 10s, 1.5min (default: until Ctrl-C)."),
     window: float = typer.Option("100ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], whole ms: 100ms, 0.25."),
@@ -106,7 +107,7 @@ def measure(
         fail(f"{cal}: {exc}", "--cal")
     sensor_meta, area_m2 = _sensor_area(sensor, area)
     lc = _load_loadcell(loadcell)
-    _check_out(out, overwrite)
+    _check_out(out, overwrite, inputs=[cal, loadcell])
     device = None
     metadata: dict = {"sensor": sensor_meta} if sensor_meta else {}
     if virtual:

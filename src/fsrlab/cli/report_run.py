@@ -8,6 +8,7 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli._common import emit_json, fail
+from fsrlab.cli._outputs import OVERWRITE_DIR_HELP, checked, out_path
 
 
 def _existing(path: Path | None, option: str) -> None:
@@ -18,7 +19,8 @@ def _existing(path: Path | None, option: str) -> None:
 @app.command("report")
 def report(
     run: Path = typer.Argument(..., metavar="RUN.csv", help="The recorded run (fsrlab bench, acquire, weights, measure)."),
-    out: Path = typer.Option(..., "--out", "-o", help="Directory for index.html, report.json and the PNGs; created if missing."),
+    out: Path = typer.Option(..., "--out", "-o", parser=out_path, help="Directory for index.html, report.json and the PNGs; created if missing."),
+    overwrite: bool = typer.Option(False, "--overwrite", help=OVERWRITE_DIR_HELP),
     weights_run: Path = typer.Option(None, "--weights", metavar="WEIGHTS.csv", help="A dead-weight run (fsrlab bench weights) for RE1/RE2 of f and V0 and ISO 376 (default: the run itself when it is one)."),
     placements: Path = typer.Option(None, "--placements", metavar="P.csv", help="A placements CSV (load [g], sensor, reading [Hz]; NAME.placements.csv of fsrlab bench weights, or a table like Table 4) for RE1/RE2 of the frequency per load and sensor, without a weights run."),
     cal: Path = typer.Option(None, "--cal", metavar="CAL.json", help="Calibration JSON (fsrlab calibrate) applied to the run; default: the run calibrated on itself."),
@@ -50,6 +52,8 @@ def report(
     for parent in (out, *out.parents):
         if parent.exists() and not parent.is_dir():
             fail(f"{parent} is a file, not a directory", "--out")
+    checked(out, "--out", overwrite=overwrite, inputs=[run, weights_run, placements, cal], kind="dir",
+            names=("index.html", "report.json"))
     try:
         files = write_run_report(run, out, placements=placements, weights_run=weights_run, calibration=cal,
                                  calibrate=not no_calibration)
