@@ -188,6 +188,9 @@ def check_output(path, option: str, *, overwrite: bool = False, inputs: Iterable
         if clash is not None:
             raise OutputError(option, f"{f} is {clash}; write the output to another file "
                                       "(--overwrite never replaces an input)")
+    if kind == "run" and target.name.lower().endswith(".meta.json"):
+        raise OutputError(option, f"{target} is named like a run's sidecar; give the run's CSV file, e.g. "
+                                  f"{target.with_name(target.name[:-len('.meta.json')] + '-2.csv')}")
     if target.is_dir():
         example = target / "run.csv" if kind == "run" else f"{target / 'NAME'}"
         raise OutputError(option, f"{target} is a directory, not a file; give a file name, e.g. {example}")
