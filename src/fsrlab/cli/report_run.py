@@ -39,7 +39,7 @@ def report(
 
     \b
       fsrlab report examples/bench.csv --out report-run
-      fsrlab report examples/other.csv --cal examples/calibration.json --placements examples/repeatability.csv --out report-run --json
+      fsrlab report examples/other.csv --cal examples/calibration.json --placements examples/repeatability.csv --out report-other --json
     """
     from fsrlab.report.run_report import write_run_report
 
