@@ -104,6 +104,12 @@ def live(
         fail(f"must be 0..65535, got {http_port}", "--http-port")
     if duration is not None and not duration > 0:
         fail(f"must be > 0 s, got {duration:g} s", "--duration")
+    from fsrlab.live.hosts import check_bind_host
+
+    try:
+        host = check_bind_host(host)
+    except ValueError as exc:
+        fail(str(exc).split(": ", 1)[1], "--host")
     if out is not None:
         from fsrlab.outputs import OutputError, check_output
 
