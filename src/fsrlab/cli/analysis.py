@@ -66,7 +66,9 @@ def _skipped_json(run) -> dict:
 
 
 def _missing(path: Path, run, column: str, what: str = "", option: str | None = None) -> None:
-    fail(f"{path}: column {column!r}{what} missing (columns: {', '.join(run.columns)})", option)
+    from fsrlab.shown import shown_list
+
+    fail(f"{path}: column {column!r}{what} missing (columns: {shown_list(run.columns)})", option)
 
 
 @app.command("hysteresis")
@@ -144,7 +146,10 @@ def repeatability(
         fail(f"must be 0 or 1, got {ddof}", "--ddof")
     with _reading(file):
         loads, sensors, readings = load_grouped_csv(file)
-    res = grouped_repeatability(loads, sensors, readings, ddof=ddof)
+    try:
+        res = grouped_repeatability(loads, sensors, readings, ddof=ddof)
+    except ValueError as exc:  # a group's problem, said with the file it is in
+        raise ValueError(f"{file}: {exc}") from None
     if json_out:
         emit_json(res.to_dict())
         return
