@@ -101,6 +101,9 @@ def hysteresis(
     run = _load(run_file, skip_bad_rows, warnings)
     if quantity not in run:
         _missing(run_file, run, quantity, option="--quantity")
+    if quantity in ("stress_pa", "force_n"):
+        fail(f"{quantity} is a reference column: its hysteresis against the reference is the reference against "
+             "itself; give a readout such as frequency_hz, voltage_v or stress_pa_estimate", "--quantity")
     _reference_option(run_file, run, reference)
     ref = reference or ("stress_pa" if "stress_pa" in run else "force_n")
     shown, factor = _unit_option(unit if unit is not None else ("kPa" if ref == "stress_pa" else None), ref)
@@ -240,6 +243,8 @@ def calibrate_cmd(
         fail(f"must be one of {', '.join(_MODELS)}; got {model!r}", "--model")
     if folds < 2:
         fail(f"must be >= 2, got {folds}", "--folds")
+    if max_lag is not None and not max_lag >= 0:
+        fail(f"must be a half-width >= 0 s, got {max_lag:g} s", "--max-lag")
     lag_value: float | str = "auto"
     if lag != "auto":
         try:
@@ -252,6 +257,9 @@ def calibrate_cmd(
     run = _load(run_file, skip_bad_rows, warnings)
     if x not in run and x != "c_fsr_farad":
         _missing(run_file, run, x, option="--x")
+    if x in ("stress_pa", "force_n"):
+        fail(f"{x} is a reference column: a calibration of the reference against itself (or against itself "
+             "divided by the area) says nothing; give a readout such as frequency_hz", "--x")
     _reference_option(run_file, run, reference)
     _unit_option(unit, reference or ("stress_pa" if "stress_pa" in run else "force_n"))
     circuit = None
