@@ -15,6 +15,7 @@ import typer
 
 from clirun import run_cli
 from fsrlab.cli import app
+from fsrlab.cli.options import out_path
 
 COMMANDS = ("oscillator", "decode", "design", "physics", "paper")
 
@@ -27,7 +28,8 @@ def _takes_a_number(param) -> bool:
     descriptor = param.type_descriptor
     annotation = descriptor.annotation
     numeric = annotation in (float, int) or str(annotation) in ("list[float]", "list[int]")
-    return not param.is_flag and (numeric or descriptor.parameter_info.parser is not None)
+    parser = descriptor.parameter_info.parser
+    return not param.is_flag and (numeric or parser not in (None, out_path))
 
 
 def _help(name: str) -> str:

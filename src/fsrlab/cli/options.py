@@ -1,5 +1,6 @@
 """What the command modules share: option parsers, JSON output, one-line errors, and the options and helpers of
-the recording commands (sensor and area, load cell, virtual device, window, output, live view, run loading).
+the recording commands (sensor and area, load cell, virtual device, window, live view, run loading), and the output
+policy as the commands use it (``parser=out_path``, :func:`checked`, :func:`check_out`, the ``--overwrite`` help texts).
 
 A command module imports these from here, never another command module's names.
 
@@ -29,7 +30,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import queue
 import re
 import signal
@@ -346,21 +346,37 @@ def window_ms_option(window_s: float) -> int:
     return int(ms)
 
 
-def check_out(out: Path, overwrite: bool) -> None:
-    """Refuse an output that exists (unless ``overwrite``) or cannot be written, before any device is touched."""
-    from fsrlab.io.runformat import sidecar_path
+OVERWRITE_HELP = "Replace an existing output file; without it an existing one stops the command. An input is never replaced."
+OVERWRITE_DIR_HELP = ("Write into a directory that is not empty, replacing the files this command writes there; "
+                      "without it a non-empty directory stops the command. An input is never replaced.")
 
-    if out.is_dir():
-        fail(f"{out} is a directory; give the run's CSV file, e.g. {out / 'run.csv'}", "--out")
-    if not overwrite:
-        for existing in (out, sidecar_path(out)):
-            if os.path.lexists(existing):
-                fail(f"{existing} exists; pass --overwrite to replace the run", "--out")
-    parent = out.parent if str(out.parent) else Path(".")
-    if not parent.is_dir():
-        fail(f"directory {parent} does not exist", "--out")
-    if not os.access(parent, os.W_OK):
-        fail(f"cannot write in directory {parent} (permission denied)", "--out")
+
+def out_path(text) -> Path:
+    """An output path option's value (``parser=out_path``); an empty or blank one is refused (it would mean "here")."""
+    from fsrlab.io.outputs import OutputError, output_path
+
+    try:
+        return output_path(text, "")
+    except OutputError as exc:
+        raise typer.BadParameter(exc.message) from None
+
+
+def checked(path, option: str, **kwargs) -> Path:
+    """:func:`fsrlab.io.outputs.check_output` (``overwrite``, ``inputs``, ``kind``, ``names``), a refusal
+    ending the command with one line naming ``option``."""
+    from fsrlab.io.outputs import OutputError, check_output
+
+    try:
+        return check_output(path, option, **kwargs)
+    except OutputError as exc:
+        fail(exc.message, exc.option)
+        raise AssertionError from None  # fail() raises
+
+
+def check_out(out: Path, overwrite: bool, inputs=(), option: str = "--out") -> None:
+    """Refuse a run output that exists (unless ``overwrite``), is an input or an input's sidecar, or cannot be
+    written, before any device is touched (the output policy, :mod:`fsrlab.io.outputs`)."""
+    checked(out, option, overwrite=overwrite, inputs=inputs, kind="run")
 
 
 def fmt_value(value: float, spec: str) -> str:
@@ -543,7 +559,9 @@ def skipped_json(run) -> dict:
 
 
 def missing_column(path: Path, run, column: str, what: str = "", option: str | None = None) -> None:
-    fail(f"{path}: column {column!r}{what} missing (columns: {', '.join(run.columns)})", option)
+    from fsrlab.io.shown import shown_list
+
+    fail(f"{path}: column {column!r}{what} missing (columns: {shown_list(run.columns)})", option)
 
 
 def load_frame_calibration(cal: Path, command: str):
