@@ -80,7 +80,17 @@ def _sidecar(path: Path) -> Path:
 
 
 def run_files(path) -> tuple[Path, Path]:
-    """A run's two files: ``NAME.csv`` and its sidecar ``NAME.meta.json``."""
+    """A run's two files: ``NAME.csv`` and its sidecar ``NAME.meta.json``.
+
+    Parameters
+    ----------
+    path : path-like
+        The run's CSV file.
+
+    Returns
+    -------
+    (Path, Path)
+    """
     p = Path(path)
     return p, _sidecar(p)
 
