@@ -296,3 +296,92 @@ def execute(root: Path, args: list[str]):
         os.chdir(cwd)
     shown = [w for w in caught if not issubclass(w.category, SHOWN_BY_DEFAULT)]
     return code, out, err, shown, time.perf_counter() - started
+
+
+# ------------------------------------------------------------------------------------------------
+# Outputs: every command that writes, against the output policy (fsrlab.io.outputs)
+# ------------------------------------------------------------------------------------------------
+
+#: Each writing command: (argv with OUT where the output goes, the output's kind, the input whose path
+#: and sidecar it must never replace, or None). Recording commands are virtual and short: every case
+#: below is refused before a device starts.
+WRITERS = {
+    "calibrate -o": (["calibrate", "bench.csv", "-o", "OUT"], "file", "bench.csv"),
+    "apply -o": (["apply", "calibration.json", "bench.csv", "-o", "OUT"], "run", "bench.csv"),
+    "creep --plot": (["creep", "creep.csv", "--plot", "OUT"], "plot", "creep.csv"),
+    "report --out": (["report", "bench.csv", "--out", "OUT"], "dir", None),
+    "paper --out": (["paper", "--out", "OUT"], "dir", None),
+    "demo --out": (["demo", "--out", "OUT", "--cycles", "1", "--repeat", "2"], "dir", None),
+    "bench --report": (["bench", "spring", "--virtual", "--quiet", "--out", "new.csv", "--report", "OUT"], "dir", None),
+    "acquire --out": (["acquire", "--virtual", "--quiet", "--duration", "0.2", "--out", "OUT"], "run", None),
+    "measure --out": (["measure", "--virtual", "--quiet", "--duration", "0.2", "--cal", "bench.csv.json", "--out",
+                       "OUT"], "run", "bench.csv.json"),
+    "weights --out": (["weights", "--virtual", "--quiet", "--out", "OUT"], "run", None),
+    "bench --out": (["bench", "spring", "--virtual", "--quiet", "--out", "OUT"], "run", None),
+    "live --out": (["live", "--virtual", "--http-port", "0", "--duration", "0.2", "--out", "OUT"], "run", None),
+    "loadcell tare -o": (["loadcell", "tare", "--virtual", "-o", "OUT"], "file", None),
+}
+OUTPUT_CASES = ("exists", "is an input", "is a sidecar", "is empty", "is a directory")
+
+
+def output_case(writer: str, case: str, root: Path) -> list[str] | None:
+    """The command line of one case in ``root`` (which holds the corpus files), or None when it does not apply.
+
+    The files it needs are made in ``root``: an existing output, a non-empty directory, a directory.
+    """
+    argv, kind, source = WRITERS[writer]
+    overwrite = ["--overwrite"] if "--overwrite" in _options_of(argv[0]) else []
+    if case == "exists":
+        if kind == "dir":
+            (root / "full").mkdir(exist_ok=True)
+            (root / "full" / "index.html").write_text("mine\n")
+            out = "full"
+        else:
+            out = "exists.png" if kind == "plot" else "exists.csv" if kind == "run" else "exists.json"
+            (root / out).write_text("mine\n")
+        overwrite = []
+    elif case == "is an input":
+        if source is None:
+            return None
+        out = "./" + source if kind != "plot" else None
+        if kind == "plot":  # a plot must end in .png: the input is a copy named so, given as the run
+            shutil.copy(root / "creep.csv", root / "creep-in.png")
+            argv = [a if a != "creep.csv" else "creep-in.png" for a in argv]
+            out = "sub/../creep-in.png"
+            (root / "sub").mkdir(exist_ok=True)
+    elif case == "is a sidecar":
+        if source is None or not source.endswith(".csv"):
+            return None
+        sidecar = source[:-4] + ".meta.json"
+        if kind == "plot":
+            return None  # a sidecar never ends in .png
+        out = sidecar
+    elif case == "is empty":
+        out = ""
+    else:  # "is a directory": a directory where a file goes, a file where a directory goes
+        if kind == "dir":
+            (root / "afile").write_text("mine\n")
+            out = "afile"
+        else:
+            (root / "adir.csv").mkdir(exist_ok=True)
+            (root / "adir.csv" / "keep").write_text("mine\n")
+            out = "adir.csv"
+    return [a if a != "OUT" else out for a in argv] + overwrite
+
+
+def _options_of(command: str) -> set[str]:
+    import typer
+
+    from fsrlab.cli import app
+
+    group = typer.main.get_command(app)
+    return {opt for p in group.commands[command].params for opt in p.opts}
+
+
+def tree_hashes(root: Path) -> dict[str, str]:
+    """sha256 of every file under ``root`` (relative path → digest), directories as entries too."""
+    out = {}
+    for p in sorted(root.rglob("*")):
+        rel = str(p.relative_to(root))
+        out[rel] = "dir" if p.is_dir() else hashlib.sha256(p.read_bytes()).hexdigest()
+    return out

@@ -44,7 +44,7 @@ def _options(help_text: str) -> dict[str, str]:
 def test_every_option_with_a_value_shows_its_unit(name):
     code, out, _ = run_cli([name, "--help"])
     options = _options(out)
-    valued = {k: v for k, v in options.items() if "<" in k and not k.endswith("<path>")}
+    valued = {k: v for k, v in options.items() if "<" in k and not k.endswith(("<path>", "<Path>"))}
     assert valued, out
     for option, text in valued.items():
         units = [u for u in re.findall(r"\[([^\]]+)\]", text) if not u.startswith(("default", "required"))]

@@ -18,6 +18,7 @@ import typer
 
 from clirun import run_cli
 from fsrlab.cli import app
+from fsrlab.cli.options import out_path
 
 ROOT = Path(__file__).resolve().parents[2]
 COMMANDS = ("oscillator", "decode", "design", "physics", "paper", "import")
@@ -31,7 +32,8 @@ def _takes_a_number(param) -> bool:
     descriptor = param.type_descriptor
     annotation = descriptor.annotation
     numeric = annotation in (float, int) or str(annotation) in ("list[float]", "list[int]")
-    return not getattr(param, "is_flag", False) and (numeric or descriptor.parameter_info.parser is not None)
+    parser = descriptor.parameter_info.parser
+    return not getattr(param, "is_flag", False) and (numeric or parser not in (None, out_path))
 
 
 def _help(name: str) -> str:

@@ -547,9 +547,10 @@ def run_protocol(plan, out, device: str = "virtual", port: str | None = None, se
     placements = None
     if proc is not None:
         from fsrlab.bench.weights import placements_table
+        from fsrlab.io.outputs import write_text_atomic
 
         summary = proc.summary()
         placements = out.with_name(out.stem + ".placements.csv")
-        placements.write_text(placements_table(summary, "frequency_hz"), encoding="utf-8")
+        write_text_atomic(placements, placements_table(summary, "frequency_hz"))
     return ProtocolRun(result=result, protocol=plan.to_dict(), device=device if virtual else str(port),
                        summary=summary, placements=placements)

@@ -309,11 +309,21 @@ def hysteresis_of_run(run, quantity: str = "frequency_hz", threshold: float = 0.
         No complete cycle, or the quantity does not respond to the stress (a dead sensor,
         :func:`fsrlab.metrics.hysteresis.check_response`).
     """
+    import dataclasses
+    import re
+
     run = _as_run(run)
-    stress, q = run_reference(run, reference)[0], run[quantity]
+    stress, ref_name, ref_unit = run_reference(run, reference)
+    if quantity in ("stress_pa", "force_n"):
+        raise ValueError(f"quantity: {quantity} is a reference column (the {ref_name} the branches follow, or it "
+                         "divided by the area); give a readout such as frequency_hz")
+    q = run[quantity]
+    # eq. (13)'s functions speak of stresses [Pa]; on a force reference their levels are newtons.
+    in_unit = (lambda text: text) if ref_unit == "Pa" else (lambda text: re.sub(r"(\d) Pa\b", r"\1 " + ref_unit, text))
     try:
-        return run_hysteresis(stress, q, *_recorded(run), threshold, name=quantity)
+        res = run_hysteresis(stress, q, *_recorded(run), threshold, name=quantity)
     except RunFormatError:
         raise
     except ValueError as exc:
-        raise ValueError(f"{run.path}: {exc}") from None
+        raise ValueError(f"{run.path}: {in_unit(str(exc))}") from None
+    return res if ref_unit == "Pa" else dataclasses.replace(res, method=in_unit(res.method))

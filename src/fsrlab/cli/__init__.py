@@ -175,5 +175,5 @@ def _one_line(message: str) -> str:
     from fsrlab.cli.options import plain_numbers
 
     # click quotes the option it found ("'--r'"), fail() and option_names do not: one spelling.
-    message = re.sub(r"^Invalid value for '(-[^']*)'", r"Invalid value for \1", message.strip())
+    message = re.sub(r"^Invalid value for '(-[^']*)'(?: / '-[^']*')*", r"Invalid value for \1", message.strip())
     return " ".join(plain_numbers(message).split())

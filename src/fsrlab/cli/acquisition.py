@@ -15,8 +15,8 @@ from fsrlab.cli import app
 from fsrlab.cli.options import (
     AREA_HELP, C_OFF_HELP, CORRUPT_HELP, DROP_HELP, LiveView, LOADCELL_HELP, NO_LOADCELL_HELP, PEAK_HELP,
     PERIOD_HELP, PROFILE_HELP, RATE_HELP, SEED_HELP, SENSOR_HELP, SPEED_HELP, areas, check_out, check_rate,
-    check_speed, check_virtual, emit_json, fail, farads, fraction, loadcell_option, make_virtual_device, pascals,
-    plain_numbers, seconds, sensor_area, sigterm_as_interrupt, window_ms_option,
+    check_speed, check_virtual, emit_json, fail, farads, fraction, loadcell_option, make_virtual_device, out_path,
+    pascals, plain_numbers, seconds, sensor_area, sigterm_as_interrupt, window_ms_option,
 )
 
 
@@ -26,7 +26,7 @@ def acquire(
     virtual: bool = typer.Option(False, "--virtual", help="Record from a virtual device (pty, physics and 555 models) instead of hardware."),
     speed: str = typer.Option("realtime", "--speed", help=SPEED_HELP),
     duration: float = typer.Option("60s", "--duration", parser=seconds, metavar="TIME", help="Recording time [s]: 90, 90s, 1.5min, 2h, 500ms (a bare m is refused: minutes or milliseconds?)."),
-    out: Path = typer.Option(Path("run.csv"), "--out", "-o", help="Run file (CSV + NAME.meta.json sidecar, docs/data-format.md)."),
+    out: Path = typer.Option(Path("run.csv"), "--out", "-o", parser=out_path, help="Run file (CSV + NAME.meta.json sidecar, docs/data-format.md)."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing run file and its sidecar; without it an existing one stops the command before the device is touched."),
     window: float = typer.Option("100ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], 10ms to 60s in whole milliseconds (the meter counts ms): 20ms, 100ms, 0.25, 1s."),
     stall: float = typer.Option(None, "--stall", parser=seconds, metavar="TIME", help="No frame for this long [s] is reported as a gap (default: 5 windows, at least 2s); a device still silent at the end fails the run (exit 1)."),
@@ -83,7 +83,7 @@ def acquire(
     check_rate(hx711_rate)
     sensor_meta, area_m2 = sensor_area(sensor, area)
     cal = loadcell_option(loadcell)
-    check_out(out, overwrite)
+    check_out(out, overwrite, inputs=[loadcell])
     device = None
     metadata: dict = {"sensor": sensor_meta} if sensor_meta else {}
     reference = health = None

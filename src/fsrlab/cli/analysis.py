@@ -16,8 +16,8 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli.options import (
-    SKIP_HELP, emit_json, fail, farads, fraction, load_run_warned, missing_column, number, ohms, option_names,
-    reading_file, seconds, skipped_json, warn,
+    OVERWRITE_HELP, SKIP_HELP, checked, emit_json, fail, farads, fraction, load_run_warned, missing_column, number,
+    ohms, option_names, out_path, reading_file, seconds, skipped_json, warn,
 )
 from fsrlab.units import STANDARD_GRAVITY
 
@@ -53,6 +53,9 @@ def hysteresis(
     run = load_run_warned(run_file, skip_bad_rows, warnings)
     if quantity not in run:
         missing_column(run_file, run, quantity, option="--quantity")
+    if quantity in ("stress_pa", "force_n"):
+        fail(f"{quantity} is a reference column: its hysteresis against the reference is the reference against "
+             "itself; give a readout such as frequency_hz, voltage_v or stress_pa_estimate", "--quantity")
     _reference_option(run_file, run, reference)
     ref = reference or ("stress_pa" if "stress_pa" in run else "force_n")
     shown, factor = _unit_option(unit if unit is not None else ("kPa" if ref == "stress_pa" else None), ref)
@@ -98,7 +101,10 @@ def repeatability(
         fail(f"must be 0 or 1, got {ddof}", "--ddof")
     with reading_file(file):
         loads, sensors, readings = load_grouped_csv(file)
-    res = grouped_repeatability(loads, sensors, readings, ddof=ddof)
+    try:
+        res = grouped_repeatability(loads, sensors, readings, ddof=ddof)
+    except ValueError as exc:  # a group's problem, said with the file it is in
+        raise ValueError(f"{file}: {exc}") from None
     if json_out:
         emit_json(res.to_dict())
         return
@@ -163,7 +169,8 @@ def calibrate_cmd(
     r: float = typer.Option(None, "--r", parser=ohms, help="555 R for --x c_fsr_farad [Ω], e.g. 10k (default: the run's sidecar, else 10k)."),
     c_off: float = typer.Option(None, "--c-off", parser=farads, help="C_off for --x c_fsr_farad [F], e.g. 470p (default: sidecar, else 0)."),
     skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=SKIP_HELP),
-    output: Path = typer.Option(None, "--output", "-o", help="Write the calibration to this JSON file."),
+    output: Path = typer.Option(None, "--output", "-o", parser=out_path, help="Write the calibration to this JSON file."),
+    overwrite: bool = typer.Option(False, "--overwrite", help=OVERWRITE_HELP),
     json_out: bool = typer.Option(False, "--json", help="Print JSON: model, method, how choices were scored and each step's result, held-out RMSE [reference unit and % FS], lag_s [s], candidates, ..."),
 ) -> None:
     """Calibrate readout → force or stress, every choice scored where it will be used.
@@ -189,6 +196,11 @@ def calibrate_cmd(
     if method not in ("auto", "held-out", "cv"):
         fail(f"must be auto, held-out or cv, got {method!r}", "--method")
     asked = [k for k, v in cv_only.items() if v]
+    if x in ("stress_pa", "force_n"):
+        fail(f"{x} is a reference column: a calibration of the reference against itself (or against itself "
+             "divided by the area) says nothing; give a readout such as frequency_hz", "--x")
+    if output is not None:
+        checked(output, "--output", overwrite=overwrite, inputs=run_files)
     if method == "held-out" and asked:
         fail(f"{asked[0]} needs --method cv (or auto)", "--method")
     if method == "held-out" or (method == "auto" and not asked):
@@ -210,6 +222,8 @@ def calibrate_cmd(
         fail(f"must be one of {', '.join(_MODELS)}; got {model!r}", "--model")
     if folds < 2:
         fail(f"must be >= 2, got {folds}", "--folds")
+    if max_lag is not None and not max_lag >= 0:
+        fail(f"must be a half-width >= 0 s, got {max_lag:g} s", "--max-lag")
     lag_value = _lag_option(lag)
     warnings: list[str] = []
     run = load_run_warned(run_file, skip_bad_rows, warnings)
@@ -388,11 +402,11 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
 def apply_cmd(
     cal_file: Path = typer.Argument(..., metavar="CAL.json", help="A calibration written by fsrlab calibrate -o."),
     run_file: Path = typer.Argument(..., metavar="RUN.csv", help="The run to convert."),
-    output: Path = typer.Option(..., "--output", "-o", help="Output run: the input columns plus <reference>_estimate and <reference>_uncertainty [N or Pa] and in_range [1]."),
+    output: Path = typer.Option(..., "--output", "-o", parser=out_path, help="Output run: the input columns plus <reference>_estimate and <reference>_uncertainty [N or Pa] and in_range [1]."),
     no_compensation: bool = typer.Option(False, "--no-compensation", help="Use the plain model even if the calibration holds a compensation."),
     margin: float = typer.Option(None, "--margin", parser=fraction, help="How far beyond the calibrated readout range an estimate is still written [1, a fraction of the range's span], e.g. 0.1 or 10%; beyond it the estimate is left empty (default: every reading for a held-out calibration, 10% for --method cv). Every reading outside the range has in_range = 0."),
     force: bool = typer.Option(False, "--force", help="Apply even to a run recorded with another circuit or range than the calibration."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing output run and its sidecar; without it an existing one stops the command."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing output run and its sidecar; without it an existing one stops the command. An input (or its sidecar) is never replaced."),
     skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=SKIP_HELP + " Skipped rows are not written."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON: rows written, estimated, missing (with the reasons), in and out of the readout range."),
 ) -> None:
@@ -413,7 +427,7 @@ def apply_cmd(
     from fsrlab.calibration.document import load_calibration
     from fsrlab.calibration.apply import apply_calibration, check_readout
     from fsrlab.errors import ProvenanceError
-    from fsrlab.io.runformat import sidecar_path
+    from fsrlab.io.outputs import atomic_run
     from fsrlab.io.runwriter import write_run
 
     if margin is not None and not (math.isfinite(margin) and margin >= 0):
@@ -424,12 +438,7 @@ def apply_cmd(
     run = load_run_warned(run_file, skip_bad_rows, warnings)
     if cal.x_name not in run and cal.x_name != "c_fsr_farad":
         missing_column(run_file, run, cal.x_name, " (the calibration's readout)")
-    if output.resolve() == run_file.resolve():
-        fail("must differ from the input run", "--output")
-    if not overwrite:
-        for existing in (output, sidecar_path(output)):
-            if existing.exists():
-                fail(f"{existing} exists; pass --overwrite to replace it", "--output")
+    checked(output, "--output", overwrite=overwrite, inputs=[cal_file, run_file], kind="run")
     if cal.recorded_with is None:
         warnings.append(f"{cal_file} does not record the circuit and range its data were recorded with (written by an "
                         f"earlier fsrlab, or not from a run): {run_file} is not checked against them")
@@ -441,7 +450,8 @@ def apply_cmd(
     info = est.metadata["calibration"]
     for difference in info.get("forced", []):
         warnings.append(f"applied with --force although {difference}")
-    write_run(output, est.columns, est.metadata, overwrite=True)
+    with atomic_run(output) as tmp:
+        write_run(tmp, est.columns, est.metadata, overwrite=True)
     n = info["counts"]
     warn(warnings)
     estimate_col = f"{cal.y_name}_estimate"

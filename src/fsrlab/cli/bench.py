@@ -9,7 +9,8 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli.options import (
-    Keyboard, LiveView, check_out, check_speed, emit_json, fail, loadcell_option, mass_list, masses, pascals,
+    Keyboard, LiveView, check_out, check_speed, checked, emit_json, fail, loadcell_option, mass_list, masses,
+    out_path, pascals,
     plain_numbers, seconds, sensor_area, sigterm_as_interrupt, virtual_sensor_option, window_ms_option,
 )
 
@@ -23,7 +24,7 @@ def bench(
     twin: bool = typer.Option(False, "--twin", help="Run on the digital twin (the firmware in simavr on a pty); unattended."),
     speed: str = typer.Option("realtime", "--speed", help="With --virtual or --twin: realtime (as hardware, for watching) or max (as fast as this computer runs the bench; the run's times stay the simulated clock)."),
     port: str = typer.Option(None, "--port", help="Serial port of a real meter (/dev/ttyACM0, COM3, a pty) or 'auto': you are prompted for each step."),
-    out: Path = typer.Option(None, "--out", "-o", help="Run file (CSV + NAME.meta.json sidecar; weights: NAME.placements.csv beside it) [default: PROTOCOL.csv]."),
+    out: Path = typer.Option(None, "--out", "-o", parser=out_path, help="Run file (CSV + NAME.meta.json sidecar; weights: NAME.placements.csv beside it) [default: PROTOCOL.csv]."),
     sensor: str = typer.Option(None, "--sensor", help="Sensor: a preset for its sensing area (flexiforce-a201, interlink-402; the virtual FSR gets that area), or with --virtual/--twin a virtual sensor: virtual-fsr (default), paper-a201-1 .. paper-a201-4 (the sensors fitted to the paper's §6; with --port only their area)."),
     peak: float = typer.Option("10k", "--peak", parser=pascals, metavar="STRESS", help="spring: peak stress [Pa]: 10k, 10kPa, 0.05MPa (the paper's bench: 10 kPa)."),
     period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="spring: duration of one cycle [s]: 4s, 500ms, 1min."),
@@ -36,8 +37,8 @@ def bench(
     window: float = typer.Option("20ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], whole ms: 20ms, 100ms."),
     seed: int = typer.Option(None, "--seed", help="Random seed of the virtual meter's noise (an integer)."),
     loadcell: Path = typer.Option(None, "--loadcell", metavar="LC.json", help="Load-cell calibration JSON (fsrlab loadcell tare/scale) [counts → N]; a virtual meter uses its own."),
-    report: Path = typer.Option(None, "--report", metavar="DIR", help="Also write the measurement report of the run (index.html) into this directory."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing run and its sidecar."),
+    report: Path = typer.Option(None, "--report", metavar="DIR", parser=out_path, help="Also write the measurement report of the run (index.html) into this directory."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing run and its sidecar (weights: and its placements file), and write the --report into a directory that is not empty. An input is never replaced."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Virtual bench: do not print its steps (prompts for a person are always shown)."),
     json_out: bool = typer.Option(False, "--json", help='Print {"file", "frames", "dropped", "duration_s", "protocol", "device", "placements", "report"} as JSON.'),
 ) -> None:
@@ -110,9 +111,13 @@ def bench(
     if sensor_obj is None:  # with --port a paper sensor's name gives its area
         sensor_meta, area_m2 = sensor_area(sensor, None)
     cal = loadcell_option(loadcell)
-    check_out(out, overwrite)
+    check_out(out, overwrite, inputs=[loadcell])
+    if protocol == "weights":
+        checked(out.with_name(out.stem + ".placements.csv"), "--out", overwrite=overwrite, inputs=[loadcell])
     if report is not None:
         _check_report_dir(report)
+        checked(report, "--report", overwrite=overwrite, inputs=[out, loadcell], kind="dir",
+                names=("index.html", "report.json"))
     device = "virtual" if virtual else "twin" if twin else "port"
     confirm = None
     if device == "port":

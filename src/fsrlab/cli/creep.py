@@ -13,9 +13,10 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli.options import (
-    SKIP_HELP, emit_json, fail, fraction, load_run_warned, missing_column, option_names, seconds, skipped_json,
-    warn,
+    SKIP_HELP, checked, emit_json, fail, fraction, load_run_warned, missing_column, option_names, out_path, seconds,
+    skipped_json, warn,
 )
+from fsrlab.io.outputs import atomic_path
 
 _PLOT_SUFFIXES = (".png", ".svg", ".pdf")
 
@@ -32,7 +33,8 @@ def creep_cmd(
     min_hold: float = typer.Option(5.0, "--min-hold", parser=seconds, help="Shortest hold reported [s], e.g. 5s, 500ms, 2min."),
     band: float = typer.Option(0.02, "--band", parser=fraction, help="Half-width of the hold band [1, a fraction of full scale = the largest |reference|], 0.02 or 2%; in (0, 50 %)."),
     settle: float = typer.Option(None, "--settle", parser=seconds, help="Time after each hold's start left out of the fits, while the load settles [s], e.g. 0.5s; shorter than --min-hold (default: 0.5 s, at most a fifth of --min-hold)."),
-    plot: Path = typer.Option(None, "--plot", metavar="FILE.png", help="Also draw the readout against log time per hold into this figure [.png, .svg or .pdf]."),
+    plot: Path = typer.Option(None, "--plot", metavar="FILE.png", parser=out_path, help="Also draw the readout against log time per hold into this figure [.png, .svg or .pdf]."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing --plot file. An input is never replaced."),
     skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=SKIP_HELP),
     json_out: bool = typer.Option(False, "--json", help="Print JSON (units in the keys; null where not determined)."),
 ) -> None:
@@ -66,8 +68,7 @@ def creep_cmd(
     if plot is not None:
         if plot.suffix.lower() not in _PLOT_SUFFIXES:
             fail(f"must end in .png, .svg or .pdf, got '{plot}'", "--plot")
-        if plot.is_dir():
-            fail(f"'{plot}' is a directory, not a file", "--plot")
+        checked(plot, "--plot", overwrite=overwrite, inputs=[run_file])
     warnings: list[str] = []
     run = load_run_warned(run_file, skip_bad_rows, warnings)
     if x not in run:
@@ -125,7 +126,8 @@ def _save_plot(res, path: Path) -> None:
         res.plot(ax=ax)
         fig.tight_layout()
         try:
-            fig.savefig(path)
+            with atomic_path(path) as tmp:
+                fig.savefig(tmp, format=path.suffix.lower()[1:])
         except IsADirectoryError:
             fail(f"'{path}' is a directory, not a file", "--plot")
         except OSError as exc:

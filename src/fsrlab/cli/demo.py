@@ -8,12 +8,13 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli.options import emit_json, fail, seconds
+from fsrlab.cli.options import OVERWRITE_DIR_HELP, checked, emit_json, fail, out_path, seconds
 
 
 @app.command("demo")
 def demo(
-    out: Path = typer.Option(Path("demo"), "--out", "-o", help="Directory for the runs, the calibration, both reports and index.html; created if missing."),
+    out: Path = typer.Option(Path("demo"), "--out", "-o", parser=out_path, help="Directory for the runs, the calibration, both reports and index.html; created if missing."),
+    overwrite: bool = typer.Option(False, "--overwrite", help=OVERWRITE_DIR_HELP),
     device: str = typer.Option("auto", "--device", help="The virtual bench: auto (the digital twin when it can run, else the Python virtual device), twin or virtual."),
     sensor: str = typer.Option(None, "--sensor", help="The virtual sensor: paper-a201-1 (default) .. paper-a201-4 (fitted to the paper's §6) or virtual-fsr."),
     cycles: int = typer.Option(4, "--cycles", help="Spring cycles per run [1]: 4."),
@@ -55,6 +56,7 @@ def demo(
     for parent in (out, *out.parents):
         if parent.exists() and not parent.is_dir():
             fail(f"{parent} is a file, not a directory", "--out")
+    checked(out, "--out", overwrite=overwrite, kind="dir")
     if device == "twin":
         from fsrlab.bench.protocols import twin_status
 

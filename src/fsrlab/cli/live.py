@@ -9,8 +9,8 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli.options import (
-    AREA_HELP, LOADCELL_HELP, SENSOR_HELP, areas, check_out, check_virtual, fail, farads, load_frame_calibration,
-    loadcell_option, make_virtual_device, mass_list, meter_differences, pascals, seconds, sensor_area,
+    AREA_HELP, LOADCELL_HELP, SENSOR_HELP, areas, check_virtual, fail, farads, load_frame_calibration,
+    loadcell_option, make_virtual_device, mass_list, meter_differences, out_path, pascals, seconds, sensor_area,
     virtual_bench, window_ms_option,
 )
 from fsrlab.io.jsonable import to_jsonable
@@ -54,7 +54,7 @@ def _json_line(obj) -> None:
 def live(
     port: str = typer.Option(None, "--port", help="Serial port of the meter (/dev/ttyACM0, COM3, a pty) or 'auto'."),
     virtual: bool = typer.Option(False, "--virtual", help="Show a virtual device (pty, physics and 555 models) instead of hardware."),
-    out: Path = typer.Option(None, "--out", "-o", help="Run file for the page's 'Start recording' (CSV + sidecar); later recordings get -2, -3, ...; never replaced. Without it recording is off."),
+    out: Path = typer.Option(None, "--out", "-o", parser=out_path, help="Run file for the page's 'Start recording' (CSV + sidecar); later recordings get -2, -3, ...; never replaced. Without it recording is off."),
     cal: Path = typer.Option(None, "--cal", help="Calibration JSON (fsrlab calibrate -o): the page also shows the estimate and its uncertainty."),
     host: str = typer.Option("127.0.0.1", "--host", help="Interface to serve on: 127.0.0.1 (this computer only) or e.g. 0.0.0.0; any other than 127.0.0.1 needs the random token printed with the URL."),
     http_port: int = typer.Option(5006, "--http-port", help="TCP port of the page [1], 1..65535, or 0 for any free one."),
@@ -100,8 +100,20 @@ def live(
         fail(f"must be 0..65535, got {http_port}", "--http-port")
     if duration is not None and not duration > 0:
         fail(f"must be > 0 s, got {duration:g} s", "--duration")
+    from fsrlab.live.hosts import check_bind_host
+
+    try:
+        host = check_bind_host(host)
+    except ValueError as exc:
+        fail(str(exc).split(": ", 1)[1], "--host")
     if out is not None:
-        check_out(out, overwrite=False)
+        from fsrlab.io.outputs import OutputError, check_output
+
+        try:
+            check_output(out, "--out", inputs=[cal, loadcell], kind="run")
+        except OutputError as exc:  # live has no --overwrite: it never replaces a run
+            fail(exc.message.replace("pass --overwrite to replace it", "live never replaces a run: give a new name"),
+                 "--out")
     sensor_meta, area_m2 = sensor_area(sensor, area)
     lc = loadcell_option(loadcell)
     calibration = load_frame_calibration(cal, "live") if cal is not None else None

@@ -9,8 +9,8 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli.options import (
-    GRAVITY_HELP, check_rate, emit_json, fail, gravity_value, loadcell_option, masses, plain_numbers, seconds,
-    sigterm_as_interrupt, window_ms_option,
+    GRAVITY_HELP, check_rate, emit_json, fail, gravity_value, loadcell_option, masses, out_path, plain_numbers,
+    seconds, sigterm_as_interrupt, window_ms_option,
 )
 
 @app.command("loadcell")
@@ -19,7 +19,7 @@ def loadcell(
                                  "scale: read it with --mass on, add the scale factor to --cal."),
     port: str = typer.Option(None, "--port", help="Serial port of the meter (/dev/ttyACM0, COM3, a pty) or 'auto'."),
     virtual: bool = typer.Option(False, "--virtual", help="Use a virtual meter with its emulated load cell; the virtual bench places the mass itself."),
-    out: Path = typer.Option(None, "--out", "-o", metavar="LC.json", help="tare: the load-cell calibration file to write (LC.json)."),
+    out: Path = typer.Option(None, "--out", "-o", metavar="LC.json", parser=out_path, help="tare: the load-cell calibration file to write (LC.json)."),
     cal: Path = typer.Option(None, "--cal", metavar="LC.json", help="scale: the tare's calibration file (LC.json); the scale factor is added to it (or written to -o)."),
     mass: float = typer.Option(None, "--mass", parser=masses, metavar="MASS", help="scale: the known mass on the cell [kg]: 500g, 0.5kg, 250mg."),
     gravity: float = typer.Option("9.80665", "--gravity", parser=gravity_value, metavar="ACCELERATION", help=GRAVITY_HELP),

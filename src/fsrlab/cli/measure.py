@@ -13,7 +13,7 @@ from fsrlab.cli import app
 from fsrlab.cli.options import (
     AREA_HELP, LiveView, LOADCELL_HELP, PEAK_HELP, PERIOD_HELP, PROFILE_HELP, SENSOR_HELP, areas, check_out,
     check_virtual, emit_json, fail, farads, fmt_value, load_frame_calibration, loadcell_option, make_virtual_device,
-    meter_differences, pascals, plain_numbers, seconds, sensor_area, sigterm_as_interrupt, window_ms_option,
+    meter_differences, out_path, pascals, plain_numbers, seconds, sensor_area, sigterm_as_interrupt, window_ms_option,
 )
 from fsrlab.units import STANDARD_GRAVITY
 
@@ -41,7 +41,7 @@ def measure(
     cal: Path = typer.Option(..., "--cal", metavar="CAL.json", help="Calibration JSON from fsrlab calibrate -o (readout -> stress_pa [Pa] or force_n [N])."),
     port: str = typer.Option(None, "--port", help="Serial port of the meter (/dev/ttyACM0, COM3, a pty) or 'auto'."),
     virtual: bool = typer.Option(False, "--virtual", help="Measure a virtual meter (its sensor follows --profile)."),
-    out: Path = typer.Option(Path("measure.csv"), "--out", "-o", help="Run file with the estimate (CSV + NAME.meta.json)."),
+    out: Path = typer.Option(Path("measure.csv"), "--out", "-o", parser=out_path, help="Run file with the estimate (CSV + NAME.meta.json)."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing run and its sidecar."),
     duration: float = typer.Option(None, "--duration", parser=seconds, metavar="TIME", help="Measure this long [s]: 10s, 1.5min (default: until Ctrl-C)."),
     window: float = typer.Option("100ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], whole ms: 100ms, 0.25."),
@@ -85,7 +85,7 @@ def measure(
         fail(f"{cal}: {exc}", "--cal")
     sensor_meta, area_m2 = sensor_area(sensor, area)
     lc = loadcell_option(loadcell)
-    check_out(out, overwrite)
+    check_out(out, overwrite, inputs=[cal, loadcell])
     device = None
     metadata: dict = {"sensor": sensor_meta} if sensor_meta else {}
     if virtual:

@@ -1,5 +1,6 @@
 """What the command modules share: option parsers, JSON output, one-line errors, and the options and helpers of
-the recording commands (sensor and area, load cell, virtual device, window, output, live view, run loading).
+the recording commands (sensor and area, load cell, virtual device, window, live view, run loading), and the output
+policy as the commands use it (``parser=out_path``, :func:`checked`, :func:`check_out`, the ``--overwrite`` help texts).
 
 A command module imports these from here, never another command module's names.
 
@@ -29,7 +30,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import queue
 import re
 import signal
@@ -357,21 +357,7 @@ def window_ms_option(window_s: float) -> int:
     return int(ms)
 
 
-def check_out(out: Path, overwrite: bool, option: str = "--out") -> None:
-    """Refuse an output that exists (unless ``overwrite``) or cannot be written, before any device is touched."""
-    from fsrlab.io.runformat import sidecar_path
-
-    if out.is_dir():
-        fail(f"{out} is a directory; give the run's CSV file, e.g. {out / 'run.csv'}", option)
-    if not overwrite:
-        for existing in (out, sidecar_path(out)):
-            if os.path.lexists(existing):
-                fail(f"{existing} exists; pass --overwrite to replace the run", option)
-    parent = out.parent if str(out.parent) else Path(".")
-    if not parent.is_dir():
-        fail(f"directory {parent} does not exist", option)
-    if not os.access(parent, os.W_OK):
-        fail(f"cannot write in directory {parent} (permission denied)", option)
+from fsrlab.cli.outputs import OVERWRITE_DIR_HELP, OVERWRITE_HELP, check_out, checked, out_path  # noqa: E402,F401
 
 
 def fmt_value(value: float, spec: str) -> str:
@@ -554,7 +540,9 @@ def skipped_json(run) -> dict:
 
 
 def missing_column(path: Path, run, column: str, what: str = "", option: str | None = None) -> None:
-    fail(f"{path}: column {column!r}{what} missing (columns: {', '.join(run.columns)})", option)
+    from fsrlab.io.shown import shown_list
+
+    fail(f"{path}: column {column!r}{what} missing (columns: {shown_list(run.columns)})", option)
 
 
 def load_frame_calibration(cal: Path, command: str):

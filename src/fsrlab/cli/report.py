@@ -7,12 +7,13 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli.options import emit_json, fail
+from fsrlab.cli.options import OVERWRITE_DIR_HELP, checked, emit_json, fail, out_path
 
 
 @app.command("paper")
 def paper(
-    out: Path = typer.Option(Path("report"), "--out", "-o", help="Directory for index.html, paper.json and the PNG figures; created if missing."),
+    out: Path = typer.Option(Path("report"), "--out", "-o", parser=out_path, help="Directory for index.html, paper.json and the PNG figures; created if missing."),
+    overwrite: bool = typer.Option(False, "--overwrite", help=OVERWRITE_DIR_HELP),
     json_out: bool = typer.Option(False, "--json", help="Print the paths written as JSON instead of a summary."),
 ) -> None:
     """Reproduce every figure and table of the paper, with the paper's values beside ours and the errata.
@@ -29,6 +30,7 @@ def paper(
     for parent in (out, *out.parents):
         if parent.exists() and not parent.is_dir():
             fail(f"{parent} is a file, not a directory", "--out")
+    checked(out, "--out", overwrite=overwrite, kind="dir")
     from rich.console import Console
 
     console = Console(stderr=True)

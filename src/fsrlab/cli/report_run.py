@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli.options import emit_json, fail
+from fsrlab.cli.options import OVERWRITE_DIR_HELP, checked, emit_json, fail, out_path
 
 
 def _existing(path: Path | None, option: str) -> None:
@@ -18,7 +18,8 @@ def _existing(path: Path | None, option: str) -> None:
 @app.command("report")
 def report(
     run: Path = typer.Argument(..., metavar="RUN.csv", help="The recorded run (fsrlab bench, acquire, weights, measure)."),
-    out: Path = typer.Option(..., "--out", "-o", help="Directory for index.html, report.json and the PNGs; created if missing."),
+    out: Path = typer.Option(..., "--out", "-o", parser=out_path, help="Directory for index.html, report.json and the PNGs; created if missing."),
+    overwrite: bool = typer.Option(False, "--overwrite", help=OVERWRITE_DIR_HELP),
     weights_run: Path = typer.Option(None, "--weights", metavar="WEIGHTS.csv", help="A dead-weight run (fsrlab bench weights) for RE1/RE2 of f and V0 and ISO 376 (default: the run itself when it is one)."),
     placements: Path = typer.Option(None, "--placements", metavar="P.csv", help="A placements CSV (load [g], sensor, reading [Hz]; NAME.placements.csv of fsrlab bench weights, or a table like Table 4) for RE1/RE2 of the frequency per load and sensor, without a weights run."),
     cal: Path = typer.Option(None, "--cal", metavar="CAL.json", help="Calibration JSON (fsrlab calibrate) applied to the run; default: the run calibrated on itself."),
@@ -37,7 +38,7 @@ def report(
 
     \b
       fsrlab report examples/bench.csv --out report-run
-      fsrlab report examples/other.csv --cal examples/calibration.json --placements examples/repeatability.csv --out report-run --json
+      fsrlab report examples/other.csv --cal examples/calibration.json --placements examples/repeatability.csv --out report-other --json
     """
     from fsrlab.reports.run_report import write_run_report
 
@@ -50,6 +51,8 @@ def report(
     for parent in (out, *out.parents):
         if parent.exists() and not parent.is_dir():
             fail(f"{parent} is a file, not a directory", "--out")
+    checked(out, "--out", overwrite=overwrite, inputs=[run, weights_run, placements, cal], kind="dir",
+            names=("index.html", "report.json"))
     try:
         files = write_run_report(run, out, placements=placements, weights_run=weights_run, calibration=cal,
                                  calibrate=not no_calibration)

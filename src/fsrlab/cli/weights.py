@@ -10,11 +10,11 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli.options import (
-    AREA_HELP, GRAVITY_HELP, Keyboard, SENSOR_HELP, check_out, emit_json, fail, fraction, gravity_value,
-    loadcell_option, mass_list, plain_numbers, seconds, sensor_area, sigterm_as_interrupt, virtual_bench,
-    window_ms_option,
+    AREA_HELP, GRAVITY_HELP, Keyboard, SENSOR_HELP, areas, check_out, checked, emit_json, fail, fraction,
+    gravity_value, loadcell_option, mass_list, out_path, plain_numbers, seconds, sensor_area, sigterm_as_interrupt,
+    virtual_bench, window_ms_option,
 )
-from fsrlab.cli.options import areas
+from fsrlab.io.outputs import write_text_atomic
 
 
 @app.command("weights")
@@ -22,7 +22,7 @@ def weights(
     masses: str = typer.Option(..., "--masses", metavar="MASSES", help="Masses to place, increasing, comma-separated [kg]: 0,50g,100g,200g,500g (g, kg or mg; 0 needs no unit)."),
     port: str = typer.Option(None, "--port", help="Serial port of the meter (/dev/ttyACM0, COM3, a pty) or 'auto'."),
     virtual: bool = typer.Option(False, "--virtual", help="A virtual meter and a virtual bench that places the masses itself (runs unattended)."),
-    out: Path = typer.Option(Path("weights.csv"), "--out", "-o", help="Run file (CSV + NAME.meta.json sidecar; NAME.placements.csv beside it)."),
+    out: Path = typer.Option(Path("weights.csv"), "--out", "-o", parser=out_path, help="Run file (CSV + NAME.meta.json sidecar; NAME.placements.csv beside it)."),
     repeat: int = typer.Option(1, "--repeat", help="Cycles of placements [1], for repeatability (RE1, RE2 as in Tables 4 and 5): 1, 3, 5."),
     unload: bool = typer.Option(False, "--unload", help="After the largest mass, unload in reverse (direction -1), for hysteresis."),
     loadcell: Path = typer.Option(None, "--loadcell", metavar="LC.json", help="Load-cell calibration JSON: force_n is then the load cell's reading, force_nominal_n stays m·g."),
@@ -87,7 +87,8 @@ def weights(
         fail(f"must be an integer >= 0, got {seed}", "--seed")
     sensor_meta, area_m2 = sensor_area(sensor, area)
     cal = loadcell_option(loadcell)
-    check_out(out, overwrite)
+    check_out(out, overwrite, inputs=[loadcell])
+    checked(out.with_name(out.stem + ".placements.csv"), "--out", overwrite=overwrite, inputs=[loadcell])
     steps = plan_steps(masses_kg, repeat, unload)
     stop = threading.Event()
     device = bench = None
@@ -147,7 +148,7 @@ def weights(
     summary = proc.summary()
     placements = out.with_name(out.stem + ".placements.csv")
     try:
-        placements.write_text(placements_table(summary, x), encoding="utf-8")
+        write_text_atomic(placements, placements_table(summary, x))
     except OSError as exc:
         print(f"fsrlab: cannot write {placements}: {exc.strerror}", file=sys.stderr)
     info = {**result_dict(result), "recorded": summary["recorded"], "skipped": summary["skipped"],

@@ -12,6 +12,7 @@ import json
 import os
 from pathlib import Path
 
+from fsrlab.io.outputs import write_text_atomic
 from fsrlab.io.runformat import read_json_document
 
 __all__ = ["CALIBRATION_FORMAT", "CALIBRATION_VERSION", "read_calibration_document", "write_calibration_document"]
@@ -23,7 +24,7 @@ CALIBRATION_VERSION = 1
 
 
 def write_calibration_document(doc: dict, path: str | os.PathLike) -> Path:
-    """Write a calibration document as indented JSON (non-finite numbers refused).
+    """Write a calibration document as indented JSON (non-finite numbers refused), atomically.
 
     Parameters
     ----------
@@ -35,9 +36,8 @@ def write_calibration_document(doc: dict, path: str | os.PathLike) -> Path:
     -------
     Path
     """
-    p = Path(path)
-    p.write_text(json.dumps(doc, indent=2, allow_nan=False) + "\n", encoding="utf-8")
-    return p
+    # Through a temporary file and a rename: an interrupted write leaves the old file or none.
+    return write_text_atomic(path, json.dumps(doc, indent=2, allow_nan=False) + "\n")
 
 
 def read_calibration_document(path: str | os.PathLike) -> dict:

@@ -18,6 +18,7 @@ from typing import NamedTuple, Sequence
 import numpy as np
 
 from fsrlab.io.schema import KNOWN_COLUMNS, RunFormatError, where
+from fsrlab.io.shown import number_cell, shown
 
 __all__ = ["COLUMN_LIMITS", "OTHER_LIMIT", "BadRow", "parse_cells"]
 
@@ -78,6 +79,9 @@ def _parse_fast(body: list[str], ncol: int) -> np.ndarray | None:
         return np.empty((0, ncol))
     if _has_empties(body) or any('"' in ln for ln in body[:1]):
         return None
+    # numpy, like float(), reads 5_000 and non-ASCII digits as numbers; such cells go cell by cell.
+    if any(not ln.isascii() or "_" in ln for ln in body):
+        return None
     try:
         arr = np.loadtxt(body, delimiter=",", dtype=np.float64, ndmin=2, comments=None)
     except ValueError:
@@ -119,9 +123,9 @@ def _parse_slow(path: Path, body: list[str], header: list[str], checks: list) ->
                 empty[i, j] = True
                 continue
             try:
-                out[i, j] = float(cell)
+                out[i, j] = number_cell(cell)
             except ValueError:
-                report(i, j, f"{where(path, i + 1, header[j])}: non-numeric cell {cell!r}")
+                report(i, j, f"{where(path, i + 1, header[j])}: non-numeric cell {shown(cell)}")
                 break
     # Empty and 0 (a value every column can hold): the value checks pass over a broken row.
     empty[broken] = True

@@ -25,6 +25,7 @@ import numpy as np
 from fsrlab.io.schema import (
     FORMAT, KNOWN_COLUMNS, QUANTITY_COLUMNS, VERSION, RunFormatError, check_columns, sidecar_path, where,
 )
+from fsrlab.io.shown import shown_list
 
 __all__ = [
     "read_table",
@@ -40,6 +41,12 @@ __all__ = [
     "check_columns",
     "read_json_document",
 ]
+
+
+def _names(header: Sequence[str]) -> str:
+    """A header as an error message shows it: control characters escaped, the length capped."""
+    return shown_list(header)
+
 
 @dataclass
 class Run:
@@ -260,7 +267,7 @@ def read_table(path: str | os.PathLike, required: Sequence[str], hint: str = "")
     header = [h.strip() for h in table[0]]
     for col in required:
         if col not in header:
-            raise ValueError(f"{p}: column {col!r} missing (columns: {', '.join(header)})")
+            raise ValueError(f"{p}: column {col!r} missing (columns: {_names(header)})")
     rows = [(k, row) for k, row in enumerate(table[1:], start=1) if any(c.strip() for c in row)]
     return {c: i for i, c in enumerate(header)}, rows, p
 
@@ -326,7 +333,7 @@ def load_run(path: str | os.PathLike, require: Sequence[str] = (), skip_bad_rows
         raise RunFormatError(f"{p}: row 0 (line 1, header): {exc}") from None
     for name in require:
         if name not in header:
-            raise RunFormatError(f"{p}: column {name!r} missing (columns: {', '.join(header)})")
+            raise RunFormatError(f"{p}: column {name!r} missing (columns: {_names(header)})")
     from fsrlab.io.runcells import parse_cells
 
     data, skipped = parse_cells(p, lines[1:], header, skip_bad_rows)

@@ -15,6 +15,7 @@ import numpy as np
 
 from fsrlab.io.runcells import OTHER_LIMIT
 from fsrlab.io.runformat import read_table, where
+from fsrlab.io.shown import number_cell, shown
 
 __all__ = ["CalibrationSeries", "load_grouped_csv", "load_iso376_csv"]
 
@@ -44,7 +45,7 @@ class CalibrationSeries:
 
 def _label(cell: str) -> Any:
     try:
-        v = float(cell)
+        v = number_cell(cell)
     except ValueError:
         return cell
     return int(v) if v.is_integer() else v
@@ -88,9 +89,9 @@ def load_grouped_csv(path: str | os.PathLike) -> tuple[list, list, np.ndarray]:
             if j >= len(row) or not row[j].strip():
                 raise ValueError(f"{where(p, k, name)}: empty cell")
         try:
-            v = float(row[ir])
+            v = number_cell(row[ir].strip())
         except ValueError:
-            raise ValueError(f"{where(p, k, 'reading')}: non-numeric cell {row[ir].strip()!r}") from None
+            raise ValueError(f"{where(p, k, 'reading')}: non-numeric cell {shown(row[ir].strip())}") from None
         _check_number(p, k, "reading", v, row[ir])
         loads.append(_label(row[il].strip()))
         sensors.append(_label(row[isn].strip()))
@@ -141,9 +142,9 @@ def load_iso376_csv(path) -> tuple[np.ndarray, list[CalibrationSeries]]:
             if not cell:
                 raise ValueError(f"{where(p, k, col)}: empty cell")
             try:
-                vals[col] = float(cell)
+                vals[col] = number_cell(cell)
             except ValueError:
-                raise ValueError(f"{where(p, k, col)}: non-numeric cell {cell!r}") from None
+                raise ValueError(f"{where(p, k, col)}: non-numeric cell {shown(cell)}") from None
             _check_number(p, k, col, vals[col], cell, 0.0 if col == "force_n" else -OTHER_LIMIT)
         d = vals.get("direction", 1.0)
         if d not in (1.0, -1.0):

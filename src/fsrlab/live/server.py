@@ -3,8 +3,9 @@
 Security rules (docs/live.md): the server binds to 127.0.0.1 unless told otherwise; on any other
 interface every request needs the random token printed with the URL (``?token=...``, then a cookie
 for the page's own requests) and gets 403 without it; the websocket that carries the page's commands
-accepts only the page's own origin (Bokeh's ``allow_websocket_origin``); only the page, BokehJS's
-static files and the websocket are served. BokehJS comes from the ``bokeh`` wheel: nothing is loaded
+accepts only the page's own origin (Bokeh's ``allow_websocket_origin``); every request, the websocket
+included, is first checked for its Host name, token and path (:mod:`fsrlab.live.hosts`): only the page,
+BokehJS's static files, the favicon and the websocket are served. BokehJS comes from the ``bokeh`` wheel: nothing is loaded
 from a CDN, the page works offline.
 """
 
@@ -94,6 +95,8 @@ def start_server(make_doc, host: str = "127.0.0.1", port: int = 5006, token: str
     from bokeh.application.handlers.function import FunctionHandler
     from bokeh.server.server import Server
 
+    from fsrlab.live.hosts import HostPolicy, guard
+
     local = host in ("127.0.0.1", "localhost", "::1")
     if not local and token is None:
         token = secrets.token_urlsafe(16)
@@ -109,6 +112,7 @@ def start_server(make_doc, host: str = "127.0.0.1", port: int = 5006, token: str
     if not local:
         options["auth_provider"] = _token_auth(token)
     server = Server({"/": Application(FunctionHandler(make_doc))}, **options)
+    guard(server._tornado, HostPolicy(host, None if local else token))
     server.start()
     shown = "127.0.0.1" if local else host
     url = f"http://{shown}:{port}/" + (f"?token={token}" if token else "")

@@ -459,7 +459,10 @@ def grouped_repeatability(load: Sequence, sensor: Sequence, reading, ddof: int =
     for (ld, sn), idx in order.items():
         if len(idx) < 2:
             raise ValueError(f"reading: group load={ld!r} sensor={sn!r} has {len(idx)} reading; at least 2 are needed")
-        r = repeatability(x[idx], ddof=ddof)
+        try:
+            r = repeatability(x[idx], ddof=ddof)
+        except ValueError as exc:  # the group it is about, not only "a set"
+            raise ValueError(f"reading: group load={ld!r} sensor={sn!r}: {str(exc).split(': ', 1)[-1]}") from None
         groups.append(GroupRepeatability(ld, sn, float(r.re1_percent), float(r.re2_percent), float(r.mean), len(idx)))
     means = []
     for ld in dict.fromkeys(g.load for g in groups):

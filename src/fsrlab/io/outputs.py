@@ -1,0 +1,302 @@
+"""The output policy of every command that writes: what may be written where, and how.
+
+One rule for files and report directories alike:
+
+- an empty path is refused (``--out ""`` with an unset variable must not mean "here");
+- an output that exists is refused unless the caller passes ``overwrite=True`` (``--overwrite``);
+  for a directory, "exists" means it holds anything;
+- an output that is one of the command's inputs, or an input's sidecar (``NAME.meta.json`` beside
+  ``NAME.csv``), is refused even with ``overwrite``: symlinks, ``..`` and relative spellings are
+  resolved and hard links compared, so ``-o ./b.csv`` for input ``b.csv`` is the same file;
+- a directory where a file is expected (or a file where a directory is expected, or a missing
+  parent directory) is refused before anything is computed;
+- a file is written under a temporary name in its directory and renamed over the final name
+  (:func:`atomic_path`, :func:`write_text_atomic`): an interrupted write never leaves a half file
+  under the final name.
+
+Recordings (``acquire``, ``bench``, ``weights``, ``measure``, ``live``) are checked by the same rule
+but written row by row under their final name (:class:`fsrlab.io.runwriter.RunWriter`: a stopped
+recording keeps every whole row).
+
+Every refusal is an :class:`OutputError`, a ``ValueError`` that names the option.
+"""
+
+from __future__ import annotations
+
+import os
+import secrets
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Iterable, Iterator
+
+__all__ = ["OutputError", "output_path", "check_output", "protected_paths", "same_file", "atomic_path",
+           "write_text_atomic", "atomic_run", "run_files"]
+
+
+class OutputError(ValueError):
+    """An output the policy refuses.
+
+    Parameters
+    ----------
+    option : str
+        The option or argument that names the output, e.g. ``"--output"``.
+    message : str
+        What is wrong and what is allowed.
+    """
+
+    def __init__(self, option: str, message: str):
+        super().__init__(f"{option}: {message}")
+        self.option = option
+        self.message = message
+
+
+def output_path(text, option: str = "--out") -> Path:
+    """The path an option names; an empty or blank value is refused.
+
+    ``Path("")`` is ``Path(".")``, so the check must see the text before it becomes a path.
+
+    Parameters
+    ----------
+    text : str or path-like
+        The option's value as typed.
+    option : str
+        The option, for the message.
+
+    Returns
+    -------
+    Path
+    """
+    raw = os.fspath(text) if not isinstance(text, str) else text
+    if not raw.strip():
+        raise OutputError(option, "is empty; give a file or directory name (an unset shell variable gives an "
+                                  "empty value)")
+    return Path(raw)
+
+
+def _sidecar(path: Path) -> Path:
+    # The run format's sidecar (fsrlab.io.schema.sidecar_path), spelled here to keep this module import-free.
+    name = path.name
+    return path.with_name((name[:-4] if name.lower().endswith(".csv") else name) + ".meta.json")
+
+
+def run_files(path) -> tuple[Path, Path]:
+    """A run's two files: ``NAME.csv`` and its sidecar ``NAME.meta.json``.
+
+    Parameters
+    ----------
+    path : path-like
+        The run's CSV file.
+
+    Returns
+    -------
+    (Path, Path)
+    """
+    p = Path(path)
+    return p, _sidecar(p)
+
+
+def protected_paths(inputs: Iterable) -> list[tuple[Path, str]]:
+    """The inputs and their sidecars: what no output may replace.
+
+    Parameters
+    ----------
+    inputs : iterable of path-like or None
+        The command's input files (None entries are skipped).
+
+    Returns
+    -------
+    list of (Path, str)
+        Each protected file and what it is ("the input X", "the sidecar of the input X").
+    """
+    out: list[tuple[Path, str]] = []
+    for item in inputs:
+        if item is None or not os.fspath(item).strip():
+            continue
+        p = Path(item)
+        out.append((p, f"the input {p}"))
+        if p.name.lower().endswith(".csv"):
+            out.append((_sidecar(p), f"the sidecar of the input {p}"))
+    return out
+
+
+def same_file(a, b) -> bool:
+    """Whether two spellings name one file: symlinks and ``..`` resolved, hard links compared.
+
+    Parameters
+    ----------
+    a, b : path-like
+
+    Returns
+    -------
+    bool
+    """
+    if os.path.realpath(a) == os.path.realpath(b):
+        return True
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # one of them does not exist
+        return False
+
+
+def _input_clash(target: Path, protected: list[tuple[Path, str]]) -> str | None:
+    for p, what in protected:
+        if same_file(target, p):
+            return what
+    return None
+
+
+def check_output(path, option: str, *, overwrite: bool = False, inputs: Iterable = (), kind: str = "file",
+                 names: Iterable[str] = ()) -> Path:
+    """Check one output against the policy (module docstring) before anything is computed or written.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The output as the user gave it.
+    option : str
+        The option naming it, e.g. ``"--output"``; refusals name it.
+    overwrite : bool
+        Whether the user asked to replace an existing output.
+    inputs : iterable of path-like
+        The command's inputs; they and their sidecars are never written.
+    kind : {"file", "run", "dir"}
+        ``"file"``: one file; ``"run"``: ``NAME.csv`` and its sidecar ``NAME.meta.json``; ``"dir"``:
+        a directory the command fills (created if missing).
+    names : iterable of str
+        For ``kind="dir"``: files the command writes in it, checked against the inputs too.
+
+    Returns
+    -------
+    Path
+        ``path`` as a ``Path``.
+
+    Raises
+    ------
+    OutputError
+        The output is refused; the message says why and what to do.
+    """
+    if kind not in ("file", "run", "dir"):
+        raise ValueError(f"kind: must be file, run or dir, got {kind!r}")
+    target = output_path(path, option)
+    protected = protected_paths(inputs)
+    if kind == "dir":
+        for parent in (target, *target.parents):
+            if parent.exists() and not parent.is_dir():
+                raise OutputError(option, f"{parent} is a file, not a directory")
+        clash = _input_clash(target, protected)
+        if clash is None:
+            clash = next((c for n in names if (c := _input_clash(target / n, protected)) is not None), None)
+        if clash is not None:
+            raise OutputError(option, f"it would replace {clash}; choose another directory")
+        if target.is_dir() and not overwrite and any(os.scandir(target)):
+            raise OutputError(option, f"{target} exists and is not empty; pass --overwrite to replace the files "
+                                      "this command writes in it, or choose a new directory")
+        return target
+    files = run_files(target) if kind == "run" else (target,)
+    for f in files:
+        clash = _input_clash(f, protected)
+        if clash is not None:
+            raise OutputError(option, f"{f} is {clash}; write the output to another file "
+                                      "(--overwrite never replaces an input)")
+    if kind == "run" and target.name.lower().endswith(".meta.json"):
+        raise OutputError(option, f"{target} is named like a run's sidecar; give the run's CSV file, e.g. "
+                                  f"{target.with_name(target.name[:-len('.meta.json')] + '-2.csv')}")
+    if target.is_dir():
+        example = target / "run.csv" if kind == "run" else f"{target / 'NAME'}"
+        raise OutputError(option, f"{target} is a directory, not a file; give a file name, e.g. {example}")
+    for f in files:
+        if f.is_dir():
+            raise OutputError(option, f"{f} is a directory; the run's sidecar would go there")
+    parent = target.parent
+    if not parent.is_dir():
+        raise OutputError(option, f"directory {parent} does not exist" if not parent.exists()
+                          else f"{parent} is not a directory")
+    if not os.access(parent, os.W_OK):
+        raise OutputError(option, f"cannot write in directory {parent} (permission denied)")
+    if not overwrite:
+        for f in files:
+            if os.path.lexists(f):
+                raise OutputError(option, f"{f} exists; pass --overwrite to replace it")
+    return target
+
+
+@contextmanager
+def atomic_path(path) -> Iterator[Path]:
+    """A temporary path beside ``path``, renamed over ``path`` when the block ends without an error.
+
+    The temporary name keeps the suffix (a plot library chooses the format by it); it starts with a
+    dot and is removed when the block raises, so the final name holds either the old file or the
+    whole new one.
+
+    Parameters
+    ----------
+    path : path-like
+        The final file.
+
+    Yields
+    ------
+    Path
+        Where to write.
+    """
+    final = Path(path)
+    # Not mkstemp: its file is 0600, and the rename would give the output those permissions.
+    tmp = final.with_name(f".{final.name}.{os.getpid()}-{secrets.token_hex(4)}.partial{final.suffix}")
+    try:
+        yield tmp
+        with open(tmp, "rb") as fh:
+            os.fsync(fh.fileno())
+        os.replace(tmp, final)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+
+
+def write_text_atomic(path, text: str) -> Path:
+    """Write ``text`` (UTF-8) to ``path`` through a temporary file and one rename.
+
+    Parameters
+    ----------
+    path : path-like
+    text : str
+
+    Returns
+    -------
+    Path
+    """
+    with atomic_path(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    return Path(path)
+
+
+@contextmanager
+def atomic_run(path) -> Iterator[Path]:
+    """:func:`atomic_path` for a run: the temporary ``NAME.csv`` and its sidecar both renamed at the end.
+
+    The CSV is renamed first, then the sidecar; each is whole under its final name at any moment.
+
+    Parameters
+    ----------
+    path : path-like
+        The run's CSV file.
+
+    Yields
+    ------
+    Path
+        The temporary CSV to write the run to (its sidecar beside it).
+    """
+    final = Path(path)
+    tmp = final.with_name(f".{final.stem}.{os.getpid()}-{secrets.token_hex(4)}.partial.csv")
+    try:
+        yield tmp
+        for src, dst in zip(run_files(tmp), run_files(final)):
+            os.replace(src, dst)
+    except BaseException:
+        for f in run_files(tmp):
+            try:
+                os.unlink(f)
+            except OSError:
+                pass
+        raise

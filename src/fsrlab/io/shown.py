@@ -1,0 +1,105 @@
+"""Text from files, as error messages show it: control characters escaped, length capped, numbers strict.
+
+A CSV header or cell is echoed in one-line errors. Written raw, an escape sequence in it would act
+on the user's terminal and a 100 kB header would become a 100 kB line; :func:`shown` and
+:func:`shown_list` make it safe and short. :func:`number_cell` is the one spelling of a number a
+data cell may use: Python's ``float`` also reads ``5_000`` and full-width or other Unicode digits
+(``１０``, ``٣``), which a CSV cell should never be read as.
+"""
+
+from __future__ import annotations
+
+import re
+import unicodedata
+from typing import Iterable
+
+__all__ = ["shown", "shown_list", "number_cell", "NUMBER"]
+
+# ASCII digits, an optional sign, point and exponent; nan and inf in any case (checked later by value).
+NUMBER = re.compile(r"^[+-]?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|nan|inf|infinity)$", re.IGNORECASE)
+
+
+def _escape(text: str) -> str:
+    out = []
+    for ch in text:
+        if ch == "\\":
+            out.append("\\\\")
+        elif unicodedata.category(ch) in ("Cc", "Cf", "Zl", "Zp", "Cs", "Co", "Cn"):
+            out.append(f"\\x{ord(ch):02x}" if ord(ch) < 0x100 else f"\\u{ord(ch):04x}" if ord(ch) < 0x10000
+                       else f"\\U{ord(ch):08x}")
+        else:
+            out.append(ch)
+    return "".join(out)
+
+
+def shown(text, limit: int = 60) -> str:
+    """``text`` quoted for a message: control and format characters escaped, at most ``limit`` characters.
+
+    Parameters
+    ----------
+    text : object
+        A header name, a cell.
+    limit : int
+        Characters of ``text`` kept. [1]
+
+    Returns
+    -------
+    str
+        ``'name'``, or ``'first characters…' (12345 characters)`` when cut.
+    """
+    s = str(text)
+    if len(s) <= limit:
+        return f"'{_escape(s)}'"
+    return f"'{_escape(s[:limit])}…' ({len(s)} characters)"
+
+
+def shown_list(items: Iterable, limit: int = 200, item_limit: int = 40) -> str:
+    """Names joined by ", " for a message, each :func:`shown` unquoted, the whole capped near ``limit``.
+
+    Parameters
+    ----------
+    items : iterable
+        Column names.
+    limit : int
+        Characters of the joined text before the rest is counted instead. [1]
+    item_limit : int
+        Characters kept of each name. [1]
+
+    Returns
+    -------
+    str
+        ``"time_s, frequency_hz, … and 9998 more"``.
+    """
+    names = list(items)
+    parts: list[str] = []
+    size = 0
+    for k, name in enumerate(names):
+        part = shown(name, item_limit)[1:]
+        part = part[:-1] if part.endswith("'") else part.replace("…'", "…", 1)
+        if parts and size + len(part) > limit:
+            return ", ".join(parts) + f", … and {len(names) - k} more"
+        parts.append(part)
+        size += len(part) + 2
+    return ", ".join(parts)
+
+
+def number_cell(cell: str) -> float:
+    """A data cell's number: ASCII digits only (no ``_`` separators, no other scripts' digits).
+
+    Parameters
+    ----------
+    cell : str
+        The cell, stripped.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ValueError
+        The cell is not written as a plain number.
+    """
+    if not NUMBER.match(cell):
+        raise ValueError(f"not a plain number: {cell!r}")
+    return float(cell)
