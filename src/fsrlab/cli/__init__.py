@@ -156,8 +156,18 @@ def main(argv: list[str] | None = None) -> int:
         print("fsrlab: aborted", file=sys.stderr)
         code = 130
     except typer.TyperException as exc:  # click's usage errors (bad option, bad value): exit 2
-        print(f"fsrlab: error: {_one_line(exc.format_message())}", file=sys.stderr)
-        code = getattr(exc, "exit_code", 2)
+        if type(exc).__name__ == "NoArgsIsHelpError" and getattr(exc, "ctx", None) is not None:
+            # a command group without its command (``fsrlab firmware``): its help, as bare ``fsrlab`` gives
+            print(exc.ctx.get_help())
+            code = 0
+        else:
+            message = exc.format_message()
+            ctx = getattr(exc, "ctx", None)
+            if message.strip() == "Missing command." and ctx is not None and hasattr(ctx.command, "list_commands"):
+                message = (f"{ctx.command_path}: missing command (argument COMMAND): one of "
+                           f"{', '.join(ctx.command.list_commands(ctx))}")
+            print(f"fsrlab: error: {_one_line(message)}", file=sys.stderr)
+            code = getattr(exc, "exit_code", 2)
     except (ValueError, OSError) as exc:
         # Our models raise ValueError naming the parameter; files raise OSError. An FsrlabError carries the
         # parameter at fault: the message names its option instead.

@@ -203,9 +203,11 @@ def calibrate_cmd(
         checked(output, "--output", overwrite=overwrite, inputs=run_files)
     if method == "held-out" and asked:
         fail(f"{asked[0]} needs --method cv (or auto)", "--method")
+    fallback_note = None
     if method == "held-out" or (method == "auto" and not asked):
-        if _calibrate_held_out(run_files, x, reference, compensate, unit, lag or "0", skip_bad_rows, output, json_out,
-                               fall_back=method == "auto"):
+        fallback_note = _calibrate_held_out(run_files, x, reference, compensate, unit, lag or "0", skip_bad_rows,
+                                            output, json_out, fall_back=method == "auto")
+        if fallback_note is None:
             return
     if len(run_files) > 1:
         fail(f"--method cv calibrates one run, got {len(run_files)}: several runs are calibrated with --method "
@@ -225,7 +227,7 @@ def calibrate_cmd(
     if max_lag is not None and not max_lag >= 0:
         fail(f"must be a half-width >= 0 s, got {max_lag:g} s", "--max-lag")
     lag_value = _lag_option(lag)
-    warnings: list[str] = []
+    warnings: list[str] = [fallback_note] if fallback_note else []
     run = load_run_warned(run_file, skip_bad_rows, warnings)
     if x not in run and x != "c_fsr_farad":
         missing_column(run_file, run, x, option="--x")
@@ -323,11 +325,13 @@ def _lag_option(lag: str) -> float | str:
 
 
 def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, compensate: bool, unit: str | None,
-                        lag: str, skip_bad_rows: bool, output: Path | None, json_out: bool, fall_back: bool) -> bool:
+                        lag: str, skip_bad_rows: bool, output: Path | None, json_out: bool,
+                        fall_back: bool) -> str | None:
     """``fsrlab calibrate`` by held-out scoring (:func:`fsrlab.calibration.heldout_runs.calibrate_runs`).
 
-    Returns False, having done nothing, when ``fall_back`` and a single run is too short for held-out
-    scoring: the caller then calibrates it by in-run cross-validation (and says so)."""
+    Returns None when done; a note, having done nothing, when ``fall_back`` and a single run is too
+    short for held-out scoring: the caller then calibrates it by in-run cross-validation and warns with
+    the note when that succeeds."""
     import numpy as np
 
     from fsrlab.calibration.document import save_calibration
@@ -346,9 +350,8 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
     if fall_back and len(runs) == 1 and ref in runs[0]:
         both = np.isfinite(runs[0][x]) & np.isfinite(runs[0][ref])
         if int(both.sum()) < MIN_READINGS:
-            typer.echo(f"fsrlab: note: {run_files[0]} has {int(both.sum())} readings, fewer than the {MIN_READINGS} "
-                       "held-out scoring needs: calibrated by cross-validation inside the run (--method cv)", err=True)
-            return False
+            return (f"{run_files[0]} has {int(both.sum())} readings, fewer than the {MIN_READINGS} held-out scoring "
+                    "needs: calibrated by cross-validation inside the run (--method cv)")
     lag_rows: int | str = "auto"
     lag_s = _lag_option(lag)
     if lag_s != "auto":
@@ -370,7 +373,7 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
     warn(warnings)
     if json_out:
         emit_json(out)
-        return True
+        return None
     from rich.console import Console
     from rich.table import Table
 
@@ -395,7 +398,7 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
         console.print(f"compensation: {refused[0]['step']} not kept: {refused[0]['why']}")
     if output is not None:
         console.print(f"wrote {output}")
-    return True
+    return None
 
 
 @app.command("apply")

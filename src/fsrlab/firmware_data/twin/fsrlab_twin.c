@@ -26,10 +26,11 @@
  *   #HX..., #HX_SCK               the HX711 model (hx711_model.h)
  *   #END <cycles> <edges>         at the end
  * The firmware's bytes go to the UART fd; the bytes read from it are fed to USART0, one per 87 us
- * (115200 baud, 10 bits a byte). A full pty drops bytes, as a UART with nobody listening.
+ * (115200 baud, 10 bits a byte). In real time a full pty drops bytes, as a UART with nobody
+ * listening; at --speed max the simulation waits until the host has read them (the host sets the pace).
  *
  * --speed realtime holds simulated time to the wall clock (never ahead of it); max runs as fast as
- * simavr goes. Either way the run never passes the limit the caller has confirmed.
+ * simavr goes and the host reads. Either way the run never passes the limit the caller has confirmed.
  * The process ends when stdin closes (its caller ended or died): the pty master it holds then closes,
  * and the host sees a pulled cable.
  *
@@ -72,6 +73,7 @@ typedef struct { uint64_t cycle; int32_t value; } rec_t;
 static avr_t *avr;
 static avr_irq_t *pin_irq, *uart_in, *adc0;
 static int uart_fd = -1;
+static int realtime = 1;
 
 /* ------------------------------------------------------------------ edges on D8 */
 static rec_t edges[QCAP];
@@ -145,6 +147,10 @@ static void flush_out(void) {
     ssize_t n = write(uart_fd, obuf + off, olen - off);
     if (n > 0) { off += (size_t)n; continue; }
     if (n < 0 && errno == EINTR) continue;
+    if (n < 0 && errno == EAGAIN && !realtime) { /* max speed: the host's reading sets the pace */
+      struct pollfd p = {uart_fd, POLLOUT, 0};
+      if (poll(&p, 1, 1000) > 0 && !(p.revents & (POLLERR | POLLHUP | POLLNVAL))) continue;
+    }
     bytes_lost += olen - off; /* EAGAIN (nobody reads) or EIO: lost, as on a UART */
     break;
   }
@@ -287,7 +293,7 @@ static void usage(void) {
 
 int main(int argc, char **argv) {
   const char *elf = NULL;
-  int realtime = 1, hx_sps = 0;
+  int hx_sps = 0;
   double hx_first = -1;
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i];
