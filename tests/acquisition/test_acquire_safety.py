@@ -21,6 +21,7 @@ import threading
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from fsrlab.acquisition.recorder import record
@@ -371,3 +372,16 @@ def test_help_shows_units_and_ends_with_examples_that_run(tmp_path, command, uni
             argv += ["--duration", "0.3s"]
         code, _, stderr = run_cli(argv)
         assert code in (0, 1) and "Invalid value" not in stderr, (example, stderr)
+
+
+def test_a_load_cell_without_its_calibration_is_said_not_left_silent(tmp_path):
+    """A meter with an HX711 (protocol 2) recorded without --loadcell: the counts are kept in reference_raw,
+    force_n is empty in every row -- and the command says so, instead of only counting the rows."""
+    out = tmp_path / "run.csv"
+    with VirtualDevice(ConstantSource(), seed=1) as dev:
+        code, stdout, stderr = run_cli(["acquire", "--port", dev.port, "--duration", "0.5", "--window", "20ms",
+                                        "--out", out, "--quiet"])
+    assert code == 0, stderr
+    run = load_run(out)
+    assert run.n_rows > 0 and np.isnan(run["force_n"]).all() and np.isfinite(run["reference_raw"]).any()
+    assert "force_n is empty" in stderr and "--loadcell" in stderr
