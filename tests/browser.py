@@ -123,8 +123,12 @@ class LiveServer:
 
     def __init__(self, *args: str, timeout_s: float = 30.0) -> None:
         exe = str(Path(sys.executable).with_name("fsrlab"))
+        import signal
+
+        # Ctrl-C restored in the child (stop() sends it): a runner started in the background passes it on ignored.
         self.proc = subprocess.Popen([exe, "live", "--http-port", "0", "--json", *args], stdout=subprocess.PIPE,
-                                     stderr=subprocess.PIPE, text=True, env={**os.environ, "PYTHONUNBUFFERED": "1"})
+                                     stderr=subprocess.PIPE, text=True, env={**os.environ, "PYTHONUNBUFFERED": "1"},
+                                     preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
         line = self.proc.stdout.readline()
         if not line:
             raise RuntimeError(f"fsrlab live ended: {self.proc.stderr.read()}")

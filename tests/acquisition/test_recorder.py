@@ -136,8 +136,11 @@ def test_device_process_killed_mid_run(tmp_path):
 
 
 def _start_recording(out: Path) -> subprocess.Popen:
+    # Ctrl-C restored in the child: a test runner started in the background (a shell's `&`) passes SIGINT on
+    # as ignored, and the interrupt this file sends would then never arrive.
     return subprocess.Popen(CLI + ["acquire", "--virtual", "--duration", "60", "--window", "20ms", "--out", str(out),
-                                   "--quiet", "--json"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                                   "--quiet", "--json"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
 
 
 def test_sigkill_of_a_recording_leaves_a_readable_file(tmp_path):
