@@ -123,8 +123,9 @@ def acquire(
                    f"({result.stats.bad_frames} corrupt lines, {result.stats.resets} device resets, "
                    f"{len(result.gaps)} gaps)"
                    + (f"; {result.no_reference} windows without a load-cell reading" if result.reference else ""))
-        if result.reference and cal is None:
-            # the HX711's counts are in reference_raw, but nothing turns them into newtons
+        if result.reference and cal is None and not result.failed:
+            # the HX711's counts are in reference_raw, but nothing turns them into newtons (a failed recording
+            # says only why it failed: one line)
             print(f"fsrlab: warning: {out}: force_n is empty in every row: no --loadcell calibration was given "
                   "(the HX711's counts are in reference_raw; fsrlab loadcell tare/scale makes one)", file=sys.stderr)
     if result.failed:
