@@ -85,8 +85,8 @@ def test_a_run_of_another_circuit_is_refused(runs, tmp_path):
         apply_calibration(cal, other)
     forced = apply_calibration(cal, other, force=True)
     assert np.isfinite(forced["force_n_estimate"]).any() and forced.metadata["calibration"]["forced"]
-    code, _, err = run_cli(["apply", tmp_path / "cal.json" if save_calibration(cal, tmp_path / "cal.json") else "",
-                            other, "-o", tmp_path / "out.csv"])
+    saved = save_calibration(cal, tmp_path / "cal.json")
+    code, _, err = run_cli(["apply", saved, other, "-o", tmp_path / "out.csv"])
     assert code == 2 and len(err.strip().splitlines()) == 1 and "22" in err
 
 
@@ -126,3 +126,15 @@ def test_cli_bad_method_options_give_one_line(runs, args, option):
     code, stdout, err = run_cli(["calibrate", runs["hand"], "--x", "reading", *args])
     assert code == 2
     assert len(err.strip().splitlines()) == 1 and option in err
+
+
+def test_runs_of_different_circuits_are_not_calibrated_together(runs, tmp_path):
+    """Leave-one-out across runs needs one readout: a second run with another R is refused, naming both."""
+    src = load_run(runs["hand"])
+    circuit = {"topology": "lm555-astable", "r_ohm": 10000.0, "c_off_farad": 0.0, "diode": True, "diode_drop_v": 0.0}
+    cols = {"time_s": src["time_s"], "frequency_hz": 1000 + src["reading"], "force_n": src["force_n"]}
+    units = {"time_s": "s", "frequency_hz": "Hz", "force_n": "N"}
+    a = write_run(tmp_path / "a.csv", cols, {"units": units, "circuit": circuit})
+    b = write_run(tmp_path / "b.csv", cols, {"units": units, "circuit": dict(circuit, r_ohm=22000.0)})
+    with pytest.raises(ValueError, match="calibrate runs of one readout together"):
+        calibrate_runs([a, b], x="frequency_hz", reference="force_n")

@@ -304,21 +304,17 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
     if len(refs) > 1:
         raise ValueError(f"runs: the reference differs between runs ({', '.join(sorted(refs))}); name it")
     ref = refs.pop()
-    neg = np.concatenate([r.y[r.usable] for r in recs])
-    if float(np.mean(neg < 0)) > 0.5:
+    y_all = np.concatenate([r.y[r.usable] for r in recs])
+    if float(np.mean(y_all < 0)) > 0.5:
         raise ValueError(f"{ref}: the reference is mostly negative: a load cell mounted or wired the wrong way "
                          "round, or the wrong column")
-    rw = None
-    try:
-        rws = [recorded_with(r.metadata, r.columns.get("range"), rec.usable) for r, rec in zip(runs, recs)]
-        rw = rws[0]
-        for other, run in zip(rws[1:], runs[1:]):
-            diff = mismatches(x, rw, other, None)
-            if diff:
-                raise ValueError(f"{run.path}: recorded with {diff[0][0]}, {runs[0].path} with {diff[0][1]}: "
-                                 "calibrate runs of one readout together")
-    except ValueError:
-        raise
+    rws = [recorded_with(r.metadata, r.columns.get("range"), rec.usable) for r, rec in zip(runs, recs)]
+    rw = rws[0]
+    for other, run in zip(rws[1:], runs[1:]):
+        diff = mismatches(x, rw, other, None)
+        if diff:
+            raise ValueError(f"{run.path}: recorded with {diff[0][0]}, {runs[0].path} with {diff[0][1]}: "
+                             "calibrate runs of one readout together")
     try:
         model, sel = calibrate_recordings(recs, compensate=compensate, lag=lag, rail=_divider_rail(runs[0], x))
     except ValueError as exc:
