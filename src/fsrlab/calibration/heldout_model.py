@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fsrlab.calibration.heldout import Part, Recording, chunk_ids, held_out_splits, paired_gain, scheme_name
-from fsrlab.calibration.monotone import MonotoneCurve, adc_full_scale, fit_monotone
+from fsrlab.calibration.monotone import MonotoneCurve, adc_full_scale, fit_monotone, monotone_system
 from fsrlab.calibration.operators import CREEP_TIME_CONSTANTS_S, PLAY_THRESHOLDS, MemoryState, directions, memory_features
 
 __all__ = ["STATIC_CANDIDATES", "RIDGES", "HeldoutCalibration", "LevelUncertainty", "Selection",
@@ -51,6 +51,13 @@ STATIC_CANDIDATES = (("readout", 1), ("readout", 2), ("conductance", 1), ("reado
                      ("conductance", 4), ("readout", 8), ("conductance", 8))
 #: Ridge weights tried for the memory terms (relative to the number of readings). [1]
 RIDGES = (1e-3, 1e-2, 1e-1, 1.0)
+#: Least held-out MSE a memory must save, a fraction of the simpler calibration's (5 %: 2.5 % of its
+#: RMSE): a smaller gain held out within one run is not worth terms another recording may not share. [1]
+MIN_GAIN = 0.05
+#: The memory models tried, each with every ridge weight: (play thresholds, creep time constants,
+#: growing with the level). [1]
+MEMORY_VARIANTS = ((PLAY_THRESHOLDS, (), False), (PLAY_THRESHOLDS, (), True), ((), CREEP_TIME_CONSTANTS_S, False),
+                   (PLAY_THRESHOLDS, CREEP_TIME_CONSTANTS_S, False), (PLAY_THRESHOLDS, CREEP_TIME_CONSTANTS_S, True))
 #: Signs the weights of the play-operator and the creep features may take. A piezoresistive film
 #: conducts more on unloading than on loading at the same force (its estimate is lowered while
 #: ``p − u > 0``), and its reading creeps up under a held load (the estimate is raised just after a
@@ -320,22 +327,57 @@ class _Choice:
 
 
 class _Cache:
-    """Static curves and memory features already computed, per split: the ridge weights and the signs
-    of a step refit only the weights, so each split's curve and features are computed once."""
+    """Static curves and memory features already computed, per split: every memory variant and ridge
+    weight of a split shares its static curve and one matrix of all the features over each recording
+    (hysteresis and creep, not scaled, float32), from which a variant takes its columns."""
 
     def __init__(self):
         self.statics: dict = {}
         self.features: dict = {}
+        self.systems: dict = {}
 
     def static(self, key, make):
         if key not in self.statics:
             self.statics[key] = make()
         return self.statics[key]
 
-    def memory(self, key, make):
+    def system(self, key, make):
+        if key not in self.systems:
+            self.systems[key] = make()
+        return self.systems[key]
+
+    def _full(self, key, rec: Recording, level):
         if key not in self.features:
-            self.features[key] = make()
+            u = level(rec.x)
+            full = memory_features(u, rec.t, PLAY_THRESHOLDS, CREEP_TIME_CONSTANTS_S, False)
+            self.features[key] = (np.maximum(u, 0.0).astype(np.float32), full.astype(np.float32))
         return self.features[key]
+
+    @staticmethod
+    def _columns(ch: "_Choice") -> list:
+        return ([j for j, r in enumerate(PLAY_THRESHOLDS) if r in ch.thresholds] +
+                [len(PLAY_THRESHOLDS) + j for j, v in enumerate(CREEP_TIME_CONSTANTS_S) if v in ch.time_constants])
+
+    def memory(self, key, rec: Recording, level, ch: "_Choice") -> np.ndarray:
+        """The features of ``ch``'s variant over the whole recording ``rec`` for the level function ``level``."""
+        u, full = self._full(key, rec, level)
+        f = full[:, self._columns(ch)].astype(float)
+        if ch.scaled:
+            f *= u.astype(float)[:, None]
+        return f
+
+    def memory_term(self, key, rec: Recording, level, ch: "_Choice", weights: np.ndarray) -> np.ndarray:
+        """``memory(...) @ weights`` without the variant's columns copied (float32 products)."""
+        u, full = self._full(key, rec, level)
+        w = np.zeros(full.shape[1], dtype=np.float32)
+        w[self._columns(ch)] = weights
+        term = (full @ w).astype(float)
+        return term * u if ch.scaled else term
+
+
+def _standard(ch: "_Choice") -> bool:
+    """Whether the choice's memory uses the standard thresholds and time constants (cached features)."""
+    return set(ch.thresholds) <= set(PLAY_THRESHOLDS) and set(ch.time_constants) <= set(CREEP_TIME_CONSTANTS_S)
 
 
 def _fit(parts: list[Part], ch: _Choice, sign: int, adc, cache: _Cache | None = None,
@@ -352,20 +394,26 @@ def _fit(parts: list[Part], ch: _Choice, sign: int, adc, cache: _Cache | None = 
     row_s = row_s if row_s > 0 else 1.0
     if not (ch.thresholds or ch.time_constants):
         return HeldoutCalibration(static, static, full_scale=fs, row_s=row_s)
-    fkey = skey + (ch.thresholds, ch.time_constants, ch.scaled)
-    feats = cache.memory(fkey, lambda: np.concatenate([
-        memory_features(static(p.rec.x) / fs, p.rec.t, ch.thresholds, ch.time_constants, ch.scaled)[p.rows]
-        for p in parts])[ok])
+    level = lambda v: static(v) / fs  # noqa: E731
+
+    def system():
+        if _standard(ch):
+            feats = np.concatenate([cache.memory(skey + (id(p.rec),), p.rec, level, ch)[p.rows] for p in parts])[ok]
+        else:
+            feats = np.concatenate([memory_features(level(p.rec.x), p.rec.t, ch.thresholds, ch.time_constants,
+                                                    ch.scaled)[p.rows] for p in parts])[ok]
+        return monotone_system(x[ok], y[ok], ch.variable, ch.segments, sign, adc, extra=feats)
+
+    # the normal equations serve every ridge weight and every sign of this split's variant
+    msys = cache.system(skey + (ch.thresholds, ch.time_constants, ch.scaled), system)
     nh, nc = len(ch.thresholds), len(ch.time_constants)
     best = None
     for sh in (HYSTERESIS_SIGNS if nh else (1,)):
         for sc in (CREEP_SIGNS if nc else (1,)):
             sg = np.array([sh] * nh + [sc] * nc, float)
-            curve, w = fit_monotone(x[ok], y[ok], ch.variable, ch.segments, sign, adc, extra=feats * sg,
-                                    extra_lower=np.zeros(sg.size), extra_lam=ch.ridge)
-            r = float(np.sum((curve(x[ok]) + feats @ (w * sg) - y[ok]) ** 2))
+            curve, w, r = msys.solve(extra_lower=np.zeros(sg.size), extra_lam=ch.ridge, extra_signs=sg)
             if best is None or r < best[0]:
-                best = (r, curve, w * sg)
+                best = (r, curve, w)
     _, curve, w = best
     return HeldoutCalibration(static, curve, tuple(ch.thresholds), tuple(ch.time_constants), w, fs, row_s,
                               scaled=ch.scaled)
@@ -383,11 +431,60 @@ def _shifted(rec: Recording, lag: int) -> np.ndarray:
     return y
 
 
-def _gain_spread(splits, ch: _Choice, sign: int, adc) -> float:
+def _blend(static: HeldoutCalibration, mem: HeldoutCalibration, alpha: float) -> HeldoutCalibration:
+    """``static + alpha·(mem − static)``: the memory's correction shrunk by ``alpha`` (both fitted on the
+    same readings, so their curves share the knots and the blend of two monotone curves is one)."""
+    if alpha == 1.0 or not mem.has_memory:
+        return mem
+    c, k = mem.curve, static.curve
+    curve = MonotoneCurve(c.variable, c.sign, c.adc, c.knots, (1 - alpha) * k.coef + alpha * c.coef, c.x_range)
+    return HeldoutCalibration(mem.static, curve, mem.thresholds, mem.time_constants, alpha * mem.weights,
+                              mem.full_scale, mem.row_s, scaled=mem.scaled)
+
+
+def _memory_step(sel: Selection, score, scored: dict, cache: _Cache, base: _Choice):
+    """The memory trial of lowest held-out error, and the weight ``alpha`` in [0, 1] of its correction
+    that minimises the held-out error of ``base + alpha·(trial − base)`` (stacking); (None, 1) unless
+    that blend wins over ``base`` by more than one standard error. Recorded in ``sel``."""
+    cache.features.clear()  # the features of the lag step's probes are not needed again
+    cache.systems.clear()
+    trials = [base.but(thresholds=h, time_constants=c, scaled=sc, ridge=r) for h, c, sc in MEMORY_VARIANTS
+              for r in RIDGES]
+    for ch in [base] + trials:
+        score(ch)
+    best = min(trials, key=lambda c: _rmse(scored[c][0]))
+    e_s, ids, _, parts = scored[base]
+    d = scored[best][0] - e_s
+    alpha = float(np.clip(-np.sum(e_s * d) / max(float(np.sum(d * d)), 1e-300), 0.0, 1.0))
+    blended = e_s + alpha * d
+    gain, se = paired_gain(e_s, blended, ids)
+    folds = _fold_gains(scored[base], (blended, ids, None, parts))
+    least = MIN_GAIN * float(np.mean(e_s ** 2))
+    kept = bool(alpha > 0 and gain > se and gain >= least)
+    lower = sum(f > 0 for f in folds)
+    head = (f"{best.name}, its correction weighted {alpha:.3g}: held-out MSE lower by {gain:.4g} ± {se:.4g}, "
+            f"lower in {lower} of {len(folds)} held-out parts")
+    short = ("not more than one standard error" if not gain > se else
+             f"less than {100 * MIN_GAIN:.0f} % of the simpler calibration's")
+    sel.steps.append({"step": "memory", "tried": best.name, "weight": alpha, "gain": gain, "se": se, "kept": kept,
+                      "heldout_gain_by_part": folds,
+                      "why": head + (f" (more than one standard error and {100 * MIN_GAIN:.0f} % of the simpler "
+                                     "calibration's)" if kept else f": {short}, so the simpler calibration is kept")})
+    for other in trials:  # the held-out errors of the trials not kept are no longer needed
+        if other is not best or not kept:
+            scored.pop(other, None)
+    cache.features.clear()
+    cache.systems.clear()
+    return (best, alpha) if kept else (None, 1.0)
+
+
+def _gain_spread(splits, static: _Choice, ch: _Choice, alpha: float, sign: int, adc) -> float:
     """RMS relative gain error of the held-out recordings (least-squares gain of reference on estimate)."""
     g = []
     for fit_parts, test_parts in splits:
         cal = _fit(fit_parts, ch, sign, adc)
+        if static != ch:
+            cal = _blend(_fit(fit_parts, static, sign, adc), cal, alpha)
         for p in test_parts:
             e, _ = cal.run(p.rec.t, p.rec.x)
             y = _shifted(p.rec, ch.lag)
@@ -406,12 +503,11 @@ def _held_out(splits, ch: _Choice, sign: int, adc, cache: _Cache | None = None):
     for i, (fit_parts, test_parts) in enumerate(splits):
         cal = _fit(fit_parts, ch, sign, adc, cache, i)
         for j, p in enumerate(test_parts):
-            feats = None
-            if cal.has_memory:
-                key = (i, j, ch.variable, ch.segments, ch.lag, ch.thresholds, ch.time_constants, ch.scaled)
-                feats = cache.memory(key, lambda: memory_features(cal.level(p.rec.x), p.rec.t, cal.thresholds,
-                                                                  cal.time_constants, cal.scaled))
-            e = cal.estimate(p.rec.t, p.rec.x, features=feats)
+            if cal.has_memory and cache is not None and _standard(ch):
+                e = cal.curve(p.rec.x) + cache.memory_term((i, ch.variable, ch.segments, ch.lag, id(p.rec)), p.rec,
+                                                           cal.level, ch, cal.weights)
+            else:
+                e = cal.estimate(p.rec.t, p.rec.x)
             y = _shifted(p.rec, ch.lag)
             idx = np.flatnonzero(p.rows)
             rows = p.rows.copy()
@@ -526,6 +622,7 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
     def step(name: str, trials: list[_Choice], base: _Choice) -> _Choice | None:
         """The best trial when it wins over ``base`` (see the module's notes), else None; recorded."""
         cache.features.clear()  # a step's features serve its own trials only
+        cache.systems.clear()
         for ch in trials + [base]:
             score(ch)
         ch = min(trials, key=lambda c: _rmse(scored[c][0]))
@@ -554,13 +651,15 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
         if won is not None:
             cur = cur.but(lag=won.lag)
             score(cur)
+    alpha, mem = 1.0, None
     if compensate:
-        won = step("hysteresis", [cur.but(thresholds=PLAY_THRESHOLDS, ridge=r, scaled=sc) for sc in (False, True)
-                                  for r in RIDGES], cur)
-        cur = won or cur
-        ridges = RIDGES if not cur.thresholds else (cur.ridge,)
-        won = step("creep", [cur.but(time_constants=CREEP_TIME_CONSTANTS_S, ridge=r) for r in ridges], cur)
-        cur = won or cur
+        mem, alpha = _memory_step(sel, score, scored, cache, cur)
+    static_cur = cur
+    if mem is not None:
+        e_s, ids, est_s, parts_s = scored[cur]
+        e_m, _, est_m, _ = scored[mem]
+        scored[mem] = (e_s + alpha * (e_m - e_s), ids, est_s + alpha * (est_m - est_s), parts_s)
+        cur = mem
     sel.lag_rows = cur.lag
     err, _, est, parts = scored[cur]
     fs_all = max(float(np.ptp(np.concatenate([r.y[r.usable] for r in recs]))), 1e-12)
@@ -570,15 +669,15 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
 
     dirs = held_out_directions(est, parts)
     sel.heldout_rmse = _rmse(err)
-    cal = _fit([Part(r, r.usable) for r in recs], cur, sign, adc)
+    whole = [Part(r, r.usable) for r in recs]
+    cal = _blend(_fit(whole, static_cur, sign, adc), _fit(whole, cur, sign, adc), alpha)
     rel = REPEATABILITY
     if len(recs) >= 2:
-        sel.gain_spread = _gain_spread(splits, cur, sign, adc)
+        sel.gain_spread = _gain_spread(splits, static_cur, cur, alpha, sign, adc)
         rel = max(rel, sel.gain_spread)
     cal.uncertainty = LevelUncertainty.fit(err, est, dirs, relative=rel)
     if cal.has_memory:
-        static_choice = cur.but(thresholds=(), time_constants=(), scaled=False, ridge=plain.ridge)
-        e0, _, est0, parts0 = score(static_choice)
+        e0, _, est0, parts0 = score(static_cur)
         dirs0 = held_out_directions(est0, parts0)
         cal.uncertainty_plain = LevelUncertainty.fit(e0, est0, dirs0, relative=rel)
     return cal, sel

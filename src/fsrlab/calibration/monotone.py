@@ -22,7 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["VARIABLES", "adc_full_scale", "readout_variable", "MonotoneCurve", "fit_monotone", "bounded_fit"]
+__all__ = ["VARIABLES", "adc_full_scale", "readout_variable", "MonotoneCurve", "fit_monotone", "bounded_fit", "bounded_solve",
+           "MonotoneSystem", "monotone_system"]
 
 #: The readout variables a curve can be fitted in. [1]
 VARIABLES = ("readout", "conductance")
@@ -107,13 +108,18 @@ def bounded_fit(a: np.ndarray, y: np.ndarray, lower: np.ndarray, penalty: np.nda
     -------
     ndarray, shape (k,)
     """
+    return bounded_solve(a.T @ a, a.T @ y, a.shape[0], lower, penalty)
+
+
+def bounded_solve(gram: np.ndarray, atb: np.ndarray, n: int, lower: np.ndarray,
+                  penalty: np.ndarray | None = None) -> np.ndarray:
+    """:func:`bounded_fit` from its normal equations ``gram = aᵀa``, ``atb = aᵀy`` of ``n`` rows."""
     from scipy.optimize import lsq_linear
 
-    gram = a.T @ a
-    scale = np.sqrt(np.diag(gram) / a.shape[0])
+    scale = np.sqrt(np.diag(gram) / n)
     scale[~(scale > 0)] = 1.0
     ata = gram / np.outer(scale, scale)
-    atb = (a.T @ y) / scale
+    atb = atb / scale
     if penalty is not None and penalty.size:
         p_s = penalty / scale
         ata = ata + p_s.T @ p_s
@@ -238,6 +244,82 @@ def smoothness_penalty(knots: np.ndarray, columns: int, lam: float, n: int) -> n
     return np.sqrt(lam * n) * d
 
 
+@dataclass
+class MonotoneSystem:
+    """The normal equations of a monotone curve's design ``[1, segments, extra columns]`` on some readings:
+    every ridge weight and every sign of the extra columns is then solved without the readings.
+
+    Parameters
+    ----------
+    curve : MonotoneCurve
+        The curve's variable, knots and range (coefficients not yet fitted).
+    gram, atb : ndarray
+        ``aᵀa`` and ``aᵀy``.
+    yty : float
+        ``yᵀy``.
+    n : int
+        Readings.
+    """
+
+    curve: MonotoneCurve
+    gram: np.ndarray
+    atb: np.ndarray
+    yty: float
+    n: int
+
+    @property
+    def extra(self) -> int:
+        return self.gram.shape[0] - self.curve.knots.size
+
+    def solve(self, lam: float = 1e-3, extra_lower: np.ndarray | None = None, extra_lam: float = 0.0,
+              extra_signs: np.ndarray | None = None) -> tuple[MonotoneCurve, np.ndarray, float]:
+        """The curve, the extra columns' weights and the residual sum of squares (see :func:`fit_monotone`);
+        ``extra_signs``: the extra columns multiplied by these signs first (the weights returned are of the
+        columns as given)."""
+        knots = self.curve.knots
+        seg = knots.size - 1
+        m = self.extra
+        gram, atb = self.gram, self.atb
+        sg = np.ones(gram.shape[0])
+        if m and extra_signs is not None:
+            sg[1 + seg:] = extra_signs
+            gram = gram * np.outer(sg, sg)
+            atb = atb * sg
+        cols = gram.shape[0]
+        pen = [smoothness_penalty(knots, cols, lam, self.n)]
+        if m and extra_lam > 0:
+            r = np.zeros((m, cols))
+            r[:, 1 + seg:] = np.eye(m)
+            pen.append(np.sqrt(extra_lam * self.n) * r)
+        lower = np.r_[-np.inf, np.zeros(seg), (extra_lower if extra_lower is not None else np.full(m, -np.inf))
+                      if m else np.zeros(0)]
+        c = bounded_solve(gram, atb, self.n, lower, np.vstack(pen))
+        rss = float(c @ gram @ c - 2 * c @ atb + self.yty)
+        curve = MonotoneCurve(self.curve.variable, self.curve.sign, self.curve.adc, knots, c[:1 + seg],
+                              self.curve.x_range)
+        return curve, (c * sg)[1 + seg:], max(rss, 0.0)
+
+
+def monotone_system(x, y, variable: str, segments: int, sign: int, adc: float | None,
+                    extra: np.ndarray | None = None) -> MonotoneSystem:
+    """The :class:`MonotoneSystem` of readings ``x``, reference ``y`` and further columns ``extra`` (see
+    :func:`fit_monotone`)."""
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    v = readout_variable(x, variable, sign, adc)
+    knots = knots_for(v, segments)
+    curve = MonotoneCurve(variable, sign, adc, knots, np.zeros(knots.size), (float(x.min()), float(x.max())))
+    m = 0 if extra is None else extra.shape[1]
+    seg = knots.size - 1
+    # columns: the constant, the segments, the extra columns
+    a = np.empty((x.size, 1 + seg + m), order="F")
+    a[:, 0] = 1.0
+    a[:, 1:1 + seg] = _basis(v, knots)
+    if m:
+        a[:, 1 + seg:] = extra
+    return MonotoneSystem(curve, a.T @ a, a.T @ y, float(y @ y), x.size)
+
+
 def fit_monotone(x, y, variable: str, segments: int, sign: int, adc: float | None, lam: float = 1e-3,
                  extra: np.ndarray | None = None, extra_lower: np.ndarray | None = None,
                  extra_lam: float = 0.0) -> tuple[MonotoneCurve, np.ndarray]:
@@ -265,26 +347,5 @@ def fit_monotone(x, y, variable: str, segments: int, sign: int, adc: float | Non
     curve : MonotoneCurve
     weights : ndarray, shape (m,)
     """
-    x = np.asarray(x, dtype=float)
-    y = np.asarray(y, dtype=float)
-    v = readout_variable(x, variable, sign, adc)
-    knots = knots_for(v, segments)
-    curve = MonotoneCurve(variable, sign, adc, knots, np.zeros(knots.size), (float(x.min()), float(x.max())))
-    m = 0 if extra is None else extra.shape[1]
-    seg = knots.size - 1
-    # columns: the constant, the segments, the extra columns
-    a = np.empty((x.size, 1 + seg + m), order="F")
-    a[:, 0] = 1.0
-    a[:, 1:1 + seg] = _basis(v, knots)
-    if m:
-        a[:, 1 + seg:] = extra
-    cols = a.shape[1]
-    pen = [smoothness_penalty(knots, cols, lam, x.size)]
-    if m and extra_lam > 0:
-        r = np.zeros((m, cols))
-        r[:, 1 + seg:] = np.eye(m)
-        pen.append(np.sqrt(extra_lam * x.size) * r)
-    lower = np.r_[-np.inf, np.zeros(seg), extra_lower if m else np.zeros(0)]
-    c = bounded_fit(a, y, lower, np.vstack(pen))
-    curve.coef = c[:1 + seg]
-    return curve, c[1 + seg:]
+    curve, w, _ = monotone_system(x, y, variable, segments, sign, adc, extra).solve(lam, extra_lower, extra_lam)
+    return curve, w

@@ -361,7 +361,7 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
     cal = calibrate_runs(runs, x=x, reference=ref, compensate=compensate, lag=lag_rows)
     sel = cal.selection
     fs = cal.full_scale
-    refused = [s for s in sel.steps if s["step"] in ("hysteresis", "creep") and not s["kept"]]
+    refused = [s for s in sel.steps if s["step"] == "memory" and not s["kept"]]
     out = {"method": "held-out", "scheme": sel.scheme, "model": cal.model_name, "reference": cal.y_name,
            "unit": cal.y_unit, "runs": [str(p) for p in run_files], "lag_s": cal.lag_s, "lag_rows": sel.lag_rows,
            "heldout_rmse": sel.heldout_rmse, "heldout_rmse_percent_fs": 100 * sel.heldout_rmse / fs,
