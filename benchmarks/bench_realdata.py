@@ -7,7 +7,8 @@ The recordings are not part of fsrlab (most have no licence that allows redistri
 ``analogRead`` with an HX711 load cell, hand-loaded and servo-driven (LucasWestfal/
 FSR_calibration_techniques); a Velostat film pressed by a UR5e arm against a Futek load cell
 (Lupasic/tactile-sensor-velostat); FSRs under a phantom pressed by hand on a force plate
-(priyanshum17/pressure, MIT).
+(priyanshum17/pressure, MIT); a piezoresistive taxel read through a divider with the authors' force
+conversion (TAMS-Group/tams_tactile_sensor_array_hardware).
 
 For each train → test pair: :func:`fsrlab.calibration.heldout_runs.calibrate_runs` (what
 ``fsrlab calibrate TRAIN.csv --x reading --reference force_n [--compensate]`` runs) on the training
@@ -41,6 +42,25 @@ PAIRS = (
      [("lupasic_velostat__pike1_force_20_exp1", 1)]),
     ("Velostat, robot: run 1 → its repeat", ["lupasic_velostat__pike1_force_40_exp1"], ["lupasic_velostat__pike1_force_40_exp2"]),
     ("force plate FSR: first half → second half", [("forceplate__exp13cQ2_fsr2", 0)], [("forceplate__exp13cQ2_fsr2", 1)]),
+    ("second FSR, hand: first half → second half", [("westfal_fsr__s06_manual", 0)], [("westfal_fsr__s06_manual", 1)]),
+    ("FSR, hand: one session → the next", ["westfal_fsr__s03_manual"], ["westfal_fsr__s04_manual"]),
+    ("FSR, hand: session 5 → session 6", ["westfal_fsr__s05_manual"], ["westfal_fsr__s06_manual"]),
+    ("FSR: hand + servo of one session → servo of another", ["westfal_fsr__s02_manual", "westfal_fsr__s02_motor"],
+     ["westfal_fsr__s06_motor"]),
+    ("Velostat, robot 20 N: run 1 → its repeat", ["lupasic_velostat__pike1_force_20_exp1"],
+     ["lupasic_velostat__pike1_force_20_exp2"]),
+    ("Velostat, robot: 10 N and 30 N runs → a 20 N run", ["lupasic_velostat__pike1_force_10_exp1",
+                                                           "lupasic_velostat__pike1_force_30_exp1"],
+     ["lupasic_velostat__pike1_force_20_exp1"]),
+    ("Velostat, other indenter, 40 N: run 1 → its repeat", ["lupasic_velostat__pike5_force_40_exp1"],
+     ["lupasic_velostat__pike5_force_40_exp2"]),
+    ("Velostat, robot: a 40 N run → a 10 N run", ["lupasic_velostat__pike1_force_40_exp1"],
+     ["lupasic_velostat__pike1_force_10_exp1"]),
+    ("force plate, one FSR: one experiment → another", ["forceplate__exp7a_fsr3"], ["forceplate__exp13a_fsr3"]),
+    ("force plate, another FSR: first half → second half", [("forceplate__exp12b_fsr1", 0)],
+     [("forceplate__exp12b_fsr1", 1)]),
+    ("taxel (TAMS), bare → under a thin silicone layer", ["tams_tactile__r10k_nosil"], ["tams_tactile__r10k_thinsil"]),
+    ("taxel (TAMS), bare: first half → second half", [("tams_tactile__r10k_nosil", 0)], [("tams_tactile__r10k_nosil", 1)]),
 )
 
 
@@ -140,7 +160,7 @@ def run() -> str:
                 "see this module's docstring)\n")
     lines = ["| pair | best polynomial (degree) | plain ×, ±2u coverage | `--compensate` ×, ±2u coverage, missing | "
              "model chosen | `--method cv --compensate` ×, missing |", "|---|---:|---:|---:|---|---:|"]
-    ratios = []
+    ratios, covers = [], []
     with tempfile.TemporaryDirectory() as tmp:
         for name, tr, te in PAIRS:
             s = pair_scores(Path(root), Path(tmp), tr, te)
@@ -149,6 +169,7 @@ def run() -> str:
                 continue
             p, c = s["plain"], s["comp"]
             ratios.append(c["ratio"])
+            covers.append(c["coverage"])
             old = s["cv"]
             cv = f"×{old['ratio']:.2f}, {100 * old['missing']:.1f} %" if old else "— (one run only)"
             lines.append(f"| {name} | {s['poly']:.2f} % ({s['degree']}) | ×{p['ratio']:.2f}, {100 * p['coverage']:.0f} % | "
@@ -156,6 +177,8 @@ def run() -> str:
                          f"{cv} |")
     if ratios:
         lines.append("")
-        lines.append(f"Geometric mean of the `--compensate` ratios: ×{np.exp(np.mean(np.log(ratios))):.2f} over "
-                     f"{len(ratios)} pairs; worst ×{max(ratios):.2f}.")
+        r = np.asarray(ratios)
+        lines.append(f"Geometric mean of the `--compensate` ratios: ×{np.exp(np.mean(np.log(r))):.2f} over "
+                     f"{r.size} pairs; worst ×{r.max():.2f}; {int((r <= 1.0).sum())} of {r.size} at most ×1.00; "
+                     f"±2u coverage at least 90 % on {sum(c >= 0.9 for c in covers)} of {len(covers)}.")
     return "\n".join(lines) + "\n"

@@ -25,7 +25,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["BLOCKS", "CHUNKS", "Recording", "Part", "held_out_splits", "scheme_name", "paired_gain"]
+from fsrlab.calibration.monotone import adc_full_scale
+
+__all__ = ["BLOCKS", "CHUNKS", "Recording", "Part", "held_out_splits", "scheme_name", "paired_gain", "orientation",
+           "readout_rail"]
 
 #: Contiguous blocks of a single recording for forward chaining. [1]
 BLOCKS = 5
@@ -145,3 +148,34 @@ def paired_gain(err_simple: np.ndarray, err_complex: np.ndarray, chunks: np.ndar
     cnt = np.bincount(chunks, minlength=k)
     d = (np.bincount(chunks, err_simple ** 2, k) - np.bincount(chunks, err_complex ** 2, k))[cnt > 0] / cnt[cnt > 0]
     return float(d.mean()), float(d.std(ddof=1) / np.sqrt(d.size))
+
+
+def _rank_correlation(x: np.ndarray, y: np.ndarray) -> float:
+    """Rank correlation on dense ranks (ties share one): enough to tell whether the readout rises or falls."""
+    rx = np.unique(x, return_inverse=True)[1].astype(float)  # tied readings share a rank
+    ry = np.unique(y, return_inverse=True)[1].astype(float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return float(np.corrcoef(rx, ry)[0, 1])
+
+
+def orientation(recs: list[Recording]) -> tuple[int, float | None]:
+    """+1 when the readout rises with the reference, −1 when it falls, and the ADC full scale of its counts
+    (None when it is not ADC counts); a reference or readout that does not change is refused."""
+    x_all = np.concatenate([r.x[r.usable] for r in recs])
+    y_all = np.concatenate([r.y[r.usable] for r in recs])
+    if x_all.size > 2 and not np.ptp(y_all) > 0:
+        raise ValueError("the reference does not change: nothing to calibrate against")
+    rho = _rank_correlation(x_all, y_all) if x_all.size > 2 else float("nan")
+    if not np.isfinite(rho) or abs(rho) < 0.1:
+        raise ValueError("the readout does not respond to the reference" + (
+            " (it does not change)" if not np.isfinite(rho) else f" (rank correlation {rho:.2f})"))
+    return (1 if rho > 0 else -1), adc_full_scale(x_all)
+
+
+def readout_rail(recs: list[Recording], rail: float | None, adc: float | None) -> float | None:
+    """The readout's full scale for the conductance variable: the one given (a divider's supply for
+    its voltage), else the ADC's found in the counts; None when neither (or readings beyond it)."""
+    if rail is None:
+        return adc
+    top = max(float(np.nanmax(r.x)) for r in recs)
+    return float(rail) if rail > 0 and top < rail else None
