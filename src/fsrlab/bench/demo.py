@@ -326,7 +326,7 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
               "compensation) scored on later blocks of the run and kept only when it wins there; and a known-weight "
               "calibration on the dead weights (m·g)")
     cal = calibrate_runs(calrun, x="frequency_hz", reference=reference, compensate=True)
-    refused = [s for s in cal.selection.steps if s["step"] in ("hysteresis", "creep") and not s["kept"]]
+    refused = [s for s in cal.selection.steps if s["step"] == "memory" and not s["kept"]]
     if refused:
         say(f"      {refused[0]['step']} not kept: {refused[0]['why']}")
     result.files["calibration"] = save_calibration(cal, out / "calibration.json")

@@ -271,8 +271,9 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
     reference : {"force_n", "stress_pa"}, optional
         Reference column (default: ``stress_pa`` when the runs have it, else ``force_n``).
     compensate : bool
-        Try the memory terms (hysteresis, then creep); each is kept only when it beats the simpler
-        calibration on held-out recordings or later blocks by more than one standard error.
+        Try the memory terms (hysteresis and creep, alone and together); the best, its correction
+        weighted by the held-out error, is kept only when it beats the simpler calibration on held-out
+        recordings or later blocks by more than one standard error and 5 % of its MSE.
     lag : int or "auto"
         Rows the readout lags the reference (default 0: the estimate is of the reference as recorded);
         ``"auto"``: searched, and kept only when a shift of whole rows wins held out.
