@@ -109,3 +109,29 @@ def test_measure_refuses_a_calibration_made_on_another_circuit_or_range(tmp_path
                               "-o", "live.csv"])
     assert code == 2 and err.count("\n") == 1 and "--cal" in err and named in err, err
     assert "the meter has" in err and not (tmp_path / "live.csv").exists()
+
+
+def test_measure_ages_the_memory_by_the_rows_time_as_apply_does(tmp_path, monkeypatch):
+    """A calibration with creep terms whose row step is not the meter's: ``measure`` steps its memory by
+    each row's ``time_s``, so its estimates equal ``apply``'s on the run it wrote (which reads the
+    times from the file). Stepped by the calibration's row step instead, the creep averages would age
+    ten times too fast and the two would differ."""
+    monkeypatch.chdir(tmp_path)
+    shutil.copy(ROOT / "examples" / "bench.csv", "bench.csv")
+    shutil.copy(ROOT / "examples" / "bench.meta.json", "bench.meta.json")
+    code, out, err = run_cli(["calibrate", "bench.csv", "--x", "frequency_hz", "-o", "plain.json"])
+    assert code == 0, err
+    doc = json.loads(Path("plain.json").read_text())
+    model = doc["calibration"]
+    span = float(model["full_scale"])
+    model.update({"time_constants_s": [0.5, 2.0], "weights": [0.3 * span, 0.2 * span],
+                  "row_s": 10 * float(model["row_s"])})
+    Path("cal.json").write_text(json.dumps(doc))
+    code, out, err = run_cli(["measure", "--virtual", "--cal", "cal.json", "--duration", "2s", "--quiet", "-o", "live.csv"])
+    assert code == 0, err
+    code, out, err = run_cli(["apply", "cal.json", "live.csv", "-o", "again.csv"])
+    assert code == 0, err
+    live, again = load_run("live.csv"), load_run("again.csv")
+    ok = np.isfinite(live["stress_pa_estimate"])
+    assert ok.sum() > 10
+    assert np.allclose(live["stress_pa_estimate"][ok], again["stress_pa_estimate"][ok], rtol=1e-9, atol=1e-6 * span)

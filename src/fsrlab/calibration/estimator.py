@@ -91,8 +91,10 @@ class CausalEstimator:
         x = np.asarray(x, dtype=float)
         return np.abs(self.base(x + self._h) - self.base(x - self._h)) / (2 * self._h)
 
-    def step(self, readout: float | None) -> tuple[float | None, float | None, bool]:
-        """Take one reading; return (estimate or None, standard uncertainty or None, in_range)."""
+    def step(self, readout: float | None, t: float | None = None) -> tuple[float | None, float | None, bool]:
+        """Take one reading; return (estimate or None, standard uncertainty or None, in_range). ``t`` [s] is
+        accepted like :class:`fsrlab.calibration.heldout_runs.RunEstimator`'s and not used: this
+        calibration's memory counts readings."""
         if readout is None:
             return None, None, False
         x = float(readout)

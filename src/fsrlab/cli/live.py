@@ -38,7 +38,9 @@ def _estimator(cal, area_m2: float | None):
         if ranges is not None and row.get("range") not in ranges:  # switched to a range it does not know
             return math.nan, math.nan
         x = row.get(est.x)
-        e, u, _inside = est.step(x if x is not None and math.isfinite(x) else None)
+        t = row.get("time_s")  # the memory's creep ages by the row's time, not by the calibration's row step
+        e, u, _inside = est.step(x if x is not None and math.isfinite(x) else None,
+                                 t if t is not None and math.isfinite(t) else None)
         return (math.nan if e is None else e * scale), (math.nan if u is None else u * scale)
     return step
 

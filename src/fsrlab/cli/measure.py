@@ -114,7 +114,9 @@ def measure(
     with _Live(not quiet, f"fsrlab measure {out}  (Ctrl-C ends)") as live:
         def on_row(m, row):
             value = row.get(est.x)
-            e, u, inside = est.step(value if value is not None and math.isfinite(value) else None)
+            t = row.get("time_s")  # the memory's creep ages by the row's time, not by the calibration's row step
+            e, u, inside = est.step(value if value is not None and math.isfinite(value) else None,
+                                    t if t is not None and math.isfinite(t) else None)
             row = dict(row)
             row[f"{ref}_estimate"] = e
             row["in_range"] = (1 if inside else 0) if value is not None and math.isfinite(value) else None
