@@ -320,6 +320,8 @@ WRITERS = {
     "bench --out": (["bench", "spring", "--virtual", "--quiet", "--out", "OUT"], "run", None),
     "live --out": (["live", "--virtual", "--http-port", "0", "--duration", "0.2", "--out", "OUT"], "run", None),
     "loadcell tare -o": (["loadcell", "tare", "--virtual", "-o", "OUT"], "file", None),
+    "loadcell scale -o": (["loadcell", "scale", "--virtual", "--mass", "500g", "--cal", "lc.json", "-o", "OUT"], "file",
+                          "lc.json"),
 }
 OUTPUT_CASES = ("exists", "is an input", "is a sidecar", "is empty", "is a directory")
 

@@ -135,3 +135,55 @@ def test_measure_ages_the_memory_by_the_rows_time_as_apply_does(tmp_path, monkey
     ok = np.isfinite(live["stress_pa_estimate"])
     assert ok.sum() > 10
     assert np.allclose(live["stress_pa_estimate"][ok], again["stress_pa_estimate"][ok], rtol=1e-9, atol=1e-6 * span)
+
+
+def _tree(root: Path) -> dict[str, str]:
+    import hashlib
+
+    return {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(root.iterdir()) if p.is_file()}
+
+
+def test_scale_to_another_file_follows_the_output_policy(tmp_path, monkeypatch):
+    # Reference: the output policy (fsrlab.io.outputs): an existing -o is replaced only with --overwrite, the
+    # --cal input never; the sha256 of every file is the same after a refusal, and the meter is not read.
+    monkeypatch.chdir(tmp_path)
+    code, _, err = run_cli(["loadcell", "tare", "--virtual", "-o", "lc.json", "--duration", "1s", "--seed", "1"])
+    assert code == 0, err
+    Path("mine.json").write_text("mine\n")
+    scale = ["loadcell", "scale", "--virtual", "--mass", "500g", "--cal", "lc.json", "--duration", "1s", "--seed", "2"]
+    for extra, said in ((["-o", "mine.json"], "mine.json exists; pass --overwrite"),
+                        (["-o", "./lc.json", "--overwrite"], "is the --cal file; leave -o out"),
+                        (["-o", "."], "is a directory, not a file"),
+                        (["-o", "missing/x.json"], "does not exist")):
+        before = _tree(tmp_path)
+        code, out, err = run_cli(scale + extra)
+        assert code == 2 and err.count("\n") == 1 and "--out" in err and said in err, (extra, err)
+        assert _tree(tmp_path) == before, extra
+    code, out, err = run_cli(scale + ["-o", "mine.json", "--overwrite", "--json"])
+    assert code == 0, err
+    assert json.loads(Path("mine.json").read_text())["scale_counts_per_n"] == json.loads(out)["scale_counts_per_n"]
+    assert json.loads(Path("lc.json").read_text())["scale_counts_per_n"] is None  # the tare itself untouched
+
+
+def test_an_interrupted_save_leaves_the_old_file_and_no_temporary(tmp_path, monkeypatch):
+    # Reference: the output policy's atomic write (fsrlab.io.outputs): the final name holds the old file or the
+    # whole new one, and no temporary file is left beside it; a file the user has under any other name stays.
+    from fsrlab.acquisition.loadcell import LoadCellCalibration
+
+    cal = LoadCellCalibration(offset_counts=8192.0)
+    target = tmp_path / "lc.json"
+    cal.save(target)
+    (tmp_path / "lc.json.tmp").write_text("mine\n")
+    before = _tree(tmp_path)
+    real_write = Path.write_text
+
+    def half_then_interrupted(self, text, *args, **kwargs):
+        real_write(self, text[: len(text) // 2], *args, **kwargs)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(Path, "write_text", half_then_interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        LoadCellCalibration(offset_counts=9000.0).save(target)
+    monkeypatch.undo()
+    assert _tree(tmp_path) == before
+    assert {p.name for p in tmp_path.iterdir()} == {"lc.json", "lc.json.tmp"}

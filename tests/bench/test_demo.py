@@ -110,3 +110,34 @@ def test_demo_command_prints_steps_and_ends_with_the_index(tmp_path):
     assert info["total_s"] == pytest.approx(sum(s["seconds"] for s in info["steps"]))
     assert info["numbers"]["calibration"]["reference"] == "force_n"  # the emulated load cell
     assert err.splitlines()[0].startswith("fsrlab demo: [1/6]")
+
+
+def test_an_interrupted_demo_leaves_the_old_runs_whole(tmp_path, monkeypatch):
+    # Reference: the output policy (fsrlab.io.outputs; README "Files written"): an interrupted write never leaves
+    # half a file under its final name. Here the first recording is cut after a header and a row (a stand-in for
+    # the bench, stopped by Ctrl-C): the demo directory's files are byte for byte the old ones, and the folder
+    # the runs are recorded in is gone.
+    import hashlib
+
+    from fsrlab.bench import protocols
+    from fsrlab.bench.demo import run_chain
+
+    out = tmp_path / "demo"
+    out.mkdir()
+    (out / "calibration-run.csv").write_text("time_s,frequency_hz\n0.1,5000\n")
+    (out / "calibration-run.meta.json").write_text('{"format": "fsrlab-run"}\n')
+
+    def cut_recording(plan, path, **kwargs):
+        path.write_text("time_s,frequency_hz\n0.02,51")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(protocols, "run_protocol", cut_recording)
+
+    def tree():
+        return {str(p.relative_to(out)): hashlib.sha256(p.read_bytes()).hexdigest() if p.is_file() else "dir"
+                for p in sorted(out.rglob("*"))}
+
+    before = tree()
+    with pytest.raises(KeyboardInterrupt):
+        run_chain(out, DemoSettings(cycles=1, period_s=1.0, repeat=2, speed="realtime"), device="virtual")
+    assert tree() == before

@@ -446,8 +446,11 @@ def _check(code, out, err, shown, elapsed, args, columns) -> list[str]:
             problems.append("exit 2 naming no option, argument, file, row or column")
     if ".tmp" in err and ".tmp" not in " ".join(args):
         problems.append("names an internal temporary file")
-    if code == 0 and "--help" not in args and NON_FINITE.search(out):  # help text may speak of nan
-        problems.append(f"printed a non-finite number: {NON_FINITE.search(out).group(0)!r}")
+    # Help text may speak of nan; a port is a name (doctor --port nan reports "board on nan"), not a number.
+    names = {args[i + 1].lower() for i, a in enumerate(args[:-1]) if a == "--port"}
+    printed = [m.group(0) for m in NON_FINITE.finditer(out) if m.group(0).lower() not in names]
+    if code == 0 and "--help" not in args and printed:
+        problems.append(f"printed a non-finite number: {printed[0]!r}")
     if code == 1 and not err.strip():
         problems.append("exit 1 with nothing on stderr")
     return problems

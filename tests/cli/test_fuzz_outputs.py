@@ -7,6 +7,7 @@ line and exit code 2, and the sha256 of every file in the directory is the same 
 
 from __future__ import annotations
 
+import json
 import shutil
 from pathlib import Path
 
@@ -24,6 +25,9 @@ def test_output_refused_and_nothing_changed(writer, case, tmp_path, monkeypatch)
     for name in ("bench.csv", "bench.meta.json", "calibration.json", "creep.csv", "creep.meta.json"):
         shutil.copy(EXAMPLES / name, tmp_path / name)
     shutil.copy(EXAMPLES / "calibration.json", tmp_path / "bench.csv.json")
+    # A load cell's tare (fsrlab loadcell tare writes this form), the input of loadcell scale.
+    (tmp_path / "lc.json").write_text(json.dumps({"format": "fsrlab-loadcell", "version": 1, "offset_counts": 8192.0,
+                                                  "scale_counts_per_n": None}))
     monkeypatch.chdir(tmp_path)
     argv = output_case(writer, case, tmp_path)
     if argv is None:

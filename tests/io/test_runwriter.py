@@ -9,6 +9,7 @@ makes a write fail with EFBIG part of the way through a line.
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 
@@ -100,3 +101,36 @@ w.close()
     assert text.endswith("\n") and len(text) <= 1000
     run = load_run(path)
     assert run.metadata["complete"] is True and run.metadata["rows"] == run.n_rows == text.count("\n") - 1 > 0
+
+
+def test_write_run_interrupted_leaves_the_old_run_and_no_temporary(tmp_path, monkeypatch):
+    # Reference: the output policy's atomic write (fsrlab.io.outputs, README "Files written"): both files of the
+    # old run stay byte for byte while the new one is written, and nothing else is left beside them. The
+    # interruption (Ctrl-C) comes at the second fsync: after the new run's sidecar and its header were written.
+    import hashlib
+
+    from fsrlab.io.runwriter import write_run
+
+    old = write_run(tmp_path / "run.csv", {"time_s": [0.1, 0.2], "frequency_hz": [5000.0, 5100.0]})
+
+    def files():
+        return {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(tmp_path.iterdir())}
+
+    before = files()
+    calls = []
+    real_fsync = os.fsync
+
+    def interrupted_fsync(fd):
+        calls.append(fd)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        real_fsync(fd)
+
+    monkeypatch.setattr(os, "fsync", interrupted_fsync)
+    with pytest.raises(KeyboardInterrupt):
+        write_run(old, {"time_s": [0.1, 0.2, 0.3], "frequency_hz": [1.0, 2.0, 3.0]})
+    monkeypatch.undo()
+    assert files() == before and set(before) == {"run.csv", "run.meta.json"}
+    # A directory that does not exist is named as the user gave it, not as a temporary file.
+    with pytest.raises(OSError, match=r"cannot write '.*missing/run\.csv'"):
+        write_run(tmp_path / "missing" / "run.csv", {"time_s": [0.1]})

@@ -32,7 +32,6 @@ from __future__ import annotations
 import datetime as _dt
 import json
 import math
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Sequence
@@ -317,11 +316,11 @@ class LoadCellCalibration:
                 "tare": self.tare, "scale": self.scale}
 
     def save(self, path) -> None:
-        """Write the JSON file atomically (a temporary file renamed over it)."""
-        path = Path(path)
-        tmp = path.with_name(path.name + ".tmp")
-        tmp.write_text(json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n", encoding="utf-8")
-        os.replace(tmp, path)
+        """Write the JSON file atomically (:func:`fsrlab.io.outputs.write_text_atomic`: a temporary file beside
+        it, synced and renamed over it; an interrupted save leaves the old file and no temporary one)."""
+        from fsrlab.io.outputs import write_text_atomic
+
+        write_text_atomic(path, json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n")
 
 
 def _number(d: dict, key: str, p: Path, positive: bool = False, optional: bool = False) -> float | None:

@@ -193,7 +193,10 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
     Parameters
     ----------
     out : path-like
-        Output directory (created; files in it are replaced).
+        Output directory (created; files in it are replaced). Each run is recorded in a hidden
+        folder inside it and renamed into ``out`` once complete, with its sidecar and placements; the
+        folder is removed however the chain ends, so an interrupted demo leaves the old files (or
+        none), never half of a run.
     settings : DemoSettings
         Durations and loads.
     sensor : str or object, optional
@@ -216,9 +219,14 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
     RuntimeError
         A recording that failed (the message says which and why).
     """
+    import dataclasses
+    import os
+    import shutil
+    import tempfile
     from concurrent.futures import Future, ThreadPoolExecutor
 
     from fsrlab.bench.protocols import SPEEDS, SpringPlan, WeightsPlan, run_protocol, twin_status
+    from fsrlab.io.outputs import run_files
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -249,7 +257,7 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
 
     def record(plan, name: str, seed: int, label: str, total_s: float | None, settle=None):
         nonlocal bench
-        path = out / name
+        path, final = staging / name, out / name  # recorded aside, renamed into place when complete
         used = bench  # (runs recorded at once: another one may fall back meanwhile)
         try:
             run = run_protocol(plan, path, device=used, sensor=sensor_obj, seed=seed, window_ms=s.window_ms,
@@ -262,8 +270,15 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
             run = run_protocol(plan, path, device="virtual", sensor=sensor_obj, seed=seed, window_ms=s.window_ms,
                                overwrite=True, on_status=recorder(label, total_s), settle=settle, speed=s.speed)
         if run.result.failed or not run.result.frames:
-            raise RuntimeError(f"{path}: the recording failed: {run.result.message}")
-        result.files[name] = path
+            raise RuntimeError(f"{final}: the recording failed: {run.result.message.replace(str(path), str(final))}")
+        for src, dst in zip(run_files(path), run_files(final)):
+            os.replace(src, dst)
+        run.result = dataclasses.replace(run.result, file=final)
+        if run.placements is not None:
+            placed = final.with_name(run.placements.name)
+            os.replace(run.placements, placed)
+            run.placements = placed
+        result.files[name] = final
         return run
 
     # 1. The bench and the spring runs. Faster than real time, the three recordings run at once (each its own
@@ -285,6 +300,7 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
               f"{'' if bench == 'twin' else ' (the twin is not available: ' + reason + ')'}: sensor {sensor_text}; "
               f"{s.cycles} cycles 0 → {s.peak_pa / 1e3:g} kPa → 0 of {s.period_s:g} s, twice (calibration run, test run); "
               f"{pace}")
+    staging = Path(tempfile.mkdtemp(prefix=".recording-", dir=out))
     try:
         f1 = later(spring, "calibration-run.csv", s.seed, "calibration run", spring.duration_s)
         f2 = later(spring, "test-run.csv", s.seed + 1, "test run", spring.duration_s)
@@ -302,6 +318,7 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
     finally:
         if pool is not None:
             pool.shutdown(wait=True)
+        shutil.rmtree(staging, ignore_errors=True)
     for name in ("calibration-run.csv", "test-run.csv", "weights-run.csv"):  # in the plan's order, however they ended
         result.files[name] = result.files.pop(name)
     result.files["placements"] = rw.placements

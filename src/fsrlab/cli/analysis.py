@@ -430,7 +430,6 @@ def apply_cmd(
     from fsrlab.calibration.document import load_calibration
     from fsrlab.calibration.apply import apply_calibration, check_readout
     from fsrlab.errors import ProvenanceError
-    from fsrlab.io.outputs import atomic_run
     from fsrlab.io.runwriter import write_run
 
     if margin is not None and not (math.isfinite(margin) and margin >= 0):
@@ -453,8 +452,7 @@ def apply_cmd(
     info = est.metadata["calibration"]
     for difference in info.get("forced", []):
         warnings.append(f"applied with --force although {difference}")
-    with atomic_run(output) as tmp:
-        write_run(tmp, est.columns, est.metadata, overwrite=True)
+    write_run(output, est.columns, est.metadata, overwrite=True)  # through temporary files and renames
     n = info["counts"]
     warn(warnings)
     estimate_col = f"{cal.y_name}_estimate"

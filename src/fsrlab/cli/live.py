@@ -81,7 +81,8 @@ def live(
     """Serve the meter's front panel: frequency, duty cycle, op-amp voltage and the reference live, the
     loading/unloading loop, the link's health, and controls (recording, range, window).
 
-    The page updates every 50 ms and works offline (BokehJS comes with the bokeh package). It is
+    The page shows the latest window's numbers every 40 ms and redraws the plots every 100 ms
+    (docs/live.md), and works offline (BokehJS comes with the bokeh package). It is
     served on 127.0.0.1 only unless --host names another interface; then every request needs the
     token printed with the URL. One browser tab controls the meter; more tabs watch.
 

@@ -9,8 +9,8 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli.options import (
-    GRAVITY_HELP, check_rate, emit_json, fail, gravity_value, loadcell_option, masses, out_path, plain_numbers,
-    seconds, sigterm_as_interrupt, window_ms_option,
+    GRAVITY_HELP, check_rate, checked, emit_json, fail, gravity_value, loadcell_option, masses, out_path,
+    plain_numbers, seconds, sigterm_as_interrupt, window_ms_option,
 )
 
 @app.command("loadcell")
@@ -19,7 +19,7 @@ def loadcell(
                                  "scale: read it with --mass on, add the scale factor to --cal."),
     port: str = typer.Option(None, "--port", help="Serial port of the meter (/dev/ttyACM0, COM3, a pty) or 'auto'."),
     virtual: bool = typer.Option(False, "--virtual", help="Use a virtual meter with its emulated load cell; the virtual bench places the mass itself."),
-    out: Path = typer.Option(None, "--out", "-o", metavar="LC.json", parser=out_path, help="tare: the load-cell calibration file to write (LC.json)."),
+    out: Path = typer.Option(None, "--out", "-o", metavar="LC.json", parser=out_path, help="tare: the load-cell calibration file to write (LC.json); scale: write the tare with its scale factor here instead of adding it to --cal."),
     cal: Path = typer.Option(None, "--cal", metavar="LC.json", help="scale: the tare's calibration file (LC.json); the scale factor is added to it (or written to -o)."),
     mass: float = typer.Option(None, "--mass", parser=masses, metavar="MASS", help="scale: the known mass on the cell [kg]: 500g, 0.5kg, 250mg."),
     gravity: float = typer.Option("9.80665", "--gravity", parser=gravity_value, metavar="ACCELERATION", help=GRAVITY_HELP),
@@ -28,7 +28,7 @@ def loadcell(
     window: float = typer.Option("100ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], whole ms: 100ms, 0.5s."),
     hx711_rate: int = typer.Option(80, "--hx711-rate", help="Virtual load cell: HX711 output data rate [samples/s]: 10 or 80."),
     seed: int = typer.Option(None, "--seed", help="Random seed of the virtual meter's noise (an integer)."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="tare: replace an existing -o file."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing -o file; without it an existing one stops the command before the meter is read. The --cal file is never replaced by -o (scale without -o adds the factor to it)."),
     json_out: bool = typer.Option(False, "--json", help="Print the calibration written (offset_counts [count], scale_counts_per_n [count/N], noise) as JSON."),
 ) -> None:
     """Calibrate the load cell: tare (offset, nothing on the cell), then scale (counts per newton from a known mass).
@@ -71,7 +71,7 @@ def loadcell(
             fail("--mass and --cal belong to scale (fsrlab loadcell scale --mass 500g --cal lc.json)", "--mass")
         if capacity is not None and not capacity > 0:
             fail(f"must be > 0 kg, got {capacity:g} kg", "--capacity")
-        target = out
+        target = checked(out, "--out", overwrite=overwrite)
     else:
         if cal is None:
             fail("scale needs the tare's file, e.g. --cal lc.json", "--cal")
@@ -80,14 +80,14 @@ def loadcell(
         if capacity is not None:
             fail("the capacity is given at the tare (fsrlab loadcell tare --capacity 5kg)", "--capacity")
         tare = loadcell_option(cal, "--cal", scaled=False)
-        target = out if out is not None else cal
-    if target.is_dir():
-        fail(f"{target} is a directory; give a file, e.g. {target / 'lc.json'}", "--out" if out is not None else "--cal")
-    if action == "tare" and target.exists() and not overwrite:
-        fail(f"{target} exists; pass --overwrite to replace it", "--out")
-    parent = target.parent if str(target.parent) else Path(".")
-    if not parent.is_dir():
-        fail(f"directory {parent} does not exist", "--out" if out is not None else "--cal")
+        if out is None:
+            target = cal  # the scale factor added to the tare's file, as asked
+        else:
+            from fsrlab.io.outputs import same_file
+
+            if same_file(out, cal):
+                fail(f"{out} is the --cal file; leave -o out to add the scale factor to it", "--out")
+            target = checked(out, "--out", overwrite=overwrite, inputs=[cal])
 
     device = None
     force = 0.0 if action == "tare" else mass * gravity

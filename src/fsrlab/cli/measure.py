@@ -64,10 +64,11 @@ def measure(
     of the range's span, as fsrlab apply). Stress becomes force with --sensor, --area or the
     virtual sensor's area.
 
-    Examples:
+    Examples (the first calibration, from a clone's examples/, was fitted on 0 to 50 kPa: the virtual
+    meter's default --peak 50k stays in its range):
 
     \b
-      fsrlab measure --virtual --cal cal.json --duration 10s -o live.csv
+      fsrlab measure --virtual --cal examples/calibration.json --duration 10s -o live.csv
       fsrlab measure --port auto --cal cal.json --sensor flexiforce-a201 --loadcell lc.json -o live.csv
     """
     from fsrlab.acquisition.recorder import record, result_dict

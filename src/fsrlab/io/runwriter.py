@@ -18,6 +18,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from fsrlab.io.outputs import atomic_run
 from fsrlab.io.schema import FORMAT, KNOWN_COLUMNS, VERSION, check_columns, sidecar_path
 
 __all__ = ["RunWriter", "write_run"]
@@ -47,9 +48,10 @@ def _format_value(value: Any) -> str:
 
 def _user_error(exc: OSError, path: Path) -> OSError:
     """``exc`` about ``path`` (the file the user named), never about a temporary file beside it."""
-    why = "it is a directory" if isinstance(exc, IsADirectoryError) else (exc.strerror or exc)
+    why = ("it is a directory" if isinstance(exc, IsADirectoryError)
+           else getattr(exc, "why", None) or exc.strerror or exc)  # (an error already said of another name)
     err = type(exc)(f"cannot write '{path}': {why}")
-    err.errno = exc.errno
+    err.errno, err.why = exc.errno, why
     return err
 
 
@@ -63,12 +65,14 @@ def _write_json_atomic(path: Path, obj: dict) -> None:
             fh.flush()
             os.fsync(fh.fileno())
         os.replace(tmp, path)
-    except OSError as exc:
+    except BaseException as exc:  # Ctrl-C included: no temporary left behind
         try:
             os.unlink(tmp)
         except OSError:
             pass
-        raise _user_error(exc, path) from None
+        if isinstance(exc, OSError):
+            raise _user_error(exc, path) from None
+        raise
 
 
 def _build_metadata(columns: list[str], metadata: Mapping[str, Any] | None) -> dict:
@@ -250,6 +254,10 @@ def write_run(path: str | os.PathLike, columns: Mapping[str, Any], metadata: Map
               overwrite: bool = True) -> Path:
     """Write a whole run at once from column arrays.
 
+    Both files are written under temporary names beside the run and renamed over ``NAME.csv`` and then
+    ``NAME.meta.json`` at the end (:func:`fsrlab.io.outputs.atomic_run`): an interrupted write leaves
+    the old files (or none), never half of one, and no temporary file.
+
     Parameters
     ----------
     path : str or path-like
@@ -275,7 +283,16 @@ def write_run(path: str | os.PathLike, columns: Mapping[str, Any], metadata: Map
     for i in range(arrays[0].shape[0]):
         buf.write(",".join(_format_value(a[i]) for a in arrays))
         buf.write("\n")
-    with RunWriter(path, names, metadata, overwrite=overwrite) as w:
-        w._raw(buf.getvalue())
-        w.rows = arrays[0].shape[0]
-    return Path(path)
+    path = Path(path)
+    if not overwrite:
+        for existing in (path, sidecar_path(path)):
+            if os.path.lexists(existing):
+                raise FileExistsError(f"{existing} exists; a run is replaced only when asked to")
+    try:
+        with atomic_run(path) as tmp:
+            with RunWriter(tmp, names, metadata, overwrite=True) as w:
+                w._raw(buf.getvalue())
+                w.rows = arrays[0].shape[0]
+    except OSError as exc:  # name the run, not the temporary files
+        raise _user_error(exc, path) from None
+    return path

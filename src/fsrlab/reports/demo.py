@@ -143,4 +143,6 @@ n.get('known_weight_calibration'))}.</p>
 <p>ISO 376 class: {html.escape(str(n.get('iso376_class')))} (the measurement report says what is missing).</p>
 <h2>Steps</h2><ol>{steps}</ol><h2>Files</h2><ul>{files}</ul></body></html>
 """
-    result.index.write_text(page, encoding="utf-8")
+    from fsrlab.io.outputs import write_text_atomic
+
+    write_text_atomic(result.index, page)

@@ -41,10 +41,19 @@ def fixed_layout(fig) -> None:
 
 
 def save(fig, path: Path) -> Path:
-    """Save ``fig`` as PNG at ``path`` (fixed layout, :func:`fixed_layout`) and close it."""
+    """Save ``fig`` as PNG at ``path`` (fixed layout, :func:`fixed_layout`) and close it.
+
+    Written under a temporary name and renamed (:func:`fsrlab.io.outputs.atomic_path`): an interrupted
+    report leaves the old figure or the whole new one under ``path``, never half of one.
+    """
     import matplotlib.pyplot as plt
 
+    from fsrlab.io.outputs import atomic_path
+
     fixed_layout(fig)
-    fig.savefig(path, format="png")
-    plt.close(fig)
+    try:
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, format="png")
+    finally:
+        plt.close(fig)
     return path

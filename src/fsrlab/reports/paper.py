@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Callable
 
 from fsrlab import __version__
+from fsrlab.io.outputs import write_text_atomic
 from fsrlab.reports.html import render_html
 from fsrlab.reports.model import Section
 
@@ -170,8 +171,7 @@ def write_report(outdir: str | Path, progress: Callable[[str], None] | None = No
             raise RuntimeError(f"report section {section.key!r} redefines {sorted(clash)}")
         data.update(section.data)
     data["errata"] = [asdict(e) for s in sections for e in s.errata]
-    json_path = out / "paper.json"
-    json_path.write_text(json.dumps(data, indent=2, allow_nan=False) + "\n", encoding="utf-8")
-    index = out / "index.html"
-    index.write_text(render_html(sections, out), encoding="utf-8")
+    # Each file under a temporary name, then renamed: an interrupted report never leaves half a file.
+    json_path = write_text_atomic(out / "paper.json", json.dumps(data, indent=2, allow_nan=False) + "\n")
+    index = write_text_atomic(out / "index.html", render_html(sections, out))
     return ReportResult(index=index, json=json_path, sections=sections)

@@ -256,13 +256,13 @@ def write_run_report(run, outdir, placements=None, weights_run=None, calibration
                       calibrate=calibrate)
     outdir.mkdir(parents=True, exist_ok=True)
     sections = build_sections(rep, outdir)
-    index = outdir / "index.html"
-    index.write_text(render_html(sections, outdir, title=f"Measurement report: {rep.path.name}",
-                                 command="fsrlab report", errata=False), encoding="utf-8")
-    js = outdir / "report.json"
     from fsrlab.io.jsonable import to_jsonable
+    from fsrlab.io.outputs import write_text_atomic
 
-    js.write_text(json.dumps(to_jsonable(rep.to_dict()), indent=1, allow_nan=False), encoding="utf-8")
+    # Each file under a temporary name, then renamed: an interrupted report never leaves half a file.
+    index = write_text_atomic(outdir / "index.html", render_html(
+        sections, outdir, title=f"Measurement report: {rep.path.name}", command="fsrlab report", errata=False))
+    js = write_text_atomic(outdir / "report.json", json.dumps(to_jsonable(rep.to_dict()), indent=1, allow_nan=False))
     figures = [outdir / f.filename for s in sections for f in s.figures]
     return RunReportFiles(index, js, figures, rep)
 

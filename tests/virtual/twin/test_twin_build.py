@@ -55,3 +55,22 @@ def test_cache_root_follows_xdg_cache_home(tmp_path, monkeypatch):
     assert build.cache_root() == tmp_path / "fsrlab"
     monkeypatch.setenv("XDG_CACHE_HOME", "")
     assert build.cache_root() == Path.home() / ".cache" / "fsrlab"
+
+
+def test_twin_available_is_false_in_an_if_when_the_twin_cannot_run(tmp_path, monkeypatch):
+    # Reference: twin_available's contract (False with a one-line reason when the harness is missing; True
+    # when it answers its usage with exit code 2). A plain (False, reason) tuple is true in an if.
+    from fsrlab.virtual.twin import twin_available
+
+    monkeypatch.setenv("FSRLAB_FIRMWARE_BUILD", str(tmp_path))
+    answer = twin_available()
+    assert not answer and bool(answer) is False
+    ok, reason = answer
+    assert ok is False and "fsrlab_twin is missing" in reason and "\n" not in reason
+    # A harness that answers as the real one does (usage on stderr, exit 2) beside a firmware image.
+    harness = tmp_path / "fsrlab_twin"
+    harness.write_text("#!/bin/sh\necho 'usage: fsrlab_twin FIRMWARE' >&2\nexit 2\n")
+    harness.chmod(0o755)
+    (tmp_path / "fsrlab_meter.elf").write_bytes(b"\x7fELF")
+    answer = twin_available()
+    assert answer and answer == (True, "")

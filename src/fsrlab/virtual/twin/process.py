@@ -16,9 +16,10 @@ from __future__ import annotations
 import os
 import subprocess
 from pathlib import Path
+from typing import NamedTuple
 
-__all__ = ["F_CPU_HZ", "ROOT", "build_dir", "elf_path", "harness_path", "twin_available", "pack_records",
-           "RECORD_DTYPE"]
+__all__ = ["F_CPU_HZ", "ROOT", "build_dir", "elf_path", "harness_path", "twin_available", "TwinAvailability",
+           "pack_records", "RECORD_DTYPE"]
 
 F_CPU_HZ = 16_000_000
 """CPU clock of the simulated ATmega328P (cycles per second). [Hz]"""
@@ -60,14 +61,36 @@ def harness_path() -> Path:
     return build_dir() / "fsrlab_twin"
 
 
-def twin_available() -> tuple[bool, str]:
+class TwinAvailability(NamedTuple):
+    """Whether the twin can run here: true or false in an ``if``, and ``ok, reason = ...`` unpacks it.
+
+    A plain ``(False, reason)`` tuple would be true in an ``if`` (it is not empty); this one is as
+    true as ``ok``.
+
+    Parameters
+    ----------
+    ok : bool
+        Whether the twin can run.
+    reason : str
+        Empty when it can; else one line saying what is missing and how to get it.
+    """
+
+    ok: bool
+    reason: str
+
+    def __bool__(self) -> bool:
+        return bool(self.ok)
+
+
+def twin_available() -> TwinAvailability:
     """Whether the twin can run here.
 
     Returns
     -------
-    (bool, str)
+    TwinAvailability
         ``(True, "")``, or ``(False, reason)``: one line saying what is missing and how to get it
-        (``make sysdeps`` for simavr, ``make firmware`` for the firmware and its harness).
+        (``make sysdeps`` for simavr, ``make firmware`` for the firmware and its harness). It is
+        false in an ``if`` when the twin cannot run, and unpacks as ``ok, reason``.
     """
     if not os.environ.get("FSRLAB_FIRMWARE_BUILD") and not harness_path().exists() \
             and not (ROOT / "firmware" / "Makefile").exists():
@@ -75,23 +98,24 @@ def twin_available() -> tuple[bool, str]:
 
         built, reason = build_harness()
         if built is None:
-            return False, reason
+            return TwinAvailability(False, reason)
     harness, elf = harness_path(), elf_path()
     if not harness.exists() or not elf.exists():
         missing = harness if not harness.exists() else elf
         if not SIMAVR_HEADER.exists():
-            return False, (f"the digital twin needs simavr and the built firmware ({missing} is missing): "
-                           "run `make sysdeps`, then `make firmware`")
-        return False, f"the digital twin needs the built firmware and its simavr harness ({missing} is missing): " \
-                      "run `make firmware`"
+            return TwinAvailability(False, f"the digital twin needs simavr and the built firmware ({missing} is "
+                                           "missing): run `make sysdeps`, then `make firmware`")
+        return TwinAvailability(False, f"the digital twin needs the built firmware and its simavr harness "
+                                       f"({missing} is missing): run `make firmware`")
     try:
         proc = subprocess.run([str(harness)], capture_output=True, timeout=10)
     except OSError as exc:
-        return False, f"the digital twin's harness {harness} cannot run ({exc.strerror}): run `make firmware`"
+        return TwinAvailability(False, f"the digital twin's harness {harness} cannot run ({exc.strerror}): "
+                                       "run `make firmware`")
     if proc.returncode != 2 or b"usage" not in proc.stderr:
-        return False, (f"the digital twin's harness {harness} cannot run (simavr library missing?): "
-                       "run `make sysdeps`, then `make firmware`")
-    return True, ""
+        return TwinAvailability(False, f"the digital twin's harness {harness} cannot run (simavr library missing?): "
+                                       "run `make sysdeps`, then `make firmware`")
+    return TwinAvailability(True, "")
 
 
 def _dtype():
