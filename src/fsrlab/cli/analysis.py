@@ -161,7 +161,7 @@ def calibrate_cmd(
     method: str = typer.Option("auto", "--method", help="How choices are scored [name]: held-out (on other runs, or on later blocks of one run; each added term kept only when it wins there: docs/calibration.md), cv (grouped cross-validation inside one run, with --model, --degree, --folds, --max-lag, c_fsr_farad), or auto: cv when one of those is given, else held-out."),
     model: str = typer.Option("auto", "--model", help="Model [name] (--method cv): auto (every family, chosen by grouped cross-validation), polynomial, conductance-polynomial, conductance-power (F = c + a·G^b through the readout circuit), power, or one candidate such as polynomial-3."),
     degree: str = typer.Option("auto", "--degree", help="Polynomial degree 1..5 [1] (--method cv; the model is then that polynomial), or auto."),
-    compensate: bool = typer.Option(False, "--compensate", help="Also try the causal hysteresis compensation (play operators with memory, and creep; extension beyond the paper): kept only when it lowers the held-out error by more than its standard error (--method cv: chosen by grouped CV, HE [%] before/after)."),
+    compensate: bool = typer.Option(False, "--compensate", help="Also try the causal hysteresis compensation (play operators with memory, and creep; extension beyond the paper): its correction weighted by the held-out error, kept only when it lowers that error by more than its standard error and 5 % of the MSE (--method cv: chosen by grouped CV, HE [%] before/after)."),
     unit: str = typer.Option(None, "--unit", help="Display unit of the errors in the table [N, g, Pa or kPa] (default: the reference's, N or Pa); --json and the file stay SI."),
     lag: str = typer.Option(None, "--lag", help="Lag of the readout behind the reference [s] (rows without time_s), e.g. 0.02, 0 or auto (searched; kept only when a shift of whole rows wins held out). Default 0: the estimate is of the reference as recorded (--method cv: auto, searched by cross-validation)."),
     max_lag: float = typer.Option(None, "--max-lag", parser=seconds, help="Half-width of the lag search [s] (--method cv), e.g. 0.25 (default 0.25 s, at least 2 rows)."),
@@ -176,9 +176,10 @@ def calibrate_cmd(
     """Calibrate readout → force or stress, every choice scored where it will be used.
 
     Default (held-out): a monotone curve (readout, or a divider's conductance for analogRead
-    counts), then a lag, hysteresis and creep terms, each kept only when it beats the simpler
-    calibration on another run (or, with one run, on later blocks of it) by more than one standard
-    error -- otherwise the simpler calibration is written and the output says why. The uncertainty
+    counts), then a lag and the hysteresis and creep terms (their correction weighted by the held-out
+    error), each kept only when it beats the simpler calibration on another run (or, with one run, on
+    later blocks of it) by more than one standard error (the memory also by 5 % of its MSE) --
+    otherwise the simpler calibration is written and the output says why. The uncertainty
     comes from those held-out errors. With --method cv (one run): polynomials and conductance
     families by grouped cross-validation, the dead zone, the branch or play-operator compensation.
     The file records the readout range and the circuit and range the runs were recorded with,
