@@ -26,37 +26,40 @@ PARAMETER_OPTIONS = {"port": "--port"}
 # imports no topic module and ``fsrlab CMD`` imports only CMD's; tests/cli/test_lazy_commands.py checks
 # the table against the commands themselves. A topic module adds its commands with ``@app.command()``.
 COMMANDS = {
-    "paper": ("report", "Reproduce every figure and table of the paper, with the paper's values beside ours and the errata."),
-    "physics": ("physics", "Hysteresis error (eq. 13) of R_A and C_A over one cycle 0 → σf → 0; defaults are the paper's "
-                           "Table 1."),
+    "paper": ("report", "Reproduce every figure and table of the paper, with the paper's values beside ours and the "
+                        "errata."),
+    "physics": ("physics", "Hysteresis error (eq. 13) of R_A and C_A over one cycle 0 → σf → 0; defaults are the "
+                           "paper's Table 1."),
     "oscillator": ("oscillator", "Frequency, duty cycle and sensitivities of the LM555 astable with the FSR as timing "
                                  "element."),
     "decode": ("oscillator", "Recover R_FSR and C_FSR from a measured frequency and duty cycle (uncertainty: 62.5 ns "
                              "timer ticks)."),
-    "design": ("oscillator", "Propose R, C_off and the variant for a sensor's R_FSR/C_FSR ranges and a wanted frequency "
-                             "band."),
+    "design": ("oscillator", "Propose R, C_off and the variant for a sensor's R_FSR/C_FSR ranges and a wanted "
+                             "frequency band."),
     "hysteresis": ("analysis", "Hysteresis error (eq. 13) of a run, per loading-unloading cycle and overall."),
     "repeatability": ("analysis", "Repeatability errors RE1 and RE2 (eq. 39) per load and sensor, and their means per "
                                   "load."),
     "calibrate": ("analysis", "Calibrate readout → force or stress, every choice scored where it will be used."),
     "apply": ("analysis", "Apply a calibration to a run: adds <reference>_estimate, <reference>_uncertainty and "
                           "in_range."),
-    "iso376": ("analysis", "ISO 376:2011 quantities (b, b', fc, f0, v, c) and the class they reach (beyond the paper)."),
+    "iso376": ("analysis", "ISO 376:2011 quantities (b, b', fc, f0, v, c) and the class they reach (beyond the "
+                           "paper)."),
     "acquire": ("acquisition", "Record measurement windows (frequency, duty cycle, A0 voltage) from an fsrlab meter "
                                "into a run file."),
     "virtual-device": ("acquisition", "Emulate an fsrlab meter on a pseudo-terminal; prints its path (open it with "
                                       "--port PATH or any serial tool)."),
-    "loadcell": ("loadcell", "Calibrate the load cell: tare (offset, nothing on the cell), then scale (counts per newton "
-                             "from a known mass)."),
-    "weights": ("weights", "Guided known-weight calibration: place each mass, wait until the reading is stable, record "
-                           "it."),
+    "loadcell": ("loadcell", "Calibrate the load cell: tare (offset, nothing on the cell), then scale (counts per "
+                             "newton from a known mass)."),
+    "weights": ("weights", "Guided known-weight calibration: place each mass, wait until the reading is stable, "
+                           "record it."),
     "measure": ("measure", "Show the force live from a calibration (N and g; the load cell's reading beside it) and "
                            "record it."),
     "creep": ("creep", "Creep of a readout under held loads: drift per decade of time and time constant, per hold."),
-    "live": ("live", "Serve the meter's front panel: frequency, duty cycle, op-amp voltage and the reference live, the "
-                     "loading/unloading loop, the link's health, and controls (recording, range, window)."),
+    "live": ("live", "Serve the meter's front panel: frequency, duty cycle, op-amp voltage and the reference live, "
+                     "the loading/unloading loop, the link's health, and controls (recording, range, window)."),
     "twin": ("twin", "Run the digital twin: the meter's real firmware in simavr on a pty; prints its path first."),
-    "bench": ("bench", "Run a bench protocol (spring cycles, dead-weight re-placements, a creep hold) into a run file."),
+    "bench": ("bench", "Run a bench protocol (spring cycles, dead-weight re-placements, a creep hold) into a run "
+                       "file."),
     "report": ("report_run", "Measurement report of a recorded run: HE of f and V0 side by side, RE1/RE2, ISO 376, "
                              "calibration."),
     "demo": ("demo", "The measurement chain on a virtual bench: record, calibrate, compensate, report; then the paper "
@@ -88,30 +91,36 @@ def _name(info) -> str:
     return info.name or typer.main.get_command_name(info.callback.__name__)
 
 
+def _registration(name: str):
+    """The command's or group's registration on ``app`` (``CommandInfo``, ``TyperInfo``), or None."""
+    for info in app.registered_commands:
+        if _name(info) == name:
+            return info
+    return next((info for info in app.registered_groups if info.name == name), None)
+
+
 def _build(name: str):
     """The click command ``name`` from ``app``'s registrations, its topic module imported first if need be."""
-    for attempt in range(2):
-        for info in app.registered_commands:
-            if _name(info) == name:
-                _summarise(info)
-                return typer.main.get_command_from_info(info, pretty_exceptions_short=app.pretty_exceptions_short,
-                                                        rich_markup_mode=app.rich_markup_mode)
-        for info in app.registered_groups:
-            if info.name == name:
-                return typer.main.get_group_from_info(info, pretty_exceptions_short=app.pretty_exceptions_short,
-                                                      suggest_commands=app.suggest_commands,
-                                                      rich_markup_mode=app.rich_markup_mode)
-        if attempt or name not in COMMANDS:
-            return None
+    info = _registration(name)
+    if info is None and name in COMMANDS:
         importlib.import_module(f"{__name__}.{COMMANDS[name][0]}")
-    return None
+        info = _registration(name)
+    if info is None:
+        return None
+    if isinstance(info, typer.models.TyperInfo):
+        return typer.main.get_group_from_info(info, pretty_exceptions_short=app.pretty_exceptions_short,
+                                              suggest_commands=app.suggest_commands,
+                                              rich_markup_mode=app.rich_markup_mode)
+    _summarise(info)
+    return typer.main.get_command_from_info(info, pretty_exceptions_short=app.pretty_exceptions_short,
+                                            rich_markup_mode=app.rich_markup_mode)
 
 
 class _Commands(MutableMapping):
     """A group's commands by name, each built (its topic module imported) when it is first looked up.
 
-    Its names are the table's and then any other command registered on ``app`` (tests add some); a name's
-    lookup builds only that command. ``keys()`` and ``in COMMANDS`` cost nothing; ``items()`` builds all.
+    Its names are the table's and then any other command registered on ``app`` (tests add some): listing
+    them imports nothing; looking one up (``[name]``, ``get``, ``in``) builds that one; ``items()`` builds all.
     """
 
     def __init__(self, built: dict):
