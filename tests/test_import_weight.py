@@ -18,7 +18,8 @@ HEAVY = ("scipy", "matplotlib", "serial", "rich")
 @pytest.mark.parametrize("module", ["fsrlab.physics.params", "fsrlab.circuits.lm555", "fsrlab.circuits.circuit",
                                     "fsrlab.cli"])
 def test_module_does_not_import_heavy_packages(module):
-    # fsrlab.cli: `fsrlab --help` loads every command module; each imports what it needs when run.
+    # fsrlab.cli imports no command's module (tests/cli/test_lazy_commands.py); a command imports what it
+    # needs when it runs.
     code = (f"import json, sys, {module}; "
             f"print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] in {HEAVY!r})))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
@@ -46,12 +47,12 @@ def test_command_line_start_does_not_import_numpy(module):
 @pytest.mark.parametrize("args, absent", [
     (["--help"], ("numpy", "pydantic", "scipy", "matplotlib")),
     (["oscillator", "--help"], ("numpy", "pydantic")),
-    (["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1n", "--json"], ("pydantic", "scipy")),
+    (["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1n", "--json"], ("pydantic", "scipy", "matplotlib")),
 ])
 def test_command_line_runs_without_heavy_packages(args, absent):
     # The whole command as a user starts it (a subprocess), then sys.modules: `fsrlab --help` needs no
     # numpy, and no command's option parsing needs pydantic (fsrlab.cli's light coercion; typer would
-    # import it, ~0.1 s). The oscillator's closed form needs numpy, not scipy.
+    # import it, ~0.1 s). The oscillator's closed form needs numpy, not scipy or matplotlib.
     code = ("import atexit, json, sys\n"
             f"atexit.register(lambda: print(json.dumps(sorted(m for m in {absent!r} if m in sys.modules)), file=sys.stderr))\n"
             "from fsrlab.cli import main\n"

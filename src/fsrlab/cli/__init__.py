@@ -11,6 +11,7 @@ import inspect
 import os
 import re
 import sys
+from collections.abc import MutableMapping
 
 import typer
 
@@ -20,9 +21,174 @@ from fsrlab.errors import FsrlabError
 #: The option of each library parameter an error can name (:attr:`fsrlab.errors.FsrlabError.parameter`).
 PARAMETER_OPTIONS = {"port": "--port"}
 
+# Every command ``fsrlab --help`` lists, in its order: the topic module that adds it to ``app`` and its
+# summary (the first paragraph of its help). The listing is built from this table, so ``fsrlab --help``
+# imports no topic module and ``fsrlab CMD`` imports only CMD's; tests/cli/test_lazy_commands.py checks
+# the table against the commands themselves. A topic module adds its commands with ``@app.command()``.
+COMMANDS = {
+    "paper": ("report", "Reproduce every figure and table of the paper, with the paper's values beside ours and the "
+                        "errata."),
+    "physics": ("physics", "Hysteresis error (eq. 13) of R_A and C_A over one cycle 0 → σf → 0; defaults are the "
+                           "paper's Table 1."),
+    "oscillator": ("oscillator", "Frequency, duty cycle and sensitivities of the LM555 astable with the FSR as timing "
+                                 "element."),
+    "decode": ("oscillator", "Recover R_FSR and C_FSR from a measured frequency and duty cycle (uncertainty: 62.5 ns "
+                             "timer ticks)."),
+    "design": ("oscillator", "Propose R, C_off and the variant for a sensor's R_FSR/C_FSR ranges and a wanted "
+                             "frequency band."),
+    "hysteresis": ("analysis", "Hysteresis error (eq. 13) of a run, per loading-unloading cycle and overall."),
+    "repeatability": ("analysis", "Repeatability errors RE1 and RE2 (eq. 39) per load and sensor, and their means per "
+                                  "load."),
+    "calibrate": ("analysis", "Calibrate readout → force or stress, every choice scored where it will be used."),
+    "apply": ("analysis", "Apply a calibration to a run: adds <reference>_estimate, <reference>_uncertainty and "
+                          "in_range."),
+    "iso376": ("analysis", "ISO 376:2011 quantities (b, b', fc, f0, v, c) and the class they reach (beyond the "
+                           "paper)."),
+    "acquire": ("acquisition", "Record measurement windows (frequency, duty cycle, A0 voltage) from an fsrlab meter "
+                               "into a run file."),
+    "virtual-device": ("acquisition", "Emulate an fsrlab meter on a pseudo-terminal; prints its path (open it with "
+                                      "--port PATH or any serial tool)."),
+    "loadcell": ("loadcell", "Calibrate the load cell: tare (offset, nothing on the cell), then scale (counts per "
+                             "newton from a known mass)."),
+    "weights": ("weights", "Guided known-weight calibration: place each mass, wait until the reading is stable, "
+                           "record it."),
+    "measure": ("measure", "Show the force live from a calibration (N and g; the load cell's reading beside it) and "
+                           "record it."),
+    "creep": ("creep", "Creep of a readout under held loads: drift per decade of time and time constant, per hold."),
+    "live": ("live", "Serve the meter's front panel: frequency, duty cycle, op-amp voltage and the reference live, "
+                     "the loading/unloading loop, the link's health, and controls (recording, range, window)."),
+    "twin": ("twin", "Run the digital twin: the meter's real firmware in simavr on a pty; prints its path first."),
+    "bench": ("bench", "Run a bench protocol (spring cycles, dead-weight re-placements, a creep hold) into a run "
+                       "file."),
+    "report": ("report_run", "Measurement report of a recorded run: HE of f and V0 side by side, RE1/RE2, ISO 376, "
+                             "calibration."),
+    "demo": ("demo", "The measurement chain on a virtual bench: record, calibrate, compensate, report; then the paper "
+                     "report."),
+    "import": ("importer", "Import a foreign CSV (your own sketch, a data logger, a spreadsheet) as a run."),
+    "ports": ("ports", "List the serial ports with what is known about each, and what --port auto picks."),
+    "doctor": ("doctor", "Say what this machine has for fsrlab and what each thing enables, with install commands."),
+    "firmware": ("firmware", "The meter's firmware shipped in the package: its image (hex), its sketch, flashing an "
+                             "Uno."),
+}
+# Command groups (``fsrlab firmware hex``): the list shows their summary cut to the line, as click does for a
+# command without a short help.
+COMMAND_GROUPS = frozenset({"firmware"})
+COMMAND_MODULES = tuple(dict.fromkeys(module for module, _ in COMMANDS.values()))
+
+
+def _summarise(info) -> None:
+    """Give a registered command its whole first paragraph as short help.
+
+    click's default cuts the summary at the first ". ", which in "Hysteresis error (eq. 13) of ..." is
+    inside the equation number.
+    """
+    if info.short_help is None:
+        doc = info.help or inspect.getdoc(info.callback) or ""
+        info.short_help = " ".join(doc.split("\n\n")[0].split()) or None
+
+
+def _name(info) -> str:
+    return info.name or typer.main.get_command_name(info.callback.__name__)
+
+
+def _registration(name: str):
+    """The command's or group's registration on ``app`` (``CommandInfo``, ``TyperInfo``), or None."""
+    for info in app.registered_commands:
+        if _name(info) == name:
+            return info
+    return next((info for info in app.registered_groups if info.name == name), None)
+
+
+def _build(name: str):
+    """The click command ``name`` from ``app``'s registrations, its topic module imported first if need be."""
+    info = _registration(name)
+    if info is None and name in COMMANDS:
+        importlib.import_module(f"{__name__}.{COMMANDS[name][0]}")
+        info = _registration(name)
+    if info is None:
+        return None
+    if isinstance(info, typer.models.TyperInfo):
+        return typer.main.get_group_from_info(info, pretty_exceptions_short=app.pretty_exceptions_short,
+                                              suggest_commands=app.suggest_commands,
+                                              rich_markup_mode=app.rich_markup_mode)
+    _summarise(info)
+    return typer.main.get_command_from_info(info, pretty_exceptions_short=app.pretty_exceptions_short,
+                                            rich_markup_mode=app.rich_markup_mode)
+
+
+class _Commands(MutableMapping):
+    """A group's commands by name, each built (its topic module imported) when it is first looked up.
+
+    Its names are the table's and then any other command registered on ``app`` (tests add some): listing
+    them imports nothing; looking one up (``[name]``, ``get``, ``in``) builds that one; ``items()`` builds all.
+    """
+
+    def __init__(self, built: dict):
+        self._built = dict(built)
+
+    def __getitem__(self, name):
+        if name not in self._built:
+            command = _build(name)
+            if command is None:
+                raise KeyError(name)
+            self._built[name] = command
+        return self._built[name]
+
+    def __setitem__(self, name, command):
+        self._built[name] = command
+
+    def __delitem__(self, name):
+        del self._built[name]
+
+    def __iter__(self):
+        registered = [_name(i) for i in app.registered_commands] + [i.name for i in app.registered_groups]
+        return iter(dict.fromkeys([*COMMANDS, *self._built, *registered]))
+
+    def __len__(self):
+        return sum(1 for _ in self)
+
+    def built(self, name: str) -> bool:
+        """Whether ``name`` is built already (looking it up would import nothing)."""
+        return name in self._built
+
+
+class _LazyGroup(typer.core.TyperGroup):
+    """The ``fsrlab`` group: commands built on first use; the command list and typo hints from the table."""
+
+    def __init__(self, *, commands=None, **attrs):
+        super().__init__(commands=_Commands(commands or {}), **attrs)
+        self._summaries_only = False
+        self._stubs: dict = {}
+
+    def list_commands(self, ctx) -> list[str]:
+        return list(self.commands)
+
+    def get_command(self, ctx, cmd_name: str):
+        if self._summaries_only and cmd_name in COMMANDS and not self.commands.built(cmd_name):
+            return self._stub(cmd_name)
+        return self.commands.get(cmd_name)
+
+    def _stub(self, name: str):
+        """A stand-in that lists ``name`` with the table's summary, as the command itself would be listed."""
+        if name not in self._stubs:
+            summary = COMMANDS[name][1]
+            self._stubs[name] = (typer.core.TyperCommand(name, help=summary, rich_markup_mode=self.rich_markup_mode)
+                                 if name in COMMAND_GROUPS else
+                                 typer.core.TyperCommand(name, short_help=summary, rich_markup_mode=self.rich_markup_mode))
+        return self._stubs[name]
+
+    def format_commands(self, ctx, formatter) -> None:
+        self._summaries_only = True  # the list shows every command: from the table, importing no topic module
+        try:
+            super().format_commands(ctx, formatter)
+        finally:
+            self._summaries_only = False
+
+
 app = typer.Typer(
     name="fsrlab",
     help="Force sensing with FSRs: physics, LM555 readout, firmware, acquisition, calibration, reports.",
+    cls=_LazyGroup,
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
@@ -30,23 +196,6 @@ app = typer.Typer(
     # tags and drop them, and it shows a "<bool>" value placeholder after every flag.
     rich_markup_mode=None,
 )
-
-# Topic modules that add commands to ``app``; a topic not written yet is simply absent.
-COMMAND_MODULES = ("report", "physics", "oscillator", "analysis", "acquisition", "loadcell", "weights", "measure",
-                   "creep", "live", "twin", "bench", "report_run", "demo", "importer", "firmware", "ports", "doctor")
-for _name in COMMAND_MODULES:
-    try:
-        importlib.import_module(f"{__name__}.{_name}")
-    except ModuleNotFoundError as _err:
-        if _err.name != f"{__name__}.{_name}":
-            raise
-
-# The command list shows each command's first paragraph whole: click's default cuts it at the
-# first ". ", which in "Hysteresis error (eq. 13) of ..." is inside the equation number.
-for _info in app.registered_commands:
-    if _info.short_help is None:
-        _doc = _info.help or inspect.getdoc(_info.callback) or ""
-        _info.short_help = " ".join(_doc.split("\n\n")[0].split()) or None
 
 
 def _version(value: bool) -> None:
@@ -70,6 +219,8 @@ def _click_command():
     key = tuple((id(info), info.name) for info in app.registered_commands)
     if key not in _CLICK:
         _CLICK.clear()
+        for info in app.registered_commands:
+            _summarise(info)
         _CLICK[key] = typer.main.get_command(app)
     return _CLICK[key]
 
