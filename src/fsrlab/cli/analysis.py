@@ -393,7 +393,8 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
     table.add_row(f"readout range ({cal.x_unit or '1'})", f"{cal.x_range[0]:.6g} … {cal.x_range[1]:.6g}")
     table.add_row("relative uncertainty between runs (%)", f"{100 * cal.model.uncertainty.relative:.3g}")
     for s in sel.steps[1:]:
-        table.add_row(f"{s['step']}: {s['tried']}", "kept" if s["kept"] else "not kept")
+        kept = "kept" + (f" (weight {s['weight']:.2f})" if "weight" in s else "")
+        table.add_row(f"{s['step']}: {s['tried']}", kept if s["kept"] else "not kept")
     console.print(table)
     if compensate and refused:
         console.print(f"compensation: {refused[0]['step']} not kept: {refused[0]['why']}")
