@@ -1,13 +1,15 @@
 """What a recording command shows and reads on the terminal: the live table of the recording (:class:`LiveView`),
-and a person's answers typed on stdin (:class:`Keyboard`). Re-exported by :mod:`fsrlab.cli.options`, where the
+a person's answers typed on stdin (:class:`Keyboard`), and SIGTERM taken as Ctrl-C. Re-exported by :mod:`fsrlab.cli.options`, where the
 command modules take them from."""
 
 from __future__ import annotations
 
 import math
 import queue
+import signal
 import sys
 import threading
+from contextlib import contextmanager
 
 
 def fmt_value(value: float, spec: str) -> str:
@@ -101,3 +103,20 @@ class Keyboard:
                       file=sys.stderr, flush=True)
             return "ok"
         return "skip" if line.strip().lower() in ("s", "skip") else "ok"
+
+
+@contextmanager
+def sigterm_as_interrupt():
+    """Let SIGTERM end a recording like Ctrl-C (file closed, device stopped)."""
+    def handler(signum, frame):  # noqa: ARG001
+        raise KeyboardInterrupt
+
+    try:
+        previous = signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not the main thread (e.g. called from a test thread): leave it
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
