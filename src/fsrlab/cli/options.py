@@ -1,5 +1,6 @@
 """What the command modules share: option parsers, JSON output, one-line errors, and the options and helpers of
-the recording commands (sensor and area, load cell, virtual device, window, live view, run loading), and the output
+the recording commands (sensor and area, load cell, virtual device, window, live view, run loading, the meter's
+circuit on --port), and the output
 policy as the commands use it (``parser=out_path``, :func:`checked`, :func:`check_out`, the ``--overwrite`` help texts).
 
 A command module imports these from here, never another command module's names.
