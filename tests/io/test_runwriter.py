@@ -10,12 +10,13 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import subprocess
 import sys
 
 import pytest
 
-from fsrlab.io.runformat import load_run, sidecar_path
+from fsrlab.io.runformat import RunFormatError, load_run, sidecar_path
 from fsrlab.io.runwriter import RunWriter, write_run
 
 
@@ -134,3 +135,64 @@ def test_write_run_interrupted_leaves_the_old_run_and_no_temporary(tmp_path, mon
     # A directory that does not exist is named as the user gave it, not as a temporary file.
     with pytest.raises(OSError, match=r"cannot write '.*missing/run\.csv'"):
         write_run(tmp_path / "missing" / "run.csv", {"time_s": [0.1]})
+
+
+# Two runs of the same shape, as `apply -o` run twice with calibrations of two circuits writes them: the
+# row count alone cannot tell one from the other.
+_OLD = ({"time_s": [0.1, 0.2], "frequency_hz": [5000.0, 5100.0]}, {"circuit": {"r_ohm": 10e3, "diode": True}})
+_NEW = ({"time_s": [0.1, 0.2], "frequency_hz": [7000.0, 7100.0]}, {"circuit": {"r_ohm": 4.7e3, "diode": True}})
+
+# write_run stopped after the first of its two renames (of a run's own file, not of a temporary) and before the
+# second: by Ctrl-C (KeyboardInterrupt: write_run's clean-up runs) or by a kill (no handler, no clean-up).
+_STOPPED_BETWEEN_THE_RENAMES = """
+import os, sys
+from fsrlab.io.runwriter import write_run
+real, renamed = os.replace, []
+def replace(src, dst):
+    renamed.extend([dst] if not os.path.basename(dst).startswith(".") else [])
+    if len(renamed) == 2:
+        if sys.argv[2] == "kill":
+            os._exit(9)
+        raise KeyboardInterrupt
+    real(src, dst)
+os.replace = replace
+write_run(sys.argv[1], {"time_s": [0.1, 0.2], "frequency_hz": [7000.0, 7100.0]},
+          {"circuit": {"r_ohm": 4.7e3, "diode": True}})
+"""
+
+
+@pytest.mark.parametrize("old", ["write_run", "recorded"])
+@pytest.mark.parametrize("how", ["Ctrl-C", "kill"])
+def test_write_run_stopped_between_its_two_renames_leaves_no_pair_that_passes_for_one_run(tmp_path, how, old):
+    # Reference: the crash-safety contract of docs/data-format.md (a run's two files are one run or refused as
+    # a pair, never the new CSV under the old sidecar: another circuit, another calibration). The run replaced
+    # was written whole, or recorded row by row (its sidecar names no content).
+    path = tmp_path / "run.csv"
+    if old == "write_run":
+        write_run(path, *_OLD)
+    else:
+        with RunWriter(path, list(_OLD[0]), _OLD[1]) as w:
+            for row in zip(*_OLD[0].values()):
+                w.write(dict(zip(_OLD[0], row)))
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    done = subprocess.run([sys.executable, "-c", _STOPPED_BETWEEN_THE_RENAMES, path, how], env=env,
+                          capture_output=True, text=True)
+    # (Python ends on an uncaught KeyboardInterrupt as killed by SIGINT)
+    assert done.returncode == (9 if how == "kill" else -signal.SIGINT), done.stderr
+    with pytest.raises(RunFormatError, match=r"run\.csv: not the CSV its sidecar run\.meta\.json was written with"):
+        load_run(path)
+    write_run(path, *_NEW)  # written again: one run
+    run = load_run(path)
+    assert list(run["frequency_hz"]) == [7000.0, 7100.0] and run.metadata["circuit"]["r_ohm"] == 4.7e3
+
+
+def test_a_sidecar_taken_from_a_run_read_names_the_new_csv(tmp_path):
+    # The digest is of the file written, never carried over with the rest of a sidecar (a RunWriter copying a
+    # run's metadata, write_run writing an estimate of it): both runs read back as written.
+    write_run(tmp_path / "a.csv", *_OLD)
+    meta = load_run(tmp_path / "a.csv").metadata
+    with RunWriter(tmp_path / "b.csv", ["time_s", "frequency_hz"], meta) as w:
+        w.write({"time_s": 0.1, "frequency_hz": 1.0})
+    write_run(tmp_path / "c.csv", _NEW[0], meta)
+    assert load_run(tmp_path / "b.csv").n_rows == 1 and load_run(tmp_path / "c.csv").n_rows == 2
+    assert "csv_sha256" not in load_run(tmp_path / "b.csv").metadata  # a recording names no content

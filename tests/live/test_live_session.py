@@ -180,8 +180,6 @@ def test_tare_while_the_load_moves_is_refused_saying_why(tmp_path):
 
 
 def test_a_calibration_recorded_on_another_range_is_refused_with_the_reason(tmp_path, monkeypatch):
-    import json
-
     from fsrlab.virtual.sources import VIRTUAL_CIRCUIT
     from fsrlab.calibration.document import save_calibration
     from fsrlab.calibration.fit import calibrate_run
@@ -196,6 +194,6 @@ def test_a_calibration_recorded_on_another_range_is_refused_with_the_reason(tmp_
     save_calibration(cal, tmp_path / "cal.json")
     code, out, err = run_cli(["live", "--virtual", "--range", "1", "--cal", "cal.json", "--http-port", "0",
                               "--duration", "1s", "--json"])
-    assert code == 0
-    assert "cal.json refused" in err and "range 1" in err and "range 0" in err
-    assert json.loads(out.strip().splitlines()[-1])["frames"] > 0
+    # As measure and apply: one line naming --cal (exit 2), before the device or the page starts.
+    assert code == 2 and err.count("\n") == 1 and "--cal" in err and out == "", err
+    assert "the meter has range 1" in err and "range 0" in err

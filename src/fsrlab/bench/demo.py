@@ -226,7 +226,7 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
     from concurrent.futures import Future, ThreadPoolExecutor
 
     from fsrlab.bench.protocols import SPEEDS, SpringPlan, WeightsPlan, run_protocol, twin_status
-    from fsrlab.io.outputs import run_files
+    from fsrlab.io.outputs import replace_run
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -271,8 +271,7 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
                                overwrite=True, on_status=recorder(label, total_s), settle=settle, speed=s.speed)
         if run.result.failed or not run.result.frames:
             raise RuntimeError(f"{final}: the recording failed: {run.result.message.replace(str(path), str(final))}")
-        for src, dst in zip(run_files(path), run_files(final)):
-            os.replace(src, dst)
+        replace_run(path, final)  # the sidecar first, naming its CSV: a stop between the two is told when read
         run.result = dataclasses.replace(run.result, file=final)
         if run.placements is not None:
             placed = final.with_name(run.placements.name)

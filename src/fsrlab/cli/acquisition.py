@@ -15,52 +15,13 @@ from fsrlab.cli import app
 from fsrlab.cli.options import (
     AREA_HELP, C_OFF_HELP, CORRUPT_HELP, DROP_HELP, LiveView, LOADCELL_HELP, NO_LOADCELL_HELP, PEAK_HELP,
     PERIOD_HELP, PROFILE_HELP, RATE_HELP, SEED_HELP, SENSOR_HELP, SPEED_HELP, areas, check_out, check_rate,
-    check_speed, check_virtual, emit_json, fail, farads, fraction, loadcell_option, make_virtual_device, ohms,
-    option_names, out_path, pascals, plain_numbers, seconds, sensor_area, sigterm_as_interrupt, volts,
+    MeterCircuit, check_speed, check_virtual, emit_json, fail, farads, fraction, loadcell_option, make_virtual_device,
+    meter_circuit_options, out_path, pascals, plain_numbers, seconds, sensor_area, sigterm_as_interrupt, warn,
     window_ms_option,
 )
 
-# The options that describe a meter on --port, by the circuits' parameter names (for the messages).
-_CIRCUIT_OPTIONS = {"r_ohm": "--r", "c_off_farad": "--c-off", "diode_drop_v": "--diode-drop", "vcc_v": "--vcc"}
-_OPAMP_OPTIONS = {"r_f_ohm": "--r-f", "vcc_v": "--drive"}
-
-
-def _meter_circuits(given: dict, range_: int) -> dict:
-    """The sidecar's ``circuit`` and ``opamp`` of a meter on --port, from the options that describe it.
-
-    ``given`` maps each option to its value (None: not given). Without --r (or --r-f) nothing is said of that
-    circuit; a part given without it, or range 1 without the C_off it switches in, ends the command (exit 2).
-    """
-    from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout
-
-    out: dict = {}
-    if given["--r"] is None:
-        stray = next((o for o in ("--c-off", "--diode", "--diode-drop", "--vcc") if given[o] not in (None, False)), None)
-        if stray is not None:
-            fail("describes the meter's 555 with its R: give --r too (e.g. --r 10k), so that the run records the "
-                 "circuit", stray)
-    else:
-        c_off = given["--c-off"]
-        if c_off is None and range_ == 1:
-            fail("--range 1 switches C_off in: give its value (e.g. --c-off 1n) so that the run records it", "--c-off")
-        drop = given["--diode-drop"]
-        if drop is not None and not drop >= 0:
-            fail(f"must be a forward drop >= 0 V, got {drop:g}", "--diode-drop")
-        parts = {"r_ohm": given["--r"], "c_off_farad": 0.0 if c_off is None else c_off,
-                 "diode": bool(given["--diode"] or drop is not None), "diode_drop_v": drop or 0.0,
-                 "vcc_v": 5.0 if given["--vcc"] is None else given["--vcc"]}
-        with option_names(_CIRCUIT_OPTIONS):
-            out["circuit"] = LM555Circuit(**parts).to_dict()
-    if given["--r-f"] is None:
-        if given["--drive"] is not None:
-            fail("describes the op-amp readout with its R_F: give --r-f too (e.g. --r-f 20k)", "--drive")
-    else:
-        with option_names(_OPAMP_OPTIONS):
-            out["opamp"] = OpAmpReadout(given["--r-f"], -5.0 if given["--drive"] is None else given["--drive"]).to_dict()
-    return out
-
-
 @app.command("acquire")
+@meter_circuit_options(virtual_c_off=True)
 def acquire(
     port: str = typer.Option(None, "--port", help="Serial port (/dev/ttyACM0, COM3, a pty) or 'auto' to find an Uno by USB id."),
     virtual: bool = typer.Option(False, "--virtual", help="Record from a virtual device (pty, physics and 555 models) instead of hardware."),
@@ -75,13 +36,6 @@ def acquire(
     profile: str = typer.Option("triangle", "--profile", help=PROFILE_HELP),
     peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS", help="Virtual device: " + PEAK_HELP[0].lower() + PEAK_HELP[1:]),
     period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="Virtual device: " + PERIOD_HELP[0].lower() + PERIOD_HELP[1:]),
-    c_off: float = typer.Option(None, "--c-off", parser=farads, metavar="CAPACITANCE", help=C_OFF_HELP[:-1] + " (virtual: default 1n; --port: the meter's, recorded with --r, needed with --range 1)."),
-    r: float = typer.Option(None, "--r", parser=ohms, metavar="RESISTANCE", help="--port: the meter's 555 R = R_A = R_B [Ω], e.g. 10k or 4k7; recorded in the sidecar with --c-off, --diode and --vcc, so that calibrate and apply can refuse a run of another circuit (without it the run records none)."),
-    diode: bool = typer.Option(False, "--diode", help="--port: the meter's 555 has D1 in series with R_B (the paper's Fig. 16); with --r."),
-    diode_drop: float = typer.Option(None, "--diode-drop", parser=volts, metavar="VOLTAGE", help="--port: D1's forward drop [V], e.g. 0.6 (implies --diode; default 0: ideal); with --r."),
-    vcc: float = typer.Option(None, "--vcc", parser=volts, metavar="VOLTAGE", help="--port: the 555's supply [V], e.g. 5 or 3.3V (default 5); with --r."),
-    r_f: float = typer.Option(None, "--r-f", parser=ohms, metavar="RESISTANCE", help="--port: the op-amp readout's feedback resistor R_F [Ω] (eq. 38), e.g. 20k; recorded with --drive, for calibrations on voltage_v."),
-    drive: float = typer.Option(None, "--drive", parser=volts, metavar="VOLTAGE", help="--port: the voltage driving the FSR at the op-amp's input [V] (default -5, the paper's); with --r-f."),
     seed: int = typer.Option(None, "--seed", help=SEED_HELP),
     corrupt: float = typer.Option("0", "--corrupt", parser=fraction, metavar="FRACTION", help="Virtual device (tests): " + CORRUPT_HELP[0].lower() + CORRUPT_HELP[1:]),
     drop: float = typer.Option("0", "--drop", parser=fraction, metavar="FRACTION", help="Virtual device (tests): " + DROP_HELP[0].lower() + DROP_HELP[1:]),
@@ -92,6 +46,7 @@ def acquire(
     hx711_rate: int = typer.Option(80, "--hx711-rate", help=RATE_HELP),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No live display (notices of gaps still go to stderr)."),
     json_out: bool = typer.Option(False, "--json", help='Print {"frames", "dropped", "duration_s", "file"} as JSON, "no_reference" (windows without a load-cell conversion) for a protocol-2 device, and "run_s" (the run\'s length on the device\'s clock) with --speed max.'),
+    meter: MeterCircuit = MeterCircuit(),
 ) -> None:
     """Record measurement windows (frequency, duty cycle, A0 voltage) from an fsrlab meter into a run file.
 
@@ -129,17 +84,7 @@ def acquire(
         if not 0 <= v <= 1:
             fail(f"must be in 0..1, got {v:g}", name)
     check_rate(hx711_rate)
-    given = {"--r": r, "--c-off": c_off, "--diode": diode, "--diode-drop": diode_drop, "--vcc": vcc, "--r-f": r_f,
-             "--drive": drive}
-    if virtual:
-        hardware_only = next((o for o, v in given.items() if o != "--c-off" and v not in (None, False)), None)
-        if hardware_only is not None:
-            fail("describes the meter on --port; the virtual meter's circuit is the paper's (R = 10 kΩ, D1, 5 V; "
-                 "its C_off with --c-off)", hardware_only)
-        c_off = 1e-9 if c_off is None else c_off
-        circuits: dict = {}
-    else:
-        circuits = _meter_circuits(given, range_)
+    circuits = meter.sidecar(range_, "--virtual" if virtual else None)
     sensor_meta, area_m2 = sensor_area(sensor, area)
     cal = loadcell_option(loadcell)
     check_out(out, overwrite, inputs=[loadcell])
@@ -147,6 +92,7 @@ def acquire(
     metadata: dict = {**circuits, **({"sensor": sensor_meta} if sensor_meta else {})}
     reference = health = None
     if virtual:
+        c_off = meter.virtual_c_off_farad
         check_virtual(profile, peak, period, c_off, corrupt, drop, seed)
         device, source = make_virtual_device(profile, peak, period, c_off, seed, corrupt, drop, not no_loadcell,
                                              hx711_rate, area_m2, speed=speed)
@@ -187,9 +133,8 @@ def acquire(
             # says only why it failed: one line)
             print(f"fsrlab: warning: {out}: force_n is empty in every row: no --loadcell calibration was given "
                   "(the HX711's counts are in reference_raw; fsrlab loadcell tare/scale makes one)", file=sys.stderr)
-        if not virtual and "circuit" not in circuits and not result.failed:
-            print(f"fsrlab: warning: {out}: no circuit recorded (give the meter's --r, and --c-off, --diode, --vcc "
-                  "as built): calibrate and apply cannot refuse it as a run of another circuit", file=sys.stderr)
+        if not virtual and not result.failed and (note := meter.warning(out)):
+            warn([note])
     if result.failed:
         print(f"fsrlab: {plain_numbers(result.message)}", file=sys.stderr)
         raise typer.Exit(1)

@@ -9,15 +9,16 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli.options import (
-    Keyboard, LiveView, check_out, check_speed, checked, emit_json, fail, loadcell_option, mass_list, masses,
-    out_path, pascals,
-    plain_numbers, seconds, sensor_area, sigterm_as_interrupt, virtual_sensor_option, window_ms_option,
+    Keyboard, LiveView, MeterCircuit, check_out, check_speed, checked, emit_json, fail, loadcell_option, mass_list,
+    masses, meter_circuit_options, out_path, pascals, plain_numbers, seconds, sensor_area, sigterm_as_interrupt,
+    virtual_sensor_option, warn, window_ms_option,
 )
 
 _PROTOCOLS = ("spring", "weights", "creep")
 
 
 @app.command("bench")
+@meter_circuit_options()
 def bench(
     protocol: str = typer.Argument(..., metavar="PROTOCOL", help="spring (cycles 0 → peak → 0), weights (dead-weight re-placements, Tables 4/5) or creep (a held mass)."),
     virtual: bool = typer.Option(False, "--virtual", help="Run on the Python virtual device (a model of the meter on a pty); unattended."),
@@ -41,6 +42,7 @@ def bench(
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing run and its sidecar (weights: and its placements file), and write the --report into a directory that is not empty. An input is never replaced."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Virtual bench: do not print its steps (prompts for a person are always shown)."),
     json_out: bool = typer.Option(False, "--json", help='Print {"file", "frames", "dropped", "duration_s", "protocol", "device", "placements", "report"} as JSON.'),
+    meter: MeterCircuit = MeterCircuit(),
 ) -> None:
     """Run a bench protocol (spring cycles, dead-weight re-placements, a creep hold) into a run file.
 
@@ -48,14 +50,15 @@ def bench(
     (Figure 19, Table 3); weights: 0 → each of --masses → back to 0, --repeat times, each placement
     recorded once stable (Tables 4 and 5: RE1/RE2 from NAME.placements.csv); creep: --mass held for
     --hold. --virtual and --twin run unattended (the virtual bench applies the loads); with --port
-    you are prompted for each step (Enter to go on). Ctrl-C keeps the rows recorded. With --report
-    DIR the measurement report of the run follows (fsrlab report).
+    you are prompted for each step (Enter to go on), and the meter's circuit as built (--r, --c-off,
+    --diode, --vcc; --r-f, --drive) goes into the sidecar for calibrate and apply to compare. Ctrl-C
+    keeps the rows recorded. With --report DIR the measurement report of the run follows (fsrlab report).
 
     Examples:
 
     \b
       fsrlab bench spring --virtual --cycles 3 --period 3s --out spring.csv --report spring-report
-      fsrlab bench weights --port auto --sensor flexiforce-a201 --loadcell lc.json --repeat 5 --out weights.csv
+      fsrlab bench weights --port auto --r 10k --diode --sensor flexiforce-a201 --repeat 5 --out weights.csv
     """
     from fsrlab.bench.protocols import CreepPlan, SpringPlan, WeightsPlan, run_protocol, twin_status
     from fsrlab.acquisition.recorder import result_dict
@@ -103,6 +106,7 @@ def bench(
         ok, reason = twin_status()
         if not ok:
             fail(f"{reason}; use --virtual for the Python virtual device", "--twin")
+    circuits = meter.sidecar(0, None if port is not None else "--twin" if twin else "--virtual")  # on range 0
     area_m2 = None
     if (sensor or "").strip().lower() == "virtual-fsr" and port is not None:
         fail(f"{sensor!r} is a virtual sensor; with --port give a preset for the area (flexiforce-a201, "
@@ -144,7 +148,8 @@ def bench(
             run = run_protocol(plan, out, device=device, port=port, sensor=sensor_obj, area_m2=area_m2, seed=seed,
                                window_ms=window_ms, loadcell=cal, announce=announce, confirm=confirm,
                                overwrite=overwrite, settle={"hold_s": settle_hold} if protocol == "weights" else None,
-                               metadata={"sensor": sensor_meta} if sensor_meta else None, on_status=view.update,
+                               metadata={**circuits, **({"sensor": sensor_meta} if sensor_meta else {})},
+                               on_status=view.update,
                                speed=speed)
     except KeyboardInterrupt:  # Ctrl-C before the recording began (while asked to start): nothing recorded
         raise typer.Abort() from None
@@ -171,6 +176,8 @@ def bench(
         typer.echo(f"{out}: {protocol} on {run.device}, {result.frames} windows, {result.dropped} dropped, "
                    f"{result.duration_s:.1f} s" + (f"; per placement: {run.placements}" if run.placements else "")
                    + (f"; report: {report_index}" if report_index else ""))
+        if device == "port" and not result.failed and (note := meter.warning(out)):
+            warn([note])
     if result.failed:
         print(f"fsrlab: {plain_numbers(result.message)}", file=sys.stderr)
         raise typer.Exit(1)

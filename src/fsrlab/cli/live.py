@@ -9,22 +9,17 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli.options import (
-    AREA_HELP, LOADCELL_HELP, SENSOR_HELP, areas, check_virtual, fail, farads, load_frame_calibration,
-    loadcell_option, make_virtual_device, mass_list, meter_differences, out_path, pascals, seconds, sensor_area,
-    virtual_bench, window_ms_option,
+    AREA_HELP, LOADCELL_HELP, SENSOR_HELP, MeterCircuit, areas, check_virtual, fail, load_frame_calibration,
+    loadcell_option, make_virtual_device, mass_list, meter_circuit_options, meter_differences, out_path, pascals,
+    refuse_other_meter, seconds, sensor_area, virtual_bench, warn, window_ms_option,
 )
 from fsrlab.io.jsonable import to_jsonable
 from fsrlab.units import STANDARD_GRAVITY
 
 
-def _refusal(cal, metadata: dict, range_: int) -> str | None:
-    """Why a calibration does not fit the meter it would be used with (circuit, range), or None
-    (:func:`fsrlab.calibration.apply.readout_differences`, the check of ``apply`` and ``measure``)."""
-    return "; ".join(meter_differences(cal, metadata, range_)) or None
-
-
-def _estimator(cal, area_m2: float | None):
-    """``row -> (estimate [N], uncertainty [N])`` by the calibration's causal estimator (compensation included)."""
+def _estimator(cal, area_m2: float | None, ranges: tuple[int, ...]):
+    """``row -> (estimate [N], uncertainty [N])`` by the calibration's causal estimator (compensation included),
+    NaN on a range not in ``ranges`` (those where the meter reads as the calibration's run did)."""
     import math
 
     from fsrlab.calibration.estimator import live_estimator
@@ -32,10 +27,8 @@ def _estimator(cal, area_m2: float | None):
     est = live_estimator(cal)
     scale = 1.0 if est.reference == "force_n" else (area_m2 or math.nan)  # stress → force
 
-    ranges = cal.recorded_with.ranges if cal.recorded_with is not None else None
-
     def step(row):
-        if ranges is not None and row.get("range") not in ranges:  # switched to a range it does not know
+        if row.get("range") not in ranges:  # switched to a range where the readout means another force
             return math.nan, math.nan
         x = row.get(est.x)
         t = row.get("time_s")  # the memory's creep ages by the row's time, not by the calibration's row step
@@ -53,6 +46,7 @@ def _json_line(obj) -> None:
 
 
 @app.command()
+@meter_circuit_options(virtual_c_off=True)
 def live(
     port: str = typer.Option(None, "--port", help="Serial port of the meter (/dev/ttyACM0, COM3, a pty) or 'auto'."),
     virtual: bool = typer.Option(False, "--virtual", help="Show a virtual device (pty, physics and 555 models) instead of hardware."),
@@ -67,7 +61,6 @@ def live(
     profile: str = typer.Option("triangle", "--profile", help="Virtual device: stress profile (triangle, sine, ...)."),
     peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS", help="Virtual device: peak stress [Pa], e.g. 50k."),
     period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="Virtual device: period of the profile [s], e.g. 4s."),
-    c_off: float = typer.Option("1n", "--c-off", parser=farads, metavar="CAPACITANCE", help="Virtual circuit: C_off [F], e.g. 1n."),
     seed: int = typer.Option(None, "--seed", help="Virtual device: random seed [1] (default: a fresh one)."),
     loadcell: Path = typer.Option(None, "--loadcell", help=LOADCELL_HELP),
     sensor: str = typer.Option(None, "--sensor", help=SENSOR_HELP),
@@ -77,6 +70,7 @@ def live(
     unload: bool = typer.Option(False, "--unload", help="Guided calibration: also unload in reverse (for hysteresis)."),
     unplug_after: int = typer.Option(None, "--unplug-after", help="Virtual device (tests): pull the cable after this many windows [1]."),
     json_out: bool = typer.Option(False, "--json", help='Print JSON lines: {"url", "token"} when the page is up, {"frames", "recorded", "state"} at the end.'),
+    meter: MeterCircuit = MeterCircuit(),
 ) -> None:
     """Serve the meter's front panel: frequency, duty cycle, op-amp voltage and the reference live, the
     loading/unloading loop, the link's health, and controls (recording, range, window).
@@ -84,13 +78,16 @@ def live(
     The page shows the latest window's numbers every 40 ms and redraws the plots every 100 ms
     (docs/live.md), and works offline (BokehJS comes with the bokeh package). It is
     served on 127.0.0.1 only unless --host names another interface; then every request needs the
-    token printed with the URL. One browser tab controls the meter; more tabs watch.
+    token printed with the URL. One browser tab controls the meter; more tabs watch. With --port, the
+    meter's circuit as built (--r with --c-off, --diode, --vcc; --r-f, --drive for the op-amp) goes into
+    the recordings' sidecars, and a --cal recorded with another circuit or range is refused (exit 2);
+    on a range switched to where it does not fit, the estimate is left blank.
 
     Examples:
 
     \b
       fsrlab live --virtual --out bench.csv --open
-      fsrlab live --port auto --cal cal.json --out run.csv
+      fsrlab live --port auto --r 10k --c-off 1n --diode --cal cal.json --out run.csv
       fsrlab live --virtual --host 0.0.0.0 --http-port 8080
     """
 
@@ -117,6 +114,7 @@ def live(
         except OutputError as exc:  # live has no --overwrite: it never replaces a run
             fail(exc.message.replace("pass --overwrite to replace it", "live never replaces a run: give a new name"),
                  "--out")
+    circuits = meter.sidecar(None, "--virtual" if virtual else None)  # the page may switch to either range
     sensor_meta, area_m2 = sensor_area(sensor, area)
     lc = loadcell_option(loadcell)
     calibration = load_frame_calibration(cal, "live") if cal is not None else None
@@ -126,7 +124,7 @@ def live(
     from fsrlab.live.session import LiveSession
 
     device, reference, health = None, None, None
-    metadata: dict = {"sensor": sensor_meta} if sensor_meta else {}
+    metadata: dict = {**circuits, **({"sensor": sensor_meta} if sensor_meta else {})}
     steps = None
     if masses is not None:
         from fsrlab.bench.weights import plan_steps
@@ -144,12 +142,13 @@ def live(
         steps = plan_steps(masses_kg, repeat, unload)
     place = None
     if virtual:
-        check_virtual(profile, peak, period, c_off, 0.0, 0.0, seed)
+        check_virtual(profile, peak, period, meter.virtual_c_off_farad, 0.0, 0.0, seed)
         if steps is not None:  # a virtual bench that places the masses of the plan
 
             device, source, place = virtual_bench(steps, seed, area_m2, STANDARD_GRAVITY)
         else:
-            device, source = make_virtual_device(profile, peak, period, c_off, seed, 0.0, 0.0, True, 80, area_m2)
+            device, source = make_virtual_device(profile, peak, period, meter.virtual_c_off_farad, seed, 0.0, 0.0, True,
+                                                 80, area_m2)
         if unplug_after is not None:
             if unplug_after < 1:
                 fail(f"must be >= 1 window, got {unplug_after}", "--unplug-after")
@@ -159,7 +158,6 @@ def live(
         if lc is None:
             lc = device.load_cell.calibration()
         area_m2 = source.sensor.area_m2
-        port = device.open()
         metadata = {"origin": "fsrlab live --virtual", **source.metadata(), **metadata}
         if steps is None:
             reference = lambda frame: device.reference(frame.seq)  # noqa: E731
@@ -168,13 +166,15 @@ def live(
                                           "gravity_m_s2": STANDARD_GRAVITY,
                                           "metadata": {"weights": {"masses_kg": [s.mass_kg for s in steps],
                                                                    "repeat": repeat, "unload": unload}}}
-    estimator, refusal = None, None
+    estimator = None
     if calibration is not None:
-        refusal = _refusal(calibration, metadata, range_)
-        if refusal:
-            print(f"fsrlab: {cal} refused: {refusal}; the page shows no estimate", file=sys.stderr)
-        else:
-            estimator = _estimator(calibration, area_m2)
+        refuse_other_meter(calibration, metadata, range_)  # before the device is opened
+        usable = tuple(r for r in (0, 1) if not meter_differences(calibration, metadata, r))
+        estimator = _estimator(calibration, area_m2, usable)
+    if virtual:
+        port = device.open()
+    elif (cal is not None or out is not None) and (note := meter.warning(out, cal)):
+        warn([note])
     try:
         link = SerialLink(port)
     except Exception as exc:  # noqa: BLE001 - one line: the port could not be opened
@@ -183,8 +183,6 @@ def live(
         fail(f"cannot open {port}: {exc}", "--port")
     session = LiveSession(link, window_ms=window_ms, range_=range_, reference=reference, loadcell=lc, area_m2=area_m2,
                           estimator=estimator, health=health, metadata=metadata, weights=weights)
-    if refusal:
-        session.status.events.append(f"calibration {cal} refused: {refusal}")
     session.start()
     controller = Controller(out)
     try:

@@ -11,9 +11,10 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli.options import (
-    AREA_HELP, LiveView, LOADCELL_HELP, PEAK_HELP, PERIOD_HELP, PROFILE_HELP, SENSOR_HELP, areas, check_out,
-    check_virtual, emit_json, fail, farads, fmt_value, load_frame_calibration, loadcell_option, make_virtual_device,
-    meter_differences, out_path, pascals, plain_numbers, seconds, sensor_area, sigterm_as_interrupt, window_ms_option,
+    AREA_HELP, LiveView, LOADCELL_HELP, PEAK_HELP, PERIOD_HELP, PROFILE_HELP, SENSOR_HELP, MeterCircuit, areas,
+    check_out, check_virtual, emit_json, fail, fmt_value, load_frame_calibration, loadcell_option, make_virtual_device,
+    meter_circuit_options, out_path, pascals, plain_numbers, refuse_other_meter, seconds, sensor_area,
+    sigterm_as_interrupt, warn, window_ms_option,
 )
 from fsrlab.units import STANDARD_GRAVITY
 
@@ -37,6 +38,7 @@ class _Live(LiveView):
 
 
 @app.command("measure")
+@meter_circuit_options(virtual_c_off=True)
 def measure(
     cal: Path = typer.Option(..., "--cal", metavar="CAL.json", help="Calibration JSON from fsrlab calibrate -o (readout -> stress_pa [Pa] or force_n [N])."),
     port: str = typer.Option(None, "--port", help="Serial port of the meter (/dev/ttyACM0, COM3, a pty) or 'auto'."),
@@ -51,10 +53,10 @@ def measure(
     profile: str = typer.Option("triangle", "--profile", help=PROFILE_HELP),
     peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS", help="Virtual device: " + PEAK_HELP[0].lower() + PEAK_HELP[1:]),
     period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="Virtual device: " + PERIOD_HELP[0].lower() + PERIOD_HELP[1:]),
-    c_off: float = typer.Option("1n", "--c-off", parser=farads, metavar="CAPACITANCE", help="Virtual circuit: C_off switched in by range 1 [F]: 1n, 470p."),
     seed: int = typer.Option(None, "--seed", help="Random seed of the virtual meter's noise (an integer)."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No live display."),
     json_out: bool = typer.Option(False, "--json", help='Print {"frames", "dropped", "duration_s", "file", "estimated", "out_of_range", "last"} as JSON (forces in N).'),
+    meter: MeterCircuit = MeterCircuit(),
 ) -> None:
     """Show the force live from a calibration (N and g; the load cell's reading beside it) and record it.
 
@@ -62,14 +64,16 @@ def measure(
     (stress_pa_estimate [Pa], force_n_estimate [N] when an area is known or the calibration gives
     force) and in_range (1 inside the calibrated readout range, 0 outside; no estimate beyond 10 %
     of the range's span, as fsrlab apply). Stress becomes force with --sensor, --area or the
-    virtual sensor's area.
+    virtual sensor's area. A calibration recorded with another circuit than the meter's (with --port
+    the one --r, --c-off, --diode, --vcc and --r-f, --drive describe, which the run's sidecar records)
+    or on range 1 only is refused (exit 2); without --r it cannot be checked (a warning).
 
     Examples (the first calibration, from a clone's examples/, was fitted on 0 to 50 kPa: the virtual
     meter's default --peak 50k stays in its range):
 
     \b
       fsrlab measure --virtual --cal examples/calibration.json --duration 10s -o live.csv
-      fsrlab measure --port auto --cal cal.json --sensor flexiforce-a201 --loadcell lc.json -o live.csv
+      fsrlab measure --port auto --r 10k --diode --cal cal.json --sensor flexiforce-a201 -o live.csv
     """
     from fsrlab.acquisition.recorder import record, result_dict
     from fsrlab.acquisition.serial_link import SerialLink
@@ -84,25 +88,25 @@ def measure(
         est = _estimator(calibration)
     except ValueError as exc:
         fail(f"{cal}: {exc}", "--cal")
+    circuits = meter.sidecar(0, "--virtual" if virtual else None)  # measure records on range 0
     sensor_meta, area_m2 = sensor_area(sensor, area)
     lc = loadcell_option(loadcell)
     check_out(out, overwrite, inputs=[cal, loadcell])
     device = None
-    metadata: dict = {"sensor": sensor_meta} if sensor_meta else {}
+    metadata: dict = {**circuits, **({"sensor": sensor_meta} if sensor_meta else {})}
     if virtual:
-        check_virtual(profile, peak, period, c_off, 0.0, 0.0, seed)
-        device, source = make_virtual_device(profile, peak, period, c_off, seed, 0.0, 0.0, True, 80, area_m2)
+        check_virtual(profile, peak, period, meter.virtual_c_off_farad, 0.0, 0.0, seed)
+        device, source = make_virtual_device(profile, peak, period, meter.virtual_c_off_farad, seed, 0.0, 0.0, True, 80,
+                                             area_m2)
         if lc is None:
             lc = device.load_cell.calibration()
-        port = device.open()
         metadata = {"origin": "fsrlab measure --virtual", **source.metadata(), **metadata}
         area_m2 = source.sensor.area_m2
-    differences = meter_differences(calibration, metadata, 0)  # measure records on range 0
-    if differences:
-        if device is not None:
-            device.close()
-        fail(f"{differences[0]}: the readout means another stress there; calibrate on a run recorded the same way",
-             "--cal")
+    refuse_other_meter(calibration, metadata, 0)  # before the device is opened
+    if virtual:
+        port = device.open()
+    elif note := meter.warning(out, cal):
+        warn([note])
     ref = est.reference  # "stress_pa" or "force_n"
     to_force = (lambda v: v) if ref == "force_n" else ((lambda v: v * area_m2) if area_m2 else None)
     columns = [f"{ref}_estimate", "in_range"] + (["force_n_estimate"] if ref != "force_n" and to_force else [])

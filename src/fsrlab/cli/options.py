@@ -1,5 +1,6 @@
 """What the command modules share: option parsers, JSON output, one-line errors, and the options and helpers of
-the recording commands (sensor and area, load cell, virtual device, window, live view, run loading), and the output
+the recording commands (sensor and area, load cell, virtual device, window, live view, run loading, the meter's
+circuit on --port), and the output
 policy as the commands use it (``parser=out_path``, :func:`checked`, :func:`check_out`, the ``--overwrite`` help texts).
 
 A command module imports these from here, never another command module's names.
@@ -28,14 +29,13 @@ for --r: '1m' is ambiguous: ..."), exit code 2; none accepts ``nan`` or ``inf``:
 
 from __future__ import annotations
 
+import functools
+import inspect
 import json
 import math
-import queue
 import re
-import signal
-import sys
-import threading
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterator
 
@@ -279,23 +279,6 @@ def check_rate(rate: int) -> None:
         fail(f"must be 10 or 80 samples/s (the HX711's RATE pin), got {rate}", "--hx711-rate")
 
 
-@contextmanager
-def sigterm_as_interrupt():
-    """Let SIGTERM end a recording like Ctrl-C (file closed, device stopped)."""
-    def handler(signum, frame):  # noqa: ARG001
-        raise KeyboardInterrupt
-
-    try:
-        previous = signal.signal(signal.SIGTERM, handler)
-    except ValueError:  # not the main thread (e.g. called from a test thread): leave it
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-
-
 def check_virtual(profile: str, peak: float, period: float, c_off: float, corrupt: float, drop: float,
                    seed: int | None) -> None:
     """One-line errors, each naming its own option, for the virtual device's options."""
@@ -358,99 +341,7 @@ def window_ms_option(window_s: float) -> int:
 
 
 from fsrlab.cli.outputs import OVERWRITE_DIR_HELP, OVERWRITE_HELP, check_out, checked, out_path  # noqa: E402,F401
-
-
-def fmt_value(value: float, spec: str) -> str:
-    return "—" if value is None or not math.isfinite(value) else format(value, spec)
-
-
-class LiveView:
-    """Rich live table of the recording on stderr (frames/s, frequency, duty cycle, dropped), and notices."""
-
-    def __init__(self, enabled: bool, title: str) -> None:
-        from rich.console import Console
-
-        self.console = Console(stderr=True)
-        self.enabled = enabled and self.console.is_terminal
-        self.title = title
-        self.live = None
-
-    def __enter__(self) -> "LiveView":
-        if self.enabled:
-            from rich.live import Live
-
-            self.live = Live(self._render(None), console=self.console, transient=True, refresh_per_second=8)
-            self.live.__enter__()
-        return self
-
-    def _render(self, st):
-        from rich.table import Table
-
-        table = Table(title=self.title, show_header=True, header_style="bold")
-        for col in ("time (s)", "frames", "frames/s", "frequency (Hz)", "duty cycle (%)", "dropped", "corrupt", "resets"):
-            table.add_column(col, justify="right")
-        if st is not None:
-            table.add_row(f"{st.elapsed_s:.1f}", str(st.frames), f"{st.frames_per_s:.1f}", fmt_value(st.frequency_hz, ".1f"),
-                          fmt_value(st.duty_cycle * 100 if st.duty_cycle == st.duty_cycle else math.nan, ".2f"),
-                          str(st.dropped), str(st.bad_frames), str(st.resets))
-        return table
-
-    def update(self, st) -> None:
-        if self.live is not None:
-            self.live.update(self._render(st))
-
-    def notice(self, text: str) -> None:
-        """One line on stderr, above the live table when there is one (shown even with --quiet)."""
-        if self.live is not None:
-            self.console.print(f"fsrlab: {text}", markup=False, highlight=False)
-        else:
-            print(f"fsrlab: {text}", file=sys.stderr, flush=True)
-
-    def __exit__(self, *exc) -> None:
-        if self.live is not None:
-            self.live.__exit__(*exc)
-
-
-class Keyboard:
-    """The user's answers: lines typed on stdin, read by a daemon thread (the recording never waits on them)."""
-
-    def __init__(self) -> None:
-        self._lines: queue.Queue = queue.Queue()
-        self._eof_said = False
-        threading.Thread(target=self._read, name="fsrlab-weights-stdin", daemon=True).start()
-
-    def _read(self) -> None:
-        try:
-            for line in sys.stdin:
-                self._lines.put(line)
-        except (OSError, ValueError):  # no usable stdin (closed, or a test's captured one)
-            pass
-        self._lines.put(None)  # end of input: every later question is answered "ok"
-
-    def drain(self) -> None:
-        """Forget what was typed before the question."""
-        while True:
-            try:
-                if self._lines.get_nowait() is None:
-                    self._lines.put(None)
-                    return
-            except queue.Empty:
-                return
-
-    def answer(self) -> str | None:
-        """None (nothing typed yet), "skip" (s) or "ok" (anything else, or the end of the input)."""
-        try:
-            line = self._lines.get_nowait()
-        except queue.Empty:
-            return None
-        if line is None:
-            self._lines.put(None)
-            if not self._eof_said:
-                self._eof_said = True
-                print("fsrlab: standard input closed: every later step goes on without waiting for Enter",
-                      file=sys.stderr, flush=True)
-            return "ok"
-        return "skip" if line.strip().lower() in ("s", "skip") else "ok"
+from fsrlab.cli.console import Keyboard, LiveView, fmt_value, sigterm_as_interrupt  # noqa: E402,F401
 
 
 def virtual_bench(steps, seed: int | None, area_m2: float | None, gravity_m_s2: float):
@@ -573,3 +464,134 @@ def meter_differences(cal, metadata: dict, range_: int) -> list[str]:
     from fsrlab.calibration.provenance import recorded_with
 
     return readout_differences(cal, recorded_with(metadata, [range_]), "the meter has")
+
+
+def refuse_other_meter(cal, metadata: dict, range_: int) -> None:
+    """End the command with one line naming --cal (exit 2) where :func:`meter_differences` finds a difference."""
+    differences = meter_differences(cal, metadata, range_)
+    if differences:
+        fail(f"{differences[0]}: the readout means another stress there; calibrate on a run recorded the same way",
+             "--cal")
+
+
+# ------------------------------------------------------------------ the meter's circuit, as the user gives it
+
+# The options that describe a meter on --port: parameter, option, typer.Option's other arguments (--c-off's help
+# is the command's: see meter_circuit_options).
+_METER_OPTIONS = (
+    ("r", "--r", {"parser": ohms, "metavar": "RESISTANCE", "help": "--port: the meter's 555 R = R_A = R_B [Ω], e.g. 10k or 4k7; recorded in the sidecar with --c-off, --diode and --vcc, so that a calibration of another circuit is refused (without it the run records none and nothing can be checked)."}),
+    ("c_off", "--c-off", {"parser": farads, "metavar": "CAPACITANCE"}),
+    ("diode", "--diode", {"help": "--port: the meter's 555 has D1 in series with R_B (the paper's Fig. 16); with --r."}),
+    ("diode_drop", "--diode-drop", {"parser": volts, "metavar": "VOLTAGE", "help": "--port: D1's forward drop [V], e.g. 0.6 (implies --diode; default 0: ideal); with --r."}),
+    ("vcc", "--vcc", {"parser": volts, "metavar": "VOLTAGE", "help": "--port: the 555's supply [V], e.g. 5 or 3.3V (default 5); with --r."}),
+    ("r_f", "--r-f", {"parser": ohms, "metavar": "RESISTANCE", "help": "--port: the op-amp readout's feedback resistor R_F [Ω] (eq. 38), e.g. 20k; recorded with --drive, for calibrations on voltage_v."}),
+    ("drive", "--drive", {"parser": volts, "metavar": "VOLTAGE", "help": "--port: the voltage driving the FSR at the op-amp's input [V] (default -5, the paper's); with --r-f."}),
+)
+# The circuits' parameter names as options, for their messages.
+_CIRCUIT_NAMES = {"r_ohm": "--r", "c_off_farad": "--c-off", "diode_drop_v": "--diode-drop", "vcc_v": "--vcc"}
+_OPAMP_NAMES = {"r_f_ohm": "--r-f", "vcc_v": "--drive"}
+
+
+@dataclass(frozen=True)
+class MeterCircuit:
+    """The meter's circuit as the user gives it: --r, --c-off, --diode, --diode-drop, --vcc (the LM555's) and --r-f,
+    --drive (the op-amp readout's), None where not given; ``virtual_c_off``: the command's virtual meter takes
+    --c-off too. A command gets it from :func:`meter_circuit_options`."""
+
+    r: float | None = None
+    c_off: float | None = None
+    diode: bool = False
+    diode_drop: float | None = None
+    vcc: float | None = None
+    r_f: float | None = None
+    drive: float | None = None
+    virtual_c_off: bool = False
+
+    @property
+    def virtual_c_off_farad(self) -> float:
+        """The virtual meter's C_off [F]: --c-off, else the virtual circuit's (1 nF)."""
+        from fsrlab.virtual.sources import VIRTUAL_CIRCUIT
+
+        return VIRTUAL_CIRCUIT.c_off_farad if self.c_off is None else self.c_off
+
+    def sidecar(self, range_: int | None = 0, virtual: str | None = None) -> dict:
+        """The sidecar's ``circuit`` and ``opamp`` (``LM555Circuit.to_dict()``, ``OpAmpReadout.to_dict()``).
+
+        ``range_`` is the range the meter records on (None: either, the live page switches it); ``virtual`` the
+        option that chose a virtual meter (``"--virtual"``, ``"--twin"``; None: --port), whose circuit is the
+        paper's: nothing is returned, and any of these options but a virtual --c-off ends the command. Without
+        --r (--r-f) the LM555 (op-amp) is not described; a part given without it, or a range that switches C_off
+        in without --c-off, ends the command with one line naming the option (exit 2).
+        """
+        from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout
+
+        given = [option for name, option, _ in _METER_OPTIONS if getattr(self, name) not in (None, False)]
+        if virtual is not None:
+            stray = [o for o in given if not (o == "--c-off" and self.virtual_c_off)]
+            if stray:
+                fail("describes the meter on --port; the virtual meter's circuit is the paper's (R = 10 kΩ, D1, 5 V"
+                     + ("; its C_off with --c-off)" if self.virtual_c_off else ")"), stray[0])
+            return {}
+        stray = [o for o in given if o in ("--c-off", "--diode", "--diode-drop", "--vcc")] if self.r is None else []
+        if stray:
+            fail("describes the meter's 555 with its R: give --r too (e.g. --r 10k), so that the run records the "
+                 "circuit", stray[0])
+        if self.drive is not None and self.r_f is None:
+            fail("describes the op-amp readout with its R_F: give --r-f too (e.g. --r-f 20k)", "--drive")
+        if self.r is not None and self.c_off is None and range_ != 0:
+            fail(("--range 1 switches C_off in" if range_ == 1 else "the page's range switch puts C_off in")
+                 + ": give its value (e.g. --c-off 1n) so that the run records it", "--c-off")
+        if self.diode_drop is not None and not self.diode_drop >= 0:
+            fail(f"must be a forward drop >= 0 V, got {self.diode_drop:g}", "--diode-drop")
+        out: dict = {}
+        if self.r is not None:
+            with option_names(_CIRCUIT_NAMES):
+                out["circuit"] = LM555Circuit(
+                    r_ohm=self.r, c_off_farad=0.0 if self.c_off is None else self.c_off,
+                    diode=self.diode or self.diode_drop is not None, diode_drop_v=self.diode_drop or 0.0,
+                    vcc_v=5.0 if self.vcc is None else self.vcc).to_dict()
+        if self.r_f is not None:
+            with option_names(_OPAMP_NAMES):
+                out["opamp"] = OpAmpReadout(self.r_f, -5.0 if self.drive is None else self.drive).to_dict()
+        return out
+
+    def warning(self, out: Path | None = None, cal: Path | None = None) -> str | None:
+        """What a meter on --port described without --r says on stderr (None with --r): its run ``out`` records no
+        circuit, and the calibration ``cal`` cannot be checked against it."""
+        if self.r is not None:
+            return None
+        said = ((["calibrate and apply cannot refuse it as a run of another circuit"] if out is not None else [])
+                + ([f"{cal} cannot be checked against the meter's 555"] if cal is not None else []))
+        return (f"{out}: no circuit recorded" if out is not None else "no circuit given") + (
+            " (give the meter's --r, and --c-off, --diode, --vcc as built): " + ", and ".join(said))
+
+
+def meter_circuit_options(virtual_c_off: bool = False) -> Callable:
+    """Give a recording command, after its --port, the options that describe the meter's circuit (--r, --c-off,
+    --diode, --diode-drop, --vcc, --r-f, --drive); it receives them as one :class:`MeterCircuit`, ``meter``.
+
+    Use under ``@app.command``; ``virtual_c_off``: the command's virtual meter takes --c-off too (its C_off).
+    """
+    c_off_help = C_OFF_HELP[:-1] + (" (virtual: default 1n; --port: the meter's" if virtual_c_off else
+                                    " (--port: the meter's") + ", recorded with --r; needed with --r where range 1 is used)."
+
+    def decorate(command: Callable) -> Callable:
+        signature = inspect.signature(command)
+        own = [p for p in signature.parameters.values() if p.name != "meter"]
+        at = [p.name for p in own].index("port") + 1
+        added = [inspect.Parameter(name, inspect.Parameter.POSITIONAL_OR_KEYWORD, annotation=bool if name == "diode" else float,
+                                   default=typer.Option(False if name == "diode" else None, option,
+                                                        **{"help": c_off_help, **kwargs}))
+                 for name, option, kwargs in _METER_OPTIONS]
+
+        @functools.wraps(command)
+        def run(**kwargs):
+            meter = MeterCircuit(**{name: kwargs.pop(name) for name, _, _ in _METER_OPTIONS}, virtual_c_off=virtual_c_off)
+            return command(**kwargs, meter=meter)
+
+        # typer reads the options from the signature (the one given here) and their types from the annotations
+        run.__signature__ = signature.replace(parameters=own[:at] + added + own[at:])
+        run.__annotations__ = {k: v for k, v in command.__annotations__.items() if k != "meter"}
+        return run
+    return decorate
+

@@ -10,14 +10,15 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli.options import (
-    AREA_HELP, GRAVITY_HELP, Keyboard, SENSOR_HELP, areas, check_out, checked, emit_json, fail, fraction,
-    gravity_value, loadcell_option, mass_list, out_path, plain_numbers, seconds, sensor_area, sigterm_as_interrupt,
-    virtual_bench, window_ms_option,
+    AREA_HELP, GRAVITY_HELP, Keyboard, SENSOR_HELP, MeterCircuit, areas, check_out, checked, emit_json, fail, fraction,
+    gravity_value, loadcell_option, mass_list, meter_circuit_options, out_path, plain_numbers, seconds, sensor_area,
+    sigterm_as_interrupt, virtual_bench, warn, window_ms_option,
 )
 from fsrlab.io.outputs import write_text_atomic
 
 
 @app.command("weights")
+@meter_circuit_options()
 def weights(
     masses: str = typer.Option(..., "--masses", metavar="MASSES", help="Masses to place, increasing, comma-separated [kg]: 0,50g,100g,200g,500g (g, kg or mg; 0 needs no unit)."),
     port: str = typer.Option(None, "--port", help="Serial port of the meter (/dev/ttyACM0, COM3, a pty) or 'auto'."),
@@ -39,6 +40,7 @@ def weights(
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing run and its sidecar."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Virtual bench: do not print its steps (prompts for a person are always shown)."),
     json_out: bool = typer.Option(False, "--json", help='Print {"frames", "dropped", "duration_s", "file", "recorded", "skipped", "placements"} as JSON.'),
+    meter: MeterCircuit = MeterCircuit(),
 ) -> None:
     """Guided known-weight calibration: place each mass, wait until the reading is stable, record it.
 
@@ -49,13 +51,14 @@ def weights(
     force_n (m·g, or the load cell's with --loadcell; force_nominal_n keeps m·g), stress_pa (with
     an area: --sensor, --area or the virtual sensor), step, direction, cycle, and load (g), sensor,
     reading for fsrlab repeatability; NAME.placements.csv holds one mean reading per placement.
-    Ctrl-C keeps the rows recorded.
+    With --port the meter's circuit as built (--r, --c-off, --diode, --vcc; --r-f, --drive) goes into
+    the sidecar, for calibrate and apply to compare. Ctrl-C keeps the rows recorded.
 
     Examples:
 
     \b
       fsrlab weights --virtual --masses 0,100g,200g,400g --repeat 3 --unload --window 20ms --hold 200ms -o w.csv
-      fsrlab weights --port auto --masses 0,50g,100g,200g,500g --repeat 5 --unload --sensor flexiforce-a201 -o w.csv
+      fsrlab weights --port auto --r 10k --diode --masses 0,50g,100g,200g,500g --repeat 5 --unload -o w.csv
     """
     from fsrlab.acquisition.recorder import record, result_dict
     from fsrlab.acquisition.serial_link import SerialLink
@@ -85,6 +88,7 @@ def weights(
         fail(f"must be one window ({window_ms / 1000.0:g} s) to 1 h, got {hold:g} s", "--hold")
     if seed is not None and seed < 0:
         fail(f"must be an integer >= 0, got {seed}", "--seed")
+    circuits = meter.sidecar(0, "--virtual" if virtual else None)  # recorded on range 0
     sensor_meta, area_m2 = sensor_area(sensor, area)
     cal = loadcell_option(loadcell)
     check_out(out, overwrite, inputs=[loadcell])
@@ -92,7 +96,7 @@ def weights(
     steps = plan_steps(masses_kg, repeat, unload)
     stop = threading.Event()
     device = bench = None
-    metadata: dict = {"sensor": sensor_meta} if sensor_meta else {}
+    metadata: dict = {**circuits, **({"sensor": sensor_meta} if sensor_meta else {})}
     if virtual:
         device, bench, place = virtual_bench(steps, seed, area_m2, gravity)
         port = device.open()
@@ -158,6 +162,8 @@ def weights(
     else:
         typer.echo(f"{out}: {summary['recorded']} of {len(steps)} steps recorded ({summary['skipped']} skipped), "
                    f"{result.frames} windows; force_n: {force_source}; per placement: {placements}")
+        if not virtual and not result.failed and (note := meter.warning(out)):
+            warn([note])
     if result.failed:
         print(f"fsrlab: {plain_numbers(result.message)}", file=sys.stderr)
         raise typer.Exit(1)

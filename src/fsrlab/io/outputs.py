@@ -23,6 +23,8 @@ Every refusal is an :class:`OutputError`, a ``ValueError`` that names the option
 
 from __future__ import annotations
 
+import hashlib
+import json
 import os
 import secrets
 from contextlib import contextmanager
@@ -30,7 +32,7 @@ from pathlib import Path
 from typing import Iterable, Iterator
 
 __all__ = ["OutputError", "output_path", "check_output", "protected_paths", "same_file", "atomic_path",
-           "write_text_atomic", "atomic_run", "run_files"]
+           "write_text_atomic", "atomic_run", "replace_run", "run_files"]
 
 
 class OutputError(ValueError):
@@ -275,7 +277,8 @@ def write_text_atomic(path, text: str) -> Path:
 def atomic_run(path) -> Iterator[Path]:
     """:func:`atomic_path` for a run: the temporary ``NAME.csv`` and its sidecar both renamed at the end.
 
-    The CSV is renamed first, then the sidecar; each is whole under its final name at any moment.
+    Each is whole under its final name at any moment; the two are renamed by :func:`replace_run`, which
+    makes a stop between them detectable.
 
     Parameters
     ----------
@@ -291,8 +294,7 @@ def atomic_run(path) -> Iterator[Path]:
     tmp = final.with_name(f".{final.stem}.{os.getpid()}-{secrets.token_hex(4)}.partial.csv")
     try:
         yield tmp
-        for src, dst in zip(run_files(tmp), run_files(final)):
-            os.replace(src, dst)
+        replace_run(tmp, final)
     except BaseException:
         for f in run_files(tmp):
             try:
@@ -300,3 +302,33 @@ def atomic_run(path) -> Iterator[Path]:
             except OSError:
                 pass
         raise
+
+
+def replace_run(src, dst) -> None:
+    """Rename the complete run ``src`` (its CSV and sidecar) over ``dst``'s two files, the sidecar first.
+
+    Two renames are not one step. The sidecar is given the SHA-256 of the CSV it was written with
+    (``"csv_sha256"``) and renamed first, so a stop between the two (Ctrl-C, a kill, a full disk) leaves the
+    old CSV beside a sidecar that :func:`fsrlab.io.runformat.load_run` refuses as not its own. The other order
+    would leave the new CSV under the old sidecar (another run's circuit, calibration, units), which a reader
+    could not tell from one run where that sidecar names no content (a recording's).
+
+    Parameters
+    ----------
+    src : path-like
+        The run's CSV under its temporary name, its sidecar beside it.
+    dst : path-like
+        The run's CSV under its final name.
+    """
+    from fsrlab.io.schema import CSV_SHA256
+
+    csv, meta = run_files(src)
+    with open(csv, "rb") as fh:
+        digest = hashlib.file_digest(fh, "sha256").hexdigest()
+    doc = {**json.loads(meta.read_text(encoding="utf-8")), CSV_SHA256: digest}
+    with open(meta, "w", encoding="utf-8") as fh:  # a temporary name yet: rewritten in place
+        fh.write(json.dumps(doc, indent=2, allow_nan=False) + "\n")
+        fh.flush()
+        os.fsync(fh.fileno())
+    for s, d in reversed(list(zip(run_files(src), run_files(dst)))):
+        os.replace(s, d)

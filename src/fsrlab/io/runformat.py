@@ -13,6 +13,7 @@ reads a run back and rejects a bad file with one line naming the file, the row a
 from __future__ import annotations
 
 import csv
+import hashlib
 import json
 import math
 import os
@@ -23,7 +24,7 @@ from typing import Sequence
 import numpy as np
 
 from fsrlab.io.schema import (
-    FORMAT, KNOWN_COLUMNS, QUANTITY_COLUMNS, VERSION, RunFormatError, check_columns, sidecar_path, where,
+    CSV_SHA256, FORMAT, KNOWN_COLUMNS, QUANTITY_COLUMNS, VERSION, RunFormatError, check_columns, sidecar_path, where,
 )
 from fsrlab.io.shown import shown_list
 
@@ -298,7 +299,8 @@ def load_run(path: str | os.PathLike, require: Sequence[str] = (), skip_bad_rows
         infinite value, a value its column cannot hold (``1e308`` Hz, a duty cycle of 2, a
         ``direction`` other than -1, 0, +1, a ``range`` other than 0, 1: see
         :data:`fsrlab.io.runcells.COLUMN_LIMITS`), an empty ``time_s`` cell, ``time_s`` going
-        backwards; or a bad sidecar.
+        backwards; or a bad sidecar, or one written with another CSV (its ``"csv_sha256"``: a replacement
+        by :func:`~fsrlab.io.runwriter.write_run` interrupted between its two renames).
     OSError
         If the file cannot be read.
 
@@ -316,6 +318,11 @@ def load_run(path: str | os.PathLike, require: Sequence[str] = (), skip_bad_rows
     except UnicodeDecodeError as exc:
         raise RunFormatError(f"{p}: not UTF-8 text (byte {exc.start})") from None
     meta = _load_metadata(p)
+    if meta is not None and CSV_SHA256 in meta and meta[CSV_SHA256] != hashlib.sha256(raw).hexdigest():
+        raise RunFormatError(f"{p}: not the CSV its sidecar {sidecar_path(p).name} was written with (its "
+                             f"\"{CSV_SHA256}\" differs: the run's replacement was interrupted, or the CSV was changed "
+                             f"since); write the run again, or remove \"{CSV_SHA256}\" from the sidecar to read the "
+                             "two as one run")
     lines = text.splitlines()
     truncated = False
     if lines and not text.endswith(("\n", "\r")) and meta is not None and meta.get("complete") is False and len(lines) > 1:

@@ -19,7 +19,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from fsrlab.io.outputs import atomic_run
-from fsrlab.io.schema import FORMAT, KNOWN_COLUMNS, VERSION, check_columns, sidecar_path
+from fsrlab.io.schema import CSV_SHA256, FORMAT, KNOWN_COLUMNS, VERSION, check_columns, sidecar_path
 
 __all__ = ["RunWriter", "write_run"]
 
@@ -77,6 +77,7 @@ def _write_json_atomic(path: Path, obj: dict) -> None:
 
 def _build_metadata(columns: list[str], metadata: Mapping[str, Any] | None) -> dict:
     meta = dict(metadata or {})
+    meta.pop(CSV_SHA256, None)  # another CSV's (metadata taken from a run read); a run renamed into place gets its own
     units = {c: KNOWN_COLUMNS.get(c, "") for c in columns}
     units.update({k: str(v) for k, v in dict(meta.pop("units", {}) or {}).items() if k in units})
     out = {
@@ -254,9 +255,11 @@ def write_run(path: str | os.PathLike, columns: Mapping[str, Any], metadata: Map
               overwrite: bool = True) -> Path:
     """Write a whole run at once from column arrays.
 
-    Both files are written under temporary names beside the run and renamed over ``NAME.csv`` and then
-    ``NAME.meta.json`` at the end (:func:`fsrlab.io.outputs.atomic_run`): an interrupted write leaves
-    the old files (or none), never half of one, and no temporary file.
+    Both files are written under temporary names beside the run and renamed over ``NAME.meta.json`` and
+    then ``NAME.csv`` at the end (:func:`fsrlab.io.outputs.replace_run`): an interrupted write leaves the
+    old files (or none), never half of one, and no temporary file. The sidecar records the CSV's SHA-256
+    (``"csv_sha256"``), so a write interrupted between the two renames leaves the old CSV beside a sidecar
+    that :func:`~fsrlab.io.runformat.load_run` refuses as not its own, never a pair that passes for one run.
 
     Parameters
     ----------

@@ -14,8 +14,8 @@ from typing import Sequence
 from fsrlab.errors import FileFormatError
 from fsrlab.io.shown import shown, shown_list
 
-__all__ = ["FORMAT", "VERSION", "KNOWN_COLUMNS", "QUANTITY_COLUMNS", "RunFormatError", "check_columns", "sidecar_path",
-           "where"]
+__all__ = ["FORMAT", "VERSION", "KNOWN_COLUMNS", "QUANTITY_COLUMNS", "CSV_SHA256", "RunFormatError", "check_columns",
+           "sidecar_path", "where"]
 
 #: Value of the sidecar's ``"format"`` key.
 FORMAT = "fsrlab-run"
@@ -46,6 +46,10 @@ KNOWN_COLUMNS: dict[str, str] = {
 
 #: Readout quantities a calibration or a hysteresis error can be computed on.
 QUANTITY_COLUMNS = ("frequency_hz", "duty_cycle", "voltage_v")
+
+#: Sidecar key of a run written whole (:func:`fsrlab.io.runwriter.write_run`): the SHA-256 of its CSV's bytes
+#: (hex), by which :func:`fsrlab.io.runformat.load_run` tells the sidecar of another CSV from the CSV's own.
+CSV_SHA256 = "csv_sha256"
 
 
 class RunFormatError(FileFormatError):
