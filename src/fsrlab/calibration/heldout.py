@@ -160,7 +160,13 @@ def _rank_correlation(x: np.ndarray, y: np.ndarray) -> float:
 
 def orientation(recs: list[Recording]) -> tuple[int, float | None]:
     """+1 when the readout rises with the reference, −1 when it falls, and the ADC full scale of its counts
-    (None when it is not ADC counts); a reference or readout that does not change is refused."""
+    (None when it is not ADC counts); a reference or readout that does not change is refused.
+
+    Parameters
+    ----------
+    recs : list of Recording
+        The recordings, their usable rows taken together.
+    """
     x_all = np.concatenate([r.x[r.usable] for r in recs])
     y_all = np.concatenate([r.y[r.usable] for r in recs])
     if x_all.size > 2 and not np.ptp(y_all) > 0:
@@ -174,7 +180,17 @@ def orientation(recs: list[Recording]) -> tuple[int, float | None]:
 
 def readout_rail(recs: list[Recording], rail: float | None, adc: float | None) -> float | None:
     """The readout's full scale for the conductance variable: the one given (a divider's supply for
-    its voltage), else the ADC's found in the counts; None when neither (or readings beyond it)."""
+    its voltage), else the ADC's found in the counts; None when neither (or readings beyond it).
+
+    Parameters
+    ----------
+    recs : list of Recording
+        The recordings.
+    rail : float or None
+        A divider's supply for its voltage readout, when known. [unit of the readout]
+    adc : float or None
+        The ADC full scale found in the counts (:func:`orientation`). [counts]
+    """
     if rail is None:
         return adc
     top = max(float(np.nanmax(r.x)) for r in recs)

@@ -113,7 +113,21 @@ def bounded_fit(a: np.ndarray, y: np.ndarray, lower: np.ndarray, penalty: np.nda
 
 def bounded_solve(gram: np.ndarray, atb: np.ndarray, n: int, lower: np.ndarray,
                   penalty: np.ndarray | None = None) -> np.ndarray:
-    """:func:`bounded_fit` from its normal equations ``gram = aᵀa``, ``atb = aᵀy`` of ``n`` rows."""
+    """:func:`bounded_fit` from its normal equations.
+
+    Parameters
+    ----------
+    gram : ndarray, shape (k, k)
+        ``aᵀa``.
+    atb : ndarray, shape (k,)
+        ``aᵀy``.
+    n : int
+        Rows of ``a``. [1]
+    lower : ndarray, shape (k,)
+        Lower bound of each coefficient (``-inf``: free).
+    penalty : ndarray, shape (m, k), optional
+        Ridge rows.
+    """
     from scipy.optimize import lsq_linear
 
     scale = np.sqrt(np.diag(gram) / n)
@@ -302,8 +316,19 @@ class MonotoneSystem:
 
 def monotone_system(x, y, variable: str, segments: int, sign: int, adc: float | None,
                     extra: np.ndarray | None = None) -> MonotoneSystem:
-    """The :class:`MonotoneSystem` of readings ``x``, reference ``y`` and further columns ``extra`` (see
-    :func:`fit_monotone`)."""
+    """The :class:`MonotoneSystem` of readings, reference and further columns.
+
+    Parameters
+    ----------
+    x, y : array_like
+        Readings and reference, finite.
+    variable, sign, adc
+        See :func:`readout_variable`.
+    segments : int
+        Number of linear segments (knots at quantiles of the readings). [1]
+    extra : ndarray, shape (n, m), optional
+        Further columns (memory features) fitted with the curve.
+    """
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
     v = readout_variable(x, variable, sign, adc)
