@@ -247,3 +247,10 @@ def test_apply_never_replaces_an_existing_run_unless_asked(runs, tmp_path):
     assert out.read_bytes() == before
     assert run_cli(["apply", cal, runs / "other.csv", "-o", out, "--overwrite"])[0] == 0
     assert out.read_bytes() != before
+
+
+@pytest.mark.parametrize("args, word", [(["-00", "--bogus"], "-00"), (["bench", "-xq"], "-xq")])
+def test_an_unknown_cluster_of_short_options_names_the_word_given(args, word):
+    """click reports ``-00`` as ``No such option: -0``; the line names the word that was typed."""
+    code, _, err = run_cli(args)
+    assert code == 2 and err.count("\n") == 1 and repr(word) in err and "Traceback" not in err, err

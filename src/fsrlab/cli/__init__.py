@@ -317,6 +317,11 @@ def main(argv: list[str] | None = None) -> int:
             if message.strip() == "Missing command." and ctx is not None and hasattr(ctx.command, "list_commands"):
                 message = (f"{ctx.command_path}: missing command (argument COMMAND): one of "
                            f"{', '.join(ctx.command.list_commands(ctx))}")
+            opt = getattr(exc, "option_name", None)
+            if type(exc).__name__ == "NoSuchOption" and opt and opt not in args:
+                # a cluster of short options (``-00``) is reported by its first letter: name the word given
+                word = next((a for a in args if a.startswith(opt) and not a.startswith("--")), None)
+                message += f" (from {word!r}, read as one-letter options)" if word else ""
             print(f"fsrlab: error: {_one_line(message)}", file=sys.stderr)
             code = getattr(exc, "exit_code", 2)
     except (ValueError, OSError) as exc:
