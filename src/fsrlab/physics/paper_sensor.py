@@ -381,7 +381,7 @@ class PaperFSR:
         """A copy with some parameters changed (validated again)."""
         return replace(self, **changes)
 
-    def film_resistance(self, u_v, s_m, area_m2):
+    def film_resistance(self, u_v, s_m, area_m2, validate: bool = True):
         """Composite resistance ``n·R_A(u/n, s)/A`` (eqs. 16–18 per film, n films in series). [Ω]
 
         Parameters
@@ -392,9 +392,13 @@ class PaperFSR:
             Separation. [m]
         area_m2 : array_like
             Conductive area. [m²]
+        validate : bool
+            False skips the checks of u and s (:func:`fsrlab.physics.electrical.resistance_per_area`):
+            :meth:`respond` checks the separation once and calls this in its root finder's loop.
         """
         n = self.layers
-        return n * np.asarray(resistance_per_area(np.asarray(u_v, dtype=float) / n, s_m, self.phi0_j)) / area_m2
+        return n * np.asarray(resistance_per_area(np.asarray(u_v, dtype=float) / n, s_m, self.phi0_j,
+                                                  validate=validate)) / area_m2
 
     def respond(self, stress_pa, voltage_v: float = 2.5, time_s=None, stress_factor=1.0,
                 contact_factor=1.0, area_factor=1.0) -> PaperResponse:
@@ -437,8 +441,9 @@ class PaperFSR:
         area = np.broadcast_to(area, eff.shape)
         rc = contact_resistance(eff, self.contact_ohm, self.contact_stress_pa) * np.asarray(contact_factor, dtype=float)
         rc = np.broadcast_to(rc, eff.shape)
+        check_positive("s_m", s, "m")  # once: the root finder's u stays in (0, V]
         u, r = series_contact(np.full(eff.shape, float(voltage_v)), rc,
-                              lambda uu: self.film_resistance(uu, s, area))  # Fig. 3
+                              lambda uu: self.film_resistance(uu, s, area, validate=False))  # Fig. 3
         c = capacitance(self.layers * s, self.dielectric_ratio * area, self.eps_r) + self.parasitic_farad  # Eq. (14)
         return PaperResponse(stress_pa=sigma, separation_m=s, direction=hist.direction,
                              r_fsr_ohm=np.asarray(r, dtype=float), c_fsr_farad=np.asarray(c, dtype=float),
