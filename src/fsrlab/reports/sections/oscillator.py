@@ -10,15 +10,16 @@ This module draws and words them; the errata O1–O5 are worded in
 
 from __future__ import annotations
 
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import Future
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
 from fsrlab.circuits.decomposition import frequency_decomposition
 from fsrlab.circuits.lm555 import astable, duty_cycle_limits, minimum_n_ratio, sensitivity, tau_ratio
 from fsrlab.circuits.paper_ratio import (RatioMinimum, SimulatedRatios, TauRatioTable, minimum_eq32_as_printed,
-                                         n_where_ratio_equals, simulate_tau_ratios, tau_ratio_eq32_as_printed,
+                                         n_where_ratio_equals, start_tau_ratios, tau_ratio_eq32_as_printed,
                                          tau_ratio_eq37_as_printed, tau_ratio_table)
 from fsrlab.circuits.spice import ngspice_available
 from fsrlab.reference import paper_values
@@ -37,23 +38,22 @@ def _claims() -> dict:
     return {k: v for k, v in printed.items() if k != "note"}
 
 
-def _spice(diode: bool) -> SimulatedRatios | None:
-    return simulate_tau_ratios(N_TABLE, diode, R_OHM, C_FARAD) if ngspice_available() else None
+def _no_spice() -> tuple[None, None]:
+    return None, None
 
 
-def _spice_both() -> tuple[SimulatedRatios | None, SimulatedRatios | None]:
-    return _spice(False), _spice(True)
+def prefetch() -> Callable[[], tuple[SimulatedRatios | None, SimulatedRatios | None]]:
+    """Start the section's ngspice runs now and return what waits for them (see :func:`build`).
 
-
-def prefetch() -> Future:
-    """Start the section's ngspice runs in a background thread; :func:`build` takes the future.
-
-    The runs are separate processes, so they go on while the other sections draw their figures.
+    The runs are processes started at once (the longest first, no thread yet:
+    :func:`fsrlab.circuits.paper_ratio.start_tau_ratios`), so they go on while the report imports and
+    draws the other sections; :func:`fsrlab.reports.paper.build_sections` calls the returned function in
+    a background thread and passes its future to :func:`build`.
     """
-    pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="fsrlab-spice")
-    future = pool.submit(_spice_both)
-    pool.shutdown(wait=False)
-    return future
+    if not ngspice_available():
+        return _no_spice
+    runs = start_tau_ratios(N_TABLE, (False, True), R_OHM, C_FARAD)
+    return lambda: tuple(runs.results())
 
 
 def _ratio_axes(ax, diode: bool, spice: SimulatedRatios | None, claims: dict, minimum: RatioMinimum) -> None:
@@ -240,20 +240,21 @@ def _intro() -> str:
 def build(outdir: Path, prefetched: Future | None = None) -> Section:
     """Build the oscillator section into ``outdir`` (PNGs) and return it.
 
-    ``prefetched`` is the future of :func:`prefetch` when the ngspice runs were started earlier.
+    ``prefetched``: the future of :func:`prefetch`'s function when the ngspice runs were started earlier
+    (without it they run now). The figures without simulator points are drawn before waiting for them.
     """
     outdir = Path(outdir)
     claims = _claims()
     table = tau_ratio_table(N_TABLE)
     minimum = minimum_eq32_as_printed()
     n_at_claim = n_where_ratio_equals(claims["min_tau_ratio_no_diode"])
-    spice_nd, spice_d = prefetched.result() if prefetched is not None else _spice_both()
     s20_nd = float(sensitivity(R_OHM, 20 * R_OHM, C_FARAD).r_fsr)
     s20 = float(sensitivity(R_OHM, 20 * R_OHM, C_FARAD, diode=True).r_fsr)
     stress_figure, fs = _stress_figure(outdir)
+    sensitivity_figure = _sensitivity_figure(outdir, s20_nd, s20)
+    spice_nd, spice_d = prefetched.result() if prefetched is not None else prefetch()()
     figures = [_ratio_figure(outdir, False, spice_nd, claims, minimum, table),
-               _ratio_figure(outdir, True, spice_d, claims, minimum, table),
-               _sensitivity_figure(outdir, s20_nd, s20), stress_figure]
+               _ratio_figure(outdir, True, spice_d, claims, minimum, table), sensitivity_figure, stress_figure]
     errata = oscillator_errata(table, minimum, n_at_claim, spice_nd, spice_d, R_OHM, C_FARAD)
     dc_inf_nd, dc_inf_d = duty_cycle_limits()[0], duty_cycle_limits(diode=True)[0]
     data = {"oscillator": {
