@@ -17,16 +17,27 @@ def preload() -> None:
     import matplotlib.pyplot  # noqa: F401
 
 
-def new_figure(width: float = 6.4, height: float = 4.2):
-    """Return ``(fig, ax)`` drawn with the Agg backend, no display needed."""
+def new_figure(width: float = 6.4, height: float = 4.2, ncols: int = 1, sharey: bool = False):
+    """Return ``(fig, ax)`` drawn with the Agg backend, no display needed; ``(fig, axes)`` for ``ncols`` > 1.
+
+    Parameters
+    ----------
+    width, height : float
+        Figure size. [in]
+    ncols : int
+        Panels side by side.
+    sharey : bool
+        The panels share their y axis.
+    """
     import matplotlib
 
     matplotlib.use("Agg", force=True)
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(width, height), dpi=110)
-    ax.grid(True, alpha=0.3)
-    return fig, ax
+    fig, axes = plt.subplots(1, ncols, figsize=(width, height), dpi=110, sharey=sharey)
+    for ax in axes if ncols > 1 else [axes]:
+        ax.grid(True, alpha=0.3)
+    return fig, axes
 
 
 #: Fixed margins of every report figure [in]: room for the tick labels and axis labels on the left and

@@ -103,11 +103,7 @@ def _ratio_figure(outdir: Path, diode: bool, spice: SimulatedRatios | None, clai
                   t: TauRatioTable) -> Figure:
     """Figure 12 (no diode) or 15 (D1): τH/τL versus N on the left, the duty cycle on the right."""
     name = "fig15_tau_ratio_diode.png" if diode else "fig12_tau_ratio_no_diode.png"
-    fig, _ = new_figure(11.0, 4.2)
-    fig.clf()
-    ax1, ax2 = fig.subplots(1, 2)
-    for ax in (ax1, ax2):
-        ax.grid(True, alpha=0.3)
+    fig, (ax1, ax2) = new_figure(11.0, 4.2, ncols=2)
     _ratio_axes(ax1, diode, spice, claims, minimum)
     _duty_axes(ax2, diode, spice, claims)
     save(fig, outdir / name)
@@ -182,13 +178,11 @@ def _stress_figure(outdir: Path) -> tuple[Figure, dict]:
     stress = np.linspace(0.0, 10e3, 101)  # the paper's Figure 17 range, 0–10 kPa
     resp = VirtualFSR().respond(stress)
     rf, cf = resp.r_fsr_ohm, resp.c_fsr_farad
-    fig, _ = new_figure(11.0, 4.2)
-    fig.clf()
+    fig, axes = new_figure(11.0, 4.2, ncols=2)
     out = {"stress_pa": [float(stress[0]), float(stress[-1])], "r_fsr_ohm": [float(rf[0]), float(rf[-1])],
            "c_fsr_farad": [float(cf[0]), float(cf[-1])]}
-    for ax, diode in zip(fig.subplots(1, 2), (True, False)):
+    for ax, diode in zip(axes, (True, False)):
         parts = frequency_decomposition(R_OHM, rf, cf, diode=diode)
-        ax.grid(True, alpha=0.3)
         ax.plot(stress / 1e3, parts.frequency_hz / 1e3, "k-", lw=2, label="f (R_FSR and C_FSR change)")
         ax.plot(stress / 1e3, parts.c_only_hz / 1e3, "C0--", label="only C_FSR changes")
         ax.plot(stress / 1e3, parts.r_only_hz / 1e3, "C1--", label="only R_FSR changes")
