@@ -34,3 +34,17 @@ def test_labels_titles_and_ticks_stay_inside_the_figure(panels, title_lines, sup
         assert axes[1].get_tightbbox(renderer).x0 > axes[0].get_window_extent(renderer).x1
     if suptitle:
         assert fig._suptitle.get_window_extent(renderer).y0 > max(a.get_tightbbox(renderer).y1 for a in axes)
+
+
+def test_plain_log_labels_name_the_decades_without_mathtext():
+    # Reference: the decade values themselves; the labels are plain text (no "$...$" for mathtext to parse).
+    from fsrlab.reports.figures import plain_log_labels
+
+    fig, ax = new_figure()
+    ax.semilogx([4.0, 1e4], [0.0, 1.0])
+    plain_log_labels(ax.xaxis)
+    fig.canvas.draw()
+    lo, hi = ax.get_xlim()
+    shown = [(t.get_position()[0], t.get_text()) for t in ax.get_xticklabels() if lo <= t.get_position()[0] <= hi]
+    assert [text for _, text in shown] == ["10", "100", "1000", "10000"]
+    assert all(float(text) == x for x, text in shown)

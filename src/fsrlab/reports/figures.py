@@ -40,6 +40,22 @@ def new_figure(width: float = 6.4, height: float = 4.2, ncols: int = 1, sharey: 
     return fig, axes
 
 
+def plain_log_labels(axis) -> None:
+    """Label a logarithmic axis's decades as plain numbers (10, 100, 1000), not as powers (10², by mathtext).
+
+    The same ticks and values; mathtext's parser costs about 0.15 s to build in each process and a few
+    milliseconds per label in each figure (its cache belongs to the figure's renderer).
+
+    Parameters
+    ----------
+    axis : matplotlib.axis.Axis
+        E.g. ``ax.xaxis`` after ``ax.semilogx(...)``.
+    """
+    from matplotlib.ticker import LogFormatter
+
+    axis.set_major_formatter(LogFormatter())
+
+
 #: Fixed margins of every report figure [in]: room for the tick labels and axis labels on the left and
 #: bottom, an axes title on top (more with a figure title), and the gap between side-by-side panels.
 MARGINS_IN = {"left": 0.85, "right": 0.2, "bottom": 0.6, "top": 0.15, "title_line": 0.22, "suptitle": 0.3, "gap": 0.85}

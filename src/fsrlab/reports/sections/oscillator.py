@@ -23,7 +23,7 @@ from fsrlab.circuits.paper_ratio import (RatioMinimum, SimulatedRatios, TauRatio
                                          tau_ratio_eq37_as_printed, tau_ratio_table)
 from fsrlab.circuits.spice import ngspice_available
 from fsrlab.reference import paper_values
-from fsrlab.reports.figures import new_figure, save
+from fsrlab.reports.figures import new_figure, plain_log_labels, save
 from fsrlab.reports.model import Figure, Section, Table
 from fsrlab.reports.sections._oscillator_errata import oscillator_errata
 
@@ -96,6 +96,7 @@ def _duty_axes(ax, diode: bool, spice: SimulatedRatios | None, claims: dict) -> 
         ax.semilogx(spice.n_ratio, 100 * np.array(spice.duty_cycle), "ko", ms=5, mfc="none", label="ngspice")
     ax.set(xlabel="N = R_FSR / R", ylabel="duty cycle (%)", ylim=(0, 101),
            title="duty cycle vs N" + (" with D1" if diode else " without diode"))
+    plain_log_labels(ax.xaxis)
     ax.legend(fontsize=7.5)
 
 
@@ -139,6 +140,7 @@ def _sensitivity_figure(outdir: Path, s20_nd: float, s20: float) -> Figure:
     ax.axhline(-1.0, color="0.4", ls=":", lw=1, label="∂ln f/∂ln C_FSR (C_off = 0)")
     ax.set(xlabel="N = R_FSR / R", ylabel="logarithmic sensitivity", ylim=(-1.5, 3.0),
            title="How resistive is the “capacitive” frequency? (extension)")
+    plain_log_labels(ax.xaxis)
     ax.legend(fontsize=8)
     save(fig, outdir / "oscillator_sensitivity.png")
     return Figure(
