@@ -203,6 +203,7 @@ def netlist(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: flo
         ".options reltol=1e-6 vntol=1e-9 abstol=1e-15",
         ".control",
         "set filetype=binary",
+        "set norefvalue",  # no time printed as it runs: ngspice reads the CPU clock at every point for it
         f"tran {t_max_step_s:.6g} {t_stop_s:.9g} 0 {t_max_step_s:.6g} uic",
         f"write {output_file} v(out) v(thr)",
         "quit",
