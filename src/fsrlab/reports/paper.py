@@ -22,7 +22,8 @@ from fsrlab.io.outputs import write_text_atomic
 from fsrlab.reports.html import render_html
 from fsrlab.reports.model import Section
 
-__all__ = ["SECTION_MODULES", "SIDE_SECTIONS", "EARLY_SECTIONS", "ReportResult", "build_sections", "write_report"]
+__all__ = ["SECTION_MODULES", "SIDE_SECTIONS", "EARLY_SECTIONS", "ReportResult", "build_sections", "write_report",
+           "ReportProcess", "start_report"]
 
 #: Section builders in report order. Add yours here.
 SECTION_MODULES = [
@@ -193,3 +194,69 @@ def write_report(outdir: str | Path, progress: Callable[[str], None] | None = No
     json_path = write_text_atomic(out / "paper.json", json.dumps(data, indent=2, allow_nan=False) + "\n")
     index = write_text_atomic(out / "index.html", render_html(sections, out))
     return ReportResult(index=index, json=json_path, sections=sections)
+
+
+class ReportProcess:
+    """:func:`write_report` under way in a Python process of its own (:func:`start_report`).
+
+    Parameters
+    ----------
+    outdir : str or Path
+        As for :func:`write_report`.
+    """
+
+    _CODE = ("import pickle, sys\n"
+             "from fsrlab.reports.paper import write_report\n"
+             "pickle.dump(write_report(sys.argv[1]), sys.stdout.buffer)\n")
+
+    def __init__(self, outdir: str | Path) -> None:
+        import subprocess
+        import sys
+
+        import fsrlab
+
+        env = dict(os.environ)
+        # The same fsrlab as this process's, wherever it was imported from.
+        root = str(Path(fsrlab.__file__).resolve().parents[1])
+        env["PYTHONPATH"] = os.pathsep.join([root, *filter(None, [env.get("PYTHONPATH")])])
+        self.outdir = Path(outdir)
+        self._proc = subprocess.Popen([sys.executable, "-c", self._CODE, str(self.outdir)], stdin=subprocess.DEVNULL,
+                                      stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+
+    def result(self) -> ReportResult:
+        """Wait for the report and return what :func:`write_report` returned in its process.
+
+        Raises
+        ------
+        RuntimeError
+            The report's process failed; the message carries the end of its error output.
+        """
+        out, err = self._proc.communicate()
+        if self._proc.returncode != 0:
+            tail = " | ".join(err.decode("utf-8", "replace").strip().splitlines()[-4:])
+            raise RuntimeError(f"the reproduction report ({self.outdir}) failed (exit {self._proc.returncode}): {tail}")
+        return pickle.loads(out)
+
+    def stop(self) -> None:
+        """End the report's process if it is still running (its files may be left half written)."""
+        if self._proc.poll() is None:
+            self._proc.kill()
+        self._proc.communicate()
+
+
+def start_report(outdir: str | Path) -> ReportProcess:
+    """Start :func:`write_report` in a Python process of its own and return at once.
+
+    Parameters
+    ----------
+    outdir : str or Path
+        As for :func:`write_report`.
+
+    Returns
+    -------
+    ReportProcess
+        ``.result()`` waits for it and returns its :class:`ReportResult`. A separate interpreter, not a
+        thread or a fork: it competes with nothing of this process for the interpreter lock, and it
+        inherits none of its open files (the demo draws the report while its last recording runs).
+    """
+    return ReportProcess(outdir)
