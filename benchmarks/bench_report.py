@@ -33,7 +33,7 @@ TITLE = "Reproduction report (`fsrlab paper`)"
 REPEAT = 5
 AIM_S = 3.5
 #: The peer: main before issue 25's report work (the commit the work started from).
-BASELINE = "f92aa4d"
+BASELINE = "4d6bbc7"
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
