@@ -139,6 +139,7 @@ def run() -> str:
 
     if not ngspice_available():
         return "ngspice is not installed (`make sysdeps`): not measured.\n"
+    load_before = " / ".join(f"{x:.1f}" for x in os.getloadavg())
     with tempfile.TemporaryDirectory(prefix="fsrlab-bench-report-") as tmp:
         tmp = Path(tmp)
         trees = {"baseline": _tree(BASELINE, tmp / "baseline"), "current": _tree(None, tmp / "current")}
@@ -169,8 +170,9 @@ def run() -> str:
         f"| this checkout | {_stats(wall['current'])} | {_stats(cpu['current'])} |\n\n"
         f"Median wall time {med_old / med_new:.2f}× shorter, median CPU time (all processes) "
         f"{statistics.median(cpu['baseline']) / statistics.median(cpu['current']):.2f}× less. "
-        f"Aim ≤ {AIM_S} s (median wall): **{met}** (load average {load} at the end, on this machine's cores shared "
-        "with other jobs). The report's numbers: `paper.json` "
+        f"Aim ≤ {AIM_S} s (median wall): **{met}** (load average {load_before} before the runs and {load} after "
+        "them, these runs included, on this machine's cores shared with other jobs). The report's numbers: "
+        "`paper.json` "
         + ("byte-identical to the baseline's" if same_json else "**differs** from the baseline's")
         + ", the HTML page's text (images left out) "
         + ("identical" if same_html else "**differs**") + ".\n\n"
