@@ -141,3 +141,36 @@ def test_an_interrupted_demo_leaves_the_old_runs_whole(tmp_path, monkeypatch):
     with pytest.raises(KeyboardInterrupt):
         run_chain(out, DemoSettings(cycles=1, period_s=1.0, repeat=2, speed="realtime"), device="virtual")
     assert tree() == before
+
+
+@pytest.mark.slow
+def test_demo_draws_the_reproduction_report_while_the_dead_weights_are_recorded(tmp_path, monkeypatch):
+    # The report starts in its own process once the spring runs are in (before the dead weights end) and is
+    # linked from the index; a chain that fails after that start leaves no report process running.
+    import fsrlab.reports.paper as paper
+
+    started = []
+    real = paper.start_report
+
+    def spy(outdir):
+        started.append(real(outdir))
+        return started[-1]
+
+    monkeypatch.setattr(paper, "start_report", spy)
+    lines = []
+    res = run_demo(tmp_path / "demo", SHORT, device="virtual", progress=lines.append)
+    assert len(started) == 1 and (tmp_path / "demo" / "paper" / "paper.json").is_file()
+    assert "paper/index.html" in res.index.read_text()
+    numbered = [ln for ln in lines if ln.startswith("[")]
+    assert [ln.split("]")[0] for ln in numbered] == [f"[{k}/7" for k in range(1, 8)]
+    assert "drawn while the dead weights were recorded" in numbered[5]
+
+    import fsrlab.reports.run_report as run_report
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("measurement report: cannot")
+
+    monkeypatch.setattr(run_report, "write_run_report", broken)
+    with pytest.raises(RuntimeError, match="cannot"):
+        run_demo(tmp_path / "again", SHORT, device="virtual")
+    assert len(started) == 2 and started[-1]._proc.poll() is not None

@@ -121,3 +121,14 @@ def test_ngspice_agrees_with_the_corrected_ratios():
         sim = simulate_tau_ratios(n, diode)
         np.testing.assert_allclose(sim.tau_ratio, tau_ratio(np.array(n), diode=diode), rtol=1e-3)
         assert sim.to_dict()["N"] == n
+
+
+def test_started_variants_give_the_numbers_of_one_variant_at_a_time():
+    # start_tau_ratios (both variants in one batch of ngspice runs, the report's prefetch) against
+    # simulate_tau_ratios for each variant alone: the same numbers, in the order of ``diodes``.
+    from fsrlab.circuits.paper_ratio import start_tau_ratios
+
+    require_tool("ngspice")
+    n = [5.0, 50.0]
+    together = start_tau_ratios(n, (True, False)).results()
+    assert together == [simulate_tau_ratios(n, True), simulate_tau_ratios(n, False)]

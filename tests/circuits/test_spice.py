@@ -175,3 +175,25 @@ def test_concurrent_runs_equal_sequential_runs():
     assert [t.duty_cycle for t in together] == [a.duty_cycle for a in alone]
     for t, c in zip(together, cases):  # in the order of the cases: each near its own closed form
         assert t.frequency_hz == pytest.approx(float(astable(**c).frequency_hz), rel=1e-3)
+
+
+def test_a_started_batch_runs_the_longest_first_and_starts_no_thread():
+    # start_spice_many returns with ngspice processes under way and no thread (a process may fork before
+    # results() is called); the first started is the run with the most time steps (with D1 at large N: a
+    # short charge phase sets the largest step, a long discharge the simulated time); results() gives the
+    # numbers of the runs one after another, in the order of the cases.
+    import threading
+
+    from fsrlab.circuits.spice import simulate_spice, start_spice_many
+
+    require_tool("ngspice")
+    cases = [{"r_ohm": 10e3, "r_fsr_ohm": n * 10e3, "c_fsr_farad": 1e-9, "diode": d}
+             for n, d in ((5, False), (60, True), (20, True), (80, False))]
+    threads = threading.active_count()
+    batch = start_spice_many(cases, jobs=2, periods=3)
+    assert threading.active_count() == threads
+    assert [i for i, _ in batch._first] == [1, 2]
+    got = batch.results()
+    alone = [simulate_spice(**c, periods=3) for c in cases]
+    assert [g.duty_cycle for g in got] == [a.duty_cycle for a in alone]
+    assert [g.frequency_hz for g in got] == [a.frequency_hz for a in alone]

@@ -175,3 +175,22 @@ def test_series_contact_stopping_early_is_bisection_bit_for_bit():
     calls[0] = 0
     u, r = series_contact(v, rc, film)
     assert np.array_equal(u, 0.5 * (lo + hi)) and calls[0] < 60
+
+
+def test_respond_many_gives_each_respond_to_the_bit():
+    # Reference: one respond call per request. The contact solve goes element by element, so solving the
+    # requests together (different voltages, histories, placement factors, creep) changes no number.
+    from fsrlab.physics.paper_sensor import paper_sensor
+
+    fsr = paper_sensor(1)
+    stress = np.array([0.0, 4e3, 9e3, 5e3, 0.0])
+    asked = [dict(stress_pa=stress, voltage_v=2.5), dict(stress_pa=stress, voltage_v=5.0),
+             dict(stress_pa=stress[:3], voltage_v=2.5, stress_factor=1.01, contact_factor=0.9, area_factor=1.1,
+                  time_s=np.array([0.0, 1.0, 5.0])),
+             dict(stress_pa=[], voltage_v=5.0)]
+    together = fsr.respond_many(asked)
+    assert len(together) == len(asked) and fsr.respond_many([]) == []
+    for got, a in zip(together, asked):
+        alone = fsr.respond(**a)
+        for name in ("r_fsr_ohm", "c_fsr_farad", "film_voltage_v", "contact_ohm", "area_m2", "separation_m"):
+            assert np.array_equal(getattr(got, name), getattr(alone, name)), name

@@ -105,3 +105,16 @@ def test_capacitance_per_area_closed_form_and_figure_8b_range():
 def test_bad_inputs_name_the_parameter(call, field):
     with pytest.raises(ValueError, match=field):
         call()
+
+
+def test_unvalidated_path_gives_the_same_numbers_to_the_bit():
+    # validate=False only skips the input checks (a root finder's inner loop): same numbers and regimes as
+    # the checked call, in one regime and with all three mixed in one array (eq. 10 at tiny u).
+    u = np.array([1e-4, 0.5e-3, 0.05, 0.2, 0.3, 1.0, 2.0, 3.0])
+    assert set(np.unique(tunneling_regime(u))) == {10, 11, 12}
+    s = np.linspace(3e-9, 5e-9, u.size)
+    for uu, ss in ((u, s), (u[5:], s[5:]), (2.0, 4.2e-9)):
+        for call in (current_density, resistance_per_area):
+            a, ra = call(uu, ss, return_regime=True)
+            b, rb = call(uu, ss, return_regime=True, validate=False)
+            assert np.array_equal(a, b) and np.array_equal(ra, rb)

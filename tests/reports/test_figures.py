@@ -34,3 +34,59 @@ def test_labels_titles_and_ticks_stay_inside_the_figure(panels, title_lines, sup
         assert axes[1].get_tightbbox(renderer).x0 > axes[0].get_window_extent(renderer).x1
     if suptitle:
         assert fig._suptitle.get_window_extent(renderer).y0 > max(a.get_tightbbox(renderer).y1 for a in axes)
+
+
+def test_plain_log_labels_name_the_decades_without_mathtext():
+    # Reference: the decade values themselves; the labels are plain text (no "$...$" for mathtext to parse).
+    from fsrlab.reports.figures import plain_log_labels
+
+    fig, ax = new_figure()
+    ax.semilogx([4.0, 1e4], [0.0, 1.0])
+    plain_log_labels(ax.xaxis)
+    fig.canvas.draw()
+    lo, hi = ax.get_xlim()
+    shown = [(t.get_position()[0], t.get_text()) for t in ax.get_xticklabels() if lo <= t.get_position()[0] <= hi]
+    assert [text for _, text in shown] == ["10", "100", "1000", "10000"]
+    assert all(float(text) == x for x, text in shown)
+
+
+def _draw(kind: str, new, out):
+    # Figures that leave much behind on their axes: log scale, fixed limits, spans, lines, a legend, titles.
+    import numpy as np
+
+    from fsrlab.reports.figures import plain_log_labels, save
+
+    if kind == "log":
+        fig, ax = new()
+        ax.semilogx(np.geomspace(4, 1e4, 50), np.linspace(0, 1, 50), "C0-", label="a")
+        plain_log_labels(ax.xaxis)
+        ax.axhspan(0.2, 0.4, color="0.9")
+        ax.set(ylim=(-1, 2), xlabel="N", ylabel="DC", title="two\nlines")
+        ax.legend(fontsize=7)
+    elif kind == "two":
+        fig, axes = new(11.0, 4.2, ncols=2)
+        for k, ax in enumerate(axes):
+            ax.plot([0, 1, 2], [k, 3, 1], label=f"{k}")
+            ax.axvline(1.5, color="C3")
+            ax.set(title=f"panel {k}", xlim=(0, 3))
+            ax.legend()
+    else:
+        fig, ax = new()
+        for k in range(3):
+            ax.plot([0, 10, 20], [k, 2 * k, k * k])  # the colour cycle from its start
+        ax.set(xlabel="σ (kPa)", title="plain")
+    return save(fig, out / f"{kind}.png").read_bytes()
+
+
+def test_a_saved_figure_drawn_again_gives_the_png_of_a_new_one(tmp_path, monkeypatch):
+    # Reference: the same figures on new matplotlib figures (the pool of saved figures emptied each time).
+    import fsrlab.reports.figures as figures
+
+    order = ["log", "plain", "two", "plain", "log", "two", "plain"]
+    reused = [_draw(k, figures.new_figure, tmp_path) for k in order]
+
+    def fresh(*args, **kwargs):
+        figures._SAVED.clear()
+        return figures.new_figure(*args, **kwargs)
+
+    assert [_draw(k, fresh, tmp_path) for k in order] == reused

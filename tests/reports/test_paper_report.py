@@ -48,3 +48,14 @@ def test_index_is_self_contained_and_shows_both_values(report, paper):
     # The paper's Table 2 value beside ours (docs/errata.md P1: 1.47 % at 3 V).
     assert f"{paper['table2_hysteresis_error_percent']['resistance_per_area'][0]:.2f}" in html and "1.47" in html
     assert "Errata" in html and "P1" in html
+
+
+def test_report_in_a_process_of_its_own_writes_the_same_report(report, tmp_path):
+    # Reference: the report written in this process (the fixture). start_report builds it in another
+    # interpreter (the demo draws it while its last recording runs) and hands back the same result.
+    from fsrlab.reports.paper import start_report
+
+    result = start_report(tmp_path / "other").result()
+    assert result.json.read_bytes() == (report / "paper.json").read_bytes()
+    assert [s.key for s in result.sections] == ["physics", "oscillator", "measurements", "experiment"]
+    assert result.index == tmp_path / "other" / "index.html" and all(p.exists() for p in result.figures)

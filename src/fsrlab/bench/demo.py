@@ -187,7 +187,8 @@ class DemoChain:
 
 
 def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", total: int = 4,
-              say: Callable[[str], None] = lambda line: None) -> DemoChain:
+              say: Callable[[str], None] = lambda line: None,
+              after_spring: Callable[[], None] | None = None) -> DemoChain:
     """The demo's measurement chain: bench, spring and dead-weight runs, calibrations, the compensated estimate.
 
     Parameters
@@ -207,6 +208,9 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
         Number of steps the whole demo has (for the progress lines).
     say : callable
         ``say(line)``: what the demo does, step by step.
+    after_spring : callable, optional
+        Called once the two spring runs are recorded, while the dead weights may still be (the demo
+        starts its reproduction report there, so that it draws meanwhile).
 
     Returns
     -------
@@ -307,6 +311,8 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
                    settle={"hold_s": s.settle_hold_s}) if at_once else None
         r1, r2 = f1.result(), f2.result()
         done("spring runs", t0, f"{r1.result.frames} + {r2.result.frames} windows on the {bench} bench")
+        if after_spring is not None:
+            after_spring()
 
         # 2. Dead weights.
         t0 = step(f"dead weights: {', '.join(format(m * 1e3, 'g') + ' g' for m in weights.masses_kg)}, "

@@ -21,10 +21,9 @@ from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
 
 from fsrlab.circuits.lm555 import tau_ratio
-from fsrlab.circuits.spice import simulate_spice_many
+from fsrlab.circuits.spice import simulate_spice_many, start_spice_many
 
 __all__ = [
     "tau_ratio_eq32_as_printed",
@@ -37,6 +36,8 @@ __all__ = [
     "tau_ratio_table",
     "SimulatedRatios",
     "simulate_tau_ratios",
+    "TauRatioRuns",
+    "start_tau_ratios",
 ]
 
 
@@ -174,6 +175,8 @@ def minimum_eq32_as_printed(bounds: tuple[float, float] = (4.2, 20.0), xatol: fl
     lo, hi = bounds
     if not 4.0 < lo < hi:
         raise ValueError(f"bounds must satisfy 4 < low < high (the circuit oscillates for N > 4), got {bounds!r}")
+    from scipy.optimize import minimize_scalar  # here: importing the module (the report's ngspice start) stays light
+
     res = minimize_scalar(lambda x: float(tau_ratio_eq32_as_printed(x)), bounds=(lo, hi), method="bounded",
                           options={"xatol": xatol})
     return RatioMinimum(n_ratio=float(res.x), value=float(res.fun))
@@ -209,6 +212,8 @@ def n_where_ratio_equals(value: float) -> float:
     hi = 5.0
     while tau_ratio(hi) > value:
         hi = 4.0 + 2.0 * (hi - 4.0)
+    from scipy.optimize import brentq
+
     return float(brentq(lambda x: tau_ratio(x) - value, lo, hi))
 
 
@@ -306,6 +311,11 @@ class SimulatedRatios:
         return {"N": list(self.n_ratio), "tau_ratio": list(self.tau_ratio), "duty_cycle": list(self.duty_cycle)}
 
 
+def _simulated(n_ratio: Sequence[float], runs) -> SimulatedRatios:
+    dc = [s.duty_cycle for s in runs]
+    return SimulatedRatios(n_ratio=tuple(n_ratio), tau_ratio=tuple(d / (1 - d) for d in dc), duty_cycle=tuple(dc))
+
+
 def simulate_tau_ratios(n_ratio: Sequence[float], diode: bool, r_ohm: float = 10e3, c_farad: float = 1e-9,
                         periods: int = 5) -> SimulatedRatios:
     """τH/τL and duty cycle at each N by an independent simulator (ngspice, fsrlab's behavioural 555).
@@ -334,10 +344,58 @@ def simulate_tau_ratios(n_ratio: Sequence[float], diode: bool, r_ohm: float = 10
         As :func:`fsrlab.circuits.spice.simulate_spice` when ngspice is missing or fails; check
         :func:`fsrlab.circuits.spice.ngspice_available` first.
     """
-    ratio, dc = [], []
     runs = simulate_spice_many(({"r_ohm": r_ohm, "r_fsr_ohm": n * r_ohm, "c_fsr_farad": c_farad} for n in n_ratio),
                                diode=diode, periods=periods)
-    for s in runs:
-        ratio.append(s.duty_cycle / (1 - s.duty_cycle))
-        dc.append(s.duty_cycle)
-    return SimulatedRatios(n_ratio=tuple(n_ratio), tau_ratio=tuple(ratio), duty_cycle=tuple(dc))
+    return _simulated(n_ratio, runs)
+
+
+class TauRatioRuns:
+    """The ngspice runs of :func:`start_tau_ratios`, under way; :meth:`results` waits for them.
+
+    Parameters
+    ----------
+    n_ratio : sequence of float
+        N = R_FSR / R of each variant's runs. [1]
+    diodes : sequence of bool
+        The variants, in the order of the runs.
+    batch : fsrlab.circuits.spice.SpiceBatch
+        The runs: every N of the first variant, then of the next.
+    """
+
+    def __init__(self, n_ratio: Sequence[float], diodes: Sequence[bool], batch) -> None:
+        self.n_ratio, self.diodes, self._batch = tuple(n_ratio), tuple(diodes), batch
+
+    def results(self) -> list[SimulatedRatios]:
+        """One :class:`SimulatedRatios` per variant, in the order of ``diodes``; the numbers
+        :func:`simulate_tau_ratios` gives for each."""
+        runs, n = self._batch.results(), len(self.n_ratio)
+        return [_simulated(self.n_ratio, runs[k * n:(k + 1) * n]) for k in range(len(self.diodes))]
+
+
+def start_tau_ratios(n_ratio: Sequence[float], diodes: Sequence[bool] = (False, True), r_ohm: float = 10e3,
+                     c_farad: float = 1e-9, periods: int = 5) -> TauRatioRuns:
+    """Start the ngspice runs of :func:`simulate_tau_ratios` for several variants at once; return at once.
+
+    Parameters
+    ----------
+    n_ratio : sequence of float
+        N = R_FSR / R, each > 4. [1]
+    diodes : sequence of bool
+        The variants: without (False) and with (True) the ideal diode D1.
+    r_ohm, c_farad, periods
+        As in :func:`simulate_tau_ratios`. [Ω, F, -]
+
+    Returns
+    -------
+    TauRatioRuns
+        Every variant's runs share one :func:`fsrlab.circuits.spice.start_spice_many` batch, so the
+        longest of them all (with D1 at large N) starts first; ``.results()`` waits for them.
+
+    Raises
+    ------
+    FileNotFoundError
+        ngspice is not installed (:func:`fsrlab.circuits.spice.ngspice_available`).
+    """
+    cases = [{"r_ohm": r_ohm, "r_fsr_ohm": n * r_ohm, "c_fsr_farad": c_farad, "diode": bool(d)}
+             for d in diodes for n in n_ratio]
+    return TauRatioRuns(n_ratio, diodes, start_spice_many(cases, periods=periods))

@@ -36,6 +36,7 @@ import math
 import shutil
 import subprocess
 import tempfile
+import threading
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -46,7 +47,7 @@ from fsrlab.circuits.lm555 import astable
 from fsrlab.circuits.phases import timing_per_rc
 
 __all__ = ["SUBCKT_555", "SpiceResult", "netlist", "read_raw", "run_ngspice", "simulate_spice", "simulate_spice_many",
-           "ngspice_available",
+           "start_spice_many", "SpiceBatch", "ngspice_available",
            "edges_from_waveform", "level_crossings"]
 
 #: Control-voltage gain in front of the latch switches (see module docstring). [1]
@@ -202,6 +203,7 @@ def netlist(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: flo
         ".options reltol=1e-6 vntol=1e-9 abstol=1e-15",
         ".control",
         "set filetype=binary",
+        "set norefvalue",  # no time printed as it runs: ngspice reads the CPU clock at every point for it
         f"tran {t_max_step_s:.6g} {t_stop_s:.9g} 0 {t_max_step_s:.6g} uic",
         f"write {output_file} v(out) v(thr)",
         "quit",
@@ -251,6 +253,62 @@ def read_raw(data: bytes) -> np.ndarray:
     return np.frombuffer(body, dtype="<f8", count=nvars * npoints).reshape(npoints, nvars).copy()
 
 
+class _NgspiceRun:
+    """One ngspice process, started at once; :meth:`result` waits for it and reads its output.
+
+    The process runs in a temporary directory; its console output goes to a file there (not a pipe, so
+    no thread has to read it while it runs and a process forked meanwhile holds no end of it).
+    """
+
+    def __init__(self, text: str, output_file: str = "fsrlab_out.raw") -> None:
+        exe = shutil.which("ngspice")
+        if exe is None:
+            raise FileNotFoundError("ngspice is not installed (`make sysdeps` installs it)")
+        self._dir = tempfile.TemporaryDirectory(prefix="fsrlab-spice-")
+        self._tmp = Path(self._dir.name)
+        self.output_file = output_file
+        cir = self._tmp / "circuit.cir"
+        cir.write_text(text, encoding="ascii")
+        try:
+            with open(self._tmp / "ngspice.log", "wb") as log:
+                self._proc = subprocess.Popen([exe, "-b", str(cir)], cwd=self._tmp, stdin=subprocess.DEVNULL,
+                                              stdout=log, stderr=subprocess.STDOUT)
+        except BaseException:
+            self._dir.cleanup()
+            raise
+
+    def result(self, timeout_s: float = 300.0) -> np.ndarray:
+        """Wait for ngspice (at most ``timeout_s``, then stop it) and read its binary raw output.
+
+        Returns
+        -------
+        ndarray
+            The table (first column time), one row per time point.
+
+        Raises
+        ------
+        RuntimeError
+            ngspice failed or wrote no data; the message carries the end of its log.
+        subprocess.TimeoutExpired
+            It ran longer than ``timeout_s`` (it is stopped).
+        """
+        try:
+            try:
+                code = self._proc.wait(timeout=timeout_s)
+            except subprocess.TimeoutExpired:
+                self._proc.kill()
+                self._proc.wait()
+                raise
+            out = self._tmp / self.output_file
+            if code != 0 or not out.exists():
+                log = (self._tmp / "ngspice.log").read_text(encoding="utf-8", errors="replace")
+                tail = " | ".join(log.strip().splitlines()[-8:])
+                raise RuntimeError(f"ngspice failed (exit {code}): {tail}")
+            return read_raw(out.read_bytes())
+        finally:
+            self._dir.cleanup()
+
+
 def run_ngspice(text: str, output_file: str = "fsrlab_out.raw", timeout_s: float = 300.0) -> np.ndarray:
     """Run a netlist with ``ngspice -b`` in a temporary directory and read its binary raw output.
 
@@ -275,18 +333,7 @@ def run_ngspice(text: str, output_file: str = "fsrlab_out.raw", timeout_s: float
     RuntimeError
         ngspice failed or wrote no data; the message carries the end of its log.
     """
-    exe = shutil.which("ngspice")
-    if exe is None:
-        raise FileNotFoundError("ngspice is not installed (`make sysdeps` installs it)")
-    with tempfile.TemporaryDirectory(prefix="fsrlab-spice-") as tmp:
-        cir = Path(tmp) / "circuit.cir"
-        cir.write_text(text, encoding="ascii")
-        proc = subprocess.run([exe, "-b", str(cir)], cwd=tmp, capture_output=True, text=True, timeout=timeout_s)
-        out = Path(tmp) / output_file
-        if proc.returncode != 0 or not out.exists():
-            tail = " | ".join((proc.stdout + proc.stderr).strip().splitlines()[-8:])
-            raise RuntimeError(f"ngspice failed (exit {proc.returncode}): {tail}")
-        return read_raw(out.read_bytes())
+    return _NgspiceRun(text, output_file).result(timeout_s)
 
 
 def level_crossings(t_s, v_v, level_v: float, rising: bool) -> np.ndarray:
@@ -346,6 +393,59 @@ def edges_from_waveform(t_s, v_out_v, vcc_v: float = 5.0, skip_periods: int = 2)
     return rising, falling, periods / total, float(np.sum(falling - rising[:-1]) / total)
 
 
+@dataclass(frozen=True)
+class _Plan:
+    """One run of :func:`simulate_spice`: its netlist, how to measure it, and its expected work."""
+
+    text: str
+    periods: int
+    skip_periods: int
+    vcc_v: float
+    timeout_s: float
+    steps: float  # simulated time over the largest time step: the expected work of the run
+
+
+def _plan(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: float = 0.0,
+          diode: bool = False, diode_drop_v: float = 0.0, vcc_v: float = 5.0,
+          lower_fraction: float = 1 / 3, upper_fraction: float = 2 / 3, *, periods: int = 20,
+          skip_periods: int = 2, steps_per_phase: int = 50, timeout_s: float = 300.0,
+          discharge_ohm: float = 1e-3) -> _Plan:
+    """The netlist of :func:`simulate_spice`'s run (its parameters checked) and what measures it."""
+    if int(periods) < 1 or int(skip_periods) < 0 or int(steps_per_phase) < 10:
+        raise ValueError("periods >= 1, skip_periods >= 0 and steps_per_phase >= 10 are required")
+    est = astable(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction,
+                  upper_fraction, check=False)
+    period = float(est.period_s)
+    shortest = float(min(est.tau_high_s, est.tau_low_s))
+    if not math.isfinite(period):
+        # Does not oscillate by the closed form: simulate a few periods of the classic 555 with the same
+        # thresholds (R_FSR = ∞, no diode) and let ngspice show it.
+        th, tl = timing_per_rc(math.inf, vcc_v=vcc_v, lower_fraction=lower_fraction, upper_fraction=upper_fraction)
+        rc = r_ohm * (c_fsr_farad + c_off_farad)
+        period, shortest = float(th + tl) * rc, float(min(th, tl)) * rc
+    # Start-up from 0 V takes longer than a steady period; allow for it.
+    t_stop = period * (periods + skip_periods + 2)
+    t_max_step = shortest / steps_per_phase
+    text = netlist(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction,
+                   upper_fraction, t_stop_s=t_stop, t_max_step_s=t_max_step, discharge_ohm=discharge_ohm)
+    return _Plan(text=text, periods=int(periods), skip_periods=int(skip_periods), vcc_v=vcc_v,
+                 timeout_s=timeout_s, steps=t_stop / t_max_step)
+
+
+def _measured(plan: _Plan, data: np.ndarray) -> SpiceResult:
+    """Frequency and duty cycle of a run's output waveform (``data``: time, V(out), V(thr))."""
+    periods = plan.periods
+    rising, falling, f, dc = edges_from_waveform(data[:, 0], data[:, 1], plan.vcc_v, plan.skip_periods)
+    if rising.size > periods + 1:
+        rising = rising[: periods + 1]
+        falling = falling[falling < rising[-1]]
+        total = rising[-1] - rising[0]
+        f, dc = periods / total, float(np.sum(falling - rising[:-1]) / total)
+    n = max(rising.size - 1, 0) if math.isfinite(f) else 0
+    return SpiceResult(frequency_hz=f, duty_cycle=dc, rising_s=rising, falling_s=falling, n_periods=n,
+                       n_points=int(data.shape[0]), netlist=plan.text)
+
+
 def simulate_spice(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: float = 0.0,
                    diode: bool = False, diode_drop_v: float = 0.0, vcc_v: float = 5.0,
                    lower_fraction: float = 1 / 3, upper_fraction: float = 2 / 3, *, periods: int = 20,
@@ -375,33 +475,101 @@ def simulate_spice(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_far
     SpiceResult
         NaN frequency and duty cycle when no oscillation shows in the simulated time.
     """
-    if int(periods) < 1 or int(skip_periods) < 0 or int(steps_per_phase) < 10:
-        raise ValueError("periods >= 1, skip_periods >= 0 and steps_per_phase >= 10 are required")
-    est = astable(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction,
-                  upper_fraction, check=False)
-    period = float(est.period_s)
-    shortest = float(min(est.tau_high_s, est.tau_low_s))
-    if not math.isfinite(period):
-        # Does not oscillate by the closed form: simulate a few periods of the classic 555 with the same
-        # thresholds (R_FSR = ∞, no diode) and let ngspice show it.
-        th, tl = timing_per_rc(math.inf, vcc_v=vcc_v, lower_fraction=lower_fraction, upper_fraction=upper_fraction)
-        rc = r_ohm * (c_fsr_farad + c_off_farad)
-        period, shortest = float(th + tl) * rc, float(min(th, tl)) * rc
-    # Start-up from 0 V takes longer than a steady period; allow for it.
-    t_stop = period * (periods + skip_periods + 2)
-    text = netlist(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction,
-                   upper_fraction, t_stop_s=t_stop, t_max_step_s=shortest / steps_per_phase,
-                   discharge_ohm=discharge_ohm)
-    data = run_ngspice(text, timeout_s=timeout_s)
-    rising, falling, f, dc = edges_from_waveform(data[:, 0], data[:, 1], vcc_v, skip_periods)
-    if rising.size > periods + 1:
-        rising = rising[: periods + 1]
-        falling = falling[falling < rising[-1]]
-        total = rising[-1] - rising[0]
-        f, dc = periods / total, float(np.sum(falling - rising[:-1]) / total)
-    n = max(rising.size - 1, 0) if math.isfinite(f) else 0
-    return SpiceResult(frequency_hz=f, duty_cycle=dc, rising_s=rising, falling_s=falling, n_periods=n,
-                       n_points=int(data.shape[0]), netlist=text)
+    plan = _plan(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction,
+                 upper_fraction, periods=periods, skip_periods=skip_periods, steps_per_phase=steps_per_phase,
+                 timeout_s=timeout_s, discharge_ohm=discharge_ohm)
+    return _measured(plan, run_ngspice(plan.text, timeout_s=plan.timeout_s))
+
+
+class SpiceBatch:
+    """:func:`simulate_spice` runs started by :func:`start_spice_many`; :meth:`results` waits for them all.
+
+    Parameters
+    ----------
+    plans : list
+        The runs' netlists and measurement settings, in the order of the cases.
+    jobs : int
+        ngspice processes at a time (≥ 1); that many start at once, the longest first.
+    """
+
+    def __init__(self, plans: list, jobs: int) -> None:
+        self._plans = plans
+        self._queue = sorted(range(len(plans)), key=lambda i: -plans[i].steps)  # the longest first
+        self._lock = threading.Lock()
+        self._failed = False
+        self._first = [run for run in (self._start_next() for _ in range(min(jobs, len(plans)))) if run]
+
+    def _start_next(self):
+        with self._lock:
+            if self._failed or not self._queue:
+                return None
+            i = self._queue.pop(0)
+        return i, _NgspiceRun(self._plans[i].text)
+
+    def results(self) -> list[SpiceResult]:
+        """Wait for every run (starting the waiting ones as others end); the results in the order of the cases.
+
+        Returns
+        -------
+        list of SpiceResult
+            The same results as :func:`simulate_spice` gives for each case alone.
+
+        Raises
+        ------
+        RuntimeError, subprocess.TimeoutExpired
+            As :func:`simulate_spice`, for the first run that fails (no further run is started).
+        """
+        out: list = [None] * len(self._plans)
+
+        def work(item) -> None:
+            while item is not None:
+                i, run = item
+                try:
+                    out[i] = _measured(self._plans[i], run.result(self._plans[i].timeout_s))
+                except BaseException:
+                    self._failed = True
+                    raise
+                item = self._start_next()
+
+        if len(self._first) == 1:
+            work(self._first[0])
+        else:
+            from concurrent.futures import ThreadPoolExecutor
+
+            # Threads suffice: each waits on its ngspice process, which does the work.
+            with ThreadPoolExecutor(max_workers=len(self._first)) as pool:
+                for done in [pool.submit(work, item) for item in self._first]:
+                    done.result()
+        return out
+
+
+def start_spice_many(cases, jobs: int | None = None, **options) -> SpiceBatch:
+    """Start several :func:`simulate_spice` runs as ngspice processes and return at once.
+
+    Parameters
+    ----------
+    cases : iterable of dict
+        Keyword arguments of :func:`simulate_spice` for each run (``r_ohm``, ``r_fsr_ohm``, ...); all are
+        checked (and their netlists written) before any run starts.
+    jobs : int, optional
+        Processes at a time; by default the machine's cores (``os.cpu_count()``), the most that help:
+        each ngspice run is one busy process.
+    **options
+        Keywords common to every run (``periods``, ``steps_per_phase``, ...).
+
+    Returns
+    -------
+    SpiceBatch
+        The first ``jobs`` runs are under way when it returns, the longest first (the most time steps:
+        simulated time over the largest step), so that the last one to end is not a long one started
+        late; :meth:`SpiceBatch.results` starts the others as runs end and returns every result. No thread
+        runs until ``results`` is called (a process may fork meanwhile without inheriting one), and the
+        runs' console output goes to files, not pipes.
+    """
+    import os
+
+    plans = [_plan(**options, **dict(c)) for c in cases]
+    return SpiceBatch(plans, max(1, jobs if jobs is not None else (os.cpu_count() or 1)))
 
 
 def simulate_spice_many(cases, jobs: int | None = None, **options) -> list[SpiceResult]:
@@ -420,15 +588,10 @@ def simulate_spice_many(cases, jobs: int | None = None, **options) -> list[Spice
     Returns
     -------
     list of SpiceResult
-        In the order of ``cases``; the same results as running them one after another.
+        In the order of ``cases``; the same results as running them one after another. The longest
+        runs start first (:func:`start_spice_many`).
     """
-    import os
-    from concurrent.futures import ThreadPoolExecutor
-
     cases = [dict(c) for c in cases]
-    workers = max(1, min(len(cases), jobs if jobs is not None else (os.cpu_count() or 1)))
-    if workers == 1:
+    if jobs == 1 or len(cases) == 1:
         return [simulate_spice(**options, **c) for c in cases]
-    # Threads suffice: each waits on its ngspice process, which does the work.
-    with ThreadPoolExecutor(max_workers=workers) as pool:
-        return list(pool.map(lambda c: simulate_spice(**options, **c), cases))
+    return start_spice_many(cases, jobs, **options).results()

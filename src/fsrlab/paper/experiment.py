@@ -145,7 +145,8 @@ def dead_weights(sensor, mass_kg: float, placements: int = 5, load_area_m2: floa
     sensor : object
         A sensor with ``respond``; if it has ``placement(rng)`` (a
         :class:`~fsrlab.physics.paper_sensor.PaperFSR`), each placement draws its stress, contact
-        and area factors, and ``respond`` gets ``time_s`` for creep.
+        and area factors, and ``respond`` gets ``time_s`` for creep; with ``respond_many``, both
+        readouts' responses come from one call.
     mass_kg : float
         The dead weight. [kg]
     placements : int
@@ -183,8 +184,12 @@ def dead_weights(sensor, mass_kg: float, placements: int = 5, load_area_m2: floa
         kw = {}
         if hasattr(sensor, "placement"):
             kw = {"time_s": np.array([0.0, 0.0, t_read]), **sensor.placement(rng)}
-        r555 = sensor.respond(stress, voltage_v=circuit.fsr_voltage_v, **kw)
-        rop = sensor.respond(stress, voltage_v=opamp.fsr_voltage_v, **kw)
+        asked = [dict(stress_pa=stress, voltage_v=circuit.fsr_voltage_v, **kw),
+                 dict(stress_pa=stress, voltage_v=opamp.fsr_voltage_v, **kw)]
+        if hasattr(sensor, "respond_many"):  # both readouts in one solve (PaperFSR)
+            r555, rop = sensor.respond_many(asked)
+        else:
+            r555, rop = (sensor.respond(**a) for a in asked)
         osc = circuit.astable(r555.r_fsr_ohm[-1:], r555.c_fsr_farad[-1:])
         volts = opamp.output_v(rop.r_fsr_ohm[-1:])  # Eq. (38)
         # two windows: the first only opens a period after START, the second is the reading

@@ -194,8 +194,12 @@ def quick_response(sensor, points: int = 41, circuit: LM555Circuit = PAPER_CIRCU
 
     up = np.linspace(0.0, 10e3, points)
     stress = np.concatenate([up, up[::-1][1:]])
-    r5 = sensor.respond(stress, voltage_v=opamp.fsr_voltage_v)
-    r25 = sensor.respond(stress, voltage_v=circuit.fsr_voltage_v)
+    weights = {key: np.array([0.0, m * STANDARD_GRAVITY / DEAD_WEIGHT_AREA_M2])
+               for key, m in (("f200", 0.2), ("f400", 0.4))}
+    # Both readouts' cycles and the two weights in one contact solve: the numbers of one respond each.
+    r5, r25, *placed = sensor.respond_many(
+        [dict(stress_pa=stress, voltage_v=opamp.fsr_voltage_v), dict(stress_pa=stress, voltage_v=circuit.fsr_voltage_v),
+         *(dict(stress_pa=s, voltage_v=circuit.fsr_voltage_v) for s in weights.values())])
     f = circuit.astable(r25.r_fsr_ohm, r25.c_fsr_farad, check=False).frequency_hz
     v = opamp.output_v(r5.r_fsr_ohm)
     n = points
@@ -203,9 +207,7 @@ def quick_response(sensor, points: int = 41, circuit: LM555Circuit = PAPER_CIRCU
     for key, q in (("he_tm", v), ("he_pm", f)):
         he[key] = float(hysteresis_error(up, q[:n], up[::-1], q[n - 1:]).percent)
     out = {"f0": float(f[0]), "f10": float(f[n - 1]), "v0": float(v[0]), "v10": float(v[n - 1]), **he}
-    for key, m in (("f200", 0.2), ("f400", 0.4)):
-        s = np.array([0.0, m * STANDARD_GRAVITY / DEAD_WEIGHT_AREA_M2])
-        rr = sensor.respond(s, voltage_v=circuit.fsr_voltage_v)
+    for key, rr in zip(weights, placed):
         out[key] = float(circuit.astable(rr.r_fsr_ohm[-1], rr.c_fsr_farad[-1], check=False).frequency_hz)
     return out
 
@@ -408,16 +410,18 @@ def placement_sensitivities(sensor, mass_kg: float, circuit: LM555Circuit = PAPE
     from fsrlab.physics.paper_sensor import DEAD_WEIGHT_AREA_M2
 
     s = np.array([0.0, mass_kg * STANDARD_GRAVITY / DEAD_WEIGHT_AREA_M2])
+    up, dn = np.exp(step), np.exp(-step)
+    factors = [{k: x} for k in ("stress_factor", "contact_factor", "area_factor") for x in (up, dn)]
+    # Every perturbed placement through both readouts in one solve: the numbers of one respond each.
+    resp = iter(sensor.respond_many([dict(stress_pa=s, voltage_v=v, **kw) for kw in factors
+                                     for v in (circuit.fsr_voltage_v, opamp.fsr_voltage_v)]))
 
-    def readings(**kw):
-        r25 = sensor.respond(s, circuit.fsr_voltage_v, **kw)
-        r5 = sensor.respond(s, opamp.fsr_voltage_v, **kw)
+    def readings(r25, r5):
         f = circuit.astable(r25.r_fsr_ohm[-1], r25.c_fsr_farad[-1], check=False).frequency_hz
         return np.log([f, opamp.output_v(r5.r_fsr_ohm[-1])])
 
-    up, dn = np.exp(step), np.exp(-step)
-    cols = [(readings(**{k: up}) - readings(**{k: dn})) / (2 * step)
-            for k in ("stress_factor", "contact_factor", "area_factor")]
+    logs = [readings(next(resp), next(resp)) for _ in factors]
+    cols = [(logs[2 * j] - logs[2 * j + 1]) / (2 * step) for j in range(3)]
     return np.column_stack(cols)
 
 

@@ -23,6 +23,7 @@ def resistance_per_area(
     regime: str | int = "auto",
     return_regime: bool = False,
     small_u_fraction: float = SMALL_U_FRACTION,
+    validate: bool = True,
 ):
     """Resistance per unit area R_A = u / J of the composite.
 
@@ -41,6 +42,9 @@ def resistance_per_area(
         Also return the equation number of J used for each element.
     small_u_fraction : float
         Threshold of u ≈ 0 for ``"auto"``. [-]
+    validate : bool
+        False skips the checks of the inputs, as in
+        :func:`fsrlab.physics.tunneling.current_density`.
 
     Returns
     -------
@@ -59,7 +63,8 @@ def resistance_per_area(
     ----------
     Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901.
     """
-    j, which = current_density(u_v, s_m, phi0_j, regime, return_regime=True, small_u_fraction=small_u_fraction)
+    j, which = current_density(u_v, s_m, phi0_j, regime, return_regime=True, small_u_fraction=small_u_fraction,
+                               validate=validate)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         r = np.divide(np.asarray(u_v, dtype=float), j)  # Eqs. (16)-(18)
     r = float(r) if np.ndim(r) == 0 else r

@@ -381,7 +381,7 @@ class PaperFSR:
         """A copy with some parameters changed (validated again)."""
         return replace(self, **changes)
 
-    def film_resistance(self, u_v, s_m, area_m2):
+    def film_resistance(self, u_v, s_m, area_m2, validate: bool = True):
         """Composite resistance ``n·R_A(u/n, s)/A`` (eqs. 16–18 per film, n films in series). [Ω]
 
         Parameters
@@ -392,9 +392,13 @@ class PaperFSR:
             Separation. [m]
         area_m2 : array_like
             Conductive area. [m²]
+        validate : bool
+            False skips the checks of u and s (:func:`fsrlab.physics.electrical.resistance_per_area`):
+            :meth:`respond` checks the separation once and calls this in its root finder's loop.
         """
         n = self.layers
-        return n * np.asarray(resistance_per_area(np.asarray(u_v, dtype=float) / n, s_m, self.phi0_j)) / area_m2
+        return n * np.asarray(resistance_per_area(np.asarray(u_v, dtype=float) / n, s_m, self.phi0_j,
+                                                  validate=validate)) / area_m2
 
     def respond(self, stress_pa, voltage_v: float = 2.5, time_s=None, stress_factor=1.0,
                 contact_factor=1.0, area_factor=1.0) -> PaperResponse:
@@ -420,6 +424,41 @@ class PaperFSR:
         -------
         PaperResponse
         """
+        return self.respond_many([dict(stress_pa=stress_pa, voltage_v=voltage_v, time_s=time_s,
+                                       stress_factor=stress_factor, contact_factor=contact_factor,
+                                       area_factor=area_factor)])[0]
+
+    def respond_many(self, requests) -> list:
+        """:meth:`respond` for several requests at once, with one contact solve (Fig. 3) for all of them.
+
+        Parameters
+        ----------
+        requests : iterable of dict
+            Keyword arguments of :meth:`respond`, one dict per response (``stress_pa`` in each).
+
+        Returns
+        -------
+        list of PaperResponse
+            One per request, in order, with the numbers :meth:`respond` gives for each: the contact solve
+            (:func:`series_contact`) goes element by element, so solving the requests together only
+            shares its bisection steps (the readouts' two voltages, a placement's perturbations).
+        """
+        states = [self._state(**req) for req in requests]
+        if not states:
+            return []
+        s, area, rc, v = (np.concatenate([np.ravel(st[key]) for st in states]) for key in ("s", "area", "rc", "v"))
+        check_positive("s_m", s, "m")  # once: the root finder's u stays in (0, V]
+        u, r = series_contact(v, rc, lambda uu: self.film_resistance(uu, s, area, validate=False))  # Fig. 3
+        out, start = [], 0
+        for st in states:
+            stop = start + st["eff"].size
+            out.append(self._response(st, u[start:stop], r[start:stop]))
+            start = stop
+        return out
+
+    def _state(self, stress_pa, voltage_v: float = 2.5, time_s=None, stress_factor=1.0, contact_factor=1.0,
+               area_factor=1.0) -> dict:
+        """:meth:`respond` up to the contact solve: the checked inputs, separation, area and contact."""
         check_positive("voltage_v", voltage_v, "V")
         sigma = np.asarray(stress_pa, dtype=float).ravel()
         check_finite("stress_pa", sigma)
@@ -437,13 +476,16 @@ class PaperFSR:
         area = np.broadcast_to(area, eff.shape)
         rc = contact_resistance(eff, self.contact_ohm, self.contact_stress_pa) * np.asarray(contact_factor, dtype=float)
         rc = np.broadcast_to(rc, eff.shape)
-        u, r = series_contact(np.full(eff.shape, float(voltage_v)), rc,
-                              lambda uu: self.film_resistance(uu, s, area))  # Fig. 3
+        return {"sigma": sigma, "eff": eff, "hist": hist, "s": s, "area": area, "rc": rc,
+                "v": np.full(eff.shape, float(voltage_v))}
+
+    def _response(self, st: dict, u, r) -> PaperResponse:
+        s, area = st["s"], st["area"]
         c = capacitance(self.layers * s, self.dielectric_ratio * area, self.eps_r) + self.parasitic_farad  # Eq. (14)
-        return PaperResponse(stress_pa=sigma, separation_m=s, direction=hist.direction,
+        return PaperResponse(stress_pa=st["sigma"], separation_m=s, direction=st["hist"].direction,
                              r_fsr_ohm=np.asarray(r, dtype=float), c_fsr_farad=np.asarray(c, dtype=float),
-                             effective_stress_pa=eff, area_m2=np.asarray(area, dtype=float),
-                             film_voltage_v=np.asarray(u, dtype=float), contact_ohm=np.asarray(rc, dtype=float))
+                             effective_stress_pa=st["eff"], area_m2=np.asarray(area, dtype=float),
+                             film_voltage_v=np.asarray(u, dtype=float), contact_ohm=np.asarray(st["rc"], dtype=float))
 
     def force_to_stress(self, force_n):
         """Stress σ = F / A_FSR for force ``force_n`` [N]; returns [Pa]."""

@@ -55,10 +55,14 @@ def tunneling_regime(u_v, phi0_j: float = PAPER.phi0_j, small_u_fraction: float 
     check_positive("phi0_j", phi0_j, "J")
     if not 0 <= small_u_fraction < 1:
         raise ValueError(f"small_u_fraction must be in [0, 1), got {small_u_fraction!r}")
-    u = np.asarray(u_v, dtype=float)
-    eu = e * u
-    regime = np.where(eu > phi0_j, 12, np.where(eu <= small_u_fraction * phi0_j, 10, 11))
+    regime = _regime(np.asarray(u_v, dtype=float), phi0_j, small_u_fraction)
     return regime if regime.ndim else int(regime)
+
+
+def _regime(u, phi0_j: float, small_u_fraction: float):
+    """:func:`tunneling_regime` without its checks: an int array of 10, 11, 12 (0-d for a scalar)."""
+    eu = e * u
+    return np.where(eu > phi0_j, 12, np.where(eu <= small_u_fraction * phi0_j, 10, 11))
 
 
 def _eq10(u, s, phi0):
@@ -114,6 +118,7 @@ def current_density(
     regime: str | int = "auto",
     return_regime: bool = False,
     small_u_fraction: float = SMALL_U_FRACTION,
+    validate: bool = True,
 ):
     """Tunnelling current density J(u, s) across the polymer film between particles.
 
@@ -131,6 +136,11 @@ def current_density(
         Also return the equation number used for each element.
     small_u_fraction : float
         Threshold of u ≈ 0 for ``"auto"``, as a fraction of φ0/e. [-]
+    validate : bool
+        True (default): raise ``ValueError`` unless ``u_v``, ``s_m`` and ``phi0_j`` are finite and > 0
+        (and, with ``"auto"``, ``small_u_fraction`` is in [0, 1)). False: skip those checks, for a
+        caller that made them once before calling many times (a root finder's inner loop); the
+        numbers are the same.
 
     Returns
     -------
@@ -157,26 +167,29 @@ def current_density(
     Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901.
     Simmons, J. Appl. Phys. 34, 1793 (1963), doi:10.1063/1.1702682.
     """
-    check_positive("phi0_j", phi0_j, "J")
-    check_positive("u_v", u_v, "V")
-    check_positive("s_m", s_m, "m")
+    if validate:
+        check_positive("phi0_j", phi0_j, "J")
+        check_positive("u_v", u_v, "V")
+        check_positive("s_m", s_m, "m")
     u_in, s_in = np.asarray(u_v, dtype=float), np.asarray(s_m, dtype=float)
     if regime == "auto":
-        which_u = np.asarray(tunneling_regime(u_in, phi0_j, small_u_fraction))  # decided on u alone
+        if validate and not 0 <= small_u_fraction < 1:
+            raise ValueError(f"small_u_fraction must be in [0, 1), got {small_u_fraction!r}")
+        which_u = _regime(u_in, phi0_j, small_u_fraction)  # decided on u alone
     elif regime in (10, 11, 12):
         which_u = np.full(u_in.shape, int(regime))
     else:
         raise ValueError(f"regime must be 'auto', 10, 11 or 12, got {regime!r}")
     equations = {10: _eq10, 11: _eq11, 12: _eq12}
-    present = np.unique(which_u)
+    first = int(which_u.flat[0]) if which_u.size else 12
     with np.errstate(over="ignore", under="ignore", invalid="ignore", divide="ignore"):
-        if present.size == 1:  # the usual case: one regime, no masking
-            j = equations[int(present[0])](u_in, s_in, phi0_j)
+        if not which_u.size or bool(np.all(which_u == first)):  # the usual case: one regime, no masking
+            j = equations[first](u_in, s_in, phi0_j)
             which = np.broadcast_to(which_u, j.shape)
         else:
             u, s, which = np.broadcast_arrays(u_in, s_in, which_u)
             j = np.empty(u.shape)
-            for eq in present:
+            for eq in np.unique(which_u):
                 mask = which == eq
                 j[mask] = equations[int(eq)](u[mask], s[mask], phi0_j)
     j = np.asarray(j, dtype=float)

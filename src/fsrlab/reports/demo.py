@@ -5,13 +5,15 @@ dead-weight runs, the calibrations, the compensated estimate of the test run), t
 
 5. writes the measurement report of the test run (:func:`fsrlab.reports.run_report.write_run_report`)
    with the dead-weight run's placements;
-6. writes the reproduction report (:func:`fsrlab.reports.paper.write_report`);
+6. writes the reproduction report (:func:`fsrlab.reports.paper.write_report`), in a process of its own
+   started as soon as the spring runs are in: it draws while the dead weights are recorded;
 7. writes ``index.html`` linking both.
 """
 
 from __future__ import annotations
 
 import html
+import time
 from pathlib import Path
 from typing import Callable
 
@@ -51,10 +53,29 @@ def run_demo(out="demo", settings: DemoSettings = DemoSettings(), sensor=None, d
         A recording that failed (the message says which and why).
     """
     say = progress or (lambda line: None)
-    chain = run_chain(out, settings, sensor, device, 7 if paper else 6, say)
-    result, cal, sensor_text, s = chain.result, chain.calibration, chain.sensor_text, settings
+    started = []
+
+    def start_paper() -> None:
+        # The reproduction report needs nothing the chain records: its own process draws it while the last
+        # recording (the dead weights) runs and the calibration is fitted, on a core they leave free.
+        from fsrlab.reports.paper import start_report
+
+        started.append((start_report(Path(out) / "paper"), time.monotonic()))
+
+    try:
+        return _run_demo(run_chain(out, settings, sensor, device, 7 if paper else 6, say,
+                                   start_paper if paper else None), settings, paper, started)
+    except BaseException:
+        for report, _ in started:  # a failed chain: no report left running on its own
+            report.stop()
+        raise
+
+
+def _run_demo(chain, s: DemoSettings, paper: bool, started: list) -> DemoResult:
+    """Steps 5 to 7 of :func:`run_demo` after the chain."""
+    result, cal, sensor_text = chain.result, chain.calibration, chain.sensor_text
     step, done = chain.steps.step, chain.steps.done
-    out = Path(out)
+    out = result.index.parent
 
     # 5. Measurement report.
     from fsrlab.reports.run_report import write_run_report
@@ -72,14 +93,13 @@ def run_demo(out="demo", settings: DemoSettings = DemoSettings(), sensor=None, d
     done("measurement report", t0, f"HE f {fmt(hs.get('frequency_hz'))}, V0 {fmt(hs.get('voltage_v'))}, "
          f"estimate {fmt(result.numbers['he_estimate_percent'])}")
 
-    # 6. The reproduction report.
+    # 6. The reproduction report (started with the dead weights, in its own process).
     if paper:
-        from fsrlab.reports.paper import write_report
-
-        t0 = step("reproduction report of the paper (fsrlab paper)")
-        pr = write_report(out / "paper", progress=None)
+        t0 = step("reproduction report of the paper (fsrlab paper), drawn while the dead weights were recorded")
+        report, since = started[0]
+        pr = report.result()
         result.files["reproduction report"] = pr.index
-        done("reproduction report", t0, f"{len(pr.sections)} sections")
+        done("reproduction report", t0, f"{len(pr.sections)} sections, {time.monotonic() - since:.1f} s since it started")
 
     # 7. The index.
     t0 = step("index")

@@ -5,16 +5,91 @@ from __future__ import annotations
 from pathlib import Path
 
 
-def new_figure(width: float = 6.4, height: float = 4.2):
-    """Return ``(fig, ax)`` drawn with the Agg backend, no display needed."""
+def preload() -> None:
+    """Import matplotlib with the Agg backend, and pyplot, now.
+
+    The report imports them before it forks its second process (:func:`fsrlab.reports.paper.build_sections`),
+    which then shares them instead of importing them again (about half a second of CPU).
+    """
     import matplotlib
 
     matplotlib.use("Agg", force=True)
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot  # noqa: F401
 
-    fig, ax = plt.subplots(figsize=(width, height), dpi=110)
-    ax.grid(True, alpha=0.3)
-    return fig, ax
+
+#: Figures saved by :func:`save` and ready to be drawn again, by (width, height, ncols, sharey): drawing on
+#: a used figure keeps its axes and their tick objects, which a new figure would make again.
+_SAVED: dict = {}
+
+
+def new_figure(width: float = 6.4, height: float = 4.2, ncols: int = 1, sharey: bool = False):
+    """Return ``(fig, ax)`` drawn with the Agg backend, no display needed; ``(fig, axes)`` for ``ncols`` > 1.
+
+    A figure of the same layout that :func:`save` has saved is cleared and handed out again: its axes
+    and their tick objects stay (making them is about a fifth of a report figure's time), everything
+    drawn on them goes, and the PNGs are the same to the byte as from a new figure
+    (tests/reports/test_figures.py).
+
+    Parameters
+    ----------
+    width, height : float
+        Figure size. [in]
+    ncols : int
+        Panels side by side.
+    sharey : bool
+        The panels share their y axis.
+    """
+    key = (float(width), float(height), int(ncols), bool(sharey))
+    if _SAVED.get(key):
+        fig = _SAVED[key].pop()
+        for ax in fig.axes:
+            _clear(ax)
+    else:
+        import matplotlib
+
+        matplotlib.use("Agg", force=True)
+        import matplotlib.pyplot as plt
+
+        fig, _ = plt.subplots(1, ncols, figsize=(width, height), dpi=110, sharey=sharey)
+        fig._fsrlab_layout = key
+        for ax in fig.axes:
+            ax.grid(True, alpha=0.3)
+    return fig, (fig.axes if ncols > 1 else fig.axes[0])
+
+
+def _clear(ax) -> None:
+    """Everything drawn on ``ax`` removed and its settings back to a new axes' (the grid kept)."""
+    for artist in [*ax.lines, *ax.patches, *ax.collections, *ax.texts, *ax.images, *ax.tables, *ax.artists]:
+        artist.remove()
+    if ax.get_legend() is not None:
+        ax.get_legend().remove()
+    for loc in ("left", "center", "right"):
+        ax.set_title("", loc=loc)
+    ax.set_xlabel("")
+    ax.set_ylabel("")
+    ax.set_prop_cycle(None)
+    ax.set_xscale("linear")
+    ax.set_yscale("linear")
+    ax.ignore_existing_data_limits = True
+    ax.relim()
+    ax.set_autoscale_on(True)
+    ax.autoscale_view()
+
+
+def plain_log_labels(axis) -> None:
+    """Label a logarithmic axis's decades as plain numbers (10, 100, 1000), not as powers (10², by mathtext).
+
+    The same ticks and values; mathtext's parser costs about 0.15 s to build in each process and a few
+    milliseconds per label in each figure (its cache belongs to the figure's renderer).
+
+    Parameters
+    ----------
+    axis : matplotlib.axis.Axis
+        E.g. ``ax.xaxis`` after ``ax.semilogx(...)``.
+    """
+    from matplotlib.ticker import LogFormatter
+
+    axis.set_major_formatter(LogFormatter())
 
 
 #: Fixed margins of every report figure [in]: room for the tick labels and axis labels on the left and
@@ -41,19 +116,27 @@ def fixed_layout(fig) -> None:
 
 
 def save(fig, path: Path) -> Path:
-    """Save ``fig`` as PNG at ``path`` (fixed layout, :func:`fixed_layout`) and close it.
+    """Save ``fig`` as PNG at ``path`` (fixed layout, :func:`fixed_layout`); a figure of :func:`new_figure`
+    is kept to be drawn again, any other closed.
 
     Written under a temporary name and renamed (:func:`fsrlab.io.outputs.atomic_path`): an interrupted
     report leaves the old figure or the whole new one under ``path``, never half of one.
     """
-    import matplotlib.pyplot as plt
-
     from fsrlab.io.outputs import atomic_path
 
     fixed_layout(fig)
+    saved = False
     try:
         with atomic_path(path) as tmp:
-            fig.savefig(tmp, format="png")
+            # zlib level 3, not PIL's 6: the same pixels, about a third less time to compress, 3 % more bytes.
+            fig.savefig(tmp, format="png", pil_kwargs={"compress_level": 3})
+        saved = True
     finally:
-        plt.close(fig)
+        layout = getattr(fig, "_fsrlab_layout", None)
+        if saved and layout is not None and fig.get_suptitle() == "" and not fig.texts and not fig.legends:
+            _SAVED.setdefault(layout, []).append(fig)
+        else:
+            import matplotlib.pyplot as plt
+
+            plt.close(fig)
     return path

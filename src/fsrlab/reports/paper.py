@@ -12,6 +12,7 @@ import importlib
 import json
 import os
 import pickle
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Callable
@@ -21,7 +22,8 @@ from fsrlab.io.outputs import write_text_atomic
 from fsrlab.reports.html import render_html
 from fsrlab.reports.model import Section
 
-__all__ = ["SECTION_MODULES", "SIDE_SECTIONS", "ReportResult", "build_sections", "write_report"]
+__all__ = ["SECTION_MODULES", "SIDE_SECTIONS", "EARLY_SECTIONS", "ReportResult", "build_sections", "write_report",
+           "ReportProcess", "start_report"]
 
 #: Section builders in report order. Add yours here.
 SECTION_MODULES = [
@@ -34,6 +36,9 @@ SECTION_MODULES = [
 #: Sections built in a second process (forked) on a machine with more than one core, while this one builds
 #: the others and ngspice runs: about half of the drawing and computing each (docs/performance.md).
 SIDE_SECTIONS = ("fsrlab.reports.sections.physics", "fsrlab.reports.sections.measurements")
+
+#: Sections imported before the others, so that their ``prefetch`` (ngspice) starts before the rest imports.
+EARLY_SECTIONS = ("fsrlab.reports.sections.oscillator",)
 
 
 @dataclass
@@ -123,13 +128,27 @@ def build_sections(outdir: Path, progress: Callable[[str], None] | None = None,
     list of Section
         In the order of :data:`SECTION_MODULES`, whichever process built them.
     """
-    modules = [importlib.import_module(name) for name in SECTION_MODULES]
     if parallel is None:
         parallel = hasattr(os, "fork") and (os.cpu_count() or 1) > 1
-    side = _Side([m.__name__ for m in modules if parallel and m.__name__ in SIDE_SECTIONS
-                  and not hasattr(m, "prefetch")], outdir)  # forked before any thread starts
-    # Slow external work (ngspice) starts first and runs while the other sections draw.
-    started = {m.__name__: m.prefetch() for m in modules if hasattr(m, "prefetch")}
+    # Slow external work (ngspice processes, no thread yet) starts first and goes on while the other
+    # sections import and draw: the sections with a prefetch are imported first.
+    started, modules = {}, {}
+    for name in sorted(SECTION_MODULES, key=lambda n: n not in EARLY_SECTIONS):
+        modules[name] = module = importlib.import_module(name)
+        if hasattr(module, "prefetch"):
+            started[name] = module.prefetch()
+    modules = [modules[name] for name in SECTION_MODULES]
+    side_names = [m.__name__ for m in modules if parallel and m.__name__ in SIDE_SECTIONS and m.__name__ not in started]
+    if side_names:
+        from fsrlab.reports.figures import preload
+
+        preload()  # matplotlib, imported once for both processes
+    side = _Side(side_names, outdir)  # forked before this function starts a thread
+    # Each prefetch's waiting goes on in a thread of this process from here on.
+    for name, wait in started.items():
+        pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="fsrlab-prefetch")
+        started[name] = pool.submit(wait)
+        pool.shutdown(wait=False)
     built = {}
     # This process's sections first, those waiting for external work (ngspice) last, then those of the
     # second process (built meanwhile).
@@ -175,3 +194,69 @@ def write_report(outdir: str | Path, progress: Callable[[str], None] | None = No
     json_path = write_text_atomic(out / "paper.json", json.dumps(data, indent=2, allow_nan=False) + "\n")
     index = write_text_atomic(out / "index.html", render_html(sections, out))
     return ReportResult(index=index, json=json_path, sections=sections)
+
+
+class ReportProcess:
+    """:func:`write_report` under way in a Python process of its own (:func:`start_report`).
+
+    Parameters
+    ----------
+    outdir : str or Path
+        As for :func:`write_report`.
+    """
+
+    _CODE = ("import pickle, sys\n"
+             "from fsrlab.reports.paper import write_report\n"
+             "pickle.dump(write_report(sys.argv[1]), sys.stdout.buffer)\n")
+
+    def __init__(self, outdir: str | Path) -> None:
+        import subprocess
+        import sys
+
+        import fsrlab
+
+        env = dict(os.environ)
+        # The same fsrlab as this process's, wherever it was imported from.
+        root = str(Path(fsrlab.__file__).resolve().parents[1])
+        env["PYTHONPATH"] = os.pathsep.join([root, *filter(None, [env.get("PYTHONPATH")])])
+        self.outdir = Path(outdir)
+        self._proc = subprocess.Popen([sys.executable, "-c", self._CODE, str(self.outdir)], stdin=subprocess.DEVNULL,
+                                      stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+
+    def result(self) -> ReportResult:
+        """Wait for the report and return what :func:`write_report` returned in its process.
+
+        Raises
+        ------
+        RuntimeError
+            The report's process failed; the message carries the end of its error output.
+        """
+        out, err = self._proc.communicate()
+        if self._proc.returncode != 0:
+            tail = " | ".join(err.decode("utf-8", "replace").strip().splitlines()[-4:])
+            raise RuntimeError(f"the reproduction report ({self.outdir}) failed (exit {self._proc.returncode}): {tail}")
+        return pickle.loads(out)
+
+    def stop(self) -> None:
+        """End the report's process if it is still running (its files may be left half written)."""
+        if self._proc.poll() is None:
+            self._proc.kill()
+        self._proc.communicate()
+
+
+def start_report(outdir: str | Path) -> ReportProcess:
+    """Start :func:`write_report` in a Python process of its own and return at once.
+
+    Parameters
+    ----------
+    outdir : str or Path
+        As for :func:`write_report`.
+
+    Returns
+    -------
+    ReportProcess
+        ``.result()`` waits for it and returns its :class:`ReportResult`. A separate interpreter, not a
+        thread or a fork: it competes with nothing of this process for the interpreter lock, and it
+        inherits none of its open files (the demo draws the report while its last recording runs).
+    """
+    return ReportProcess(outdir)

@@ -49,14 +49,11 @@ def _loops_figure(rep, outdir: Path) -> Figure | None:
     drawn = [h for h in rep.hysteresis if h.result is not None]
     if not drawn:
         return None
-    fig, ax = new_figure(width=11.0, height=4.2)
-    fig.clf()
-    axes = fig.subplots(1, len(drawn))
+    fig, axes = new_figure(width=11.0, height=4.2, ncols=len(drawn))
     axes = list(axes) if len(drawn) > 1 else [axes]
     scale = 1e-3 if rep.reference == "stress_pa" else 1.0
     unit = "kPa" if rep.reference == "stress_pa" else rep.reference_unit
     for a, h in zip(axes, drawn):
-        a.grid(True, alpha=0.3)
         r = h.result
         for c in r.cycles:
             a.plot(c.stress_pa * scale, c.q_load, "-", color="tab:blue", alpha=0.35, lw=0.9)

@@ -54,17 +54,14 @@ def _fig19(outdir: Path, exp: Experiment, key: str, scale: float, unit: str, lab
 
 
 def _fig17(outdir: Path, exp: Experiment) -> Path:
-    import matplotlib.pyplot as plt
-
     from fsrlab.calibration.result import calibrate
 
     c = exp.cycles[0]
     sl, fl, su, fu = c.branches("frequency_hz")
     f_all, s_all = np.concatenate([fl, fu]), np.concatenate([sl, su])
-    fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0), dpi=110, sharey=True)
+    fig, axes = new_figure(10.0, 4.0, ncols=2, sharey=True)
     grid = np.linspace(np.nanmin(f_all), np.nanmax(f_all), 100)
     for ax, deg, lab in ((axes[0], 1, "(a) linear"), (axes[1], 3, "(b) cubic")):
-        ax.grid(True, alpha=0.3)
         fit = calibrate(f_all, s_all, degree=deg)
         ax.plot(fl / 1e3, sl / 1e3, ".", ms=4, color="tab:blue", label="loading")
         ax.plot(fu / 1e3, su / 1e3, ".", ms=4, color="tab:orange", label="unloading")

@@ -10,19 +10,20 @@ This module draws and words them; the errata O1–O5 are worded in
 
 from __future__ import annotations
 
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import Future
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
 from fsrlab.circuits.decomposition import frequency_decomposition
 from fsrlab.circuits.lm555 import astable, duty_cycle_limits, minimum_n_ratio, sensitivity, tau_ratio
 from fsrlab.circuits.paper_ratio import (RatioMinimum, SimulatedRatios, TauRatioTable, minimum_eq32_as_printed,
-                                         n_where_ratio_equals, simulate_tau_ratios, tau_ratio_eq32_as_printed,
+                                         n_where_ratio_equals, start_tau_ratios, tau_ratio_eq32_as_printed,
                                          tau_ratio_eq37_as_printed, tau_ratio_table)
 from fsrlab.circuits.spice import ngspice_available
 from fsrlab.reference import paper_values
-from fsrlab.reports.figures import new_figure, save
+from fsrlab.reports.figures import new_figure, plain_log_labels, save
 from fsrlab.reports.model import Figure, Section, Table
 from fsrlab.reports.sections._oscillator_errata import oscillator_errata
 
@@ -37,23 +38,22 @@ def _claims() -> dict:
     return {k: v for k, v in printed.items() if k != "note"}
 
 
-def _spice(diode: bool) -> SimulatedRatios | None:
-    return simulate_tau_ratios(N_TABLE, diode, R_OHM, C_FARAD) if ngspice_available() else None
+def _no_spice() -> tuple[None, None]:
+    return None, None
 
 
-def _spice_both() -> tuple[SimulatedRatios | None, SimulatedRatios | None]:
-    return _spice(False), _spice(True)
+def prefetch() -> Callable[[], tuple[SimulatedRatios | None, SimulatedRatios | None]]:
+    """Start the section's ngspice runs now and return what waits for them (see :func:`build`).
 
-
-def prefetch() -> Future:
-    """Start the section's ngspice runs in a background thread; :func:`build` takes the future.
-
-    The runs are separate processes, so they go on while the other sections draw their figures.
+    The runs are processes started at once (the longest first, no thread yet:
+    :func:`fsrlab.circuits.paper_ratio.start_tau_ratios`), so they go on while the report imports and
+    draws the other sections; :func:`fsrlab.reports.paper.build_sections` calls the returned function in
+    a background thread and passes its future to :func:`build`.
     """
-    pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="fsrlab-spice")
-    future = pool.submit(_spice_both)
-    pool.shutdown(wait=False)
-    return future
+    if not ngspice_available():
+        return _no_spice
+    runs = start_tau_ratios(N_TABLE, (False, True), R_OHM, C_FARAD)
+    return lambda: tuple(runs.results())
 
 
 def _ratio_axes(ax, diode: bool, spice: SimulatedRatios | None, claims: dict, minimum: RatioMinimum) -> None:
@@ -96,6 +96,7 @@ def _duty_axes(ax, diode: bool, spice: SimulatedRatios | None, claims: dict) -> 
         ax.semilogx(spice.n_ratio, 100 * np.array(spice.duty_cycle), "ko", ms=5, mfc="none", label="ngspice")
     ax.set(xlabel="N = R_FSR / R", ylabel="duty cycle (%)", ylim=(0, 101),
            title="duty cycle vs N" + (" with D1" if diode else " without diode"))
+    plain_log_labels(ax.xaxis)
     ax.legend(fontsize=7.5)
 
 
@@ -103,11 +104,7 @@ def _ratio_figure(outdir: Path, diode: bool, spice: SimulatedRatios | None, clai
                   t: TauRatioTable) -> Figure:
     """Figure 12 (no diode) or 15 (D1): τH/τL versus N on the left, the duty cycle on the right."""
     name = "fig15_tau_ratio_diode.png" if diode else "fig12_tau_ratio_no_diode.png"
-    fig, _ = new_figure(11.0, 4.2)
-    fig.clf()
-    ax1, ax2 = fig.subplots(1, 2)
-    for ax in (ax1, ax2):
-        ax.grid(True, alpha=0.3)
+    fig, (ax1, ax2) = new_figure(11.0, 4.2, ncols=2)
     _ratio_axes(ax1, diode, spice, claims, minimum)
     _duty_axes(ax2, diode, spice, claims)
     save(fig, outdir / name)
@@ -143,6 +140,7 @@ def _sensitivity_figure(outdir: Path, s20_nd: float, s20: float) -> Figure:
     ax.axhline(-1.0, color="0.4", ls=":", lw=1, label="∂ln f/∂ln C_FSR (C_off = 0)")
     ax.set(xlabel="N = R_FSR / R", ylabel="logarithmic sensitivity", ylim=(-1.5, 3.0),
            title="How resistive is the “capacitive” frequency? (extension)")
+    plain_log_labels(ax.xaxis)
     ax.legend(fontsize=8)
     save(fig, outdir / "oscillator_sensitivity.png")
     return Figure(
@@ -182,13 +180,11 @@ def _stress_figure(outdir: Path) -> tuple[Figure, dict]:
     stress = np.linspace(0.0, 10e3, 101)  # the paper's Figure 17 range, 0–10 kPa
     resp = VirtualFSR().respond(stress)
     rf, cf = resp.r_fsr_ohm, resp.c_fsr_farad
-    fig, _ = new_figure(11.0, 4.2)
-    fig.clf()
+    fig, axes = new_figure(11.0, 4.2, ncols=2)
     out = {"stress_pa": [float(stress[0]), float(stress[-1])], "r_fsr_ohm": [float(rf[0]), float(rf[-1])],
            "c_fsr_farad": [float(cf[0]), float(cf[-1])]}
-    for ax, diode in zip(fig.subplots(1, 2), (True, False)):
+    for ax, diode in zip(axes, (True, False)):
         parts = frequency_decomposition(R_OHM, rf, cf, diode=diode)
-        ax.grid(True, alpha=0.3)
         ax.plot(stress / 1e3, parts.frequency_hz / 1e3, "k-", lw=2, label="f (R_FSR and C_FSR change)")
         ax.plot(stress / 1e3, parts.c_only_hz / 1e3, "C0--", label="only C_FSR changes")
         ax.plot(stress / 1e3, parts.r_only_hz / 1e3, "C1--", label="only R_FSR changes")
@@ -240,20 +236,21 @@ def _intro() -> str:
 def build(outdir: Path, prefetched: Future | None = None) -> Section:
     """Build the oscillator section into ``outdir`` (PNGs) and return it.
 
-    ``prefetched`` is the future of :func:`prefetch` when the ngspice runs were started earlier.
+    ``prefetched``: the future of :func:`prefetch`'s function when the ngspice runs were started earlier
+    (without it they run now). The figures without simulator points are drawn before waiting for them.
     """
     outdir = Path(outdir)
     claims = _claims()
     table = tau_ratio_table(N_TABLE)
     minimum = minimum_eq32_as_printed()
     n_at_claim = n_where_ratio_equals(claims["min_tau_ratio_no_diode"])
-    spice_nd, spice_d = prefetched.result() if prefetched is not None else _spice_both()
     s20_nd = float(sensitivity(R_OHM, 20 * R_OHM, C_FARAD).r_fsr)
     s20 = float(sensitivity(R_OHM, 20 * R_OHM, C_FARAD, diode=True).r_fsr)
     stress_figure, fs = _stress_figure(outdir)
+    sensitivity_figure = _sensitivity_figure(outdir, s20_nd, s20)
+    spice_nd, spice_d = prefetched.result() if prefetched is not None else prefetch()()
     figures = [_ratio_figure(outdir, False, spice_nd, claims, minimum, table),
-               _ratio_figure(outdir, True, spice_d, claims, minimum, table),
-               _sensitivity_figure(outdir, s20_nd, s20), stress_figure]
+               _ratio_figure(outdir, True, spice_d, claims, minimum, table), sensitivity_figure, stress_figure]
     errata = oscillator_errata(table, minimum, n_at_claim, spice_nd, spice_d, R_OHM, C_FARAD)
     dc_inf_nd, dc_inf_d = duty_cycle_limits()[0], duty_cycle_limits(diode=True)[0]
     data = {"oscillator": {
