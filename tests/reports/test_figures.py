@@ -90,3 +90,20 @@ def test_a_saved_figure_drawn_again_gives_the_png_of_a_new_one(tmp_path, monkeyp
         return figures.new_figure(*args, **kwargs)
 
     assert [_draw(k, fresh, tmp_path) for k in order] == reused
+
+
+def test_a_kept_figure_closed_elsewhere_is_not_handed_out_again(tmp_path):
+    """pyplot's ``close("all")`` (a notebook, another test) turns a kept figure's canvas into the base
+    canvas, which cannot render: new_figure must give a new Agg figure instead of that one."""
+    import matplotlib.pyplot as plt
+
+    from fsrlab.reports.figures import save
+
+    fig, ax = new_figure(5.1, 3.3)
+    ax.plot([0, 1], [0, 1])
+    save(fig, tmp_path / "a.png")
+    plt.close("all")
+    again, ax2 = new_figure(5.1, 3.3)
+    assert again is not fig and hasattr(again.canvas, "get_renderer")
+    ax2.plot([0, 1], [1, 0])
+    assert save(again, tmp_path / "b.png").stat().st_size > 0

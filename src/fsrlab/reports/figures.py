@@ -40,8 +40,12 @@ def new_figure(width: float = 6.4, height: float = 4.2, ncols: int = 1, sharey: 
         The panels share their y axis.
     """
     key = (float(width), float(height), int(ncols), bool(sharey))
-    if _SAVED.get(key):
+    fig = None
+    while _SAVED.get(key) and fig is None:
         fig = _SAVED[key].pop()
+        if type(fig.canvas).__name__ != "FigureCanvasAgg":  # closed elsewhere (plt.close("all")): not reused
+            fig = None
+    if fig is not None:
         for ax in fig.axes:
             _clear(ax)
     else:
