@@ -55,7 +55,9 @@ def test_report_in_a_process_of_its_own_writes_the_same_report(report, tmp_path)
     # interpreter (the demo draws it while its last recording runs) and hands back the same result.
     from fsrlab.reports.paper import start_report
 
-    result = start_report(tmp_path / "other").result()
+    result = start_report(tmp_path / "other", nice=3).result()  # at a lower priority, as the demo starts it
     assert result.json.read_bytes() == (report / "paper.json").read_bytes()
     assert [s.key for s in result.sections] == ["physics", "oscillator", "measurements", "experiment"]
     assert result.index == tmp_path / "other" / "index.html" and all(p.exists() for p in result.figures)
+    with pytest.raises(ValueError, match="nice"):
+        start_report(tmp_path / "never", nice=-1)

@@ -57,10 +57,12 @@ def run_demo(out="demo", settings: DemoSettings = DemoSettings(), sensor=None, d
 
     def start_paper() -> None:
         # The reproduction report needs nothing the chain records: its own process draws it while the last
-        # recording (the dead weights) runs and the calibration is fitted, on a core they leave free.
+        # recording (the dead weights) runs and the calibration is fitted, at a lower priority: the twin's
+        # simulation and its feeder keep the cores they need (their latency sets the recording's pace), the
+        # report takes what they leave.
         from fsrlab.reports.paper import start_report
 
-        started.append((start_report(Path(out) / "paper"), time.monotonic()))
+        started.append((start_report(Path(out) / "paper", nice=10), time.monotonic()))
 
     try:
         return _run_demo(run_chain(out, settings, sensor, device, 7 if paper else 6, say,

@@ -203,13 +203,17 @@ class ReportProcess:
     ----------
     outdir : str or Path
         As for :func:`write_report`.
+    nice : int
+        Added to the process's niceness (``os.nice``, where it exists), 0: as this process.
     """
 
-    _CODE = ("import pickle, sys\n"
+    _CODE = ("import os, pickle, sys\n"
+             "if int(sys.argv[2]) and hasattr(os, 'nice'):\n"
+             "    os.nice(int(sys.argv[2]))\n"
              "from fsrlab.reports.paper import write_report\n"
              "pickle.dump(write_report(sys.argv[1]), sys.stdout.buffer)\n")
 
-    def __init__(self, outdir: str | Path) -> None:
+    def __init__(self, outdir: str | Path, nice: int = 0) -> None:
         import subprocess
         import sys
 
@@ -220,8 +224,10 @@ class ReportProcess:
         root = str(Path(fsrlab.__file__).resolve().parents[1])
         env["PYTHONPATH"] = os.pathsep.join([root, *filter(None, [env.get("PYTHONPATH")])])
         self.outdir = Path(outdir)
-        self._proc = subprocess.Popen([sys.executable, "-c", self._CODE, str(self.outdir)], stdin=subprocess.DEVNULL,
-                                      stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+        if not int(nice) >= 0:
+            raise ValueError(f"nice: must be >= 0 (a lower priority or the same), got {nice!r}")
+        self._proc = subprocess.Popen([sys.executable, "-c", self._CODE, str(self.outdir), str(int(nice))],
+                                      stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
 
     def result(self) -> ReportResult:
         """Wait for the report and return what :func:`write_report` returned in its process.
@@ -244,13 +250,16 @@ class ReportProcess:
         self._proc.communicate()
 
 
-def start_report(outdir: str | Path) -> ReportProcess:
+def start_report(outdir: str | Path, nice: int = 0) -> ReportProcess:
     """Start :func:`write_report` in a Python process of its own and return at once.
 
     Parameters
     ----------
     outdir : str or Path
         As for :func:`write_report`.
+    nice : int
+        Niceness added to the report's process and its own (the second process, ngspice): the demo gives 10,
+        so that the recordings it draws beside keep the cores they need and the report takes what they leave.
 
     Returns
     -------
@@ -259,4 +268,4 @@ def start_report(outdir: str | Path) -> ReportProcess:
         thread or a fork: it competes with nothing of this process for the interpreter lock, and it
         inherits none of its open files (the demo draws the report while its last recording runs).
     """
-    return ReportProcess(outdir)
+    return ReportProcess(outdir, nice)
