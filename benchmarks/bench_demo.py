@@ -48,7 +48,9 @@ def run() -> str:
         f"| `--speed max` (the default) | {REPEAT} | {lo:.1f} s | {med:.1f} s | {hi:.1f} s | {slow_t / med:.2f}× faster |\n\n"
         f"Steps of the median `--speed max` run: {steps}. Aim ≤ {AIM_S:g} s (median): **{met}** (load average "
         f"{load} on cores shared with other jobs). The recordings are simavr's work on the twin (three at once at "
-        "`--speed max`, one simavr process each): the section on the twin below gives simavr's pace here.\n"
+        "`--speed max`, one simavr process each): the section on the twin below gives simavr's pace here. The reproduction report is drawn in a process "
+        "of its own at niceness +10 from the end of the spring runs, beside the dead weights (its step is the wait "
+        "left when the chain is done).\n"
     )
 
 

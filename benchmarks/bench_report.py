@@ -30,7 +30,7 @@ import time
 from pathlib import Path
 
 TITLE = "Reproduction report (`fsrlab paper`)"
-REPEAT = 5
+REPEAT = 7
 AIM_S = 3.5
 #: The peer: main before issue 25's report work (the commit the work started from).
 BASELINE = "4d6bbc7"
