@@ -92,18 +92,23 @@ def test_a_saved_figure_drawn_again_gives_the_png_of_a_new_one(tmp_path, monkeyp
     assert [_draw(k, fresh, tmp_path) for k in order] == reused
 
 
-def test_a_kept_figure_closed_elsewhere_is_not_handed_out_again(tmp_path):
-    """pyplot's ``close("all")`` (a notebook, another test) turns a kept figure's canvas into the base
-    canvas, which cannot render: new_figure must give a new Agg figure instead of that one."""
+def test_report_figures_are_not_pyplots_and_survive_its_close_all(tmp_path):
+    """A user's pyplot (a notebook, another test) never sees the report's figures: plt.gcf() after a report is
+    not one of them, and pyplot's close("all"), which turns a figure of its own into the base canvas (it
+    cannot render), leaves a kept figure drawable."""
     import matplotlib.pyplot as plt
 
     from fsrlab.reports.figures import save
 
+    shown = plt.get_fignums()
     fig, ax = new_figure(5.1, 3.3)
+    assert plt.get_fignums() == shown
     ax.plot([0, 1], [0, 1])
     save(fig, tmp_path / "a.png")
+    current = plt.gcf()
+    assert current is not fig
     plt.close("all")
     again, ax2 = new_figure(5.1, 3.3)
-    assert again is not fig and hasattr(again.canvas, "get_renderer")
+    assert hasattr(again.canvas, "get_renderer")
     ax2.plot([0, 1], [1, 0])
     assert save(again, tmp_path / "b.png").stat().st_size > 0
