@@ -193,5 +193,11 @@ def run() -> str:
         f"{calls_rate / old_rate:.5f}× | {calls_rate / exp_rate:.3%} |\n\n"
         f"Target (≥ 8e7 points/s on this machine, ahead of numba): {'met' if new_rate >= 8e7 else 'not met'} "
         f"({new_rate:.2g} points/s{', ' + numba_vs if numba_vs else ''}). The exp limit is one core's; the "
-        f"kernel uses {__import__('os').cpu_count()} (the machine's cores, shared with whatever else runs).\n"
+        f"kernel uses {__import__('os').cpu_count()} (the machine's cores, shared with whatever else runs). Why "
+        f"not more: the exponentials alone cap any kernel with {EXPS_PER_POINT} per stress at "
+        f"{exp_rate / EXPS_PER_POINT:.2g} points/s per core here (the exp limit / {EXPS_PER_POINT}), so the target "
+        f"needs the two cores at {8e7 / (2 * exp_rate / EXPS_PER_POINT):.0%} of that bound with nothing else "
+        f"running; the kernel's other seven passes per chunk (separation, −B, bracket, R_A, C_A, the two "
+        f"differences) and the cores' other jobs take the rest, and numba's one fused loop with the same "
+        f"exponentials is slower still.\n"
     )
