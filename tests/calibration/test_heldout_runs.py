@@ -70,15 +70,20 @@ def test_margin_only_decides_what_is_reported_not_the_memory(cal, runs):
     assert np.array_equal(narrow[kept], wide[kept])
 
 
-def test_a_run_of_another_circuit_is_refused(runs, tmp_path):
-    """A calibration of the 555's frequency records the circuit its run was recorded with; a run with
-    another R (so the same frequency means another force) is refused, and applied only when forced."""
+def _two_circuits(runs, tmp_path):
+    """The same frequency readings as two runs, recorded with R = 10 kΩ and with R = 22 kΩ."""
     src = load_run(runs["hand"])
     circuit = {"topology": "lm555-astable", "r_ohm": 10000.0, "c_off_farad": 0.0, "diode": True, "diode_drop_v": 0.0}
     cols = {"time_s": src["time_s"], "frequency_hz": 1000 + src["reading"], "force_n": src["force_n"]}
     units = {"time_s": "s", "frequency_hz": "Hz", "force_n": "N"}
-    mine = write_run(tmp_path / "mine.csv", cols, {"units": units, "circuit": circuit})
-    other = write_run(tmp_path / "other.csv", cols, {"units": units, "circuit": dict(circuit, r_ohm=22000.0)})
+    return (write_run(tmp_path / "mine.csv", cols, {"units": units, "circuit": circuit}),
+            write_run(tmp_path / "other.csv", cols, {"units": units, "circuit": dict(circuit, r_ohm=22000.0)}))
+
+
+def test_a_run_of_another_circuit_is_refused(runs, tmp_path):
+    """A calibration of the 555's frequency records the circuit its run was recorded with; a run with
+    another R (so the same frequency means another force) is refused, and applied only when forced."""
+    mine, other = _two_circuits(runs, tmp_path)
     cal = calibrate_runs([mine], x="frequency_hz", reference="force_n")
     assert cal.recorded_with is not None and cal.recorded_with.circuit is not None
     with pytest.raises(ProvenanceError, match="22"):
@@ -130,11 +135,6 @@ def test_cli_bad_method_options_give_one_line(runs, args, option):
 
 def test_runs_of_different_circuits_are_not_calibrated_together(runs, tmp_path):
     """Leave-one-out across runs needs one readout: a second run with another R is refused, naming both."""
-    src = load_run(runs["hand"])
-    circuit = {"topology": "lm555-astable", "r_ohm": 10000.0, "c_off_farad": 0.0, "diode": True, "diode_drop_v": 0.0}
-    cols = {"time_s": src["time_s"], "frequency_hz": 1000 + src["reading"], "force_n": src["force_n"]}
-    units = {"time_s": "s", "frequency_hz": "Hz", "force_n": "N"}
-    a = write_run(tmp_path / "a.csv", cols, {"units": units, "circuit": circuit})
-    b = write_run(tmp_path / "b.csv", cols, {"units": units, "circuit": dict(circuit, r_ohm=22000.0)})
+    a, b = _two_circuits(runs, tmp_path)
     with pytest.raises(ValueError, match="calibrate runs of one readout together"):
         calibrate_runs([a, b], x="frequency_hz", reference="force_n")

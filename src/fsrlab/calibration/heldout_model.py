@@ -303,11 +303,6 @@ class _Cache:
         return term * u if ch.scaled else term
 
 
-def _standard(ch: "_Choice") -> bool:
-    """Whether the choice's memory uses the standard thresholds and time constants (cached features)."""
-    return set(ch.thresholds) <= set(PLAY_THRESHOLDS) and set(ch.time_constants) <= set(CREEP_TIME_CONSTANTS_S)
-
-
 def _fit(parts: list[Part], ch: _Choice, sign: int, adc, cache: _Cache | None = None,
          split: int = -1) -> HeldoutCalibration:
     cache = cache or _Cache()
@@ -324,12 +319,8 @@ def _fit(parts: list[Part], ch: _Choice, sign: int, adc, cache: _Cache | None = 
         return HeldoutCalibration(static, static, full_scale=fs, row_s=row_s)
     level = lambda v: static(v) / fs  # noqa: E731
 
-    def system():
-        if _standard(ch):
-            feats = np.concatenate([cache.memory(skey + (id(p.rec),), p.rec, level, ch)[p.rows] for p in parts])[ok]
-        else:
-            feats = np.concatenate([memory_features(level(p.rec.x), p.rec.t, ch.thresholds, ch.time_constants,
-                                                    ch.scaled)[p.rows] for p in parts])[ok]
+    def system():  # every choice's memory is a subset of the standard features (MEMORY_VARIANTS, the lag probe)
+        feats = np.concatenate([cache.memory(skey + (id(p.rec),), p.rec, level, ch)[p.rows] for p in parts])[ok]
         return monotone_system(x[ok], y[ok], ch.variable, ch.segments, sign, adc, extra=feats)
 
     # the normal equations serve every ridge weight and every sign of this split's variant
@@ -422,7 +413,7 @@ def _gain_spread(splits, static: _Choice, ch: _Choice, alpha: float, sign: int, 
     return float(np.sqrt(np.mean((np.asarray(g) - 1.0) ** 2))) if g else 0.0
 
 
-def _held_out(splits, ch: _Choice, sign: int, adc, cache: _Cache | None = None):
+def _held_out(splits, ch: _Choice, sign: int, adc, cache: _Cache):
     """Held-out errors, chunk ids, estimates and the held-out parts' slices; the first and last rows of every
     held-out part within the largest lag tried are left out for every choice, so all choices are scored on
     the same rows."""
@@ -431,11 +422,10 @@ def _held_out(splits, ch: _Choice, sign: int, adc, cache: _Cache | None = None):
     for i, (fit_parts, test_parts) in enumerate(splits):
         cal = _fit(fit_parts, ch, sign, adc, cache, i)
         for j, p in enumerate(test_parts):
-            if cal.has_memory and cache is not None and _standard(ch):
-                e = cal.curve(p.rec.x) + cache.memory_term((i, ch.variable, ch.segments, ch.lag, id(p.rec)), p.rec,
-                                                           cal.level, ch, cal.weights)
-            else:
-                e = cal.estimate(p.rec.t, p.rec.x)
+            e = cal.curve(p.rec.x)
+            if cal.has_memory:
+                e = e + cache.memory_term((i, ch.variable, ch.segments, ch.lag, id(p.rec)), p.rec, cal.level, ch,
+                                          cal.weights)
             y = _shifted(p.rec, ch.lag)
             idx = np.flatnonzero(p.rows)
             rows = p.rows.copy()
@@ -516,7 +506,6 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
         if other != cur:
             scored.pop(other, None)
     sel.heldout_rmse_plain = _rmse(scored[cur][0])
-    plain = cur
 
     def step(name: str, trials: list[_Choice], base: _Choice) -> _Choice | None:
         """The best trial when it wins over ``base`` (see the module's notes), else None; recorded."""
