@@ -149,6 +149,7 @@ def pair_scores(root: Path, tmp: Path, train_specs, test_specs) -> dict | None:
         key = "comp" if comp else "plain"
         out[key] = {"ratio": rmse / poly, "coverage": float(np.mean(np.abs(e[got]) <= 2 * u[got])),
                     "missing": float(np.mean(~np.isfinite(e[loaded]))), "model": cal.model_name,
+                    "delay_rows": cal.model.delay_s / cal.model.row_s,
                     "steps": [s for s in cal.selection.steps if "kept" in s]}
     return out
 
@@ -172,8 +173,9 @@ def run() -> str:
             covers.append(c["coverage"])
             old = s["cv"]
             cv = f"×{old['ratio']:.2f}, {100 * old['missing']:.1f} %" if old else "— (one run only)"
+            delay = f", delay {c['delay_rows']:.2g} rows" if c["delay_rows"] else ""
             lines.append(f"| {name} | {s['poly']:.2f} % ({s['degree']}) | ×{p['ratio']:.2f}, {100 * p['coverage']:.0f} % | "
-                         f"×{c['ratio']:.2f}, {100 * c['coverage']:.0f} %, {100 * c['missing']:.1f} % | {c['model']} | "
+                         f"×{c['ratio']:.2f}, {100 * c['coverage']:.0f} %, {100 * c['missing']:.1f} % | {c['model']}{delay} | "
                          f"{cv} |")
     if ratios:
         lines.append("")

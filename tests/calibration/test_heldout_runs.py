@@ -102,7 +102,7 @@ def test_cli_calibrates_several_runs_leaving_one_out(runs, tmp_path):
     assert code == 0, err
     doc = json.loads(stdout)
     assert doc["method"] == "held-out" and doc["scheme"] == "leave one recording out"
-    assert [s["step"] for s in doc["steps"]] == ["static curve", "memory"]
+    assert [s["step"] for s in doc["steps"]] == ["static curve", "delay", "memory"]
     assert json.loads(out.read_text())["method"] == "held-out"
 
 

@@ -8,12 +8,19 @@ complexity:
 1. **static curve** (:mod:`fsrlab.calibration.monotone`): straight line in the readout, then more
    segments, then the divider's conductance ratio; of the candidates whose held-out error is within
    one standard error of the best, the simplest;
-2. **lag** between reference and readout, only when asked (``lag="auto"``): none unless a shift of
+2. **delay** of the reference (:mod:`fsrlab.calibration.delay`, :data:`DELAY_ROWS`): the estimate made
+   from the readout as it was a fraction of a reading (up to two) earlier, as when a load-cell
+   amplifier integrates over its conversion window and hands the result over later (an HX711 at
+   10 samples/s beside an ``analogRead``: half a reading). The estimate is still of the reference as
+   recorded, and causal; judged like the lag, with a hysteresis model. On the real recordings
+   (docs/calibration.md) it is kept on 10 of 21 pairs, 0.25–0.75 of a reading, and lowers the
+   geometric mean from 0.98× to 0.93× the oracle polynomial;
+3. **lag** between reference and readout, only when asked (``lag="auto"``): none unless a shift of
    whole rows wins, judged with a hysteresis model (a shift narrows a loop, so a static curve alone
    takes part of a loop for a lag). By default there is none: the estimate is of the reference as
    recorded, and one aligned to a lagging reference's instant is further from the recorded values
    (the virtual bench's test run: 13 % hysteresis error of the estimate with a 3-row lag, 6 % without);
-3. **memory**: hysteresis (rate-independent: play operators on the curve's level ``u = static(x)/FS``,
+4. **memory**: hysteresis (rate-independent: play operators on the curve's level ``u = static(x)/FS``,
    :mod:`fsrlab.calibration.operators`, additive or growing with the level) and creep (rate-dependent:
    exponential averages with time constants from 0.5 s to 2 min, the time scale the fit's mix of
    them), alone and together (:data:`MEMORY_VARIANTS`), their weights of one sign per kind -- a loop
@@ -23,7 +30,7 @@ complexity:
    Networks* 5, 241, 1992; L. Breiman, *Machine Learning* 24, 49, 1996), so a memory that holds only
    in part is shrunk rather than taken whole or dropped.
 
-Steps 2 and 3 are kept only when they **win**: the lag by a held-out mean squared error lower by more
+Steps 2 to 4 are kept only when they **win**: the delay and the lag by a held-out mean squared error lower by more
 than one standard error (paired over chunks), lower in most held-out recordings or blocks and higher
 in none; the memory by a held-out MSE lower by more than one standard error and by at least
 :data:`MIN_GAIN` of the plain curve's. Otherwise the simpler calibration is kept, and the
@@ -43,11 +50,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from fsrlab.calibration.heldout_uncertainty import COVERAGE, REPEATABILITY, LevelUncertainty
+from fsrlab.calibration.delay import delayed
+from fsrlab.calibration.heldout_calibration import HeldoutCalibration
+from fsrlab.calibration.heldout_uncertainty import REPEATABILITY, LevelUncertainty
 from fsrlab.calibration.heldout import (Part, Recording, chunk_ids, held_out_splits, orientation, paired_gain, readout_rail,
                                         scheme_name)
 from fsrlab.calibration.monotone import MonotoneCurve, fit_monotone, monotone_system
-from fsrlab.calibration.operators import CREEP_TIME_CONSTANTS_S, PLAY_THRESHOLDS, MemoryState, directions, memory_features
+from fsrlab.calibration.operators import CREEP_TIME_CONSTANTS_S, PLAY_THRESHOLDS, directions, memory_features
 
 __all__ = ["STATIC_CANDIDATES", "RIDGES", "HeldoutCalibration", "LevelUncertainty", "Selection",
            "calibrate_recordings"]
@@ -75,124 +84,9 @@ CREEP_SIGNS = (1, -1)
 LAG_PROBE_RIDGE = 1e-2
 #: Lags tried, in rows of the recording (the reference shifted against the readout). [1]
 LAG_ROWS = (-3, -2, -1, 1, 2, 3)
-
-
-@dataclass
-class HeldoutCalibration:
-    """Estimate = curve(x) + Σ weight·feature, the features of the level ``static(x)/full_scale``.
-
-    Parameters
-    ----------
-    static : MonotoneCurve
-        The curve that feeds the memory (fitted alone).
-    curve : MonotoneCurve
-        The curve of the estimate (refitted with the memory; ``static`` itself without memory).
-    thresholds, time_constants : tuple of float
-        The memory's play thresholds [1] and creep time constants [s] (empty: none).
-    weights : ndarray
-        One weight per feature. [unit of the reference]
-    full_scale : float
-        The reference's span on the calibration data. [unit of the reference]
-    row_s : float
-        Median time between readings of the calibration data (the step a gap is taken as). [s]
-    uncertainty : LevelUncertainty or None
-        The uncertainty of the estimate.
-    scaled : bool
-        Whether the memory features grow with the level (:func:`memory_features`).
-    uncertainty_plain : LevelUncertainty or None
-        The uncertainty of the static curve alone (with memory only).
-    """
-
-    static: MonotoneCurve
-    curve: MonotoneCurve
-    thresholds: tuple = ()
-    time_constants: tuple = ()
-    weights: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    full_scale: float = 1.0
-    row_s: float = 1.0
-    uncertainty: "LevelUncertainty | None" = None
-    scaled: bool = False
-    uncertainty_plain: "LevelUncertainty | None" = None
-
-    def without_memory(self) -> "HeldoutCalibration":
-        """The static curve alone (the estimate before compensation), with its own uncertainty."""
-        if not self.has_memory:
-            return self
-        return HeldoutCalibration(self.static, self.static, full_scale=self.full_scale, row_s=self.row_s,
-                                  uncertainty=self.uncertainty_plain or self.uncertainty)
-
-    @property
-    def has_memory(self) -> bool:
-        return self.weights.size > 0
-
-    def level(self, x) -> np.ndarray:
-        return self.static(x) / self.full_scale
-
-    def run(self, t, x) -> tuple[np.ndarray, np.ndarray]:
-        """Estimates and directions of a whole recording (readings in time order; NaN gives NaN)."""
-        x = np.asarray(x, dtype=float)
-        u = self.level(x)
-        return self.estimate(t, x, u), directions(u)
-
-    def estimate(self, t, x, u=None, features=None) -> np.ndarray:
-        """The estimates alone; ``u`` (the level) and ``features`` (its :func:`memory_features`) when
-        already computed."""
-        x = np.asarray(x, dtype=float)
-        est = self.curve(x)
-        if self.has_memory:
-            if features is None:
-                u = self.level(x) if u is None else u
-                features = memory_features(u, t, self.thresholds, self.time_constants, self.scaled)
-            est = est + features @ self.weights
-        return est
-
-    def stepper(self) -> "Stepper":
-        """The same estimates one reading at a time."""
-        return Stepper(self)
-
-    def to_dict(self) -> dict:
-        return {"static": self.static.to_dict(), "curve": self.curve.to_dict(), "thresholds": list(self.thresholds),
-                "time_constants_s": list(self.time_constants), "weights": self.weights.tolist(),
-                "full_scale": self.full_scale, "row_s": self.row_s, "level_scaled_hysteresis": self.scaled,
-                "uncertainty": None if self.uncertainty is None else self.uncertainty.to_dict(),
-                "uncertainty_plain": None if self.uncertainty_plain is None else self.uncertainty_plain.to_dict()}
-
-    @classmethod
-    def from_dict(cls, d: dict) -> "HeldoutCalibration":
-        thr = tuple(float(v) for v in d.get("thresholds", ()))
-        tau = tuple(float(v) for v in d.get("time_constants_s", ()))
-        w = np.asarray(d.get("weights", []), dtype=float)
-        if w.size != len(thr) + len(tau):
-            raise ValueError("weights: one per play threshold and creep time constant")
-        if any(not 0 < r < 1 for r in thr) or any(not v > 0 for v in tau):
-            raise ValueError("thresholds must lie in (0, 1) and time constants be > 0")
-        fs, row = float(d["full_scale"]), float(d["row_s"])
-        if not (fs > 0 and row > 0):
-            raise ValueError("full_scale and row_s must be > 0")
-        unc, plain = d.get("uncertainty"), d.get("uncertainty_plain")
-        return cls(MonotoneCurve.from_dict(d["static"]), MonotoneCurve.from_dict(d["curve"]), thr, tau, w, fs, row,
-                   None if unc is None else LevelUncertainty.from_dict(unc), bool(d.get("level_scaled_hysteresis", False)),
-                   None if plain is None else LevelUncertainty.from_dict(plain))
-
-
-class Stepper:
-    """One reading at a time: ``step(x, t) -> (estimate, direction)``; None readings keep the memory."""
-
-    def __init__(self, cal: HeldoutCalibration):
-        self.cal = cal
-        self.state = MemoryState(cal.thresholds, cal.time_constants, cal.scaled)
-        self.state.dt_default = cal.row_s
-
-    def step(self, x: float | None, t: float | None = None) -> tuple[float | None, int]:
-        if x is None or not np.isfinite(x):
-            return None, 0
-        cal = self.cal
-        u = float(cal.level(np.array([x]))[0])
-        feats, d = self.state.advance(u, t)
-        est = float(cal.curve(np.array([x]))[0])
-        if cal.has_memory:
-            est += float(np.dot(feats, cal.weights))
-        return est, d
+#: Delays of the reference tried, in readings of the calibration data (:mod:`fsrlab.calibration.delay`):
+#: fractions of one, as a load-cell amplifier's conversion window gives, up to two. [1]
+DELAY_ROWS = (0.25, 0.5, 0.75, 1.0, 1.5, 2.0)
 
 
 @dataclass
@@ -213,6 +107,8 @@ class Selection:
         Held-out RMSE of the calibration chosen and of its static curve. [unit of the reference]
     gain_spread : float or None
         RMS relative gain error of the held-out recordings (two or more recordings). [1]
+    delay_s : float
+        The reference's delay applied to the readout (:data:`DELAY_ROWS`). [s]
     """
 
     scheme: str
@@ -222,9 +118,11 @@ class Selection:
     heldout_rmse: float = float("nan")
     heldout_rmse_plain: float = float("nan")
     gain_spread: float | None = None
+    delay_s: float = 0.0
 
     def to_dict(self) -> dict:
         return {"scheme": self.scheme, "candidates": self.candidates, "steps": self.steps, "lag_rows": self.lag_rows,
+                "delay_s": self.delay_s,
                 "heldout_rmse": self.heldout_rmse, "heldout_rmse_plain": self.heldout_rmse_plain,
                 "gain_spread": self.gain_spread}
 
@@ -239,12 +137,13 @@ class _Choice:
     ridge: float = 1e-3
     lag: int = 0
     scaled: bool = False
+    delay: float = 0.0
 
     @property
     def name(self) -> str:
         mem = (("+hysteresis" + ("·level" if self.scaled else "")) if self.thresholds else "") + \
             ("+creep" if self.time_constants else "")
-        lag = f", lag {self.lag} rows" if self.lag else ""
+        lag = (f", lag {self.lag} rows" if self.lag else "") + (f", delay {self.delay:g} rows" if self.delay else "")
         return f"{self.variable}-{self.segments}{mem}" + (f" (ridge {self.ridge:g}{lag})" if mem else
                                                           (f" ({lag[2:]})" if lag else ""))
 
@@ -309,7 +208,7 @@ def _fit(parts: list[Part], ch: _Choice, sign: int, adc, cache: _Cache | None = 
     x = np.concatenate([p.rec.x[p.rows] for p in parts])
     y = np.concatenate([_shifted(p.rec, ch.lag)[p.rows] for p in parts])
     ok = np.isfinite(y)
-    skey = (split, ch.variable, ch.segments, ch.lag)
+    skey = (split, ch.variable, ch.segments, ch.lag, ch.delay)
     static, fs = cache.static(skey, lambda: (fit_monotone(x[ok], y[ok], ch.variable, ch.segments, sign, adc)[0],
                                              max(float(np.ptp(y[ok])), 1e-12)))
     steps = np.concatenate([np.diff(p.rec.t) for p in parts if p.rec.t.size > 1] or [np.ones(1)])
@@ -424,7 +323,7 @@ def _held_out(splits, ch: _Choice, sign: int, adc, cache: _Cache):
         for j, p in enumerate(test_parts):
             e = cal.curve(p.rec.x)
             if cal.has_memory:
-                e = e + cache.memory_term((i, ch.variable, ch.segments, ch.lag, id(p.rec)), p.rec, cal.level, ch,
+                e = e + cache.memory_term((i, ch.variable, ch.segments, ch.lag, ch.delay, id(p.rec)), p.rec, cal.level, ch,
                                           cal.weights)
             y = _shifted(p.rec, ch.lag)
             idx = np.flatnonzero(p.rows)
@@ -454,6 +353,11 @@ def _rmse(e):
     return float(np.sqrt(np.mean(e ** 2))) if e.size else float("inf")
 
 
+def rows_have_times(recs: list[Recording]) -> bool:
+    """Whether the recordings' rows come at steady times (a delay in seconds means the same on each)."""
+    return all(r.t.size > 2 and np.all(np.diff(r.t) > 0) for r in recs)
+
+
 def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: int | str = 0,
                          variables=("readout", "conductance"), rail: float | None = None
                          ) -> tuple[HeldoutCalibration, Selection]:
@@ -479,14 +383,23 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
     """
     sign, adc = orientation(recs)
     adc = readout_rail(recs, rail, adc)
-    splits = held_out_splits(recs)
     sel = Selection(scheme_name(len(recs)))
     scored = {}
     cache = _Cache()
+    steps = np.concatenate([np.diff(r.t) for r in recs if r.t.size > 1] or [np.ones(1)])
+    row_s = float(np.median(steps)) if steps.size and np.median(steps) > 0 else 1.0
+    by_delay = {}
+
+    def delayed_recs(d: float) -> tuple[list[Recording], list]:
+        """The recordings with the readout ``d`` rows late, and their held-out splits."""
+        if d not in by_delay:
+            rs = recs if d == 0 else [Recording(r.t, delayed(r.t, r.x, d * row_s), r.y, r.name) for r in recs]
+            by_delay[d] = (rs, held_out_splits(rs))
+        return by_delay[d]
 
     def score(ch: _Choice):
         if ch not in scored:
-            scored[ch] = _held_out(splits, ch, sign, adc, cache)
+            scored[ch] = _held_out(delayed_recs(ch.delay)[1], ch, sign, adc, cache)
             if all(c["name"] != ch.name for c in sel.candidates):
                 sel.candidates.append({"name": ch.name, "heldout_rmse": _rmse(scored[ch][0])})
         return scored[ch]
@@ -531,6 +444,14 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
                 scored.pop(other, None)
         return ch if kept else None
 
+    if lag == 0 and DELAY_ROWS and rows_have_times(recs):
+        # Only when the estimate is of the reference as recorded (no lag asked for: a lag aligns the
+        # reference instead). Judged with a hysteresis model, as the lag is: a delay opens or narrows a loop.
+        probe = cur.but(thresholds=PLAY_THRESHOLDS, ridge=LAG_PROBE_RIDGE)
+        won = step("delay", [probe.but(delay=d) for d in DELAY_ROWS], probe)
+        if won is not None:
+            cur = cur.but(delay=won.delay)
+            score(cur)
     if lag == "auto":
         # Judged with a hysteresis model: a shift of the reference narrows a loop, so a static curve alone
         # would take part of the hysteresis for a lag.
@@ -549,6 +470,7 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
         scored[mem] = (e_s + alpha * (e_m - e_s), ids, est_s + alpha * (est_m - est_s), parts_s)
         cur = mem
     sel.lag_rows = cur.lag
+    sel.delay_s = cur.delay * row_s
     err, _, est, parts = scored[cur]
     fs_all = max(float(np.ptp(np.concatenate([r.y[r.usable] for r in recs]))), 1e-12)
 
@@ -557,8 +479,10 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
 
     dirs = held_out_directions(est, parts)
     sel.heldout_rmse = _rmse(err)
-    whole = [Part(r, r.usable) for r in recs]
+    drecs, splits = delayed_recs(cur.delay)
+    whole = [Part(r, r.usable) for r in drecs]
     cal = _blend(_fit(whole, static_cur, sign, adc), _fit(whole, cur, sign, adc), alpha)
+    cal.delay_s = sel.delay_s
     rel = REPEATABILITY
     if len(recs) >= 2:
         sel.gain_spread = _gain_spread(splits, static_cur, cur, alpha, sign, adc)

@@ -1,0 +1,151 @@
+"""The calibration :func:`fsrlab.calibration.heldout_model.calibrate_recordings` writes, and its stepper.
+
+**Extension beyond the paper.** A monotone curve of the readout plus weighted memory features
+(hysteresis play operators and creep averages of the level, :mod:`fsrlab.calibration.operators`),
+fed with the readout as it was :attr:`HeldoutCalibration.delay_s` earlier
+(:mod:`fsrlab.calibration.delay`); :class:`Stepper` gives the same estimates one reading at a time.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fsrlab.calibration.delay import DelayLine, delayed
+from fsrlab.calibration.heldout_uncertainty import LevelUncertainty
+from fsrlab.calibration.monotone import MonotoneCurve
+from fsrlab.calibration.operators import MemoryState, directions, memory_features
+
+__all__ = ["HeldoutCalibration", "Stepper"]
+
+
+@dataclass
+class HeldoutCalibration:
+    """Estimate = curve(x) + Σ weight·feature, the features of the level ``static(x)/full_scale``.
+
+    Parameters
+    ----------
+    static : MonotoneCurve
+        The curve that feeds the memory (fitted alone).
+    curve : MonotoneCurve
+        The curve of the estimate (refitted with the memory; ``static`` itself without memory).
+    thresholds, time_constants : tuple of float
+        The memory's play thresholds [1] and creep time constants [s] (empty: none).
+    weights : ndarray
+        One weight per feature. [unit of the reference]
+    full_scale : float
+        The reference's span on the calibration data. [unit of the reference]
+    row_s : float
+        Median time between readings of the calibration data (the step a gap is taken as). [s]
+    uncertainty : LevelUncertainty or None
+        The uncertainty of the estimate.
+    scaled : bool
+        Whether the memory features grow with the level (:func:`memory_features`).
+    uncertainty_plain : LevelUncertainty or None
+        The uncertainty of the static curve alone (with memory only).
+    delay_s : float
+        The reference's delay: every estimate is made from the readout this much earlier
+        (:func:`fsrlab.calibration.delay.delayed`). [s]
+    """
+
+    static: MonotoneCurve
+    curve: MonotoneCurve
+    thresholds: tuple = ()
+    time_constants: tuple = ()
+    weights: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    full_scale: float = 1.0
+    row_s: float = 1.0
+    uncertainty: "LevelUncertainty | None" = None
+    scaled: bool = False
+    uncertainty_plain: "LevelUncertainty | None" = None
+    delay_s: float = 0.0
+
+    def without_memory(self) -> "HeldoutCalibration":
+        """The static curve alone (the estimate before compensation), with its own uncertainty."""
+        if not self.has_memory:
+            return self
+        return HeldoutCalibration(self.static, self.static, full_scale=self.full_scale, row_s=self.row_s,
+                                  uncertainty=self.uncertainty_plain or self.uncertainty, delay_s=self.delay_s)
+
+    @property
+    def has_memory(self) -> bool:
+        return self.weights.size > 0
+
+    def level(self, x) -> np.ndarray:
+        return self.static(x) / self.full_scale
+
+    def run(self, t, x) -> tuple[np.ndarray, np.ndarray]:
+        """Estimates and directions of a whole recording (readings in time order; NaN gives NaN)."""
+        x = delayed(t, x, self.delay_s)
+        u = self.level(x)
+        return self.estimate(t, x, u), directions(u)
+
+    def estimate(self, t, x, u=None, features=None) -> np.ndarray:
+        """The estimates alone of readings ``x`` already delayed (:meth:`run` delays them); ``u`` (the
+        level) and ``features`` (its :func:`memory_features`) when already computed."""
+        x = np.asarray(x, dtype=float)
+        est = self.curve(x)
+        if self.has_memory:
+            if features is None:
+                u = self.level(x) if u is None else u
+                features = memory_features(u, t, self.thresholds, self.time_constants, self.scaled)
+            est = est + features @ self.weights
+        return est
+
+    def stepper(self) -> "Stepper":
+        """The same estimates one reading at a time."""
+        return Stepper(self)
+
+    def to_dict(self) -> dict:
+        return {"static": self.static.to_dict(), "curve": self.curve.to_dict(), "thresholds": list(self.thresholds),
+                "time_constants_s": list(self.time_constants), "weights": self.weights.tolist(),
+                "full_scale": self.full_scale, "row_s": self.row_s, "level_scaled_hysteresis": self.scaled,
+                "uncertainty": None if self.uncertainty is None else self.uncertainty.to_dict(),
+                "uncertainty_plain": None if self.uncertainty_plain is None else self.uncertainty_plain.to_dict(),
+                "delay_s": self.delay_s}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "HeldoutCalibration":
+        thr = tuple(float(v) for v in d.get("thresholds", ()))
+        tau = tuple(float(v) for v in d.get("time_constants_s", ()))
+        w = np.asarray(d.get("weights", []), dtype=float)
+        if w.size != len(thr) + len(tau):
+            raise ValueError("weights: one per play threshold and creep time constant")
+        if any(not 0 < r < 1 for r in thr) or any(not v > 0 for v in tau):
+            raise ValueError("thresholds must lie in (0, 1) and time constants be > 0")
+        fs, row, delay = float(d["full_scale"]), float(d["row_s"]), float(d.get("delay_s", 0.0))
+        if not (fs > 0 and row > 0):
+            raise ValueError("full_scale and row_s must be > 0")
+        if not 0 <= delay < 3600:
+            raise ValueError("delay_s must lie in [0, 3600) s")
+        unc, plain = d.get("uncertainty"), d.get("uncertainty_plain")
+        return cls(MonotoneCurve.from_dict(d["static"]), MonotoneCurve.from_dict(d["curve"]), thr, tau, w, fs, row,
+                   None if unc is None else LevelUncertainty.from_dict(unc), bool(d.get("level_scaled_hysteresis", False)),
+                   None if plain is None else LevelUncertainty.from_dict(plain), delay)
+
+
+class Stepper:
+    """One reading at a time: ``step(x, t) -> (estimate, direction)``; None readings keep the memory."""
+
+    def __init__(self, cal: HeldoutCalibration):
+        self.cal = cal
+        self.state = MemoryState(cal.thresholds, cal.time_constants, cal.scaled)
+        self.state.dt_default = cal.row_s
+        self.line = DelayLine(cal.delay_s)
+        self._t = None
+
+    def step(self, x: float | None, t: float | None = None) -> tuple[float | None, int]:
+        if x is None or not np.isfinite(x):
+            return None, 0
+        cal = self.cal
+        if cal.delay_s > 0:
+            t = t if t is not None else (0.0 if self._t is None else self._t + cal.row_s)
+            self._t = t
+            x = self.line.push(t, float(x))
+        u = float(cal.level(np.array([x]))[0])
+        feats, d = self.state.advance(u, t)
+        est = float(cal.curve(np.array([x]))[0])
+        if cal.has_memory:
+            est += float(np.dot(feats, cal.weights))
+        return est, d

@@ -1,0 +1,109 @@
+"""The reference's delay (calibration/delay.py and its step in heldout_model.py).
+
+References: a ramp delayed by τ is the ramp at t − τ (closed form); the one-reading-at-a-time line
+equals the batch (property); a load cell that integrates over its 100 ms conversion and reports it at
+the next row (an HX711 at 10 samples/s, simulated here sample by sample, not with the delay model)
+describes the force half a reading earlier, so the held-out selection keeps a delay near 0.5 rows and
+the estimate on a new recording is closer to the recorded reference; with an instantaneous reference
+and a clean readout no delay is kept.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fsrlab.calibration import heldout_model as hm
+from fsrlab.calibration.delay import DelayLine, delayed
+from fsrlab.calibration.heldout import Recording
+from fsrlab.calibration.heldout_calibration import HeldoutCalibration
+from fsrlab.calibration.heldout_model import calibrate_recordings
+
+
+def test_a_delayed_ramp_is_the_ramp_earlier():
+    t = np.arange(50) * 0.1
+    x = 3.0 + 2.0 * t
+    d = delayed(t, x, 0.05)
+    assert d[0] == x[0]  # before the first reading: the first reading
+    assert np.allclose(d[1:], 3.0 + 2.0 * (t[1:] - 0.05), rtol=0, atol=1e-12)
+    x[7] = np.nan
+    d = delayed(t, x, 0.05)
+    assert np.isnan(d[7]) and np.isclose(d[8], 3.0 + 2.0 * (t[8] - 0.05))  # interpolated across the gap
+    assert delayed(t, x, 0.0) is not None and np.array_equal(delayed(t, x, 0.0), x, equal_nan=True)
+
+
+def test_the_line_gives_the_batch_values_one_reading_at_a_time():
+    rng = np.random.default_rng(4)
+    t = np.cumsum(rng.uniform(0.05, 0.15, 400))
+    x = np.sin(t) + rng.normal(0, 0.1, t.size)
+    x[rng.choice(t.size, 20, replace=False)] = np.nan
+    for delay in (0.03, 0.1, 0.27):
+        line = DelayLine(delay)
+        stepped = np.array([line.push(ti, xi) if np.isfinite(xi) else np.nan for ti, xi in zip(t, x)])
+        assert np.allclose(stepped, delayed(t, x, delay), rtol=0, atol=1e-12, equal_nan=True)
+
+
+def _hx711_recording(seed: int, instant: bool = False, noise_counts: float = 2.0, n: int = 3000) -> Recording:
+    """Hand-like presses read at 10 rows/s: the readout is the divider's counts at the row's instant;
+    the reference is the mean force over the 100 ms conversion that ends at the row (``instant``: the
+    force at the row's instant)."""
+    rng = np.random.default_rng(seed)
+    fine = np.arange(n * 100) * 1e-3  # 1 ms steps
+    periods = rng.uniform(1.5, 4.0, 6)
+    phases = rng.uniform(0, 2 * np.pi, 6)
+    f = sum(np.sin(2 * np.pi * fine / p + ph) for p, ph in zip(periods, phases))
+    force = 12.0 * np.clip(f / 3.0, 0.0, None) ** 1.2
+    t = (np.arange(n) + 1) * 0.1
+    idx = np.round(t / 1e-3).astype(int) - 1
+    g = (force[idx] / 10.0) ** 0.8
+    x = np.round(1023 * g / (1 + g) + rng.normal(0, noise_counts, n))
+    if instant:
+        y = force[idx]
+    else:
+        y = force[: n * 100].reshape(n, 100).mean(axis=1)
+    return Recording(t, x, y + rng.normal(0, 0.02, n))
+
+
+def _rmse_on(cal: HeldoutCalibration, rec: Recording) -> float:
+    est, _ = cal.run(rec.t, rec.x)
+    return float(np.sqrt(np.nanmean((est - rec.y) ** 2)))
+
+
+def test_a_reference_averaged_over_its_conversion_gets_a_delay_that_generalises(monkeypatch):
+    rec, other = _hx711_recording(1), _hx711_recording(2)
+    cal, sel = calibrate_recordings([rec], compensate=False)
+    step = next(s for s in sel.steps if s["step"] == "delay")
+    assert step["kept"] and 0.25 <= sel.delay_s / 0.1 <= 0.75 and cal.delay_s == sel.delay_s
+    monkeypatch.setattr(hm, "DELAY_ROWS", ())
+    plain, sel0 = calibrate_recordings([rec], compensate=False)
+    assert plain.delay_s == 0 and not any(s["step"] == "delay" for s in sel0.steps)
+    assert _rmse_on(cal, other) < 0.8 * _rmse_on(plain, other)  # on a recording the calibration never saw
+
+
+def test_an_instantaneous_reference_gets_no_delay():
+    cal, sel = calibrate_recordings([_hx711_recording(3, instant=True, noise_counts=0.3)], compensate=False)
+    step = next(s for s in sel.steps if s["step"] == "delay")
+    assert not step["kept"] and sel.delay_s == 0 and cal.delay_s == 0
+
+
+def test_no_delay_when_a_lag_is_asked_for():
+    """A lag aligns the reference (the estimate of the force at the readout's instant); the delay would
+    undo it, so it is not tried then."""
+    _, sel = calibrate_recordings([_hx711_recording(1)], compensate=False, lag="auto")
+    assert sel.delay_s == 0 and not any(s["step"] == "delay" for s in sel.steps)
+
+
+def test_the_delay_survives_the_file_and_the_stepper():
+    cal, _ = calibrate_recordings([_hx711_recording(1)], compensate=True)
+    assert cal.delay_s > 0
+    again = HeldoutCalibration.from_dict(cal.to_dict())
+    other = _hx711_recording(2, n=600)
+    batch, _ = again.run(other.t, other.x)
+    assert np.array_equal(batch, cal.run(other.t, other.x)[0])
+    st = cal.stepper()
+    stepped = np.array([st.step(x, t)[0] for t, x in zip(other.t, other.x)])
+    assert np.allclose(stepped, batch, rtol=0, atol=1e-9)
+    bad = cal.to_dict()
+    bad["delay_s"] = -0.1
+    with pytest.raises(ValueError, match="delay_s"):
+        HeldoutCalibration.from_dict(bad)
