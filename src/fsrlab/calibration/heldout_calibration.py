@@ -126,7 +126,13 @@ class HeldoutCalibration:
 
 
 class Stepper:
-    """One reading at a time: ``step(x, t) -> (estimate, direction)``; None readings keep the memory."""
+    """One reading at a time: ``step(x, t) -> (estimate, direction)``; None readings keep the memory.
+
+    Parameters
+    ----------
+    cal : HeldoutCalibration
+        The calibration whose :meth:`HeldoutCalibration.run` this gives reading by reading.
+    """
 
     def __init__(self, cal: HeldoutCalibration):
         self.cal = cal
