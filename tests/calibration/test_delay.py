@@ -43,10 +43,12 @@ def test_the_line_gives_the_batch_values_one_reading_at_a_time():
         assert np.allclose(stepped, delayed(t, x, delay), rtol=0, atol=1e-12, equal_nan=True)
 
 
-def _hx711_recording(seed: int, instant: bool = False, noise_counts: float = 2.0, n: int = 3000) -> Recording:
+def _hx711_recording(seed: int, instant: bool = False, noise_counts: float = 2.0, n: int = 3000,
+                     loop: float = 0.0) -> Recording:
     """Hand-like presses read at 10 rows/s: the readout is the divider's counts at the row's instant;
     the reference is the mean force over the 100 ms conversion that ends at the row (``instant``: the
-    force at the row's instant)."""
+    force at the row's instant). ``loop``: the sensor conducts more on unloading than on loading, as an
+    FSR does (a play operator of 5 % of full scale on the force, this share of its output mixed in)."""
     rng = np.random.default_rng(seed)
     fine = np.arange(n * 100) * 1e-3  # 1 ms steps
     periods = rng.uniform(1.5, 4.0, 6)
@@ -55,7 +57,15 @@ def _hx711_recording(seed: int, instant: bool = False, noise_counts: float = 2.0
     force = 12.0 * np.clip(f / 3.0, 0.0, None) ** 1.2
     t = (np.arange(n) + 1) * 0.1
     idx = np.round(t / 1e-3).astype(int) - 1
-    g = (force[idx] / 10.0) ** 0.8
+    sensed = force[idx]
+    if loop:
+        u, r = sensed / sensed.max(), 0.05
+        p = np.empty_like(u)
+        p[0] = u[0]
+        for i in range(1, u.size):
+            p[i] = min(max(p[i - 1], u[i] - r), u[i] + r)
+        sensed = sensed.max() * np.clip(u + loop * (p - u), 0.0, None)
+    g = (sensed / 10.0) ** 0.8
     x = np.round(1023 * g / (1 + g) + rng.normal(0, noise_counts, n))
     if instant:
         y = force[idx]
@@ -84,6 +94,16 @@ def test_an_instantaneous_reference_gets_no_delay():
     cal, sel = calibrate_recordings([_hx711_recording(3, instant=True, noise_counts=0.3)], compensate=False)
     step = next(s for s in sel.steps if s["step"] == "delay")
     assert not step["kept"] and sel.delay_s == 0 and cal.delay_s == 0
+
+
+def test_an_fsr_loop_is_not_taken_for_a_delay():
+    """A sensor whose loop leaves the estimate behind the force (more conductance on unloading), read
+    against an instantaneous reference: a delay would widen the loop, so none is kept, while the
+    memory step finds the loop."""
+    cal, sel = calibrate_recordings([_hx711_recording(5, instant=True, noise_counts=0.3, loop=0.6)], compensate=True)
+    step = next(s for s in sel.steps if s["step"] == "delay")
+    assert not step["kept"] and cal.delay_s == 0
+    assert next(s for s in sel.steps if s["step"] == "memory")["kept"]
 
 
 def test_no_delay_when_a_lag_is_asked_for():

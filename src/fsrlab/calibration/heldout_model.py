@@ -12,9 +12,10 @@ complexity:
    from the readout as it was a fraction of a reading (up to two) earlier, as when a load-cell
    amplifier integrates over its conversion window and hands the result over later (an HX711 at
    10 samples/s beside an ``analogRead``: half a reading). The estimate is still of the reference as
-   recorded, and causal; judged like the lag, with a hysteresis model. On the real recordings
-   (docs/calibration.md) it is kept on 10 of 21 pairs, 0.25–0.75 of a reading, and lowers the
-   geometric mean from 0.98× to 0.93× the oracle polynomial;
+   recorded, and causal; judged with the static curve (a delay corrects estimates that run ahead of
+   the reference; an FSR's loop leaves them behind, so its hysteresis is not taken for a delay). On the
+   real recordings (docs/calibration.md) it is kept on 8 of 21 pairs, 0.25–0.75 of a reading, and
+   lowers the geometric mean from 0.98× to 0.93× the oracle polynomial;
 3. **lag** between reference and readout, only when asked (``lag="auto"``): none unless a shift of
    whole rows wins, judged with a hysteresis model (a shift narrows a loop, so a static curve alone
    takes part of a loop for a lag). By default there is none: the estimate is of the reference as
@@ -446,12 +447,14 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
 
     if lag == 0 and DELAY_ROWS and rows_have_times(recs):
         # Only when the estimate is of the reference as recorded (no lag asked for: a lag aligns the
-        # reference instead). Judged with a hysteresis model, as the lag is: a delay opens or narrows a loop.
-        probe = cur.but(thresholds=PLAY_THRESHOLDS, ridge=LAG_PROBE_RIDGE)
-        won = step("delay", [probe.but(delay=d) for d in DELAY_ROWS], probe)
+        # reference instead). Judged with the static curve: a delay corrects estimates that run ahead of
+        # the reference (a reference that lags); an FSR's loop leaves them behind (it conducts more on
+        # unloading), which a delay would make worse, so the sensor's hysteresis is not taken for a delay.
+        won = step("delay", [cur.but(delay=d) for d in DELAY_ROWS], cur)
         if won is not None:
-            cur = cur.but(delay=won.delay)
-            score(cur)
+            cur = won
+        for d in [d for d in by_delay if d != cur.delay]:  # the other delays' recordings are not needed again
+            del by_delay[d]
     if lag == "auto":
         # Judged with a hysteresis model: a shift of the reference narrows a loop, so a static curve alone
         # would take part of the hysteresis for a lag.
