@@ -41,6 +41,13 @@ def test_the_line_gives_the_batch_values_one_reading_at_a_time():
         line = DelayLine(delay)
         stepped = np.array([line.push(ti, xi) if np.isfinite(xi) else np.nan for ti, xi in zip(t, x)])
         assert np.allclose(stepped, delayed(t, x, delay), rtol=0, atol=1e-12, equal_nan=True)
+    # a millisecond clock at a high rate: many rows share a time, and delays of whole milliseconds land on them
+    t = np.round(np.cumsum(rng.uniform(0.0, 0.003, 3000)), 3)
+    x = rng.normal(size=t.size)
+    for delay in (0.001, 0.0015, 0.004):
+        line = DelayLine(delay)
+        stepped = np.array([line.push(ti, xi) for ti, xi in zip(t, x)])
+        assert np.allclose(stepped, delayed(t, x, delay), rtol=0, atol=1e-12)
 
 
 def _hx711_recording(seed: int, instant: bool = False, noise_counts: float = 2.0, n: int = 3000,

@@ -355,8 +355,9 @@ def _rmse(e):
 
 
 def rows_have_times(recs: list[Recording]) -> bool:
-    """Whether the recordings' rows come at steady times (a delay in seconds means the same on each)."""
-    return all(r.t.size > 2 and np.all(np.diff(r.t) > 0) for r in recs)
+    """Whether the recordings' rows come in time order (repeated times allowed, as a millisecond clock
+    gives at a high rate), so that a delay in seconds means the same on each."""
+    return all(r.t.size > 2 and np.all(np.diff(r.t) >= 0) and np.median(np.diff(r.t)) > 0 for r in recs)
 
 
 def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: int | str = 0,
