@@ -138,3 +138,35 @@ def test_runs_of_different_circuits_are_not_calibrated_together(runs, tmp_path):
     a, b = _two_circuits(runs, tmp_path)
     with pytest.raises(ValueError, match="calibrate runs of one readout together"):
         calibrate_runs([a, b], x="frequency_hz", reference="force_n")
+
+
+def _volts(path, seed=1):
+    """A divider's voltage (5 V supply) logged as a plain column, no divider in the sidecar."""
+    run = fsr_bench_run("hand", seed=seed)
+    cols = {"time_s": run.columns["time_s"], "reading": run.columns["voltage_v"], "force_n": run.columns["force_n"]}
+    return write_run(path, cols, {"units": {"time_s": "s", "reading": "V", "force_n": "N"}})
+
+
+def test_rail_makes_a_voltage_readout_try_the_conductance(tmp_path):
+    """Without --rail a voltage readout is fitted in the readout alone; with --rail 5 the divider's
+    conductance ratio V/(5 − V) is among the candidates, and the file records that full scale."""
+    p = _volts(tmp_path / "v.csv")
+    code, stdout, err = run_cli(["calibrate", p, "--x", "reading", "--json"])
+    assert code == 0, err
+    assert not any(c["name"].startswith("conductance") for c in json.loads(stdout)["candidates"])
+    out = tmp_path / "cal.json"
+    code, stdout, err = run_cli(["calibrate", p, "--x", "reading", "--rail", "5", "--json", "-o", out])
+    assert code == 0, err
+    assert any(c["name"].startswith("conductance") for c in json.loads(stdout)["candidates"])
+    assert json.loads(out.read_text())["calibration"]["static"]["adc"] == 5.0
+
+
+@pytest.mark.parametrize("args, says", [
+    (["--rail", "0"], "> 0"),
+    (["--rail", "2"], "not below"),
+    (["--rail", "5", "--method", "cv"], "held-out"),
+])
+def test_rail_refuses_what_cannot_be_a_full_scale(tmp_path, args, says):
+    p = _volts(tmp_path / "v.csv")
+    code, _, err = run_cli(["calibrate", p, "--x", "reading", *args])
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "--rail" in err and says in err, err

@@ -260,7 +260,7 @@ def _recording(run: Run, x: str, reference: str | None) -> tuple[Recording, str,
 
 
 def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, compensate: bool = False,
-                   lag: int | str = 0) -> RunCalibration:
+                   lag: int | str = 0, rail: float | None = None) -> RunCalibration:
     """Calibrate a readout to its reference from one or more runs, every choice scored held out.
 
     Parameters
@@ -278,6 +278,10 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
     lag : int or "auto"
         Rows the readout lags the reference (default 0: the estimate is of the reference as recorded);
         ``"auto"``: searched, and kept only when a shift of whole rows wins held out.
+    rail : float, optional
+        The readout's full scale for the conductance variable (a divider's supply for its voltage),
+        when the runs' sidecar does not give it; readings at or above it leave the variable out. [unit
+        of the readout]
 
     Returns
     -------
@@ -318,7 +322,7 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
             raise ValueError(f"{run.path}: recorded with {diff[0][0]}, {runs[0].path} with {diff[0][1]}: "
                              "calibrate runs of one readout together")
     try:
-        model, sel = calibrate_recordings(recs, compensate=compensate, lag=lag, rail=_divider_rail(runs[0], x))
+        model, sel = calibrate_recordings(recs, compensate=compensate, lag=lag, rail=_divider_rail(runs[0], x) if rail is None else rail)
     except ValueError as exc:
         names = ", ".join(str(r.path) for r in runs)
         raise ValueError(f"{names}: {x} and {ref}: {exc}") from None

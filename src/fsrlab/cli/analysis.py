@@ -16,7 +16,7 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli.options import (
-    OVERWRITE_HELP, SKIP_HELP, checked, emit_json, fail, farads, fraction, load_run_warned, missing_column, number,
+    OVERWRITE_HELP, SKIP_HELP, checked, emit_json, eng, fail, farads, fraction, load_run_warned, missing_column, number,
     ohms, option_names, out_path, reading_file, seconds, skipped_json, warn,
 )
 from fsrlab.units import STANDARD_GRAVITY
@@ -168,6 +168,7 @@ def calibrate_cmd(
     folds: int = typer.Option(5, "--folds", help="Cross-validation folds [1] (--method cv), ≥ 2 (fewer when the run has fewer cycles or blocks)."),
     r: float = typer.Option(None, "--r", parser=ohms, help="555 R for --x c_fsr_farad [Ω], e.g. 10k (default: the run's sidecar, else 10k)."),
     c_off: float = typer.Option(None, "--c-off", parser=farads, help="C_off for --x c_fsr_farad [F], e.g. 470p (default: sidecar, else 0)."),
+    rail: float = typer.Option(None, "--rail", parser=eng, help="Full scale of a divider's readout [unit of the readout], e.g. 5 for a voltage read across a divider on 5 V, 3.3 on 3.3 V: the FSR's conductance ratio V/(rail − V) is then tried as the curve's variable (held-out method; default: the run's sidecar, or the ADC's full scale for integer counts). Every reading must lie below it."),
     skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=SKIP_HELP),
     output: Path = typer.Option(None, "--output", "-o", parser=out_path, help="Write the calibration to this JSON file."),
     overwrite: bool = typer.Option(False, "--overwrite", help=OVERWRITE_HELP),
@@ -176,7 +177,8 @@ def calibrate_cmd(
     """Calibrate readout → force or stress, every choice scored where it will be used.
 
     Default (held-out): a monotone curve (readout, or a divider's conductance for analogRead
-    counts), then a lag and the hysteresis and creep terms (their correction weighted by the held-out
+    counts or with --rail), then a delay of the reference (a load cell that reports late), a lag
+    (--lag auto) and the hysteresis and creep terms (their correction weighted by the held-out
     error), each kept only when it beats the simpler calibration on another run (or, with one run, on
     later blocks of it) by more than one standard error (the memory also by 5 % of its MSE) --
     otherwise the simpler calibration is written and the output says why. The uncertainty
@@ -206,13 +208,17 @@ def calibrate_cmd(
         fail(f"{asked[0]} needs --method cv (or auto)", "--method")
     fallback_note = None
     if method == "held-out" or (method == "auto" and not asked):
+        if rail is not None and not (math.isfinite(rail) and rail > 0):
+            fail(f"must be a full scale > 0 in the readout's unit, got {rail:g}", "--rail")
         fallback_note = _calibrate_held_out(run_files, x, reference, compensate, unit, lag or "0", skip_bad_rows,
-                                            output, json_out, fall_back=method == "auto")
+                                            output, json_out, fall_back=method == "auto", rail=rail)
         if fallback_note is None:
             return
     if len(run_files) > 1:
         fail(f"--method cv calibrates one run, got {len(run_files)}: several runs are calibrated with --method "
              "held-out", "--method")
+    if rail is not None:
+        fail("is for the held-out method (--method cv takes the divider from the run's sidecar)", "--rail")
     run_file = run_files[0]
     lag = lag or "auto"
     from fsrlab.calibration.document import save_calibration
@@ -327,7 +333,7 @@ def _lag_option(lag: str) -> float | str:
 
 def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, compensate: bool, unit: str | None,
                         lag: str, skip_bad_rows: bool, output: Path | None, json_out: bool,
-                        fall_back: bool) -> str | None:
+                        fall_back: bool, rail: float | None = None) -> str | None:
     """``fsrlab calibrate`` by held-out scoring (:func:`fsrlab.calibration.heldout_runs.calibrate_runs`).
 
     Returns None when done; a note, having done nothing, when ``fall_back`` and a single run is too
@@ -348,6 +354,11 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
         runs.append(run)
     ref = reference or ("stress_pa" if all("stress_pa" in r for r in runs) else "force_n")
     _unit_option(unit, ref)
+    if rail is not None:
+        for run_file, run in zip(run_files, runs):
+            v = np.asarray(run[x], dtype=float)
+            if np.isfinite(v).any() and float(np.nanmax(v)) >= rail:
+                fail(f"{run_file}: {x} reaches {float(np.nanmax(v)):g}, not below the full scale {rail:g}", "--rail")
     if fall_back and len(runs) == 1 and ref in runs[0]:
         both = np.isfinite(runs[0][x]) & np.isfinite(runs[0][ref])
         if int(both.sum()) < MIN_READINGS:
@@ -359,7 +370,7 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
         first = runs[0]
         step = float(np.median(np.diff(first["time_s"]))) if "time_s" in first and first.n_rows > 1 else 1.0
         lag_rows = int(round(lag_s / step)) if step > 0 else 0
-    cal = calibrate_runs(runs, x=x, reference=ref, compensate=compensate, lag=lag_rows)
+    cal = calibrate_runs(runs, x=x, reference=ref, compensate=compensate, lag=lag_rows, rail=rail)
     sel = cal.selection
     fs = cal.full_scale
     refused = [s for s in sel.steps if s["step"] == "memory" and not s["kept"]]
