@@ -474,7 +474,7 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
         scored[mem] = (e_s + alpha * (e_m - e_s), ids, est_s + alpha * (est_m - est_s), parts_s)
         cur = mem
     sel.lag_rows = cur.lag
-    sel.delay_s = cur.delay * row_s
+    sel.delay_s = float(f"{cur.delay * row_s:.10g}")  # without the float noise of the median step
     err, _, est, parts = scored[cur]
     fs_all = max(float(np.ptp(np.concatenate([r.y[r.usable] for r in recs]))), 1e-12)
 
