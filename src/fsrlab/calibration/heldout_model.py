@@ -31,10 +31,10 @@ complexity:
    Networks* 5, 241, 1992; L. Breiman, *Machine Learning* 24, 49, 1996), so a memory that holds only
    in part is shrunk rather than taken whole or dropped.
 
-Steps 2 to 4 are kept only when they **win**: the delay and the lag by a held-out mean squared error lower by more
-than one standard error (paired over chunks), lower in most held-out recordings or blocks and higher
-in none; the memory by a held-out MSE lower by more than one standard error and by at least
-:data:`MIN_GAIN` of the plain curve's. Otherwise the simpler calibration is kept, and the
+Steps 2 to 4 are kept only when they **win**: the delay and the lag by a held-out mean squared error
+lower by more than one standard error (paired over chunks), lower in most held-out recordings or
+blocks and higher in none; the memory by a held-out MSE lower by more than one standard error and by
+at least :data:`MIN_GAIN` of the plain curve's. Otherwise the simpler calibration is kept, and the
 :class:`Selection` says why. On real recordings (docs/calibration.md) a rule that kept any gain let a
 compensation fitted on fast hand presses make a slow motor triangle worse; taking hysteresis and creep
 one after the other, each by the strict rule, kept a memory on 11 of 21 train → test pairs where the
@@ -324,8 +324,8 @@ def _held_out(splits, ch: _Choice, sign: int, adc, cache: _Cache):
         for j, p in enumerate(test_parts):
             e = cal.curve(p.rec.x)
             if cal.has_memory:
-                e = e + cache.memory_term((i, ch.variable, ch.segments, ch.lag, ch.delay, id(p.rec)), p.rec, cal.level, ch,
-                                          cal.weights)
+                key = (i, ch.variable, ch.segments, ch.lag, ch.delay, id(p.rec))
+                e = e + cache.memory_term(key, p.rec, cal.level, ch, cal.weights)
             y = _shifted(p.rec, ch.lag)
             idx = np.flatnonzero(p.rows)
             rows = p.rows.copy()
