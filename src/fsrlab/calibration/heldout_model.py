@@ -105,7 +105,8 @@ class Selection:
     lag_rows : int
         The lag applied. [rows]
     heldout_rmse, heldout_rmse_plain : float
-        Held-out RMSE of the calibration chosen and of its static curve. [unit of the reference]
+        Held-out RMSE of the calibration chosen and of it without memory (its static curve, with the
+        delay or lag kept). [unit of the reference]
     gain_spread : float or None
         RMS relative gain error of the held-out recordings (two or more recordings). [1]
     delay_s : float
@@ -420,7 +421,6 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
     for other in statics:
         if other != cur:
             scored.pop(other, None)
-    sel.heldout_rmse_plain = _rmse(scored[cur][0])
 
     def step(name: str, trials: list[_Choice], base: _Choice) -> _Choice | None:
         """The best trial when it wins over ``base`` (see the module's notes), else None; recorded."""
@@ -464,6 +464,7 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
         if won is not None:
             cur = cur.but(lag=won.lag)
             score(cur)
+    sel.heldout_rmse_plain = _rmse(score(cur)[0])  # the calibration the memory is tried on (delay, lag kept)
     alpha, mem = 1.0, None
     if compensate:
         mem, alpha = _memory_step(sel, score, scored, cache, cur)

@@ -404,9 +404,16 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
         table.add_row(f"held-out RMSE without compensation ({u})", f"{k * sel.heldout_rmse_plain:.4g}")
     table.add_row(f"readout range ({cal.x_unit or '1'})", f"{cal.x_range[0]:.6g} … {cal.x_range[1]:.6g}")
     table.add_row("relative uncertainty between runs (%)", f"{100 * cal.model.uncertainty.relative:.3g}")
+    scores = {c["name"]: c["heldout_rmse"] for c in sel.candidates}
+    first = sel.steps[0]
+    table.add_row(f"static curve: {first['chosen']}", f"chosen of {first['tried']}, held-out RMSE "
+                  f"{k * scores[first['chosen']]:.4g} {u}")
     for s in sel.steps[1:]:
         kept = "kept" + (f" (weight {s['weight']:.2f})" if "weight" in s else "")
-        table.add_row(f"{s['step']}: {s['tried']}", kept if s["kept"] else "not kept")
+        rmse = scores.get(s["tried"])
+        table.add_row(f"{s['step']}: {s['tried']}", (kept if s["kept"] else "not kept")
+                      + ("" if rmse is None else f", held-out RMSE {k * rmse:.4g} {u}"
+                         + (" at weight 1" if s.get("weight", 1.0) < 1.0 else "")))
     console.print(table)
     if compensate and refused:
         console.print(f"compensation: {refused[0]['step']} not kept: {refused[0]['why']}")
