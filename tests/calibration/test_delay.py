@@ -158,3 +158,22 @@ def test_apply_and_the_live_estimator_agree_with_a_delay(tmp_path):
     u = np.array([np.nan if s[1] is None else s[1] for s in stepped])
     assert np.allclose(e, batch["force_n_estimate"], rtol=0, atol=1e-9, equal_nan=True)
     assert np.allclose(u, batch["force_n_uncertainty"], rtol=0, atol=1e-9, equal_nan=True)
+
+
+def test_the_run_report_names_the_delay(tmp_path):
+    """A run's measurement report states the delay of the calibration it applied (the file's value)."""
+    import json
+
+    from fsrlab.calibration.heldout_runs import calibrate_runs
+    from fsrlab.io.runwriter import write_run
+    from fsrlab.reports.run_report import write_run_report
+
+    r = _hx711_recording(1, n=1500)
+    path = write_run(tmp_path / "r.csv", {"time_s": r.t, "reading": r.x, "force_n": r.y},
+                     {"units": {"time_s": "s", "reading": "counts", "force_n": "N"}})
+    cal = calibrate_runs([path], x="reading", reference="force_n")
+    assert cal.model.delay_s > 0
+    write_run_report(path, tmp_path / "rep", calibration=cal)
+    doc = json.loads((tmp_path / "rep" / "report.json").read_text())
+    assert doc["calibration"]["delay_s"] == cal.model.delay_s
+    assert "delay of the reference" in (tmp_path / "rep" / "index.html").read_text()

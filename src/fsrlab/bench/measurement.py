@@ -140,7 +140,7 @@ class RunReport:
         (None when not determined); empty with ``creep_reason``.
     creep_reason : str or None
     calibration : dict or None
-        ``model``, ``x``, ``y``, ``cv_rmse``, ``r2``, ``lag_s``, ``uncertainty_max``,
+        ``model``, ``x``, ``y``, ``cv_rmse``, ``r2``, ``lag_s``, ``delay_s`` (held-out), ``uncertainty_max``,
         ``uncertainty_median``, ``compensated``, ``source``, ``full_scale``; None with ``calibration_reason``.
     calibration_reason : str or None
     estimate : ReadoutHysteresis or None
@@ -373,7 +373,7 @@ def _calibration_summary(cal, source: str) -> dict:
     if isinstance(cal, RunCalibration):
         m = cal.model
         return {"model": cal.model_name, "x": cal.x_name, "y": cal.y_name, "y_unit": cal.y_unit,
-                "cv_rmse": cal.selection.heldout_rmse, "r2": cal.r2, "lag_s": cal.lag_s,
+                "cv_rmse": cal.selection.heldout_rmse, "r2": cal.r2, "lag_s": cal.lag_s, "delay_s": m.delay_s,
                 "uncertainty_max": float(m.uncertainty.table.max()), "uncertainty_median": float(np.median(m.uncertainty.table)),
                 "compensated": m.has_memory, "compensation_he_percent": None, "full_scale": cal.full_scale,
                 "source": source, "scheme": cal.selection.scheme}

@@ -208,6 +208,8 @@ def build_sections(rep, outdir: Path) -> list[Section]:
                 ["held-out RMSE" if held else "CV RMSE", f"{_f(cal['cv_rmse'], '.4g')} {u}"],
                 ["R² (in sample)", _f(cal["r2"], ".4f")],
                 ["lag of the readout", f"{_f(cal['lag_s'], '.3f')} s"],
+                *([["delay of the reference (estimate from the readout this much earlier)",
+                    f"{_f(cal['delay_s'], '.3f')} s"]] if cal.get("delay_s") else []),
                 ["standard uncertainty, median / largest bin", f"{_f(cal['uncertainty_median'], '.4g')} / "
                                                                 f"{_f(cal['uncertainty_max'], '.4g')} {u}"],
                 ["causal compensation", "yes" if cal["compensated"] else "no"]]
