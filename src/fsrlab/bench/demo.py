@@ -361,7 +361,7 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
         say(f"      known-weight calibration not possible: {exc}")
     result.numbers["calibration"] = {"model": cal.model_name, "reference": cal.y_name,
                                      "cv_rmse": cal.selection.heldout_rmse, "unit": cal.y_unit, "lag_s": cal.lag_s,
-                                     "scheme": cal.selection.scheme}
+                                     "delay_s": cal.model.delay_s, "scheme": cal.selection.scheme}
     if known is not None:
         result.numbers["known_weight_calibration"] = {"model": known.model_name, "reference": known.y_name,
                                                       "cv_rmse": known.cv_rmse, "unit": known.y_unit}
