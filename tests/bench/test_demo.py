@@ -174,3 +174,38 @@ def test_demo_draws_the_reproduction_report_while_the_dead_weights_are_recorded(
     with pytest.raises(RuntimeError, match="cannot"):
         run_demo(tmp_path / "again", SHORT, device="virtual")
     assert len(started) == 2 and started[-1]._proc.poll() is not None
+
+
+def test_a_killed_demos_hidden_folder_is_removed_and_does_not_block_the_next(tmp_path, monkeypatch):
+    """A demo killed outright (``kill -9``) cannot remove the hidden folder it records in: the next demo
+    removes it when its process is gone (not one whose process still runs) and does not take the
+    directory for one holding results."""
+    import os
+    import subprocess
+    import sys
+
+    from fsrlab.bench import demo as demo_mod
+
+    out = tmp_path / "d"
+    out.mkdir()
+    ended = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    stale = out / f"{demo_mod.STAGING_PREFIX}{int(ended.stdout)}-abc"
+    stale.mkdir()
+    (stale / "calibration-run.csv").write_text("time_s,frequency_hz\n0.02,51")
+    running = out / f"{demo_mod.STAGING_PREFIX}{os.getpid()}-def"
+    running.mkdir()
+    assert demo_mod.remove_stale_staging(out) == [stale]
+    assert not stale.exists() and running.exists()
+    running.rmdir()
+    stale.mkdir()
+    reached = []
+
+    def fake_run_demo(out_dir, *args, **kwargs):
+        reached.append(out_dir)
+        raise SystemExit(0)
+
+    from fsrlab.reports import demo as reports_demo
+
+    monkeypatch.setattr(reports_demo, "run_demo", fake_run_demo)
+    code, _, err = run_cli(["demo", "--out", out, "--device", "virtual", "--no-paper"])
+    assert code == 0 and reached and not stale.exists() and "removed" in err, err

@@ -32,7 +32,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
-__all__ = ["DEMO_SENSOR", "demo_sensor", "DemoSettings", "DemoResult", "DemoSteps", "DemoChain", "run_chain"]
+__all__ = ["DEMO_SENSOR", "demo_sensor", "DemoSettings", "DemoResult", "DemoSteps", "DemoChain", "run_chain",
+           "remove_stale_staging"]
+
+#: Name of the hidden folder a run is recorded in before it is renamed into the output directory:
+#: the recording process's id, then a unique part. [1]
+STAGING_PREFIX = ".recording-"
 
 DEMO_SENSOR = "paper-a201-1"
 """The sensor the demo runs on (:func:`demo_sensor`): ``paper-a201-1`` (the first of the four sensors
@@ -186,6 +191,40 @@ class DemoChain:
     steps: DemoSteps
 
 
+def remove_stale_staging(out) -> list[Path]:
+    """Remove the hidden folders (``.recording-PID-…``) that a demo killed outright left in ``out``:
+    those whose process no longer runs. A demo ended any other way removes its own; one still running
+    keeps its. Returns the folders removed.
+
+    Parameters
+    ----------
+    out : path-like
+        The demo's output directory (nothing happens when it does not exist).
+    """
+    import os
+    import shutil
+
+    out = Path(out)
+    removed = []
+    if not out.is_dir():
+        return removed
+    for entry in out.iterdir():
+        head, _, rest = entry.name.partition(STAGING_PREFIX)
+        pid = rest.split("-", 1)[0]
+        if head or not entry.is_dir() or not pid.isdigit():
+            continue
+        try:
+            os.kill(int(pid), 0)
+            continue  # its process still runs
+        except ProcessLookupError:
+            pass
+        except (PermissionError, OverflowError):
+            continue  # another user's, or not a process id: left alone
+        shutil.rmtree(entry, ignore_errors=True)
+        removed.append(entry)
+    return removed
+
+
 def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", total: int = 4,
               say: Callable[[str], None] = lambda line: None,
               after_spring: Callable[[], None] | None = None) -> DemoChain:
@@ -303,7 +342,7 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
               f"{'' if bench == 'twin' else ' (the twin is not available: ' + reason + ')'}: sensor {sensor_text}; "
               f"{s.cycles} cycles 0 → {s.peak_pa / 1e3:g} kPa → 0 of {s.period_s:g} s, twice (calibration run, test run); "
               f"{pace}")
-    staging = Path(tempfile.mkdtemp(prefix=".recording-", dir=out))
+    staging = Path(tempfile.mkdtemp(prefix=f"{STAGING_PREFIX}{os.getpid()}-", dir=out))
     try:
         f1 = later(spring, "calibration-run.csv", s.seed, "calibration run", spring.duration_s)
         f2 = later(spring, "test-run.csv", s.seed + 1, "test run", spring.duration_s)

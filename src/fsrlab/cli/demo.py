@@ -56,6 +56,10 @@ def demo(
     for parent in (out, *out.parents):
         if parent.exists() and not parent.is_dir():
             fail(f"{parent} is a file, not a directory", "--out")
+    from fsrlab.bench.demo import remove_stale_staging
+
+    for gone in remove_stale_staging(out):  # left by a demo killed outright: never a finished run
+        print(f"fsrlab demo: removed {gone}, left by a demo that was killed", file=sys.stderr)
     checked(out, "--out", overwrite=overwrite, kind="dir")
     if device == "twin":
         from fsrlab.bench.protocols import twin_status
