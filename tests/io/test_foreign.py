@@ -411,3 +411,18 @@ def test_help_ends_with_examples_that_run(tmp_path, monkeypatch):
         code, out, err = run_cli([*args, "--overwrite"])
         assert code == 0 and out, err
         assert load_run(tmp_path / "run.csv")["force_n"].size == 400
+
+
+def test_a_separator_in_every_row_is_not_a_header(tmp_path):
+    """A logger that writes ``526 - 101.7`` (reading, a dash, grams) on every line and no header: the
+    first line is data like the others, none is dropped; a header above such rows is still one."""
+    text = "526 - 101.74713\n515 - 99.85449\n516 - 94.50384\n"
+    code, out, err, run = _import(tmp_path, text, "--rate", "10", "--reading", "1", "--force", "3",
+                                  "--force-unit", "g")
+    assert code == 0, err
+    assert run["reading"].tolist() == [526, 515, 516] and "no header" in out
+    assert run["force_n"] == pytest.approx(np.array([101.74713, 99.85449, 94.50384]) * 9.80665e-3, rel=1e-12)
+    code, out, err, run = _import(tmp_path, "fsr sep grams\n" + text, "--rate", "10", "--force-unit", "g",
+                                  "--force", "grams", name="with_header.csv")
+    assert code == 0, err
+    assert run["reading"].tolist() == [526, 515, 516] and "header on line 1" in out

@@ -197,6 +197,21 @@ def _sniff(lines: Sequence[str]) -> str:
     return best
 
 
+def _looks_like_header(rows: list) -> bool:
+    """Whether the first of ``rows`` (line number, cells) is a header: a cell of it is not a number in a
+    column whose cells below it (up to 20 rows, a units row among them) are mostly numbers."""
+    first = rows[0][1]
+    words = [j for j, c in enumerate(first) if c and not is_number(c)]
+    below = [r for _, r in rows[1:21]]
+    if not words or not below:
+        return bool(words)
+    for j in words:
+        cells = [r[j] for r in below if j < len(r) and r[j]]
+        if cells and sum(is_number(c) for c in cells) > len(cells) / 2:
+            return True
+    return False
+
+
 def read_table(path: str | os.PathLike, header: bool | None = None, skip_lines: int = 0) -> Table:
     """Read a foreign CSV file's cells.
 
@@ -205,7 +220,9 @@ def read_table(path: str | os.PathLike, header: bool | None = None, skip_lines: 
     path : str or path-like
         The file.
     header : bool, optional
-        Whether the first line read is a header; None: it is when one of its cells is not a number.
+        Whether the first line read is a header; None: it is when one of its cells is not a number in a
+        column that holds numbers below it (a column of text or separators in every row, such as the
+        ``-`` of ``526 - 101.7``, makes no header: that line is data).
     skip_lines : int
         Lines to leave out at the top (a logger's preamble), before comments and blanks are. [lines]
 
@@ -232,7 +249,7 @@ def read_table(path: str | os.PathLike, header: bool | None = None, skip_lines: 
     delimiter = _sniff([ln for _, ln in numbered[:50]])
     rows = [(k, _split(ln, delimiter)) for k, ln in numbered]
     if header is None:
-        header = any(c and not is_number(c) for c in rows[0][1])
+        header = _looks_like_header(rows)
     names: list[str] = []
     header_line, units_row = None, []
     if header:
