@@ -177,3 +177,15 @@ def test_the_run_report_names_the_delay(tmp_path):
     doc = json.loads((tmp_path / "rep" / "report.json").read_text())
     assert doc["calibration"]["delay_s"] == cal.model.delay_s
     assert "delay of the reference" in (tmp_path / "rep" / "index.html").read_text()
+
+
+def test_a_time_that_goes_back_starts_the_delay_again():
+    """Two logs one after the other (the time restarts): each is delayed on its own, one reading at a
+    time as in the batch, and no reading of one log is taken for the other's."""
+    t = np.r_[np.arange(10) * 0.1, np.arange(10) * 0.1]
+    x = np.r_[np.arange(10.0), 100 + np.arange(10.0)]
+    d = delayed(t, x, 0.05)
+    assert d[10] == 100.0 and np.allclose(d[11:], 100 + np.arange(1, 10) - 0.5)
+    assert np.allclose(d[1:10], np.arange(1, 10) - 0.5)
+    line = DelayLine(0.05)
+    assert np.allclose([line.push(a, b) for a, b in zip(t, x)], d, rtol=0, atol=1e-12)

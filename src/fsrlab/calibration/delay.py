@@ -23,7 +23,8 @@ def delayed(t, x, delay_s: float) -> np.ndarray:
     """The readings ``x`` as they were ``delay_s`` earlier, linear between readings.
 
     Before the first reading, the first reading; a missing reading (NaN) stays missing, and its
-    neighbours interpolate across it.
+    neighbours interpolate across it. Where the time goes back (two logs one after the other), the
+    delay starts again as at the first reading.
 
     Parameters
     ----------
@@ -38,6 +39,9 @@ def delayed(t, x, delay_s: float) -> np.ndarray:
     if not delay_s > 0 or x.size == 0:
         return x
     t = np.asarray(t, dtype=float)
+    back = np.flatnonzero(np.diff(t) < 0) + 1  # where the time goes back: each stretch on its own
+    if back.size:
+        return np.concatenate([delayed(tt, xx, delay_s) for tt, xx in zip(np.split(t, back), np.split(x, back))])
     ok = np.isfinite(x) & np.isfinite(t)
     if not ok.any():
         return x
@@ -63,6 +67,8 @@ class DelayLine:
         if not self.delay_s > 0:
             return x
         past = self._past
+        if past and t < past[-1][0]:  # the time went back: start again, as at the first reading
+            past.clear()
         past.append((t, x))
         when = t - self.delay_s
         while len(past) > 2 and past[1][0] <= when:  # keep one reading at or before the instant asked for
