@@ -139,10 +139,9 @@ def test_the_delay_survives_the_file_and_the_stepper():
 def test_apply_and_the_live_estimator_agree_with_a_delay(tmp_path):
     """What ``fsrlab apply`` writes and what ``measure``/``live`` step (``live_estimator``) are the same
     estimates and uncertainties when the calibration holds a delay."""
-    from fsrlab.calibration.apply import apply_calibration
-    from fsrlab.calibration.estimator import live_estimator
     from fsrlab.calibration.heldout_runs import calibrate_runs
     from fsrlab.io.runwriter import write_run
+    from stepping import assert_steps_as_batch
 
     paths = []
     for seed in (1, 2):
@@ -151,13 +150,7 @@ def test_apply_and_the_live_estimator_agree_with_a_delay(tmp_path):
                                {"units": {"time_s": "s", "reading": "counts", "force_n": "N"}}))
     cal = calibrate_runs([paths[0]], x="reading", reference="force_n", compensate=True)
     assert cal.model.delay_s > 0
-    batch = apply_calibration(cal, paths[1])
-    est = live_estimator(cal)
-    stepped = [est.step(x, t) for x, t in zip(batch["reading"], batch["time_s"])]
-    e = np.array([np.nan if s[0] is None else s[0] for s in stepped])
-    u = np.array([np.nan if s[1] is None else s[1] for s in stepped])
-    assert np.allclose(e, batch["force_n_estimate"], rtol=0, atol=1e-9, equal_nan=True)
-    assert np.allclose(u, batch["force_n_uncertainty"], rtol=0, atol=1e-9, equal_nan=True)
+    assert_steps_as_batch(cal, paths[1])
 
 
 def test_the_run_report_names_the_delay(tmp_path):

@@ -13,12 +13,12 @@ import pytest
 from clirun import run_cli
 from fsrlab.calibration.apply import apply_calibration
 from fsrlab.calibration.document import load_calibration, save_calibration
-from fsrlab.calibration.estimator import live_estimator
 from fsrlab.calibration.heldout_runs import RunCalibration, calibrate_runs
 from fsrlab.errors import ProvenanceError
 from fsrlab.io.runformat import load_run
 from fsrlab.io.runwriter import write_run
 from fsrlab.virtual.handloaded import fsr_bench_run
+from stepping import assert_steps_as_batch
 
 
 def _write(path, kind, seed, **kw):
@@ -51,14 +51,7 @@ def test_the_file_gives_the_same_estimates(cal, runs, tmp_path):
 
 
 def test_stepping_gives_the_batch_estimates_and_uncertainties(cal, runs):
-    run = load_run(runs["motor"])
-    batch = apply_calibration(cal, run)
-    est = live_estimator(cal)
-    stepped = [est.step(x, t) for x, t in zip(run["reading"], run["time_s"])]
-    e = np.array([np.nan if s[0] is None else s[0] for s in stepped])
-    u = np.array([np.nan if s[1] is None else s[1] for s in stepped])
-    assert np.allclose(e, batch["force_n_estimate"], rtol=0, atol=1e-9, equal_nan=True)
-    assert np.allclose(u, batch["force_n_uncertainty"], rtol=0, atol=1e-9, equal_nan=True)
+    assert_steps_as_batch(cal, load_run(runs["motor"]))
 
 
 def test_margin_only_decides_what_is_reported_not_the_memory(cal, runs):
