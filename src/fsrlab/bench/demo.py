@@ -383,9 +383,9 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
     # with hardware has; else the stress the bench applied.
     reference = "force_n" if "force_n" in calrun and np.isfinite(calrun["force_n"]).mean() > 0.5 else "stress_pa"
     what = "the load cell's force (HX711)" if reference == "force_n" else "the applied stress"
-    t0 = step(f"calibration: the calibration run against {what}, every choice (curve, delay of the reference, hysteresis and creep "
-              "compensation) scored on later blocks of the run and kept only when it wins there; and a known-weight "
-              "calibration on the dead weights (m·g)")
+    t0 = step(f"calibration: the calibration run against {what}, every choice (curve, delay of the reference, "
+              "hysteresis and creep compensation) scored on later blocks of the run and kept only when it wins there; "
+              "and a known-weight calibration on the dead weights (m·g)")
     cal = calibrate_runs(calrun, x="frequency_hz", reference=reference, compensate=True)
     refused = [s for s in cal.selection.steps if s["step"] == "memory" and not s["kept"]]
     if refused:
