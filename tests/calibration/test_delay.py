@@ -182,3 +182,26 @@ def test_a_time_that_goes_back_starts_the_delay_again():
     assert np.allclose(d[1:10], np.arange(1, 10) - 0.5)
     line = DelayLine(0.05)
     assert np.allclose([line.push(a, b) for a, b in zip(t, x)], d, rtol=0, atol=1e-12)
+
+
+def _half_row_late(seed: int, sigma: float, n: int = 8000, rate_hz: float = 100.0) -> Recording:
+    """A readout linear in the force, beside a reference that reports the force half a row earlier with
+    white noise of ``sigma`` newtons (the truth: a delay of 0.5 rows, closed form)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / rate_hz
+    force = lambda tt: 10 + 8 * np.sin(2 * np.pi * 0.7 * tt) + 4 * np.sin(2 * np.pi * 0.23 * tt + 1)  # noqa: E731
+    return Recording(t, 50 + 20 * force(t) + rng.normal(0, 0.5, n), force(t - 0.5 / rate_hz) + rng.normal(0, sigma, n))
+
+
+def test_a_delay_that_saves_less_than_min_gain_of_the_error_is_not_kept():
+    # quiet reference: the half-row delay is most of the error, and it is kept
+    _, sel = calibrate_recordings([_half_row_late(1, 0.05)], compensate=False)
+    step = next(s for s in sel.steps if s["step"] == "delay")
+    assert step["kept"] and sel.delay_s == pytest.approx(0.005)
+    # noisy reference: the same delay still wins by several standard errors in every block, but saves
+    # under MIN_GAIN (5 %) of the held-out MSE, so the simpler calibration is kept and the step says why
+    _, sel = calibrate_recordings([_half_row_late(1, 0.6)], compensate=False)
+    step = next(s for s in sel.steps if s["step"] == "delay")
+    assert step["gain"] > 3 * step["se"] and min(step["heldout_gain_by_part"]) > 0
+    assert not step["kept"] and sel.delay_s == 0.0
+    assert f"less than {100 * hm.MIN_GAIN:.0f} %" in step["why"]

@@ -98,6 +98,29 @@ def test_monotone_curve_extrapolates_linearly_in_the_readout_with_its_last_slope
     assert np.max(np.abs(curve(x) - y)) < 0.05 * np.ptp(y)
 
 
+def test_log_variable_is_the_oriented_logarithm_and_its_curve_inverts_it():
+    # closed form: v = sign·ln x; the reading back from a knot is exp(sign·v)
+    x = np.array([2.0, 20.0, 200.0, 2000.0])
+    assert readout_variable(x, "log", -1, None) == pytest.approx(-np.log(x))
+    assert np.isfinite(readout_variable(np.array([0.0, -1.0]), "log", 1, None)).all()
+    y = 30.0 / x ** 0.8  # a resistance-like reading falling as a power law of the force
+    xs = np.geomspace(2.0, 2000.0, 300)
+    curve, _ = fit_monotone(xs, 30.0 / xs ** 0.8, "log", 8, -1, None)
+    straight, _ = fit_monotone(xs, 30.0 / xs ** 0.8, "readout", 8, -1, None)
+    assert all(curve._readout_at(k) == pytest.approx(v) for k, v in zip(curve.knots, np.exp(-curve.knots)))
+    grid = np.geomspace(1.0, 4000.0, 400)
+    assert np.all(np.diff(curve(grid)) <= 1e-9)  # falls as the reading rises: monotone in the force's sense
+    # eight segments in ln x follow the power law (knots at quantiles, spread over three decades); eight
+    # in x leave most of its steep end to one straight piece
+    rms = lambda c: float(np.sqrt(np.mean((c(xs) - 30.0 / xs ** 0.8) ** 2)))  # noqa: E731
+    assert rms(curve) < 0.01 * np.ptp(y) and rms(curve) < rms(straight) / 5
+    again = MonotoneCurve.from_dict(curve.to_dict())
+    assert np.array_equal(again(grid), curve(grid))
+    below = curve(np.array([1.0, 0.5]))  # beyond the top (readings below the smallest): straight in the readout
+    assert (below[1] - below[0]) / 0.5 == pytest.approx((curve(np.array([1.0]))[0] - curve(np.array([2.0]))[0]) / 1.0,
+                                                        rel=1e-6)
+
+
 def test_curve_round_trips_and_refuses_a_decreasing_segment():
     x = np.linspace(0, 1, 50)
     curve, _ = fit_monotone(x, 3 * x, "readout", 2, 1, None)

@@ -6,8 +6,9 @@ readout, reference) and returns a :class:`HeldoutCalibration`. Every choice is s
 complexity:
 
 1. **static curve** (:mod:`fsrlab.calibration.monotone`): straight line in the readout, then more
-   segments, then the divider's conductance ratio; of the candidates whose held-out error is within
-   one standard error of the best, the simplest;
+   segments, in the divider's conductance ratio (ADC counts or a rail given) and in the logarithm of
+   the readout (readings all above zero: a power law is a straight line there); of the candidates
+   whose held-out error is within one standard error of the best, the simplest;
 2. **delay** of the reference (:mod:`fsrlab.calibration.delay`, :data:`DELAY_ROWS`): the estimate made
    from the readout as it was a fraction of a reading (up to two) earlier, as when a load-cell
    amplifier integrates over its conversion window and hands the result over later (an HX711 at
@@ -32,9 +33,9 @@ complexity:
    in part is shrunk rather than taken whole or dropped.
 
 Steps 2 to 4 are kept only when they **win**: the delay and the lag by a held-out mean squared error
-lower by more than one standard error (paired over chunks), lower in most held-out recordings or
-blocks and higher in none; the memory by a held-out MSE lower by more than one standard error and by
-at least :data:`MIN_GAIN` of the plain curve's. Otherwise the simpler calibration is kept, and the
+lower by more than one standard error (paired over chunks) and by at least :data:`MIN_GAIN` of the
+simpler calibration's, lower in most held-out recordings or blocks and higher in none; the memory by
+a held-out MSE lower by more than one standard error and by at least :data:`MIN_GAIN`. Otherwise the simpler calibration is kept, and the
 :class:`Selection` says why. On real recordings (docs/calibration.md) a rule that kept any gain let a
 compensation fitted on fast hand presses make a slow motor triangle worse; taking hysteresis and creep
 one after the other, each by the strict rule, kept a memory on 11 of 21 train → test pairs where the
@@ -62,13 +63,15 @@ from fsrlab.calibration.operators import CREEP_TIME_CONSTANTS_S, PLAY_THRESHOLDS
 __all__ = ["STATIC_CANDIDATES", "RIDGES", "HeldoutCalibration", "LevelUncertainty", "Selection",
            "calibrate_recordings"]
 
-#: Static candidates, simplest first: (readout variable, segments). [1]
-STATIC_CANDIDATES = (("readout", 1), ("readout", 2), ("conductance", 1), ("readout", 4), ("conductance", 2),
-                     ("conductance", 4), ("readout", 8), ("conductance", 8))
+#: Static candidates, simplest first: (readout variable, segments). ``log`` only when every reading
+#: of the calibration data is above zero, ``conductance`` only with a rail (:func:`calibrate_recordings`). [1]
+STATIC_CANDIDATES = (("readout", 1), ("readout", 2), ("conductance", 1), ("log", 1), ("readout", 4), ("conductance", 2),
+                     ("log", 2), ("conductance", 4), ("log", 4), ("readout", 8), ("conductance", 8), ("log", 8))
 #: Ridge weights tried for the memory terms (relative to the number of readings). [1]
 RIDGES = (1e-3, 1e-2, 1e-1, 1.0)
-#: Least held-out MSE a memory must save, a fraction of the simpler calibration's (5 %: 2.5 % of its
-#: RMSE): a smaller gain held out within one run is not worth terms another recording may not share. [1]
+#: Least held-out MSE a delay, a lag or a memory must save, a fraction of the simpler calibration's
+#: (5 %: 2.5 % of its RMSE): a smaller gain held out within one run is not worth terms another recording
+#: may not share. [1]
 MIN_GAIN = 0.05
 #: The memory models tried, each with every ridge weight: (play thresholds, creep time constants,
 #: growing with the level). [1]
@@ -362,7 +365,7 @@ def rows_have_times(recs: list[Recording]) -> bool:
 
 
 def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: int | str = 0,
-                         variables=("readout", "conductance"), rail: float | None = None
+                         variables=("readout", "conductance", "log"), rail: float | None = None
                          ) -> tuple[HeldoutCalibration, Selection]:
     """Choose and fit a calibration on held-out recordings or blocks (see the module's notes).
 
@@ -375,7 +378,8 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
     lag : int or "auto"
         Rows the readout lags the reference (default 0), or ``"auto"``: 0 unless a shift wins.
     variables : sequence of str
-        Readout variables tried (``conductance`` only with a rail: ADC counts, or ``rail`` given).
+        Readout variables tried (``conductance`` only with a rail: ADC counts, or ``rail`` given;
+        ``log`` only when every usable reading is above zero).
     rail : float, optional
         The readout's full scale when it is not ADC counts: a divider's supply voltage for its
         voltage (the conductance ratio is then V/(Vcc − V), or its mirror). [unit of the readout]
@@ -408,8 +412,9 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
         return scored[ch]
 
     fixed_lag = 0 if lag == "auto" else int(lag)
+    positive = all(np.min(r.x[r.usable]) > 0 for r in recs if r.usable.any())  # the log variable is defined
     statics = [_Choice(v, k, lag=fixed_lag) for v, k in STATIC_CANDIDATES
-               if v in variables and (v != "conductance" or adc is not None)]
+               if v in variables and (v != "conductance" or adc is not None) and (v != "log" or positive)]
     for ch in statics:
         score(ch)
     best = min(statics, key=lambda c: _rmse(scored[c][0]))
@@ -431,16 +436,20 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
         ch = min(trials, key=lambda c: _rmse(scored[c][0]))
         gain, se = paired_gain(scored[base][0], scored[ch][0], scored[base][1])
         folds = _fold_gains(scored[base], scored[ch])
-        # one standard error, and no held-out recording or block made worse, most made better
-        kept = gain > se and min(folds) >= 0 and sum(f > 0 for f in folds) > len(folds) / 2
+        # one standard error and MIN_GAIN, and no held-out recording or block made worse, most made better
+        least = MIN_GAIN * float(np.mean(scored[base][0] ** 2))
         lower = sum(f > 0 for f in folds)
+        wins = gain > se and min(folds) >= 0 and lower > len(folds) / 2
+        kept = wins and gain >= least
+        head = f"held-out MSE lower by {gain:.4g} ± {se:.4g}"
+        why = (f"{head} (more than one standard error and {100 * MIN_GAIN:.0f} % of the simpler calibration's), "
+               f"lower in {lower} of {len(folds)} held-out parts, higher in none" if kept else
+               f"{head}, lower in {lower} of {len(folds)} held-out parts: less than {100 * MIN_GAIN:.0f} % of the "
+               "simpler calibration's, so the simpler calibration is kept" if wins else
+               f"{head}, lower in {lower} of {len(folds)} held-out parts: not more than one standard error in most "
+               "parts without a loss in any, so the simpler calibration is kept")
         sel.steps.append({"step": name, "tried": ch.name, "gain": gain, "se": se, "kept": bool(kept),
-                          "heldout_gain_by_part": folds,
-                          "why": (f"held-out MSE lower by {gain:.4g} ± {se:.4g} (more than one standard error), "
-                                  f"lower in {lower} of {len(folds)} held-out parts, higher in none" if kept else
-                                  f"held-out MSE lower by {gain:.4g} ± {se:.4g}, lower in {lower} of {len(folds)} "
-                                  "held-out parts: not more than one standard error in most parts without a loss in "
-                                  "any, so the simpler calibration is kept")})
+                          "heldout_gain_by_part": folds, "why": why})
         for other in trials:  # the held-out errors of the trials not kept are no longer needed
             if other is not ch or not kept:
                 scored.pop(other, None)

@@ -10,7 +10,10 @@ least-squares fit, with a ridge term on the change of slope between segments):
   counts of a divider (integers within 0..1023 or 0..4095), the divider's conductance ratio
   ``c/(A − c)`` (the FSR on the supply side: counts rise with force) or ``(A − c)/c`` (the FSR on
   the ground side, a pull-up: counts fall as force rises, as with Velostat), proportional to the
-  FSR's conductance, which follows a power law of force;
+  FSR's conductance, which follows a power law of force; or, for readings all above zero, its
+  logarithm ``sign·ln x``: a power law ``F = a·x^b`` (a resistance-like reading of a film that
+  falls as ~1/F) bends over decades of ``x``; in ``ln x`` its bend is spread evenly, so a few
+  segments follow it where segments in ``x`` leave its steep end to one straight piece;
 * below the calibrated readings the curve is flat (an FSR below its activation force reads as no
   load); above them it continues with the slope of its last segment **per unit of readout** (not of
   ``v``): a conductance that grows without bound as the reading nears its rail is not followed.
@@ -26,7 +29,7 @@ __all__ = ["VARIABLES", "adc_full_scale", "readout_variable", "MonotoneCurve", "
            "MonotoneSystem", "monotone_system"]
 
 #: The readout variables a curve can be fitted in. [1]
-VARIABLES = ("readout", "conductance")
+VARIABLES = ("readout", "conductance", "log")
 #: ADC full scales recognised in integer readings (10, 12, 16 bits). [1]
 _ADC = (1023.0, 4095.0, 65535.0)
 
@@ -53,8 +56,9 @@ def readout_variable(x, name: str, sign: int, adc: float | None) -> np.ndarray:
     ----------
     x : array_like
         Readings.
-    name : {"readout", "conductance"}
-        ``sign·x``, or the divider conductance ratio (needs ``adc``).
+    name : {"readout", "conductance", "log"}
+        ``sign·x``, the divider conductance ratio (needs ``adc``), or ``sign·ln x`` (readings above
+        zero; ones at or below it are taken as the smallest positive float).
     sign : {1, -1}
         +1 when the readout rises with force.
     adc : float or None
@@ -68,6 +72,8 @@ def readout_variable(x, name: str, sign: int, adc: float | None) -> np.ndarray:
         eps = adc / 2046.0  # half a count of a 10-bit ADC off each rail: the ratio stays finite
         c = np.clip(x, eps, adc - eps)
         return c / (adc - c) if sign > 0 else (adc - c) / c
+    if name == "log":
+        return sign * np.log(np.maximum(x, np.finfo(float).tiny))
 
     raise ValueError(f"variable: must be one of {', '.join(VARIABLES)} (conductance only for ADC counts), got {name!r}")
 
@@ -196,6 +202,8 @@ class MonotoneCurve:
         """The reading whose variable is ``v`` (the inverse of :func:`readout_variable`)."""
         if self.variable == "readout":
             return float(self.sign * v)
+        if self.variable == "log":
+            return float(np.exp(self.sign * v))
         a = float(self.adc)
         return float(a * v / (1.0 + v) if self.sign > 0 else a / (1.0 + v))
 
