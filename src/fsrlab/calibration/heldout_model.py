@@ -24,7 +24,7 @@ complexity:
    (the virtual bench's test run: 13 % hysteresis error of the estimate with a 3-row lag, 6 % without);
 4. **memory**: hysteresis (rate-independent: play operators on the curve's level ``u = static(x)/FS``,
    :mod:`fsrlab.calibration.operators`, additive or growing with the level) and creep (rate-dependent:
-   exponential averages with time constants from 0.5 s to 2 min, the time scale the fit's mix of
+   exponential averages with time constants from 0.5 s to 32 s, the time scale the fit's mix of
    them), alone and together (:data:`MEMORY_VARIANTS`), their weights of one sign per kind -- a loop
    opens one way -- with the curve refitted jointly, each with every ridge weight; the one of lowest
    held-out error is taken, and its correction (memory estimate − plain estimate) enters with the
