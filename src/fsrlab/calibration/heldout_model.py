@@ -15,8 +15,9 @@ complexity:
    10 samples/s beside an ``analogRead``: half a reading). The estimate is still of the reference as
    recorded, and causal; judged with the static curve (a delay corrects estimates that run ahead of
    the reference; an FSR's loop leaves them behind, so its hysteresis is not taken for a delay). On the
-   real recordings (docs/calibration.md) it is kept on 8 of 21 pairs, 0.25–0.75 of a reading, and
-   lowers the geometric mean from 0.98× to 0.93× the oracle polynomial;
+   real recordings (docs/calibration.md) it is kept on 6 of 21 pairs, 0.5–0.75 of a reading (an
+   HX711 or a taxel at 10 rows/s), and lowered the geometric mean from 0.98× to 0.93× the oracle
+   polynomial;
 3. **lag** between reference and readout, only when asked (``lag="auto"``): none unless a shift of
    whole rows wins, judged with a hysteresis model (a shift narrows a loop, so a static curve alone
    takes part of a loop for a lag). By default there is none: the estimate is of the reference as
