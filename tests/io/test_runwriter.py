@@ -54,7 +54,7 @@ def test_overwrite_replaces_and_a_new_run_needs_no_flag(tmp_path):
 def test_errors_name_the_users_files_not_a_temporary(tmp_path):
     with pytest.raises(OSError) as info:
         RunWriter(tmp_path / "missing" / "x.csv", ["time_s"])
-    assert "x.meta.json" in str(info.value) and ".tmp" not in str(info.value)
+    assert "x.csv" in str(info.value) and ".tmp" not in str(info.value)
     (tmp_path / "y.meta.json").mkdir()  # a directory where the sidecar goes
     with pytest.raises(OSError) as info:
         RunWriter(tmp_path / "y.csv", ["time_s"])
@@ -65,6 +65,42 @@ def test_errors_name_the_users_files_not_a_temporary(tmp_path):
         RunWriter(tmp_path / "z.csv", ["time_s"])
     assert str(tmp_path / "z.csv") in str(info.value)
     assert not sidecar_path(tmp_path / "z.csv").exists()
+
+
+def test_replacing_a_run_never_leaves_its_csv_beside_a_sidecar_not_its_own(tmp_path, monkeypatch):
+    """Replacing a run: a sidecar that cannot be written (a full disk) leaves the old run as it was; a
+    failure after the old rows are gone leaves the new CSV alone, without the old sidecar."""
+    import errno
+
+    from fsrlab.io import runwriter
+
+    path = tmp_path / "run.csv"
+    _run(path, rows=4)
+    before = {p: p.read_bytes() for p in (path, sidecar_path(path))}
+
+    def full(target, obj):
+        raise runwriter._user_error(OSError(errno.ENOSPC, "No space left on device"), target)
+
+    monkeypatch.setattr(runwriter, "_prepare_json", full)
+    with pytest.raises(OSError, match="run.meta.json"):
+        RunWriter(path, ["time_s", "force_n"])
+    assert {p: p.read_bytes() for p in (path, sidecar_path(path))} == before
+    monkeypatch.undo()
+
+    real = os.replace
+
+    def no_rename(src, dst):
+        if str(dst).endswith(".meta.json"):
+            raise OSError(errno.EIO, "Input/output error")
+        return real(src, dst)
+
+    monkeypatch.setattr(runwriter.os, "replace", no_rename)
+    with pytest.raises(OSError, match="run.meta.json"):
+        RunWriter(path, ["time_s", "force_n"])
+    monkeypatch.undo()
+    assert not sidecar_path(path).exists()  # the old sidecar went before the old rows
+    assert path.read_text() == "time_s,force_n\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.csv"]  # no temporary left behind
 
 
 def test_update_metadata_is_on_disk_while_the_run_is_open(tmp_path):

@@ -55,8 +55,9 @@ def _user_error(exc: OSError, path: Path) -> OSError:
     return err
 
 
-def _write_json_atomic(path: Path, obj: dict) -> None:
-    """Replace ``path`` by ``obj`` as JSON in one rename; an error names ``path``, not the temporary."""
+def _prepare_json(path: Path, obj: dict) -> Path:
+    """``obj`` as JSON in a temporary file beside ``path``, on disk, for :func:`os.replace` to put in place
+    (a full disk fails here, before anything is replaced); an error names ``path``, not the temporary."""
     text = json.dumps(obj, indent=2, allow_nan=False) + "\n"
     tmp = path.with_name(path.name + ".tmp")
     try:
@@ -64,15 +65,29 @@ def _write_json_atomic(path: Path, obj: dict) -> None:
             fh.write(text)
             fh.flush()
             os.fsync(fh.fileno())
-        os.replace(tmp, path)
     except BaseException as exc:  # Ctrl-C included: no temporary left behind
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
+        _unlink_quietly(tmp)
         if isinstance(exc, OSError):
             raise _user_error(exc, path) from None
         raise
+    return tmp
+
+
+def _unlink_quietly(path: Path) -> None:
+    try:
+        os.unlink(path)
+    except OSError:
+        pass
+
+
+def _write_json_atomic(path: Path, obj: dict) -> None:
+    """Replace ``path`` by ``obj`` as JSON in one rename; an error names ``path``, not the temporary."""
+    tmp = _prepare_json(path, obj)
+    try:
+        os.replace(tmp, path)
+    except OSError as exc:
+        _unlink_quietly(tmp)
+        raise _user_error(exc, path) from None
 
 
 def _build_metadata(columns: list[str], metadata: Mapping[str, Any] | None) -> dict:
@@ -147,20 +162,38 @@ class RunWriter:
             for existing in (self.path, self.meta_path):
                 if os.path.lexists(existing):
                     raise FileExistsError(f"{existing} exists; a run is replaced only when asked to")
-        had_sidecar = os.path.lexists(self.meta_path)
-        _write_json_atomic(self.meta_path, self.metadata)
-        try:
-            # buffering=0: every write() below is one system call carrying one whole line.
-            self._fd = open(self.path, "wb" if overwrite else "xb", buffering=0)
+        existed = os.path.lexists(self.path)
+        try:  # opened without truncating: a CSV that cannot be written leaves the old run as it was
+            fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | (0 if overwrite else os.O_EXCL), 0o666)
         except OSError as exc:
-            if not had_sidecar:  # do not leave a sidecar without its run
+            raise _user_error(exc, self.path) from None
+        # buffering=0: every write() below is one system call carrying one whole line.
+        self._fd = open(fd, "wb", buffering=0)
+        tmp = None
+        try:
+            tmp = _prepare_json(self.meta_path, self.metadata)
+            # The old run's sidecar goes before its rows, and the new one comes after the new header:
+            # a crash in between leaves a CSV alone (the old rows, or the new header), never a CSV
+            # beside a sidecar that is not its own.
+            if os.path.lexists(self.meta_path) and not os.path.isdir(self.meta_path):
                 try:
                     os.unlink(self.meta_path)
-                except OSError:
-                    pass
-            raise _user_error(exc, self.path) from None
-        self._raw(",".join(self.columns) + "\n")
-        self.sync()
+                except OSError as exc:
+                    raise _user_error(exc, self.meta_path) from None
+            os.ftruncate(fd, 0)
+            self._raw(",".join(self.columns) + "\n")
+            self.sync()
+            try:
+                os.replace(tmp, self.meta_path)
+            except OSError as exc:
+                raise _user_error(exc, self.meta_path) from None
+        except BaseException:
+            self._fd.close()
+            if tmp is not None:
+                _unlink_quietly(tmp)
+            if not existed:  # do not leave a run the caller did not get
+                _unlink_quietly(self.path)
+            raise
 
     def _raw(self, text: str) -> None:
         data = text.encode("utf-8")
