@@ -176,11 +176,12 @@ def calibrate_cmd(
 ) -> None:
     """Calibrate readout → force or stress, every choice scored where it will be used.
 
-    Default (held-out): a monotone curve (readout, or a divider's conductance for analogRead
-    counts or with --rail), then a delay of the reference (a load cell that reports late), a lag
-    (--lag auto) and the hysteresis and creep terms (their correction weighted by the held-out
-    error), each kept only when it beats the simpler calibration on another run (or, with one run, on
-    later blocks of it) by more than one standard error (the memory also by 5 % of its MSE) --
+    Default (held-out): a monotone curve (readout, a divider's conductance for analogRead
+    counts or with --rail, or the readout's logarithm when every reading is above zero), then a
+    delay of the reference (a load cell that reports late), a lag (--lag auto) and the hysteresis
+    and creep terms (their correction weighted by the held-out error), each kept only when it beats
+    the simpler calibration on another run (or, with one run, on later blocks of it) by more than
+    one standard error and by 5 % of its MSE --
     otherwise the simpler calibration is written and the output says why. The uncertainty
     comes from those held-out errors. With --method cv (one run): polynomials and conductance
     families by grouped cross-validation, the dead zone, the branch or play-operator compensation.
