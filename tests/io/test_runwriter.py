@@ -101,6 +101,13 @@ def test_replacing_a_run_never_leaves_its_csv_beside_a_sidecar_not_its_own(tmp_p
     assert not sidecar_path(path).exists()  # the old sidecar went before the old rows
     assert path.read_text() == "time_s,force_n\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.csv"]  # no temporary left behind
+    _run(path, rows=3)
+    rows = path.read_bytes()
+    sidecar_path(path).unlink()
+    sidecar_path(path).mkdir()  # a directory where the sidecar goes: refused before the old rows go
+    with pytest.raises(OSError, match="run.meta.json"):
+        RunWriter(path, ["time_s", "force_n"])
+    assert path.read_bytes() == rows
 
 
 def test_update_metadata_is_on_disk_while_the_run_is_open(tmp_path):

@@ -7,7 +7,7 @@ complexity:
 
 1. **static curve** (:mod:`fsrlab.calibration.monotone`): straight line in the readout, then more
    segments, in the divider's conductance ratio (ADC counts or a rail given) and in the logarithm of
-   the readout (readings all above zero: a power law is a straight line there); of the candidates
+   the readout (readings all above zero: a power law's bend is spread evenly there); of the candidates
    whose held-out error is within one standard error of the best, the simplest;
 2. **delay** of the reference (:mod:`fsrlab.calibration.delay`, :data:`DELAY_ROWS`): the estimate made
    from the readout as it was a fraction of a reading (up to two) earlier, as when a load-cell

@@ -8,6 +8,7 @@ rewritten through a temporary file and a rename, and errors name the run's own f
 
 from __future__ import annotations
 
+import errno
 import io
 import json
 import math
@@ -175,7 +176,9 @@ class RunWriter:
             # The old run's sidecar goes before its rows, and the new one comes after the new header:
             # a crash in between leaves a CSV alone (the old rows, or the new header), never a CSV
             # beside a sidecar that is not its own.
-            if os.path.lexists(self.meta_path) and not os.path.isdir(self.meta_path):
+            if os.path.isdir(self.meta_path):  # the new sidecar could not replace it: stop before the rows go
+                raise _user_error(IsADirectoryError(errno.EISDIR, "Is a directory"), self.meta_path)
+            if os.path.lexists(self.meta_path):
                 try:
                     os.unlink(self.meta_path)
                 except OSError as exc:
