@@ -55,3 +55,27 @@ def test_the_log_variable_is_not_offered_when_a_reading_is_not_above_zero():
     _, sel = calibrate_recordings([Recording(rec.t, x, rec.y)], compensate=False)
     assert not any(c["name"].startswith("log-") for c in sel.candidates)
     assert any(c["name"].startswith("readout-") for c in sel.candidates)
+
+
+def test_a_log_calibration_steps_as_the_batch_and_survives_a_file(tmp_path):
+    """Property: ``live``/``measure`` one reading at a time equal ``apply`` (tests/stepping.py), also for
+    readings at or below zero in the new run (clipped to the calibrated range: finite estimates)."""
+    from fsrlab.calibration.heldout_runs import calibrate_runs
+    from fsrlab.io.runwriter import write_run
+    from stepping import assert_steps_as_batch
+
+    train, _ = _film(5)
+    test, _ = _film(6, n=1500)
+    x = test.x.copy()
+    x[[100, 700]] = (0.0, -3.0)
+    p_train = write_run(tmp_path / "train.csv", {"time_s": train.t, "reading": train.x, "force_n": train.y},
+                        {"units": {"reading": "1"}})
+    p_test = write_run(tmp_path / "test.csv", {"time_s": test.t, "reading": x, "force_n": test.y},
+                       {"units": {"reading": "1"}})
+    cal = calibrate_runs([p_train], x="reading", reference="force_n", compensate=True)
+    assert cal.model.static.variable == "log"
+    assert_steps_as_batch(cal, p_test)
+    from fsrlab.calibration.apply import apply_calibration
+
+    est = apply_calibration(cal, p_test)["force_n_estimate"]
+    assert np.all(np.isfinite(est))
