@@ -36,8 +36,8 @@ complexity:
 Steps 2 to 4 are kept only when they **win**: the delay and the lag by a held-out mean squared error
 lower by more than one standard error (paired over chunks) and by at least :data:`MIN_GAIN` of the
 simpler calibration's, lower in most held-out recordings or blocks and higher in none; the memory by
-a held-out MSE lower by more than one standard error and by at least :data:`MIN_GAIN`. Otherwise the simpler calibration is kept, and the
-:class:`Selection` says why. On real recordings (docs/calibration.md) a rule that kept any gain let a
+a held-out MSE lower by more than one standard error and by at least :data:`MIN_GAIN`. Otherwise the
+simpler calibration is kept, and the :class:`Selection` says why. On real recordings (docs/calibration.md) a rule that kept any gain let a
 compensation fitted on fast hand presses make a slow motor triangle worse; taking hysteresis and creep
 one after the other, each by the strict rule, kept a memory on 11 of 21 train → test pairs where the
 blend keeps one on 16, for a geometric mean of 0.98× the oracle polynomial instead of 1.00×.
@@ -113,8 +113,6 @@ class Selection:
         delay or lag kept). [unit of the reference]
     gain_spread : float or None
         RMS relative gain error of the held-out recordings (two or more recordings). [1]
-    delay_s : float
-        The reference's delay applied to the readout (:data:`DELAY_ROWS`). [s]
     """
 
     scheme: str
@@ -124,11 +122,9 @@ class Selection:
     heldout_rmse: float = float("nan")
     heldout_rmse_plain: float = float("nan")
     gain_spread: float | None = None
-    delay_s: float = 0.0
 
     def to_dict(self) -> dict:
         return {"scheme": self.scheme, "candidates": self.candidates, "steps": self.steps, "lag_rows": self.lag_rows,
-                "delay_s": self.delay_s,
                 "heldout_rmse": self.heldout_rmse, "heldout_rmse_plain": self.heldout_rmse_plain,
                 "gain_spread": self.gain_spread}
 
@@ -217,9 +213,7 @@ def _fit(parts: list[Part], ch: _Choice, sign: int, adc, cache: _Cache | None = 
     skey = (split, ch.variable, ch.segments, ch.lag, ch.delay)
     static, fs = cache.static(skey, lambda: (fit_monotone(x[ok], y[ok], ch.variable, ch.segments, sign, adc)[0],
                                              max(float(np.ptp(y[ok])), 1e-12)))
-    steps = np.concatenate([np.diff(p.rec.t) for p in parts if p.rec.t.size > 1] or [np.ones(1)])
-    row_s = float(np.median(steps))
-    row_s = row_s if row_s > 0 else 1.0
+    row_s = _row_step([p.rec for p in parts])
     if not (ch.thresholds or ch.time_constants):
         return HeldoutCalibration(static, static, full_scale=fs, row_s=row_s)
     level = lambda v: static(v) / fs  # noqa: E731
@@ -241,6 +235,13 @@ def _fit(parts: list[Part], ch: _Choice, sign: int, adc, cache: _Cache | None = 
     _, curve, w = best
     return HeldoutCalibration(static, curve, tuple(ch.thresholds), tuple(ch.time_constants), w, fs, row_s,
                               scaled=ch.scaled)
+
+
+def _row_step(recs: list[Recording]) -> float:
+    """Median time between readings of ``recs`` (1 when it is not above zero). [s]"""
+    steps = np.concatenate([np.diff(r.t) for r in recs if r.t.size > 1] or [np.ones(1)])
+    step = float(np.median(steps))
+    return step if step > 0 else 1.0
 
 
 def _shifted(rec: Recording, lag: int) -> np.ndarray:
@@ -394,8 +395,7 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
     sel = Selection(scheme_name(len(recs)))
     scored = {}
     cache = _Cache()
-    steps = np.concatenate([np.diff(r.t) for r in recs if r.t.size > 1] or [np.ones(1)])
-    row_s = float(np.median(steps)) if steps.size and np.median(steps) > 0 else 1.0
+    row_s = _row_step(recs)
     by_delay = {}
 
     def delayed_recs(d: float) -> tuple[list[Recording], list]:
@@ -442,13 +442,16 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
         lower = sum(f > 0 for f in folds)
         wins = gain > se and min(folds) >= 0 and lower > len(folds) / 2
         kept = wins and gain >= least
-        head = f"held-out MSE lower by {gain:.4g} ± {se:.4g}"
-        why = (f"{head} (more than one standard error and {100 * MIN_GAIN:.0f} % of the simpler calibration's), "
-               f"lower in {lower} of {len(folds)} held-out parts, higher in none" if kept else
-               f"{head}, lower in {lower} of {len(folds)} held-out parts: less than {100 * MIN_GAIN:.0f} % of the "
-               "simpler calibration's, so the simpler calibration is kept" if wins else
-               f"{head}, lower in {lower} of {len(folds)} held-out parts: not more than one standard error in most "
-               "parts without a loss in any, so the simpler calibration is kept")
+        said = f"held-out MSE lower by {gain:.4g} ± {se:.4g}, lower in {lower} of {len(folds)} held-out parts"
+        if kept:
+            why = (f"{said}, higher in none (more than one standard error and {100 * MIN_GAIN:.0f} % of the simpler "
+                   "calibration's)")
+        elif wins:
+            why = (f"{said}: less than {100 * MIN_GAIN:.0f} % of the simpler calibration's, so the simpler "
+                   "calibration is kept")
+        else:
+            why = (f"{said}: not more than one standard error in most parts without a loss in any, so the simpler "
+                   "calibration is kept")
         sel.steps.append({"step": name, "tried": ch.name, "gain": gain, "se": se, "kept": bool(kept),
                           "heldout_gain_by_part": folds, "why": why})
         for other in trials:  # the held-out errors of the trials not kept are no longer needed
@@ -485,7 +488,7 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
         scored[mem] = (e_s + alpha * (e_m - e_s), ids, est_s + alpha * (est_m - est_s), parts_s)
         cur = mem
     sel.lag_rows = cur.lag
-    sel.delay_s = float(f"{cur.delay * row_s:.10g}")  # without the float noise of the median step
+    delay_s = float(f"{cur.delay * row_s:.10g}")  # without the float noise of the median step
     err, _, est, parts = scored[cur]
     fs_all = max(float(np.ptp(np.concatenate([r.y[r.usable] for r in recs]))), 1e-12)
 
@@ -497,7 +500,7 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
     drecs, splits = delayed_recs(cur.delay)
     whole = [Part(r, r.usable) for r in drecs]
     cal = _blend(_fit(whole, static_cur, sign, adc), _fit(whole, cur, sign, adc), alpha)
-    cal.delay_s = sel.delay_s
+    cal.delay_s = delay_s
     rel = REPEATABILITY
     if len(recs) >= 2:
         sel.gain_spread = _gain_spread(splits, static_cur, cur, alpha, sign, adc)

@@ -116,7 +116,6 @@ class RunCalibration:
         sel = Selection(str(s.get("scheme", "")), list(s.get("candidates", [])), list(s.get("steps", [])),
                         int(s.get("lag_rows", 0)), float(s.get("heldout_rmse", math.nan)),
                         float(s.get("heldout_rmse_plain", math.nan)))
-        sel.delay_s = float(d.get("calibration", {}).get("delay_s", 0.0))
         rw = d.get("recorded_with")
         units = d.get("units") or {}
         return cls(HeldoutCalibration.from_dict(d["calibration"]), sel, str(d["x"]), str(d["y"]),

@@ -377,7 +377,7 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
     refused = [s for s in sel.steps if s["step"] == "memory" and not s["kept"]]
     out = {"method": "held-out", "scheme": sel.scheme, "model": cal.model_name, "reference": cal.y_name,
            "unit": cal.y_unit, "runs": [str(p) for p in run_files], "lag_s": cal.lag_s, "lag_rows": sel.lag_rows,
-           "delay_s": sel.delay_s, "heldout_rmse": sel.heldout_rmse, "heldout_rmse_percent_fs": 100 * sel.heldout_rmse / fs,
+           "delay_s": cal.model.delay_s, "heldout_rmse": sel.heldout_rmse, "heldout_rmse_percent_fs": 100 * sel.heldout_rmse / fs,
            "heldout_rmse_plain": sel.heldout_rmse_plain, "full_scale": fs, "readout_range": list(cal.x_range),
            "compensated": cal.model.has_memory, "uncertainty_relative": cal.model.uncertainty.relative,
            "gain_spread": sel.gain_spread, "steps": sel.steps, "candidates": sel.candidates}
@@ -398,7 +398,7 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
     table.add_row("model", cal.model_name)
     table.add_row("choices scored by", sel.scheme)
     table.add_row("lag (s)", f"{cal.lag_s:.4g}")
-    table.add_row("reference delay (s)", f"{sel.delay_s:.4g}")
+    table.add_row("reference delay (s)", f"{cal.model.delay_s:.4g}")
     table.add_row(f"held-out RMSE ({u})", f"{k * sel.heldout_rmse:.4g}")
     table.add_row("held-out RMSE (% FS)", f"{out['heldout_rmse_percent_fs']:.3f}")
     if cal.model.has_memory:
