@@ -8,7 +8,9 @@ The recordings are not part of fsrlab (most have no licence that allows redistri
 FSR_calibration_techniques); a Velostat film pressed by a UR5e arm against a Futek load cell
 (Lupasic/tactile-sensor-velostat); FSRs under a phantom pressed by hand on a force plate
 (priyanshum17/pressure, MIT); a piezoresistive taxel read through a divider with the authors' force
-conversion (TAMS-Group/tams_tactile_sensor_array_hardware).
+conversion (TAMS-Group/tams_tactile_sensor_array_hardware); one taxel of a capacitive insole (8-bit
+counts) in an air chamber whose pressure times the taxel's area is the reference
+(ami-iit/paper_belli_2023_sensors_insole-calibration, BSD-3-Clause).
 
 For each train → test pair: :func:`fsrlab.calibration.heldout_runs.calibrate_runs` (what
 ``fsrlab calibrate TRAIN.csv --x reading --reference force_n [--compensate]`` runs) on the training
@@ -61,7 +63,45 @@ PAIRS = (
      [("forceplate__exp12b_fsr1", 1)]),
     ("taxel (TAMS), bare → under a thin silicone layer", ["tams_tactile__r10k_nosil"], ["tams_tactile__r10k_thinsil"]),
     ("taxel (TAMS), bare: first half → second half", [("tams_tactile__r10k_nosil", 0)], [("tams_tactile__r10k_nosil", 1)]),
+    # the pairs below were added after the calibration had been developed on those above (DEVELOPED_ON)
+    ("force plate, one FSR: the other experiment → the first", ["forceplate__exp13a_fsr3"], ["forceplate__exp7a_fsr3"]),
+    ("force plate, that FSR: first half → second half", [("forceplate__exp13a_fsr3", 0)],
+     [("forceplate__exp13a_fsr3", 1)]),
+    ("force plate, that FSR, other experiment: first half → second half", [("forceplate__exp7a_fsr3", 0)],
+     [("forceplate__exp7a_fsr3", 1)]),
+    ("FSR, hand, one session: first half → second half", [("westfal_fsr__s03_manual", 0)],
+     [("westfal_fsr__s03_manual", 1)]),
+    ("FSR, hand: session 4 → session 5", ["westfal_fsr__s04_manual"], ["westfal_fsr__s05_manual"]),
+    ("Velostat, robot 5 N: run 1 → its repeat", ["lupasic_velostat__pike1_force_5_exp1"],
+     ["lupasic_velostat__pike1_force_5_exp2"]),
+    ("Velostat, robot 1 N: run 1 → its repeat", ["lupasic_velostat__pike1_force_1_exp1"],
+     ["lupasic_velostat__pike1_force_1_exp2"]),
+    ("Velostat, robot 30 N: run 2 → run 1", ["lupasic_velostat__pike1_force_30_exp2"],
+     ["lupasic_velostat__pike1_force_30_exp1"]),
+    ("Velostat, other indenter, 10 N: run 1 → its repeat", ["lupasic_velostat__pike5_force_10_exp1"],
+     ["lupasic_velostat__pike5_force_10_exp2"]),
+    ("taxel (TAMS) under thick silicone: first half → second half", [("tams_tactile__r10k_thicksil", 0)],
+     [("tams_tactile__r10k_thicksil", 1)]),
+    ("taxel (TAMS) under thin silicone: first half → second half", [("tams_tactile__r10k_thinsil", 0)],
+     [("tams_tactile__r10k_thinsil", 1)]),
+    ("capacitive insole taxel, air chamber: calibration run → three validation runs", ["belli_insole__left_t34_calibration"],
+     ["belli_insole__left_t34_validation1", "belli_insole__left_t34_validation2", "belli_insole__left_t34_validation3"]),
+    ("capacitive insole taxel: loading staircase → unloading staircase", [("belli_insole__left_t34_calibration", 0)],
+     [("belli_insole__left_t34_calibration", 1)]),
+    ("capacitive insole taxel: slow staircase → fast rises on a preload", ["belli_insole__left_t34_steps1"], ["belli_insole__left_t34_dynamic2"]),
+    ("capacitive insole taxel: calibration run → two runs of another day", ["belli_insole__left_t34_calibration"],
+     ["belli_insole__left_t34_steps1", "belli_insole__left_t34_dynamic1"]),
+    ("capacitive insole taxel: one slow ramp → a validation run", ["belli_insole__left_t34_dynamic1"], ["belli_insole__left_t34_validation1"]),
+    ("capacitive insole, another taxel: calibration run → a validation run", ["belli_insole__left_t53_calibration"],
+     ["belli_insole__left_t53_validation1"]),
+    ("capacitive insole, other dielectric: one day → the next", ["belli_insole__right_t126_dyn2sep_a"],
+     ["belli_insole__right_t126_dyn3sep"]),
 )
+
+
+#: The first pairs of PAIRS, those the calibration was developed on; the others were added later and
+#: only measured (their figures are summed up apart, as the less flattering check).
+DEVELOPED_ON = 21
 
 
 def _read(root: Path, spec, tmp: Path) -> Path | None:
@@ -161,9 +201,9 @@ def run() -> str:
                 "see this module's docstring)\n")
     lines = ["| pair | best polynomial (degree) | plain ×, ±2u coverage | `--compensate` ×, ±2u coverage, missing | "
              "model chosen | `--method cv --compensate` ×, missing |", "|---|---:|---:|---:|---|---:|"]
-    ratios, covers = [], []
+    ratios, covers, later = [], [], []
     with tempfile.TemporaryDirectory() as tmp:
-        for name, tr, te in PAIRS:
+        for i, (name, tr, te) in enumerate(PAIRS):
             s = pair_scores(Path(root), Path(tmp), tr, te)
             if s is None:
                 lines.append(f"| {name} | not found | | | | |")
@@ -171,16 +211,20 @@ def run() -> str:
             p, c = s["plain"], s["comp"]
             ratios.append(c["ratio"])
             covers.append(c["coverage"])
+            later.append(i >= DEVELOPED_ON)
             old = s["cv"]
             cv = f"×{old['ratio']:.2f}, {100 * old['missing']:.1f} %" if old else "— (one run only)"
             delay = f", delay {c['delay_rows']:.2g} rows" if c["delay_rows"] else ""
             lines.append(f"| {name} | {s['poly']:.2f} % ({s['degree']}) | ×{p['ratio']:.2f}, {100 * p['coverage']:.0f} % | "
                          f"×{c['ratio']:.2f}, {100 * c['coverage']:.0f} %, {100 * c['missing']:.1f} % | {c['model']}{delay} | "
                          f"{cv} |")
-    if ratios:
-        lines.append("")
-        r = np.asarray(ratios)
-        lines.append(f"Geometric mean of the `--compensate` ratios: ×{np.exp(np.mean(np.log(r))):.2f} over "
-                     f"{r.size} pairs; worst ×{r.max():.2f}; {int((r <= 1.0).sum())} of {r.size} at most ×1.00; "
-                     f"±2u coverage at least 90 % on {sum(c >= 0.9 for c in covers)} of {len(covers)}.")
+    r, cov, later = np.asarray(ratios), np.asarray(covers), np.asarray(later, dtype=bool)
+    for which, m in (("all", np.ones(r.size, dtype=bool)), (f"the first {DEVELOPED_ON} (developed on)", ~later),
+                     ("the pairs added later (measured only)", later)):
+        if m.any() and (which == "all" or later.any()):
+            lines.append("")
+            lines.append(f"Geometric mean of the `--compensate` ratios, {which}: ×{np.exp(np.mean(np.log(r[m]))):.2f} "
+                         f"over {int(m.sum())} pairs; worst ×{r[m].max():.2f}; {int((r[m] <= 1.0).sum())} of "
+                         f"{int(m.sum())} at most ×1.00; ±2u coverage at least 90 % on {int((cov[m] >= 0.9).sum())} "
+                         f"of {int(m.sum())}.")
     return "\n".join(lines) + "\n"

@@ -17,7 +17,7 @@ from fsrlab.calibration.heldout_uncertainty import LevelUncertainty
 from fsrlab.calibration.monotone import MonotoneCurve
 from fsrlab.calibration.operators import MemoryState, directions, memory_features
 
-__all__ = ["HeldoutCalibration", "Stepper"]
+__all__ = ["HeldoutCalibration", "Stepper", "clip_hysteresis"]
 
 
 @dataclass
@@ -47,6 +47,13 @@ class HeldoutCalibration:
     delay_s : float
         The reference's delay: every estimate is made from the readout this much earlier
         (:func:`fsrlab.calibration.delay.delayed`). [s]
+    hysteresis_range : ndarray or None, shape (2, len(thresholds))
+        Least and largest value of each hysteresis feature on the calibration data. A new recording's
+        hysteresis features are clipped to it (:func:`clip_hysteresis`), so the loop is corrected only
+        on branches like those it was fitted on: a calibration that saw loading alone does not
+        extrapolate its hysteresis to an unloading. The creep features are not clipped: a film
+        recovers after unloading as it crept under load, so their fit holds for either sign. None: not
+        clipped (files written before it). [1]
     """
 
     static: MonotoneCurve
@@ -60,6 +67,7 @@ class HeldoutCalibration:
     scaled: bool = False
     uncertainty_plain: "LevelUncertainty | None" = None
     delay_s: float = 0.0
+    hysteresis_range: "np.ndarray | None" = None
 
     def without_memory(self) -> "HeldoutCalibration":
         """The static curve alone (the estimate before compensation), with its own uncertainty."""
@@ -90,7 +98,7 @@ class HeldoutCalibration:
             if features is None:
                 u = self.level(x) if u is None else u
                 features = memory_features(u, t, self.thresholds, self.time_constants, self.scaled)
-            est = est + features @ self.weights
+            est = est + clip_hysteresis(features, self.hysteresis_range) @ self.weights
         return est
 
     def stepper(self) -> "Stepper":
@@ -103,7 +111,8 @@ class HeldoutCalibration:
                 "full_scale": self.full_scale, "row_s": self.row_s, "level_scaled_hysteresis": self.scaled,
                 "uncertainty": None if self.uncertainty is None else self.uncertainty.to_dict(),
                 "uncertainty_plain": None if self.uncertainty_plain is None else self.uncertainty_plain.to_dict(),
-                "delay_s": self.delay_s}
+                "delay_s": self.delay_s,
+                "hysteresis_range": None if self.hysteresis_range is None else self.hysteresis_range.tolist()}
 
     @classmethod
     def from_dict(cls, d: dict) -> "HeldoutCalibration":
@@ -119,10 +128,36 @@ class HeldoutCalibration:
             raise ValueError("full_scale and row_s must be > 0")
         if not 0 <= delay < 3600:
             raise ValueError("delay_s must lie in [0, 3600) s")
+        rng = d.get("hysteresis_range")
+        if rng is not None:
+            rng = np.asarray(rng, dtype=float)
+            if rng.shape != (2, len(thr)) or not np.all(np.isfinite(rng)) or np.any(rng[0] > rng[1]):
+                raise ValueError("hysteresis_range: two rows (least, largest) of one finite value per play threshold, "
+                                 "least ≤ largest")
         unc, plain = d.get("uncertainty"), d.get("uncertainty_plain")
         return cls(MonotoneCurve.from_dict(d["static"]), MonotoneCurve.from_dict(d["curve"]), thr, tau, w, fs, row,
                    None if unc is None else LevelUncertainty.from_dict(unc), bool(d.get("level_scaled_hysteresis", False)),
-                   None if plain is None else LevelUncertainty.from_dict(plain), delay)
+                   None if plain is None else LevelUncertainty.from_dict(plain), delay, rng)
+
+
+def clip_hysteresis(features: np.ndarray, hysteresis_range: "np.ndarray | None") -> np.ndarray:
+    """Memory features with their first (hysteresis) columns clipped to the range they had on the
+    calibration data; the creep columns after them as they are (NaN rows stay NaN).
+
+    Parameters
+    ----------
+    features : ndarray, shape (n, k) or (k,)
+        Memory features (:func:`fsrlab.calibration.operators.memory_features`): the play operators'
+        columns first. [1]
+    hysteresis_range : ndarray, shape (2, h), or None
+        Least and largest value of each of the first h features (None: returned as they are). [1]
+    """
+    if hysteresis_range is None or hysteresis_range.shape[1] == 0:
+        return features
+    h = hysteresis_range.shape[1]
+    out = np.array(features, copy=True)
+    out[..., :h] = np.clip(out[..., :h], hysteresis_range[0], hysteresis_range[1])
+    return out
 
 
 class Stepper:
@@ -153,5 +188,5 @@ class Stepper:
         feats, d = self.state.advance(u, t)
         est = float(cal.curve(np.array([x]))[0])
         if cal.has_memory:
-            est += float(np.dot(feats, cal.weights))
+            est += float(np.dot(clip_hysteresis(np.asarray(feats), cal.hysteresis_range), cal.weights))
         return est, d

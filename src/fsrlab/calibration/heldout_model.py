@@ -54,7 +54,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fsrlab.calibration.delay import delayed
-from fsrlab.calibration.heldout_calibration import HeldoutCalibration
+from fsrlab.calibration.heldout_calibration import HeldoutCalibration, clip_hysteresis
 from fsrlab.calibration.heldout_uncertainty import REPEATABILITY, LevelUncertainty
 from fsrlab.calibration.heldout import (Part, Recording, chunk_ids, held_out_splits, orientation, paired_gain, readout_rail,
                                         scheme_name)
@@ -195,13 +195,15 @@ class _Cache:
             f *= u.astype(float)[:, None]
         return f
 
-    def memory_term(self, key, rec: Recording, level, ch: "_Choice", weights: np.ndarray) -> np.ndarray:
-        """``memory(...) @ weights`` without the variant's columns copied (float32 products)."""
+    def memory_term(self, key, rec: Recording, level, ch: "_Choice", weights: np.ndarray,
+                    hysteresis_range: np.ndarray | None = None) -> np.ndarray:
+        """``clip_hysteresis(memory(...), hysteresis_range) @ weights`` in float32."""
         u, full = self._full(key, rec, level)
-        w = np.zeros(full.shape[1], dtype=np.float32)
-        w[self._columns(ch)] = weights
-        term = (full @ w).astype(float)
-        return term * u if ch.scaled else term
+        f = full[:, self._columns(ch)]
+        if ch.scaled:
+            f = f * u[:, None]
+        f = clip_hysteresis(f, None if hysteresis_range is None else hysteresis_range.astype(np.float32))
+        return (f @ weights.astype(np.float32)).astype(float)
 
 
 def _fit(parts: list[Part], ch: _Choice, sign: int, adc, cache: _Cache | None = None,
@@ -220,10 +222,12 @@ def _fit(parts: list[Part], ch: _Choice, sign: int, adc, cache: _Cache | None = 
 
     def system():  # every choice's memory is a subset of the standard features (MEMORY_VARIANTS, the lag probe)
         feats = np.concatenate([cache.memory(skey + (id(p.rec),), p.rec, level, ch)[p.rows] for p in parts])[ok]
-        return monotone_system(x[ok], y[ok], ch.variable, ch.segments, sign, adc, extra=feats)
+        hyst = feats[:, :len(ch.thresholds)]  # the range of the hysteresis features seen (the creep's is not kept)
+        rng = np.array([np.nanmin(hyst, axis=0), np.nanmax(hyst, axis=0)]) if hyst.size else None
+        return monotone_system(x[ok], y[ok], ch.variable, ch.segments, sign, adc, extra=feats), rng
 
     # the normal equations serve every ridge weight and every sign of this split's variant
-    msys = cache.system(skey + (ch.thresholds, ch.time_constants, ch.scaled), system)
+    msys, hysteresis_range = cache.system(skey + (ch.thresholds, ch.time_constants, ch.scaled), system)
     nh, nc = len(ch.thresholds), len(ch.time_constants)
     best = None
     for sh in (HYSTERESIS_SIGNS if nh else (1,)):
@@ -234,7 +238,7 @@ def _fit(parts: list[Part], ch: _Choice, sign: int, adc, cache: _Cache | None = 
                 best = (r, curve, w)
     _, curve, w = best
     return HeldoutCalibration(static, curve, tuple(ch.thresholds), tuple(ch.time_constants), w, fs, row_s,
-                              scaled=ch.scaled)
+                              scaled=ch.scaled, hysteresis_range=hysteresis_range)
 
 
 def _row_step(recs: list[Recording]) -> float:
@@ -264,7 +268,7 @@ def _blend(static: HeldoutCalibration, mem: HeldoutCalibration, alpha: float) ->
     c, k = mem.curve, static.curve
     curve = MonotoneCurve(c.variable, c.sign, c.adc, c.knots, (1 - alpha) * k.coef + alpha * c.coef, c.x_range)
     return HeldoutCalibration(mem.static, curve, mem.thresholds, mem.time_constants, alpha * mem.weights,
-                              mem.full_scale, mem.row_s, scaled=mem.scaled)
+                              mem.full_scale, mem.row_s, scaled=mem.scaled, hysteresis_range=mem.hysteresis_range)
 
 
 def _memory_step(sel: Selection, score, scored: dict, cache: _Cache, base: _Choice):
@@ -331,7 +335,7 @@ def _held_out(splits, ch: _Choice, sign: int, adc, cache: _Cache):
             e = cal.curve(p.rec.x)
             if cal.has_memory:
                 key = (i, ch.variable, ch.segments, ch.lag, ch.delay, id(p.rec))
-                e = e + cache.memory_term(key, p.rec, cal.level, ch, cal.weights)
+                e = e + cache.memory_term(key, p.rec, cal.level, ch, cal.weights, cal.hysteresis_range)
             y = _shifted(p.rec, ch.lag)
             idx = np.flatnonzero(p.rows)
             rows = p.rows.copy()
