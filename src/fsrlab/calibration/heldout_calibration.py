@@ -54,6 +54,10 @@ class HeldoutCalibration:
         extrapolate its hysteresis to an unloading. The creep features are not clipped: a film
         recovers after unloading as it crept under load, so their fit holds for either sign. None: not
         clipped (files written before it). [1]
+    mix : tuple of MonotoneCurve
+        Static curves whose mean is the static estimate in place of ``static`` (model averaging, see
+        :data:`fsrlab.calibration.heldout_model.MIX_SE`); the memory's level and its correction stay
+        those fitted around ``static``. Empty: ``static`` alone.
     """
 
     static: MonotoneCurve
@@ -68,13 +72,33 @@ class HeldoutCalibration:
     uncertainty_plain: "LevelUncertainty | None" = None
     delay_s: float = 0.0
     hysteresis_range: "np.ndarray | None" = None
+    mix: tuple = ()
 
     def without_memory(self) -> "HeldoutCalibration":
         """The static curve alone (the estimate before compensation), with its own uncertainty."""
         if not self.has_memory:
             return self
         return HeldoutCalibration(self.static, self.static, full_scale=self.full_scale, row_s=self.row_s,
-                                  uncertainty=self.uncertainty_plain or self.uncertainty, delay_s=self.delay_s)
+                                  uncertainty=self.uncertainty_plain or self.uncertainty, delay_s=self.delay_s,
+                                  mix=self.mix)
+
+    @property
+    def static_name(self) -> str:
+        """The static estimate's name: ``readout-4``, ``mean(readout-4/log-4)`` or, of more than three
+        curves, ``mean(5 curves: readout-1…log-8)`` (no comma: progress lines split on commas)."""
+        names = [f"{m.variable}-{m.segments}" for m in self.mix]
+        if len(names) > 3:
+            return f"mean({len(names)} curves: {names[0]}…{names[-1]})"
+        if names:
+            return "mean(" + "/".join(names) + ")"
+        return f"{self.static.variable}-{self.static.segments}"
+
+    def static_estimate(self, x) -> np.ndarray:
+        """The estimate without memory at readings ``x`` (already delayed): the mean of :attr:`mix`, or
+        the static curve."""
+        if not self.mix:
+            return self.static(x)
+        return np.mean([m(x) for m in self.mix], axis=0)
 
     @property
     def has_memory(self) -> bool:
@@ -94,6 +118,8 @@ class HeldoutCalibration:
         level) and ``features`` (its :func:`memory_features`) when already computed."""
         x = np.asarray(x, dtype=float)
         est = self.curve(x)
+        if self.mix:
+            est = est + self.static_estimate(x) - self.static(x)
         if self.has_memory:
             if features is None:
                 u = self.level(x) if u is None else u
@@ -112,7 +138,8 @@ class HeldoutCalibration:
                 "uncertainty": None if self.uncertainty is None else self.uncertainty.to_dict(),
                 "uncertainty_plain": None if self.uncertainty_plain is None else self.uncertainty_plain.to_dict(),
                 "delay_s": self.delay_s,
-                "hysteresis_range": None if self.hysteresis_range is None else self.hysteresis_range.tolist()}
+                "hysteresis_range": None if self.hysteresis_range is None else self.hysteresis_range.tolist(),
+                "static_mix": [m.to_dict() for m in self.mix]}
 
     @classmethod
     def from_dict(cls, d: dict) -> "HeldoutCalibration":
@@ -137,7 +164,8 @@ class HeldoutCalibration:
         unc, plain = d.get("uncertainty"), d.get("uncertainty_plain")
         return cls(MonotoneCurve.from_dict(d["static"]), MonotoneCurve.from_dict(d["curve"]), thr, tau, w, fs, row,
                    None if unc is None else LevelUncertainty.from_dict(unc), bool(d.get("level_scaled_hysteresis", False)),
-                   None if plain is None else LevelUncertainty.from_dict(plain), delay, rng)
+                   None if plain is None else LevelUncertainty.from_dict(plain), delay, rng,
+                   tuple(MonotoneCurve.from_dict(m) for m in d.get("static_mix", ())))
 
 
 def clip_hysteresis(features: np.ndarray, hysteresis_range: "np.ndarray | None") -> np.ndarray:
@@ -186,7 +214,10 @@ class Stepper:
             x = self.line.push(t, float(x))
         u = float(cal.level(np.array([x]))[0])
         feats, d = self.state.advance(u, t)
-        est = float(cal.curve(np.array([x]))[0])
+        xa = np.array([x])
+        est = float(cal.curve(xa)[0])
+        if cal.mix:
+            est += float(cal.static_estimate(xa)[0] - cal.static(xa)[0])
         if cal.has_memory:
             est += float(np.dot(clip_hysteresis(np.asarray(feats), cal.hysteresis_range), cal.weights))
         return est, d

@@ -95,11 +95,10 @@ class RunCalibration:
 
     @property
     def model_name(self) -> str:
-        c = self.model.curve
         m = self.model
         mem = (("+hysteresis" + ("·level" if m.scaled else "")) if m.thresholds else "") + \
             ("+creep" if m.time_constants else "")
-        return f"monotone-{c.variable}-{c.segments}{mem}"
+        return f"monotone-{m.static_name}{mem}"
 
     def to_dict(self) -> dict:
         return {"format": "fsrlab-calibration", "version": 1, "method": METHOD, "model": self.model_name,
@@ -161,7 +160,7 @@ class RunCalibration:
         meta["units"] = dict(run.units, **{ycol: self.y_unit, ucol: self.y_unit, "in_range": "1"})
         meta["calibration"] = {**({} if self.path is None else {"file": str(self.path)}), "x": self.x_name,
                                "reference": self.y_name, "model": self.model_name if compensation else
-                               f"monotone-{self.model.static.variable}-{self.model.static.segments}", "method": METHOD,
+                               f"monotone-{self.model.static_name}", "method": METHOD,
                                "lag_s": self.lag_s, "created": self.created, "readout_range": list(self.x_range),
                                "margin": margin if math.isfinite(margin) else None, "counts": counts}
         if differences:

@@ -409,9 +409,11 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
     first = sel.steps[0]
     table.add_row(f"static curve: {first['chosen']}", f"chosen of {first['tried']}, held-out RMSE "
                   f"{k * scores[first['chosen']]:.4g} {u}")
+    if first.get("averaged"):
+        table.add_row(f"static estimate: mean of {len(first['averaged'])}", ", ".join(first["averaged"]))
     for s in sel.steps[1:]:
         kept = "kept" + (f" (weight {s['weight']:.2f})" if "weight" in s else "")
-        rmse = scores.get(s["tried"])
+        rmse = s.get("heldout_rmse_at_weight_1", scores.get(s["tried"]))
         table.add_row(f"{s['step']}: {s['tried']}", (kept if s["kept"] else "not kept")
                       + ("" if rmse is None else f", held-out RMSE {k * rmse:.4g} {u}"
                          + (" at weight 1" if s.get("weight", 1.0) < 1.0 else "")))
