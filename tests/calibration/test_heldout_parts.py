@@ -83,6 +83,20 @@ def test_monotone_curve_never_decreases_and_is_flat_below_its_readings(seed, seg
     assert curve(np.array([-100.0]))[0] == pytest.approx(curve(np.array([x.min()]))[0])
 
 
+@settings(max_examples=30, deadline=None)
+@given(st.integers(min_value=0, max_value=10_000), st.sampled_from([1, 2, 4, 8]),
+       st.sampled_from(["readout", "conductance", "log"]), st.sampled_from([1, -1]))
+def test_one_reading_at_a_time_gives_the_curve_of_the_whole_array(seed, segments, variable, sign):
+    """``at`` (a live stream's scalar path) equals ``__call__`` below, inside and beyond the range."""
+    rng = np.random.default_rng(seed)
+    x = np.sort(rng.uniform(20, 1000, 300))
+    g = (x / (1023 - x)) if sign > 0 else ((1023 - x) / x)
+    y = 3 * g ** 0.8 + rng.normal(0, 0.05, x.size)
+    curve, _ = fit_monotone(x, y, variable, segments, sign, 1023.0)
+    grid = np.r_[np.linspace(-50, 1100, 301), x[:20]]
+    assert [curve.at(float(v)) for v in grid] == pytest.approx(curve(grid).tolist(), rel=1e-12, abs=1e-12)
+
+
 def test_monotone_curve_extrapolates_linearly_in_the_readout_with_its_last_slope():
     x = np.linspace(0, 800, 400)
     g = x / (1023 - x)

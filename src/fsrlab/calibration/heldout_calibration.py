@@ -212,12 +212,16 @@ class Stepper:
             t = t if t is not None else (0.0 if self._t is None else self._t + cal.row_s)
             self._t = t
             x = self.line.push(t, float(x))
-        u = float(cal.level(np.array([x]))[0])
-        feats, d = self.state.advance(u, t)
-        xa = np.array([x])
-        est = float(cal.curve(xa)[0])
+        x = float(x)
+        static = cal.static.at(x)
+        feats, d = self.state.advance(static / cal.full_scale, t)
+        est = cal.curve.at(x)
         if cal.mix:
-            est += float(cal.static_estimate(xa)[0] - cal.static(xa)[0])
+            est += sum(m.at(x) for m in cal.mix) / len(cal.mix) - static
         if cal.has_memory:
-            est += float(np.dot(clip_hysteresis(np.asarray(feats), cal.hysteresis_range), cal.weights))
+            rng = cal.hysteresis_range
+            if rng is not None:
+                for j in range(rng.shape[1]):
+                    feats[j] = min(max(feats[j], float(rng[0, j])), float(rng[1, j]))
+            est += sum(f * float(w) for f, w in zip(feats, cal.weights))
         return est, d

@@ -21,7 +21,9 @@ least-squares fit, with a ridge term on the change of slope between segments):
 
 from __future__ import annotations
 
+from bisect import bisect_right
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -206,6 +208,37 @@ class MonotoneCurve:
             return float(np.exp(self.sign * v))
         a = float(self.adc)
         return float(a * v / (1.0 + v) if self.sign > 0 else a / (1.0 + v))
+
+    @cached_property
+    def _table(self) -> tuple:
+        """(knots, values at the knots, slope beyond the top per unit of readout, top reading) as Python
+        floats, for :meth:`at` (the curve is not changed after it is made)."""
+        c = self.coef
+        values = c[0] + np.concatenate([[0.0], np.cumsum(c[1:] * np.diff(self.knots))])
+        lo, hi = self.x_range
+        top = hi if self.sign > 0 else lo
+        slope = float(c[-1] * self._beyond(np.array([top + self.sign]))[0])
+        return self.knots.tolist(), values.tolist(), slope, top
+
+    def at(self, x: float) -> float:
+        """The curve at one finite reading ``x``: :meth:`__call__` without arrays (a live stream's step)."""
+        knots, values, slope, top = self._table
+        lo, hi = self.x_range
+        xc = lo if x < lo else (hi if x > hi else x)
+        if self.variable == "readout":
+            v = self.sign * xc
+        else:
+            v = float(readout_variable(np.array([xc]), self.variable, self.sign, self.adc)[0])
+        i = bisect_right(knots, v)
+        if i <= 0:
+            out = values[0]
+        elif i >= len(knots):
+            out = values[-1]
+        else:
+            k0, k1 = knots[i - 1], knots[i]
+            out = values[i - 1] + (values[i] - values[i - 1]) * (v - k0) / (k1 - k0)
+        beyond = self.sign * (x - top)
+        return out + slope * beyond if beyond > 0 else out
 
     def __call__(self, x) -> np.ndarray:
         """The curve at readings ``x`` (NaN stays NaN): the basis times the coefficients, evaluated as
