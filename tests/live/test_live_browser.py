@@ -67,14 +67,16 @@ def test_page_shows_the_windows_the_recorder_wrote_and_the_loop_grows(driver, tm
 
 def test_unplugged_device_shows_on_the_page_and_the_file_keeps_its_rows(driver, tmp_path):
     out = tmp_path / "unplug.csv"
-    server = LiveServer("--virtual", "--out", str(out), "--window", "20ms", "--unplug-after", "500")
+    # unplugged after 1000 windows (20 s): time for a loaded machine to start Chromium, load the page and
+    # start the recording first (after 500 windows a busy CI run once saw the device gone before that)
+    server = LiveServer("--virtual", "--out", str(out), "--window", "20ms", "--unplug-after", "1000")
     try:
         driver.get(server.url)
         assert wait_for(lambda: text(driver, "#latest-seq"))
         assert click_button(driver, "Start recording")
         assert wait_for(lambda: text(driver, "#recording"))
         page = wait_for(lambda: "disconnected" in (driver.execute_script("return document.body.innerText") or "")
-                        or _shadow_text_has(driver, "disconnected"), timeout_s=20)
+                        or _shadow_text_has(driver, "disconnected"), timeout_s=40)
         assert page
     finally:
         server.stop()
