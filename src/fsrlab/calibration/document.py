@@ -185,8 +185,7 @@ def load_calibration(path: str | os.PathLike) -> "Calibration | RunCalibration":
         raise ValueError(f"{p}: calibration file incomplete or malformed ({type(exc).__name__}: {exc})") from None
     lo, hi = cal.x_range
     if isinstance(cal, RunCalibration):
-        grid = np.linspace(lo, hi, 65)
-        values = cal.model.curve(grid) + cal.model.static_estimate(grid) - cal.model.static(grid)
+        values = cal.model.curve_estimate(np.linspace(lo, hi, 65))
         if not np.all(np.isfinite(values)) or np.max(np.abs(values)) > _MAX_ESTIMATE:
             raise ValueError(f"{p}: the calibration's curve does not give finite values of {cal.y_name} over its own "
                              f"readout range {lo:.6g} … {hi:.6g} (values changed or damaged)")

@@ -93,6 +93,12 @@ class HeldoutCalibration:
             return "mean(" + "/".join(names) + ")"
         return f"{self.static.variable}-{self.static.segments}"
 
+    def curve_estimate(self, x) -> np.ndarray:
+        """The estimate at readings ``x`` (already delayed) before the memory's features: :attr:`curve`,
+        plus what the mean of :attr:`mix` adds to :attr:`static`."""
+        est = self.curve(x)
+        return est + self.static_estimate(x) - self.static(x) if self.mix else est
+
     def static_estimate(self, x) -> np.ndarray:
         """The estimate without memory at readings ``x`` (already delayed): the mean of :attr:`mix`, or
         the static curve."""
@@ -117,9 +123,7 @@ class HeldoutCalibration:
         """The estimates alone of readings ``x`` already delayed (:meth:`run` delays them); ``u`` (the
         level) and ``features`` (its :func:`memory_features`) when already computed."""
         x = np.asarray(x, dtype=float)
-        est = self.curve(x)
-        if self.mix:
-            est = est + self.static_estimate(x) - self.static(x)
+        est = self.curve_estimate(x)
         if self.has_memory:
             if features is None:
                 u = self.level(x) if u is None else u
@@ -203,6 +207,8 @@ class Stepper:
         self.state.dt_default = cal.row_s
         self.line = DelayLine(cal.delay_s)
         self._t = None
+        rng = cal.hysteresis_range  # clip_hysteresis's bounds as Python floats, for one reading at a time
+        self._clip = [] if rng is None else list(zip(rng[0].tolist(), rng[1].tolist()))
 
     def step(self, x: float | None, t: float | None = None) -> tuple[float | None, int]:
         if x is None or not np.isfinite(x):
@@ -215,13 +221,11 @@ class Stepper:
         x = float(x)
         static = cal.static.at(x)
         feats, d = self.state.advance(static / cal.full_scale, t)
-        est = cal.curve.at(x)
+        est = cal.curve.at(x)  # curve_estimate and clip_hysteresis below, without arrays
         if cal.mix:
             est += sum(m.at(x) for m in cal.mix) / len(cal.mix) - static
         if cal.has_memory:
-            rng = cal.hysteresis_range
-            if rng is not None:
-                for j in range(rng.shape[1]):
-                    feats[j] = min(max(feats[j], float(rng[0, j])), float(rng[1, j]))
+            for j, (lo, hi) in enumerate(self._clip):
+                feats[j] = min(max(feats[j], lo), hi)
             est += sum(f * float(w) for f, w in zip(feats, cal.weights))
         return est, d

@@ -321,6 +321,11 @@ def _memory_step(sel: Selection, score, scored: dict, cache: _Cache, base: _Choi
     return (best, alpha) if kept else (None, 1.0)
 
 
+def _mix(parts: list[Part], mixed: list, sign: int, adc) -> tuple:
+    """The static curves of ``mixed`` fitted on ``parts`` (:attr:`HeldoutCalibration.mix`)."""
+    return tuple(_fit(parts, m, sign, adc).static for m in mixed)
+
+
 def _gain_spread(splits, static: _Choice, ch: _Choice, alpha: float, sign: int, adc, mixed=()) -> float:
     """RMS relative gain error of the held-out recordings (least-squares gain of reference on estimate)."""
     g = []
@@ -328,7 +333,7 @@ def _gain_spread(splits, static: _Choice, ch: _Choice, alpha: float, sign: int, 
         cal = _fit(fit_parts, ch, sign, adc)
         if static != ch:
             cal = _blend(_fit(fit_parts, static, sign, adc), cal, alpha)
-        cal.mix = tuple(_fit(fit_parts, m, sign, adc).static for m in mixed)
+        cal.mix = _mix(fit_parts, mixed, sign, adc)
         for p in test_parts:
             e, _ = cal.run(p.rec.t, p.rec.x)
             y = _shifted(p.rec, ch.lag)
@@ -540,7 +545,7 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
     whole = [Part(r, r.usable) for r in drecs]
     cal = _blend(_fit(whole, static_cur, sign, adc), _fit(whole, cur, sign, adc), alpha)
     cal.delay_s = delay_s
-    cal.mix = tuple(_fit(whole, m, sign, adc).static for m in mixed)
+    cal.mix = _mix(whole, mixed, sign, adc)
     rel = REPEATABILITY
     if len(recs) >= 2:
         sel.gain_spread = _gain_spread(splits, static_cur, cur, alpha, sign, adc, mixed)
