@@ -354,6 +354,24 @@ class MonotoneSystem:
                               self.curve.x_range)
         return curve, (c * sg)[1 + seg:], max(rss, 0.0)
 
+    def solve_extra(self, curve: MonotoneCurve, extra_lam: float = 0.0,
+                    extra_signs: np.ndarray | None = None) -> tuple[np.ndarray, float]:
+        """The extra columns' weights, not below zero (after ``extra_signs``), with the curve held at
+        ``curve`` (fitted alone on the same readings, so on these knots), and the residual sum of squares:
+        the extra columns fitted to what the curve leaves."""
+        k = self.curve.knots.size
+        if curve.coef.size != k:
+            raise ValueError("the curve held must have the system's knots")
+        g_ff, g_fc = self.gram[k:, k:], self.gram[k:, :k]
+        b = self.atb[k:] - g_fc @ curve.coef
+        m = b.size
+        sg = np.ones(m) if extra_signs is None else np.asarray(extra_signs, dtype=float)
+        pen = np.sqrt(extra_lam * self.n) * np.eye(m) if extra_lam > 0 else None
+        w = bounded_solve(g_ff * np.outer(sg, sg), b * sg, self.n, np.zeros(m), pen) * sg
+        c = curve.coef
+        rr = self.yty - 2 * c @ self.atb[:k] + c @ self.gram[:k, :k] @ c  # what the curve leaves
+        return w, max(float(w @ g_ff @ w - 2 * w @ b + rr), 0.0)
+
 
 def monotone_system(x, y, variable: str, segments: int, sign: int, adc: float | None,
                     extra: np.ndarray | None = None) -> MonotoneSystem:
