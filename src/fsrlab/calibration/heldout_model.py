@@ -306,14 +306,23 @@ def _memory_step(sel: Selection, score, scored: dict, cache: _Cache, base: _Choi
     held = [base.but(thresholds=h, time_constants=c, scaled=sc, ridge=r, held=True) for h, c, sc in MEMORY_VARIANTS
             for r in RIDGES]
     refit = [c.but(held=False) for c in held]
-    for ch in [base] + held + refit:
-        score(ch)
     e_s, ids, _, parts = plain
+    score(base)
 
     def full(c):  # held-out errors of the static estimate plus c's whole correction
         return scored[c][0] - scored[base][0] + e_s
 
-    best_held, best_refit = (min(t, key=lambda c: _rmse(full(c))) for t in (held, refit))
+    leader = {}  # the best trial of each kind so far; the others' held-out errors are let go at once
+    for ch in held + refit:
+        score(ch)
+        was = leader.get(ch.held)
+        if was is None or _rmse(full(ch)) < _rmse(full(was)):
+            leader[ch.held], loser = ch, was
+        else:
+            loser = ch
+        if loser is not None:
+            scored.pop(loser)
+    best_held, best_refit = leader[True], leader[False]
     g_refit, se_refit = paired_gain(full(best_held), full(best_refit), ids)
     refitted = _refit_wins(g_refit, se_refit, float(np.mean(full(best_held) ** 2)))
     best = best_refit if refitted else best_held
@@ -382,9 +391,10 @@ def _held_out(splits, ch: _Choice, sign: int, adc, cache: _Cache):
     for i, (fit_parts, test_parts) in enumerate(splits):
         cal = _fit(fit_parts, ch, sign, adc, cache, i)
         for j, p in enumerate(test_parts):
-            e = cal.curve(p.rec.x)
+            key = (i, ch.variable, ch.segments, ch.lag, ch.delay, id(p.rec))
+            # with the curve held, its values on the part are the static curve's, the same for every trial
+            e = cache.static(("values",) + key, lambda: cal.curve(p.rec.x)) if ch.held else cal.curve(p.rec.x)
             if cal.has_memory:
-                key = (i, ch.variable, ch.segments, ch.lag, ch.delay, id(p.rec))
                 e = e + cache.memory_term(key, p.rec, cal.level, ch, cal.weights, cal.hysteresis_range)
             y = _shifted(p.rec, ch.lag)
             idx = np.flatnonzero(p.rows)
