@@ -97,17 +97,22 @@ def test_one_reading_at_a_time_gives_the_curve_of_the_whole_array(seed, segments
     assert [curve.at(float(v)) for v in grid] == pytest.approx(curve(grid).tolist(), rel=1e-12, abs=1e-12)
 
 
-def test_monotone_curve_extrapolates_linearly_in_the_readout_with_its_last_slope():
-    x = np.linspace(0, 800, 400)
-    g = x / (1023 - x)
+@pytest.mark.parametrize("sign", [1, -1])
+def test_monotone_curve_extrapolates_linearly_in_the_readout_with_its_top_half_slope(sign):
+    x = np.linspace(0, 800, 400) if sign > 0 else np.linspace(223, 1023, 400)
+    g = x / (1023 - x) if sign > 0 else (1023 - x) / x
     y = 2.0 * g  # a force proportional to the conductance ratio
-    curve, _ = fit_monotone(x, y, "conductance", 4, 1, 1023.0)
-    top = x.max()
-    v = curve(np.array([top, top + 50, top + 100]))
+    curve, _ = fit_monotone(x, y, "conductance", 4, sign, 1023.0)
+    top, mid = (x.max(), x.mean()) if sign > 0 else (x.min(), x.mean())
+    v = curve(np.array([top, top + 50 * sign, top + 100 * sign]))
     assert v[2] - v[1] == pytest.approx(v[1] - v[0], rel=1e-9)  # straight beyond the range
-    knot_x = curve._readout_at(curve.knots[-2])
-    slope = (curve(np.array([top]))[0] - curve(np.array([knot_x]))[0]) / (top - knot_x)
+    # the slope beyond: the curve's own rise over the top half of the range, per unit of readout
+    slope = (curve(np.array([top]))[0] - curve(np.array([mid]))[0]) / abs(top - mid)
     assert (v[1] - v[0]) / 50 == pytest.approx(slope, rel=1e-6)
+    # gentler than the last segment's, which the divider's rail steepens
+    knot_x = curve._readout_at(curve.knots[-2])
+    assert slope < (curve(np.array([top]))[0] - curve(np.array([knot_x]))[0]) / abs(top - knot_x)
+    assert curve.at(float(top + 50 * sign)) == pytest.approx(v[1], rel=1e-12)
     # inside the range the conductance curve follows y = 2·G closely
     assert np.max(np.abs(curve(x) - y)) < 0.05 * np.ptp(y)
 
