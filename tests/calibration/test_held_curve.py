@@ -39,6 +39,10 @@ def test_the_held_fit_is_bounded_least_squares_on_what_the_curve_leaves():
         assert rss == pytest.approx(float(np.sum((r - feats @ w) ** 2)), rel=1e-6)
     with pytest.raises(ValueError):
         system.solve_extra(fit_monotone(x, y, "readout", 2, 1, None)[0])
+    # columns that never move (a level that stayed put) and no ridge: no weights, the curve's residual
+    still = monotone_system(x, y, "readout", 4, 1, None, extra=np.zeros((400, 2)))
+    w, rss = still.solve_extra(curve)
+    assert np.all(w == 0) and rss == pytest.approx(float(np.sum(r ** 2)), rel=1e-6)
 
 
 def _creeping_film(force: np.ndarray, rng) -> np.ndarray:

@@ -29,8 +29,8 @@ from functools import cached_property
 
 import numpy as np
 
-__all__ = ["VARIABLES", "TOP_SLOPE_SPAN", "adc_full_scale", "readout_variable", "MonotoneCurve", "fit_monotone", "bounded_fit", "bounded_solve",
-           "MonotoneSystem", "monotone_system"]
+__all__ = ["VARIABLES", "TOP_SLOPE_SPAN", "adc_full_scale", "readout_variable", "MonotoneCurve", "fit_monotone",
+           "bounded_fit", "bounded_solve", "MonotoneSystem", "monotone_system"]
 
 #: The readout variables a curve can be fitted in. [1]
 VARIABLES = ("readout", "conductance", "log")
@@ -370,7 +370,10 @@ class MonotoneSystem:
         m = b.size
         sg = np.ones(m) if extra_signs is None else np.asarray(extra_signs, dtype=float)
         pen = np.sqrt(extra_lam * self.n) * np.eye(m) if extra_lam > 0 else None
-        w = bounded_solve(g_ff * np.outer(sg, sg), b * sg, self.n, np.zeros(m), pen) * sg
+        if pen is None and not np.any(g_ff):  # columns all zero and no ridge: nothing to fit
+            w = np.zeros(m)
+        else:
+            w = bounded_solve(g_ff * np.outer(sg, sg), b * sg, self.n, np.zeros(m), pen) * sg
         c = curve.coef
         rr = self.yty - 2 * c @ self.atb[:k] + c @ self.gram[:k, :k] @ c  # what the curve leaves
         return w, max(float(w @ g_ff @ w - 2 * w @ b + rr), 0.0)
