@@ -10,6 +10,8 @@ the unloading staircase that follows. Each decision is checked against its ablat
 replaced by "always" or "never").
 """
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy.optimize import lsq_linear
@@ -19,7 +21,7 @@ from fsrlab.calibration.heldout import Recording
 from fsrlab.calibration.monotone import fit_monotone, monotone_system
 
 RATE_HZ = 20.0
-DATA = __import__("pathlib").Path(__file__).resolve().parents[1] / "data" / "real" / "belli-insole"
+DATA = Path(__file__).resolve().parents[1] / "data" / "real" / "belli-insole"
 
 
 def test_the_held_fit_is_bounded_least_squares_on_what_the_curve_leaves():

@@ -84,6 +84,21 @@ def test_the_stepper_and_a_file_give_the_batch_numbers(averaged):
     np.testing.assert_allclose(live, batch, rtol=1e-9, atol=1e-6)
 
 
+def test_beyond_the_range_the_extrapolated_amount_is_the_mean_curves(averaged):
+    """The uncertainty beyond the calibrated readings grows with how far the estimate the user gets (the
+    mean of the averaged curves) went beyond its value at the range's end -- each curve's own values
+    are the reference -- not with one curve's."""
+    _, cal, _ = averaged
+    plain = cal.without_memory()
+    lo, hi = plain.static.x_range
+    top = hi if plain.static.sign > 0 else lo
+    xs = top + plain.static.sign * np.array([5.0, 20.0, 60.0])
+    expected = np.abs(np.mean([m(xs) - m(np.array([top]))[0] for m in plain.mix], axis=0))
+    assert np.all(expected > 0)
+    np.testing.assert_allclose(plain.extrapolated(xs, lo, hi), expected, rtol=1e-9, atol=1e-12)
+    assert np.all(plain.extrapolated(np.linspace(lo, hi, 7), lo, hi) == 0)
+
+
 def test_a_file_without_a_mix_reads_as_its_single_curve(averaged):
     rec, cal, _ = averaged
     d = cal.without_memory().to_dict()

@@ -99,6 +99,12 @@ class HeldoutCalibration:
         est = self.curve(x)
         return est + self.static_estimate(x) - self.static(x) if self.mix else est
 
+    def extrapolated(self, x, lo: float, hi: float) -> np.ndarray:
+        """How far the estimate before the memory at readings ``x`` goes beyond its value at the nearest end
+        of the calibrated readings ``lo`` … ``hi`` (0 inside; NaN stays NaN). [unit of the reference]"""
+        x = np.asarray(x, dtype=float)
+        return np.abs(self.curve_estimate(x) - self.curve_estimate(np.clip(x, lo, hi)))
+
     def static_estimate(self, x) -> np.ndarray:
         """The estimate without memory at readings ``x`` (already delayed): the mean of :attr:`mix`, or
         the static curve."""

@@ -175,7 +175,7 @@ def _estimate(m: HeldoutCalibration, x_range, t, x, margin):
     inside = np.isfinite(x) & (x >= lo) & (x <= hi)
     kept = np.isfinite(x) & (x >= lo - margin * span) & (x <= hi + margin * span) if np.isfinite(margin) \
         else np.isfinite(x)
-    extra = np.abs(m.curve(x) - m.curve(np.clip(x, lo, hi))) if (~inside & np.isfinite(x)).any() else None
+    extra = m.extrapolated(x, lo, hi) if (~inside & np.isfinite(x)).any() else None
     u = m.uncertainty(est, d, extra) if m.uncertainty is not None else np.full(x.shape, np.nan)
     return est, u, inside, kept
 
@@ -221,10 +221,7 @@ class RunEstimator:
         u = None
         m = self.model
         if m.uncertainty is not None:
-            extra = None
-            if not inside:
-                xc = min(max(x, self.lo), self.hi)
-                extra = np.array([abs(float(m.curve(np.array([x]))[0] - m.curve(np.array([xc]))[0]))])
+            extra = None if inside else m.extrapolated(np.array([x]), self.lo, self.hi)
             u = float(m.uncertainty(np.array([est]), np.array([d]), extra)[0])
         return est, u, inside
 

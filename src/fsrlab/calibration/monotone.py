@@ -200,13 +200,17 @@ class MonotoneCurve:
         f_start, f_top = self._inside(np.array([start, top]))
         return top, max(float(f_top - f_start), 0.0) / (TOP_SLOPE_SPAN * (hi - lo))
 
+    @cached_property
+    def _values(self) -> np.ndarray:
+        """The curve's values at its knots. [unit of the reference]"""
+        c = self.coef
+        return c[0] + np.concatenate([[0.0], np.cumsum(c[1:] * np.diff(self.knots))])
+
     def _inside(self, x: np.ndarray) -> np.ndarray:
         """The curve at readings ``x`` (finite) clipped to the range it was fitted on."""
         lo, hi = self.x_range
         v = readout_variable(np.clip(x, lo, hi), self.variable, self.sign, self.adc)
-        c = self.coef
-        values = c[0] + np.concatenate([[0.0], np.cumsum(c[1:] * np.diff(self.knots))])
-        return np.interp(v, self.knots, values)
+        return np.interp(v, self.knots, self._values)
 
     def _readout_at(self, v: float) -> float:
         """The reading whose variable is ``v`` (the inverse of :func:`readout_variable`)."""
@@ -221,10 +225,8 @@ class MonotoneCurve:
     def _table(self) -> tuple:
         """(knots, values at the knots, slope beyond the top per unit of readout, top reading) as Python
         floats, for :meth:`at` (the curve is not changed after it is made)."""
-        c = self.coef
-        values = c[0] + np.concatenate([[0.0], np.cumsum(c[1:] * np.diff(self.knots))])
         top, slope = self._top
-        return self.knots.tolist(), values.tolist(), slope, top
+        return self.knots.tolist(), self._values.tolist(), slope, top
 
     def at(self, x: float) -> float:
         """The curve at one finite reading ``x``: :meth:`__call__` without arrays (a live stream's step)."""
