@@ -34,7 +34,7 @@ import numpy as np
 
 from fsrlab.calibration.polynomial import PolynomialModel, default_groups
 from fsrlab.calibration.readout import (
-    C_FSR, _as_run, _named, _recorded, run_readout, run_recorded_with, run_reference,
+    C_FSR, _as_run, _named, _recorded, reference_reversed, run_readout, run_recorded_with, run_reference,
 )
 from fsrlab.calibration.result import Calibration, calibrate
 from fsrlab.circuits.circuit import LM555Circuit
@@ -169,7 +169,7 @@ def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", comp
         A column the run lacks, no reference.
     ValueError
         A parameter out of range, too few readings, a readout that does not respond, a reference
-        that is mostly negative, a lag search without a minimum.
+        that is reversed (mostly negative, its largest excursion below zero), a lag search without a minimum.
     """
     from fsrlab.calibration.alignment import estimate_lag, shift_reference
     from fsrlab.calibration.polynomial import fit_metrics, fingerprint
@@ -184,10 +184,10 @@ def calibrate_run(run, x: str = "frequency_hz", degree: int | str = "auto", comp
     both = np.isfinite(values) & np.isfinite(y_raw)
     if both.sum() < 3:
         raise ValueError(f"{run.path}: {x} and {y_name}: fewer than 3 readings with both values present")
-    neg = float(np.mean(y_raw[both] < 0))
-    if neg > 0.5:
-        raise ValueError(f"{run.path}: {y_name}: the reference is mostly negative ({100 * neg:.0f} % of the readings "
-                         "below 0): a load cell mounted or wired the wrong way round, or the wrong column")
+    reversed_why = reference_reversed(y_raw[both])
+    if reversed_why:
+        raise ValueError(f"{run.path}: {y_name}: {reversed_why}: a load cell mounted or wired the wrong way round, "
+                         "or the wrong column")
     from fsrlab.metrics.hysteresis import check_response
 
     try:

@@ -22,7 +22,8 @@ __all__ = ["HeldoutCalibration", "Stepper", "clip_hysteresis"]
 
 @dataclass
 class HeldoutCalibration:
-    """Estimate = curve(x) + Σ weight·feature, the features of the level ``static(x)/full_scale``.
+    """Estimate = curve(x) + Σ weight·feature, the features of the level
+    ``(static(x) − static.rest)/full_scale`` (the load above rest).
 
     Parameters
     ----------
@@ -117,7 +118,7 @@ class HeldoutCalibration:
         return self.weights.size > 0
 
     def level(self, x) -> np.ndarray:
-        return self.static(x) / self.full_scale
+        return (self.static(x) - self.static.rest) / self.full_scale
 
     def run(self, t, x) -> tuple[np.ndarray, np.ndarray]:
         """Estimates and directions of a whole recording (readings in time order; NaN gives NaN)."""
@@ -213,6 +214,7 @@ class Stepper:
         self.state.dt_default = cal.row_s
         self.line = DelayLine(cal.delay_s)
         self._t = None
+        self._rest = cal.static.rest
         rng = cal.hysteresis_range  # clip_hysteresis's bounds as Python floats, for one reading at a time
         self._clip = [] if rng is None else list(zip(rng[0].tolist(), rng[1].tolist()))
 
@@ -226,7 +228,7 @@ class Stepper:
             x = self.line.push(t, float(x))
         x = float(x)
         static = cal.static.at(x)
-        feats, d = self.state.advance(static / cal.full_scale, t)
+        feats, d = self.state.advance((static - self._rest) / cal.full_scale, t)
         est = cal.curve.at(x)  # curve_estimate and clip_hysteresis below, without arrays
         if cal.mix:
             est += sum(m.at(x) for m in cal.mix) / len(cal.mix) - static

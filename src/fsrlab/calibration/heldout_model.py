@@ -26,7 +26,8 @@ complexity:
    takes part of a loop for a lag). By default there is none: the estimate is of the reference as
    recorded, and one aligned to a lagging reference's instant is further from the recorded values
    (the virtual bench's test run: 13 % hysteresis error of the estimate with a 3-row lag, 6 % without);
-4. **memory**: hysteresis (rate-independent: play operators on the curve's level ``u = static(x)/FS``,
+4. **memory**: hysteresis (rate-independent: play operators on the curve's level ``u = (static(x) − rest)/FS``, the
+   load above the curve's value at rest (:attr:`MonotoneCurve.rest`),
    :mod:`fsrlab.calibration.operators`, additive or growing with the level) and creep (rate-dependent:
    exponential averages with time constants from 0.5 s to 32 s, the time scale the fit's mix of
    them), alone and together (:data:`MEMORY_VARIANTS`), their weights of one sign per kind -- a loop
@@ -237,7 +238,8 @@ def _fit(parts: list[Part], ch: _Choice, sign: int, adc, cache: _Cache | None = 
     row_s = _row_step([p.rec for p in parts])
     if not (ch.thresholds or ch.time_constants):
         return HeldoutCalibration(static, static, full_scale=fs, row_s=row_s)
-    level = lambda v: static(v) / fs  # noqa: E731
+    rest = static.rest
+    level = lambda v: (static(v) - rest) / fs  # noqa: E731  (HeldoutCalibration.level)
 
     def system():  # every choice's memory is a subset of the standard features (MEMORY_VARIANTS, the lag probe)
         feats = np.concatenate([cache.memory(skey + (id(p.rec),), p.rec, level, ch)[p.rows] for p in parts])[ok]

@@ -26,6 +26,7 @@ import numpy as np
 from fsrlab.calibration.heldout import Recording
 from fsrlab.calibration.heldout_model import HeldoutCalibration, Selection, calibrate_recordings
 from fsrlab.calibration.provenance import RecordedWith, mismatches, recorded_with
+from fsrlab.calibration.readout import reference_reversed
 from fsrlab.io.runformat import KNOWN_COLUMNS, Run, RunFormatError, load_run
 
 __all__ = ["METHOD", "MARGIN", "MIN_READINGS", "RunCalibration", "calibrate_runs", "RunEstimator"]
@@ -306,9 +307,10 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
         raise ValueError(f"runs: the reference differs between runs ({', '.join(sorted(refs))}); name it")
     ref = refs.pop()
     y_all = np.concatenate([r.y[r.usable] for r in recs])
-    if float(np.mean(y_all < 0)) > 0.5:
-        raise ValueError(f"{ref}: the reference is mostly negative: a load cell mounted or wired the wrong way "
-                         "round, or the wrong column")
+    reversed_why = reference_reversed(y_all)
+    if reversed_why:
+        raise ValueError(f"{ref}: {reversed_why}: a load cell mounted or wired the wrong way round, or the wrong "
+                         "column")
     rws = [recorded_with(r.metadata, r.columns.get("range"), rec.usable) for r, rec in zip(runs, recs)]
     rw = rws[0]
     for other, run in zip(rws[1:], runs[1:]):

@@ -200,6 +200,13 @@ class MonotoneCurve:
         f_start, f_top = self._inside(np.array([start, top]))
         return top, max(float(f_top - f_start), 0.0) / (TOP_SLOPE_SPAN * (hi - lo))
 
+    @property
+    def rest(self) -> float:
+        """The curve's least value, at the low-force end of its readings: the reference at rest as the
+        curve sees it (0 for a tared load cell; another value when it was not tared). [unit of the
+        reference]"""
+        return float(self._values[0])
+
     @cached_property
     def _values(self) -> np.ndarray:
         """The curve's values at its knots. [unit of the reference]"""

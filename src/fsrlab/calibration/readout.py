@@ -25,7 +25,7 @@ from fsrlab.io.runformat import Run, RunFormatError, load_run
 from fsrlab.metrics.cycles import RunHysteresis, row_cycles, row_directions, run_hysteresis
 
 __all__ = ["C_FSR", "run_directions", "run_cycles", "run_groups", "run_circuit", "decode_capacitance", "run_readout",
-           "run_reference", "run_recorded_with", "hysteresis_of_run"]
+           "run_reference", "reference_reversed", "run_recorded_with", "hysteresis_of_run"]
 
 #: The decoded-capacitance variable of the physics-informed calibration. [F]
 C_FSR = "c_fsr_farad"
@@ -222,6 +222,30 @@ def run_readout(run: Run, x: str, circuit: LM555Circuit | None = None) -> tuple[
         circ = run_circuit(run, circuit)
         return decode_capacitance(run["frequency_hz"], run["duty_cycle"], circ, run.columns.get("range")), circ
     return run[x], None
+
+
+def reference_reversed(y) -> str | None:
+    """Why a reference looks reversed (a load cell mounted or wired the wrong way round), or None.
+
+    It does when most of its values are below zero **and** its largest excursion is below zero
+    (``−min > max``): the presses go negative. A reference whose rest level sits below zero (a load
+    cell not tared, an offset that drifted) with presses going positive is mostly negative too, but
+    is not reversed: its estimate is of the reference as recorded.
+
+    Parameters
+    ----------
+    y : array_like
+        The reference's values (NaN ignored). [N or Pa]
+    """
+    y = np.asarray(y, dtype=float)
+    y = y[np.isfinite(y)]
+    if y.size == 0:
+        return None
+    neg = float(np.mean(y < 0))
+    if neg > 0.5 and -float(np.min(y)) > float(np.max(y)):
+        return (f"the reference is mostly negative ({100 * neg:.0f} % of the readings below 0, down to "
+                f"{float(np.min(y)):.4g}, up to {float(np.max(y)):.4g})")
+    return None
 
 
 def run_reference(run: Run, reference: str | None = None) -> tuple[np.ndarray, str, str]:
