@@ -205,3 +205,46 @@ def test_a_delay_that_saves_less_than_min_gain_of_the_error_is_not_kept():
     assert step["gain"] > 3 * step["se"] and min(step["heldout_gain_by_part"]) > 0
     assert not step["kept"] and cal.delay_s == 0.0
     assert f"less than {100 * hm.MIN_GAIN:.0f} %" in step["why"]
+
+
+def _rows_late(seed: int, rows: float, n: int = 6000, rate_hz: float = 100.0) -> Recording:
+    """Presses read at ``rate_hz``; the reference logged ``rows`` readings late (a load cell on another
+    logger joined by its time stamps): the force of ``rows / rate_hz`` before the row, by construction.
+    The readout is a power law of the force (an FSR's conductance), not fsrlab's curve."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / rate_hz
+    periods, phases = rng.uniform(1.0, 3.0, 4), rng.uniform(0, 2 * np.pi, 4)
+    force = lambda tt: 10.0 * np.clip(sum(np.sin(2 * np.pi * tt / p + ph) for p, ph in  # noqa: E731
+                                          zip(periods, phases)) / 2.0, 0.0, None) ** 1.2
+    g = (force(t) / 5.0) ** 0.8
+    x = np.round(1023 * g / (1 + g) + rng.normal(0, 1.0, n))
+    return Recording(t, x, force(t - rows / rate_hz) + rng.normal(0, 0.02, n))
+
+
+@pytest.mark.parametrize("rows", [3.0, 5.5, 20.0])
+def test_a_reference_many_readings_late_gets_its_delay(rows, monkeypatch):
+    """Beyond the two readings fsrlab tried before: the delay found is the construction's within a
+    quarter reading (20 rows: within the doubling grid's refinement, 1 row), and on a recording the
+    calibration never saw the estimate is closer than with the old grid (0.25–2 readings), the ablation."""
+    rec, other = _rows_late(1, rows), _rows_late(2, rows)
+    cal, sel = calibrate_recordings([rec], compensate=False)
+    step = next(s for s in sel.steps if s["step"] == "delay")
+    assert step["kept"]
+    assert abs(cal.delay_s * 100.0 - rows) <= (1.0 if rows > 16 else 0.25)
+    monkeypatch.setattr(hm, "DELAY_ROWS", (0.25, 0.5, 0.75, 1.0, 1.5, 2.0))
+    monkeypatch.setattr(hm, "DELAY_MAX_S", 0.0)
+    old, _ = calibrate_recordings([rec], compensate=False)
+    assert old.delay_s == pytest.approx(0.02)  # the old grid's last
+    assert _rmse_on(cal, other) < 0.75 * _rmse_on(old, other)  # measured 0.57 at 3 rows, less beyond
+
+
+def test_the_delays_tried():
+    # at 10 readings/s the grid stops at 16 readings (1.6 s, beyond DELAY_MAX_S); at 1000/s it doubles on
+    # to 512 readings, the first at or beyond 0.5 s
+    assert hm.delay_trials(0.1) == list(hm.DELAY_ROWS)
+    fast = hm.delay_trials(0.001)
+    assert fast[-1] == 512.0 and fast[-2] * 0.001 < hm.DELAY_MAX_S <= fast[-1] * 0.001
+    # the refinement: quarter, half and three-quarter points to each neighbour, in quarter readings
+    assert hm.delay_trials(0.1, 3.0) == [2.25, 2.5, 2.75, 3.25, 3.5, 3.75]
+    assert hm.delay_trials(0.1, 16.0) == [13.0, 14.0, 15.0]
+    assert hm.delay_trials(0.1, 0.5) == []  # nothing between 0.25, 0.5 and 0.75 in quarter readings

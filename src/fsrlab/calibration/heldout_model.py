@@ -13,9 +13,10 @@ complexity:
    **standard error** (model averaging: which of several curves that score alike within one recording
    holds on the next is left to chance by picking one, and their mean is on average closer to it);
 2. **delay** of the reference (:mod:`fsrlab.calibration.delay`, :data:`DELAY_ROWS`): the estimate made
-   from the readout as it was a fraction of a reading (up to two) earlier, as when a load-cell
-   amplifier integrates over its conversion window and hands the result over later (an HX711 at
-   10 samples/s beside an ``analogRead``: half a reading). The estimate is still of the reference as
+   from the readout as it was a fraction of a reading or more earlier (:func:`delay_trials`: 0.25 to
+   16 readings, doubling on to 0.5 s, refined around the best), as when a load-cell amplifier
+   integrates over its conversion window and hands the result over later (an HX711 at 10 samples/s
+   beside an ``analogRead``: half a reading) or a reference is logged by another device. The estimate is still of the reference as
    recorded, and causal; judged with the static curve (a delay corrects estimates that run ahead of
    the reference; an FSR's loop leaves them behind, so its hysteresis is not taken for a delay). On the
    real recordings (docs/calibration.md) it is kept on 6 of 21 pairs, 0.5–0.75 of a reading (an
@@ -107,9 +108,13 @@ CREEP_SIGNS = (1, -1)
 LAG_PROBE_RIDGE = 1e-2
 #: Lags tried, in rows of the recording (the reference shifted against the readout). [1]
 LAG_ROWS = (-3, -2, -1, 1, 2, 3)
-#: Delays of the reference tried, in readings of the calibration data (:mod:`fsrlab.calibration.delay`):
-#: fractions of one, as a load-cell amplifier's conversion window gives, up to two. [1]
-DELAY_ROWS = (0.25, 0.5, 0.75, 1.0, 1.5, 2.0)
+#: Delays of the reference tried first, in readings of the calibration data (:mod:`fsrlab.calibration.delay`):
+#: fractions of one, as a load-cell amplifier's conversion window gives, then longer ones, as a reference
+#: logged by another device and joined by its time stamps, or filtered, gives; then doubling up to
+#: :data:`DELAY_MAX_S`, and finer steps around the best (:func:`delay_trials`). [1]
+DELAY_ROWS = (0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0)
+#: The delays tried go on doubling beyond :data:`DELAY_ROWS` until they reach this much time. [s]
+DELAY_MAX_S = 0.5
 
 
 @dataclass
@@ -263,6 +268,21 @@ def _fit(parts: list[Part], ch: _Choice, sign: int, adc, cache: _Cache | None = 
     _, curve, w = best
     return HeldoutCalibration(static, curve, tuple(ch.thresholds), tuple(ch.time_constants), w, fs, row_s,
                               scaled=ch.scaled, hysteresis_range=hysteresis_range)
+
+
+def delay_trials(row_s: float, best: float | None = None) -> list[float]:
+    """The delays tried, in readings: :data:`DELAY_ROWS` and their doublings up to :data:`DELAY_MAX_S`
+    (``row_s``: the time of one reading [s]); with ``best`` (one of those), the quarter, half and three
+    quarter points between it and each neighbour, in quarter readings, not already among them."""
+    grid = list(DELAY_ROWS)
+    while grid and row_s > 0 and grid[-1] * row_s < DELAY_MAX_S:
+        grid.append(2.0 * grid[-1])
+    if best is None:
+        return grid
+    i = grid.index(best)
+    finer = {round(4.0 * (best + (n - best) * f)) / 4.0 for n in grid[max(i - 1, 0):i + 2] if n != best
+             for f in (0.25, 0.5, 0.75)}
+    return sorted(d for d in finer if d > 0 and d not in grid)
 
 
 def _row_step(recs: list[Recording]) -> float:
@@ -539,7 +559,17 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
         # reference instead). Judged with the static curve: a delay corrects estimates that run ahead of
         # the reference (a reference that lags); an FSR's loop leaves them behind (it conducts more on
         # unloading), which a delay would make worse, so the sensor's hysteresis is not taken for a delay.
-        won = step("delay", [cur.but(delay=d) for d in DELAY_ROWS], cur)
+        coarse = None  # the best of the grid so far; the others' held-out errors and recordings let go at once
+        for d in delay_trials(row_s):
+            score(cur.but(delay=d))
+            if coarse is None or _rmse(scored[cur.but(delay=d)][0]) < _rmse(scored[cur.but(delay=coarse)][0]):
+                coarse, loser = d, coarse
+            else:
+                loser = d
+            if loser is not None:
+                scored.pop(cur.but(delay=loser))
+                by_delay.pop(loser, None)
+        won = step("delay", [cur.but(delay=d) for d in [coarse] + delay_trials(row_s, coarse)], cur)
         if won is not None:
             cur = won
         for d in [d for d in by_delay if d != cur.delay]:  # the other delays' recordings are not needed again
