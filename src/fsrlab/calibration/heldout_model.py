@@ -16,9 +16,10 @@ complexity:
    from the readout as it was a fraction of a reading or more earlier (:func:`delay_trials`: 0.25 to
    16 readings, doubling on to 0.5 s, refined around the best), as when a load-cell amplifier
    integrates over its conversion window and hands the result over later (an HX711 at 10 samples/s
-   beside an ``analogRead``: half a reading) or a reference is logged by another device. The estimate is still of the reference as
-   recorded, and causal; judged with the static curve (a delay corrects estimates that run ahead of
-   the reference; an FSR's loop leaves them behind, so its hysteresis is not taken for a delay). On the
+   beside an ``analogRead``: half a reading) or a reference is logged by another device. The
+   estimate is still of the reference as recorded, and causal; judged with the static curve (a delay
+   corrects estimates that run ahead of the reference; an FSR's loop leaves them behind, so its
+   hysteresis is not taken for a delay). On the
    real recordings (docs/calibration.md) it is kept on 6 of 21 pairs, 0.5–0.75 of a reading (an
    HX711 or a taxel at 10 rows/s), and lowered the geometric mean from 0.98× to 0.93× the oracle
    polynomial;
@@ -27,8 +28,8 @@ complexity:
    takes part of a loop for a lag). By default there is none: the estimate is of the reference as
    recorded, and one aligned to a lagging reference's instant is further from the recorded values
    (the virtual bench's test run: 13 % hysteresis error of the estimate with a 3-row lag, 6 % without);
-4. **memory**: hysteresis (rate-independent: play operators on the curve's level ``u = (static(x) − rest)/FS``, the
-   load above the curve's value at rest (:attr:`MonotoneCurve.rest`),
+4. **memory**: hysteresis (rate-independent: play operators on the curve's level
+   ``u = (static(x) − rest)/FS``, the load above the curve's value at rest (:attr:`MonotoneCurve.rest`),
    :mod:`fsrlab.calibration.operators`, additive or growing with the level) and creep (rate-dependent:
    exponential averages with time constants from 0.5 s to 32 s, the time scale the fit's mix of
    them), alone and together (:data:`MEMORY_VARIANTS`), their weights of one sign per kind -- a loop
