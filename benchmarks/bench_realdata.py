@@ -20,6 +20,11 @@ runs, then :func:`fsrlab.calibration.apply.apply_calibration` (``fsrlab apply``)
 test run**: an oracle the calibration does not have); the share of loaded rows whose error lies
 within ±2u; the share of loaded rows left without an estimate. Beside it, measured in the same run,
 the in-run cross-validated calibration (``--method cv --compensate``, one training run only).
+
+Then a robustness table: a few of those pairs with their reference logged ``k`` readings late (the
+readout's first ``k`` rows and the reference's last ``k`` dropped, in the training and the test runs
+alike, as when a load cell is logged by another device and joined by time stamps): the compensated
+estimate's RMSE as a multiple of the same pair's with ``k = 0``, and the delay the calibration found.
 """
 
 from __future__ import annotations
@@ -104,6 +109,24 @@ PAIRS = (
 DEVELOPED_ON = 21
 
 
+#: Pairs (by name) and reference delays [readings] of the robustness table.
+LATE_PAIRS = ("FSR divider + HX711, hand: first half → second half", "second FSR, hand: first half → second half",
+              "taxel (TAMS), bare: first half → second half", "Velostat, robot: run 1 → its repeat",
+              "Velostat, robot 20 N: run 1 → its repeat")
+LATE_ROWS = (3, 6, 12)
+
+
+def _late(path: Path, k: int, tmp: Path, tag: str) -> Path:
+    """A copy of the run ``path`` with its reference ``k`` readings late."""
+    d = np.genfromtxt(path, delimiter=",", names=True)
+    out = tmp / f"late{k}-{tag}.csv"
+    with out.open("w") as fh:
+        fh.write("time_s,reading,force_n\n")
+        for t, x, y in zip(d["time_s"][k:], d["reading"][k:], d["force_n"][:d.size - k]):
+            fh.write(f"{t:.6f},{x:.10g},{y:.10g}\n")
+    return out
+
+
 def _read(root: Path, spec, tmp: Path) -> Path | None:
     name, part = (spec, None) if isinstance(spec, str) else spec
     src = root / f"{name}.csv"
@@ -141,6 +164,38 @@ def _best_polynomial(train, test) -> tuple[float, int]:
         e = 100 * np.sqrt(np.mean((p(x[loaded]) - y[loaded]) ** 2)) / span
         best = (e, d) if best is None or e < best[0] else best
     return best
+
+
+def late_scores(root: Path, tmp: Path, train_specs, test_specs) -> list | None:
+    """(k, RMSE of the compensated estimate as a multiple of k = 0's, delay found [readings]) for k = 0 and
+    each of :data:`LATE_ROWS`; an entry's ratio is None where ``calibrate`` refused the shifted runs."""
+    from fsrlab.calibration.apply import apply_calibration
+    from fsrlab.calibration.heldout_runs import calibrate_runs
+
+    train = [_read(root, s, tmp) for s in train_specs]
+    test = [_read(root, s, tmp) for s in test_specs]
+    if any(p is None for p in train + test):
+        return None
+    out, base = [], None
+    for k in (0,) + LATE_ROWS:
+        tr = [_late(p, k, tmp, f"train{i}") for i, p in enumerate(train)]
+        te = [_late(p, k, tmp, f"test{i}") for i, p in enumerate(test)]
+        try:
+            cal = calibrate_runs([str(p) for p in tr], x="reading", reference="force_n", compensate=True)
+        except ValueError:
+            out.append((k, None, None))
+            continue
+        e, y = [], []
+        for p in te:
+            run = apply_calibration(cal, str(p))
+            e.append(np.asarray(run["force_n_estimate"], float) - np.asarray(run["force_n"], float))
+            y.append(np.asarray(run["force_n"], float))
+        e, y = np.concatenate(e), np.concatenate(y)
+        got = (y > 0.05 * np.nanmax(y)) & np.isfinite(e)
+        rmse = float(np.sqrt(np.mean(e[got] ** 2)))
+        base = rmse if base is None else base
+        out.append((k, rmse / base, cal.model.delay_s / cal.model.row_s))
+    return out
 
 
 def pair_scores(root: Path, tmp: Path, train_specs, test_specs) -> dict | None:
@@ -227,4 +282,15 @@ def run() -> str:
                          f"over {int(m.sum())} pairs; worst ×{r[m].max():.2f}; {int((r[m] <= 1.0).sum())} of "
                          f"{int(m.sum())} at most ×1.00; ±2u coverage at least 90 % on {int((cov[m] >= 0.9).sum())} "
                          f"of {int(m.sum())}.")
+    lines += ["", "The reference logged k readings late (robustness): the compensated estimate's RMSE as a multiple of "
+              "the same pair's with k = 0, and the delay found [readings].", "",
+              "| pair | k = 0: delay | " + " | ".join(f"k = {k}" for k in LATE_ROWS) + " |",
+              "|---|---:|" + "---:|" * len(LATE_ROWS)]
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, tr, te in (p for p in PAIRS if p[0] in LATE_PAIRS):
+            s = late_scores(Path(root), Path(tmp), tr, te)
+            if s is None:
+                continue
+            cells = [f"×{r:.2f}, delay {d:.3g}" if r is not None else "refused (no response left)" for _, r, d in s[1:]]
+            lines.append(f"| {name} | {s[0][2]:.3g} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
