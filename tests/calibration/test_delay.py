@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from fsrlab.calibration import delay as dl
 from fsrlab.calibration import heldout_model as hm
 from fsrlab.calibration.delay import DelayLine, delayed
 from fsrlab.calibration.heldout import Recording
@@ -231,8 +232,8 @@ def test_a_reference_many_readings_late_gets_its_delay(rows, monkeypatch):
     step = next(s for s in sel.steps if s["step"] == "delay")
     assert step["kept"]
     assert abs(cal.delay_s * 100.0 - rows) <= (1.0 if rows > 16 else 0.25)
-    monkeypatch.setattr(hm, "DELAY_ROWS", (0.25, 0.5, 0.75, 1.0, 1.5, 2.0))
-    monkeypatch.setattr(hm, "DELAY_MAX_S", 0.0)
+    monkeypatch.setattr(dl, "DELAY_ROWS", (0.25, 0.5, 0.75, 1.0, 1.5, 2.0))
+    monkeypatch.setattr(dl, "DELAY_MAX_S", 0.0)
     old, _ = calibrate_recordings([rec], compensate=False)
     assert old.delay_s == pytest.approx(0.02)  # the old grid's last
     assert _rmse_on(cal, other) < 0.75 * _rmse_on(old, other)  # measured 0.57 at 3 rows, less beyond
@@ -241,10 +242,10 @@ def test_a_reference_many_readings_late_gets_its_delay(rows, monkeypatch):
 def test_the_delays_tried():
     # at 10 readings/s the grid stops at 16 readings (1.6 s, beyond DELAY_MAX_S); at 1000/s it doubles on
     # to 512 readings, the first at or beyond 0.5 s
-    assert hm.delay_trials(0.1) == list(hm.DELAY_ROWS)
-    fast = hm.delay_trials(0.001)
-    assert fast[-1] == 512.0 and fast[-2] * 0.001 < hm.DELAY_MAX_S <= fast[-1] * 0.001
+    assert dl.delay_trials(0.1) == list(dl.DELAY_ROWS)
+    fast = dl.delay_trials(0.001)
+    assert fast[-1] == 512.0 and fast[-2] * 0.001 < dl.DELAY_MAX_S <= fast[-1] * 0.001
     # the refinement: quarter, half and three-quarter points to each neighbour, in quarter readings
-    assert hm.delay_trials(0.1, 3.0) == [2.25, 2.5, 2.75, 3.25, 3.5, 3.75]
-    assert hm.delay_trials(0.1, 16.0) == [13.0, 14.0, 15.0]
-    assert hm.delay_trials(0.1, 0.5) == []  # nothing between 0.25, 0.5 and 0.75 in quarter readings
+    assert dl.delay_trials(0.1, 3.0) == [2.25, 2.5, 2.75, 3.25, 3.5, 3.75]
+    assert dl.delay_trials(0.1, 16.0) == [13.0, 14.0, 15.0]
+    assert dl.delay_trials(0.1, 0.5) == []  # nothing between 0.25, 0.5 and 0.75 in quarter readings

@@ -1,4 +1,4 @@
-"""The reference's delay: the readout as it was a fraction of a reading earlier.
+"""The reference's delay: the readout as it was a fraction of a reading, or many readings, earlier.
 
 **Extension beyond the paper.** A load-cell amplifier does not report the force of the instant it is
 read: an HX711 at 10 samples/s integrates over its whole conversion (100 ms) and hands over the
@@ -7,7 +7,9 @@ average, an instant half a reading or more before the row it sits in. A calibrat
 the reference *as recorded* (fsrlab's default) then estimates best from the readout as it was that
 much earlier. The delay is causal (only past readings are used), so :class:`DelayLine` gives the
 same estimates one reading at a time, and ``0`` is the default hypothesis
-(:mod:`fsrlab.calibration.heldout_model` keeps a delay only where it wins on held-out data).
+(:mod:`fsrlab.calibration.heldout_model` keeps a delay only where it wins on held-out data). A
+reference logged by another device and joined by its time stamps, or filtered, can be many readings
+late: :func:`delay_trials` lists the delays the calibration tries.
 """
 
 from __future__ import annotations
@@ -16,7 +18,38 @@ from collections import deque
 
 import numpy as np
 
-__all__ = ["delayed", "DelayLine"]
+__all__ = ["DELAY_ROWS", "DELAY_MAX_S", "delay_trials", "delayed", "DelayLine"]
+
+#: Delays of the reference tried first by the held-out calibration, in readings of the calibration data:
+#: fractions of one, as a load-cell amplifier's conversion window gives, then longer ones, as a reference
+#: logged by another device and joined by its time stamps, or filtered, gives; then doubling up to
+#: :data:`DELAY_MAX_S`, and finer steps around the best (:func:`delay_trials`). [1]
+DELAY_ROWS = (0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0)
+#: The delays tried go on doubling beyond :data:`DELAY_ROWS` until they reach this much time. [s]
+DELAY_MAX_S = 0.5
+
+
+def delay_trials(row_s: float, best: float | None = None) -> list[float]:
+    """The delays tried, in readings: :data:`DELAY_ROWS` and their doublings up to :data:`DELAY_MAX_S`;
+    with ``best``, the quarter, half and three-quarter points between it and each neighbour, in quarter
+    readings, not already among them.
+
+    Parameters
+    ----------
+    row_s : float
+        The time of one reading. [s]
+    best : float, optional
+        One of the delays tried first, the one to refine around. [1]
+    """
+    grid = list(DELAY_ROWS)
+    while grid and row_s > 0 and grid[-1] * row_s < DELAY_MAX_S:
+        grid.append(2.0 * grid[-1])
+    if best is None:
+        return grid
+    i = grid.index(best)
+    finer = {round(4.0 * (best + (n - best) * f)) / 4.0 for n in grid[max(i - 1, 0):i + 2] if n != best
+             for f in (0.25, 0.5, 0.75)}
+    return sorted(d for d in finer if d > 0 and d not in grid)
 
 
 def delayed(t, x, delay_s: float) -> np.ndarray:

@@ -7,51 +7,33 @@ complexity:
 
 1. **static curve** (:mod:`fsrlab.calibration.monotone`): straight line in the readout, then more
    segments, in the divider's conductance ratio (ADC counts or a rail given) and in the logarithm of
-   the readout (readings all above zero: a power law's bend is spread evenly there). The memory is
-   fitted around the simplest of the candidates whose held-out error is within one standard error of
-   the best; the static estimate is the **mean of the candidates within** :data:`MIX_SE` (one)
-   **standard error** (model averaging: which of several curves that score alike within one recording
-   holds on the next is left to chance by picking one, and their mean is on average closer to it);
-2. **delay** of the reference (:mod:`fsrlab.calibration.delay`, :data:`DELAY_ROWS`): the estimate made
-   from the readout as it was a fraction of a reading or more earlier (:func:`delay_trials`: 0.25 to
-   16 readings, doubling on to 0.5 s, refined around the best), as when a load-cell amplifier
-   integrates over its conversion window and hands the result over later (an HX711 at 10 samples/s
-   beside an ``analogRead``: half a reading) or a reference is logged by another device. The
-   estimate is still of the reference as recorded, and causal; judged with the static curve (a delay
+   the readout (readings all above zero). The memory is fitted around the simplest candidate within
+   one standard error of the best held-out error; the static estimate is the **mean of the candidates
+   within** :data:`MIX_SE` **standard error** (model averaging: which of several curves that score
+   alike holds on the next recording is left to chance by picking one);
+2. **delay** of the reference (:mod:`fsrlab.calibration.delay`, its ``delay_trials``): the estimate
+   made from the readout 0.25 to 16 readings (doubling on to 0.5 s) earlier, as when a
+   load-cell amplifier hands its conversion over late or a reference is logged by another device;
+   still an estimate of the reference as recorded, and causal. Judged with the static curve: a delay
    corrects estimates that run ahead of the reference; an FSR's loop leaves them behind, so its
-   hysteresis is not taken for a delay). On the
-   real recordings (docs/calibration.md) it is kept on 6 of 21 pairs, 0.5–0.75 of a reading (an
-   HX711 or a taxel at 10 rows/s), and lowered the geometric mean from 0.98× to 0.93× the oracle
-   polynomial;
-3. **lag** between reference and readout, only when asked (``lag="auto"``): none unless a shift of
-   whole rows wins, judged with a hysteresis model (a shift narrows a loop, so a static curve alone
-   takes part of a loop for a lag). By default there is none: the estimate is of the reference as
-   recorded, and one aligned to a lagging reference's instant is further from the recorded values
-   (the virtual bench's test run: 13 % hysteresis error of the estimate with a 3-row lag, 6 % without);
-4. **memory**: hysteresis (rate-independent: play operators on the curve's level
-   ``u = (static(x) − rest)/FS``, the load above the curve's value at rest (:attr:`MonotoneCurve.rest`),
-   :mod:`fsrlab.calibration.operators`, additive or growing with the level) and creep (rate-dependent:
-   exponential averages with time constants from 0.5 s to 32 s, the time scale the fit's mix of
-   them), alone and together (:data:`MEMORY_VARIANTS`), their weights of one sign per kind -- a loop
-   opens one way -- each with every ridge weight, fitted to what the static curve leaves (the curve
-   held) and with the curve refitted jointly; the refitted curve is taken only when it wins over the
-   best with the curve held by more than one standard error and :data:`MIN_GAIN` (a refitted curve
-   trades its offset against the slow creep terms, and a recording of another pattern shows it: long
-   rests after continuous presses, an unloading staircase after a loading one; on the 39 real pairs
-   of docs/calibration.md 0.973× → 0.962× the oracle polynomial, the 18 added later 1.074× → 1.055×).
-   The one of lowest held-out error is taken, and its correction (memory estimate − plain estimate) enters with the
-   weight in [0, 1] that minimises the held-out error of the blend (stacking: D. H. Wolpert, *Neural
-   Networks* 5, 241, 1992; L. Breiman, *Machine Learning* 24, 49, 1996), so a memory that holds only
-   in part is shrunk rather than taken whole or dropped.
+   hysteresis is not taken for a delay;
+3. **lag**, only when asked (``lag="auto"``): a shift of whole rows, judged with a hysteresis model (a
+   shift narrows a loop). By default none: the estimate is of the reference as recorded;
+4. **memory**: hysteresis (play operators, :mod:`fsrlab.calibration.operators`, on the level
+   ``u = (static(x) − rest)/FS``, the load above the curve's rest value, additive or growing with the
+   level) and creep (exponential averages, 0.5 s to 32 s), alone and together
+   (:data:`MEMORY_VARIANTS`), weights of one sign per kind, every ridge weight; each fitted to what the
+   static curve leaves (the curve held) and with the curve refitted, which is taken only when it wins
+   over the best held trial by more than one standard error and :data:`MIN_GAIN` (a refitted curve
+   trades its offset against the slow creep terms). The best trial's correction enters with the weight
+   in [0, 1] that minimises the held-out error of the blend (stacking: D. H. Wolpert, *Neural Networks*
+   5, 241, 1992; L. Breiman, *Machine Learning* 24, 49, 1996).
 
 Steps 2 to 4 are kept only when they **win**: the delay and the lag by a held-out mean squared error
 lower by more than one standard error (paired over chunks) and by at least :data:`MIN_GAIN` of the
 simpler calibration's, lower in most held-out recordings or blocks and higher in none; the memory by
-a held-out MSE lower by more than one standard error and by at least :data:`MIN_GAIN`. Otherwise the
-simpler calibration is kept, and the :class:`Selection` says why. On real recordings (docs/calibration.md) a rule that kept any gain let a
-compensation fitted on fast hand presses make a slow motor triangle worse; taking hysteresis and creep
-one after the other, each by the strict rule, kept a memory on 11 of 21 train → test pairs where the
-blend keeps one on 16, for a geometric mean of 0.98× the oracle polynomial instead of 1.00×.
+more than one standard error and :data:`MIN_GAIN`. Otherwise the simpler calibration is kept and the
+:class:`Selection` says why. What each rule did on real recordings: docs/calibration.md.
 
 The memory is fed with every reading, in time order; what an estimate reports (margin, range) does
 not change it. The uncertainty (:class:`LevelUncertainty`) comes from the held-out errors of the
@@ -64,7 +46,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from fsrlab.calibration.delay import delayed
+from fsrlab.calibration.delay import DELAY_ROWS, delay_trials, delayed
 from fsrlab.calibration.heldout_calibration import HeldoutCalibration, clip_hysteresis
 from fsrlab.calibration.heldout_uncertainty import REPEATABILITY, LevelUncertainty
 from fsrlab.calibration.heldout import (Part, Recording, chunk_ids, held_out_splits, orientation, paired_gain, readout_rail,
@@ -109,13 +91,6 @@ CREEP_SIGNS = (1, -1)
 LAG_PROBE_RIDGE = 1e-2
 #: Lags tried, in rows of the recording (the reference shifted against the readout). [1]
 LAG_ROWS = (-3, -2, -1, 1, 2, 3)
-#: Delays of the reference tried first, in readings of the calibration data (:mod:`fsrlab.calibration.delay`):
-#: fractions of one, as a load-cell amplifier's conversion window gives, then longer ones, as a reference
-#: logged by another device and joined by its time stamps, or filtered, gives; then doubling up to
-#: :data:`DELAY_MAX_S`, and finer steps around the best (:func:`delay_trials`). [1]
-DELAY_ROWS = (0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0)
-#: The delays tried go on doubling beyond :data:`DELAY_ROWS` until they reach this much time. [s]
-DELAY_MAX_S = 0.5
 
 
 @dataclass
@@ -269,21 +244,6 @@ def _fit(parts: list[Part], ch: _Choice, sign: int, adc, cache: _Cache | None = 
     _, curve, w = best
     return HeldoutCalibration(static, curve, tuple(ch.thresholds), tuple(ch.time_constants), w, fs, row_s,
                               scaled=ch.scaled, hysteresis_range=hysteresis_range)
-
-
-def delay_trials(row_s: float, best: float | None = None) -> list[float]:
-    """The delays tried, in readings: :data:`DELAY_ROWS` and their doublings up to :data:`DELAY_MAX_S`
-    (``row_s``: the time of one reading [s]); with ``best`` (one of those), the quarter, half and three
-    quarter points between it and each neighbour, in quarter readings, not already among them."""
-    grid = list(DELAY_ROWS)
-    while grid and row_s > 0 and grid[-1] * row_s < DELAY_MAX_S:
-        grid.append(2.0 * grid[-1])
-    if best is None:
-        return grid
-    i = grid.index(best)
-    finer = {round(4.0 * (best + (n - best) * f)) / 4.0 for n in grid[max(i - 1, 0):i + 2] if n != best
-             for f in (0.25, 0.5, 0.75)}
-    return sorted(d for d in finer if d > 0 and d not in grid)
 
 
 def _row_step(recs: list[Recording]) -> float:
