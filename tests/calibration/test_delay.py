@@ -16,7 +16,7 @@ import pytest
 from fsrlab.calibration import delay as dl
 from fsrlab.calibration import heldout_model as hm
 from fsrlab.calibration.delay import DelayLine, delayed
-from fsrlab.calibration.heldout import Recording
+from fsrlab.calibration.heldout import ALIGNED, Recording, _rank_correlation
 from fsrlab.calibration.heldout_calibration import HeldoutCalibration
 from fsrlab.calibration.heldout_model import calibrate_recordings
 
@@ -249,3 +249,25 @@ def test_the_delays_tried():
     assert dl.delay_trials(0.1, 3.0) == [2.25, 2.5, 2.75, 3.25, 3.5, 3.75]
     assert dl.delay_trials(0.1, 16.0) == [13.0, 14.0, 15.0]
     assert dl.delay_trials(0.1, 0.5) == []  # nothing between 0.25, 0.5 and 0.75 in quarter readings
+
+
+def test_the_sign_of_a_reference_late_by_most_of_a_press_is_told_where_it_agrees():
+    """60 readings late at 100/s (0.6 s, most of a press): the readout of a row hardly agrees with the
+    reference of that row (rank correlation 0.00, or −0.41: the wrong sign), so the orientation is told
+    from the reference the delays to be tried later; the readout rises with the force by construction."""
+    rhos = []
+    for seed in (1, 2, 3):
+        rec = _rows_late(seed, 60.0)
+        rhos.append(_rank_correlation(rec.x, rec.y))
+        cal, sel = calibrate_recordings([rec], compensate=False)
+        assert cal.static.sign == 1
+        assert 48 <= cal.delay_s * 100.0 <= 64  # the grid's 64 readings and its refinement (56) around 60
+    assert min(rhos) < 0 and max(abs(r) for r in rhos) < ALIGNED  # what the sign was taken from before
+
+
+def test_a_reference_far_ahead_of_the_readout_is_refused_with_what_was_found():
+    rec = _rows_late(1, 60.0)
+    ahead = Recording(rec.t[:-120], rec.x[:-120], rec.y[120:])  # the force 0.6 s after the readout's instant
+    with pytest.raises(ValueError, match=r"reference 64 readings later .* runs ahead of the readout"):
+        calibrate_recordings([ahead], compensate=False)
+

@@ -150,6 +150,11 @@ def paired_gain(err_simple: np.ndarray, err_complex: np.ndarray, chunks: np.ndar
     return float(d.mean()), float(d.std(ddof=1) / np.sqrt(d.size))
 
 
+#: Rank correlation of readout and reference below which :func:`orientation` also tries the reference
+#: shifted (every real recording of docs/calibration.md agrees better than 0.8 in its own rows). [1]
+ALIGNED = 0.6
+
+
 def _rank_correlation(x: np.ndarray, y: np.ndarray) -> float:
     """Rank correlation on dense ranks (ties share one): enough to tell whether the readout rises or falls."""
     rx = np.unique(x, return_inverse=True)[1].astype(float)  # tied readings share a rank
@@ -158,24 +163,66 @@ def _rank_correlation(x: np.ndarray, y: np.ndarray) -> float:
         return float(np.corrcoef(rx, ry)[0, 1])
 
 
-def orientation(recs: list[Recording]) -> tuple[int, float | None]:
+def orientation(recs: list[Recording], late_rows=()) -> tuple[int, float | None]:
     """+1 when the readout rises with the reference, −1 when it falls, and the ADC full scale of its counts
     (None when it is not ADC counts); a reference or readout that does not change is refused.
+
+    When the readout and the reference of the same row agree poorly (rank correlation below
+    :data:`ALIGNED`), the reference is also tried ``late_rows`` readings late and early: a reference
+    logged late by a good part of a press agrees with the readout of that many readings before, not
+    with its own row's (whose correlation can even take the wrong sign), so the sign is taken where
+    it agrees clearly better (by 0.2); a reference clearly ahead is refused with what was found.
 
     Parameters
     ----------
     recs : list of Recording
         The recordings, their usable rows taken together.
+    late_rows : sequence of int
+        Whole readings by which the reference may be late (the delays the calibration will try). [1]
     """
     x_all = np.concatenate([r.x[r.usable] for r in recs])
     y_all = np.concatenate([r.y[r.usable] for r in recs])
     if x_all.size > 2 and not np.ptp(y_all) > 0:
         raise ValueError("the reference does not change: nothing to calibrate against")
     rho = _rank_correlation(x_all, y_all) if x_all.size > 2 else float("nan")
+    if np.isfinite(rho) and abs(rho) < ALIGNED and len(late_rows):
+        late = _shifted_correlations(recs, late_rows)
+        early = _shifted_correlations(recs, [-k for k in late_rows])
+        top = max((abs(v) for v in late.values()), default=0.0)
+        j = max(early, key=lambda k: abs(early[k])) if early else None
+        if j is not None and abs(early[j]) >= 0.5 and abs(early[j]) > top + 0.05 and abs(early[j]) > abs(rho) + 0.2:
+            raise ValueError(f"the readout agrees with the reference {-j} readings later (rank correlation "
+                             f"{early[j]:.2f}) better than with its own row's ({rho:.2f}) or an earlier one's "
+                             f"({top:.2f}): the reference runs ahead of the readout; shift it "
+                             "(fsrlab import --offset-s)")
+        if late:
+            k = min(k for k, v in late.items() if abs(v) >= top - 0.05)  # the least delay that agrees as well
+            if abs(late[k]) > abs(rho) + 0.2:
+                rho = late[k]
     if not np.isfinite(rho) or abs(rho) < 0.1:
         raise ValueError("the readout does not respond to the reference" + (
             " (it does not change)" if not np.isfinite(rho) else f" (rank correlation {rho:.2f})"))
     return (1 if rho > 0 else -1), adc_full_scale(x_all)
+
+
+def _shifted_correlations(recs: list[Recording], shifts) -> dict:
+    """Rank correlation of each recording's readout with its reference ``k`` readings later, pooled,
+    for each ``k`` of ``shifts`` (negative: earlier); the ranks are taken once over all usable rows."""
+    xs = [r.x[r.usable] for r in recs]
+    ys = [r.y[r.usable] for r in recs]
+    cut = np.cumsum([v.size for v in xs])[:-1]
+    rx = np.split(np.unique(np.concatenate(xs), return_inverse=True)[1].astype(float), cut)
+    ry = np.split(np.unique(np.concatenate(ys), return_inverse=True)[1].astype(float), cut)
+    out = {}
+    for k in shifts:
+        a = [x[:x.size - k] if k > 0 else x[-k:] for x in rx if x.size > abs(k) + 2]
+        b = [y[k:] if k > 0 else y[:y.size + k] for y in ry if y.size > abs(k) + 2]
+        if a and sum(v.size for v in a) > 2:
+            with np.errstate(invalid="ignore", divide="ignore"):
+                c = float(np.corrcoef(np.concatenate(a), np.concatenate(b))[0, 1])
+            if np.isfinite(c):
+                out[int(k)] = c
+    return out
 
 
 def readout_rail(recs: list[Recording], rail: float | None, adc: float | None) -> float | None:

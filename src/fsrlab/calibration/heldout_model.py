@@ -437,7 +437,8 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
     -------
     HeldoutCalibration, Selection
     """
-    sign, adc = orientation(recs)
+    late = [int(d) for d in delay_trials(_row_step(recs)) if d >= 1 and d == int(d)]
+    sign, adc = orientation(recs, late if lag == 0 and DELAY_ROWS and rows_have_times(recs) else ())
     adc = readout_rail(recs, rail, adc)
     sel = Selection(scheme_name(len(recs)))
     scored = {}
