@@ -170,9 +170,9 @@ def orientation(recs: list[Recording], late_rows=()) -> tuple[int, float | None]
 
     When the readout and the reference of the same row agree poorly (rank correlation below
     :data:`ALIGNED`), the reference is also tried ``late_rows`` readings late and early: a reference
-    logged late by a good part of a press agrees with the readout of that many readings before, not
-    with its own row's (whose correlation can even take the wrong sign), so the sign is taken where
-    it agrees clearly better (by 0.2); a reference clearly ahead is refused with what was found.
+    logged late (or ahead) by a good part of a press agrees with the readout of that many readings
+    before (after), not with its own row's, whose correlation can even take the wrong sign; the sign
+    is then taken from the least shift that agrees about best, when it agrees clearly better (by 0.2).
 
     Parameters
     ----------
@@ -187,19 +187,11 @@ def orientation(recs: list[Recording], late_rows=()) -> tuple[int, float | None]
         raise ValueError("the reference does not change: nothing to calibrate against")
     rho = _rank_correlation(x_all, y_all) if x_all.size > 2 else float("nan")
     if np.isfinite(rho) and abs(rho) < ALIGNED and len(late_rows):
-        late = _shifted_correlations(recs, late_rows)
-        early = _shifted_correlations(recs, [-k for k in late_rows])
-        top = max((abs(v) for v in late.values()), default=0.0)
-        j = max(early, key=lambda k: abs(early[k])) if early else None
-        if j is not None and abs(early[j]) >= 0.5 and abs(early[j]) > top + 0.05 and abs(early[j]) > abs(rho) + 0.2:
-            raise ValueError(f"the readout agrees with the reference {-j} readings later (rank correlation "
-                             f"{early[j]:.2f}) better than with its own row's ({rho:.2f}) or an earlier one's "
-                             f"({top:.2f}): the reference runs ahead of the readout; shift it "
-                             "(fsrlab import --offset-s)")
-        if late:
-            k = min(k for k, v in late.items() if abs(v) >= top - 0.05)  # the least delay that agrees as well
-            if abs(late[k]) > abs(rho) + 0.2:
-                rho = late[k]
+        shifted = _shifted_correlations(recs, [k for j in late_rows for k in (j, -j)])
+        top = max((abs(v) for v in shifted.values()), default=0.0)
+        k = min((k for k, v in shifted.items() if abs(v) >= top - 0.05), key=abs, default=None)  # the least shift
+        if k is not None and abs(shifted[k]) > abs(rho) + 0.2:
+            rho = shifted[k]
     if not np.isfinite(rho) or abs(rho) < 0.1:
         raise ValueError("the readout does not respond to the reference" + (
             " (it does not change)" if not np.isfinite(rho) else f" (rank correlation {rho:.2f})"))
