@@ -166,10 +166,25 @@ def _best_polynomial(train, test) -> tuple[float, int]:
     return best
 
 
+def _applied(cal, test) -> tuple:
+    """The estimate's error, its uncertainty (NaN where the calibration gives none) and the reference, over
+    the test runs, each calibrated by ``cal`` (what ``fsrlab apply`` writes)."""
+    from fsrlab.calibration.apply import apply_calibration
+
+    errs, us, ys = [], [], []
+    for p in test:
+        run = apply_calibration(cal, str(p))
+        y = np.asarray(run["force_n"], float)
+        errs.append(np.asarray(run["force_n_estimate"], float) - y)
+        u = run["force_n_uncertainty"] if "force_n_uncertainty" in run else np.full(y.size, np.nan)
+        us.append(np.asarray(u, float))
+        ys.append(y)
+    return tuple(np.concatenate(v) for v in (errs, us, ys))
+
+
 def late_scores(root: Path, tmp: Path, train_specs, test_specs) -> list | None:
     """(k, RMSE of the compensated estimate as a multiple of k = 0's, delay found [readings]) for k = 0 and
     each of :data:`LATE_ROWS`; an entry's ratio is None where ``calibrate`` refused the shifted runs."""
-    from fsrlab.calibration.apply import apply_calibration
     from fsrlab.calibration.heldout_runs import calibrate_runs
 
     train = [_read(root, s, tmp) for s in train_specs]
@@ -185,12 +200,7 @@ def late_scores(root: Path, tmp: Path, train_specs, test_specs) -> list | None:
         except ValueError:
             out.append((k, None, None))
             continue
-        e, y = [], []
-        for p in te:
-            run = apply_calibration(cal, str(p))
-            e.append(np.asarray(run["force_n_estimate"], float) - np.asarray(run["force_n"], float))
-            y.append(np.asarray(run["force_n"], float))
-        e, y = np.concatenate(e), np.concatenate(y)
+        e, _, y = _applied(cal, te)
         got = (y > 0.05 * np.nanmax(y)) & np.isfinite(e)
         rmse = float(np.sqrt(np.mean(e[got] ** 2)))
         base = rmse if base is None else base
@@ -200,7 +210,6 @@ def late_scores(root: Path, tmp: Path, train_specs, test_specs) -> list | None:
 
 def pair_scores(root: Path, tmp: Path, train_specs, test_specs) -> dict | None:
     """Ratios, coverage and missing share of one pair (None when a file is absent)."""
-    from fsrlab.calibration.apply import apply_calibration
     from fsrlab.calibration.heldout_runs import calibrate_runs
 
     train = [_read(root, s, tmp) for s in train_specs]
@@ -217,26 +226,14 @@ def pair_scores(root: Path, tmp: Path, train_specs, test_specs) -> dict | None:
         except ValueError:
             old = None
         if old is not None:
-            e, y = [], []
-            for p in test:
-                run = apply_calibration(old, str(p))
-                e.append(np.asarray(run["force_n_estimate"], float) - np.asarray(run["force_n"], float))
-                y.append(np.asarray(run["force_n"], float))
-            e, y = np.concatenate(e), np.concatenate(y)
+            e, _, y = _applied(old, test)
             loaded = y > 0.05 * np.nanmax(y)
             got = loaded & np.isfinite(e)
             out["cv"] = {"ratio": 100 * np.sqrt(np.mean(e[got] ** 2)) / (np.nanmax(y) - np.nanmin(y)) / poly,
                          "missing": float(np.mean(~np.isfinite(e[loaded])))}
     for comp in (False, True):
         cal = calibrate_runs([str(p) for p in train], x="reading", reference="force_n", compensate=comp)
-        errs, us, ys = [], [], []
-        for p in test:
-            run = apply_calibration(cal, str(p))
-            y = np.asarray(run["force_n"], float)
-            errs.append(np.asarray(run["force_n_estimate"], float) - y)
-            us.append(np.asarray(run["force_n_uncertainty"], float))
-            ys.append(y)
-        e, u, y = (np.concatenate(v) for v in (errs, us, ys))
+        e, u, y = _applied(cal, test)
         loaded = y > 0.05 * np.nanmax(y)
         span = np.nanmax(y) - np.nanmin(y)
         got = loaded & np.isfinite(e)
