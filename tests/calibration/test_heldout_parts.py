@@ -110,7 +110,8 @@ def test_monotone_curve_extrapolates_linearly_in_the_readout_with_its_top_half_s
     slope = (curve(np.array([top]))[0] - curve(np.array([mid]))[0]) / abs(top - mid)
     assert (v[1] - v[0]) / 50 == pytest.approx(slope, rel=1e-6)
     # gentler than the last segment's, which the divider's rail steepens
-    knot_x = curve._readout_at(curve.knots[-2])
+    kv = curve.knots[-2]  # the last segment's first knot, back in readout (the ratio's closed-form inverse)
+    knot_x = 1023.0 * kv / (1 + kv) if sign > 0 else 1023.0 / (1 + kv)
     assert slope < (curve(np.array([top]))[0] - curve(np.array([knot_x]))[0]) / abs(top - knot_x)
     assert curve.at(float(top + 50 * sign)) == pytest.approx(v[1], rel=1e-12)
     # inside the range the conductance curve follows y = 2·G closely
@@ -126,7 +127,6 @@ def test_log_variable_is_the_oriented_logarithm_and_its_curve_inverts_it():
     xs = np.geomspace(2.0, 2000.0, 300)
     curve, _ = fit_monotone(xs, 30.0 / xs ** 0.8, "log", 8, -1, None)
     straight, _ = fit_monotone(xs, 30.0 / xs ** 0.8, "readout", 8, -1, None)
-    assert all(curve._readout_at(k) == pytest.approx(v) for k, v in zip(curve.knots, np.exp(-curve.knots)))
     grid = np.geomspace(1.0, 4000.0, 400)
     assert np.all(np.diff(curve(grid)) <= 1e-9)  # falls as the reading rises: monotone in the force's sense
     # eight segments in ln x follow the power law (knots at quantiles, spread over three decades); eight

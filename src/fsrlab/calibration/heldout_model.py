@@ -295,17 +295,11 @@ def _memory_step(sel: Selection, score, scored: dict, cache: _Cache, base: _Choi
     def full(c):  # held-out errors of the static estimate plus c's whole correction
         return scored[c][0] - scored[base][0] + e_s
 
-    leader = {}  # the best trial of each kind so far; the others' held-out errors are let go at once
-    for ch in held + refit:
-        score(ch)
-        was = leader.get(ch.held)
-        if was is None or _rmse(full(ch)) < _rmse(full(was)):
-            leader[ch.held], loser = ch, was
-        else:
-            loser = ch
-        if loser is not None:
-            scored.pop(loser)
-    best_held, best_refit = leader[True], leader[False]
+    def scored_full(c):
+        score(c)
+        return full(c)
+
+    best_held, best_refit = (_best_of(t, scored_full, scored.pop) for t in (held, refit))
     g_refit, se_refit = paired_gain(full(best_held), full(best_refit), ids)
     refitted = _refit_wins(g_refit, se_refit, float(np.mean(full(best_held) ** 2)))
     best = best_refit if refitted else best_held
@@ -334,6 +328,20 @@ def _memory_step(sel: Selection, score, scored: dict, cache: _Cache, base: _Choi
     cache.features.clear()
     cache.systems.clear()
     return (best, alpha) if kept else (None, 1.0)
+
+
+def _best_of(trials, errors, let_go):
+    """The trial of least RMS ``errors(trial)`` (held-out errors), scoring them in turn; ``let_go(trial)`` is
+    called on each one beaten as soon as it is, so only the best so far keeps its held-out errors."""
+    best = None
+    for t in trials:
+        if best is None or _rmse(errors(t)) < _rmse(errors(best)):
+            best, beaten = t, best
+        else:
+            beaten = t
+        if beaten is not None:
+            let_go(beaten)
+    return best
 
 
 def _refit_wins(gain: float, se: float, mse_held: float) -> bool:
@@ -521,16 +529,11 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
         # reference instead). Judged with the static curve: a delay corrects estimates that run ahead of
         # the reference (a reference that lags); an FSR's loop leaves them behind (it conducts more on
         # unloading), which a delay would make worse, so the sensor's hysteresis is not taken for a delay.
-        coarse = None  # the best of the grid so far; the others' held-out errors and recordings let go at once
-        for d in delay_trials(row_s):
-            score(cur.but(delay=d))
-            if coarse is None or _rmse(scored[cur.but(delay=d)][0]) < _rmse(scored[cur.but(delay=coarse)][0]):
-                coarse, loser = d, coarse
-            else:
-                loser = d
-            if loser is not None:
-                scored.pop(cur.but(delay=loser))
-                by_delay.pop(loser, None)
+        def let_go(d):  # a delay of the grid beaten: its held-out errors and delayed recordings
+            scored.pop(cur.but(delay=d))
+            by_delay.pop(d, None)
+
+        coarse = _best_of(delay_trials(row_s), lambda d: score(cur.but(delay=d))[0], let_go)
         won = step("delay", [cur.but(delay=d) for d in [coarse] + delay_trials(row_s, coarse)], cur)
         if won is not None:
             cur = won

@@ -219,15 +219,6 @@ class MonotoneCurve:
         v = readout_variable(np.clip(x, lo, hi), self.variable, self.sign, self.adc)
         return np.interp(v, self.knots, self._values)
 
-    def _readout_at(self, v: float) -> float:
-        """The reading whose variable is ``v`` (the inverse of :func:`readout_variable`)."""
-        if self.variable == "readout":
-            return float(self.sign * v)
-        if self.variable == "log":
-            return float(np.exp(self.sign * v))
-        a = float(self.adc)
-        return float(a * v / (1.0 + v) if self.sign > 0 else a / (1.0 + v))
-
     @cached_property
     def _table(self) -> tuple:
         """(knots, values at the knots, slope beyond the top per unit of readout, top reading) as Python
