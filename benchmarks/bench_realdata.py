@@ -25,6 +25,13 @@ Then a robustness table: a few of those pairs with their reference logged ``k`` 
 readout's first ``k`` rows and the reference's last ``k`` dropped, in the training and the test runs
 alike, as when a load cell is logged by another device and joined by time stamps): the compensated
 estimate's RMSE as a multiple of the same pair's with ``k = 0``, and the delay the calibration found.
+
+Last, every pair again with a fault a user's logger adds (:data:`FAULTS`, in the training and the
+test runs alike): 1 % of the readings replaced by a number drawn from the run's range (a serial line
+that garbles a value), readings in ADC counts written as volts (``x·5/1023``: a sketch that prints
+volts; no ``--rail``, so no conductance variable), time stamps of an unsteady loop (each step ×0.7 to
+×1.3). Each against the best polynomial fitted on the same altered rows, so the table says how much
+the calibration loses to a fault that a plain polynomial also meets.
 """
 
 from __future__ import annotations
@@ -127,6 +134,47 @@ def _late(path: Path, k: int, tmp: Path, tag: str) -> Path:
     return out
 
 
+def _glitches(t, x, rng):
+    x = x.copy()
+    hit = rng.random(x.size) < 0.01
+    lo, hi = np.nanmin(x), np.nanmax(x)
+    v = rng.uniform(lo, hi, int(hit.sum()))
+    whole = bool(np.all(x[np.isfinite(x)] == np.round(x[np.isfinite(x)])))
+    x[hit] = np.round(v) if whole else v
+    return t, x
+
+
+def _volts(t, x, rng):
+    ok = np.isfinite(x)
+    if not (np.all(x[ok] == np.round(x[ok])) and x[ok].min() >= 0 and x[ok].max() <= 1023):
+        return None
+    return t, x * 5.0 / 1023.0
+
+
+def _jitter(t, x, rng):
+    return np.cumsum(np.r_[t[0], np.diff(t) * rng.uniform(0.7, 1.3, t.size - 1)]), x
+
+
+#: Logger faults of the last table: name -> what it does to (time, reading) of one run, given a random
+#: generator (seeded per run); ``None`` where the fault does not apply to the run.
+FAULTS = {"1 % of the readings garbled": _glitches, "ADC counts written as volts (no --rail)": _volts,
+          "time steps ×0.7–1.3": _jitter}
+
+
+def _faulty(path: Path, fault, tmp: Path, tag: str, seed: int) -> Path | None:
+    """A copy of the run ``path`` with ``fault`` applied (None where it does not apply)."""
+    d = np.genfromtxt(path, delimiter=",", names=True)
+    got = fault(d["time_s"].astype(float), d["reading"].astype(float), np.random.default_rng(seed))
+    if got is None:
+        return None
+    out = tmp / f"fault-{tag}.csv"
+    with out.open("w") as fh:
+        fh.write("time_s,reading,force_n\n")
+        for t, x, y in zip(got[0], got[1], d["force_n"]):
+            fh.write(f"{t:.6f},{x:.10g},{y:.10g}\n")
+    return out
+
+
 def _read(root: Path, spec, tmp: Path) -> Path | None:
     name, part = (spec, None) if isinstance(spec, str) else spec
     src = root / f"{name}.csv"
@@ -210,8 +258,6 @@ def late_scores(root: Path, tmp: Path, train_specs, test_specs) -> list | None:
 
 def pair_scores(root: Path, tmp: Path, train_specs, test_specs) -> dict | None:
     """Ratios, coverage and missing share of one pair (None when a file is absent)."""
-    from fsrlab.calibration.heldout_runs import calibrate_runs
-
     train = [_read(root, s, tmp) for s in train_specs]
     test = [_read(root, s, tmp) for s in test_specs]
     if any(p is None for p in train + test):
@@ -232,17 +278,43 @@ def pair_scores(root: Path, tmp: Path, train_specs, test_specs) -> dict | None:
             out["cv"] = {"ratio": 100 * np.sqrt(np.mean(e[got] ** 2)) / (np.nanmax(y) - np.nanmin(y)) / poly,
                          "missing": float(np.mean(~np.isfinite(e[loaded])))}
     for comp in (False, True):
-        cal = calibrate_runs([str(p) for p in train], x="reading", reference="force_n", compensate=comp)
-        e, u, y = _applied(cal, test)
-        loaded = y > 0.05 * np.nanmax(y)
-        span = np.nanmax(y) - np.nanmin(y)
-        got = loaded & np.isfinite(e)
-        rmse = 100 * np.sqrt(np.mean(e[got] ** 2)) / span
-        key = "comp" if comp else "plain"
-        out[key] = {"ratio": rmse / poly, "coverage": float(np.mean(np.abs(e[got]) <= 2 * u[got])),
-                    "missing": float(np.mean(~np.isfinite(e[loaded]))), "model": cal.model_name,
-                    "delay_rows": cal.model.delay_s / cal.model.row_s,
-                    "steps": [s for s in cal.selection.steps if "kept" in s]}
+        out["comp" if comp else "plain"] = _scored(train, test, poly, comp)
+    return out
+
+
+def _scored(train, test, poly: float, compensate: bool) -> dict:
+    """``calibrate_runs`` on ``train`` applied to ``test``: ratio to ``poly`` [% of span], coverage, missing share."""
+    from fsrlab.calibration.heldout_runs import calibrate_runs
+
+    cal = calibrate_runs([str(p) for p in train], x="reading", reference="force_n", compensate=compensate)
+    e, u, y = _applied(cal, test)
+    loaded = y > 0.05 * np.nanmax(y)
+    span = np.nanmax(y) - np.nanmin(y)
+    got = loaded & np.isfinite(e)
+    rmse = 100 * np.sqrt(np.mean(e[got] ** 2)) / span
+    return {"ratio": rmse / poly, "coverage": float(np.mean(np.abs(e[got]) <= 2 * u[got])),
+            "missing": float(np.mean(~np.isfinite(e[loaded]))), "model": cal.model_name,
+            "delay_rows": cal.model.delay_s / cal.model.row_s, "steps": [s for s in cal.selection.steps if "kept" in s]}
+
+
+def fault_scores(root: Path, tmp: Path, fault) -> list:
+    """(pair index, compensated ratio and coverage unaltered, the same with ``fault``) for every pair the fault
+    applies to (each against the best polynomial on its own rows)."""
+    out = []
+    for i, (_, tr, te) in enumerate(PAIRS):
+        train = [_read(root, s, tmp) for s in tr]
+        test = [_read(root, s, tmp) for s in te]
+        if any(p is None for p in train + test):
+            continue
+        bad = [_faulty(p, fault, tmp, f"{i}-{j}", seed=1000 * i + j) for j, p in enumerate(train + test)]
+        if any(p is None for p in bad):
+            continue
+        both = []
+        for tr_p, te_p in ((train, test), (bad[:len(train)], bad[len(train):])):
+            poly, _ = _best_polynomial(tr_p, te_p)
+            s = _scored(tr_p, te_p, poly, True)
+            both.append((s["ratio"], s["coverage"]))
+        out.append((i, both[0], both[1]))
     return out
 
 
@@ -290,4 +362,18 @@ def run() -> str:
                 continue
             cells = [f"×{r:.2f}, delay {d:.3g}" if r is not None else "refused (no response left)" for _, r, d in s[1:]]
             lines.append(f"| {name} | {s[0][2]:.3g} | " + " | ".join(cells) + " |")
+    lines += ["", "Every pair with a logger's fault in its training and test runs (robustness): the `--compensate` "
+              "ratios against the best polynomial on the same altered rows, beside the same pairs unaltered.", "",
+              "| fault | pairs | geometric mean (unaltered) | worst (unaltered) | at most ×1.00 (unaltered) | "
+              "±2u coverage ≥ 90 % (unaltered) |", "|---|---:|---:|---:|---:|---:|"]
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, fault in FAULTS.items():
+            s = fault_scores(Path(root), Path(tmp), fault)
+            if not s:
+                continue
+            (r0, c0), (r1, c1) = (np.asarray([v[k] for v in s]).T for k in (1, 2))
+            n = len(s)
+            lines.append(f"| {name} | {n} | ×{np.exp(np.mean(np.log(r1))):.3f} (×{np.exp(np.mean(np.log(r0))):.3f}) | "
+                         f"×{r1.max():.2f} (×{r0.max():.2f}) | {int((r1 <= 1).sum())} ({int((r0 <= 1).sum())}) | "
+                         f"{int((c1 >= 0.9).sum())} ({int((c0 >= 0.9).sum())}) |")
     return "\n".join(lines) + "\n"

@@ -99,6 +99,19 @@ def test_cli_calibrates_several_runs_leaving_one_out(runs, tmp_path):
     assert json.loads(out.read_text())["method"] == "held-out"
 
 
+def test_cli_says_whether_the_relative_uncertainty_was_measured_or_assumed(runs, monkeypatch):
+    """One run cannot show how the gain moves between recordings: the table says the term is assumed; with
+    several runs it names the held-out runs' gain spread (the term is the larger of it and the assumed)."""
+    monkeypatch.setenv("COLUMNS", "300")  # the table's cells on one line each
+    one = " ".join(run_cli(["calibrate", runs["hand"], "--x", "reading", "--reference", "force_n"])[1].split())
+    code, stdout, err = run_cli(["calibrate", runs["hand"], runs["hand2"], runs["motor"], "--x", "reading",
+                                 "--reference", "force_n"])
+    assert code == 0, err
+    several = " ".join(stdout.split())
+    assert "(assumed: one run;" in one and "assumed: one run" not in several
+    assert "the held-out runs' gain" in several
+
+
 def test_cli_says_in_one_line_why_the_compensation_was_not_kept(tmp_path):
     """A sensor without memory: the compensation is tried, not kept, and the table says why."""
     rng = np.random.default_rng(7)

@@ -404,7 +404,11 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
     if cal.model.has_memory:
         table.add_row(f"held-out RMSE without compensation ({u})", f"{k * sel.heldout_rmse_plain:.4g}")
     table.add_row(f"readout range ({cal.x_unit or '1'})", f"{cal.x_range[0]:.6g} … {cal.x_range[1]:.6g}")
-    table.add_row("relative uncertainty between runs (%)", f"{100 * cal.model.uncertainty.relative:.3g}")
+    rel, spread = cal.model.uncertainty.relative, sel.gain_spread
+    table.add_row("relative uncertainty between runs (%)", f"{100 * rel:.3g} " + (
+        "(assumed: one run; calibrate from two or more to measure it)" if spread is None else
+        "(the held-out runs' gain spread)" if spread >= rel else
+        f"(the least assumed; the held-out runs' gains spread {100 * spread:.2g} %)"))
     scores = {c["name"]: c["heldout_rmse"] for c in sel.candidates}
     first = sel.steps[0]
     table.add_row(f"static curve: {first['chosen']}", f"chosen of {first['tried']}, held-out RMSE "
