@@ -302,3 +302,23 @@ def test_shipped_example_runs_load(name):
 
     run = load_run(ROOT / "examples" / name)
     assert run.n_rows >= 3 and "stress_pa" in run and "frequency_hz" in run
+
+
+@given(st.lists(st.text(alphabet=", 0123456789.\t\r e-", max_size=12), min_size=1, max_size=8))
+def test_empty_cells_are_found_in_the_joined_lines_as_line_by_line(lines):
+    """The fast parser's check for an empty cell runs on the lines joined into one string; the reference is
+    the check line by line (a line starting with a comma, two commas in a row, or a comma last before white
+    space)."""
+    from fsrlab.io.runcells import _has_empties
+
+    by_line = any(",," in ln or ln.startswith(",") or ln.rstrip().endswith(",") for ln in lines)
+    assert _has_empties("\n".join(lines)) == by_line
+
+
+def test_a_row_with_an_empty_last_cell_is_read_cell_by_cell(tmp_path):
+    """An empty last cell (before a carriage return) is not numpy's to read: the row keeps its other values."""
+    p = tmp_path / "r.csv"
+    p.write_bytes(b"time_s,frequency_hz\r\n0,1000\r\n0.1,\r\n0.2,1002\r\n")
+    run = load_run(p)
+    f = np.asarray(run["frequency_hz"], float)
+    assert f.size == 3 and np.isnan(f[1]) and f[0] == 1000 and f[2] == 1002
