@@ -30,7 +30,8 @@ Last, every pair again with a fault a user's logger adds (:data:`FAULTS`, in the
 test runs alike): 1 % of the readings replaced by a number drawn from the run's range (a serial line
 that garbles a value), readings in ADC counts written as volts (``x·5/1023``: a sketch that prints
 volts; no ``--rail``, so no conductance variable), time stamps of an unsteady loop (each step ×0.7 to
-×1.3). Each against the best polynomial fitted on the same altered rows, so the table says how much
+×1.3), and beside a readout of 20/s or more a reference held between the conversions of an amplifier
+at 10/s (each row the mean force of the last conversion ended: stair steps up to 0.2 s late). Each against the best polynomial fitted on the same altered rows, so the table says how much
 the calibration loses to a fault that a plain polynomial also meets.
 """
 
@@ -134,44 +135,59 @@ def _late(path: Path, k: int, tmp: Path, tag: str) -> Path:
     return out
 
 
-def _glitches(t, x, rng):
+def _glitches(t, x, y, rng):
     x = x.copy()
     hit = rng.random(x.size) < 0.01
     lo, hi = np.nanmin(x), np.nanmax(x)
     v = rng.uniform(lo, hi, int(hit.sum()))
     whole = bool(np.all(x[np.isfinite(x)] == np.round(x[np.isfinite(x)])))
     x[hit] = np.round(v) if whole else v
-    return t, x
+    return t, x, y
 
 
-def _volts(t, x, rng):
+def _volts(t, x, y, rng):
     ok = np.isfinite(x)
     if not (np.all(x[ok] == np.round(x[ok])) and x[ok].min() >= 0 and x[ok].max() <= 1023):
         return None
-    return t, x * 5.0 / 1023.0
+    return t, x * 5.0 / 1023.0, y
 
 
-def _jitter(t, x, rng):
-    return np.cumsum(np.r_[t[0], np.diff(t) * rng.uniform(0.7, 1.3, t.size - 1)]), x
+def _jitter(t, x, y, rng):
+    return np.cumsum(np.r_[t[0], np.diff(t) * rng.uniform(0.7, 1.3, t.size - 1)]), x, y
+
+
+def _held(t, x, y, rng):
+    """The reference of a load-cell amplifier converting at 10/s beside a faster readout (20/s or more): each
+    row carries the mean force of the last conversion ended, held until the next (empty before the first)."""
+    k = int(round(0.1 / float(np.median(np.diff(t)))))
+    if k < 2:
+        return None
+    out = np.full(y.size, np.nan)
+    for a in range(0, y.size - k, k):
+        seg = y[a:a + k]
+        if np.isfinite(seg).any():
+            out[a + k:a + 2 * k] = np.nanmean(seg)
+    return t, x, out
 
 
 #: Logger faults of the last table: name -> what it does to (time, reading) of one run, given a random
 #: generator (seeded per run); ``None`` where the fault does not apply to the run.
 FAULTS = {"1 % of the readings garbled": _glitches, "ADC counts written as volts (no --rail)": _volts,
-          "time steps ×0.7–1.3": _jitter}
+          "time steps ×0.7–1.3": _jitter, "reference held between conversions at 10/s": _held}
 
 
 def _faulty(path: Path, fault, tmp: Path, tag: str, seed: int) -> Path | None:
     """A copy of the run ``path`` with ``fault`` applied (None where it does not apply)."""
     d = np.genfromtxt(path, delimiter=",", names=True)
-    got = fault(d["time_s"].astype(float), d["reading"].astype(float), np.random.default_rng(seed))
+    got = fault(d["time_s"].astype(float), d["reading"].astype(float), d["force_n"].astype(float),
+                np.random.default_rng(seed))
     if got is None:
         return None
     out = tmp / f"fault-{tag}.csv"
     with out.open("w") as fh:
         fh.write("time_s,reading,force_n\n")
-        for t, x, y in zip(got[0], got[1], d["force_n"]):
-            fh.write(f"{t:.6f},{x:.10g},{y:.10g}\n")
+        for t, x, y in zip(*got):
+            fh.write(f"{t:.6f}," + ",".join(f"{v:.10g}" if np.isfinite(v) else "" for v in (x, y)) + "\n")
     return out
 
 
