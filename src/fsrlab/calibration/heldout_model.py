@@ -216,7 +216,8 @@ def _fit(parts: list[Part], ch: _Choice, sign: int, adc, cache: _Cache | None = 
     skey = (split, ch.variable, ch.segments, ch.lag, ch.delay)
     static, fs = cache.static(skey, lambda: (fit_monotone(x[ok], y[ok], ch.variable, ch.segments, sign, adc)[0],
                                              max(float(np.ptp(y[ok])), 1e-12)))
-    row_s = _row_step([p.rec for p in parts])
+    # the median step of the recordings' times, once per call (a delayed copy shares its recording's times)
+    row_s = cache.static(("row_s",) + tuple(id(p.rec.t) for p in parts), lambda: _row_step([p.rec for p in parts]))
     if not (ch.thresholds or ch.time_constants):
         return HeldoutCalibration(static, static, full_scale=fs, row_s=row_s)
     rest = static.rest
