@@ -408,7 +408,7 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
     table.add_row("relative uncertainty between runs (%)", f"{100 * rel:.3g} " + (
         "(assumed: one run; calibrate from two or more to measure it)" if spread is None else
         "(the held-out runs' gain spread)" if spread >= rel else
-        f"(the least assumed; the held-out runs' gains spread {100 * spread:.2g} %)"))
+        f"(the assumed floor; the held-out runs' gains spread only {100 * spread:.2g} %)"))
     scores = {c["name"]: c["heldout_rmse"] for c in sel.candidates}
     first = sel.steps[0]
     table.add_row(f"static curve: {first['chosen']}", f"chosen of {first['tried']}, held-out RMSE "
