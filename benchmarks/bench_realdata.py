@@ -124,18 +124,23 @@ LATE_PAIRS = ("FSR divider + HX711, hand: first half → second half", "second F
 LATE_ROWS = (3, 6, 12)
 
 
-def _late(path: Path, k: int, tmp: Path, tag: str) -> Path:
-    """A copy of the run ``path`` with its reference ``k`` readings late."""
-    d = np.genfromtxt(path, delimiter=",", names=True)
-    out = tmp / f"late{k}-{tag}.csv"
+def _write(out: Path, t, x, y) -> Path:
+    """A run of the columns ``time_s,reading,force_n`` (an empty cell where a value is missing)."""
     with out.open("w") as fh:
         fh.write("time_s,reading,force_n\n")
-        for t, x, y in zip(d["time_s"][k:], d["reading"][k:], d["force_n"][:d.size - k]):
-            fh.write(f"{t:.6f},{x:.10g},{y:.10g}\n")
+        for ti, xi, yi in zip(t, x, y):
+            fh.write(f"{ti:.6f}," + ",".join(f"{v:.10g}" if np.isfinite(v) else "" for v in (xi, yi)) + "\n")
     return out
 
 
+def _late(path: Path, k: int, tmp: Path, tag: str) -> Path:
+    """A copy of the run ``path`` with its reference ``k`` readings late."""
+    d = np.genfromtxt(path, delimiter=",", names=True)
+    return _write(tmp / f"late{k}-{tag}.csv", d["time_s"][k:], d["reading"][k:], d["force_n"][:d.size - k])
+
+
 def _glitches(t, x, y, rng):
+    """1 % of the readings replaced by a number drawn from the run's range (whole when the readings are)."""
     x = x.copy()
     hit = rng.random(x.size) < 0.01
     lo, hi = np.nanmin(x), np.nanmax(x)
@@ -146,6 +151,7 @@ def _glitches(t, x, y, rng):
 
 
 def _volts(t, x, y, rng):
+    """ADC counts (0..1023) written as volts of a 5 V supply; None for readings that are not such counts."""
     ok = np.isfinite(x)
     if not (np.all(x[ok] == np.round(x[ok])) and x[ok].min() >= 0 and x[ok].max() <= 1023):
         return None
@@ -153,6 +159,7 @@ def _volts(t, x, y, rng):
 
 
 def _jitter(t, x, y, rng):
+    """Each time step ×0.7 to ×1.3 at random (an unsteady loop)."""
     return np.cumsum(np.r_[t[0], np.diff(t) * rng.uniform(0.7, 1.3, t.size - 1)]), x, y
 
 
@@ -170,8 +177,8 @@ def _held(t, x, y, rng):
     return t, x, out
 
 
-#: Logger faults of the last table: name -> what it does to (time, reading) of one run, given a random
-#: generator (seeded per run); ``None`` where the fault does not apply to the run.
+#: Logger faults of the last table: name -> what it does to (time, reading, reference) of one run, given a
+#: random generator (seeded per run); ``None`` where the fault does not apply to the run.
 FAULTS = {"1 % of the readings garbled": _glitches, "ADC counts written as volts (no --rail)": _volts,
           "time steps ×0.7–1.3": _jitter, "reference held between conversions at 10/s": _held}
 
@@ -181,14 +188,7 @@ def _faulty(path: Path, fault, tmp: Path, tag: str, seed: int) -> Path | None:
     d = np.genfromtxt(path, delimiter=",", names=True)
     got = fault(d["time_s"].astype(float), d["reading"].astype(float), d["force_n"].astype(float),
                 np.random.default_rng(seed))
-    if got is None:
-        return None
-    out = tmp / f"fault-{tag}.csv"
-    with out.open("w") as fh:
-        fh.write("time_s,reading,force_n\n")
-        for t, x, y in zip(*got):
-            fh.write(f"{t:.6f}," + ",".join(f"{v:.10g}" if np.isfinite(v) else "" for v in (x, y)) + "\n")
-    return out
+    return None if got is None else _write(tmp / f"fault-{tag}.csv", *got)
 
 
 def _read(root: Path, spec, tmp: Path) -> Path | None:
@@ -201,13 +201,7 @@ def _read(root: Path, spec, tmp: Path) -> Path | None:
     d = np.genfromtxt(src, delimiter=",", names=True)
     n = d.size // 2
     rows = d[:n] if part == 0 else d[n:]
-    out = tmp / f"{name}-{part}.csv"
-    t0 = rows["time_s"][0]
-    with out.open("w") as fh:
-        fh.write("time_s,reading,force_n\n")
-        for r in rows:
-            fh.write(f"{r['time_s'] - t0:.6f},{r['reading']:.10g},{r['force_n']:.10g}\n")
-    return out
+    return _write(tmp / f"{name}-{part}.csv", rows["time_s"] - rows["time_s"][0], rows["reading"], rows["force_n"])
 
 
 def _columns(path: Path):
@@ -314,8 +308,8 @@ def _scored(train, test, poly: float, compensate: bool) -> dict:
 
 
 def fault_scores(root: Path, tmp: Path, fault) -> list:
-    """(pair index, compensated ratio and coverage unaltered, the same with ``fault``) for every pair the fault
-    applies to (each against the best polynomial on its own rows)."""
+    """(pair index, compensated ratio, ±2u coverage) with ``fault`` in the training and test runs, for every
+    pair the fault applies to (against the best polynomial on the same altered rows)."""
     out = []
     for i, (_, tr, te) in enumerate(PAIRS):
         train = [_read(root, s, tmp) for s in tr]
@@ -325,12 +319,9 @@ def fault_scores(root: Path, tmp: Path, fault) -> list:
         bad = [_faulty(p, fault, tmp, f"{i}-{j}", seed=1000 * i + j) for j, p in enumerate(train + test)]
         if any(p is None for p in bad):
             continue
-        both = []
-        for tr_p, te_p in ((train, test), (bad[:len(train)], bad[len(train):])):
-            poly, _ = _best_polynomial(tr_p, te_p)
-            s = _scored(tr_p, te_p, poly, True)
-            both.append((s["ratio"], s["coverage"]))
-        out.append((i, both[0], both[1]))
+        poly, _ = _best_polynomial(bad[:len(train)], bad[len(train):])
+        s = _scored(bad[:len(train)], bad[len(train):], poly, True)
+        out.append((i, s["ratio"], s["coverage"]))
     return out
 
 
@@ -342,6 +333,7 @@ def run() -> str:
     lines = ["| pair | best polynomial (degree) | plain ×, ±2u coverage | `--compensate` ×, ±2u coverage, missing | "
              "model chosen | `--method cv --compensate` ×, missing |", "|---|---:|---:|---:|---|---:|"]
     ratios, covers, later, plains = [], [], [], []
+    unaltered = {}  # pair index -> (compensated ratio, coverage), for the faults' table
     with tempfile.TemporaryDirectory() as tmp:
         for i, (name, tr, te) in enumerate(PAIRS):
             s = pair_scores(Path(root), Path(tmp), tr, te)
@@ -353,6 +345,7 @@ def run() -> str:
             plains.append(p["ratio"])
             covers.append(c["coverage"])
             later.append(i >= DEVELOPED_ON)
+            unaltered[i] = (c["ratio"], c["coverage"])
             old = s["cv"]
             cv = f"×{old['ratio']:.2f}, {100 * old['missing']:.1f} %" if old else "— (one run only)"
             delay = f", delay {c['delay_rows']:.2g} rows" if c["delay_rows"] else ""
@@ -394,7 +387,8 @@ def run() -> str:
             s = fault_scores(Path(root), Path(tmp), fault)
             if not s:
                 continue
-            (r0, c0), (r1, c1) = (np.asarray([v[k] for v in s]).T for k in (1, 2))
+            r1, c1 = np.asarray([v[1:] for v in s]).T
+            r0, c0 = np.asarray([unaltered[v[0]] for v in s]).T
             n = len(s)
             lines.append(f"| {name} | {n} | ×{np.exp(np.mean(np.log(r1))):.3f} (×{np.exp(np.mean(np.log(r0))):.3f}) | "
                          f"×{r1.max():.2f} (×{r0.max():.2f}) | {int((r1 <= 1).sum())} ({int((r0 <= 1).sum())}) | "
