@@ -18,7 +18,9 @@ runs, then :func:`fsrlab.calibration.apply.apply_calibration` (``fsrlab apply``)
 5 % of the test's maximum) in % of the test's reference span, as a ratio to the best plain polynomial
 (degree 1–5 in the raw readout fitted on the same training rows, the degree that is best **on the
 test run**: an oracle the calibration does not have); the share of loaded rows whose error lies
-within ±2u; the share of loaded rows left without an estimate. Beside it, measured in the same run,
+within ±2u; the share of loaded rows left without an estimate. Beside the oracle, the polynomial a user
+without the test's reference can fit: its degree chosen on the training runs alone (leave one recording
+out, or the first 70 % of one run fitted and the rest scored), and the calibrations' ratios to it. Beside it, measured in the same run,
 the in-run cross-validated calibration (``--method cv --compensate``, one training run only).
 
 Then a robustness table: a few of those pairs with their reference logged ``k`` readings late (the
@@ -224,6 +226,33 @@ def _best_polynomial(train, test) -> tuple[float, int]:
     return best
 
 
+def _fair_polynomial(train, test) -> tuple[float, int]:
+    """(RMSE [% of the test's span] over the loaded test rows, degree) of the plain polynomial whose degree 1–5
+    is chosen on the training runs alone, as a user without the test's reference must: by leave-one-recording-out
+    mean squared error with two or more runs, else fitted on the first 70 % of the run and scored on the rest."""
+    cols = [_columns(p) for p in train]
+    cols = [(x[ok], y[ok]) for x, y in cols for ok in [np.isfinite(x) & np.isfinite(y)]]
+
+    def heldout(d: int) -> float:
+        if len(cols) > 1:
+            errs = []
+            for k, (xk, yk) in enumerate(cols):
+                xs = np.concatenate([c[0] for j, c in enumerate(cols) if j != k])
+                ys = np.concatenate([c[1] for j, c in enumerate(cols) if j != k])
+                errs.append(np.mean((np.polynomial.Polynomial.fit(xs, ys, d)(xk) - yk) ** 2))
+            return float(np.mean(errs))
+        x, y = cols[0]
+        n = int(0.7 * x.size)
+        return float(np.mean((np.polynomial.Polynomial.fit(x[:n], y[:n], d)(x[n:]) - y[n:]) ** 2))
+
+    degree = min(range(1, 6), key=heldout)
+    xs, ys = (np.concatenate(v) for v in zip(*cols))
+    x, y = (np.concatenate(v) for v in zip(*(_columns(p) for p in test)))
+    loaded = y > 0.05 * np.nanmax(y)
+    e = np.polynomial.Polynomial.fit(xs, ys, degree)(x[loaded]) - y[loaded]
+    return 100 * float(np.sqrt(np.mean(e ** 2))) / (np.nanmax(y) - np.nanmin(y)), degree
+
+
 def _applied(cal, test) -> tuple:
     """The estimate's error, its uncertainty (NaN where the calibration gives none) and the reference, over
     the test runs, each calibrated by ``cal`` (what ``fsrlab apply`` writes)."""
@@ -273,7 +302,8 @@ def pair_scores(root: Path, tmp: Path, train_specs, test_specs) -> dict | None:
     if any(p is None for p in train + test):
         return None
     poly, degree = _best_polynomial(train, test)
-    out = {"poly": poly, "degree": degree, "cv": None}
+    fair, fair_degree = _fair_polynomial(train, test)
+    out = {"poly": poly, "degree": degree, "fair": fair, "fair_degree": fair_degree, "cv": None}
     if len(train) == 1:  # the in-run cross-validated calibration (--method cv), one run only
         from fsrlab.calibration.fit import calibrate_run
 
@@ -330,26 +360,29 @@ def run() -> str:
     if not root or not Path(root).is_dir():
         return ("skipped: set FSRLAB_REALDATA to a directory of real recordings (time_s,reading,force_n CSV files; "
                 "see this module's docstring)\n")
-    lines = ["| pair | best polynomial (degree) | plain ×, ±2u coverage | `--compensate` ×, ±2u coverage, missing | "
-             "model chosen | `--method cv --compensate` ×, missing |", "|---|---:|---:|---:|---|---:|"]
-    ratios, covers, later, plains = [], [], [], []
+    lines = ["| pair | best polynomial (degree) | polynomial, degree chosen on training (degree) | plain ×, ±2u coverage | "
+             "`--compensate` ×, ±2u coverage, missing | model chosen | `--method cv --compensate` ×, missing |",
+             "|---|---:|---:|---:|---:|---|---:|"]
+    ratios, covers, later, plains, fairs = [], [], [], [], []
     unaltered = {}  # pair index -> (compensated ratio, coverage), for the faults' table
     with tempfile.TemporaryDirectory() as tmp:
         for i, (name, tr, te) in enumerate(PAIRS):
             s = pair_scores(Path(root), Path(tmp), tr, te)
             if s is None:
-                lines.append(f"| {name} | not found | | | | |")
+                lines.append(f"| {name} | not found | | | | | |")
                 continue
             p, c = s["plain"], s["comp"]
             ratios.append(c["ratio"])
             plains.append(p["ratio"])
             covers.append(c["coverage"])
+            fairs.append(s["fair"] / s["poly"])
             later.append(i >= DEVELOPED_ON)
             unaltered[i] = (c["ratio"], c["coverage"])
             old = s["cv"]
             cv = f"×{old['ratio']:.2f}, {100 * old['missing']:.1f} %" if old else "— (one run only)"
             delay = f", delay {c['delay_rows']:.2g} rows" if c["delay_rows"] else ""
-            lines.append(f"| {name} | {s['poly']:.2f} % ({s['degree']}) | ×{p['ratio']:.2f}, {100 * p['coverage']:.0f} % | "
+            lines.append(f"| {name} | {s['poly']:.2f} % ({s['degree']}) | {s['fair']:.2f} % ({s['fair_degree']}) | "
+                         f"×{p['ratio']:.2f}, {100 * p['coverage']:.0f} % | "
                          f"×{c['ratio']:.2f}, {100 * c['coverage']:.0f} %, {100 * c['missing']:.1f} % | {c['model']}{delay} | "
                          f"{cv} |")
     r, cov, later = np.asarray(ratios), np.asarray(covers), np.asarray(later, dtype=bool)
@@ -367,6 +400,12 @@ def run() -> str:
                   f"the `--compensate` calibration on each pair ×{np.exp(np.mean(np.log(either))):.2f} "
                   f"({int((either <= 1.0).sum())} of {r.size} at most ×1.00); every ratio above ×1.00 taken as "
                   f"×1.00 ×{np.exp(np.mean(np.log(capped))):.2f}."]
+        vs = r / np.asarray(fairs)
+        lines += ["", "Against the polynomial whose degree is chosen on the training runs (the peer a user without the "
+                  f"test's reference can fit; itself ×{np.exp(np.mean(np.log(fairs))):.2f} the best polynomial): "
+                  f"`--compensate` ×{np.exp(np.mean(np.log(vs))):.2f}, worst ×{vs.max():.2f}, "
+                  f"{int((vs <= 1.0).sum())} of {r.size} at most ×1.00; the plain calibration "
+                  f"×{np.exp(np.mean(np.log(np.asarray(plains) / np.asarray(fairs)))):.2f}."]
     lines += ["", "The reference logged k readings late (robustness): the compensated estimate's RMSE as a multiple of "
               "the same pair's with k = 0, and the delay found [readings].", "",
               "| pair | k = 0: delay | " + " | ".join(f"k = {k}" for k in LATE_ROWS) + " |",
