@@ -230,8 +230,11 @@ def _fair_polynomial(train, test) -> tuple[float, int]:
     """(RMSE [% of the test's span] over the loaded test rows, degree) of the plain polynomial whose degree 1–5
     is chosen on the training runs alone, as a user without the test's reference must: by leave-one-recording-out
     mean squared error with two or more runs, else fitted on the first 70 % of the run and scored on the rest."""
-    cols = [_columns(p) for p in train]
-    cols = [(x[ok], y[ok]) for x, y in cols for ok in [np.isfinite(x) & np.isfinite(y)]]
+    cols = []
+    for p in train:
+        x, y = _columns(p)
+        ok = np.isfinite(x) & np.isfinite(y)
+        cols.append((x[ok], y[ok]))
 
     def heldout(d: int) -> float:
         if len(cols) > 1:
