@@ -55,6 +55,9 @@ def test_calibrate_and_apply_through_the_flat_api(tmp_path):
     path = fl.save_calibration(cal, tmp_path / "cal.json")
     est = fl.apply(fl.load_calibration(path), fl.load_run(other))
     assert est["stress_pa_estimate"].size == fl.load_run(other)["stress_pa"].size
+    # on a run of the same generator the calibration holds: a line near the identity, ±2u covering most errors
+    ag = fl.agreement(est["stress_pa"], est["stress_pa_estimate"], est["stress_pa_uncertainty"])
+    assert 0.9 < ag.slope < 1.1 and ag.coverage >= 0.9
 
 
 def test_errors_carry_the_parameter_and_keep_their_builtin_base():

@@ -62,6 +62,7 @@ _LAZY = {
     "calibrate": ("fsrlab.calibration.heldout_runs", "calibrate_runs"),
     "apply": ("fsrlab.calibration.apply", "apply_calibration"),
     "check_readout": ("fsrlab.calibration.apply", "check_readout"),
+    "agreement": ("fsrlab.calibration.agreement", "agreement"),
     "live_estimator": ("fsrlab.calibration.estimator", "live_estimator"),
     # reports
     "measure_run": ("fsrlab.bench.measurement", "measure_run"),

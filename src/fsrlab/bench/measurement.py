@@ -141,7 +141,9 @@ class RunReport:
     creep_reason : str or None
     calibration : dict or None
         ``model``, ``x``, ``y``, ``cv_rmse``, ``r2``, ``lag_s``, ``delay_s`` (held-out), ``uncertainty_max``,
-        ``uncertainty_median``, ``compensated``, ``source``, ``full_scale``; None with ``calibration_reason``.
+        ``uncertainty_median``, ``compensated``, ``source``, ``full_scale``, and for a given calibration on a
+        run with its reference ``agreement`` (:meth:`fsrlab.calibration.agreement.Agreement.to_dict`) and
+        ``agreement_warning``; None with ``calibration_reason``.
     calibration_reason : str or None
     estimate : ReadoutHysteresis or None
         Eq. (13) of the calibrated (compensated) estimate.
@@ -498,4 +500,14 @@ def measure_run(run, placements=None, weights_run=None, calibration=None, calibr
             rep.estimate = _hysteresis(est, col, "calibrated estimate")
             rep.curves["estimate"] = est[col] if col in est else None
             rep.curves["estimate_reference"] = run_reference(est, cal.y_name)[0]
+            unc = f"{cal.y_name}_uncertainty"
+            rep.curves["estimate_uncertainty"] = est[unc] if unc in est else None
+            rep.curves["time"] = est["time_s"] if "time_s" in est else None
+            if calibration is not None and cal.y_name in est:  # a validation run: how the calibration holds on it
+                from fsrlab.calibration.agreement import agreement
+
+                agreed = agreement(est[cal.y_name], est[col], est[unc] if unc in est else None)
+                if agreed is not None:
+                    rep.calibration["agreement"] = agreed.to_dict()
+                    rep.calibration["agreement_warning"] = agreed.warning(cal.y_unit)
     return rep

@@ -439,7 +439,7 @@ def apply_cmd(
     force: bool = typer.Option(False, "--force", help="Apply even to a run recorded with another circuit or range than the calibration."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing output run and its sidecar; without it an existing one stops the command. An input (or its sidecar) is never replaced."),
     skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=SKIP_HELP + " Skipped rows are not written."),
-    json_out: bool = typer.Option(False, "--json", help="Print JSON: rows written, estimated, missing (with the reasons), in and out of the readout range."),
+    json_out: bool = typer.Option(False, "--json", help="Print JSON: rows written, estimated, missing (with the reasons), in and out of the readout range; when the run has the reference, its agreement with the estimate."),
 ) -> None:
     """Apply a calibration to a run: adds <reference>_estimate, <reference>_uncertainty and in_range.
 
@@ -447,7 +447,10 @@ def apply_cmd(
     it would live). Readings at the readout's floor are below activation (no estimate). Readings
     outside the calibrated readout range are flagged (in_range = 0); beyond the margin their
     estimate is left empty. A run recorded with another circuit or range than the calibration is
-    refused unless --force.
+    refused unless --force. When the run also has the reference (a validation run), the estimate is
+    compared with it over the loaded rows (reference above 5 % of its largest): RMSE, mean error, the
+    line reference ≈ slope × estimate + intercept, and the share of errors within ±2u, with a warning
+    below 90 %.
 
     Examples (files under examples/ in the fsrlab source tree):
 
@@ -482,8 +485,16 @@ def apply_cmd(
         warnings.append(f"applied with --force although {difference}")
     write_run(output, est.columns, est.metadata, overwrite=True)  # through temporary files and renames
     n = info["counts"]
-    warn(warnings)
     estimate_col = f"{cal.y_name}_estimate"
+    agreed = None
+    if cal.y_name in est:  # a validation run: the estimate against the reference recorded with it
+        from fsrlab.calibration.agreement import agreement
+
+        uncertainty_col = f"{cal.y_name}_uncertainty"
+        agreed = agreement(est[cal.y_name], est[estimate_col], est[uncertainty_col] if uncertainty_col in est else None)
+        if agreed is not None and agreed.warning(cal.y_unit):
+            warnings.append(f"{run_file}: {agreed.warning(cal.y_unit)}")
+    warn(warnings)
     if json_out:
         emit_json({"output": str(output), "rows": est.n_rows, "estimated": n["estimated"], "missing": n["missing"],
                    "missing_reasons": {k: n[k] for k in ("no_readout", "not_decodable", "beyond_margin",
@@ -493,20 +504,28 @@ def apply_cmd(
                    "margin_percent": None if info["margin"] is None else 100 * info["margin"],
                    "method": info["method"], "model": info["model"],
                    "reference": cal.y_name, "unit": cal.y_unit, "lag_s": info["lag_s"],
-                   "columns": [estimate_col, f"{cal.y_name}_uncertainty", "in_range"], **skipped_json(run)})
+                   "columns": [estimate_col, f"{cal.y_name}_uncertainty", "in_range"],
+                   "agreement": None if agreed is None else agreed.to_dict(), **skipped_json(run)})
         return
     lo, hi = info["readout_range"]
     lines = [f"wrote {output} ({est.n_rows} rows, {estimate_col} by {info['method']})"]
     if n["extrapolated"] or n["beyond_margin"]:
         beyond = ("" if info["margin"] is None else f", {n['beyond_margin']} beyond the {100 * info['margin']:g} % "
                   "margin left empty")
-        lines.append(f"  outside the calibrated readout range {lo:.6g} … {hi:.6g} {cal.x_unit}: "
+        lines.append(f"  outside the calibrated readout range {lo:.6g} … {hi:.6g}{' ' + cal.x_unit if cal.x_unit else ''}: "
                      f"{n['extrapolated']} extrapolated (in_range = 0){beyond}")
     if n["below_activation"]:
         lines.append(f"  below activation (readout at its floor, no estimate): {n['below_activation']} rows")
     if n["no_readout"] or n["not_decodable"]:
         lines.append(f"  without an estimate: {n['no_readout']} rows without a readout"
                      + (f", {n['not_decodable']} not decodable" if n["not_decodable"] else ""))
+    if agreed is not None:
+        u = cal.y_unit
+        cover = "" if agreed.coverage is None else f", ±2u covers {100 * agreed.coverage:.0f} %"
+        lines.append(f"  against {cal.y_name} in the run ({agreed.estimated} loaded rows): RMSE {agreed.rmse:.4g} {u} "
+                     f"({agreed.rmse_percent_span:.3g} % of its span), mean error {agreed.bias:+.3g} {u}, "
+                     f"reference ≈ {agreed.slope:.3g} × estimate {'+' if agreed.intercept >= 0 else '−'} "
+                     f"{abs(agreed.intercept):.3g} {u}{cover}")
     typer.echo("\n".join(lines))
 
 

@@ -76,6 +76,45 @@ def _loops_figure(rep, outdir: Path) -> Figure | None:
                       f"{h.label}: HE {_f(h.percent)} % overall" for h in drawn) + ".")
 
 
+def _estimate_units(rep) -> tuple[dict, str, str, float, str]:
+    """The calibration summary, the reference's name and unit, and the plots' scale and unit (kPa for stress)."""
+    cal = rep.calibration or {}
+    y_name, y_unit = cal.get("y", rep.reference), cal.get("y_unit", rep.reference_unit)
+    stress = y_name == "stress_pa"
+    return cal, y_name, y_unit, 1e-3 if stress else 1.0, "kPa" if stress else y_unit
+
+
+def _estimate_time_figure(rep, outdir: Path) -> Figure | None:
+    """The estimate with its ±2u band and the reference over time (where the estimate strays, and when)."""
+    import numpy as np
+
+    from fsrlab.reports.figures import new_figure, save
+
+    est, ref = rep.curves.get("estimate"), rep.curves.get("estimate_reference")
+    t, u = rep.curves.get("time"), rep.curves.get("estimate_uncertainty")
+    if est is None or ref is None or t is None:
+        return None
+    cal, y_name, y_unit, scale, unit = _estimate_units(rep)
+    fig, ax = new_figure(width=9.6, height=3.8)
+    ax.plot(t, ref * scale, "k-", lw=1, label=f"reference {y_name}")
+    ax.plot(t, est * scale, "-", lw=0.9, color="tab:green", label="estimate")
+    has_u = u is not None and np.isfinite(u).any()
+    if has_u:
+        ax.fill_between(t, (est - 2 * u) * scale, (est + 2 * u) * scale, color="tab:green", alpha=0.2, lw=0,
+                        label="estimate ± 2u")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel(f"{y_name} [{unit}]")
+    ag = cal.get("agreement")
+    cover = "" if ag is None or ag["coverage_percent"] is None else f"; ±2u covers {ag['coverage_percent']:.0f} %"
+    ax.set_title("the estimate over time" + cover)
+    ax.legend(loc="upper right", fontsize=8)
+    name = "estimate_time.png"
+    save(fig, outdir / name)
+    return Figure(name, "The estimate and its ±2u band over time", "The paper shows no estimate over time.",
+                  ("Black: the reference recorded with the run; green: the estimate" + (" with its ±2u band" if has_u else "")
+                   + (f"; on this run's loaded rows, RMSE {_f(ag['rmse'], '.4g')} {y_unit}{cover}." if ag else ".")))
+
+
 def _estimate_figure(rep, outdir: Path) -> Figure | None:
     import numpy as np
 
@@ -85,10 +124,7 @@ def _estimate_figure(rep, outdir: Path) -> Figure | None:
     ref = rep.curves.get("estimate_reference")
     if est is None or ref is None or rep.estimate is None:
         return None
-    cal = rep.calibration or {}
-    y_name, y_unit = cal.get("y", rep.reference), cal.get("y_unit", rep.reference_unit)
-    scale = 1e-3 if y_name == "stress_pa" else 1.0
-    unit = "kPa" if y_name == "stress_pa" else y_unit
+    cal, y_name, y_unit, scale, unit = _estimate_units(rep)
     fig, ax = new_figure(width=6.4, height=4.6)
     ok = np.isfinite(est) & np.isfinite(ref)
     ax.plot(ref[ok] * scale, est[ok] * scale, ".", ms=2.5, color="tab:green", label="estimate")
@@ -219,11 +255,23 @@ def build_sections(rep, outdir: Path) -> list[Section]:
         if rep.estimate is not None:
             crow.append(["HE of the estimate on this run", f"{_f(rep.estimate.percent)} %"
                          + (f" ({rep.estimate.reason})" if rep.estimate.reason else "")])
+        ag = cal.get("agreement")
+        if ag is not None:  # a given calibration on a run that has its reference
+            b = ag["intercept"]
+            crow += [[f"on this run ({ag['estimated_rows']} loaded rows): RMSE, in % of its span",
+                      f"{_f(ag['rmse'], '.4g')} {u}, {_f(ag['rmse_percent_span'], '.3g')} %"],
+                     ["on this run: mean error; reference ≈ slope × estimate + intercept",
+                      f"{ag['bias']:+.3g} {u}; {_f(ag['slope'], '.3g')} × estimate {'+' if b >= 0 else '−'} "
+                      f"{abs(b):.3g} {u}"],
+                     ["on this run: errors within ±2u", "—" if ag["coverage_percent"] is None
+                      else f"{ag['coverage_percent']:.0f} %"]]
+        text = " ".join(t for t in (rep.calibration_reason, cal.get("agreement_warning")) if t)
         calsec = Section("calibration", "Calibration, uncertainty and compensation (extension)",
-                         rep.calibration_reason or "", tables=[Table("Calibration", ["", "value"], crow)])
-        fig = _estimate_figure(rep, outdir)
-        if fig is not None:
-            calsec.figures.append(fig)
+                         text, tables=[Table("Calibration", ["", "value"], crow)])
+        for draw in (_estimate_figure, _estimate_time_figure):
+            fig = draw(rep, outdir)
+            if fig is not None:
+                calsec.figures.append(fig)
     else:
         calsec = Section("calibration", "Calibration, uncertainty and compensation (extension)",
                          f"Not computed: {rep.calibration_reason}.")
