@@ -95,3 +95,9 @@ def test_the_report_of_a_validation_run_shows_the_agreement_and_the_estimate_ove
     assert (out / "estimate_time.png").stat().st_size > 10_000
     html = (out / "index.html").read_text()
     assert "on this run: errors within ±2u" in html and "estimate_time.png" in html
+
+
+def test_an_estimate_that_does_not_vary_has_no_line():
+    y = np.linspace(1.0, 5.0, 30)
+    ag = agreement(y, np.full(30, 3.0), np.full(30, 0.1))
+    assert np.isnan(ag.slope) and ag.line("N") == "the estimate did not vary" and "did not vary" in ag.warning("N")

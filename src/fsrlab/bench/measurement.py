@@ -142,8 +142,9 @@ class RunReport:
     calibration : dict or None
         ``model``, ``x``, ``y``, ``cv_rmse``, ``r2``, ``lag_s``, ``delay_s`` (held-out), ``uncertainty_max``,
         ``uncertainty_median``, ``compensated``, ``source``, ``full_scale``, and for a given calibration on a
-        run with its reference ``agreement`` (:meth:`fsrlab.calibration.agreement.Agreement.to_dict`) and
-        ``agreement_warning``; None with ``calibration_reason``.
+        run with its reference ``agreement`` (:meth:`fsrlab.calibration.agreement.Agreement.to_dict`),
+        ``agreement_line`` and ``agreement_warning`` (its :meth:`~fsrlab.calibration.agreement.Agreement.line`
+        and :meth:`~fsrlab.calibration.agreement.Agreement.warning`); None with ``calibration_reason``.
     calibration_reason : str or None
     estimate : ReadoutHysteresis or None
         Eq. (13) of the calibrated (compensated) estimate.
@@ -509,5 +510,6 @@ def measure_run(run, placements=None, weights_run=None, calibration=None, calibr
                 agreed = agreement(est[cal.y_name], est[col], est[unc] if unc in est else None)
                 if agreed is not None:
                     rep.calibration["agreement"] = agreed.to_dict()
+                    rep.calibration["agreement_line"] = agreed.line(cal.y_unit)
                     rep.calibration["agreement_warning"] = agreed.warning(cal.y_unit)
     return rep

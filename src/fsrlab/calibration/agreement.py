@@ -69,14 +69,19 @@ class Agreement:
                 "slope": self.slope, "intercept": self.intercept,
                 "coverage_percent": None if self.coverage is None else 100.0 * self.coverage}
 
+    def line(self, unit: str = "") -> str:
+        """``reference ≈ slope × estimate ± intercept [unit]``, or a note when the estimate did not vary."""
+        if not np.isfinite(self.slope):
+            return "the estimate did not vary"
+        return (f"reference ≈ {self.slope:.3g} × estimate {'+' if self.intercept >= 0 else '−'} "
+                f"{abs(self.intercept):.3g}" + (f" {unit}" if unit else ""))
+
     def warning(self, unit: str = "") -> str | None:
         """One line when ±2u covers fewer than :data:`COVERAGE_AIM` of the errors, else None."""
         if self.coverage is None or self.coverage >= COVERAGE_AIM:
             return None
-        line = (f"{self.slope:.3g} × estimate {'+' if self.intercept >= 0 else '−'} {abs(self.intercept):.3g}"
-                + (f" {unit}" if unit else ""))
         return (f"±2u covers only {100 * self.coverage:.0f} % of this run's errors (the calibration aims at 95 %): "
-                f"the sensor reads differently here than in the calibration's runs (reference ≈ {line}); "
+                f"the sensor reads differently here than in the calibration's runs ({self.line(unit)}); "
                 "calibrate from this run too, or from several runs so that their spread is measured")
 
 

@@ -524,8 +524,7 @@ def apply_cmd(
         cover = "" if agreed.coverage is None else f", ±2u covers {100 * agreed.coverage:.0f} %"
         lines.append(f"  against {cal.y_name} in the run ({agreed.estimated} loaded rows): RMSE {agreed.rmse:.4g} {u} "
                      f"({agreed.rmse_percent_span:.3g} % of its span), mean error {agreed.bias:+.3g} {u}, "
-                     f"reference ≈ {agreed.slope:.3g} × estimate {'+' if agreed.intercept >= 0 else '−'} "
-                     f"{abs(agreed.intercept):.3g} {u}{cover}")
+                     f"{agreed.line(u)}{cover}")
     typer.echo("\n".join(lines))
 
 

@@ -257,12 +257,10 @@ def build_sections(rep, outdir: Path) -> list[Section]:
                          + (f" ({rep.estimate.reason})" if rep.estimate.reason else "")])
         ag = cal.get("agreement")
         if ag is not None:  # a given calibration on a run that has its reference
-            b = ag["intercept"]
             crow += [[f"on this run ({ag['estimated_rows']} loaded rows): RMSE, in % of its span",
                       f"{_f(ag['rmse'], '.4g')} {u}, {_f(ag['rmse_percent_span'], '.3g')} %"],
                      ["on this run: mean error; reference ≈ slope × estimate + intercept",
-                      f"{ag['bias']:+.3g} {u}; {_f(ag['slope'], '.3g')} × estimate {'+' if b >= 0 else '−'} "
-                      f"{abs(b):.3g} {u}"],
+                      f"{ag['bias']:+.3g} {u}; {cal['agreement_line']}"],
                      ["on this run: errors within ±2u", "—" if ag["coverage_percent"] is None
                       else f"{ag['coverage_percent']:.0f} %"]]
         text = " ".join(t for t in (rep.calibration_reason, cal.get("agreement_warning")) if t)
