@@ -101,3 +101,19 @@ def test_an_estimate_that_does_not_vary_has_no_line():
     y = np.linspace(1.0, 5.0, 30)
     ag = agreement(y, np.full(30, 3.0), np.full(30, 0.1))
     assert np.isnan(ag.slope) and ag.line("N") == "the estimate did not vary" and "did not vary" in ag.warning("N")
+
+
+def test_apply_says_when_some_loaded_rows_have_no_estimate(insole):
+    d, cal, new, _, _ = insole
+    run = load_run(new)
+    x, y = run.columns["reading"].copy(), run.columns["force_n"]
+    x[np.flatnonzero(y > 0.5 * np.nanmax(y))[:50]] = 150.0  # 50 loaded readings far beyond the calibrated range
+    beyond = d / "beyond.csv"
+    write_run(beyond, {**run.columns, "reading": x}, {"units": run.units})
+    # a margin of 0: readings beyond the calibrated range are left empty, and the statistics say so
+    code, stdout, err = run_cli(["apply", cal, beyond, "-o", d / "margin0.csv", "--margin", "0", "--overwrite"])
+    out = json.loads(run_cli(["apply", cal, beyond, "-o", d / "margin0.csv", "--margin", "0", "--overwrite", "--json"])[1])
+    ag = out["agreement"]
+    assert code == 0, err
+    assert ag["estimated_rows"] == ag["loaded_rows"] - 50
+    assert f"the {ag['estimated_rows']} estimated of its {ag['loaded_rows']} loaded rows" in stdout

@@ -522,7 +522,9 @@ def apply_cmd(
     if agreed is not None:
         u = cal.y_unit
         cover = "" if agreed.coverage is None else f", ±2u covers {100 * agreed.coverage:.0f} %"
-        lines.append(f"  against {cal.y_name} in the run ({agreed.estimated} loaded rows): RMSE {agreed.rmse:.4g} {u} "
+        rows = (f"{agreed.estimated} loaded rows" if agreed.estimated == agreed.loaded
+                else f"the {agreed.estimated} estimated of its {agreed.loaded} loaded rows")
+        lines.append(f"  against {cal.y_name} in the run ({rows}): RMSE {agreed.rmse:.4g} {u} "
                      f"({agreed.rmse_percent_span:.3g} % of its span), mean error {agreed.bias:+.3g} {u}, "
                      f"{agreed.line(u)}{cover}")
     typer.echo("\n".join(lines))

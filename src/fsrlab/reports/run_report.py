@@ -257,7 +257,9 @@ def build_sections(rep, outdir: Path) -> list[Section]:
                          + (f" ({rep.estimate.reason})" if rep.estimate.reason else "")])
         ag = cal.get("agreement")
         if ag is not None:  # a given calibration on a run that has its reference
-            crow += [[f"on this run ({ag['estimated_rows']} loaded rows): RMSE, in % of its span",
+            rows = (f"{ag['estimated_rows']} loaded rows" if ag["estimated_rows"] == ag["loaded_rows"]
+                    else f"the {ag['estimated_rows']} estimated of {ag['loaded_rows']} loaded rows")
+            crow += [[f"on this run ({rows}): RMSE, in % of its span",
                       f"{_f(ag['rmse'], '.4g')} {u}, {_f(ag['rmse_percent_span'], '.3g')} %"],
                      ["on this run: mean error; reference ≈ slope × estimate + intercept",
                       f"{ag['bias']:+.3g} {u}; {cal['agreement_line']}"],
