@@ -112,6 +112,34 @@ def test_cli_says_whether_the_relative_uncertainty_was_measured_or_assumed(runs,
     assert "the held-out runs' gain" in several
 
 
+def test_the_relative_term_between_runs_can_be_given(runs, cal, tmp_path, monkeypatch):
+    """``between_runs`` is the floor of the relative term: with one run it is the term, so the uncertainty
+    of each estimate grows in quadrature by exactly (0.30² − 0.15²)·estimate² (LevelUncertainty's closed
+    form); the command line's --between-runs writes the same, says so, and refuses what is not 0–100 %."""
+    wide = calibrate_runs([runs["hand"]], x="reading", reference="force_n", compensate=True, between_runs=0.30)
+    assert cal.model.uncertainty.relative == 0.15 and wide.model.uncertainty.relative == 0.30
+    a, b = apply_calibration(cal, runs["motor"]), apply_calibration(wide, runs["motor"])
+    est = a["force_n_estimate"]
+    ok = np.isfinite(est)
+    assert np.array_equal(est, b["force_n_estimate"], equal_nan=True)  # the estimate itself does not change
+    grown = b["force_n_uncertainty"][ok] ** 2 - a["force_n_uncertainty"][ok] ** 2
+    assert np.allclose(grown, (0.30 ** 2 - 0.15 ** 2) * est[ok] ** 2, rtol=1e-6, atol=1e-12)
+    with pytest.raises(ValueError, match="between_runs"):
+        calibrate_runs([runs["hand"]], x="reading", reference="force_n", between_runs=1.5)
+    monkeypatch.setenv("COLUMNS", "300")
+    out = tmp_path / "wide.json"
+    code, stdout, err = run_cli(["calibrate", runs["hand"], "--x", "reading", "--reference", "force_n",
+                                 "--between-runs", "30%", "-o", out])
+    assert code == 0, err
+    assert "30 (given by --between-runs; one run)" in " ".join(stdout.split())
+    assert load_calibration(out).model.uncertainty.relative == pytest.approx(0.30)
+    for bad in ("150%", "30", "-5%"):
+        code, _, err = run_cli(["calibrate", runs["hand"], "--x", "reading", "--between-runs", bad])
+        assert code == 2 and len(err.strip().splitlines()) == 1 and "--between-runs" in err, err
+    code, _, err = run_cli(["calibrate", runs["hand"], "--x", "reading", "--method", "cv", "--between-runs", "20%"])
+    assert code == 2 and "held-out method" in err
+
+
 def test_cli_says_in_one_line_why_the_compensation_was_not_kept(tmp_path):
     """A sensor without memory: the compensation is tried, not kept, and the table says why."""
     rng = np.random.default_rng(7)

@@ -423,8 +423,8 @@ def rows_have_times(recs: list[Recording]) -> bool:
 
 
 def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: int | str = 0,
-                         variables=("readout", "conductance", "log"), rail: float | None = None
-                         ) -> tuple[HeldoutCalibration, Selection]:
+                         variables=("readout", "conductance", "log"), rail: float | None = None,
+                         between_runs: float | None = None) -> tuple[HeldoutCalibration, Selection]:
     """Choose and fit a calibration on held-out recordings or blocks (see the module's notes).
 
     Parameters
@@ -441,6 +441,10 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
     rail : float, optional
         The readout's full scale when it is not ADC counts: a divider's supply voltage for its
         voltage (the conductance ratio is then V/(Vcc − V), or its mirror). [unit of the readout]
+    between_runs : float, optional
+        The floor of the uncertainty's relative term for what changes from one recording to the next
+        (default :data:`~fsrlab.calibration.heldout_uncertainty.REPEATABILITY`); the held-out
+        recordings' gain spread when it is larger. [1]
 
     Returns
     -------
@@ -584,7 +588,7 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
     cal = _blend(_fit(whole, static_cur, sign, adc), _fit(whole, cur, sign, adc), alpha)
     cal.delay_s = delay_s
     cal.mix = _mix(whole, mixed, sign, adc)
-    rel = REPEATABILITY
+    rel = REPEATABILITY if between_runs is None else between_runs
     if len(recs) >= 2:
         sel.gain_spread = _gain_spread(splits, static_cur, cur, alpha, sign, adc, mixed)
         rel = max(rel, sel.gain_spread)

@@ -256,7 +256,7 @@ def _recording(run: Run, x: str, reference: str | None) -> tuple[Recording, str,
 
 
 def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, compensate: bool = False,
-                   lag: int | str = 0, rail: float | None = None) -> RunCalibration:
+                   lag: int | str = 0, rail: float | None = None, between_runs: float | None = None) -> RunCalibration:
     """Calibrate a readout to its reference from one or more runs, every choice scored held out.
 
     Parameters
@@ -278,6 +278,13 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
         The readout's full scale for the conductance variable (a divider's supply for its voltage),
         when the runs' sidecar does not give it; readings at or above it leave the variable out. [unit
         of the readout]
+    between_runs : float, optional
+        Relative standard uncertainty between recordings, the floor of the uncertainty's term for what
+        changes from one recording to the next (the sensor re-seated, another loading, another creep
+        state), in [0, 1]: default :data:`~fsrlab.calibration.heldout_uncertainty.REPEATABILITY`
+        (15 %); the held-out runs' gain spread when it is larger. Set it from the setup:
+        docs/calibration.md measured 1–8 % for a film under a robot, about 20 % for an FSR placed by
+        hand from one session to the next. [1]
 
     Returns
     -------
@@ -290,6 +297,8 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
     ValueError
         Too few readings, a readout that does not follow the reference, runs of different readouts.
     """
+    if between_runs is not None and not 0 <= between_runs <= 1:
+        raise ValueError(f"between_runs: a relative uncertainty from 0 to 1 (0 % to 100 %), got {between_runs!r}")
     if isinstance(runs, (Run, str, Path)):
         runs = [runs]
     runs = [r if isinstance(r, Run) else load_run(r) for r in runs]
@@ -319,7 +328,9 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
             raise ValueError(f"{run.path}: recorded with {diff[0][0]}, {runs[0].path} with {diff[0][1]}: "
                              "calibrate runs of one readout together")
     try:
-        model, sel = calibrate_recordings(recs, compensate=compensate, lag=lag, rail=_divider_rail(runs[0], x) if rail is None else rail)
+        model, sel = calibrate_recordings(recs, compensate=compensate, lag=lag,
+                                          rail=_divider_rail(runs[0], x) if rail is None else rail,
+                                          between_runs=between_runs)
     except ValueError as exc:
         names = ", ".join(str(r.path) for r in runs)
         raise ValueError(f"{names}: {x} and {ref}: {exc}") from None

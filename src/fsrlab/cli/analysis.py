@@ -169,6 +169,7 @@ def calibrate_cmd(
     r: float = typer.Option(None, "--r", parser=ohms, help="555 R for --x c_fsr_farad [Ω], e.g. 10k (default: the run's sidecar, else 10k)."),
     c_off: float = typer.Option(None, "--c-off", parser=farads, help="C_off for --x c_fsr_farad [F], e.g. 470p (default: sidecar, else 0)."),
     rail: float = typer.Option(None, "--rail", parser=eng, help="Full scale of a divider's readout [unit of the readout], e.g. 5 for a voltage read across a divider on 5 V, 3.3 on 3.3 V: the FSR's conductance ratio V/(rail − V) is then tried as the curve's variable (held-out method; default: the run's sidecar, or the ADC's full scale for integer counts). Every reading must lie below it."),
+    between_runs: float = typer.Option(None, "--between-runs", parser=fraction, help="Relative standard uncertainty between recordings [1, a fraction], e.g. 0.2 or 20%: the floor of the uncertainty's term for what changes from one recording to the next (held-out method; default 15%; the held-out runs' gain spread when larger). From the setup: 1–8% for a film pressed by a robot, about 20% for an FSR placed by hand from one session to the next (docs/calibration.md)."),
     skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=SKIP_HELP),
     output: Path = typer.Option(None, "--output", "-o", parser=out_path, help="Write the calibration to this JSON file."),
     overwrite: bool = typer.Option(False, "--overwrite", help=OVERWRITE_HELP),
@@ -208,13 +209,20 @@ def calibrate_cmd(
     if method == "held-out" and asked:
         fail(f"{asked[0]} needs --method cv (or auto)", "--method")
     fallback_note = None
+    if between_runs is not None and not 0 <= between_runs <= 1:
+        fail(f"must be a relative uncertainty from 0 to 100%, got {between_runs:g}", "--between-runs")
     if method == "held-out" or (method == "auto" and not asked):
         if rail is not None and not (math.isfinite(rail) and rail > 0):
             fail(f"must be a full scale > 0 in the readout's unit, got {rail:g}", "--rail")
         fallback_note = _calibrate_held_out(run_files, x, reference, compensate, unit, lag or "0", skip_bad_rows,
-                                            output, json_out, fall_back=method == "auto", rail=rail)
+                                            output, json_out, fall_back=method == "auto", rail=rail,
+                                            between_runs=between_runs)
         if fallback_note is None:
             return
+    if between_runs is not None:
+        fail("is for the held-out method (--method cv takes its uncertainty from the run's residuals)"
+             + (f", and {fallback_note.replace(': calibrated by', ': it would be calibrated by')}" if fallback_note else ""),
+             "--between-runs")
     if len(run_files) > 1:
         fail(f"--method cv calibrates one run, got {len(run_files)}: several runs are calibrated with --method "
              "held-out", "--method")
@@ -334,7 +342,7 @@ def _lag_option(lag: str) -> float | str:
 
 def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, compensate: bool, unit: str | None,
                         lag: str, skip_bad_rows: bool, output: Path | None, json_out: bool,
-                        fall_back: bool, rail: float | None = None) -> str | None:
+                        fall_back: bool, rail: float | None = None, between_runs: float | None = None) -> str | None:
     """``fsrlab calibrate`` by held-out scoring (:func:`fsrlab.calibration.heldout_runs.calibrate_runs`).
 
     Returns None when done; a note, having done nothing, when ``fall_back`` and a single run is too
@@ -371,7 +379,8 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
         first = runs[0]
         step = float(np.median(np.diff(first["time_s"]))) if "time_s" in first and first.n_rows > 1 else 1.0
         lag_rows = int(round(lag_s / step)) if step > 0 else 0
-    cal = calibrate_runs(runs, x=x, reference=ref, compensate=compensate, lag=lag_rows, rail=rail)
+    cal = calibrate_runs(runs, x=x, reference=ref, compensate=compensate, lag=lag_rows, rail=rail,
+                         between_runs=between_runs)
     sel = cal.selection
     fs = cal.full_scale
     refused = [s for s in sel.steps if s["step"] == "memory" and not s["kept"]]
@@ -405,10 +414,12 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
         table.add_row(f"held-out RMSE without compensation ({u})", f"{k * sel.heldout_rmse_plain:.4g}")
     table.add_row(f"readout range ({cal.x_unit or '1'})", f"{cal.x_range[0]:.6g} … {cal.x_range[1]:.6g}")
     rel, spread = cal.model.uncertainty.relative, sel.gain_spread
+    floor = "the floor given by --between-runs" if between_runs is not None else "the assumed floor"
     table.add_row("relative uncertainty between runs (%)", f"{100 * rel:.3g} " + (
-        "(assumed: one run; calibrate from two or more to measure it)" if spread is None else
+        ("(given by --between-runs; one run)" if between_runs is not None else
+         "(assumed: one run; calibrate from two or more to measure it)") if spread is None else
         "(the held-out runs' gain spread)" if spread >= rel else
-        f"(the assumed floor; the held-out runs' gains spread only {100 * spread:.2g} %)"))
+        f"({floor}; the held-out runs' gains spread only {100 * spread:.2g} %)"))
     scores = {c["name"]: c["heldout_rmse"] for c in sel.candidates}
     first = sel.steps[0]
     table.add_row(f"static curve: {first['chosen']}", f"chosen of {first['tried']}, held-out RMSE "
