@@ -55,7 +55,8 @@ def test_calibrate_and_apply_through_the_flat_api(tmp_path):
     path = fl.save_calibration(cal, tmp_path / "cal.json")
     est = fl.apply(fl.load_calibration(path), fl.load_run(other))
     assert est["stress_pa_estimate"].size == fl.load_run(other)["stress_pa"].size
-    # on a run of the same generator the calibration holds: a line near the identity, ±2u covering most errors
+    # a run of the same generator (no gain moved): the line must stay near the identity and ±2u must cover
+    # at least the 90 % the calibration aims at (measured: slope 0.998, coverage 100 %)
     ag = fl.agreement(est["stress_pa"], est["stress_pa_estimate"], est["stress_pa_uncertainty"])
     assert 0.9 < ag.slope < 1.1 and ag.coverage >= 0.9
 

@@ -141,13 +141,14 @@ class RunReport:
     creep_reason : str or None
     calibration : dict or None
         ``model``, ``x``, ``y``, ``cv_rmse``, ``r2``, ``lag_s``, ``delay_s`` (held-out), ``uncertainty_max``,
-        ``uncertainty_median``, ``compensated``, ``source``, ``full_scale``, and for a given calibration on a
-        run with its reference ``agreement`` (:meth:`fsrlab.calibration.agreement.Agreement.to_dict`),
-        ``agreement_line`` and ``agreement_warning`` (its :meth:`~fsrlab.calibration.agreement.Agreement.line`
-        and :meth:`~fsrlab.calibration.agreement.Agreement.warning`); None with ``calibration_reason``.
+        ``uncertainty_median``, ``compensated``, ``source``, ``full_scale``; None with ``calibration_reason``.
     calibration_reason : str or None
     estimate : ReadoutHysteresis or None
         Eq. (13) of the calibrated (compensated) estimate.
+    agreement : Agreement or None
+        A given calibration's estimate against the run's own reference
+        (:func:`fsrlab.calibration.agreement.agreement`); None for a run calibrated on itself or without
+        its reference.
     curves : dict
         ``reference``, ``estimate``, ``direction`` arrays for plots (estimate only with a calibration).
     """
@@ -169,6 +170,7 @@ class RunReport:
     calibration: dict | None = None
     calibration_reason: str | None = None
     estimate: ReadoutHysteresis | None = None
+    agreement: Any = None
     curves: dict = field(default_factory=dict, repr=False)
 
     def to_dict(self) -> dict:
@@ -187,7 +189,8 @@ class RunReport:
                 "iso376": iso, "iso376_reason": self.iso376_reason,
                 "creep": self.creep, "creep_reason": self.creep_reason,
                 "calibration": self.calibration, "calibration_reason": self.calibration_reason,
-                "estimate": None if self.estimate is None else self.estimate.to_dict()}
+                "estimate": None if self.estimate is None else self.estimate.to_dict(),
+                "agreement": None if self.agreement is None else self.agreement.to_dict()}
 
 
 def _hysteresis(run, quantity: str, label: str) -> ReadoutHysteresis:
@@ -507,9 +510,5 @@ def measure_run(run, placements=None, weights_run=None, calibration=None, calibr
             if calibration is not None and cal.y_name in est:  # a validation run: how the calibration holds on it
                 from fsrlab.calibration.agreement import agreement
 
-                agreed = agreement(est[cal.y_name], est[col], est[unc] if unc in est else None)
-                if agreed is not None:
-                    rep.calibration["agreement"] = agreed.to_dict()
-                    rep.calibration["agreement_line"] = agreed.line(cal.y_unit)
-                    rep.calibration["agreement_warning"] = agreed.warning(cal.y_unit)
+                rep.agreement = agreement(est[cal.y_name], est[col], est[unc] if unc in est else None)
     return rep

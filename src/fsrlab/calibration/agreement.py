@@ -69,6 +69,11 @@ class Agreement:
                 "slope": self.slope, "intercept": self.intercept,
                 "coverage_percent": None if self.coverage is None else 100.0 * self.coverage}
 
+    def rows(self) -> str:
+        """``N loaded rows``, or ``the N estimated of its M loaded rows`` when some have no estimate."""
+        return (f"{self.estimated} loaded rows" if self.estimated == self.loaded
+                else f"the {self.estimated} estimated of its {self.loaded} loaded rows")
+
     def line(self, unit: str = "") -> str:
         """``reference ≈ slope × estimate ± intercept [unit]``, or a note when the estimate did not vary."""
         if not np.isfinite(self.slope):

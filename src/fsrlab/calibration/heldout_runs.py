@@ -298,7 +298,7 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
         Too few readings, a readout that does not follow the reference, runs of different readouts.
     """
     if between_runs is not None and not 0 <= between_runs <= 1:
-        raise ValueError(f"between_runs: a relative uncertainty from 0 to 1 (0 % to 100 %), got {between_runs!r}")
+        raise ValueError(f"between_runs: must be a relative uncertainty from 0 to 1 (0 % to 100 %), got {between_runs!r}")
     if isinstance(runs, (Run, str, Path)):
         runs = [runs]
     runs = [r if isinstance(r, Run) else load_run(r) for r in runs]

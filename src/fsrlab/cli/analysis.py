@@ -209,8 +209,6 @@ def calibrate_cmd(
     if method == "held-out" and asked:
         fail(f"{asked[0]} needs --method cv (or auto)", "--method")
     fallback_note = None
-    if between_runs is not None and not 0 <= between_runs <= 1:
-        fail(f"must be a relative uncertainty from 0 to 100%, got {between_runs:g}", "--between-runs")
     if method == "held-out" or (method == "auto" and not asked):
         if rail is not None and not (math.isfinite(rail) and rail > 0):
             fail(f"must be a full scale > 0 in the readout's unit, got {rail:g}", "--rail")
@@ -379,8 +377,9 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
         first = runs[0]
         step = float(np.median(np.diff(first["time_s"]))) if "time_s" in first and first.n_rows > 1 else 1.0
         lag_rows = int(round(lag_s / step)) if step > 0 else 0
-    cal = calibrate_runs(runs, x=x, reference=ref, compensate=compensate, lag=lag_rows, rail=rail,
-                         between_runs=between_runs)
+    with option_names({"between_runs": "--between-runs"}):
+        cal = calibrate_runs(runs, x=x, reference=ref, compensate=compensate, lag=lag_rows, rail=rail,
+                             between_runs=between_runs)
     sel = cal.selection
     fs = cal.full_scale
     refused = [s for s in sel.steps if s["step"] == "memory" and not s["kept"]]
@@ -533,9 +532,7 @@ def apply_cmd(
     if agreed is not None:
         u = cal.y_unit
         cover = "" if agreed.coverage is None else f", ±2u covers {100 * agreed.coverage:.0f} %"
-        rows = (f"{agreed.estimated} loaded rows" if agreed.estimated == agreed.loaded
-                else f"the {agreed.estimated} estimated of its {agreed.loaded} loaded rows")
-        lines.append(f"  against {cal.y_name} in the run ({rows}): RMSE {agreed.rmse:.4g} {u} "
+        lines.append(f"  against {cal.y_name} in the run ({agreed.rows()}): RMSE {agreed.rmse:.4g} {u} "
                      f"({agreed.rmse_percent_span:.3g} % of its span), mean error {agreed.bias:+.3g} {u}, "
                      f"{agreed.line(u)}{cover}")
     typer.echo("\n".join(lines))

@@ -104,15 +104,15 @@ def _estimate_time_figure(rep, outdir: Path) -> Figure | None:
                         label="estimate ± 2u")
     ax.set_xlabel("time [s]")
     ax.set_ylabel(f"{y_name} [{unit}]")
-    ag = cal.get("agreement")
-    cover = "" if ag is None or ag["coverage_percent"] is None else f"; ±2u covers {ag['coverage_percent']:.0f} %"
+    ag = rep.agreement
+    cover = "" if ag is None or ag.coverage is None else f"; ±2u covers {100 * ag.coverage:.0f} %"
     ax.set_title("the estimate over time" + cover)
     ax.legend(loc="upper right", fontsize=8)
     name = "estimate_time.png"
     save(fig, outdir / name)
     return Figure(name, "The estimate and its ±2u band over time", "The paper shows no estimate over time.",
                   ("Black: the reference recorded with the run; green: the estimate" + (" with its ±2u band" if has_u else "")
-                   + (f"; on this run's loaded rows, RMSE {_f(ag['rmse'], '.4g')} {y_unit}{cover}." if ag else ".")))
+                   + (f"; on this run's loaded rows, RMSE {_f(ag.rmse, '.4g')} {y_unit}{cover}." if ag else ".")))
 
 
 def _estimate_figure(rep, outdir: Path) -> Figure | None:
@@ -124,7 +124,7 @@ def _estimate_figure(rep, outdir: Path) -> Figure | None:
     ref = rep.curves.get("estimate_reference")
     if est is None or ref is None or rep.estimate is None:
         return None
-    cal, y_name, y_unit, scale, unit = _estimate_units(rep)
+    cal, y_name, _, scale, unit = _estimate_units(rep)
     fig, ax = new_figure(width=6.4, height=4.6)
     ok = np.isfinite(est) & np.isfinite(ref)
     ax.plot(ref[ok] * scale, est[ok] * scale, ".", ms=2.5, color="tab:green", label="estimate")
@@ -255,17 +255,14 @@ def build_sections(rep, outdir: Path) -> list[Section]:
         if rep.estimate is not None:
             crow.append(["HE of the estimate on this run", f"{_f(rep.estimate.percent)} %"
                          + (f" ({rep.estimate.reason})" if rep.estimate.reason else "")])
-        ag = cal.get("agreement")
+        ag = rep.agreement
         if ag is not None:  # a given calibration on a run that has its reference
-            rows = (f"{ag['estimated_rows']} loaded rows" if ag["estimated_rows"] == ag["loaded_rows"]
-                    else f"the {ag['estimated_rows']} estimated of {ag['loaded_rows']} loaded rows")
-            crow += [[f"on this run ({rows}): RMSE, in % of its span",
-                      f"{_f(ag['rmse'], '.4g')} {u}, {_f(ag['rmse_percent_span'], '.3g')} %"],
+            crow += [[f"on this run ({ag.rows()}): RMSE, in % of its span",
+                      f"{_f(ag.rmse, '.4g')} {u}, {_f(ag.rmse_percent_span, '.3g')} %"],
                      ["on this run: mean error; reference ≈ slope × estimate + intercept",
-                      f"{ag['bias']:+.3g} {u}; {cal['agreement_line']}"],
-                     ["on this run: errors within ±2u", "—" if ag["coverage_percent"] is None
-                      else f"{ag['coverage_percent']:.0f} %"]]
-        text = " ".join(t for t in (rep.calibration_reason, cal.get("agreement_warning")) if t)
+                      f"{ag.bias:+.3g} {u}; {ag.line(u)}"],
+                     ["on this run: errors within ±2u", "—" if ag.coverage is None else f"{100 * ag.coverage:.0f} %"]]
+        text = " ".join(t for t in (rep.calibration_reason, ag and ag.warning(u)) if t)
         calsec = Section("calibration", "Calibration, uncertainty and compensation (extension)",
                          text, tables=[Table("Calibration", ["", "value"], crow)])
         for draw in (_estimate_figure, _estimate_time_figure):
