@@ -306,14 +306,43 @@ class VirtualDevice:
     def _write(self, data: bytes) -> None:
         if self._master is None:
             return
+        before = self._unread() if self.speed == "max" else 0
         try:
             os.write(self._master, data)
             self.frames_sent += 1
+            if self.speed == "max":
+                self._await_delivery(before, len(data))
         except BlockingIOError:
             self.frames_overflowed += 1  # the host does not read: bytes are lost, as on a UART
         except OSError as exc:
             if exc.errno not in (errno.EIO, errno.EBADF):
                 raise
+
+    def _await_delivery(self, before: int, n: int, limit_s: float = 1.0) -> None:
+        """Wait until the kernel has passed the ``n`` bytes just written to the host's side of the pty.
+
+        Linux hands bytes written to a pty master to the slave in deferred work: until that work runs,
+        FIONREAD on the slave does not count them, and on a busy machine it can lag by many frames. The
+        backpressure of ``speed="max"`` (:attr:`MAX_UNREAD`) reads FIONREAD, so without this wait the
+        device would write past its bound. A poll of the slave runs the deferred work when the slave has
+        nothing to read (``before == 0``); otherwise the count grows by ``n`` once delivered, or falls
+        below ``before`` when the host reads. ``limit_s`` only guards against a hang.
+        """
+        slave = self._slave
+        if slave is None:
+            return
+        if before == 0:
+            try:
+                select.select([slave], [], [], 0)  # runs the pending delivery when nothing is readable
+            except (OSError, ValueError):
+                return
+            return
+        end = time.monotonic() + limit_s
+        while not self._stop.is_set() and time.monotonic() < end:
+            now = self._unread()
+            if now >= before + n or now < before:
+                return
+            time.sleep(0.0002)
 
     def _handle_line(self, raw: bytes) -> None:
         st = self._st
