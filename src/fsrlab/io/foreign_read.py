@@ -11,7 +11,6 @@ editor shows it) and the column. Which column is which, and what the cells mean,
 
 from __future__ import annotations
 
-import csv
 import hashlib
 import os
 import re
@@ -22,6 +21,7 @@ from typing import Sequence
 import numpy as np
 
 from fsrlab.errors import FileFormatError
+from fsrlab.io.csvtext import LongCellError, csv_cells
 
 __all__ = ["ForeignFormatError", "Table", "read_table", "is_number"]
 
@@ -180,14 +180,30 @@ def _decode(path: Path) -> tuple[str, str]:
 def _split(line: str, delimiter: str) -> list[str]:
     if delimiter == " ":
         return line.split()
-    return [c.strip() for c in next(csv.reader([line], delimiter=delimiter))]
+    return [c.strip() for c in csv_cells(line, delimiter)]
+
+
+def _count(line: str, delimiter: str) -> int:
+    """Cells of ``line`` split at ``delimiter`` (for sniffing: a cell over the CSV reader's limit counts as text)."""
+    try:
+        return len(_split(line, delimiter))
+    except LongCellError:
+        return len(line.split(delimiter))
+
+
+def _fails(line: str, delimiter: str) -> bool:
+    try:
+        _split(line, delimiter)
+    except LongCellError:
+        return True
+    return False
 
 
 def _sniff(lines: Sequence[str]) -> str:
     """The delimiter that splits most lines into the same number (> 1) of cells."""
     best, best_key = ",", (0.0, 0)
     for rank, d in enumerate(_DELIMITERS):
-        counts = [len(_split(ln, d)) for ln in lines]
+        counts = [_count(ln, d) for ln in lines]
         values, freq = np.unique(counts, return_counts=True)
         k = int(np.argmax(freq))
         if values[k] > 1:
@@ -247,7 +263,11 @@ def read_table(path: str | os.PathLike, header: bool | None = None, skip_lines: 
         raise ForeignFormatError(f"{p}: empty file (no header and no data rows"
                                  + (f" after the {skip_lines} skipped lines)" if skip_lines else ")"))
     delimiter = _sniff([ln for _, ln in numbered[:50]])
-    rows = [(k, _split(ln, delimiter)) for k, ln in numbered]
+    try:
+        rows = [(k, _split(ln, delimiter)) for k, ln in numbered]
+    except LongCellError as exc:
+        k = next(k for k, ln in numbered if _count(ln, delimiter) and _fails(ln, delimiter))
+        raise ForeignFormatError(f"{p}: line {k}: {exc}") from None
     if header is None:
         header = _looks_like_header(rows)
     names: list[str] = []

@@ -11,13 +11,13 @@ it left out (:class:`BadRow`) instead of the first error.
 
 from __future__ import annotations
 
-import csv
 import re
 from pathlib import Path
 from typing import NamedTuple, Sequence
 
 import numpy as np
 
+from fsrlab.io.csvtext import LongCellError, csv_cells
 from fsrlab.io.schema import KNOWN_COLUMNS, RunFormatError, where
 from fsrlab.io.shown import number_cell, shown
 
@@ -117,7 +117,12 @@ def _parse_slow(path: Path, body: list[str], header: list[str], checks: list) ->
         checks.append((np.array([i]), j, lambda _i, m=message: m))
         broken.append(i)
 
-    for i, row in enumerate(csv.reader(body)):
+    for i, line in enumerate(body):
+        try:
+            row = csv_cells(line)
+        except LongCellError as exc:
+            report(i, 0, f"{where(path, i + 1, None)}: {exc}")
+            continue
         if len(row) < ncol:
             report(i, len(row), f"{where(path, i + 1, header[len(row)])}: missing ({len(row)} cells, the header has {ncol})")
             continue
@@ -140,6 +145,15 @@ def _parse_slow(path: Path, body: list[str], header: list[str], checks: list) ->
     return out, empty
 
 
+def _cell_text(line: str, j: int) -> str:
+    """Cell ``j`` of a data line, as the file has it (for a message)."""
+    try:
+        cells = csv_cells(line)
+    except LongCellError:  # a cell over the CSV reader's limit: the numbers' fast path had no quotes to undo
+        cells = line.split(",")
+    return cells[j].strip() if j < len(cells) else line
+
+
 def _value_checks(path: Path, body: list[str], header: list[str], data: np.ndarray, empty: np.ndarray) -> list:
     """One check per column and kind of problem: the cells a column cannot hold."""
     checks = []
@@ -149,7 +163,7 @@ def _value_checks(path: Path, body: list[str], header: list[str], data: np.ndarr
         textual = np.flatnonzero(~empty[:, j] & ~fin)
         if textual.size:
             checks.append((textual, j, lambda i, j=j, name=name: (
-                f"{where(path, i + 1, name)}: {next(csv.reader([body[i]]))[j].strip()!r} is not a finite number "
+                f"{where(path, i + 1, name)}: {shown(_cell_text(body[i], j))} is not a finite number "
                 "(leave the cell empty for a missing value)")))
         limits = COLUMN_LIMITS.get(name, (-OTHER_LIMIT, OTHER_LIMIT))
         if isinstance(limits[0], tuple):

@@ -12,7 +12,6 @@ reads a run back and rejects a bad file with one line naming the file, the row a
 
 from __future__ import annotations
 
-import csv
 import hashlib
 import json
 import math
@@ -23,6 +22,8 @@ from typing import Sequence
 
 import numpy as np
 
+from fsrlab.errors import FileFormatError
+from fsrlab.io.csvtext import LongCellError, csv_cells, csv_rows
 from fsrlab.io.schema import (
     CSV_SHA256, FORMAT, KNOWN_COLUMNS, QUANTITY_COLUMNS, VERSION, RunFormatError, check_columns, sidecar_path, where,
 )
@@ -262,7 +263,10 @@ def read_table(path: str | os.PathLike, required: Sequence[str], hint: str = "")
     """
     p = Path(path)
     with open(p, newline="", encoding="utf-8-sig") as fh:
-        table = list(csv.reader(fh))
+        try:
+            table = list(csv_rows(fh))
+        except LongCellError as exc:
+            raise FileFormatError(f"{p}: line {exc.line}: {exc}") from None
     if not table:
         raise ValueError(f"{p}: empty file" + (f" ({hint})" if hint else ""))
     header = [h.strip() for h in table[0]]
@@ -281,8 +285,8 @@ def load_run(path: str | os.PathLike, require: Sequence[str] = (), skip_bad_rows
     ----------
     path : str or path-like
         The CSV file. Its sidecar ``NAME.meta.json`` is read when present (optional).
-    require : sequence of str, optional
-        Columns that must be present.
+    require : sequence of str, or str, optional
+        Columns that must be present (a string is one column's name).
     skip_bad_rows : bool
         Leave out the rows with a bad cell and list them in ``Run.skipped`` instead of raising.
         Rows out of time order are an error all the same (which row is wrong cannot be told).
@@ -311,6 +315,8 @@ def load_run(path: str | os.PathLike, require: Sequence[str] = (), skip_bad_rows
     set. Without a sidecar (a hand-made file) it is kept if it parses.
     """
     p = Path(path)
+    if isinstance(require, str):  # one column's name, not its letters
+        require = (require,)
     with open(p, "rb") as fh:
         raw = fh.read()
     try:
@@ -332,8 +338,10 @@ def load_run(path: str | os.PathLike, require: Sequence[str] = (), skip_bad_rows
         lines.pop()
     if not lines:
         raise RunFormatError(f"{p}: empty file (a header row is needed)")
-    header = next(csv.reader([lines[0]]))
-    header = [h.strip() for h in header]
+    try:
+        header = [h.strip() for h in csv_cells(lines[0])]
+    except LongCellError as exc:
+        raise RunFormatError(f"{p}: row 0 (line 1, header): {exc}") from None
     try:
         header = check_columns(header)
     except ValueError as exc:
