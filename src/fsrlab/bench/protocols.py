@@ -402,14 +402,7 @@ def run_protocol(plan, out, device: str = "virtual", port: str | None = None, se
     from fsrlab.acquisition.serial_link import SerialLink
     from fsrlab.physics.sensor import VirtualFSR
 
-    if device not in DEVICES:
-        raise ValueError(f"device must be one of {', '.join(DEVICES)}, got {device!r}")
-    if device == "port" and not port:
-        raise ValueError("port: a serial port is needed for device='port'")
-    if speed not in SPEEDS:
-        raise ValueError(f"speed must be one of {', '.join(SPEEDS)}, got {speed!r}")
-    if device == "port" and speed != "realtime":
-        raise ValueError("speed: hardware runs in real time; speed='max' is for a virtual bench")
+    _check_device(device, port, speed)
     out = Path(out)
     say = announce or (lambda text: None)
     answer = confirm or (lambda: "ok")
@@ -418,139 +411,215 @@ def run_protocol(plan, out, device: str = "virtual", port: str | None = None, se
         sensor = VirtualFSR() if area_m2 is None else VirtualFSR(area_m2=area_m2)
     meta = {"protocol": plan.to_dict(), **(metadata or {})}
     stop = threading.Event()
-    kwargs: dict = {}
-    summary: dict = {}
-    proc = None
-    bench = dev = None
-    last_t = [0.0]
+    clock = _DeviceClock()
+    hooks = _plan_hooks(plan, virtual, sensor, seed, clock, say, answer, stop, gravity_m_s2, loadcell,
+                        area_m2, settle)
+    reference = health = None
+    if virtual:
+        clock.dev = open_bench(device, hooks.source, seed, speed)
+        reference, loadcell, area_m2 = _virtual_bench(hooks, clock.dev, plan, device, sensor, meta, metadata,
+                                                      loadcell, window_ms)
+        health = lambda: clock.dev.failure  # noqa: E731
+        port = clock.dev.open()
+    try:
+        with SerialLink(port) as link:
+            if not virtual:
+                _ask_to_start(plan, say, answer, stop)
+            result = record(link, out, hooks.duration, window_ms=window_ms, metadata=meta, reference=reference,
+                            on_status=on_status, stop=stop, health=health, overwrite=overwrite,
+                            loadcell=loadcell, area_m2=area_m2 if reference is None else None,
+                            on_event=say, clock="device" if speed == "max" else "host", **hooks.record_kwargs())
+    finally:
+        if clock.dev is not None:
+            clock.dev.close()
+    summary, placements = _placements(hooks.proc, out)
+    return ProtocolRun(result=result, protocol=plan.to_dict(), device=device if virtual else str(port),
+                       summary=summary, placements=placements)
 
-    def device_time() -> float:
-        t = dev.time_since_start() if hasattr(dev, "time_since_start") else math.nan
-        return t if math.isfinite(t) else last_t[0]
 
-    # ---- the signal source of a virtual bench, and the hooks of each protocol
+def _check_device(device: str, port: str | None, speed: str) -> None:
+    if device not in DEVICES:
+        raise ValueError(f"device must be one of {', '.join(DEVICES)}, got {device!r}")
+    if device == "port" and not port:
+        raise ValueError("port: a serial port is needed for device='port'")
+    if speed not in SPEEDS:
+        raise ValueError(f"speed must be one of {', '.join(SPEEDS)}, got {speed!r}")
+    if device == "port" and speed != "realtime":
+        raise ValueError("speed: hardware runs in real time; speed='max' is for a virtual bench")
+
+
+class _DeviceClock:
+    """The bench's time for a placement: the device's clock, else the last row's time. [s]"""
+
+    def __init__(self):
+        self.dev = None
+        self.last_t = 0.0
+
+    def now(self) -> float:
+        t = self.dev.time_since_start() if hasattr(self.dev, "time_since_start") else math.nan
+        return t if math.isfinite(t) else self.last_t
+
+
+@dataclass
+class _Hooks:
+    """What a protocol adds to the recording: its duration, its virtual source, the row hook."""
+
+    duration: float
+    source: object = None
+    bench: object = None
+    proc: object = None
+    on_row: Callable | None = None
+    extra_columns: list = field(default_factory=list)
+    final_metadata: Callable | None = None
+
+    def record_kwargs(self) -> dict:
+        kw: dict = {}
+        if self.extra_columns:
+            kw["extra_columns"] = self.extra_columns
+        if self.on_row is not None:
+            kw["on_row"] = self.on_row
+        if self.final_metadata is not None:
+            kw["final_metadata"] = self.final_metadata
+        return kw
+
+
+def _plan_hooks(plan, virtual, sensor, seed, clock: _DeviceClock, say, answer, stop, gravity_m_s2, loadcell,
+                area_m2, settle) -> _Hooks:
+    """The hooks of ``plan``; the row hook also keeps ``clock``'s last row time."""
     if isinstance(plan, SpringPlan):
-        duration = plan.duration_s
+        hooks = _Hooks(duration=plan.duration_s)
         if virtual:
             from fsrlab.virtual.sources import PhysicsSource
 
-            source = PhysicsSource(plan.profile(), sensor=sensor)
+            hooks.source = PhysicsSource(plan.profile(), sensor=sensor)
     elif isinstance(plan, WeightsPlan):
-        from fsrlab.bench.weights import WeightsProcedure
-
-        duration = 10 * 365 * 86400.0  # the plan's end (or Ctrl-C) stops it
-        steps = plan.steps()
-        if virtual:
-            from fsrlab.virtual.bench_source import BenchSource
-
-            source = bench = BenchSource([s.mass_kg * gravity_m_s2 for s in steps], sensor=sensor, seed=seed)
-
-            def place(step):
-                t = device_time()
-                bench.place(step.index, t)
-                return t
-        else:
-            def place(step):
-                return None
-        settle = {**(settle or {})}
-        proc = WeightsProcedure(steps, say, answer if not virtual else (lambda: "ok"), place, stop,
-                                gravity_m_s2=gravity_m_s2, use_loadcell=not virtual and loadcell is not None,
-                                area_m2=bench.load_area_m2 if virtual else area_m2, **settle)
-        kwargs["extra_columns"] = ["step", "direction", "cycle", "force_nominal_n", "force_n"] + (
-            ["stress_pa"] if (virtual or area_m2) else []) + ["load", "sensor", "reading"]
-        kwargs["on_row"] = proc.on_row
-        kwargs["final_metadata"] = lambda: {"weights": proc.summary()}
+        hooks = _weights_hooks(plan, virtual, sensor, seed, clock, say, answer, stop, gravity_m_s2, loadcell,
+                               area_m2, settle)
     elif isinstance(plan, CreepPlan):
-        duration = plan.duration_s
-        segments = plan.segments()
-        if virtual:
-            from fsrlab.virtual.bench_source import BenchSource
-
-            source = bench = BenchSource([m * gravity_m_s2 for _, m in segments], sensor=sensor, seed=seed)
-        done = [0]
-
-        def creep_row(m, row):
-            t = float(row["time_s"])
-            while done[0] + 1 < len(segments) and t >= segments[done[0] + 1][0]:
-                done[0] += 1
-                mass = segments[done[0]][1]
-                say(f"{'place ' + format(mass * 1e3, 'g') + ' g on the sensor' if mass else 'remove the mass'} now "
-                    f"(t = {segments[done[0]][0]:g} s)")
-                if bench is not None:
-                    bench.place(done[0], device_time())
-            row = dict(row)
-            row["mass_planned_kg"] = segments[done[0]][1]
-            return row
-        kwargs["extra_columns"] = ["mass_planned_kg"]
-        kwargs["on_row"] = creep_row
+        hooks = _creep_hooks(plan, virtual, sensor, seed, clock, say, gravity_m_s2)
     else:
         raise ValueError(f"plan must be a SpringPlan, WeightsPlan or CreepPlan, got {type(plan).__name__}")
-
-    if "on_row" in kwargs:
-        hook = kwargs["on_row"]
+    if hooks.on_row is not None:
+        hook = hooks.on_row
 
         def on_row(m, row):
-            last_t[0] = float(row["time_s"])  # the run's clock, for a device without time_since_start
+            clock.last_t = float(row["time_s"])  # the run's clock, for a device without time_since_start
             return hook(m, row)
-        kwargs["on_row"] = on_row
-    reference = health = None
+        hooks.on_row = on_row
+    return hooks
+
+
+def _weights_hooks(plan, virtual, sensor, seed, clock, say, answer, stop, gravity_m_s2, loadcell, area_m2,
+                   settle) -> _Hooks:
+    from fsrlab.bench.weights import WeightsProcedure
+
+    hooks = _Hooks(duration=10 * 365 * 86400.0)  # the plan's end (or Ctrl-C) stops it
+    steps = plan.steps()
     if virtual:
-        dev = open_bench(device, source, seed, speed)
-        vmeta = source.metadata()
-        if metadata and "sensor" in metadata:  # the name given, beside the model that stood for it
-            vmeta["sensor"] = {**metadata["sensor"], "virtual_model": vmeta["sensor"]["model"],
-                               "area_m2": sensor.area_m2}
-        meta.update(vmeta)
-        meta["origin"] = (f"fsrlab bench {plan.to_dict()['name']} --{device} (virtual bench -> "
-                          f"{type(sensor).__name__} -> LM555 and op-amp -> "
-                          + ("meter model -> emulated firmware over a pty)" if device == "virtual" else
-                             "the firmware in simavr over a pty)"))
-        if loadcell is None and getattr(dev, "load_cell", None) is not None:
-            loadcell = dev.load_cell.calibration()
-        if hasattr(dev, "reference") and not isinstance(plan, WeightsPlan):
-            reference = lambda frame: dev.reference(frame.seq)  # noqa: E731 - the applied stress
-        health = lambda: dev.failure  # noqa: E731
-        area_m2 = bench.load_area_m2 if bench is not None else sensor.area_m2  # stress = force / loaded area
-        if reference is None and loadcell is None and not isinstance(plan, WeightsPlan):
-            # A device that sends neither the applied stress nor a load cell's reading (a twin without
-            # its HX711): the stress the bench's model applied during each window.
-            w_s, hook = window_ms / 1000.0, kwargs.get("on_row")
+        from fsrlab.virtual.bench_source import BenchSource
 
-            def with_stress(m, row):
-                t = float(row["time_s"])
-                row = dict(row)
-                sig = source.window(max(t - w_s, 0.0), t, int(row.get("range") or 0))
-                row["stress_pa"] = sig.stress_pa if math.isfinite(sig.stress_pa) else None
-                return hook(m, row) if hook is not None else row
-            kwargs["on_row"] = with_stress
-            kwargs["extra_columns"] = ["stress_pa", *kwargs.get("extra_columns", [])]
-            meta["notes"] = ("stress_pa: the stress the virtual bench's model applied during each window (the device "
-                             "sends no reference)")
-        port = dev.open()
-    try:
-        with SerialLink(port) as link:
-            if not virtual and isinstance(plan, (SpringPlan, CreepPlan)):  # the port is open: ask the person
-                if isinstance(plan, SpringPlan):
-                    say(plan.prompt())
-                else:
-                    say(f"creep hold: {plan.before_s:g} s unloaded, then {plan.mass_kg * 1e3:g} g for "
-                        f"{plan.hold_s:g} s, then {plan.after_s:g} s unloaded; you are told when to place and "
-                        "remove the mass. Press Enter to start")
-                _hardware_wait(answer, stop)
-            result = record(link, out, duration, window_ms=window_ms, metadata=meta, reference=reference,
-                            on_status=on_status, stop=stop, health=health, overwrite=overwrite,
-                            loadcell=loadcell, area_m2=area_m2 if reference is None else None,
-                            on_event=say, clock="device" if speed == "max" else "host", **kwargs)
-    finally:
-        if dev is not None:
-            dev.close()
-    placements = None
-    if proc is not None:
-        from fsrlab.bench.weights import placements_table
-        from fsrlab.io.outputs import write_text_atomic
+        hooks.source = hooks.bench = BenchSource([s.mass_kg * gravity_m_s2 for s in steps], sensor=sensor, seed=seed)
 
-        summary = proc.summary()
-        placements = out.with_name(out.stem + ".placements.csv")
-        write_text_atomic(placements, placements_table(summary, "frequency_hz"))
-    return ProtocolRun(result=result, protocol=plan.to_dict(), device=device if virtual else str(port),
-                       summary=summary, placements=placements)
+        def place(step):
+            t = clock.now()
+            hooks.bench.place(step.index, t)
+            return t
+    else:
+        def place(step):
+            return None
+    proc = hooks.proc = WeightsProcedure(
+        steps, say, answer if not virtual else (lambda: "ok"), place, stop, gravity_m_s2=gravity_m_s2,
+        use_loadcell=not virtual and loadcell is not None,
+        area_m2=hooks.bench.load_area_m2 if virtual else area_m2, **(settle or {}))
+    hooks.extra_columns = ["step", "direction", "cycle", "force_nominal_n", "force_n"] + (
+        ["stress_pa"] if (virtual or area_m2) else []) + ["load", "sensor", "reading"]
+    hooks.on_row = proc.on_row
+    hooks.final_metadata = lambda: {"weights": proc.summary()}
+    return hooks
+
+
+def _creep_hooks(plan, virtual, sensor, seed, clock, say, gravity_m_s2) -> _Hooks:
+    hooks = _Hooks(duration=plan.duration_s, extra_columns=["mass_planned_kg"])
+    segments = plan.segments()
+    if virtual:
+        from fsrlab.virtual.bench_source import BenchSource
+
+        hooks.source = hooks.bench = BenchSource([m * gravity_m_s2 for _, m in segments], sensor=sensor, seed=seed)
+    done = [0]
+
+    def creep_row(m, row):
+        t = float(row["time_s"])
+        while done[0] + 1 < len(segments) and t >= segments[done[0] + 1][0]:
+            done[0] += 1
+            mass = segments[done[0]][1]
+            say(f"{'place ' + format(mass * 1e3, 'g') + ' g on the sensor' if mass else 'remove the mass'} now "
+                f"(t = {segments[done[0]][0]:g} s)")
+            if hooks.bench is not None:
+                hooks.bench.place(done[0], clock.now())
+        row = dict(row)
+        row["mass_planned_kg"] = segments[done[0]][1]
+        return row
+    hooks.on_row = creep_row
+    return hooks
+
+
+def _virtual_bench(hooks: _Hooks, dev, plan, device, sensor, meta, metadata, loadcell, window_ms):
+    """A virtual bench's sidecar, reference and load cell; returns ``(reference, loadcell, area_m2)``."""
+    source = hooks.source
+    vmeta = source.metadata()
+    if metadata and "sensor" in metadata:  # the name given, beside the model that stood for it
+        vmeta["sensor"] = {**metadata["sensor"], "virtual_model": vmeta["sensor"]["model"],
+                           "area_m2": sensor.area_m2}
+    meta.update(vmeta)
+    meta["origin"] = (f"fsrlab bench {plan.to_dict()['name']} --{device} (virtual bench -> "
+                      f"{type(sensor).__name__} -> LM555 and op-amp -> "
+                      + ("meter model -> emulated firmware over a pty)" if device == "virtual" else
+                         "the firmware in simavr over a pty)"))
+    if loadcell is None and getattr(dev, "load_cell", None) is not None:
+        loadcell = dev.load_cell.calibration()
+    reference = None
+    if hasattr(dev, "reference") and not isinstance(plan, WeightsPlan):
+        reference = lambda frame: dev.reference(frame.seq)  # noqa: E731 - the applied stress
+    area_m2 = hooks.bench.load_area_m2 if hooks.bench is not None else sensor.area_m2  # stress = force / loaded area
+    if reference is None and loadcell is None and not isinstance(plan, WeightsPlan):
+        # A device that sends neither the applied stress nor a load cell's reading (a twin without
+        # its HX711): the stress the bench's model applied during each window.
+        w_s, hook = window_ms / 1000.0, hooks.on_row
+
+        def with_stress(m, row):
+            t = float(row["time_s"])
+            row = dict(row)
+            sig = source.window(max(t - w_s, 0.0), t, int(row.get("range") or 0))
+            row["stress_pa"] = sig.stress_pa if math.isfinite(sig.stress_pa) else None
+            return hook(m, row) if hook is not None else row
+        hooks.on_row = with_stress
+        hooks.extra_columns = ["stress_pa", *hooks.extra_columns]
+        meta["notes"] = ("stress_pa: the stress the virtual bench's model applied during each window (the device "
+                         "sends no reference)")
+    return reference, loadcell, area_m2
+
+
+def _ask_to_start(plan, say, answer, stop) -> None:
+    """Hardware, spring or creep: the port is open, ask the person and wait for Enter."""
+    if isinstance(plan, SpringPlan):
+        say(plan.prompt())
+    elif isinstance(plan, CreepPlan):
+        say(f"creep hold: {plan.before_s:g} s unloaded, then {plan.mass_kg * 1e3:g} g for "
+            f"{plan.hold_s:g} s, then {plan.after_s:g} s unloaded; you are told when to place and "
+            "remove the mass. Press Enter to start")
+    else:
+        return
+    _hardware_wait(answer, stop)
+
+
+def _placements(proc, out: Path) -> tuple[dict, Path | None]:
+    """A weights run's summary and its ``NAME.placements.csv``; ``({}, None)`` for other protocols."""
+    if proc is None:
+        return {}, None
+    from fsrlab.bench.weights import placements_table
+    from fsrlab.io.outputs import write_text_atomic
+
+    summary = proc.summary()
+    placements = out.with_name(out.stem + ".placements.csv")
+    write_text_atomic(placements, placements_table(summary, "frequency_hz"))
+    return summary, placements
