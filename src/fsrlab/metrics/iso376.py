@@ -183,6 +183,26 @@ def _iso376(forces_n, series, creep_readings, interpolation_degree) -> ISO376Res
         raise ValueError(f"interpolation_degree must be 1, 2 or 3 (ISO 376), got {interpolation_degree!r}")
     if not series:
         raise ValueError("series: at least one calibration series is needed")
+    inc, dec = _deflections(F, series)
+    missing: dict[str, str] = {}
+    notes: list[str] = []
+    x_n = float(np.mean([x[-1] for x in inc]))
+    if not np.isfinite(x_n):
+        raise ValueError("series: the readings at the largest force must be finite")
+    if x_n == 0:
+        raise ValueError("series: zero deflection at the largest force")
+    b_prime, b, xr = _repeatability(series, inc, missing, notes)
+    fc = _interpolation_error(F, xr, interpolation_degree, missing)
+    f0 = _zero_error(series, x_n, missing)
+    v = _reversibility(inc, dec, missing)
+    c = _creep_error(creep_readings, x_n, missing)
+    res = ISO376Result(forces_n=F, b=b, b_prime=b_prime, fc=fc, f0=f0, v=v, c=c, missing=missing, notes=notes)
+    _classify(res)
+    return res
+
+
+def _deflections(F: np.ndarray, series) -> tuple[list, list]:
+    """Increasing deflections of each series and ``(k, decreasing)`` of those that have them, zero subtracted."""
     inc, dec = [], []
     for k, s in enumerate(series):
         x = np.asarray(s.increasing, dtype=float)
@@ -195,15 +215,12 @@ def _iso376(forces_n, series, creep_readings, interpolation_degree) -> ISO376Res
             if d.shape != F.shape:
                 raise ValueError(f"series[{k}].decreasing: {d.size} readings for {F.size} forces")
             dec.append((k, d - z))
-    missing: dict[str, str] = {}
-    notes: list[str] = []
-    x_n = float(np.mean([x[-1] for x in inc]))
-    if not np.isfinite(x_n):
-        raise ValueError("series: the readings at the largest force must be finite")
-    if x_n == 0:
-        raise ValueError("series: zero deflection at the largest force")
+    return inc, dec
 
-    # b': first two series in the same mounting position.
+
+def _repeatability(series, inc: list, missing: dict, notes: list):
+    """b' (first two series in one mounting position), b (first series at each rotation), and the mean
+    deflections ``xr`` the interpolation equation goes through."""
     b_prime = None
     rot = [float(s.rotation_deg) % 360 for s in series]
     pair = next(((i, j) for i in range(len(series)) for j in range(i + 1, len(series)) if rot[i] == rot[j]), None)
@@ -212,10 +229,8 @@ def _iso376(forces_n, series, creep_readings, interpolation_degree) -> ISO376Res
     else:
         x1, x2 = inc[pair[0]], inc[pair[1]]
         b_prime = 100 * np.abs(x2 - x1) / ((x1 + x2) / 2)
-
-    # b: first series at each distinct rotation.
     firsts = [inc[rot.index(r)] for r in dict.fromkeys(rot)]
-    b = fc = None
+    b = None
     if len(firsts) < 2:
         missing["b"] = "series at 2 or more mounting rotations (ISO 376: 0°, 120°, 240°)"
         xr = inc[0] if b_prime is None else (inc[pair[0]] + inc[pair[1]]) / 2
@@ -225,24 +240,31 @@ def _iso376(forces_n, series, creep_readings, interpolation_degree) -> ISO376Res
         b = 100 * (arr.max(axis=0) - arr.min(axis=0)) / np.abs(xr)
         if len(firsts) < 3:
             notes.append("b from 2 mounting rotations (ISO 376 asks for 3)")
-    # fc: interpolation equation X_a(F), degree 1..3, through the mean deflections.
-    if F.size <= interpolation_degree + 1:
-        missing["fc"] = f"more than {interpolation_degree + 1} forces for a degree-{interpolation_degree} interpolation equation"
-    else:
-        coef = np.polynomial.polynomial.polyfit(F, xr, interpolation_degree)
-        xa = np.polynomial.polynomial.polyval(F, coef)
-        fc = 100 * (xr - xa) / xa
+    return b_prime, b, xr
 
-    # f0: zero before and after each series.
+
+def _interpolation_error(F, xr, degree: int, missing: dict):
+    """fc: the mean deflections against the interpolation equation X_a(F) of ``degree`` through them."""
+    if F.size <= degree + 1:
+        missing["fc"] = f"more than {degree + 1} forces for a degree-{degree} interpolation equation"
+        return None
+    coef = np.polynomial.polynomial.polyfit(F, xr, degree)
+    xa = np.polynomial.polynomial.polyval(F, coef)
+    return 100 * (xr - xa) / xa
+
+
+def _zero_error(series, x_n: float, missing: dict):
+    """f0: the largest change of the zero reading over a series."""
     zs = [(s.zero_after - s.zero_before) for s in series if s.zero_before is not None and s.zero_after is not None]
-    f0 = None
     if zs:
-        f0 = float(100 * max(zs, key=abs) / x_n)
-    else:
-        missing["f0"] = ("zero readings before and after a series (zero_before, zero_after; in a CSV, force_n = 0 rows "
-                         "with direction +1 and -1)")
+        return float(100 * max(zs, key=abs) / x_n)
+    missing["f0"] = ("zero readings before and after a series (zero_before, zero_after; in a CSV, force_n = 0 rows "
+                     "with direction +1 and -1)")
+    return None
 
-    # v: decreasing versus increasing readings within the same series, mean over series.
+
+def _reversibility(inc: list, dec: list, missing: dict):
+    """v: decreasing versus increasing readings within the same series, mean over series."""
     v = None
     if dec:
         vs = np.array([100 * np.abs(d - inc[k]) / np.abs(inc[k]) for k, d in dec])
@@ -252,27 +274,32 @@ def _iso376(forces_n, series, creep_readings, interpolation_degree) -> ISO376Res
             v = np.where(taken.any(axis=0), np.nansum(vs, axis=0) / np.maximum(taken.sum(axis=0), 1), np.nan)
     if v is None:
         missing["v"] = "a series with decreasing forces (ISO 376 series at 120° and 240°)"
+    return v
 
-    c = None
-    if creep_readings is not None:
-        i30, i300 = (float(v_) for v_ in creep_readings)
-        c = 100 * abs(i300 - i30) / abs(x_n)
-        if not np.isfinite(c):
-            raise ValueError(f"creep_readings: must be two finite readings I30,I300 with a finite difference, "
-                             f"got {i30:g}, {i300:g}")
-    else:
+
+def _creep_error(creep_readings, x_n: float, missing: dict):
+    """c: the change between the readings 30 s and 300 s after the largest force was applied."""
+    if creep_readings is None:
         missing["c"] = "readings 30 s and 300 s after applying the largest force"
+        return None
+    i30, i300 = (float(v_) for v_ in creep_readings)
+    c = 100 * abs(i300 - i30) / abs(x_n)
+    if not np.isfinite(c):
+        raise ValueError(f"creep_readings: must be two finite readings I30,I300 with a finite difference, "
+                         f"got {i30:g}, {i300:g}")
+    return c
 
-    res = ISO376Result(forces_n=F, b=b, b_prime=b_prime, fc=fc, f0=f0, v=v, c=c, missing=missing, notes=notes)
+
+def _classify(res: ISO376Result) -> None:
+    """Each quantity's class and the instrument's (the worst of those ISO 376 requires)."""
     order = list(CLASS_LIMITS) + ["none"]
     for name in ("b", "b_prime", "fc", "f0", "v", "c"):
         w = res.worst(name)
         if w is not None:
             res.classes[name] = class_reached(name, w)
     required = ["b", "b_prime", "fc", "f0"]
-    required.append("v" if v is not None or c is None else "c")
+    required.append("v" if res.v is not None or res.c is None else "c")
     if all(r in res.classes for r in required):
         res.instrument_class = max((res.classes[r] for r in required), key=order.index)
     else:
         res.instrument_class = "incomplete"
-    return res
