@@ -142,21 +142,8 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
     and R_FSR weakly; a large C_off lowers |S_C| = C_FSR/(C_FSR + C_off)), then the margin. Resolution of an Uno (Timer1, 62.5 ns): a single
     period resolves ``Δf = f²·q``; a window averaging ``n`` periods resolves ``Δf = f·q/(n·T)``.
     """
-    rlo, rhi = (float(v) for v in r_fsr_range_ohm)
-    clo, chi = (float(v) for v in c_fsr_range_farad)
-    flo, fhi = (float(v) for v in band_hz)
-    if not (0 < rlo <= rhi and math.isfinite(rhi)):
-        raise ValueError(f"r_fsr_range_ohm: need 0 < min <= max < inf, got {r_fsr_range_ohm!r}")
-    if not (0 < clo <= chi and math.isfinite(chi)):
-        raise ValueError(f"c_fsr_range_farad: need 0 < min <= max < inf, got {c_fsr_range_farad!r}")
-    if not (0 < flo < fhi and math.isfinite(fhi)):
-        raise ValueError(f"band_hz: need 0 < low < high < inf, got {band_hz!r}")
-    limit = math.inf if max_frequency_hz is None else float(max_frequency_hz)
-    if not limit > 0:
-        raise ValueError(f"max_frequency_hz: must be > 0 Hz, got {max_frequency_hz!r}")
-    if flo >= limit:
-        raise ValueError(f"band_hz: {flo:g} … {fhi:g} Hz is beyond what the counter captures: every edge only "
-                         f"up to max_frequency_hz = {limit:g} Hz")
+    (rlo, rhi), (clo, chi), (flo, fhi), limit = _checked_ranges(r_fsr_range_ohm, c_fsr_range_farad, band_hz,
+                                                                max_frequency_hz)
     capped = fhi > limit
     fhi = min(fhi, limit)
     if variant not in ("auto", "diode", "no-diode"):
@@ -176,56 +163,14 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
     rf = np.geomspace(rlo, rhi, 24) if rhi > rlo else np.array([rlo])
     cf = np.array([clo, chi]) if chi > clo else np.array([clo])
     rf_g, cf_g = np.meshgrid(rf, cf, indexing="ij")
-    c_offs = np.concatenate([[0.0], _e12(1e-12, 10e-6)])
     best_per_variant = {}
     reasons = []
     for diode in variants:
-        vd = diode_drop_v if diode else 0.0
-        n_min = minimum_n_ratio(vd, vcc_v)
-        if math.isinf(n_min):
-            reasons.append("the diode drop leaves no headroom")
-            continue
-        r_max = rlo / (n_min * (1 + min_margin))
-        rs = _e12(100.0, min(r_max, 10e6))
-        if rs.size == 0:
-            reasons.append(f"{'diode' if diode else 'no-diode'}: R would have to be below 100 Ω for the margin")
-            continue
-        # Pair every (R, C_off) with every sensor grid point (not the full 4-D product of rf, cf).
-        R = rs[:, None, None] * np.ones((1, c_offs.size, rf_g.size))
-        CO = c_offs[None, :, None] * np.ones_like(R)
-        RF = np.broadcast_to(rf_g.ravel()[None, None, :], R.shape)
-        CF = np.broadcast_to(cf_g.ravel()[None, None, :], R.shape)
-        # Pairs that do not oscillate, and extreme sensor ranges, give NaN or inf here (check=False):
-        # they fail the band test below, so numpy's warnings about them say nothing.
-        with np.errstate(all="ignore"), warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)  # nanmin/nanmax of an all-NaN row
-            res = astable(R, RF, CF, CO, diode=diode, diode_drop_v=vd, vcc_v=vcc_v, check=False)
-            sens = sensitivity(R, RF, CF, CO, diode=diode, diode_drop_v=vd, vcc_v=vcc_v, check=False)
-            f = res.frequency_hz
-            ok = np.all(np.isfinite(f) & (f >= flo) & (f <= fhi), axis=2)
-            share = np.min(np.abs(sens.c_fsr) / (np.abs(sens.c_fsr) + np.abs(sens.r_fsr)), axis=2)
-            # Capacitive readout quality: the part of ∂ln f that comes from C_FSR, minus the part from R_FSR.
-            merit = np.min(np.abs(sens.c_fsr) - np.abs(sens.r_fsr), axis=2)
-            span = np.nanmin(np.nanmax(f, axis=2) / np.nanmin(f, axis=2)) if not np.any(ok) else math.nan
-        if not np.any(ok):
-            why = (f"the sensor's frequencies span at least a factor {span:.3g}, wider than the band's {fhi / flo:.3g}"
-                   if span > fhi / flo else "no E12 R and C_off place the sensor's frequencies inside the band")
-            reasons.append(f"{'diode' if diode else 'no-diode'} circuit: {why} (R ≤ {rs.max():.3g} Ω for the margin)")
-            continue
-        margin_rc = rlo / R[:, :, 0] / n_min - 1.0  # the smallest R_FSR is the worst case
-        score = np.where(ok, merit + 1e-6 * np.minimum(margin_rc, 100.0), -np.inf)
-        i, j = np.unravel_index(np.argmax(score), score.shape)
-        fi = f[i, j]
-        best_per_variant[diode] = dict(
-            diode=diode, r_ohm=float(rs[i]), c_off_farad=float(c_offs[j]),
-            frequency_range_hz=(float(fi.min()), float(fi.max())),
-            duty_cycle_range=(float(res.duty_cycle[i, j].min()), float(res.duty_cycle[i, j].max())),
-            margin=float(margin_rc[i, j]),
-            sensitivity_c_range=(float(sens.c_fsr[i, j].min()), float(sens.c_fsr[i, j].max())),
-            sensitivity_r_range=(float(sens.r_fsr[i, j].min()), float(sens.r_fsr[i, j].max())),
-            capacitive_share=float(share[i, j]),
-            merit=float(merit[i, j]),
-        )
+        best = _best_pair(diode, diode_drop_v if diode else 0.0, vcc_v, rlo, min_margin, rf_g, cf_g, (flo, fhi))
+        if isinstance(best, str):
+            reasons.append(best)
+        else:
+            best_per_variant[diode] = best
     if not best_per_variant:
         cap = f" (its top lowered to max_frequency_hz = {limit:g} Hz)" if capped else ""
         raise ValueError(f"band_hz: no design keeps the sensor inside the band{cap}: " + "; ".join(reasons))
@@ -238,10 +183,79 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
     def window(ends):
         # n whole periods in the window (at least one); a window too long for floor() holds "infinitely" many.
         periods = [fe * window_s for fe in ends]
-        return tuple(fe * q / ((max(math.floor(n), 1) if math.isfinite(n) else n) / fe) for fe, n in zip(ends, periods))
+        return tuple(fe * q / ((max(math.floor(n), 1) if math.isfinite(n) else n) / fe) for fe, n in zip(ends, periods, strict=True))
 
     rng = chosen["frequency_range_hz"]
     return DesignResult(**chosen, resolution_single_hz=single((flo, fhi)), resolution_window_hz=window((flo, fhi)),
                         range_resolution_single_hz=single(rng), range_resolution_window_hz=window(rng),
                         band_hz=(flo, fhi), window_s=window_s, alternatives=list(best_per_variant.values()),
                         max_frequency_hz=limit)
+
+
+def _checked_ranges(r_fsr_range_ohm, c_fsr_range_farad, band_hz, max_frequency_hz):
+    """The sensor's R and C ranges, the band and the counter's limit, checked; ``(r, c, band, limit)``."""
+    rlo, rhi = (float(v) for v in r_fsr_range_ohm)
+    clo, chi = (float(v) for v in c_fsr_range_farad)
+    flo, fhi = (float(v) for v in band_hz)
+    if not (0 < rlo <= rhi and math.isfinite(rhi)):
+        raise ValueError(f"r_fsr_range_ohm: need 0 < min <= max < inf, got {r_fsr_range_ohm!r}")
+    if not (0 < clo <= chi and math.isfinite(chi)):
+        raise ValueError(f"c_fsr_range_farad: need 0 < min <= max < inf, got {c_fsr_range_farad!r}")
+    if not (0 < flo < fhi and math.isfinite(fhi)):
+        raise ValueError(f"band_hz: need 0 < low < high < inf, got {band_hz!r}")
+    limit = math.inf if max_frequency_hz is None else float(max_frequency_hz)
+    if not limit > 0:
+        raise ValueError(f"max_frequency_hz: must be > 0 Hz, got {max_frequency_hz!r}")
+    if flo >= limit:
+        raise ValueError(f"band_hz: {flo:g} … {fhi:g} Hz is beyond what the counter captures: every edge only "
+                         f"up to max_frequency_hz = {limit:g} Hz")
+    return (rlo, rhi), (clo, chi), (flo, fhi), limit
+
+
+def _best_pair(diode: bool, vd: float, vcc_v: float, rlo: float, min_margin: float, rf_g, cf_g, band):
+    """The best E12 (R, C_off) of one variant over the sensor grid, as DesignResult fields; or why none fits."""
+    flo, fhi = band
+    name = "diode" if diode else "no-diode"
+    n_min = minimum_n_ratio(vd, vcc_v)
+    if math.isinf(n_min):
+        return "the diode drop leaves no headroom"
+    r_max = rlo / (n_min * (1 + min_margin))
+    rs = _e12(100.0, min(r_max, 10e6))
+    if rs.size == 0:
+        return f"{name}: R would have to be below 100 Ω for the margin"
+    c_offs = np.concatenate([[0.0], _e12(1e-12, 10e-6)])
+    # Pair every (R, C_off) with every sensor grid point (not the full 4-D product of rf, cf).
+    R = rs[:, None, None] * np.ones((1, c_offs.size, rf_g.size))
+    CO = c_offs[None, :, None] * np.ones_like(R)
+    RF = np.broadcast_to(rf_g.ravel()[None, None, :], R.shape)
+    CF = np.broadcast_to(cf_g.ravel()[None, None, :], R.shape)
+    # Pairs that do not oscillate, and extreme sensor ranges, give NaN or inf here (check=False):
+    # they fail the band test below, so numpy's warnings about them say nothing.
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # nanmin/nanmax of an all-NaN row
+        res = astable(R, RF, CF, CO, diode=diode, diode_drop_v=vd, vcc_v=vcc_v, check=False)
+        sens = sensitivity(R, RF, CF, CO, diode=diode, diode_drop_v=vd, vcc_v=vcc_v, check=False)
+        f = res.frequency_hz
+        ok = np.all(np.isfinite(f) & (f >= flo) & (f <= fhi), axis=2)
+        share = np.min(np.abs(sens.c_fsr) / (np.abs(sens.c_fsr) + np.abs(sens.r_fsr)), axis=2)
+        # Capacitive readout quality: the part of ∂ln f that comes from C_FSR, minus the part from R_FSR.
+        merit = np.min(np.abs(sens.c_fsr) - np.abs(sens.r_fsr), axis=2)
+        span = np.nanmin(np.nanmax(f, axis=2) / np.nanmin(f, axis=2)) if not np.any(ok) else math.nan
+    if not np.any(ok):
+        why = (f"the sensor's frequencies span at least a factor {span:.3g}, wider than the band's {fhi / flo:.3g}"
+               if span > fhi / flo else "no E12 R and C_off place the sensor's frequencies inside the band")
+        return f"{name} circuit: {why} (R ≤ {rs.max():.3g} Ω for the margin)"
+    margin_rc = rlo / R[:, :, 0] / n_min - 1.0  # the smallest R_FSR is the worst case
+    score = np.where(ok, merit + 1e-6 * np.minimum(margin_rc, 100.0), -np.inf)
+    i, j = np.unravel_index(np.argmax(score), score.shape)
+    fi = f[i, j]
+    return dict(
+        diode=diode, r_ohm=float(rs[i]), c_off_farad=float(c_offs[j]),
+        frequency_range_hz=(float(fi.min()), float(fi.max())),
+        duty_cycle_range=(float(res.duty_cycle[i, j].min()), float(res.duty_cycle[i, j].max())),
+        margin=float(margin_rc[i, j]),
+        sensitivity_c_range=(float(sens.c_fsr[i, j].min()), float(sens.c_fsr[i, j].max())),
+        sensitivity_r_range=(float(sens.r_fsr[i, j].min()), float(sens.r_fsr[i, j].max())),
+        capacitive_share=float(share[i, j]),
+        merit=float(merit[i, j]),
+    )
