@@ -198,7 +198,36 @@ def simulate(r_ohm: float, r_fsr_ohm, c_fsr_farad, c_off_farad: float = 0.0, dio
         raise ValueError(f"method: must be 'auto' or 'events', got {method!r}")
     if int(points_per_segment) < 2:
         raise ValueError(f"points_per_segment: must be >= 2, got {points_per_segment!r}")
+    times, rf, cap = _sampled_parts(r_fsr_ohm, c_fsr_farad, c_off_farad, periods, t_stop_s, time_s)
+    loop = _EventLoop(r_ohm, rf, cap, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction,
+                      discharge_ohm, capacitance_step, int(points_per_segment) if waveform else 0)
+    max_rising = None if periods is None else int(periods) + 1
+    t = float(times[0])
+    if v_initial_v is None:
+        v, high = loop.v_lo, True
+        loop.rising.append(t)
+    else:
+        v = float(v_initial_v)
+        if not math.isfinite(v):
+            raise ValueError(f"v_initial_v: must be finite, got {v_initial_v!r}")
+        high = v < loop.v_hi
+    if method == "auto" and time_s is None and not waveform:
+        fast = _steady_edges(loop, times, t, v, high, max_rising)
+        if fast is not None:
+            return fast
+    else:
+        t, v, high = loop.run(times, t, v, high, max_rising)
+    as_arr = (lambda parts: np.concatenate(parts) if parts else np.empty(0))
+    return TransientResult(
+        rising_s=np.asarray(loop.rising), falling_s=np.asarray(loop.falling),
+        t_s=as_arr(loop.wt) if waveform else None, v_cap_v=as_arr(loop.wv) if waveform else None,
+        output_high=as_arr(loop.wh).astype(bool) if waveform else None,
+        t_end_s=loop.t_end_s, v_end_v=loop.v_end_v, high_end=loop.high_end,
+    )
 
+
+def _sampled_parts(r_fsr_ohm, c_fsr_farad, c_off_farad, periods, t_stop_s, time_s):
+    """The sample times and the FSR's resistance and timing capacitance at each, checked. [s, Ω, F]"""
     if time_s is None:
         if np.ndim(r_fsr_ohm) or np.ndim(c_fsr_farad):
             raise ValueError("time_s: part values given as arrays need their sample times time_s")
@@ -230,155 +259,155 @@ def simulate(r_ohm: float, r_fsr_ohm, c_fsr_farad, c_off_farad: float = 0.0, dio
     cap = cf + c_off_farad
     if np.any(cap <= 0):
         raise ValueError("c_fsr_farad + c_off_farad: the timing capacitance must be > 0 F")
+    return times, rf, cap
 
-    # What C sees in each phase, per sample (eqs. 21, 24, 33), as Python floats for the event loop.
-    charge, discharge = thevenin(float(r_ohm), rf, diode, diode_drop_v, vcc_v, float(discharge_ohm))
-    charge_vinfs, charge_rs = charge.source_v.tolist(), charge.resistance_ohm.tolist()
-    dis_vinfs, dis_rs = discharge.source_v.tolist(), discharge.resistance_ohm.tolist()
-    vs = vcc_v - diode_drop_v
-    v_lo, v_hi = lower_fraction * vcc_v, upper_fraction * vcc_v
-    max_rising = None if periods is None else int(periods) + 1
-    npts = int(points_per_segment)
 
-    rising: list[float] = []
-    falling: list[float] = []
-    wt: list[np.ndarray] = []
-    wv: list[np.ndarray] = []
-    wh: list[np.ndarray] = []
+class _EventLoop:
+    """The astable's event loop: closed-form RC segments from one threshold crossing to the next.
 
-    t = float(times[0])
-    if v_initial_v is None:
-        v, high = v_lo, True
-        rising.append(t)
-    else:
-        v = float(v_initial_v)
-        if not math.isfinite(v):
-            raise ValueError(f"v_initial_v: must be finite, got {v_initial_v!r}")
-        high = v < v_hi
+    ``rising`` and ``falling`` collect the edges, ``wt``/``wv``/``wh`` the waveform when
+    ``points_per_segment`` > 0; ``run`` also leaves its end state in ``t_end_s``, ``v_end_v``, ``high_end``.
+    """
 
-    def record(t0, dt, v0, vinf, tau, state):
-        frac = np.linspace(0.0, 1.0, npts)
+    def __init__(self, r_ohm, rf, cap, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction,
+                 discharge_ohm, capacitance_step, points_per_segment):
+        # What C sees in each phase, per sample (eqs. 21, 24, 33), as Python floats for the loop.
+        charge, discharge = thevenin(float(r_ohm), rf, diode, diode_drop_v, vcc_v, float(discharge_ohm))
+        self.charge_vinfs, self.charge_rs = charge.source_v.tolist(), charge.resistance_ohm.tolist()
+        self.dis_vinfs, self.dis_rs = discharge.source_v.tolist(), discharge.resistance_ohm.tolist()
+        self.rf, self.cap = rf, cap
+        self.diode, self.vs = diode, vcc_v - diode_drop_v
+        self.v_lo, self.v_hi = lower_fraction * vcc_v, upper_fraction * vcc_v
+        self.charge_step = capacitance_step == "charge"
+        self.npts = points_per_segment
+        self.rising: list[float] = []
+        self.falling: list[float] = []
+        self.wt: list[np.ndarray] = []
+        self.wv: list[np.ndarray] = []
+        self.wh: list[np.ndarray] = []
+        self.t_end_s = self.v_end_v = math.nan
+        self.high_end = False
+
+    def record(self, t0, dt, v0, vinf, tau, state):
+        """One RC segment of the waveform, ``npts`` points, its ends included."""
+        frac = np.linspace(0.0, 1.0, self.npts)
         ts = t0 + frac * dt
         if math.isinf(tau):
-            vs_ = np.full(npts, v0)
+            vs_ = np.full(self.npts, v0)
         else:
             vs_ = vinf + (v0 - vinf) * np.exp(-(frac * dt) / tau)
-        wt.append(ts)
-        wv.append(vs_)
-        wh.append(np.full(npts, state))
+        self.wt.append(ts)
+        self.wv.append(vs_)
+        self.wh.append(np.full(self.npts, state))
 
-    def run(times, t, v, high, max_rising):
+    def run(self, times, t, v, high, max_rising):
         """The event loop over the sample intervals of ``times``; appends edges, returns the end state."""
-        done = False
+        rf, cap = self.rf, self.cap
         for k in range(times.size - 1):
             t_end = float(times[k + 1])
-            rfk, ck = float(rf[k]), float(cap[k])
-            if k > 0 and capacitance_step == "charge" and ck != float(cap[k - 1]):
+            ck = float(cap[k])
+            if k > 0 and self.charge_step and ck != float(cap[k - 1]):
                 v *= float(cap[k - 1]) / ck  # Q = C·V conserved across the step
-            # Closed-form segment constants for this sample interval.
-            charge_vinf, charge_tau = charge_vinfs[k], charge_rs[k] * ck
-            dis_vinf, dis_tau = dis_vinfs[k], dis_rs[k] * ck
-            leak_tau = rfk * ck  # D1 off: C decays through R_FSR alone
-            while True:
-                # A step of C (or the start) may already sit beyond a threshold: switch now.
-                if high and v >= v_hi:
-                    falling.append(t)
-                    high = False
-                elif not high and v <= v_lo:
-                    rising.append(t)
-                    high = True
-                    if max_rising is not None and len(rising) >= max_rising:
-                        done = True
-                        break
-                if high:
-                    if diode and v > vs:
-                        # D1 reverse biased: C decays through R_FSR until it reaches Vcc − V_D.
-                        vinf, tau, target, edge = 0.0, leak_tau, vs, False
-                    else:
-                        vinf, tau, target, edge = charge_vinf, charge_tau, v_hi, True
-                else:
-                    vinf, tau, target, edge = dis_vinf, dis_tau, v_lo, True
-                if math.isinf(tau):
-                    dt = math.inf
-                else:
-                    ratio = (target - vinf) / (v - vinf) if v != vinf else -1.0
-                    dt = tau * math.log(1.0 / ratio) if 0.0 < ratio <= 1.0 else math.inf
-                if t + dt < t_end:
-                    if waveform:
-                        record(t, dt, v, vinf, tau, high)
-                    t += dt
-                    v = target
-                    if edge:
-                        if high:
-                            falling.append(t)
-                            high = False
-                        else:
-                            rising.append(t)
-                            high = True
-                            if max_rising is not None and len(rising) >= max_rising:
-                                done = True
-                                break
-                    continue
-                # No event before the end of this sample interval.
-                if math.isinf(t_end):
-                    done = True  # constant parts that stopped oscillating: nothing more will happen
-                    break
-                span = t_end - t
-                if waveform:
-                    record(t, span, v, vinf, tau, high)
-                if not math.isinf(tau):
-                    v = vinf + (v - vinf) * math.exp(-span / tau)
-                t = t_end
-                break
+            segment = (self.charge_vinfs[k], self.charge_rs[k] * ck, self.dis_vinfs[k], self.dis_rs[k] * ck,
+                       float(rf[k]) * ck)  # D1 off: C decays through R_FSR alone
+            t, v, high, done = self._interval(t, v, high, t_end, segment, max_rising)
             if done:
                 break
-
+        self.t_end_s, self.v_end_v, self.high_end = t, v, high
         return t, v, high
 
-    fast = method == "auto" and time_s is None and not waveform
-    if not fast:
-        t, v, high = run(times, t, v, high, max_rising)
-    else:
-        # Constant parts: run the loop up to the second rising edge. rising[0] always starts a
-        # steady period (the default start sits at the lower threshold, and any other start reaches
-        # it at its first rising edge, with v = v_lo exactly), so every later period repeats the
-        # one from rising[0] to rising[1]: the remaining edges are an arithmetic sequence.
-        t, v, high = run(times, t, v, high, 2 if max_rising is None else min(2, max_rising))
-        if len(rising) == 2 and (max_rising is None or max_rising > 2):
-            r0, period = rising[0], rising[1] - rising[0]
-            f0 = next(f for f in falling if f > r0)
-            high_time = f0 - r0
-            startup_falls = [f for f in falling if f < r0]
-            if max_rising is not None:
-                count = max_rising  # rising edges in all, as the loop would record them
+    def _interval(self, t, v, high, t_end, segment, max_rising):
+        """Edges within one sample interval up to ``t_end``; returns ``(t, v, high, done)``."""
+        charge_vinf, charge_tau, dis_vinf, dis_tau, leak_tau = segment
+        v_lo, v_hi, vs, diode = self.v_lo, self.v_hi, self.vs, self.diode
+        rising, falling, waveform = self.rising, self.falling, self.npts > 0
+        while True:
+            # A step of C (or the start) may already sit beyond a threshold: switch now.
+            if high and v >= v_hi:
+                falling.append(t)
+                high = False
+            elif not high and v <= v_lo:
+                rising.append(t)
+                high = True
+                if max_rising is not None and len(rising) >= max_rising:
+                    return t, v, high, True
+            if high:
+                if diode and v > vs:
+                    # D1 reverse biased: C decays through R_FSR until it reaches Vcc − V_D.
+                    vinf, tau, target, edge = 0.0, leak_tau, vs, False
+                else:
+                    vinf, tau, target, edge = charge_vinf, charge_tau, v_hi, True
             else:
-                # Rising edges strictly before t_stop (the loop records an edge only if t + dt < t_end).
-                t_end = float(times[-1])
-                count = max(2, math.ceil((t_end - r0) / period) + 2)
-                while count > 2 and r0 + (count - 1) * period >= t_end:
-                    count -= 1
-            edges = np.arange(count, dtype=float)  # in place: two passes over 10^6 edges, no temporaries
-            edges *= period
-            edges += r0
-            rising_arr = edges
-            falling_arr = np.empty(len(startup_falls) + count - 1)
-            falling_arr[:len(startup_falls)] = startup_falls
-            np.add(edges[:-1], high_time, out=falling_arr[len(startup_falls):])
-            t, v, high = float(edges[-1]), v_lo, True
-            if max_rising is None:
-                # The last period may be cut by t_stop: run the loop for it from the last rising edge.
-                rising.clear()
-                falling.clear()
-                t, v, high = run(np.array([t, t_end]), t, v, high, None)
-                rising_arr = np.concatenate([rising_arr, rising])  # empty unless rounding moved an edge
-                falling_arr = np.concatenate([falling_arr, falling])
-            return TransientResult(rising_s=rising_arr, falling_s=falling_arr, t_s=None, v_cap_v=None,
-                                   output_high=None, t_end_s=t, v_end_v=v, high_end=high)
+                vinf, tau, target, edge = dis_vinf, dis_tau, v_lo, True
+            if math.isinf(tau):
+                dt = math.inf
+            else:
+                ratio = (target - vinf) / (v - vinf) if v != vinf else -1.0
+                dt = tau * math.log(1.0 / ratio) if 0.0 < ratio <= 1.0 else math.inf
+            if t + dt < t_end:
+                if waveform:
+                    self.record(t, dt, v, vinf, tau, high)
+                t += dt
+                v = target
+                if edge:
+                    if high:
+                        falling.append(t)
+                        high = False
+                    else:
+                        rising.append(t)
+                        high = True
+                        if max_rising is not None and len(rising) >= max_rising:
+                            return t, v, high, True
+                continue
+            # No event before the end of this sample interval.
+            if math.isinf(t_end):
+                return t, v, high, True  # constant parts that stopped oscillating: nothing more will happen
+            span = t_end - t
+            if waveform:
+                self.record(t, span, v, vinf, tau, high)
+            if not math.isinf(tau):
+                v = vinf + (v - vinf) * math.exp(-span / tau)
+            return t_end, v, high, False
 
-    as_arr = (lambda parts: np.concatenate(parts) if parts else np.empty(0))
-    return TransientResult(
-        rising_s=np.asarray(rising), falling_s=np.asarray(falling),
-        t_s=as_arr(wt) if waveform else None, v_cap_v=as_arr(wv) if waveform else None,
-        output_high=as_arr(wh).astype(bool) if waveform else None,
-        t_end_s=t, v_end_v=v, high_end=high,
-    )
+
+def _steady_edges(loop: _EventLoop, times, t, v, high, max_rising) -> TransientResult | None:
+    """Constant parts: the loop up to the second rising edge, the rest as an arithmetic sequence.
+
+    ``rising[0]`` always starts a steady period (the default start sits at the lower threshold, and
+    any other start reaches it at its first rising edge, with v = v_lo exactly), so every later period
+    repeats the one from ``rising[0]`` to ``rising[1]``. None when the loop alone already finished (the
+    circuit stopped oscillating, or at most two rising edges were asked for); ``loop`` then holds the edges.
+    """
+    rising, falling = loop.rising, loop.falling
+    t, v, high = loop.run(times, t, v, high, 2 if max_rising is None else min(2, max_rising))
+    if not (len(rising) == 2 and (max_rising is None or max_rising > 2)):
+        return None
+    r0, period = rising[0], rising[1] - rising[0]
+    f0 = next(f for f in falling if f > r0)
+    high_time = f0 - r0
+    startup_falls = [f for f in falling if f < r0]
+    t_end = float(times[-1])
+    if max_rising is not None:
+        count = max_rising  # rising edges in all, as the loop would record them
+    else:
+        # Rising edges strictly before t_stop (the loop records an edge only if t + dt < t_end).
+        count = max(2, math.ceil((t_end - r0) / period) + 2)
+        while count > 2 and r0 + (count - 1) * period >= t_end:
+            count -= 1
+    edges = np.arange(count, dtype=float)  # in place: two passes over 10^6 edges, no temporaries
+    edges *= period
+    edges += r0
+    rising_arr = edges
+    falling_arr = np.empty(len(startup_falls) + count - 1)
+    falling_arr[:len(startup_falls)] = startup_falls
+    np.add(edges[:-1], high_time, out=falling_arr[len(startup_falls):])
+    t, v, high = float(edges[-1]), loop.v_lo, True
+    if max_rising is None:
+        # The last period may be cut by t_stop: run the loop for it from the last rising edge.
+        rising.clear()
+        falling.clear()
+        t, v, high = loop.run(np.array([t, t_end]), t, v, high, None)
+        rising_arr = np.concatenate([rising_arr, rising])  # empty unless rounding moved an edge
+        falling_arr = np.concatenate([falling_arr, falling])
+    return TransientResult(rising_s=rising_arr, falling_s=falling_arr, t_s=None, v_cap_v=None,
+                           output_high=None, t_end_s=t, v_end_v=v, high_end=high)
