@@ -48,3 +48,29 @@ def test_cross_readout_prediction():
     assert c["rows"]["table4 400g"]["predicted"] == pytest.approx(2.92, abs=0.01)
     with pytest.raises(ValueError, match="fit_on"):
         cross_readout_spreads(a, printed, labels, fit_on="table3")
+
+
+class _PowerLawFSR:
+    """A sensor whose resistance goes as V^-k at any stress, its capacitance fixed: not the preset."""
+
+    def __init__(self, k):
+        self.k = k
+
+    def respond(self, stress_pa, voltage_v):
+        from types import SimpleNamespace
+
+        n = np.size(stress_pa)
+        return SimpleNamespace(r_fsr_ohm=np.full(n, 1e6 * voltage_v ** -self.k), c_fsr_farad=np.full(n, 1e-9))
+
+
+def test_supply_sensitivities_of_a_power_law_sensor():
+    # Closed form (eq. 38): V0 ∝ Vcc / R_FSR(Vcc), so d ln V0/d ln Vcc = 1 + k for R ∝ V^-k, exactly
+    # (central difference of a power law); the 555's thresholds scale with Vcc, so its frequency moves
+    # only through R_FSR: k = 0 leaves it unmoved.
+    from fsrlab.paper.holdout import supply_sensitivities
+
+    out = supply_sensitivities([_PowerLawFSR(0.0), _PowerLawFSR(0.5)])
+    for label in ("200g", "400g"):
+        assert out[label]["voltage"] == pytest.approx([1.0, 1.5], abs=1e-9)
+        assert out[label]["frequency"][0] == pytest.approx(0.0, abs=1e-9)
+        assert out[label]["frequency"][1] > 0  # less resistance at a higher voltage: a faster 555

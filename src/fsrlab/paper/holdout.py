@@ -167,9 +167,9 @@ def cross_readout_spreads(a: np.ndarray, printed: np.ndarray, labels: list, fit_
     sol = least_squares(lambda x: np.log(np.sqrt(a[use] @ np.exp(2 * x)) / printed[use]),
                         np.full(len(SPREADS), np.log(0.05)), bounds=(lo, hi))
     pred = np.sqrt(a @ np.exp(2 * sol.x))
-    return {"fit_on": fit_on, "spreads": {n: float(np.exp(v)) for n, v in zip(SPREADS, sol.x)},
+    return {"fit_on": fit_on, "spreads": {n: float(np.exp(v)) for n, v in zip(SPREADS, sol.x, strict=True)},
             "rows": {lab: {"printed": float(r), "predicted": float(q), "used": i in use}
-                     for i, (lab, r, q) in enumerate(zip(labels, printed, pred))}}
+                     for i, (lab, r, q) in enumerate(zip(labels, printed, pred, strict=True))}}
 
 
 def supply_sensitivities(sensors, step: float = 1e-3, circuit=PAPER_CIRCUIT, opamp=PAPER_OPAMP) -> dict:
@@ -203,17 +203,22 @@ def supply_sensitivities(sensors, step: float = 1e-3, circuit=PAPER_CIRCUIT, opa
     for label, m in MASSES_KG.items():
         s = np.array([0.0, m * STANDARD_GRAVITY / DEAD_WEIGHT_AREA_M2])
         fs, vs = [], []
+        up, dn = np.exp(step), np.exp(-step)
+        vf, vo = circuit.fsr_voltage_v, opamp.fsr_voltage_v
         for sensor in sensors:
-            def ln_f(v):
-                r = sensor.respond(s, voltage_v=v)
-                return np.log(circuit.astable(r.r_fsr_ohm[-1], r.c_fsr_farad[-1], check=False).frequency_hz)
-
-            def ln_v0(v):
-                return np.log(v / sensor.respond(s, voltage_v=v).r_fsr_ohm[-1])  # Eq. (38) up to R_F
-
-            up, dn = np.exp(step), np.exp(-step)
-            vf, vo = circuit.fsr_voltage_v, opamp.fsr_voltage_v
-            fs.append(float((ln_f(vf * up) - ln_f(vf * dn)) / (2 * step)))
-            vs.append(float((ln_v0(vo * up) - ln_v0(vo * dn)) / (2 * step)))
+            fs.append(float((_ln_frequency(sensor, circuit, s, vf * up) - _ln_frequency(sensor, circuit, s, vf * dn))
+                            / (2 * step)))
+            vs.append(float((_ln_v0(sensor, s, vo * up) - _ln_v0(sensor, s, vo * dn)) / (2 * step)))
         out[label] = {"frequency": fs, "voltage": vs}
     return out
+
+
+def _ln_frequency(sensor, circuit, stress_pa, voltage_v: float) -> float:
+    """ln of the 555's frequency at the last stress of ``stress_pa``, the sensor read at ``voltage_v``."""
+    r = sensor.respond(stress_pa, voltage_v=voltage_v)
+    return float(np.log(circuit.astable(r.r_fsr_ohm[-1], r.c_fsr_farad[-1], check=False).frequency_hz))
+
+
+def _ln_v0(sensor, stress_pa, voltage_v: float) -> float:
+    """ln of the op-amp's output at ``voltage_v`` across the sensor, up to R_F (eq. 38)."""
+    return float(np.log(voltage_v / sensor.respond(stress_pa, voltage_v=voltage_v).r_fsr_ohm[-1]))
