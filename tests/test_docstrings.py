@@ -1,7 +1,7 @@
 """Every public function and class of fsrlab documents each of its parameters (numpydoc).
 
-Reference: a property of the source (STYLE.md: a test fails when a public parameter is
-undocumented). Public means listed in a module's ``__all__``; the CLI modules are Typer commands
+Reference: a property of the source (the project's style: a test fails when a public parameter is
+undocumented, as in python-control). Public means listed in a module's ``__all__``; the CLI modules are Typer commands
 whose options carry their own help text, and are left out.
 """
 
