@@ -71,7 +71,7 @@ def test_do_no_harm_keeps_the_plain_curve_when_memory_does_not_generalise():
     from fsrlab.calibration.heldout import Part
     from fsrlab.calibration.heldout_model import PLAY_THRESHOLDS, _Choice, _fit
 
-    ch = _Choice(cal.curve.variable, cal.curve.segments)
+    ch = _Choice(cal.curve.variable, cal.curve.size, family=cal.curve.family)
     part = [Part(rec, rec.usable)]
     plain = _fit(part, ch, 1, 1023.0)
     mem = _fit(part, ch.but(thresholds=PLAY_THRESHOLDS), 1, 1023.0)

@@ -31,26 +31,32 @@ def _rmse_loaded(est, truth):
     return float(np.sqrt(np.mean((est[loaded] - truth[loaded]) ** 2)))
 
 
-def test_the_mean_of_the_equivalent_curves_is_closer_on_new_recordings(monkeypatch):
-    hand, motor = [], []
+def test_the_mean_of_the_equivalent_curves_does_no_harm_on_new_recordings(monkeypatch):
+    """On new recordings (hand-loaded and a motor triangle), the static estimate averaged over the curves
+    within one standard error is about as close to the truth as the simplest of them alone, and the smooth
+    families (polynomials, monotone splines) beside the piecewise curve bring it closer."""
+    hand, motor, smooth = [], [], []
+    piecewise = tuple(c for c in hm.STATIC_CANDIDATES if c[1] == "piecewise")
     for seed in range(10):
         cal_rec, _ = _recording("hand", 10 + seed, duration_s=40.0)
         new, truth = _recording("hand", 100 + seed, duration_s=40.0)
         tri, truth_tri = _recording("motor", 200 + seed)
         errs = []
-        for k in (0.0, 1.0):  # 0: the simplest curve within one standard error alone
-            monkeypatch.setattr(hm, "MIX_SE", k)
+        for k, candidates in ((0.0, hm.STATIC_CANDIDATES), (1.0, hm.STATIC_CANDIDATES), (1.0, piecewise)):
+            monkeypatch.setattr(hm, "MIX_SE", k)  # 0: the simplest curve within one standard error alone
+            monkeypatch.setattr(hm, "STATIC_CANDIDATES", candidates)
             cal, _ = calibrate_recordings([cal_rec], compensate=False)
             errs.append((_rmse_loaded(cal.run(new.t, new.x)[0], truth),
                          _rmse_loaded(cal.run(tri.t, tri.x)[0], truth_tri)))
         hand.append(errs[1][0] / errs[0][0])
         motor.append(errs[1][1] / errs[0][1])
-    # seeds 10-19: 0.985 (hand) and 0.985 (motor) geometric mean, 0.905-1.064 each; 3 seeds had one curve.
-    # The largest, 1.064, is seed 17's hand run: 8 % of its readings lie beyond the calibrated range, where
-    # the averaged curves continue with their own top-half slopes (monotone.TOP_SLOPE_SPAN; with each
-    # curve's last segment instead: 0.976 and 0.984, at most 1.006).
-    assert np.exp(np.mean(np.log(hand))) < 0.99 and np.exp(np.mean(np.log(motor))) < 0.995
+        smooth.append(errs[1][0] / errs[2][0] * errs[1][1] / errs[2][1])
+    # seeds 10-19, measured: the mean against the simplest alone 1.002 (hand) and 0.993 (motor) geometric
+    # mean, 0.90-1.05 each (the piecewise curves alone: 0.985 and 0.985, 0.905-1.064); all families against
+    # the piecewise curves alone 0.986 (hand) and 0.989 (motor)
+    assert np.exp(np.mean(np.log(hand))) < 1.01 and np.exp(np.mean(np.log(motor))) < 1.01
     assert max(hand + motor) < 1.08
+    assert np.exp(np.mean(np.log(smooth))) < 1.0
 
 
 @pytest.fixture(scope="module")
@@ -63,9 +69,10 @@ def averaged():
 def test_the_estimate_without_memory_is_the_mean_of_the_averaged_curves(averaged):
     rec, cal, sel = averaged
     first = sel.steps[0]
-    names = [f"{m.variable}-{m.segments}" for m in cal.mix]
+    names = [m.name for m in cal.mix]
     assert len(cal.mix) >= 2 and len(first["averaged"]) == len(cal.mix)
-    assert first["averaged"][0] == first["chosen"]  # the simplest, which the memory is fitted around
+    # the simplest that cannot fall, which the memory is fitted around
+    assert first["chosen"] == next(n for n in first["averaged"] if "-poly" not in n)
     best = min(sel.candidates[:first["tried"]], key=lambda c: c["heldout_rmse"])["name"]
     assert best in first["averaged"]
     assert cal.without_memory().static_name.startswith("mean(") and names[0] == first["chosen"]

@@ -28,7 +28,7 @@ import numpy as np
 from fsrlab.calibration.monotone import adc_full_scale
 
 __all__ = ["BLOCKS", "CHUNKS", "Recording", "Part", "held_out_splits", "scheme_name", "paired_gain", "orientation",
-           "readout_rail"]
+           "readout_rail", "RESISTANCE_UNITS", "readout_variables"]
 
 #: Contiguous blocks of a single recording for forward chaining. [1]
 BLOCKS = 5
@@ -235,3 +235,67 @@ def readout_rail(recs: list[Recording], rail: float | None, adc: float | None) -
         return adc
     top = max(float(np.nanmax(r.x)) for r in recs)
     return float(rail) if rail > 0 and top < rail else None
+
+
+#: Units that declare a resistance (spelled as run files and foreign CSVs give them). [1]
+RESISTANCE_UNITS = ("ohm", "ohms", "\u03a9", "\u2126", "kohm", "kohms", "k\u03a9", "k\u2126", "Mohm", "M\u03a9")
+#: Least ratio of the largest to the smallest reading for a unitless reading that falls as force rises to
+#: be tried in its reciprocal as well: a resistance over the range of an FSR spans decades; a voltage or
+#: a count of the same film rarely spans one. [1]
+DECADE = 10.0
+
+
+def readout_variables(recs: list[Recording], sign: int, rail: float | None, unit: str = "", name: str = "",
+                      asked=None) -> tuple[tuple, str]:
+    """The readout variables a static curve is tried in, and why (the physics of the readout).
+
+    * a resistance (``unit`` one of :data:`RESISTANCE_UNITS`, or a column named ``*_ohm``): its
+      conductance ``1/R`` (``reciprocal``) and its logarithm, not the ohms themselves;
+    * divider counts, or a voltage with its rail: the readout, the divider's conductance ratio and the
+      logarithm (``conductance``);
+    * a reading without a unit that is above zero, spans more than a decade (:data:`DECADE`) and falls
+      as the force rises looks like a resistance logged without its unit: its reciprocal is tried too;
+    * anything else (a frequency, a capacitance, a voltage): the readout and its logarithm;
+
+    the logarithm and the reciprocal only for readings all above zero. Every variable is scored held out
+    like every other choice.
+
+    Parameters
+    ----------
+    recs : list of Recording
+        The recordings (their usable rows).
+    sign : {1, -1}
+        Whether the readout rises with the force (:func:`orientation`).
+    rail : float or None
+        The readout's full scale for the divider's ratio (:func:`readout_rail`). [unit of the readout]
+    unit, name : str
+        The readout's unit and column name ("" when unknown).
+    asked : sequence of str, optional
+        The variables to try instead (those that apply to the readings).
+
+    Returns
+    -------
+    variables : tuple of str
+    why : str
+    """
+    x = np.concatenate([r.x[r.usable] for r in recs])
+    positive = bool(x.size) and float(np.min(x)) > 0
+    unit = (unit or "").strip()
+    resistance = unit.lower() in {u.lower() for u in RESISTANCE_UNITS} or name.lower().endswith("_ohm")
+    if asked is not None:
+        tried = tuple(v for v in asked if (v != "conductance" or rail is not None)
+                      and (v not in ("log", "reciprocal") or positive))
+        return tried, "the variables asked for"
+    if resistance and positive:
+        return ("reciprocal", "log"), (f"a resistance ({name or 'readout'} in {unit or 'ohm'}): calibrated in its "
+                                       "conductance 1/R and its logarithm")
+    if rail is not None:
+        return ("readout", "conductance") + (("log",) if positive else ()), \
+            f"a divider's readout (full scale {rail:g}): also in the divider's conductance ratio"
+    span = float(np.max(x) / np.min(x)) if positive else 0.0
+    if positive and unit in ("", "1") and sign < 0 and span > DECADE:
+        return ("readout", "reciprocal", "log"), (f"a reading without a unit, above zero, spanning {span:.3g}:1 and "
+                                                  "falling as the force rises, like a resistance: also in its "
+                                                  "reciprocal")
+    return ("readout", "log") if positive else ("readout",), \
+        "used as it is" + (" and in its logarithm" if positive else " (not above zero: no logarithm)")

@@ -14,7 +14,8 @@ import numpy as np
 
 from fsrlab.calibration.delay import DelayLine, delayed
 from fsrlab.calibration.heldout_uncertainty import LevelUncertainty
-from fsrlab.calibration.monotone import MonotoneCurve
+from fsrlab.calibration.curves import curve_from_dict
+from fsrlab.calibration.monotone import StaticCurve
 from fsrlab.calibration.operators import MemoryState, directions, memory_features
 
 __all__ = ["HeldoutCalibration", "Stepper", "clip_hysteresis"]
@@ -27,9 +28,10 @@ class HeldoutCalibration:
 
     Parameters
     ----------
-    static : MonotoneCurve
-        The curve that feeds the memory (fitted alone).
-    curve : MonotoneCurve
+    static : StaticCurve
+        The curve that feeds the memory (fitted alone): piecewise linear, polynomial or spline
+        (:mod:`fsrlab.calibration.curves`).
+    curve : StaticCurve
         The curve of the estimate (refitted with the memory; ``static`` itself without memory).
     thresholds, time_constants : tuple of float
         The memory's play thresholds [1] and creep time constants [s] (empty: none).
@@ -55,14 +57,14 @@ class HeldoutCalibration:
         extrapolate its hysteresis to an unloading. The creep features are not clipped: a film
         recovers after unloading as it crept under load, so their fit holds for either sign. None: not
         clipped (files written before it). [1]
-    mix : tuple of MonotoneCurve
+    mix : tuple of StaticCurve
         Static curves whose mean is the static estimate in place of ``static`` (model averaging, see
         :data:`fsrlab.calibration.heldout_model.MIX_SE`); the memory's level and its correction stay
         those fitted around ``static``. Empty: ``static`` alone.
     """
 
-    static: MonotoneCurve
-    curve: MonotoneCurve
+    static: StaticCurve
+    curve: StaticCurve
     thresholds: tuple = ()
     time_constants: tuple = ()
     weights: np.ndarray = field(default_factory=lambda: np.zeros(0))
@@ -85,14 +87,14 @@ class HeldoutCalibration:
 
     @property
     def static_name(self) -> str:
-        """The static estimate's name: ``readout-4``, ``mean(readout-4/log-4)`` or, of more than three
-        curves, ``mean(5 curves: readout-1…log-8)`` (no comma: progress lines split on commas)."""
-        names = [f"{m.variable}-{m.segments}" for m in self.mix]
+        """The static estimate's name: ``readout-4``, ``mean(readout-poly3/log-spline2)`` or, of more than
+        three curves, ``mean(5 curves: readout-1…log-8)`` (no comma: progress lines split on commas)."""
+        names = [m.name for m in self.mix]
         if len(names) > 3:
             return f"mean({len(names)} curves: {names[0]}…{names[-1]})"
         if names:
             return "mean(" + "/".join(names) + ")"
-        return f"{self.static.variable}-{self.static.segments}"
+        return self.static.name
 
     def curve_estimate(self, x) -> np.ndarray:
         """The estimate at readings ``x`` (already delayed) before the memory's features: :attr:`curve`,
@@ -173,10 +175,10 @@ class HeldoutCalibration:
                 raise ValueError("hysteresis_range: two rows (least, largest) of one finite value per play threshold, "
                                  "least ≤ largest")
         unc, plain = d.get("uncertainty"), d.get("uncertainty_plain")
-        return cls(MonotoneCurve.from_dict(d["static"]), MonotoneCurve.from_dict(d["curve"]), thr, tau, w, fs, row,
+        return cls(curve_from_dict(d["static"]), curve_from_dict(d["curve"]), thr, tau, w, fs, row,
                    None if unc is None else LevelUncertainty.from_dict(unc), bool(d.get("level_scaled_hysteresis", False)),
                    None if plain is None else LevelUncertainty.from_dict(plain), delay, rng,
-                   tuple(MonotoneCurve.from_dict(m) for m in d.get("static_mix", ())))
+                   tuple(curve_from_dict(m) for m in d.get("static_mix", ())))
 
 
 def clip_hysteresis(features: np.ndarray, hysteresis_range: "np.ndarray | None") -> np.ndarray:

@@ -50,17 +50,32 @@ from fsrlab.calibration.delay import DELAY_ROWS, delay_trials, delayed
 from fsrlab.calibration.heldout_calibration import HeldoutCalibration, clip_hysteresis
 from fsrlab.calibration.heldout_uncertainty import REPEATABILITY, LevelUncertainty
 from fsrlab.calibration.heldout import (Part, Recording, chunk_ids, held_out_splits, orientation, paired_gain, readout_rail,
-                                        scheme_name)
-from fsrlab.calibration.monotone import MonotoneCurve, fit_monotone, monotone_system
+                                        readout_variables, scheme_name)
+from fsrlab.calibration.curves import fit_static, static_system
 from fsrlab.calibration.operators import CREEP_TIME_CONSTANTS_S, PLAY_THRESHOLDS, directions, memory_features
 
 __all__ = ["STATIC_CANDIDATES", "MIX_SE", "RIDGES", "HeldoutCalibration", "LevelUncertainty", "Selection",
            "calibrate_recordings"]
 
-#: Static candidates, simplest first: (readout variable, segments). ``log`` only when every reading
-#: of the calibration data is above zero, ``conductance`` only with a rail (:func:`calibrate_recordings`). [1]
-STATIC_CANDIDATES = (("readout", 1), ("readout", 2), ("conductance", 1), ("log", 1), ("readout", 4), ("conductance", 2),
-                     ("log", 2), ("conductance", 4), ("log", 4), ("readout", 8), ("conductance", 8), ("log", 8))
+#: Sizes tried of each static curve family (:data:`fsrlab.calibration.curves.FAMILIES`): segments of the
+#: piecewise-linear curve, degrees of the polynomial (degree 1 is the one-segment line), inner knots
+#: of the monotone cubic spline. [1]
+FAMILY_SIZES = {"piecewise": (1, 2, 4, 8), "polynomial": (2, 3, 4, 5), "spline": (0, 2, 4, 8)}
+#: Order of the readout variables among candidates of as many coefficients. [1]
+_VARIABLE_ORDER = ("readout", "conductance", "reciprocal", "log")
+
+
+def _coefficients(family: str, size: int) -> int:
+    """Coefficients of a static curve of ``family`` and ``size``: its complexity."""
+    return size + 1 if family != "spline" else size + 4
+
+
+#: Static candidates, simplest first (fewest coefficients, then the piecewise curve before the polynomial
+#: before the spline, then :data:`_VARIABLE_ORDER`): (readout variable, family, size). Which variables
+#: are tried: :func:`fsrlab.calibration.heldout.readout_variables`. [1]
+STATIC_CANDIDATES = tuple(sorted(((v, f, k) for f, sizes in FAMILY_SIZES.items() for k in sizes for v in _VARIABLE_ORDER),
+                                 key=lambda c: (_coefficients(c[1], c[2]), list(FAMILY_SIZES).index(c[1]),
+                                                _VARIABLE_ORDER.index(c[0]))))
 #: Static candidates whose held-out error is within this many standard errors of the best are averaged
 #: (equal weights) into the static estimate: the candidates the one-standard-error rule cannot tell
 #: apart, instead of the simplest of them alone. On the 39 real train → test pairs of
@@ -112,6 +127,10 @@ class Selection:
         delay or lag kept). [unit of the reference]
     gain_spread : float or None
         RMS relative gain error of the held-out recordings (two or more recordings). [1]
+    readout : dict
+        The readout variables: ``variables`` (tried), ``used`` (by the static estimate: its curve's, or
+        those of the curves averaged) and ``why`` (the physics of the readout,
+        :func:`fsrlab.calibration.heldout.readout_variables`).
     """
 
     scheme: str
@@ -121,18 +140,19 @@ class Selection:
     heldout_rmse: float = float("nan")
     heldout_rmse_plain: float = float("nan")
     gain_spread: float | None = None
+    readout: dict = field(default_factory=dict)  # {"variables", "used", "why"}
 
     def to_dict(self) -> dict:
         return {"scheme": self.scheme, "candidates": self.candidates, "steps": self.steps, "lag_rows": self.lag_rows,
                 "heldout_rmse": self.heldout_rmse, "heldout_rmse_plain": self.heldout_rmse_plain,
-                "gain_spread": self.gain_spread}
+                "gain_spread": self.gain_spread, "readout": self.readout}
 
 
 # ----------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class _Choice:
     variable: str
-    segments: int
+    segments: int  # the family's size: segments, degree or inner knots
     thresholds: tuple = ()
     time_constants: tuple = ()
     ridge: float = 1e-3
@@ -140,6 +160,7 @@ class _Choice:
     scaled: bool = False
     delay: float = 0.0
     held: bool = False  # the memory fitted to what the static curve leaves, the curve held
+    family: str = "piecewise"
 
     @property
     def name(self) -> str:
@@ -147,8 +168,14 @@ class _Choice:
             ("+creep" if self.time_constants else "")
         lag = (f", lag {self.lag} rows" if self.lag else "") + (f", delay {self.delay:g} rows" if self.delay else "")
         held = "curve held, " if self.held else ""
-        return f"{self.variable}-{self.segments}{mem}" + (f" ({held}ridge {self.ridge:g}{lag})" if mem else
+        return f"{self.static}{mem}" + (f" ({held}ridge {self.ridge:g}{lag})" if mem else
                                                           (f" ({lag[2:]})" if lag else ""))
+
+    @property
+    def static(self) -> str:
+        """The static curve's name (:attr:`fsrlab.calibration.monotone.StaticCurve.name`)."""
+        kind = {"piecewise": "", "polynomial": "poly", "spline": "spline"}[self.family]
+        return f"{self.variable}-{kind}{self.segments}"
 
     def but(self, **kw) -> "_Choice":
         d = dict(self.__dict__)
@@ -213,8 +240,8 @@ def _fit(parts: list[Part], ch: _Choice, sign: int, adc, cache: _Cache | None = 
     x = np.concatenate([p.rec.x[p.rows] for p in parts])
     y = np.concatenate([_shifted(p.rec, ch.lag)[p.rows] for p in parts])
     ok = np.isfinite(y)
-    skey = (split, ch.variable, ch.segments, ch.lag, ch.delay)
-    static, fs = cache.static(skey, lambda: (fit_monotone(x[ok], y[ok], ch.variable, ch.segments, sign, adc)[0],
+    skey = (split, ch.variable, ch.family, ch.segments, ch.lag, ch.delay)
+    static, fs = cache.static(skey, lambda: (fit_static(x[ok], y[ok], ch.family, ch.segments, ch.variable, sign, adc),
                                              max(float(np.ptp(y[ok])), 1e-12)))
     # the median step of the recordings' times, once per call (a delayed copy shares its recording's times)
     row_s = cache.static(("row_s",) + tuple(id(p.rec.t) for p in parts), lambda: _row_step([p.rec for p in parts]))
@@ -227,7 +254,7 @@ def _fit(parts: list[Part], ch: _Choice, sign: int, adc, cache: _Cache | None = 
         feats = np.concatenate([cache.memory(skey + (id(p.rec),), p.rec, level, ch)[p.rows] for p in parts])[ok]
         hyst = feats[:, :len(ch.thresholds)]  # the range of the hysteresis features seen (the creep's is not kept)
         rng = np.array([np.nanmin(hyst, axis=0), np.nanmax(hyst, axis=0)]) if hyst.size else None
-        return monotone_system(x[ok], y[ok], ch.variable, ch.segments, sign, adc, extra=feats), rng
+        return static_system(x[ok], y[ok], ch.family, ch.segments, ch.variable, sign, adc, extra=feats), rng
 
     # the normal equations serve every ridge weight and every sign of this split's variant
     msys, hysteresis_range = cache.system(skey + (ch.thresholds, ch.time_constants, ch.scaled), system)
@@ -268,11 +295,11 @@ def _shifted(rec: Recording, lag: int) -> np.ndarray:
 
 def _blend(static: HeldoutCalibration, mem: HeldoutCalibration, alpha: float) -> HeldoutCalibration:
     """``static + alpha·(mem − static)``: the memory's correction shrunk by ``alpha`` (both fitted on the
-    same readings, so their curves share the knots and the blend of two monotone curves is one)."""
+    same readings, so their curves share the basis, and the blend of two monotone curves is one)."""
     if alpha == 1.0 or not mem.has_memory:
         return mem
     c, k = mem.curve, static.curve
-    curve = MonotoneCurve(c.variable, c.sign, c.adc, c.knots, (1 - alpha) * k.coef + alpha * c.coef, c.x_range)
+    curve = c.with_coef((1 - alpha) * k.coef + alpha * c.coef)
     return HeldoutCalibration(mem.static, curve, mem.thresholds, mem.time_constants, alpha * mem.weights,
                               mem.full_scale, mem.row_s, scaled=mem.scaled, hysteresis_range=mem.hysteresis_range)
 
@@ -289,7 +316,8 @@ def _memory_step(sel: Selection, score, scored: dict, cache: _Cache, base: _Choi
     cache.systems.clear()
     held = [base.but(thresholds=h, time_constants=c, scaled=sc, ridge=r, held=True) for h, c, sc in MEMORY_VARIANTS
             for r in RIDGES]
-    refit = [c.but(held=False) for c in held]
+    # a polynomial refitted with the memory could fall somewhere: only the families that cannot are refitted
+    refit = [c.but(held=False) for c in held] if base.family != "polynomial" else []
     e_s, ids, _, parts = plain
     score(base)
 
@@ -300,7 +328,8 @@ def _memory_step(sel: Selection, score, scored: dict, cache: _Cache, base: _Choi
         score(c)
         return full(c)
 
-    best_held, best_refit = (_best_of(t, scored_full, scored.pop) for t in (held, refit))
+    best_held = _best_of(held, scored_full, scored.pop)
+    best_refit = _best_of(refit, scored_full, scored.pop) if refit else best_held
     g_refit, se_refit = paired_gain(full(best_held), full(best_refit), ids)
     refitted = _refit_wins(g_refit, se_refit, float(np.mean(full(best_held) ** 2)))
     best = best_refit if refitted else best_held
@@ -383,7 +412,7 @@ def _held_out(splits, ch: _Choice, sign: int, adc, cache: _Cache):
     for i, (fit_parts, test_parts) in enumerate(splits):
         cal = _fit(fit_parts, ch, sign, adc, cache, i)
         for j, p in enumerate(test_parts):
-            key = (i, ch.variable, ch.segments, ch.lag, ch.delay, id(p.rec))
+            key = (i, ch.variable, ch.family, ch.segments, ch.lag, ch.delay, id(p.rec))
             # with the curve held, its values on the part are the static curve's, the same for every trial
             e = cache.static(("values",) + key, lambda: cal.curve(p.rec.x)) if ch.held else cal.curve(p.rec.x)
             if cal.has_memory:
@@ -422,89 +451,44 @@ def rows_have_times(recs: list[Recording]) -> bool:
     return all(r.t.size > 2 and np.all(np.diff(r.t) >= 0) and np.median(np.diff(r.t)) > 0 for r in recs)
 
 
-def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: int | str = 0,
-                         variables=("readout", "conductance", "log"), rail: float | None = None,
-                         between_runs: float | None = None) -> tuple[HeldoutCalibration, Selection]:
-    """Choose and fit a calibration on held-out recordings or blocks (see the module's notes).
+class _Search:
+    """One calibration's held-out search: the recordings (and their delayed copies) with their splits, the
+    held-out errors of the choices scored so far, and the :class:`Selection` being written."""
 
-    Parameters
-    ----------
-    recs : list of Recording
-        One or more recordings of the same sensor and readout, each in time order.
-    compensate : bool
-        Try the memory terms (hysteresis, creep); without, only the static curve (and the lag).
-    lag : int or "auto"
-        Rows the readout lags the reference (default 0), or ``"auto"``: 0 unless a shift wins.
-    variables : sequence of str
-        Readout variables tried (``conductance`` only with a rail: ADC counts, or ``rail`` given;
-        ``log`` only when every usable reading is above zero).
-    rail : float, optional
-        The readout's full scale when it is not ADC counts: a divider's supply voltage for its
-        voltage (the conductance ratio is then V/(Vcc − V), or its mirror). [unit of the readout]
-    between_runs : float, optional
-        The floor of the uncertainty's relative term for what changes from one recording to the next
-        (default :data:`~fsrlab.calibration.heldout_uncertainty.REPEATABILITY`); the held-out
-        recordings' gain spread when it is larger. [1]
+    def __init__(self, recs: list[Recording], sign: int, adc, sel: Selection):
+        self.recs, self.sign, self.adc, self.sel = recs, sign, adc, sel
+        self.scored: dict = {}
+        self.cache = _Cache()
+        self.row_s = _row_step(recs)
+        self.by_delay: dict = {}
 
-    Returns
-    -------
-    HeldoutCalibration, Selection
-    """
-    late = [int(d) for d in delay_trials(_row_step(recs)) if d >= 1 and d == int(d)]
-    sign, adc = orientation(recs, late if lag == 0 and DELAY_ROWS and rows_have_times(recs) else ())
-    adc = readout_rail(recs, rail, adc)
-    sel = Selection(scheme_name(len(recs)))
-    scored = {}
-    cache = _Cache()
-    row_s = _row_step(recs)
-    by_delay = {}
-
-    def delayed_recs(d: float) -> tuple[list[Recording], list]:
+    def delayed_recs(self, d: float) -> tuple[list[Recording], list]:
         """The recordings with the readout ``d`` rows late, and their held-out splits."""
-        if d not in by_delay:
-            rs = recs if d == 0 else [Recording(r.t, delayed(r.t, r.x, d * row_s), r.y, r.name) for r in recs]
-            by_delay[d] = (rs, held_out_splits(rs))
-        return by_delay[d]
+        if d not in self.by_delay:
+            rs = self.recs if d == 0 else [Recording(r.t, delayed(r.t, r.x, d * self.row_s), r.y, r.name)
+                                           for r in self.recs]
+            self.by_delay[d] = (rs, held_out_splits(rs))
+        return self.by_delay[d]
 
-    def score(ch: _Choice):
-        if ch not in scored:
-            scored[ch] = _held_out(delayed_recs(ch.delay)[1], ch, sign, adc, cache)
-            if all(c["name"] != ch.name for c in sel.candidates):
-                sel.candidates.append({"name": ch.name, "heldout_rmse": _rmse(scored[ch][0])})
-        return scored[ch]
+    def score(self, ch: _Choice):
+        """Held-out errors, chunk ids, estimates and parts of ``ch`` (:func:`_held_out`), recorded once."""
+        if ch not in self.scored:
+            self.scored[ch] = _held_out(self.delayed_recs(ch.delay)[1], ch, self.sign, self.adc, self.cache)
+            if all(c["name"] != ch.name for c in self.sel.candidates):
+                self.sel.candidates.append({"name": ch.name, "heldout_rmse": _rmse(self.scored[ch][0])})
+        return self.scored[ch]
 
-    fixed_lag = 0 if lag == "auto" else int(lag)
-    positive = all(np.min(r.x[r.usable]) > 0 for r in recs if r.usable.any())  # the log variable is defined
-    statics = [_Choice(v, k, lag=fixed_lag) for v, k in STATIC_CANDIDATES
-               if v in variables and (v != "conductance" or adc is not None) and (v != "log" or positive)]
-    for ch in statics:
-        score(ch)
-    best = min(statics, key=lambda c: _rmse(scored[c][0]))
+    def rmse(self, ch: _Choice) -> float:
+        return _rmse(self.scored[ch][0])
 
-    def within(c: _Choice, k: float) -> bool:  # held-out MSE within k standard errors of the best's
-        gain, se = paired_gain(scored[c][0], scored[best][0], scored[best][1])
-        return c == best or gain <= k * se
-
-    cur = next(c for c in statics if within(c, 1.0))
-    mixed = [c for c in statics if within(c, MIX_SE)]
-    mixed = mixed if len(mixed) > 1 else []
-    sel.steps.append({"step": "static curve", "tried": len(statics), "chosen": cur.name,
-                      "averaged": [c.name for c in mixed],
-                      "why": "the simplest within one standard error of the best held-out error "
-                             f"({_rmse(scored[best][0]):.4g}, {best.name})"
-                             + (f"; the static estimate the mean of the {len(mixed)} within {MIX_SE:g} standard error"
-                                if mixed else "")})
-    for other in statics:
-        if other != cur:
-            scored.pop(other, None)
-
-    def step(name: str, trials: list[_Choice], base: _Choice) -> _Choice | None:
+    def step(self, name: str, trials: list[_Choice], base: _Choice) -> _Choice | None:
         """The best trial when it wins over ``base`` (see the module's notes), else None; recorded."""
-        cache.features.clear()  # a step's features serve its own trials only
-        cache.systems.clear()
+        scored = self.scored
+        self.cache.features.clear()  # a step's features serve its own trials only
+        self.cache.systems.clear()
         for ch in trials + [base]:
-            score(ch)
-        ch = min(trials, key=lambda c: _rmse(scored[c][0]))
+            self.score(ch)
+        ch = min(trials, key=self.rmse)
         gain, se = paired_gain(scored[base][0], scored[ch][0], scored[base][1])
         folds = _fold_gains(scored[base], scored[ch])
         # one standard error and MIN_GAIN, and no held-out recording or block made worse, most made better
@@ -522,51 +506,164 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
         else:
             why = (f"{said}: not more than one standard error in most parts without a loss in any, so the simpler "
                    "calibration is kept")
-        sel.steps.append({"step": name, "tried": ch.name, "gain": gain, "se": se, "kept": bool(kept),
-                          "heldout_gain_by_part": folds, "why": why})
+        self.sel.steps.append({"step": name, "tried": ch.name, "gain": gain, "se": se, "kept": bool(kept),
+                               "heldout_gain_by_part": folds, "why": why})
         for other in trials:  # the held-out errors of the trials not kept are no longer needed
             if other is not ch or not kept:
                 scored.pop(other, None)
         return ch if kept else None
 
-    if lag == 0 and DELAY_ROWS and rows_have_times(recs):
-        # Only when the estimate is of the reference as recorded (no lag asked for: a lag aligns the
-        # reference instead). Judged with the static curve: a delay corrects estimates that run ahead of
-        # the reference (a reference that lags); an FSR's loop leaves them behind (it conducts more on
-        # unloading), which a delay would make worse, so the sensor's hysteresis is not taken for a delay.
-        def let_go(d):  # a delay of the grid beaten: its held-out errors and delayed recordings
-            scored.pop(cur.but(delay=d))
-            by_delay.pop(d, None)
 
-        coarse = _best_of(delay_trials(row_s), lambda d: score(cur.but(delay=d))[0], let_go)
-        won = step("delay", [cur.but(delay=d) for d in [coarse] + delay_trials(row_s, coarse)], cur)
-        if won is not None:
-            cur = won
-        for d in [d for d in by_delay if d != cur.delay]:  # the other delays' recordings are not needed again
-            del by_delay[d]
+def _static_candidates(search: _Search, variables, lag: int) -> tuple[list[_Choice], list[str]]:
+    """The static candidates of ``variables`` (:data:`STATIC_CANDIDATES`), without the polynomials that fall
+    somewhere over the calibrated readings when fitted on all of them (their names returned apart)."""
+    recs = search.recs
+    x = np.concatenate([r.x[r.usable] for r in recs])
+    y = np.concatenate([r.y[r.usable] for r in recs])
+    out, falling = [], []
+    for v, family, k in STATIC_CANDIDATES:
+        if v not in variables:
+            continue
+        ch = _Choice(v, k, lag=lag, family=family)
+        if family == "polynomial" and not fit_static(x, y, family, k, v, search.sign, search.adc).is_monotone():
+            falling.append(ch.name)
+            continue
+        out.append(ch)
+    return out, falling
+
+
+def _static_step(search: _Search, statics: list[_Choice], falling=()) -> tuple[_Choice, list[_Choice]]:
+    """The static curve the memory is fitted around (the simplest within one standard error of the best) and
+    the candidates averaged into the static estimate (within :data:`MIX_SE`; empty when only one); recorded,
+    with the polynomials not tried because they fall somewhere over the calibrated readings (``falling``)."""
+    scored = search.scored
+    for ch in statics:
+        search.score(ch)
+    best = min(statics, key=search.rmse)
+
+    def within(c: _Choice, k: float) -> bool:  # held-out MSE within k standard errors of the best's
+        gain, se = paired_gain(scored[c][0], scored[best][0], scored[best][1])
+        return c == best or gain <= k * se
+
+    # the memory is fitted around a curve that cannot fall (refitted with it, it still cannot): the simplest
+    # of those within one standard error of the best, else the best of them
+    rising = [c for c in statics if c.family != "polynomial"] or statics
+    cur = next((c for c in rising if within(c, 1.0)), None) or min(rising, key=search.rmse)
+    mixed = [c for c in statics if within(c, MIX_SE)]
+    mixed = mixed if len(mixed) > 1 else []
+    search.sel.steps.append({"step": "static curve", "tried": len(statics), "chosen": cur.name,
+                             "averaged": [c.name for c in mixed], "not_monotone": list(falling),
+                             "why": "the simplest curve that cannot fall within one standard error of the best "
+                                    "held-out error "
+                                    f"({search.rmse(best):.4g}, {best.name})"
+                                    + (f"; the static estimate the mean of the {len(mixed)} within {MIX_SE:g} "
+                                       "standard error" if mixed else "")})
+    for other in statics:
+        if other != cur:
+            scored.pop(other, None)
+    return cur, mixed
+
+
+def _delay_step(search: _Search, cur: _Choice) -> _Choice:
+    """``cur`` with the reference's delay when one wins (see the module's notes)."""
+    # Judged with the static curve: a delay corrects estimates that run ahead of the reference (a reference
+    # that lags); an FSR's loop leaves them behind (it conducts more on unloading), which a delay would make
+    # worse, so the sensor's hysteresis is not taken for a delay.
+    def let_go(d):  # a delay of the grid beaten: its held-out errors and delayed recordings
+        search.scored.pop(cur.but(delay=d))
+        search.by_delay.pop(d, None)
+
+    row_s = search.row_s
+    coarse = _best_of(delay_trials(row_s), lambda d: search.score(cur.but(delay=d))[0], let_go)
+    won = search.step("delay", [cur.but(delay=d) for d in [coarse] + delay_trials(row_s, coarse)], cur)
+    if won is not None:
+        cur = won
+    for d in [d for d in search.by_delay if d != cur.delay]:  # the other delays' recordings are not needed again
+        del search.by_delay[d]
+    return cur
+
+
+def _plain(search: _Search, cur: _Choice, mixed: list[_Choice]) -> tuple:
+    """Held-out errors, chunk ids, estimates and parts of the static estimate: ``cur``'s, or the mean of
+    ``mixed`` (their held-out errors then let go)."""
+    e_c, ids, est_c, parts_c = search.score(cur)
+    if not mixed:
+        return e_c, ids, est_c, parts_c
+    plain = (np.mean([search.score(m)[0] for m in mixed], axis=0), ids,
+             np.mean([search.scored[m][2] for m in mixed], axis=0), parts_c)
+    for m in mixed:
+        if m != cur:
+            search.scored.pop(m)
+    return plain
+
+
+def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: int | str = 0,
+                         variables=None, rail: float | None = None, between_runs: float | None = None,
+                         unit: str = "", name: str = "") -> tuple[HeldoutCalibration, Selection]:
+    """Choose and fit a calibration on held-out recordings or blocks (see the module's notes).
+
+    Parameters
+    ----------
+    recs : list of Recording
+        One or more recordings of the same sensor and readout, each in time order.
+    compensate : bool
+        Try the memory terms (hysteresis, creep); without, only the static curve (and the lag).
+    lag : int or "auto"
+        Rows the readout lags the reference (default 0), or ``"auto"``: 0 unless a shift wins.
+    variables : sequence of str, optional
+        Readout variables tried (default: those the readout's physics names,
+        :func:`fsrlab.calibration.heldout.readout_variables`; ``conductance`` only with a rail: ADC counts,
+        or ``rail`` given; ``log`` and ``reciprocal`` only when every usable reading is above zero).
+    rail : float, optional
+        The readout's full scale when it is not ADC counts: a divider's supply voltage for its
+        voltage (the conductance ratio is then V/(Vcc − V), or its mirror). [unit of the readout]
+    between_runs : float, optional
+        The floor of the uncertainty's relative term for what changes from one recording to the next
+        (default :data:`~fsrlab.calibration.heldout_uncertainty.REPEATABILITY`); the held-out
+        recordings' gain spread when it is larger. [1]
+    unit, name : str
+        The readout's unit and column name, when known (a resistance is calibrated in its conductance).
+
+    Returns
+    -------
+    HeldoutCalibration, Selection
+    """
+    delays = lag == 0 and DELAY_ROWS and rows_have_times(recs)
+    late = [int(d) for d in delay_trials(_row_step(recs)) if d >= 1 and d == int(d)]
+    sign, adc = orientation(recs, late if delays else ())
+    adc = readout_rail(recs, rail, adc)
+    search = _Search(recs, sign, adc, Selection(scheme_name(len(recs))))
+    sel = search.sel
+    tried, why = readout_variables(recs, sign, adc, unit, name, variables)
+    statics, falling = _static_candidates(search, tried, 0 if lag == "auto" else int(lag))
+    cur, mixed = _static_step(search, statics, falling)
+    used = sorted({c.variable for c in mixed} or {cur.variable}, key=_VARIABLE_ORDER.index)
+    sel.readout = {"variables": list(tried), "used": used, "why": why}
+    if delays:  # only when the estimate is of the reference as recorded (a lag aligns the reference instead)
+        cur = _delay_step(search, cur)
     if lag == "auto":
         # Judged with a hysteresis model: a shift of the reference narrows a loop, so a static curve alone
         # would take part of the hysteresis for a lag.
         probe = cur.but(thresholds=PLAY_THRESHOLDS, ridge=LAG_PROBE_RIDGE)
-        won = step("lag", [probe.but(lag=k) for k in LAG_ROWS], probe)
+        won = search.step("lag", [probe.but(lag=k) for k in LAG_ROWS], probe)
         if won is not None:
             cur = cur.but(lag=won.lag)
-            score(cur)
+            search.score(cur)
     mixed = [m.but(delay=cur.delay, lag=cur.lag) for m in mixed]  # with the delay and lag kept
-    e_c, ids, est_c, parts_c = score(cur)
-    if mixed:
-        plain = (np.mean([score(m)[0] for m in mixed], axis=0), ids, np.mean([scored[m][2] for m in mixed], axis=0),
-                 parts_c)
-        for m in mixed:
-            if m != cur:
-                scored.pop(m)
-    else:
-        plain = (e_c, ids, est_c, parts_c)
+    plain = _plain(search, cur, mixed)
     sel.heldout_rmse_plain = _rmse(plain[0])  # the calibration the memory is tried on (delay, lag kept)
     alpha, mem = 1.0, None
     if compensate:
-        mem, alpha = _memory_step(sel, score, scored, cache, cur, plain)
-    static_cur = cur
+        mem, alpha = _memory_step(sel, search.score, search.scored, search.cache, cur, plain)
+    return _final(search, cur, mem, alpha, mixed, plain, between_runs)
+
+
+def _final(search: _Search, static_cur: _Choice, mem: _Choice | None, alpha: float, mixed: list, plain: tuple,
+           between_runs: float | None) -> tuple[HeldoutCalibration, Selection]:
+    """The calibration chosen, fitted on every recording, with its uncertainty from the held-out errors."""
+    scored, sel, recs, sign, adc = search.scored, search.sel, search.recs, search.sign, search.adc
+    cur = static_cur
+    e_c, ids, est_c, parts_c = scored[cur]
     if mem is not None:
         e_m, _, est_m, _ = scored[mem]
         scored[mem] = (plain[0] + alpha * (e_m - e_c), ids, plain[2] + alpha * (est_m - est_c), parts_c)
@@ -574,7 +671,7 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
     else:
         scored[cur] = plain
     sel.lag_rows = cur.lag
-    delay_s = float(f"{cur.delay * row_s:.10g}")  # without the float noise of the median step
+    delay_s = float(f"{cur.delay * search.row_s:.10g}")  # without the float noise of the median step
     err, _, est, parts = scored[cur]
     fs_all = max(float(np.ptp(np.concatenate([r.y[r.usable] for r in recs]))), 1e-12)
 
@@ -583,7 +680,7 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
 
     dirs = held_out_directions(est, parts)
     sel.heldout_rmse = _rmse(err)
-    drecs, splits = delayed_recs(cur.delay)
+    drecs, splits = search.delayed_recs(cur.delay)
     whole = [Part(r, r.usable) for r in drecs]
     cal = _blend(_fit(whole, static_cur, sign, adc), _fit(whole, cur, sign, adc), alpha)
     cal.delay_s = delay_s

@@ -13,7 +13,9 @@ least-squares fit, with a ridge term on the change of slope between segments):
   FSR's conductance, which follows a power law of force; or, for readings all above zero, its
   logarithm ``sign·ln x``: a power law ``F = a·x^b`` (a resistance-like reading of a film that
   falls as ~1/F) bends over decades of ``x``; in ``ln x`` its bend is spread evenly, so a few
-  segments follow it where segments in ``x`` leave its steep end to one straight piece;
+  segments follow it where segments in ``x`` leave its steep end to one straight piece; or, for
+  a resistance (readings above zero that fall as force rises), its reciprocal ``−sign/x``: the
+  conductance, in which an FSR's force is close to a power law of exponent near one;
 * below the calibrated readings the curve is flat (an FSR below its activation force reads as no
   load); above them it continues linearly **per unit of readout** (not of ``v``: a conductance that
   grows without bound as the reading nears its rail is not followed), with the curve's mean slope
@@ -29,11 +31,12 @@ from functools import cached_property
 
 import numpy as np
 
-__all__ = ["VARIABLES", "TOP_SLOPE_SPAN", "adc_full_scale", "readout_variable", "MonotoneCurve", "fit_monotone",
-           "bounded_fit", "bounded_solve", "MonotoneSystem", "monotone_system"]
+__all__ = ["VARIABLES", "TOP_SLOPE_SPAN", "adc_full_scale", "readout_variable", "StaticCurve", "MonotoneCurve",
+           "fit_monotone", "bounded_fit", "bounded_solve", "CurveSystem", "MonotoneSystem", "curve_system",
+           "monotone_system"]
 
 #: The readout variables a curve can be fitted in. [1]
-VARIABLES = ("readout", "conductance", "log")
+VARIABLES = ("readout", "conductance", "reciprocal", "log")
 #: Beyond the top of its readings a curve continues with its mean slope over this top fraction of the
 #: readings' range (per unit of readout). On the 39 real train → test pairs of docs/calibration.md,
 #: against the last segment's slope: 0.962× → 0.950× the oracle polynomial (the 18 pairs added last
@@ -66,9 +69,10 @@ def readout_variable(x, name: str, sign: int, adc: float | None) -> np.ndarray:
     ----------
     x : array_like
         Readings.
-    name : {"readout", "conductance", "log"}
-        ``sign·x``, the divider conductance ratio (needs ``adc``), or ``sign·ln x`` (readings above
-        zero; ones at or below it are taken as the smallest positive float).
+    name : {"readout", "conductance", "reciprocal", "log"}
+        ``sign·x``, the divider conductance ratio (needs ``adc``), ``−sign/x`` (a resistance's
+        conductance) or ``sign·ln x`` (the last two for readings above zero; ones at or below it are
+        taken as the smallest positive float).
     sign : {1, -1}
         +1 when the readout rises with force.
     adc : float or None
@@ -84,6 +88,8 @@ def readout_variable(x, name: str, sign: int, adc: float | None) -> np.ndarray:
         return c / (adc - c) if sign > 0 else (adc - c) / c
     if name == "log":
         return sign * np.log(np.maximum(x, np.finfo(float).tiny))
+    if name == "reciprocal":
+        return -sign / np.maximum(x, np.finfo(float).tiny)
 
     raise ValueError(f"variable: must be one of {', '.join(VARIABLES)} (conductance only for ADC counts), got {name!r}")
 
@@ -157,12 +163,128 @@ def bounded_solve(gram: np.ndarray, atb: np.ndarray, n: int, lower: np.ndarray,
     ata = ata + 1e-12 * np.trace(ata) / k * np.eye(k)
     chol = np.linalg.cholesky(ata)
     rhs = np.linalg.solve(chol, atb)
+    if not np.any(np.isfinite(lower)):  # no bound: the least-squares solution itself
+        return np.linalg.solve(chol.T, rhs) / scale
     res = lsq_linear(chol.T, rhs, bounds=(lower * scale, np.inf), method="bvls")
     return res.x / scale
 
 
+class StaticCurve:
+    """What every static curve shares: the readout variable, and the rule beyond the calibrated readings.
+
+    A curve is linear in its coefficients ``coef``: ``coef[0]`` plus the columns of :meth:`columns`
+    (of the readout variable ``v``) times the others. Below the calibrated readings it is flat; above them
+    it continues linearly per unit of readout with its mean slope over the top half of the readings'
+    range (:data:`TOP_SLOPE_SPAN`). A subclass gives :meth:`_at_v` (the curve inside, at ``v``),
+    :meth:`columns`, :meth:`lower_bounds`, :attr:`name`, :attr:`monotone` and the file form.
+    """
+
+    variable: str
+    sign: int
+    adc: float | None
+    coef: np.ndarray
+    x_range: tuple[float, float]
+    #: Whether every curve of the family is non-decreasing in force (checked by :meth:`is_monotone` otherwise).
+    monotone: bool = True
+
+    def _at_v(self, v: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def columns(self, v: np.ndarray) -> np.ndarray:
+        """The family's columns at ``v`` (after the constant): the curve is ``coef[0] + columns(v) @ coef[1:]``."""
+        raise NotImplementedError
+
+    def lower_bounds(self) -> np.ndarray:
+        """Lower bound of each coefficient in a fit (``-inf``: free)."""
+        raise NotImplementedError
+
+    def penalty(self, columns: int, lam: float, n: int) -> np.ndarray:
+        """Ridge rows of a fit with ``columns`` columns in all on ``n`` readings (none by default)."""
+        return np.zeros((0, columns))
+
+    def with_coef(self, coef) -> "StaticCurve":
+        """The same curve (variable, basis, range) with other coefficients."""
+        raise NotImplementedError
+
+    #: The family (:data:`fsrlab.calibration.curves.FAMILIES`) and its size (segments, degree, inner knots). [1]
+    family: str = ""
+    size: int = 0
+
+    @property
+    def name(self) -> str:
+        raise NotImplementedError
+
+    def _inside(self, x: np.ndarray) -> np.ndarray:
+        """The curve at readings ``x`` (finite) clipped to the range it was fitted on."""
+        lo, hi = self.x_range
+        return self._at_v(readout_variable(np.clip(x, lo, hi), self.variable, self.sign, self.adc))
+
+    @cached_property
+    def _top(self) -> tuple[float, float]:
+        """(The reading at the top of the range, the slope beyond it per unit of readout): the curve's
+        mean slope over the top half of the readings' range (:data:`TOP_SLOPE_SPAN`), in readout units."""
+        lo, hi = self.x_range
+        top = hi if self.sign > 0 else lo
+        if not hi > lo:
+            return top, 0.0
+        start = top - self.sign * TOP_SLOPE_SPAN * (hi - lo)
+        f_start, f_top = self._inside(np.array([start, top]))
+        return top, max(float(f_top - f_start), 0.0) / (TOP_SLOPE_SPAN * (hi - lo))
+
+    @cached_property
+    def rest(self) -> float:
+        """The curve's value at the low-force end of its readings: the reference at rest as the curve
+        sees it (0 for a tared load cell; another value when it was not tared). [unit of the reference]"""
+        lo, hi = self.x_range
+        return float(self._inside(np.array([lo if self.sign > 0 else hi]))[0])
+
+    def is_monotone(self) -> bool:
+        """Whether the curve never falls as force rises over its calibrated readings."""
+        return True
+
+    def _one(self, xc: float) -> float:
+        """The curve at one reading within the calibrated range."""
+        return float(self._inside(np.array([xc]))[0])
+
+    def at(self, x: float) -> float:
+        """The curve at one finite reading ``x``: :meth:`__call__` one reading at a time (a live stream's step)."""
+        lo, hi = self.x_range
+        out = self._one(lo if x < lo else (hi if x > hi else x))
+        top, slope = self._top
+        beyond = self.sign * (x - top)
+        return out + slope * beyond if beyond > 0 else out
+
+    def __call__(self, x) -> np.ndarray:
+        """The curve at readings ``x`` (NaN stays NaN)."""
+        x = np.asarray(x, dtype=float)
+        ok = np.isfinite(x)
+        xs = np.where(ok, x, self.x_range[0])
+        top, slope = self._top
+        out = self._inside(xs) + slope * np.maximum(self.sign * (xs - top), 0.0)
+        return np.where(ok, out, np.nan)
+
+    def _common_dict(self) -> dict:
+        return {"variable": self.variable, "sign": int(self.sign), "adc": self.adc,
+                "coefficients": self.coef.tolist(), "readout_range": list(self.x_range)}
+
+
+def common_fields(d: dict, what: str) -> tuple:
+    """(variable, sign, adc, coefficients, readout range) of a curve's file form, checked."""
+    if str(d["variable"]) not in VARIABLES:
+        raise ValueError(f"{what}: variable must be one of {', '.join(VARIABLES)}, got {d['variable']!r}")
+    if int(d["sign"]) not in (1, -1):
+        raise ValueError(f"{what}: sign must be 1 or -1, got {d['sign']!r}")
+    lo, hi = (float(v) for v in d["readout_range"])
+    if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
+        raise ValueError(f"{what}: readout_range must be two finite readings, least first")
+    coef = np.asarray(d["coefficients"], dtype=float)
+    if coef.ndim != 1 or coef.size < 2 or not np.all(np.isfinite(coef)):
+        raise ValueError(f"{what}: coefficients must be finite numbers, at least two")
+    return str(d["variable"]), int(d["sign"]), None if d.get("adc") is None else float(d["adc"]), coef, (lo, hi)
+
+
 @dataclass
-class MonotoneCurve:
+class MonotoneCurve(StaticCurve):
     """Force (or stress) from a readout: non-decreasing in ``v``, flat below, linear in the readout above.
 
     Parameters
@@ -188,23 +310,10 @@ class MonotoneCurve:
     coef: np.ndarray
     x_range: tuple[float, float]
 
-    @cached_property
-    def _top(self) -> tuple[float, float]:
-        """(The reading at the top of the range, the slope beyond it per unit of readout): the curve's
-        mean slope over the top half of the readings' range (:data:`TOP_SLOPE_SPAN`), in readout units."""
-        lo, hi = self.x_range
-        top = hi if self.sign > 0 else lo
-        if not hi > lo:
-            return top, 0.0
-        start = top - self.sign * TOP_SLOPE_SPAN * (hi - lo)
-        f_start, f_top = self._inside(np.array([start, top]))
-        return top, max(float(f_top - f_start), 0.0) / (TOP_SLOPE_SPAN * (hi - lo))
-
     @property
     def rest(self) -> float:
-        """The curve's least value, at the low-force end of its readings: the reference at rest as the
-        curve sees it (0 for a tared load cell; another value when it was not tared). [unit of the
-        reference]"""
+        """The curve's least value, at the low-force end of its readings (:attr:`StaticCurve.rest`). [unit
+        of the reference]"""
         return float(self._values[0])
 
     @cached_property
@@ -213,52 +322,53 @@ class MonotoneCurve:
         c = self.coef
         return c[0] + np.concatenate([[0.0], np.cumsum(c[1:] * np.diff(self.knots))])
 
-    def _inside(self, x: np.ndarray) -> np.ndarray:
-        """The curve at readings ``x`` (finite) clipped to the range it was fitted on."""
-        lo, hi = self.x_range
-        v = readout_variable(np.clip(x, lo, hi), self.variable, self.sign, self.adc)
+    def _at_v(self, v: np.ndarray) -> np.ndarray:
         return np.interp(v, self.knots, self._values)
+
+    def columns(self, v: np.ndarray) -> np.ndarray:
+        return _basis(v, self.knots)
+
+    def lower_bounds(self) -> np.ndarray:
+        return np.r_[-np.inf, np.zeros(self.segments)]
+
+    def penalty(self, columns: int, lam: float, n: int) -> np.ndarray:
+        return smoothness_penalty(self.knots, columns, lam, n)
+
+    def with_coef(self, coef) -> "MonotoneCurve":
+        return MonotoneCurve(self.variable, self.sign, self.adc, self.knots, np.asarray(coef, dtype=float),
+                             self.x_range)
+
+    @property
+    def name(self) -> str:
+        return f"{self.variable}-{self.segments}"
 
     @cached_property
     def _table(self) -> tuple:
-        """(knots, values at the knots, slope beyond the top per unit of readout, top reading) as Python
-        floats, for :meth:`at` (the curve is not changed after it is made)."""
-        top, slope = self._top
-        return self.knots.tolist(), self._values.tolist(), slope, top
+        """(knots, values at the knots) as Python floats, for :meth:`_one` (the curve is not changed after
+        it is made)."""
+        return self.knots.tolist(), self._values.tolist()
 
-    def at(self, x: float) -> float:
-        """The curve at one finite reading ``x``: :meth:`__call__` without arrays (a live stream's step)."""
-        knots, values, slope, top = self._table
-        lo, hi = self.x_range
-        xc = lo if x < lo else (hi if x > hi else x)
+    def _one(self, xc: float) -> float:
+        """The piecewise-linear interpolation of :meth:`_at_v` without arrays."""
+        knots, values = self._table
         if self.variable == "readout":
             v = self.sign * xc
         else:
             v = float(readout_variable(np.array([xc]), self.variable, self.sign, self.adc)[0])
         i = bisect_right(knots, v)
         if i <= 0:
-            out = values[0]
-        elif i >= len(knots):
-            out = values[-1]
-        else:
-            k0, k1 = knots[i - 1], knots[i]
-            out = values[i - 1] + (values[i] - values[i - 1]) * (v - k0) / (k1 - k0)
-        beyond = self.sign * (x - top)
-        return out + slope * beyond if beyond > 0 else out
-
-    def __call__(self, x) -> np.ndarray:
-        """The curve at readings ``x`` (NaN stays NaN): the basis times the coefficients, evaluated as
-        the piecewise-linear interpolation it is."""
-        x = np.asarray(x, dtype=float)
-        ok = np.isfinite(x)
-        xs = np.where(ok, x, self.x_range[0])
-        top, slope = self._top
-        out = self._inside(xs) + slope * np.maximum(self.sign * (xs - top), 0.0)
-        return np.where(ok, out, np.nan)
+            return values[0]
+        if i >= len(knots):
+            return values[-1]
+        k0, k1 = knots[i - 1], knots[i]
+        return values[i - 1] + (values[i] - values[i - 1]) * (v - k0) / (k1 - k0)
 
     @property
     def segments(self) -> int:
         return int(self.knots.size - 1)
+
+    family = "piecewise"
+    size = segments
 
     def to_dict(self) -> dict:
         return {"variable": self.variable, "sign": int(self.sign), "adc": self.adc, "knots": self.knots.tolist(),
@@ -303,14 +413,14 @@ def smoothness_penalty(knots: np.ndarray, columns: int, lam: float, n: int) -> n
 
 
 @dataclass
-class MonotoneSystem:
-    """The normal equations of a monotone curve's design ``[1, segments, extra columns]`` on some readings:
-    every ridge weight and every sign of the extra columns is then solved without the readings.
+class CurveSystem:
+    """The normal equations of a static curve's design ``[1, the family's columns, extra columns]`` on some
+    readings: every ridge weight and every sign of the extra columns is then solved without the readings.
 
     Parameters
     ----------
-    curve : MonotoneCurve
-        The curve's variable, knots and range (coefficients not yet fitted).
+    curve : StaticCurve
+        The curve's family, variable, basis and range (coefficients not yet fitted).
     gram, atb : ndarray
         ``aᵀa`` and ``aᵀy``.
     yty : float
@@ -319,7 +429,7 @@ class MonotoneSystem:
         Readings.
     """
 
-    curve: MonotoneCurve
+    curve: StaticCurve
     gram: np.ndarray
     atb: np.ndarray
     yty: float
@@ -327,42 +437,39 @@ class MonotoneSystem:
 
     @property
     def extra(self) -> int:
-        return self.gram.shape[0] - self.curve.knots.size
+        return self.gram.shape[0] - self.curve.coef.size
 
     def solve(self, lam: float = 1e-3, extra_lower: np.ndarray | None = None, extra_lam: float = 0.0,
-              extra_signs: np.ndarray | None = None) -> tuple[MonotoneCurve, np.ndarray, float]:
+              extra_signs: np.ndarray | None = None) -> tuple[StaticCurve, np.ndarray, float]:
         """The curve, the extra columns' weights and the residual sum of squares (see :func:`fit_monotone`);
         ``extra_signs``: the extra columns multiplied by these signs first (the weights returned are of the
         columns as given)."""
-        knots = self.curve.knots
-        seg = knots.size - 1
+        k = self.curve.coef.size
         m = self.extra
         gram, atb = self.gram, self.atb
         sg = np.ones(gram.shape[0])
         if m and extra_signs is not None:
-            sg[1 + seg:] = extra_signs
+            sg[k:] = extra_signs
             gram = gram * np.outer(sg, sg)
             atb = atb * sg
         cols = gram.shape[0]
-        pen = [smoothness_penalty(knots, cols, lam, self.n)]
+        pen = [self.curve.penalty(cols, lam, self.n)]
         if m and extra_lam > 0:
             r = np.zeros((m, cols))
-            r[:, 1 + seg:] = np.eye(m)
+            r[:, k:] = np.eye(m)
             pen.append(np.sqrt(extra_lam * self.n) * r)
-        lower = np.r_[-np.inf, np.zeros(seg), (extra_lower if extra_lower is not None else np.full(m, -np.inf))
+        lower = np.r_[self.curve.lower_bounds(), (extra_lower if extra_lower is not None else np.full(m, -np.inf))
                       if m else np.zeros(0)]
         c = bounded_solve(gram, atb, self.n, lower, np.vstack(pen))
         rss = float(c @ gram @ c - 2 * c @ atb + self.yty)
-        curve = MonotoneCurve(self.curve.variable, self.curve.sign, self.curve.adc, knots, c[:1 + seg],
-                              self.curve.x_range)
-        return curve, (c * sg)[1 + seg:], max(rss, 0.0)
+        return self.curve.with_coef(c[:k]), (c * sg)[k:], max(rss, 0.0)
 
-    def solve_extra(self, curve: MonotoneCurve, extra_lam: float = 0.0,
+    def solve_extra(self, curve: StaticCurve, extra_lam: float = 0.0,
                     extra_signs: np.ndarray | None = None) -> tuple[np.ndarray, float]:
         """The extra columns' weights, not below zero (after ``extra_signs``), with the curve held at
-        ``curve`` (fitted alone on the same readings, so on these knots), and the residual sum of squares:
+        ``curve`` (fitted alone on the same readings, so on this basis), and the residual sum of squares:
         the extra columns fitted to what the curve leaves."""
-        k = self.curve.knots.size
+        k = self.curve.coef.size
         if curve.coef.size != k:
             raise ValueError("the curve held must have the system's knots")
         g_ff, g_fc = self.gram[k:, k:], self.gram[k:, :k]
@@ -379,9 +486,39 @@ class MonotoneSystem:
         return w, max(float(w @ g_ff @ w - 2 * w @ b + rr), 0.0)
 
 
+#: The name :func:`monotone_system` has always returned. [1]
+MonotoneSystem = CurveSystem
+
+
+def curve_system(template: StaticCurve, x, y, extra: np.ndarray | None = None) -> CurveSystem:
+    """The :class:`CurveSystem` of ``template``'s family on readings ``x``, reference ``y`` and further columns.
+
+    Parameters
+    ----------
+    template : StaticCurve
+        The family, variable and basis (its coefficients are not used).
+    x, y : array_like
+        Readings and reference, finite.
+    extra : ndarray, shape (n, m), optional
+        Further columns (memory features) fitted with the curve.
+    """
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    v = readout_variable(x, template.variable, template.sign, template.adc)
+    m = 0 if extra is None else extra.shape[1]
+    k = template.coef.size
+    # columns: the constant, the family's, the extra columns
+    a = np.empty((x.size, k + m), order="F")
+    a[:, 0] = 1.0
+    a[:, 1:k] = template.columns(v)
+    if m:
+        a[:, k:] = extra
+    return CurveSystem(template, a.T @ a, a.T @ y, float(y @ y), x.size)
+
+
 def monotone_system(x, y, variable: str, segments: int, sign: int, adc: float | None,
-                    extra: np.ndarray | None = None) -> MonotoneSystem:
-    """The :class:`MonotoneSystem` of readings, reference and further columns.
+                    extra: np.ndarray | None = None) -> CurveSystem:
+    """The :class:`CurveSystem` of a :class:`MonotoneCurve` on readings, reference and further columns.
 
     Parameters
     ----------
@@ -395,19 +532,9 @@ def monotone_system(x, y, variable: str, segments: int, sign: int, adc: float | 
         Further columns (memory features) fitted with the curve.
     """
     x = np.asarray(x, dtype=float)
-    y = np.asarray(y, dtype=float)
-    v = readout_variable(x, variable, sign, adc)
-    knots = knots_for(v, segments)
-    curve = MonotoneCurve(variable, sign, adc, knots, np.zeros(knots.size), (float(x.min()), float(x.max())))
-    m = 0 if extra is None else extra.shape[1]
-    seg = knots.size - 1
-    # columns: the constant, the segments, the extra columns
-    a = np.empty((x.size, 1 + seg + m), order="F")
-    a[:, 0] = 1.0
-    a[:, 1:1 + seg] = _basis(v, knots)
-    if m:
-        a[:, 1 + seg:] = extra
-    return MonotoneSystem(curve, a.T @ a, a.T @ y, float(y @ y), x.size)
+    knots = knots_for(readout_variable(x, variable, sign, adc), segments)
+    template = MonotoneCurve(variable, sign, adc, knots, np.zeros(knots.size), (float(x.min()), float(x.max())))
+    return curve_system(template, x, y, extra)
 
 
 def fit_monotone(x, y, variable: str, segments: int, sign: int, adc: float | None, lam: float = 1e-3,
