@@ -135,7 +135,8 @@ def calibration() -> None:
 
     os.chdir(HERE.parent)
     try:
-        main(["calibrate", "examples/bench.csv", "--compensate", "-o", "examples/calibration.json", "--json"])
+        main(["calibrate", "examples/bench.csv", "--compensate", "-o", "examples/calibration.json", "--overwrite",
+              "--json"])
     except SystemExit as exc:
         if exc.code:
             raise

@@ -106,7 +106,7 @@ def write_corpus(root: Path) -> None:
     cwd = os.getcwd()
     try:
         os.chdir(root)
-        code, _, err = run_cli(["calibrate", "run.csv", "--degree", "2", "--compensate", "-o", "cal.json"])
+        code, _, err = run_cli(["calibrate", "run.csv", "--compensate", "-o", "cal.json"])
     finally:
         os.chdir(cwd)
     assert code == 0, err

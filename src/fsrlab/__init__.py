@@ -12,7 +12,7 @@ each name imports its module when first used::
     import fsrlab as fl
     cal = fl.calibrate(fl.load_run("bench.csv"), compensate=True)
     fl.save_calibration(cal, "bench-calibration.json")
-    est = fl.apply(cal, fl.load_run("other.csv"))
+    est = fl.apply(cal, fl.load_run("other.csv"))   # or cal.estimate(run); cal.estimator() steps one reading
 
 The layers below it, each importing only from the ones under it, are described in ``docs/architecture.md``.
 """
@@ -63,7 +63,6 @@ _LAZY = {
     "apply": ("fsrlab.calibration.apply", "apply_calibration"),
     "check_readout": ("fsrlab.calibration.apply", "check_readout"),
     "agreement": ("fsrlab.calibration.agreement", "agreement"),
-    "live_estimator": ("fsrlab.calibration.estimator", "live_estimator"),
     # reports
     "measure_run": ("fsrlab.bench.measurement", "measure_run"),
     "report": ("fsrlab.reports.run_report", "write_run_report"),

@@ -72,7 +72,7 @@ def test_measure_records_the_estimate_beside_the_load_cell(tmp_path, monkeypatch
     monkeypatch.chdir(tmp_path)
     shutil.copy(ROOT / "examples" / "bench.csv", "bench.csv")
     shutil.copy(ROOT / "examples" / "bench.meta.json", "bench.meta.json")
-    code, out, err = run_cli(["calibrate", "bench.csv", "--degree", "3", "-o", "cal.json"])
+    code, out, err = run_cli(["calibrate", "bench.csv", "-o", "cal.json"])
     assert code == 0, err
     code, out, err = run_cli(["measure", "--virtual", "--cal", "cal.json", "--duration", "1s", "--quiet",
                               "-o", "live.csv", "--json"])
@@ -94,7 +94,7 @@ def test_measure_refuses_a_calibration_made_on_another_circuit_or_range(tmp_path
     # The provenance check of fsrlab apply (calibration.apply.readout_differences), before any window is read:
     # the virtual meter runs VIRTUAL_CIRCUIT on range 0.
     from fsrlab.calibration.document import save_calibration
-    from fsrlab.calibration.fit import calibrate_run
+    from fsrlab.calibration.heldout_runs import calibrate_runs
     from fsrlab.io.runwriter import write_run
     from fsrlab.virtual.sources import VIRTUAL_CIRCUIT
     from fsrlab.virtual.synthetic import synthetic_run
@@ -104,7 +104,7 @@ def test_measure_refuses_a_calibration_made_on_another_circuit_or_range(tmp_path
     circuit = VIRTUAL_CIRCUIT.replace(**recorded["circuit"])
     write_run("cal-run.csv", {**run.columns, "range": np.full(len(run.columns["time_s"]), recorded["range"])},
               {"circuit": circuit.to_dict()})
-    save_calibration(calibrate_run("cal-run.csv", x="frequency_hz", lag=0.0), "cal.json")
+    save_calibration(calibrate_runs("cal-run.csv", x="frequency_hz"), "cal.json")
     code, out, err = run_cli(["measure", "--virtual", "--cal", "cal.json", "--duration", "1s", "--quiet",
                               "-o", "live.csv"])
     assert code == 2 and err.count("\n") == 1 and "--cal" in err and named in err, err

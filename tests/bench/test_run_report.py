@@ -142,10 +142,10 @@ def test_report_cli_writes_html_json_and_pngs(tmp_path):
 
 def test_report_cli_with_a_calibration_file(tmp_path):
     from fsrlab.calibration.document import save_calibration
-    from fsrlab.calibration.fit import calibrate_run
+    from fsrlab.calibration.heldout_runs import calibrate_runs
 
     run = _loop_run(tmp_path / "loop.csv")
-    cal = save_calibration(calibrate_run(run, compensate=True, lag=0.0), tmp_path / "cal.json")
+    cal = save_calibration(calibrate_runs(run, compensate=True), tmp_path / "cal.json")
     code, out, err = run_cli(["report", run, "--cal", cal, "--out", tmp_path / "rep", "--json"])
     assert code == 0, err
     info = json.loads(out)

@@ -42,7 +42,7 @@ def test_a_force_reference_is_spoken_of_in_newtons(force_run):
 @pytest.mark.parametrize("argv, option", [
     (["hysteresis", "EX/bench.csv", "--quantity", "stress_pa"], "--quantity"),
     (["calibrate", "EX/bench.csv", "--x", "stress_pa"], "--x"),
-    (["calibrate", "EX/bench.csv", "--max-lag", "-1"], "--max-lag"),
+    (["calibrate", "EX/bench.csv", "--lag", "soon"], "--lag"),
 ])
 def test_reference_as_readout_and_negative_lag_refused(argv, option):
     code, _, err = run_cli([a.replace("EX", str(EXAMPLES)) for a in argv])

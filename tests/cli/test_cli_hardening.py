@@ -23,7 +23,7 @@ from fsrlab.io.runformat import load_run, sidecar_path
 @pytest.fixture(scope="module")
 def cal(runs, tmp_path_factory):
     p = tmp_path_factory.mktemp("cal") / "cal.json"
-    code, _, err = run_cli(["calibrate", runs / "bench.csv", "--degree", "3", "--compensate", "-o", p])
+    code, _, err = run_cli(["calibrate", runs / "bench.csv", "--compensate", "-o", p])
     assert code == 0, err
     return p
 
@@ -119,7 +119,7 @@ def test_apply_json_counts_are_true(runs, cal, tmp_path):
 
     meta = json.loads(sidecar_path(runs / "other.csv").read_text())
     write_run(tmp_path / "r.csv", {k: v for k, v in c.items() if k not in ("c_fsr_farad", "r_fsr_ohm")}, meta)
-    code, out, err = run_cli(["apply", cal, tmp_path / "r.csv", "-o", tmp_path / "e.csv", "--json"])
+    code, out, err = run_cli(["apply", cal, tmp_path / "r.csv", "-o", tmp_path / "e.csv", "--json", "--margin", "10%"])
     assert code == 0, err
     d = json.loads(out)
     est = load_run(tmp_path / "e.csv")
@@ -166,11 +166,11 @@ def test_apply_refuses_another_range(tmp_path):
     assert run_cli(["apply", tmp_path / "cc.json", tmp_path / "r1.csv", "-o", tmp_path / "e.csv"])[0] == 0
 
 
-def test_a_circuit_corrected_at_calibration_is_not_a_difference(runs, tmp_path):
-    # --r 12k corrects the sidecar's R = 10 kΩ of the calibration run; other.csv, from the same bench
-    # (same sidecar), is decoded through the corrected circuit alike: nothing to refuse.
+def test_a_capacitance_calibration_applies_to_a_run_of_the_same_circuit(runs, tmp_path):
+    # C_FSR is decoded through the sidecar's circuit of the calibration run; other.csv, from the same bench
+    # (same sidecar), is decoded through it alike: nothing to refuse, nothing to warn about.
     cal = tmp_path / "c.json"
-    assert run_cli(["calibrate", runs / "bench.csv", "--x", "c_fsr_farad", "--r", "12k", "-o", cal])[0] == 0
+    assert run_cli(["calibrate", runs / "bench.csv", "--x", "c_fsr_farad", "-o", cal])[0] == 0
     code, _, err = run_cli(["apply", cal, runs / "other.csv", "-o", tmp_path / "e.csv"])
     assert code == 0 and err == ""
 
@@ -184,14 +184,13 @@ def test_older_calibration_file_loads_and_says_it_is_not_checked(cal, runs, tmp_
 
 
 @pytest.mark.parametrize("change, words", [
-    (lambda d: d["chebyshev_coefficients"].__setitem__(0, 1e308), "finite values"),
-    (lambda d: d["compensation"].__setitem__("threshold", 0.0), "threshold"),
-    (lambda d: d["compensation"].__setitem__("sign", 3.0), "sign"),
+    (lambda d: d["calibration"].__setitem__("full_scale", 0.0), "full_scale"),
+    (lambda d: d["calibration"].__setitem__("delay_s", -1.0), "delay_s"),
+    (lambda d: d.__setitem__("lag_s", "soon"), "lag_s"),
 ])
 def test_damaged_calibration_value_is_one_line_naming_the_file(cal, runs, tmp_path, change, words):
     # Property: a value no calibration can hold is refused at load, naming the file, and nothing is written.
     d = json.loads(cal.read_text())
-    assert "compensation" in d  # the bench run's whole cycles: the branch compensation (its threshold, sign)
     change(d)
     (tmp_path / "bad.json").write_text(json.dumps(d))
     code, _, err = run_cli(["apply", tmp_path / "bad.json", runs / "other.csv", "-o", tmp_path / "e.csv"])

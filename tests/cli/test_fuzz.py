@@ -102,7 +102,7 @@ VALID_FOR = {
     ("acquire", "--window"): ["10", "50", "100"], ("acquire", "--range"): ["0", "1"],
     ("acquire", "--baud"): ["115200"], ("acquire", "--corrupt"): ["0", "0.1"], ("acquire", "--drop"): ["0", "0.1"],
     ("virtual-device", "--corrupt"): ["0", "0.1"], ("virtual-device", "--drop"): ["0", "0.1"],
-    ("calibrate", "--folds"): ["2", "3", "5"], ("calibrate", "--degree"): ["auto", "1", "2", "3"],
+    ("calibrate", "--lag"): ["0", "auto", "0.02"], ("calibrate", "--between-runs"): ["10%", "0.2"],
     ("iso376", "--degree"): ["1", "2", "3"], ("repeatability", "--ddof"): ["0", "1"],
     ("weights", "--masses"): ["0,100g", "0,50g,100g", "0,0.2kg"], ("weights", "--x"): ["frequency_hz", "voltage_v"],
     ("weights", "--window"): ["20ms", "0.02"], ("weights", "--settle-windows"): ["2", "3"],

@@ -182,7 +182,7 @@ def test_tare_while_the_load_moves_is_refused_saying_why(tmp_path):
 def test_a_calibration_recorded_on_another_range_is_refused_with_the_reason(tmp_path, monkeypatch):
     from fsrlab.virtual.sources import VIRTUAL_CIRCUIT
     from fsrlab.calibration.document import save_calibration
-    from fsrlab.calibration.fit import calibrate_run
+    from fsrlab.calibration.heldout_runs import calibrate_runs
     from fsrlab.virtual.synthetic import synthetic_run
     from fsrlab.io.runwriter import write_run
 
@@ -190,7 +190,7 @@ def test_a_calibration_recorded_on_another_range_is_refused_with_the_reason(tmp_
     run = synthetic_run(cycles=2, points_per_ramp=60, seed=1)  # recorded on range 0 of the virtual circuit
     write_run(tmp_path / "cal-run.csv", {**run.columns, "range": np.zeros(len(run.columns["time_s"]))},
               {"circuit": VIRTUAL_CIRCUIT.to_dict()})
-    cal = calibrate_run(tmp_path / "cal-run.csv", x="frequency_hz", lag=0.0)
+    cal = calibrate_runs(tmp_path / "cal-run.csv", x="frequency_hz")
     save_calibration(cal, tmp_path / "cal.json")
     code, out, err = run_cli(["live", "--virtual", "--range", "1", "--cal", "cal.json", "--http-port", "0",
                               "--duration", "1s", "--json"])

@@ -12,10 +12,8 @@
    recorded at once, each on its own virtual meter (their time axes are the simulated clocks);
 3. calibrates on the calibration run against the load cell's force when the meter has one (the
    virtual meter emulates an HX711; else the stress the bench applied), with the causal hysteresis
-   compensation and the lag searched automatically (it finds 0 within a row: the reference is taken
-   in the readout's own window), and fits a
-   known-weight calibration (m·g; a polynomial of degree ≤ 2 through 0 and the masses) on the
-   dead-weight run;
+   compensation, every choice scored held out (:func:`fsrlab.calibrate`), and a known-weight
+   calibration by the same engine on the dead-weight run (its readings against m·g);
 4. applies the calibration to the test run (the compensated estimate);
 5. writes the measurement report of the test run (:func:`fsrlab.reports.run_report.write_run_report`)
    with the dead-weight run's placements;
@@ -371,7 +369,6 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
     # 3. Calibration.
     from fsrlab.calibration.document import save_calibration
     from fsrlab.calibration.apply import apply_calibration
-    from fsrlab.calibration.fit import calibrate_run
     from fsrlab.calibration.heldout_runs import calibrate_runs
 
     import numpy as np
@@ -393,8 +390,8 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
     result.files["calibration"] = save_calibration(cal, out / "calibration.json")
     known = None
     try:
-        # Three load levels (0 and two masses): a polynomial of degree 2 at most.
-        known = calibrate_run(out / "weights-run.csv", degree=min(2, len(weights.masses_kg)), reference="force_n")
+        # The same engine on the dead weights' readings against m·g.
+        known = calibrate_runs(out / "weights-run.csv", x="frequency_hz", reference="force_n")
         result.files["known-weight calibration"] = save_calibration(known, out / "known-weight-calibration.json")
     except ValueError as exc:
         say(f"      known-weight calibration not possible: {exc}")
@@ -403,9 +400,10 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
                                      "delay_s": cal.model.delay_s, "scheme": cal.selection.scheme}
     if known is not None:
         result.numbers["known_weight_calibration"] = {"model": known.model_name, "reference": known.y_name,
-                                                      "cv_rmse": known.cv_rmse, "unit": known.y_unit}
+                                                      "cv_rmse": known.selection.heldout_rmse, "unit": known.y_unit,
+                                                      "scheme": known.selection.scheme}
     done("calibration", t0, f"{cal.model_name}, held-out RMSE {cal.selection.heldout_rmse:.3g} {cal.y_unit}"
-         + (f"; known weights: {known.model_name}, CV RMSE {known.cv_rmse:.3g} {known.y_unit}"
+         + (f"; known weights: {known.model_name}, held-out RMSE {known.selection.heldout_rmse:.3g} {known.y_unit}"
             if known is not None else ""))
 
     # 4. Compensation on the test run.

@@ -374,25 +374,15 @@ def _creep(run, min_hold_s: float = 5.0) -> tuple[list, str | None]:
 
 
 def _calibration_summary(cal, source: str) -> dict:
-    from fsrlab.calibration.heldout_runs import RunCalibration
-
-    if isinstance(cal, RunCalibration):
-        m = cal.model
-        return {"model": cal.model_name, "x": cal.x_name, "y": cal.y_name, "y_unit": cal.y_unit,
-                "cv_rmse": cal.selection.heldout_rmse, "r2": cal.r2, "lag_s": cal.lag_s, "delay_s": m.delay_s,
-                "uncertainty_max": float(m.uncertainty.table.max()), "uncertainty_median": float(np.median(m.uncertainty.table)),
-                "compensated": m.has_memory, "compensation_he_percent": None, "full_scale": cal.full_scale,
-                "source": source, "scheme": cal.selection.scheme}
-    unc = cal.uncertainty
-    sig = np.asarray(getattr(unc, "sigma", []), dtype=float)
-    sig = sig[np.isfinite(sig)]
+    m = cal.model
+    table = np.asarray(getattr(m.uncertainty, "table", []), dtype=float)
+    table = table[np.isfinite(table)]
     return {"model": cal.model_name, "x": cal.x_name, "y": cal.y_name, "y_unit": cal.y_unit,
-            "cv_rmse": cal.cv_rmse, "r2": float(cal.r2), "lag_s": cal.lag_s,
-            "uncertainty_max": float(sig.max()) if sig.size else None,
-            "uncertainty_median": float(np.median(sig)) if sig.size else None,
-            "compensated": cal.memory is not None or cal.compensation is not None,
-            "compensation_he_percent": list(cal.compensation_he_percent) if cal.compensation_he_percent else None,
-            "full_scale": cal.full_scale, "source": source}
+            "cv_rmse": cal.selection.heldout_rmse, "r2": cal.r2, "lag_s": cal.lag_s, "delay_s": m.delay_s,
+            "uncertainty_max": float(table.max()) if table.size else None,
+            "uncertainty_median": float(np.median(table)) if table.size else None,
+            "compensated": m.has_memory, "compensation_he_percent": None, "full_scale": cal.full_scale,
+            "source": source, "scheme": cal.selection.scheme}
 
 
 def measure_run(run, placements=None, weights_run=None, calibration=None, calibrate: bool = True) -> RunReport:
@@ -410,7 +400,7 @@ def measure_run(run, placements=None, weights_run=None, calibration=None, calibr
         run itself when it has a ``step`` column.
     calibration : Calibration or path, optional
         Applied to the run for the estimate. Without one and with ``calibrate``, the run is
-        calibrated on itself (grouped cross-validation, compensation).
+        calibrated on itself (:func:`fsrlab.calibrate` with ``compensate=True``).
     calibrate : bool
         Calibrate the run on itself when no calibration is given.
 

@@ -1,6 +1,7 @@
-"""Calibration: model families, alignment, compensation, uncertainty, provenance, the fit, the estimator, apply.
+"""Calibration: one engine, every choice scored on held-out recordings, and one result type.
 
-:func:`fsrlab.calibration.fit.calibrate_run` turns a recorded run into a
-:class:`~fsrlab.calibration.result.Calibration`; :func:`fsrlab.calibration.apply.apply_calibration` gives
-another run's estimate; :func:`fsrlab.calibration.estimator.live_estimator` steps it one reading at a time.
+:func:`fsrlab.calibration.heldout_runs.calibrate_runs` (``fsrlab.calibrate``) turns recorded runs into a
+:class:`~fsrlab.calibration.result.Calibration`, whose ``estimate(run)`` and ``estimator()`` give a run's
+estimate or one reading's; :func:`fsrlab.calibration.apply.apply_calibration` checks the run's provenance
+first. docs/calibration.md.
 """

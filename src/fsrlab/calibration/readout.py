@@ -1,11 +1,9 @@
 """What a recorded run holds for a calibration: its readout, its reference, its branches, cycles and circuit.
 
-The calibration reads a run through these functions (:mod:`fsrlab.calibration.fit`,
-:mod:`fsrlab.calibration.apply`); they pass the run's columns and sidecar to the computations on arrays.
-A run's branches and cycles come from one rule (:func:`run_directions`, :func:`run_cycles`: the
-``direction`` and ``cycle`` columns when the run has them, else found from the reference stress), used
-alike by the calibration's cross-validation groups, by the compensation and by the hysteresis error
-(:func:`hysteresis_of_run`).
+The calibration reads a run through these functions (:mod:`fsrlab.calibration.heldout_runs`,
+:mod:`fsrlab.calibration.result`, :mod:`fsrlab.calibration.apply`); they pass the run's columns and
+sidecar to the computations on arrays. The hysteresis error of a run (:func:`hysteresis_of_run`) follows
+its ``direction`` and ``cycle`` columns when it has them, else the branches found from the reference.
 
 References
 ----------
@@ -14,17 +12,14 @@ A. Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, §5, eq. (
 
 from __future__ import annotations
 
-from contextlib import contextmanager
-
 import numpy as np
 
-from fsrlab.calibration.polynomial import default_groups
 from fsrlab.calibration.provenance import recorded_with
 from fsrlab.circuits.circuit import LM555Circuit, readout_from_metadata
 from fsrlab.io.runformat import Run, RunFormatError, load_run
-from fsrlab.metrics.cycles import RunHysteresis, row_cycles, row_directions, run_hysteresis
+from fsrlab.metrics.cycles import RunHysteresis, run_hysteresis
 
-__all__ = ["C_FSR", "run_directions", "run_cycles", "run_groups", "run_circuit", "decode_capacitance", "run_readout",
+__all__ = ["C_FSR", "run_circuit", "decode_capacitance", "run_readout",
            "run_reference", "reference_reversed", "run_recorded_with", "hysteresis_of_run"]
 
 #: The decoded-capacitance variable of the physics-informed calibration. [F]
@@ -35,83 +30,9 @@ def _as_run(run) -> Run:
     return run if isinstance(run, Run) else load_run(run)
 
 
-@contextmanager
-def _named(run: Run, x: str):
-    """Re-raise a computation's ValueError about its arrays ``x``, ``y`` naming the run's columns."""
-    try:
-        yield
-    except RunFormatError:
-        raise
-    except ValueError as exc:
-        message = str(exc)
-        for lead, name in (("x, y: ", f"{x} and stress_pa: "), ("x: ", f"{x}: ")):
-            if message.startswith(lead):
-                raise ValueError(f"{run.path}: {name}{message[len(lead):]}") from None
-        if message.startswith("degree: "):
-            raise
-        raise ValueError(f"{run.path}: {message}") from None
-
-
 def _recorded(run: Run):
     """The run's own ``direction`` and ``cycle`` columns (None where absent): the only place read."""
     return run.columns.get("direction"), run.columns.get("cycle")
-
-
-def run_directions(run: Run, threshold: float = 0.05) -> np.ndarray:
-    """Direction of every reading: the ``direction`` column, else found from the reference stress.
-
-    Parameters
-    ----------
-    run : Run
-        A loaded run (:func:`fsrlab.io.runformat.load_run`).
-    threshold : float
-        Reversal threshold as a fraction of the stress span, used without a direction column. [1]
-
-    Returns
-    -------
-    ndarray of int
-        +1 loading, -1 unloading, 0 hold or unknown (see :func:`fsrlab.metrics.cycles.row_directions`).
-    """
-    return row_directions(run.stress_pa(), *_recorded(run), threshold)
-
-
-def run_cycles(run: Run, threshold: float = 0.05) -> np.ndarray:
-    """Cycle number of every reading: the ``cycle`` column, else numbered from :func:`run_directions`.
-
-    Parameters
-    ----------
-    run : Run
-        A loaded run.
-    threshold : float
-        Reversal threshold as a fraction of the stress span. [1]
-
-    Returns
-    -------
-    ndarray of float
-        Cycle numbers (NaN where the cycle column is empty); a new cycle starts where loading
-        follows unloading (:func:`fsrlab.physics.history.cycle_numbers`).
-    """
-    return row_cycles(run.stress_pa(), *_recorded(run), threshold)
-
-
-def run_groups(run: Run, folds: int = 5, threshold: float = 0.05) -> np.ndarray:
-    """Cross-validation groups of a run: its cycles, kept whole.
-
-    Parameters
-    ----------
-    run : Run
-        A loaded run.
-    folds : int
-        Contiguous blocks to cut the run into when it has fewer than 2 cycles.
-    threshold : float
-        Reversal threshold for cycles found from the stress. [1]
-
-    Returns
-    -------
-    ndarray of int
-        Group of each reading (:func:`fsrlab.calibration.polynomial.default_groups` of :func:`run_cycles`).
-    """
-    return default_groups(run.n_rows, run_cycles(run, threshold), folds)
 
 
 def run_circuit(run: Run, circuit: LM555Circuit | None = None) -> LM555Circuit:

@@ -1,339 +1,378 @@
-"""A fitted calibration (:class:`Calibration`) and the array-level fit :func:`calibrate`.
+"""The one calibration result, :class:`Calibration`: estimate a run, step readings, save, plot.
 
-:func:`calibrate` fits y(x) as a polynomial whose degree is chosen by grouped cross-validation
-(:mod:`fsrlab.calibration.polynomial`); calibrating a recorded run (its cycles, its circuit, the lag,
-the model family, the compensation) is :mod:`fsrlab.calibration.fit`, and the calibration file is
-:mod:`fsrlab.calibration.document`.
+**Extension beyond the paper.** What :func:`fsrlab.calibrate` (:func:`fsrlab.calibration.heldout_runs.calibrate_runs`)
+returns and :func:`fsrlab.load_calibration` reads. One contract for every calibration, whatever its
+curve, memory and readout variable:
 
-References
-----------
-A. Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, §5, Figure 17.
+* :meth:`Calibration.estimate` -- a run with ``<reference>_estimate``, ``<reference>_uncertainty`` and
+  ``in_range``; the memory takes every reading in row order, ``margin`` only decides which estimates are
+  reported, so no estimate inside the calibrated range depends on it;
+* :meth:`Calibration.estimator` -- the same numbers one reading at a time (``fsrlab measure``, ``live``);
+* :meth:`Calibration.to_dict` / :meth:`Calibration.from_dict` -- the file (``"version": 2``; files of
+  version 1 in either earlier layout are read and applied, read-only: :mod:`fsrlab.calibration.legacy`);
+* :meth:`Calibration.plot` -- the curve, its ±2u band and the data (matplotlib, imported when called).
+
+Examples
+--------
+::
+
+    import fsrlab as fl
+    cal = fl.calibrate("examples/bench.csv", compensate=True)
+    cal                                   # Calibration(stress_pa(frequency_hz): monotone-..., held-out RMSE ...)
+    out = cal.estimate(fl.load_run("examples/other.csv"))   # stress_pa_estimate, stress_pa_uncertainty, in_range
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
-from datetime import datetime, timezone
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from fsrlab.calibration.polynomial import (
-    MAX_DEGREE, CrossValidation, PolynomialModel, _prepare, _scaling, cross_validate_degrees, default_groups, fingerprint, fit_metrics,
-    fit_polynomial,
-)
-from fsrlab.io.calibration_file import CALIBRATION_FORMAT
+from fsrlab.calibration.heldout_calibration import HeldoutCalibration
+from fsrlab.calibration.heldout_model import Selection
+from fsrlab.calibration.legacy import LegacyModel, is_legacy
+from fsrlab.calibration.provenance import RecordedWith
+from fsrlab.calibration.readout import C_FSR, run_readout
+from fsrlab.circuits.circuit import LM555Circuit
+from fsrlab.errors import ParameterError
+from fsrlab.io.calibration_file import CALIBRATION_FORMAT, CALIBRATION_VERSION
+from fsrlab.io.runformat import Run, RunFormatError
 
-if TYPE_CHECKING:
-    from fsrlab.calibration.provenance import RecordedWith
-    from fsrlab.circuits.circuit import LM555Circuit
+__all__ = ["METHOD", "MARGIN", "Calibration", "Estimator", "as_margin"]
 
-__all__ = ["Calibration", "calibrate"]
+#: The ``method`` of a calibration file written by this fsrlab.
+METHOD = "held-out"
+#: Default margin beyond the calibrated readout range, a fraction of its span, within which an
+#: estimate is reported (flagged ``in_range`` 0): every reading, since the curve extrapolates linearly
+#: and the uncertainty grows by half the extrapolated amount. [1]
+MARGIN = float("inf")
+_FILE_KEYS = ("complete", "rows", "closed", "created", "format", "version", "columns")
 
 
-@dataclass
-class Calibration:
-    """A fitted calibration, ready to save and apply.
+def as_margin(margin) -> float:
+    """``margin`` as a fraction ≥ 0 of the calibrated span (None: :data:`MARGIN`); a number, not a string.
 
     Parameters
     ----------
-    model : PolynomialModel
-        y(x).
-    x_name, y_name : str
-        Columns (``frequency_hz`` -> ``stress_pa``; ``c_fsr_farad`` for the physics-informed option).
-    x_unit, y_unit : str
-        Units of x and y.
-    r2, rmse, max_error_percent_fs : float
-        In-sample fit quality on all readings (RMSE in the unit of y).
+    margin : float or None
+        How far beyond the calibrated readout range an estimate is reported, a fraction of its span. [1]
+
+    Raises
+    ------
+    ParameterError
+        Negative, NaN, or not a number (``"10%"`` is for the command line; give 0.1).
+    """
+    if margin is None:
+        return MARGIN
+    if isinstance(margin, bool) or not isinstance(margin, (int, float, np.integer, np.floating)):
+        raise ParameterError(f"must be a number, a fraction >= 0 of the calibrated span such as 0.1 for 10 %, "
+                             f"got {margin!r}", parameter="margin")
+    if not float(margin) >= 0:
+        raise ParameterError(f"must be a fraction >= 0 of the calibrated span, got {margin!r}", parameter="margin")
+    return float(margin)
+
+
+@dataclass(repr=False)
+class Calibration:
+    """A calibration of a readout to its reference, ready to apply, step, save and plot.
+
+    Parameters
+    ----------
+    model : HeldoutCalibration or LegacyModel
+        The curve, memory and uncertainty (a :class:`~fsrlab.calibration.legacy.LegacyModel` for a
+        file of the earlier cross-validated layout).
+    selection : Selection
+        What was tried, how it was scored, and why the calibration is what it is.
+    x_name, y_name, x_unit, y_unit : str
+        Readout and reference columns and their units.
+    sources : list of str
+        The runs it was fitted on.
+    recorded_with : RecordedWith or None
+        The circuit and range the runs were recorded with (checked when applied).
     n : int
-        Readings used.
-    data_fingerprint : str
-        See :func:`fingerprint`.
+        Readings fitted.
     created : str
         UTC time, ISO 8601.
-    cv : CrossValidation or None
-        The degree selection, when ``degree="auto"``.
-    circuit : LM555Circuit or None
-        Circuit through which C_FSR was decoded (physics-informed option).
-    source : str
-        Where the data came from.
-    extra : dict
-        Further entries kept in the calibration file.
-    compensation : DirectionAwareCalibration or None
-        Direction-aware hysteresis compensation fitted on the same data (an extension, see
-        :mod:`fsrlab.calibration.compensation`).
-    compensation_he_percent : (float, float) or None
-        Hysteresis error (eq. 13) of the calibrated stress on the calibration data, plain
-        polynomial and compensated. [%]
-    recorded_with : RecordedWith or None
-        The readout the data were recorded with (circuits, ranges), checked when the calibration
-        is applied to another run (:mod:`fsrlab.calibration.provenance`); None when unknown (a
-        calibration file written before fsrlab recorded it).
     path : Path or None
-        The file the calibration was read from (not stored in the file).
-    family : FamilyModel or None
-        The chosen model when it is not ``model`` itself (a conductance or power-law family,
-        :mod:`fsrlab.calibration.models`); None: the polynomial ``model`` is the calibration.
-    lag_s : float or None
-        Lag applied when fitting: the readout at t went with the reference at ``t − lag_s``
-        (:mod:`fsrlab.calibration.alignment`); None when the run had no time column. [s]
-    floor : Floor or None
-        The readout's floor (dead zone): readings at it are "below activation".
-    memory : MemoryModel or None
-        The causal hysteresis compensation (:mod:`fsrlab.calibration.play`).
-    uncertainty : Uncertainty or None
-        Standard uncertainty per estimate by level and direction (:mod:`fsrlab.calibration.play`),
-        of the estimate as applied by default (with the compensation when there is one).
-    uncertainty_plain : Uncertainty or None
-        The same for the estimate without the compensation (only when there is one).
-    candidates : list of dict
-        Every candidate model's cross-validated RMSE (``model``, ``cv_rmse``, ``parameters``).
-    cv_rmse : float or None
-        Cross-validated RMSE of the estimate as applied (with the compensation when fitted). [unit of y]
-    full_scale : float or None
-        Full scale of the reference (its range over the calibration data). [unit of y]
+        The file it was read from.
+    r2 : float
+        Coefficient of determination of the estimate on the readings fitted (in sample). [1]
+    circuit : LM555Circuit or None
+        The circuit C_FSR was decoded through (``x_name`` ``c_fsr_farad``), used again when applied.
+    lag_s : float
+        Lag of the readout behind the reference the calibration was fitted with. [s]
     """
 
-    model: PolynomialModel
+    model: HeldoutCalibration | LegacyModel
+    selection: Selection
     x_name: str
     y_name: str
-    x_unit: str
-    y_unit: str
-    r2: float
-    rmse: float
-    max_error_percent_fs: float
-    n: int
-    data_fingerprint: str
-    created: str
-    cv: CrossValidation | None = None
-    circuit: "LM555Circuit | None" = None
-    source: str = ""
-    extra: dict = field(default_factory=dict)
-    compensation: Any = None  # a DirectionAwareCalibration (fsrlab.calibration.compensation) or None
-    compensation_he_percent: tuple[float, float] | None = None
-    recorded_with: "RecordedWith | None" = None
+    x_unit: str = ""
+    y_unit: str = ""
+    sources: list = field(default_factory=list)
+    recorded_with: RecordedWith | None = None
+    n: int = 0
+    created: str = ""
     path: Path | None = None
-    family: Any = None
-    lag_s: float | None = 0.0
-    floor: Any = None
-    memory: Any = None
-    uncertainty: Any = None
-    uncertainty_plain: Any = None
-    candidates: list = field(default_factory=list)
-    cv_rmse: float | None = None
-    full_scale: float | None = None
+    r2: float = float("nan")
+    circuit: LM555Circuit | None = None
+    lag_s: float = 0.0
 
     @property
-    def model_name(self) -> str:
-        """The chosen model: ``polynomial-3``, ``conductance-power``, ..."""
-        return self.family.name if self.family is not None else f"polynomial-{self.degree}"
-
-    @property
-    def degree(self) -> int:
-        """Polynomial degree."""
-        return self.model.degree
+    def read_only(self) -> bool:
+        """Whether it comes from a file of the earlier cross-validated layout (applied, never written anew)."""
+        return isinstance(self.model, LegacyModel)
 
     @property
     def x_range(self) -> tuple[float, float]:
         """Calibrated readout range (lowest, highest). [unit of x]"""
-        return (self.model.center - self.model.half_width, self.model.center + self.model.half_width)
+        return self.model.x_range if self.read_only else self.model.curve.x_range
 
-    def __call__(self, x) -> np.ndarray:
-        """y estimated from readout ``x`` by the chosen model (without compensation)."""
-        return self.model(x) if self.family is None else self.family(x)
+    @property
+    def full_scale(self) -> float:
+        return self.model.full_scale
 
-    def inverse(self, y, points: int = 8193) -> np.ndarray:
-        """Readout x that the calibration maps to ``y`` (e.g. the frequency expected at a stress).
+    @property
+    def model_name(self) -> str:
+        """``monotone-readout-4+hysteresis+creep``, ``polynomial-3`` (a read-only file's), ..."""
+        return _model_name(self.model)
 
-        Parameters
-        ----------
-        y : array_like
-            Values of the calibrated quantity (stress [Pa]).
-        points : int
-            Grid points over the calibrated readout range used for the inversion.
+    def __repr__(self) -> str:
+        lo, hi = self.x_range
+        rmse = self.selection.heldout_rmse
+        score = (f"held-out RMSE {rmse:.4g} {self.y_unit}".rstrip() if math.isfinite(rmse) else "")
+        if self.read_only:
+            score = "read-only (an earlier fsrlab's file)"
+        runs = f"{self.n} readings of {len(self.sources)} run{'s' if len(self.sources) != 1 else ''}"
+        return (f"Calibration({self.y_name}({self.x_name}): {self.model_name}, {score}, readout {lo:.6g} … {hi:.6g}"
+                f"{' ' + self.x_unit if self.x_unit else ''}, {runs})")
 
-        Returns
-        -------
-        ndarray
-            Readout [unit of x]; NaN where ``y`` lies outside the calibrated range.
+    # ---------------------------------------------------------------------------------- the file
+    def to_dict(self) -> dict:
+        """The calibration file's content (``"version": 2``; a read-only one: its file as it was)."""
+        if self.read_only:
+            return self.model.to_dict()
+        return {"format": CALIBRATION_FORMAT, "version": CALIBRATION_VERSION, "method": METHOD,
+                "model": self.model_name, "x": self.x_name, "y": self.y_name,
+                "units": {"x": self.x_unit, "y": self.y_unit}, "readout_range": list(self.x_range),
+                "lag_s": self.lag_s, "n": self.n, "r2": self.r2 if math.isfinite(self.r2) else None, "created": self.created, "sources": list(self.sources),
+                "recorded_with": None if self.recorded_with is None else self.recorded_with.to_dict(),
+                "circuit": None if self.circuit is None else self.circuit.to_dict(),
+                "selection": self.selection.to_dict(), "calibration": self.model.to_dict()}
+
+    @classmethod
+    def from_dict(cls, d: dict, path: Path | None = None) -> "Calibration":
+        """Inverse of :meth:`to_dict`, for version 2 and both layouts of version 1.
 
         Raises
         ------
-        ValueError
-            If the polynomial is not monotonic over the calibrated range (no unique inverse).
-
-        Notes
-        -----
-        The polynomial is evaluated on a fine grid of the calibrated readout range and inverted by
-        linear interpolation; with 8193 points the interpolation error is below 1e-7 of the range
-        for a degree-5 polynomial.
+        KeyError, TypeError, ValueError
+            An entry missing or malformed.
         """
-        xs = np.linspace(*self.x_range, points)
-        ys = self.model(xs)
-        d = np.diff(ys)
-        if not (np.all(d > 0) or np.all(d < 0)):
-            raise ValueError(f"the degree-{self.degree} calibration is not monotonic over its readout range; "
-                             "it has no unique inverse")
-        if d[0] < 0:
-            xs, ys = xs[::-1], ys[::-1]
-        yv = np.asarray(y, dtype=float)
-        return np.interp(yv, ys, xs, left=np.nan, right=np.nan)
+        rw = d.get("recorded_with")
+        rw = None if rw is None else RecordedWith.from_dict(rw)
+        units = d.get("units") or {}
+        parts = d.get("circuit") if "circuit" in d else d.get("decode")
+        circuit = None if not parts else LM555Circuit.from_dict(parts)
+        lag = d.get("lag_s")
+        if lag is not None and (isinstance(lag, bool) or not isinstance(lag, (int, float)) or not math.isfinite(lag)):
+            raise ValueError(f"lag_s must be a finite number of seconds or null, got {lag!r}")
+        lag = 0.0 if lag is None else float(lag)
+        common = dict(x_name=str(d["x"]), y_name=str(d["y"]), x_unit=str(units.get("x", "")),
+                      y_unit=str(units.get("y", "")), recorded_with=rw, created=str(d.get("created", "")), path=path,
+                      circuit=circuit, lag_s=lag)
+        if is_legacy(d):
+            met = d.get("metrics") or {}
+            rmse = d.get("cv_rmse") if d.get("cv_rmse") is not None else met.get("rmse", math.nan)
+            sel = Selection("grouped cross-validation inside one run (an earlier fsrlab)", heldout_rmse=float(rmse),
+                            heldout_rmse_plain=float(met.get("rmse", math.nan)))
+            return cls(LegacyModel(d), sel, sources=[str(d.get("source", ""))], n=int(met.get("n", 0)),
+                       r2=float(met.get("r2", math.nan)), **common)
+        s = d.get("selection") or {}
+        sel = Selection(str(s.get("scheme", "")), list(s.get("candidates", [])), list(s.get("steps", [])),
+                        int(s.get("lag_rows", 0)), float(s.get("heldout_rmse", math.nan)),
+                        float(s.get("heldout_rmse_plain", math.nan)), s.get("gain_spread"))
+        return cls(HeldoutCalibration.from_dict(d["calibration"]), sel, sources=list(d.get("sources", [])),
+                   n=int(d.get("n", 0)), r2=float(d.get("r2") if d.get("r2") is not None else math.nan), **common)
 
-    def to_dict(self) -> dict[str, Any]:
-        """The calibration file's content (``docs/calibration.md``; read back by
-        :func:`fsrlab.calibration.document.calibration_from_dict`).
+    # ---------------------------------------------------------------------------------- applying
+    def estimator(self, margin: float | None = None, compensation: bool = True) -> "Estimator":
+        """A causal estimator: ``step(reading, t=None) -> (estimate, uncertainty, in_range)``, equal to
+        :meth:`estimate` row by row."""
+        return Estimator(self, margin, compensation)
+
+    def readout(self, run: Run, circuit: LM555Circuit | None = None) -> np.ndarray:
+        """The calibration's readout of a run: its column, or C_FSR decoded through ``circuit`` (default:
+        the calibration's, else the run's). [unit of x]"""
+        if self.x_name not in run and self.x_name != C_FSR:
+            raise RunFormatError(f"{run.path}: column {self.x_name!r} (the calibration's readout) missing "
+                                 f"(columns: {', '.join(run.columns)})")
+        values, _ = run_readout(run, self.x_name, circuit if circuit is not None else self.circuit)
+        return np.asarray(values, dtype=float)
+
+    def estimate(self, run: Run, margin: float | None = None, compensation: bool = True,
+                 circuit: LM555Circuit | None = None, forced: list | None = None) -> Run:
+        """The run with ``<reference>_estimate``, ``<reference>_uncertainty`` and ``in_range``.
+
+        Parameters
+        ----------
+        run : Run
+            The run (it needs the readout column, or ``frequency_hz`` and ``duty_cycle`` for ``c_fsr_farad``).
+        margin : float, optional
+            Beyond the calibrated readout range by more than this fraction of its span, no estimate is
+            reported (default :data:`MARGIN`: every reading). Every reading feeds the memory, in row
+            order, whatever the margin. [1]
+        compensation : bool
+            Use the memory terms when the calibration has them (False: the static curve alone).
+        circuit : LM555Circuit, optional
+            The circuit C_FSR is decoded through, when not the calibration's.
+        forced : list of str, optional
+            Provenance differences ignored by :func:`fsrlab.calibration.apply.apply_calibration`, kept
+            in the metadata. No provenance check here.
 
         Returns
         -------
-        dict
-            JSON-ready; ``circuit`` is :meth:`LM555Circuit.to_dict` or None; ``readout_range`` the
-            calibrated readout range [unit of x]; ``recorded_with`` :meth:`RecordedWith.to_dict` or
-            None; ``compensation`` (only when fitted) is :meth:`DirectionAwareCalibration.to_dict` with
-            the hysteresis errors before and after; the entries of ``extra`` follow.
+        Run
+            The input columns and the three new ones; metadata with their units and a ``calibration``
+            entry (``counts``: ``estimated``, ``in_range``, ``out_of_range``, ``extrapolated``,
+            ``missing``, ``no_readout``, ``not_decodable``, ``beyond_margin``, ``below_activation``).
         """
-        d = {
-            "format": CALIBRATION_FORMAT,
-            "version": 1,
-            "model": self.model_name if self.family is not None else "polynomial",
-            "basis": "chebyshev",
-            "x": self.x_name, "y": self.y_name,
-            "units": {"x": self.x_unit, "y": self.y_unit},
-            "degree": self.degree,
-            "chebyshev_coefficients": self.model.coefficients.tolist(),
-            "x_center": self.model.center,
-            "x_half_width": self.model.half_width,
-            "coefficients": self.model.power_coefficients().tolist(),
-            "coefficients_note": "y = sum(coefficients[k] * x**k); evaluation uses the Chebyshev form (better conditioned)",
-            "metrics": {"r2": self.r2, "rmse": self.rmse, "max_error_percent_fs": self.max_error_percent_fs, "n": self.n},
-            "cross_validation": None if self.cv is None else {
-                "degrees": self.cv.degrees, "rmse": self.cv.rmse, "folds": self.cv.folds, "groups": self.cv.groups},
-            "data_fingerprint": self.data_fingerprint,
-            "created": self.created,
-            "circuit": None if self.circuit is None else self.circuit.to_dict(),
-            "source": self.source,
-            "readout_range": list(self.x_range),
-            "recorded_with": None if self.recorded_with is None else self.recorded_with.to_dict(),
-        }
-        d.update({
-            "model_family": None if self.family is None else self.family.to_dict(),
-            "lag_s": self.lag_s,
-            "floor": None if self.floor is None else self.floor.to_dict(),
-            "memory": None if self.memory is None else self.memory.to_dict(),
-            "uncertainty": None if self.uncertainty is None else self.uncertainty.to_dict(),
-            "uncertainty_plain": None if self.uncertainty_plain is None else self.uncertainty_plain.to_dict(),
-            "candidates": self.candidates,
-            "cv_rmse": self.cv_rmse,
-            "full_scale": self.full_scale,
-        })
-        if self.memory is not None and self.compensation_he_percent is not None:
-            d["memory"]["hysteresis_error_before_percent"], d["memory"]["hysteresis_error_after_percent"] = \
-                self.compensation_he_percent
-        if self.compensation is not None:
-            d["compensation"] = self.compensation.to_dict()
-            if self.compensation_he_percent is not None:
-                before, after = self.compensation_he_percent
-                d["compensation"]["hysteresis_error_before_percent"] = before
-                d["compensation"]["hysteresis_error_after_percent"] = after
-        d.update(self.extra)
-        return d
+        margin = as_margin(margin)
+        x = self.readout(run, circuit)
+        t = np.asarray(run["time_s"], dtype=float) if "time_s" in run else np.arange(x.size) * self.model.row_s
+        model = self.model if compensation else self.model.without_memory()
+        est, d = model.run(t, x)
+        given = np.isfinite(x)
+        lo, hi = self.x_range
+        span = hi - lo
+        with np.errstate(invalid="ignore"):
+            inside = given & (x >= lo) & (x <= hi)
+            kept = given & (x >= lo - margin * span) & (x <= hi + margin * span) if math.isfinite(margin) else given
+        extra = model.extrapolated(x, lo, hi) if (given & ~inside).any() else None
+        u = model.uncertainty(est, d, extra) if model.uncertainty is not None else np.full(x.shape, np.nan)
+        ycol, ucol = f"{self.y_name}_estimate", f"{self.y_name}_uncertainty"
+        columns = dict(run.columns)
+        columns[ycol] = np.where(kept, est, np.nan)
+        columns[ucol] = np.where(kept & np.isfinite(est), u, np.nan)
+        columns["in_range"] = np.where(given, inside.astype(float), np.nan)
+        meta = {k: v for k, v in run.metadata.items() if k not in _FILE_KEYS}
+        meta["units"] = dict(run.units, **{ycol: self.y_unit, ucol: self.y_unit, "in_range": "1"})
+        meta["calibration"] = {**({} if self.path is None else {"file": str(self.path)}), "x": self.x_name,
+                               "reference": self.y_name, "model": _model_name(model), "method": METHOD, "lag_s": self.lag_s,
+                               "created": self.created, "readout_range": [lo, hi],
+                               "margin": margin if math.isfinite(margin) else None,
+                               "counts": _counts(run, self.x_name, columns[ycol], given, inside, kept, est)}
+        if forced:
+            meta["calibration"]["forced"] = list(forced)
+        return Run(path=run.path, columns=columns, metadata=meta)
 
-    def plot(self, ax=None, x=None, y=None, points: int = 200):
-        """Draw the calibration curve over its calibrated readout range, with the data if given.
+    # ---------------------------------------------------------------------------------- drawing
+    def plot(self, ax=None, run: Run | None = None, points: int = 200):
+        """Draw the static curve over the calibrated readout range with its ±2u band, and a run's data.
 
         Parameters
         ----------
         ax : matplotlib.axes.Axes, optional
             Where to draw (default: a new figure).
-        x, y : array_like, optional
-            Readings to show as points: readout [unit of x] and reference [unit of y].
+        run : Run, optional
+            A run with the readout and the reference, drawn as points.
         points : int
             Points of the drawn curve.
 
         Returns
         -------
         matplotlib.axes.Axes
-            The data (when given) first, then the polynomial, then the compensation's loading and
-            unloading curves (when the calibration holds one).
         """
-        if (x is None) != (y is None):
-            raise ValueError("x and y: give both (the data) or neither")
         if ax is None:
             import matplotlib.pyplot as plt
 
             _, ax = plt.subplots()
-        grid = np.linspace(*self.x_range, points)
-        if x is not None:
-            ax.plot(np.asarray(x, dtype=float), np.asarray(y, dtype=float), ".", ms=3, alpha=0.5, label="data")
-        ax.plot(grid, self(grid), "-", color="k", label=f"degree {self.degree}, R² = {self.r2:.4f}")
-        if self.compensation is not None:
-            ax.plot(grid, self.compensation.load_model(grid), "--", label="compensation: loading")
-            ax.plot(grid, self.compensation.unload_model(grid), "--", label="compensation: unloading")
-        ax.set_xlabel(f"{self.x_name} [{self.x_unit}]")
+        lo, hi = self.x_range
+        grid = np.linspace(lo, hi, int(points))
+        static = self.model.without_memory()
+        y = static.curve_estimate(grid)
+        if run is not None:
+            ax.plot(self.readout(run), np.asarray(run[self.y_name], dtype=float), ".", ms=3, alpha=0.5, label="data")
+        if static.uncertainty is not None:
+            u = static.uncertainty(y, np.zeros(grid.size, dtype=int))
+            ax.fill_between(grid, y - 2 * u, y + 2 * u, color="0.85", label="±2u")
+        ax.plot(grid, y, "-", color="k", label=static.static_name)
+        ax.set_xlabel(f"{self.x_name} [{self.x_unit or '1'}]")
         ax.set_ylabel(f"{self.y_name} [{self.y_unit}]")
+        ax.set_title(repr(self), fontsize=7)
         ax.legend()
         return ax
 
 
-def _finite_pairs(x, y):
-    x, y = _prepare(x, y)
-    ok = np.isfinite(x) & np.isfinite(y)
-    if ok.sum() < 3:
-        raise ValueError("x, y: fewer than 3 readings with both values present")
-    return ok
+def _model_name(m) -> str:
+    if isinstance(m, LegacyModel):
+        return m.static_name + ("+hysteresis" if m.has_memory else "")
+    mem = (("+hysteresis" + ("·level" if m.scaled else "")) if m.thresholds else "") + \
+        ("+creep" if m.time_constants else "")
+    return f"monotone-{m.static_name}{mem}"
 
 
-def calibrate(x, y, degree: int | str = "auto", groups=None, folds: int = 5, x_name: str = "frequency_hz",
-              y_name: str = "stress_pa", x_unit: str = "Hz", y_unit: str = "Pa", source: str = "",
-              circuit: "LM555Circuit | None" = None) -> Calibration:
-    """Fit y(x) as a polynomial, choosing the degree by grouped cross-validation.
+def _counts(run: Run, x_name: str, estimate, given, inside, kept, raw) -> dict:
+    """Rows estimated, in and out of range, and without an estimate by reason."""
+    not_decodable = np.zeros(given.shape, bool)
+    if x_name == C_FSR and C_FSR not in run:
+        parts = np.isfinite(run["frequency_hz"]) & np.isfinite(run["duty_cycle"])
+        not_decodable = ~given & parts
+    below = given & kept & ~np.isfinite(raw)
+    return {"estimated": int(np.isfinite(estimate).sum()), "in_range": int(inside.sum()),
+            "out_of_range": int((given & ~inside).sum()), "extrapolated": int((np.isfinite(estimate) & ~inside).sum()),
+            "missing": int((~np.isfinite(estimate)).sum()), "no_readout": int((~given & ~not_decodable).sum()),
+            "not_decodable": int(not_decodable.sum()), "beyond_margin": int((given & ~kept).sum()),
+            "below_activation": int(below.sum())}
+
+
+class Estimator:
+    """The estimates of :meth:`Calibration.estimate`, one reading at a time (``fsrlab measure``, ``fsrlab live``).
 
     Parameters
     ----------
-    x : array_like
-        Readout (or the reference for an inverse model). Rows where x or y is NaN are skipped.
-    y : array_like
-        Reference stress [Pa] (or the readout for an inverse model).
-    degree : int or "auto"
-        1..5, or ``"auto"``: the lowest degree whose out-of-fold RMSE is within 1 % of the
-        smallest (grouped cross-validation, see :func:`cross_validate_degrees`).
-    groups : array_like, optional
-        Group (cycle) of each reading for the folds (see :func:`default_groups`); default:
-        contiguous blocks in time order.
-    folds : int
-        Folds of the cross-validation (≥ 2).
-    x_name, y_name, x_unit, y_unit : str
-        Names and units recorded in the calibration.
-    source : str
-        Provenance recorded in the calibration.
-    circuit : LM555Circuit, optional
-        Circuit through which x was decoded (physics-informed option), recorded with the calibration.
+    cal : Calibration
+        The calibration.
+    margin : float, optional
+        Beyond the calibrated readout range by more than this fraction of its span, no estimate is
+        reported (the memory still takes the reading). [1]
+    compensation : bool
+        Use the memory terms when the calibration has them.
 
-    Returns
-    -------
-    Calibration
+    Notes
+    -----
+    ``step(readout, t=None)`` returns ``(estimate or None, standard uncertainty or None, in_range)``;
+    ``reference`` and ``x`` name the quantities. A missing reading leaves the memory as it is.
     """
-    x, y = _prepare(x, y)
-    ok = _finite_pairs(x, y)
-    xs, ys = x[ok], y[ok]
-    g = default_groups(x.size, None, folds) if groups is None else np.asarray(groups)
-    if g.shape != x.shape:
-        raise ValueError("groups must have one label per reading")
-    g = g[ok]
-    center, half = _scaling(xs)
-    cv = None
-    if isinstance(degree, str):
-        if degree != "auto":
-            raise ValueError(f"degree must be an integer from 1 to {MAX_DEGREE} or 'auto', got {degree!r}")
-        cv = cross_validate_degrees(xs, ys, g, folds=folds, center=center, half_width=half)
-        degree = cv.best_degree
-        # Final fit from the same sums (the Chebyshev Gram matrix on [-1, 1] is well conditioned).
-        model = PolynomialModel(coefficients=cv.full_fit(degree), center=center, half_width=half)
-    else:
-        model = fit_polynomial(xs, ys, degree, center, half)
-    met = fit_metrics(ys, model(xs))
-    return Calibration(model=model, x_name=x_name, y_name=y_name, x_unit=x_unit, y_unit=y_unit, r2=met["r2"],
-                       rmse=met["rmse"], max_error_percent_fs=met["max_error_percent_fs"], n=int(xs.size),
-                       data_fingerprint=fingerprint(xs, ys),
-                       created=datetime.now(timezone.utc).isoformat(timespec="seconds").replace("+00:00", "Z"),
-                       cv=cv, circuit=circuit, source=source)
+
+    def __init__(self, cal: Calibration, margin: float | None = None, compensation: bool = True):
+        margin = as_margin(margin)
+        self.cal = cal
+        self.model = cal.model if compensation else cal.model.without_memory()
+        self.reference, self.x = cal.y_name, cal.x_name
+        self.stepper = self.model.stepper()
+        self.lo, self.hi = cal.x_range
+        span = self.hi - self.lo
+        self.kept = (self.lo - margin * span, self.hi + margin * span) if math.isfinite(margin) else (-math.inf, math.inf)
+        self._k = 0
+
+    def step(self, readout: float | None, t: float | None = None) -> tuple[float | None, float | None, bool]:
+        """Take one reading (time ``t`` [s], default: the calibration's row step after the last)."""
+        if t is None:
+            t = self._k * self.model.row_s
+        self._k += 1
+        if readout is None or not math.isfinite(float(readout)):
+            return None, None, False
+        x = float(readout)
+        est, d = self.stepper.step(x, t)
+        inside = self.lo <= x <= self.hi
+        if est is None or not math.isfinite(est) or not self.kept[0] <= x <= self.kept[1]:
+            return None, None, inside
+        u = None
+        m = self.model
+        if m.uncertainty is not None:
+            extra = None if inside else m.extrapolated(np.array([x]), self.lo, self.hi)
+            u = float(m.uncertainty(np.array([est]), np.array([d]), extra)[0])
+        return est, u, inside

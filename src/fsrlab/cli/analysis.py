@@ -1,7 +1,7 @@
 """``fsrlab hysteresis``, ``repeatability``, ``calibrate``, ``apply``, ``iso376``: what a user does with recorded runs.
 
-Thin commands: they parse options and render; runs are calibrated, converted and measured by
-:mod:`fsrlab.calibration.fit`; files follow docs/data-format.md. Warnings (an incomplete run,
+Thin commands: they parse options and render; runs are calibrated by
+:func:`fsrlab.calibration.heldout_runs.calibrate_runs` and converted by :func:`fsrlab.calibration.apply.apply_calibration`; files follow docs/data-format.md. Warnings (an incomplete run,
 skipped rows, an unchecked calibration) go to stderr, each once, when the command has a result;
 a command that fails prints its one error line only.
 """
@@ -16,12 +16,11 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli.options import (
-    OVERWRITE_HELP, SKIP_HELP, checked, emit_json, eng, fail, farads, fraction, load_run_warned, missing_column, number,
-    ohms, option_names, out_path, reading_file, seconds, skipped_json, warn,
+    OVERWRITE_HELP, SKIP_HELP, checked, emit_json, eng, fail, fraction, load_run_warned, missing_column, number,
+    option_names, out_path, reading_file, skipped_json, warn,
 )
 from fsrlab.units import STANDARD_GRAVITY
 
-_DEGREES = ("auto", "1", "2", "3", "4", "5")
 
 @app.command("hysteresis")
 def hysteresis(
@@ -121,9 +120,6 @@ def repeatability(
     Console().print(table)
 
 
-_MODELS = ("auto", "polynomial", "conductance-polynomial", "conductance-power", "power", "polynomial-1", "polynomial-2",
-           "polynomial-3", "polynomial-4", "polynomial-5", "conductance-polynomial-1", "conductance-polynomial-2",
-           "conductance-polynomial-3")
 _GRAMS_PER_NEWTON = 1e3 / STANDARD_GRAVITY
 
 
@@ -156,38 +152,29 @@ def _unit_option(unit: str | None, reference: str) -> tuple[str, float]:
 @app.command("calibrate")
 def calibrate_cmd(
     run_files: list[Path] = typer.Argument(..., metavar="RUN.csv [RUN2.csv ...]", help="One or more runs of the same sensor and readout, each with the reference force_n [N] or stress_pa [Pa] and the readout; time_s [s] optional (row order otherwise)."),
-    x: str = typer.Option("frequency_hz", "--x", help="Readout to calibrate: any numeric column, e.g. frequency_hz [Hz], duty_cycle [1], voltage_v [V], reading [counts] (a run from fsrlab import), or c_fsr_farad [F]: C_FSR decoded from frequency_hz and duty_cycle (physics-informed, --method cv)."),
+    x: str = typer.Option("frequency_hz", "--x", help="Readout to calibrate: any numeric column, e.g. frequency_hz [Hz], duty_cycle [1], voltage_v [V], reading [counts] (a run from fsrlab import), or c_fsr_farad [F]: C_FSR decoded from frequency_hz and duty_cycle through the circuit of the run's sidecar."),
     reference: str = typer.Option(None, "--reference", help="Reference column: force_n [N] (no sensor area needed) or stress_pa [Pa] (default: stress_pa if the run has it, else force_n)."),
-    method: str = typer.Option("auto", "--method", help="How choices are scored [name]: held-out (on other runs, or on later blocks of one run; each added term kept only when it wins there: docs/calibration.md), cv (grouped cross-validation inside one run, with --model, --degree, --folds, --max-lag, c_fsr_farad), or auto: cv when one of those is given, else held-out."),
-    model: str = typer.Option("auto", "--model", help="Model [name] (--method cv): auto (every family, chosen by grouped cross-validation), polynomial, conductance-polynomial, conductance-power (F = c + a·G^b through the readout circuit), power, or one candidate such as polynomial-3."),
-    degree: str = typer.Option("auto", "--degree", help="Polynomial degree 1..5 [1] (--method cv; the model is then that polynomial), or auto."),
-    compensate: bool = typer.Option(False, "--compensate", help="Also try the causal hysteresis compensation (play operators with memory, and creep; extension beyond the paper): fitted to what the static curve leaves unless refitting the curve with it wins held out, its correction weighted by the held-out error, kept only when it lowers that error by more than its standard error and 5 % of the MSE (--method cv: chosen by grouped CV, HE [%] before/after)."),
+    compensate: bool = typer.Option(False, "--compensate", help="Also try the causal hysteresis and creep compensation (play operators with memory, exponential averages; extension beyond the paper): fitted to what the static curve leaves unless refitting the curve with it wins held out, its correction weighted by the held-out error, kept only when it lowers that error by more than its standard error and 5 % of the MSE."),
     unit: str = typer.Option(None, "--unit", help="Display unit of the errors in the table [N, g, Pa or kPa] (default: the reference's, N or Pa); --json and the file stay SI."),
-    lag: str = typer.Option(None, "--lag", help="Lag of the readout behind the reference [s] (rows without time_s), e.g. 0.02, 0 or auto (searched; kept only when a shift of whole rows wins held out). Default 0: the estimate is of the reference as recorded (--method cv: auto, searched by cross-validation)."),
-    max_lag: float = typer.Option(None, "--max-lag", parser=seconds, help="Half-width of the lag search [s] (--method cv), e.g. 0.25 (default 0.25 s, at least 2 rows)."),
-    folds: int = typer.Option(5, "--folds", help="Cross-validation folds [1] (--method cv), ≥ 2 (fewer when the run has fewer cycles or blocks)."),
-    r: float = typer.Option(None, "--r", parser=ohms, help="555 R for --x c_fsr_farad [Ω], e.g. 10k (default: the run's sidecar, else 10k)."),
-    c_off: float = typer.Option(None, "--c-off", parser=farads, help="C_off for --x c_fsr_farad [F], e.g. 470p (default: sidecar, else 0)."),
-    rail: float = typer.Option(None, "--rail", parser=eng, help="Full scale of a divider's readout [unit of the readout], e.g. 5 for a voltage read across a divider on 5 V, 3.3 on 3.3 V: the FSR's conductance ratio V/(rail − V) is then tried as the curve's variable (held-out method; default: the run's sidecar, or the ADC's full scale for integer counts). Every reading must lie below it."),
-    between_runs: float = typer.Option(None, "--between-runs", parser=fraction, help="Relative standard uncertainty between recordings [1, a fraction], e.g. 0.2 or 20%: the floor of the uncertainty's term for what changes from one recording to the next (held-out method; default 15%; the held-out runs' gain spread when larger). From the setup: 1–8% for a film pressed by a robot, about 20% for an FSR placed by hand from one session to the next (docs/calibration.md)."),
+    lag: str = typer.Option("0", "--lag", help="Lag of the readout behind the reference [s] (rows without time_s), e.g. 0.02, 0 or auto (a shift of whole rows searched, kept only when it wins held out). Default 0: the estimate is of the reference as recorded, and a delay of the reference is tried."),
+    rail: float = typer.Option(None, "--rail", parser=eng, help="Full scale of a divider's readout [unit of the readout], e.g. 5 for a voltage read across a divider on 5 V, 3.3 on 3.3 V: the FSR's conductance ratio V/(rail − V) is then tried as the curve's variable (default: the run's sidecar, or the ADC's full scale for integer counts). Every reading must lie below it."),
+    between_runs: float = typer.Option(None, "--between-runs", parser=fraction, help="Relative standard uncertainty between recordings [1, a fraction], e.g. 0.2 or 20%: the floor of the uncertainty's term for what changes from one recording to the next (default 15%; the held-out runs' gain spread when larger). From the setup: 1–8% for a film pressed by a robot, about 20% for an FSR placed by hand from one session to the next (docs/calibration.md)."),
     skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=SKIP_HELP),
     output: Path = typer.Option(None, "--output", "-o", parser=out_path, help="Write the calibration to this JSON file."),
     overwrite: bool = typer.Option(False, "--overwrite", help=OVERWRITE_HELP),
-    json_out: bool = typer.Option(False, "--json", help="Print JSON: model, method, how choices were scored and each step's result, held-out RMSE [reference unit and % FS], lag_s and delay_s [s], candidates, ..."),
+    json_out: bool = typer.Option(False, "--json", help="Print JSON: model, how choices were scored and each step's result, held-out RMSE [reference unit and % FS], lag_s and delay_s [s], candidates, ..."),
 ) -> None:
     """Calibrate readout → force or stress, every choice scored where it will be used.
 
-    Default (held-out): a monotone curve (readout, a divider's conductance for analogRead
-    counts or with --rail, or the readout's logarithm when every reading is above zero), then a
-    delay of the reference (a load cell that reports late), a lag (--lag auto) and the hysteresis
-    and creep terms (their correction weighted by the held-out error), each kept only when it beats
-    the simpler calibration on another run (or, with one run, on later blocks of it) by more than
-    one standard error and by 5 % of its MSE --
-    otherwise the simpler calibration is written and the output says why. The uncertainty
-    comes from those held-out errors. With --method cv (one run): polynomials and conductance
-    families by grouped cross-validation, the dead zone, the branch or play-operator compensation.
-    The file records the readout range and the circuit and range the runs were recorded with,
-    which fsrlab apply checks. See docs/calibration.md.
+    A monotone curve (in the readout, a divider's conductance for analogRead counts or with
+    --rail, or the readout's logarithm when every reading is above zero), then a delay of the
+    reference (a load cell that reports late), a lag (--lag auto) and the hysteresis and creep
+    terms (their correction weighted by the held-out error), each kept only when it beats the
+    simpler calibration on another run (or, with one run, on later blocks of it) by more than one
+    standard error and by 5 % of its MSE -- otherwise the simpler calibration is written and the
+    output says why. The uncertainty comes from those held-out errors. The file records the
+    readout range and the circuit and range the runs were recorded with, which fsrlab apply
+    checks. See docs/calibration.md.
 
     Examples (files under examples/ in the fsrlab source tree):
 
@@ -195,134 +182,15 @@ def calibrate_cmd(
       fsrlab calibrate examples/bench.csv --compensate -o cal.json
       fsrlab calibrate examples/bench.csv examples/other.csv --x frequency_hz --compensate --json
     """
-    cv_only = {"--model": model != "auto", "--degree": degree != "auto", "--folds": folds != 5,
-               "--max-lag": max_lag is not None, "--r": r is not None, "--c-off": c_off is not None,
-               "--x c_fsr_farad": x == "c_fsr_farad"}
-    if method not in ("auto", "held-out", "cv"):
-        fail(f"must be auto, held-out or cv, got {method!r}", "--method")
-    asked = [k for k, v in cv_only.items() if v]
     if x in ("stress_pa", "force_n"):
         fail(f"{x} is a reference column: a calibration of the reference against itself (or against itself "
              "divided by the area) says nothing; give a readout such as frequency_hz", "--x")
     if output is not None:
         checked(output, "--output", overwrite=overwrite, inputs=run_files)
-    if method == "held-out" and asked:
-        fail(f"{asked[0]} needs --method cv (or auto)", "--method")
-    fallback_note = None
-    if method == "held-out" or (method == "auto" and not asked):
-        if rail is not None and not (math.isfinite(rail) and rail > 0):
-            fail(f"must be a full scale > 0 in the readout's unit, got {rail:g}", "--rail")
-        fallback_note = _calibrate_held_out(run_files, x, reference, compensate, unit, lag or "0", skip_bad_rows,
-                                            output, json_out, fall_back=method == "auto", rail=rail,
-                                            between_runs=between_runs)
-        if fallback_note is None:
-            return
-    if between_runs is not None:
-        fail("is for the held-out method (--method cv takes its uncertainty from the run's residuals)"
-             + (f", and {fallback_note.replace(': calibrated by', ': it would be calibrated by')}" if fallback_note else ""),
-             "--between-runs")
-    if len(run_files) > 1:
-        fail(f"--method cv calibrates one run, got {len(run_files)}: several runs are calibrated with --method "
-             "held-out", "--method")
-    if rail is not None:
-        fail("is for the held-out method (--method cv takes the divider from the run's sidecar)", "--rail")
-    run_file = run_files[0]
-    lag = lag or "auto"
-    from fsrlab.calibration.document import save_calibration
-    from fsrlab.calibration.fit import calibrate_run
-    from fsrlab.calibration.readout import run_circuit
-
-    if degree not in _DEGREES:
-        fail(f"must be auto or 1..5, got {degree!r}", "--degree")
-    if model not in _MODELS:
-        fail(f"must be one of {', '.join(_MODELS)}; got {model!r}", "--model")
-    if folds < 2:
-        fail(f"must be >= 2, got {folds}", "--folds")
-    if max_lag is not None and not max_lag >= 0:
-        fail(f"must be a half-width >= 0 s, got {max_lag:g} s", "--max-lag")
-    lag_value = _lag_option(lag)
-    warnings: list[str] = [fallback_note] if fallback_note else []
-    run = load_run_warned(run_file, skip_bad_rows, warnings)
-    if x not in run and x != "c_fsr_farad":
-        missing_column(run_file, run, x, option="--x")
-    _reference_option(run_file, run, reference)
-    _unit_option(unit, reference or ("stress_pa" if "stress_pa" in run else "force_n"))
-    circuit = None
-    parts = {k: v for k, v in (("r_ohm", r), ("c_off_farad", c_off)) if v is not None}
-    if x == "c_fsr_farad" and parts:
-        with option_names({"r_ohm": "--r", "c_off_farad": "--c-off"}):
-            circuit = run_circuit(run).replace(**parts)
-    try:
-        with option_names({"model": "--model", "max_lag_s": "--max-lag"}):
-            cal = calibrate_run(run, x=x, degree="auto" if degree == "auto" else int(degree), compensate=compensate,
-                                folds=folds, circuit=circuit, reference=reference, model=model, lag=lag_value,
-                                max_lag_s=max_lag)
-    except ValueError as exc:
-        if str(exc).startswith("degree: "):
-            fail(str(exc)[len("degree: "):], "--model" if model != "auto" else "--degree")
-        raise
-    lo, hi = cal.x_range
-    fs = cal.full_scale or float("nan")
-    out = {"model": cal.model_name, "reference": cal.y_name, "unit": cal.y_unit, "lag_s": cal.lag_s,
-           "cv_rmse": cal.cv_rmse, "cv_rmse_percent_fs": 100 * cal.cv_rmse / fs if cal.cv_rmse is not None else None,
-           "full_scale": cal.full_scale, "candidates": cal.candidates,
-           "below_activation": None if cal.floor is None else {
-               "readout_threshold": cal.floor.threshold, "activation": cal.floor.activation,
-               "fraction": cal.floor.fraction},
-           "degree": cal.degree, "r2": cal.r2, "rmse": cal.rmse, "max_error_percent_fs": cal.max_error_percent_fs,
-           "coefficients": cal.model.power_coefficients().tolist(), "readout_range": [lo, hi],
-           "degrees_tried": None if cal.cv is None else cal.cv.degrees}
-    if cal.y_name == "stress_pa":
-        out["rmse_pa"] = cal.rmse
-    for key in ("lag_search", "lag_rows", "compensation_candidates", "compensation_choice", "hysteresis_error_method"):
-        if key in cal.extra:
-            out[key] = cal.extra[key]
-    if compensate:
-        out["hysteresis_error_before_percent"], out["hysteresis_error_after_percent"] = cal.compensation_he_percent
-    if skip_bad_rows:
-        out.update(skipped_json(run))
-    if output is not None:
-        save_calibration(cal, output)
-    warn(warnings)
-    if json_out:
-        emit_json(out)
-        return
-    from rich.console import Console
-    from rich.table import Table
-
-    u, k = _unit_option(unit, cal.y_name)
-    console = Console()
-    table = Table(title=f"Calibration {cal.y_name}({x}), {run_file.name}")
-    table.add_column("quantity")
-    table.add_column("value", justify="right")
-    table.add_row("model", cal.model_name + (" (chosen by grouped CV)" if model == "auto" and degree == "auto" else ""))
-    table.add_row("lag (s)" if cal.lag_s is not None else "lag (rows)",
-                  f"{cal.lag_s if cal.lag_s is not None else cal.extra.get('lag_rows', 0.0):.4g}")
-    if cal.cv_rmse is not None:
-        table.add_row(f"CV RMSE ({u})", f"{k * cal.cv_rmse:.4g}")
-        table.add_row("CV RMSE (% FS)", f"{out['cv_rmse_percent_fs']:.3f}")
-    table.add_row("R² (in sample)", f"{cal.r2:.5f}")
-    table.add_row("max error (% FS, in sample)", f"{cal.max_error_percent_fs:.3f}")
-    table.add_row(f"readout range ({cal.x_unit or '1'})", f"{lo:.6g} … {hi:.6g}")
-    if cal.floor is not None:
-        table.add_row(f"below activation: readout at floor ({cal.x_unit or '1'})", f"≤ {cal.floor.threshold:.6g}"
-                      if cal.floor.sign > 0 else f"≥ {cal.floor.threshold:.6g}")
-    for c in cal.candidates:
-        table.add_row(f"CV RMSE {c['model']} ({u})", f"{k * c['cv_rmse']:.4g}")
-    if compensate:
-        choice = cal.extra.get("compensation_choice", {})
-        if choice:
-            table.add_row("compensation", f"{choice['chosen']} (chosen by grouped CV)")
-        table.add_row("HE of the estimate, plain (%)", f"{out['hysteresis_error_before_percent']:.3f}")
-        table.add_row("HE with compensation (%)", f"{out['hysteresis_error_after_percent']:.3f}")
-    console.print(table)
-    console.print("polynomial coefficients (ascending powers of x): "
-                  + ", ".join(f"{c:.6g}" for c in out["coefficients"]))
-    if cal.cv is not None and cal.cv.untried:
-        console.print(f"polynomial degrees {', '.join(map(str, cal.cv.untried))} not tried: the smallest training fold "
-                      f"has too few readings to determine them ({cal.n} readings, {cal.cv.folds} folds)")
-    if output is not None:
-        console.print(f"wrote {output}")
+    if rail is not None and not (math.isfinite(rail) and rail > 0):
+        fail(f"must be a full scale > 0 in the readout's unit, got {rail:g}", "--rail")
+    _calibrate_held_out(run_files, x, reference, compensate, unit, lag, skip_bad_rows, output, json_out, rail=rail,
+                        between_runs=between_runs)
 
 
 def _lag_option(lag: str) -> float | str:
@@ -340,49 +208,28 @@ def _lag_option(lag: str) -> float | str:
 
 def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, compensate: bool, unit: str | None,
                         lag: str, skip_bad_rows: bool, output: Path | None, json_out: bool,
-                        fall_back: bool, rail: float | None = None, between_runs: float | None = None) -> str | None:
-    """``fsrlab calibrate`` by held-out scoring (:func:`fsrlab.calibration.heldout_runs.calibrate_runs`).
-
-    Returns None when done; a note, having done nothing, when ``fall_back`` and a single run is too
-    short for held-out scoring: the caller then calibrates it by in-run cross-validation and warns with
-    the note when that succeeds."""
-    import numpy as np
-
+                        rail: float | None = None, between_runs: float | None = None) -> None:
+    """``fsrlab calibrate`` (:func:`fsrlab.calibration.heldout_runs.calibrate_runs`): the calibration, its file,
+    and its JSON or table."""
     from fsrlab.calibration.document import save_calibration
-    from fsrlab.calibration.heldout_runs import MIN_READINGS, calibrate_runs
+    from fsrlab.calibration.heldout_runs import calibrate_runs
 
     warnings: list[str] = []
     runs = []
     for run_file in run_files:
         run = load_run_warned(run_file, skip_bad_rows, warnings)
-        if x not in run:
+        if x not in run and not (x == "c_fsr_farad" and "frequency_hz" in run and "duty_cycle" in run):
             missing_column(run_file, run, x, option="--x")
         _reference_option(run_file, run, reference)
         runs.append(run)
     ref = reference or ("stress_pa" if all("stress_pa" in r for r in runs) else "force_n")
     _unit_option(unit, ref)
-    if rail is not None:
-        for run_file, run in zip(run_files, runs):
-            v = np.asarray(run[x], dtype=float)
-            if np.isfinite(v).any() and float(np.nanmax(v)) >= rail:
-                fail(f"{run_file}: {x} reaches {float(np.nanmax(v)):g}, not below the full scale {rail:g}", "--rail")
-    if fall_back and len(runs) == 1 and ref in runs[0]:
-        both = np.isfinite(runs[0][x]) & np.isfinite(runs[0][ref])
-        if int(both.sum()) < MIN_READINGS:
-            return (f"{run_files[0]} has {int(both.sum())} readings, fewer than the {MIN_READINGS} held-out scoring "
-                    "needs: calibrated by cross-validation inside the run (--method cv)")
-    lag_rows: int | str = "auto"
-    lag_s = _lag_option(lag)
-    if lag_s != "auto":
-        first = runs[0]
-        step = float(np.median(np.diff(first["time_s"]))) if "time_s" in first and first.n_rows > 1 else 1.0
-        lag_rows = int(round(lag_s / step)) if step > 0 else 0
-    with option_names({"between_runs": "--between-runs"}):
-        cal = calibrate_runs(runs, x=x, reference=ref, compensate=compensate, lag=lag_rows, rail=rail,
+    with option_names({"between_runs": "--between-runs", "rail": "--rail", "lag": "--lag",
+                       "reference": "--reference"}):
+        cal = calibrate_runs(runs, x=x, reference=ref, compensate=compensate, lag=_lag_option(lag), rail=rail,
                              between_runs=between_runs)
     sel = cal.selection
     fs = cal.full_scale
-    refused = [s for s in sel.steps if s["step"] == "memory" and not s["kept"]]
     out = {"method": "held-out", "scheme": sel.scheme, "model": cal.model_name, "reference": cal.y_name,
            "unit": cal.y_unit, "runs": [str(p) for p in run_files], "lag_s": cal.lag_s, "lag_rows": sel.lag_rows,
            "delay_s": cal.model.delay_s, "heldout_rmse": sel.heldout_rmse, "heldout_rmse_percent_fs": 100 * sel.heldout_rmse / fs,
@@ -394,13 +241,20 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
     warn(warnings)
     if json_out:
         emit_json(out)
-        return None
+        return
+    _calibration_table(cal, run_files, unit, between_runs, out["heldout_rmse_percent_fs"], compensate, output)
+
+
+def _calibration_table(cal, run_files: list[Path], unit: str | None, between_runs: float | None, percent_fs: float,
+                       compensate: bool, output: Path | None) -> None:
+    """``fsrlab calibrate``'s table: the model, how it was chosen, its errors and uncertainty."""
     from rich.console import Console
     from rich.table import Table
 
+    sel = cal.selection
     u, k = _unit_option(unit, cal.y_name)
     console = Console()
-    table = Table(title=f"Calibration {cal.y_name}({x}), {', '.join(p.name for p in run_files)}")
+    table = Table(title=f"Calibration {cal.y_name}({cal.x_name}), {', '.join(p.name for p in run_files)}")
     table.add_column("quantity")
     table.add_column("value", justify="right")
     table.add_row("model", cal.model_name)
@@ -408,7 +262,7 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
     table.add_row("lag (s)", f"{cal.lag_s:.4g}")
     table.add_row("reference delay (s)", f"{cal.model.delay_s:.4g}")
     table.add_row(f"held-out RMSE ({u})", f"{k * sel.heldout_rmse:.4g}")
-    table.add_row("held-out RMSE (% FS)", f"{out['heldout_rmse_percent_fs']:.3f}")
+    table.add_row("held-out RMSE (% FS)", f"{percent_fs:.3f}")
     if cal.model.has_memory:
         table.add_row(f"held-out RMSE without compensation ({u})", f"{k * sel.heldout_rmse_plain:.4g}")
     table.add_row(f"readout range ({cal.x_unit or '1'})", f"{cal.x_range[0]:.6g} … {cal.x_range[1]:.6g}")
@@ -432,11 +286,11 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
                       + ("" if rmse is None else f", held-out RMSE {k * rmse:.4g} {u}"
                          + (" at weight 1" if s.get("weight", 1.0) < 1.0 else "")))
     console.print(table)
+    refused = [s for s in sel.steps if s["step"] == "memory" and not s["kept"]]
     if compensate and refused:
         console.print(f"compensation: {refused[0]['step']} not kept: {refused[0]['why']}")
     if output is not None:
         console.print(f"wrote {output}")
-    return None
 
 
 @app.command("apply")
@@ -445,7 +299,7 @@ def apply_cmd(
     run_file: Path = typer.Argument(..., metavar="RUN.csv", help="The run to convert."),
     output: Path = typer.Option(..., "--output", "-o", parser=out_path, help="Output run: the input columns plus <reference>_estimate and <reference>_uncertainty [N or Pa] and in_range [1]."),
     no_compensation: bool = typer.Option(False, "--no-compensation", help="Use the plain model even if the calibration holds a compensation."),
-    margin: float = typer.Option(None, "--margin", parser=fraction, help="How far beyond the calibrated readout range an estimate is still written [1, a fraction of the range's span], e.g. 0.1 or 10%; beyond it the estimate is left empty (default: every reading for a held-out calibration, 10% for --method cv). Every reading outside the range has in_range = 0."),
+    margin: float = typer.Option(None, "--margin", parser=fraction, help="How far beyond the calibrated readout range an estimate is still written [1, a fraction of the range's span], e.g. 0.1 or 10%; beyond it the estimate is left empty (default: every reading). The memory takes every reading whatever the margin, so no estimate inside the range changes with it; every reading outside the range has in_range = 0."),
     force: bool = typer.Option(False, "--force", help="Apply even to a run recorded with another circuit or range than the calibration."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing output run and its sidecar; without it an existing one stops the command. An input (or its sidecar) is never replaced."),
     skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=SKIP_HELP + " Skipped rows are not written."),
@@ -454,7 +308,8 @@ def apply_cmd(
     """Apply a calibration to a run: adds <reference>_estimate, <reference>_uncertainty and in_range.
 
     The estimate runs causally in row order (the compensation's memory goes forward in time, as
-    it would live). Readings at the readout's floor are below activation (no estimate). Readings
+    it would live). Readings at the readout's floor (a calibration file of an earlier fsrlab) are
+    below activation (no estimate). Readings
     outside the calibrated readout range are flagged (in_range = 0); beyond the margin their
     estimate is left empty. A run recorded with another circuit or range than the calibration is
     refused unless --force. When the run also has the reference (a validation run), the estimate is

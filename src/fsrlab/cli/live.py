@@ -22,9 +22,7 @@ def _estimator(cal, area_m2: float | None, ranges: tuple[int, ...]):
     NaN on a range not in ``ranges`` (those where the meter reads as the calibration's run did)."""
     import math
 
-    from fsrlab.calibration.estimator import live_estimator
-
-    est = live_estimator(cal)
+    est = cal.estimator()
     scale = 1.0 if est.reference == "force_n" else (area_m2 or math.nan)  # stress → force
 
     def step(row):

@@ -19,11 +19,9 @@ from fsrlab.cli.options import (
 from fsrlab.units import STANDARD_GRAVITY
 
 def _estimator(cal):
-    """The causal estimator of a calibration (:func:`fsrlab.calibration.estimator.live_estimator`): one reading at
-    a time, ``step(x) -> (estimate, uncertainty, in_range)``, with the compensation's memory between calls."""
-    from fsrlab.calibration.estimator import live_estimator
-
-    return live_estimator(cal)
+    """The calibration's estimator (:meth:`fsrlab.calibration.result.Calibration.estimator`): one reading at
+    a time, ``step(x, t) -> (estimate, uncertainty, in_range)``, with the memory between calls."""
+    return cal.estimator()
 
 
 class _Live(LiveView):
@@ -111,7 +109,7 @@ def measure(
     to_force = (lambda v: v) if ref == "force_n" else ((lambda v: v * area_m2) if area_m2 else None)
     columns = [f"{ref}_estimate", "in_range"] + (["force_n_estimate"] if ref != "force_n" and to_force else [])
     columns.append(f"{ref}_uncertainty")
-    metadata["calibration"] = {"file": str(cal), "x": est.x, "reference": ref, "estimator": "live_estimator"}
+    metadata["calibration"] = {"file": str(cal), "x": est.x, "reference": ref, "estimator": "Calibration.estimator"}
     counts = {"estimated": 0, "out_of_range": 0}
     last: dict = {}
     g = STANDARD_GRAVITY

@@ -10,7 +10,7 @@ windows and 62.5 ns timer), then through fsrlab's own analysis:
   eq. (39) (:func:`fsrlab.metrics.repeatability.repeatability`); the spread comes from the
   sensor's placement mechanisms and creep (:meth:`fsrlab.physics.paper_sensor.PaperFSR.placement`);
 - :func:`figure17_fits`: linear and cubic σ(f) on both branches, on one branch, on the branch means
-  (:func:`fsrlab.calibration.result.calibrate`);
+  (:func:`fsrlab.paper.polyfit.fit_polynomial`);
 - :func:`run_experiment`: all of it for a list of sensors, with the paper's printed values beside;
 - what the "paper sensor" preset was fitted to, and the fit: :mod:`fsrlab.paper.preset_fit`.
 
@@ -214,16 +214,16 @@ def figure17_fits(cycle: SpringCycle) -> dict:
     -------
     dict
         ``{"both": {"linear", "cubic"}, "loading": {...}, "unloading": {...}, "means": {...}}`` of R²,
-        the fits of σ on f by :func:`fsrlab.calibration.result.calibrate`. "means": σ against the
+        the fits of σ on f by :func:`fsrlab.paper.polyfit.fit_polynomial`. "means": σ against the
         mean of the loading and unloading frequency at each stepper position.
     """
-    from fsrlab.calibration.result import calibrate
+    from fsrlab.paper.polyfit import fit_polynomial
 
     sl, fl, su, fu = cycle.branches("frequency_hz")
     fu_at = np.interp(sl, su[::-1], fu[::-1]) if su.size > 1 else fl
     sets = {"both": (np.concatenate([fl, fu]), np.concatenate([sl, su])), "loading": (fl, sl),
             "unloading": (fu, su), "means": (0.5 * (fl + fu_at), sl)}
-    return {name: {"linear": float(calibrate(x, y, degree=1).r2), "cubic": float(calibrate(x, y, degree=3).r2)}
+    return {name: {"linear": float(fit_polynomial(x, y, 1).r2), "cubic": float(fit_polynomial(x, y, 3).r2)}
             for name, (x, y) in sets.items()}
 
 
@@ -252,7 +252,7 @@ def figure17_counterexample(he_percent: float = 14.2, width: float = 0.03, point
     is a small stress error. A both-branch fit of a loop with a 14 % HE can therefore reach the printed
     R² values; the virtual sensors' gap, spread over the range, cannot.
     """
-    from fsrlab.calibration.result import calibrate
+    from fsrlab.paper.polyfit import fit_polynomial
     from fsrlab.metrics.hysteresis import hysteresis_error
 
     x = np.linspace(0.0, 1.0, points)
@@ -264,8 +264,8 @@ def figure17_counterexample(he_percent: float = 14.2, width: float = 0.03, point
     f_unload = f_load + 1e3 * gap * he_percent / unit
     he = hysteresis_error(s, f_load, s[::-1], f_unload[::-1]).percent
     f_all, s_all = np.concatenate([f_load, f_unload]), np.concatenate([s, s])
-    return {"he_percent": float(he), "linear": float(calibrate(f_all, s_all, degree=1).r2),
-            "cubic": float(calibrate(f_all, s_all, degree=3).r2), "width": width}
+    return {"he_percent": float(he), "linear": float(fit_polynomial(f_all, s_all, 1).r2),
+            "cubic": float(fit_polynomial(f_all, s_all, 3).r2), "width": width}
 
 
 @dataclass

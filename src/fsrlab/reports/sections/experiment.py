@@ -54,7 +54,7 @@ def _fig19(outdir: Path, exp: Experiment, key: str, scale: float, unit: str, lab
 
 
 def _fig17(outdir: Path, exp: Experiment) -> Path:
-    from fsrlab.calibration.result import calibrate
+    from fsrlab.paper.polyfit import fit_polynomial
 
     c = exp.cycles[0]
     sl, fl, su, fu = c.branches("frequency_hz")
@@ -62,12 +62,12 @@ def _fig17(outdir: Path, exp: Experiment) -> Path:
     fig, axes = new_figure(10.0, 4.0, ncols=2, sharey=True)
     grid = np.linspace(np.nanmin(f_all), np.nanmax(f_all), 100)
     for ax, deg, lab in ((axes[0], 1, "(a) linear"), (axes[1], 3, "(b) cubic")):
-        fit = calibrate(f_all, s_all, degree=deg)
+        fit = fit_polynomial(f_all, s_all, deg)
         ax.plot(fl / 1e3, sl / 1e3, ".", ms=4, color="tab:blue", label="loading")
         ax.plot(fu / 1e3, su / 1e3, ".", ms=4, color="tab:orange", label="unloading")
         ax.plot(grid / 1e3, fit(grid) / 1e3, "k-", lw=1.4, label=f"fit on both branches, R² = {fit.r2:.4f}")
         fu_at = np.interp(sl, su[::-1], fu[::-1])
-        mean_fit = calibrate(0.5 * (fl + fu_at), sl, degree=deg)
+        mean_fit = fit_polynomial(0.5 * (fl + fu_at), sl, deg)
         ax.plot(grid / 1e3, mean_fit(grid) / 1e3, "k:", lw=1.4,
                 label=f"fit on the branch means, R² = {mean_fit.r2:.4f}")
         ax.set_xlabel("f (kHz)")
@@ -189,7 +189,7 @@ def _fig17_table(exp: Experiment, printed: dict) -> tuple[Table, dict]:
     rows += [[f"fsrlab sensor 1, {label[k]}", v["linear"], v["cubic"]] for k, v in f17.items()]
     table = Table(title="Figure 17: R² of linear and cubic σ(f) fits, paper vs virtual sensor 1",
                   columns=["data fitted", "linear R²", "cubic R²"], rows=rows, fmt="{:.4f}",
-                  note="fsrlab.paper.experiment.figure17_fits (fsrlab.calibration.result.calibrate, degree 1 and "
+                  note="fsrlab.paper.experiment.figure17_fits (fsrlab.paper.polyfit.fit_polynomial, degree 1 and "
                        "3) on the spring cycle of the fitted Table 3 (a prediction: R² was not fitted).")
     return table, {"printed": {"linear": p["linear"], "cubic": p["cubic"]}, "virtual_bench": f17}
 

@@ -2,8 +2,8 @@
 
 Tables 4 and 5 are recomputed by :mod:`fsrlab.metrics.repeatability` from the printed readings of
 :func:`fsrlab.reference.paper_values`; the calibration table and the compensation use a synthetic bench run
-(:mod:`fsrlab.virtual.synthetic`, :mod:`fsrlab.calibration.polynomial`,
-:mod:`fsrlab.calibration.compensation`). This module draws and words the results. Figure 17 and
+(:mod:`fsrlab.virtual.synthetic`, the paper's fixed polynomials :mod:`fsrlab.paper.polyfit`, and
+:func:`fsrlab.calibrate` with its hysteresis compensation). This module draws and words the results. Figure 17 and
 Tables 3–5 on a virtual bench (fitted to part of them, predicting the rest) are the experiment section's
 (:mod:`fsrlab.reports.sections.experiment`).
 """
@@ -13,18 +13,18 @@ from __future__ import annotations
 from dataclasses import dataclass
 from decimal import ROUND_HALF_UP, Decimal
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
-from fsrlab.calibration.result import calibrate
+from fsrlab.calibration.heldout_runs import calibrate_runs
 from fsrlab.calibration.readout import decode_capacitance
 from fsrlab.circuits.circuit import readout_from_metadata
-from fsrlab.calibration.compensation import compare_compensation
+from fsrlab.io.runformat import Run
 from fsrlab.metrics.cycles import run_hysteresis
 from fsrlab.metrics.repeatability import (
     DdofFinding, ForceRepeatability, PrintedTableCheck, ddof_finding, force_repeatability, recompute_printed_table
 )
+from fsrlab.paper.polyfit import fit_polynomial
 from fsrlab.virtual.synthetic import synthetic_run
 from fsrlab.reference import paper_values
 from fsrlab.reports.figures import new_figure, save
@@ -44,44 +44,75 @@ def _force_terms(printed: dict) -> ForceRepeatability:
 
 
 @dataclass(frozen=True)
+class _Compensation:
+    """The plain cubic and fsrlab's calibration with its hysteresis compensation on the same synthetic run."""
+
+    plain: np.ndarray  # the cubic's estimate [Pa]
+    compensated: np.ndarray  # fsrlab calibrate --compensate's estimate (in sample) [Pa]
+    model: str  # what fsrlab calibrate chose
+    he_before_percent: float
+    he_after_percent: float
+    rmse_before_pa: float
+    rmse_after_pa: float
+    heldout_rmse_pa: float  # fsrlab calibrate's held-out RMSE [Pa]
+
+    @property
+    def ratio(self) -> float:
+        return self.he_before_percent / self.he_after_percent if self.he_after_percent > 0 else float("inf")
+
+
+@dataclass(frozen=True)
 class _Synthetic:
     """What the section shows of one synthetic bench run (VirtualFSR → 555 closed forms → 62.5 ns timer)."""
 
     columns: dict
     he_voltage: float  # HE of the op-amp voltage, eq. (13) [%]
     he_frequency: float  # HE of the frequency [%]
-    fits: dict  # name → calibrate() result
-    compensation: Any  # compare_compensation() result
+    fits: dict  # name → fit_polynomial() result
+    compensation: _Compensation
     he_decoded: float  # HE of the stress calibrated on decoded C_FSR [%]
+
+
+def _compensation(run, cubic) -> _Compensation:
+    """The cubic against :func:`fsrlab.calibrate` with ``compensate=True``, both on the run they were fitted on."""
+    c = run.columns
+    f, s, d, cyc = c["frequency_hz"], c["stress_pa"], c["direction"], c["cycle"]
+    cal = calibrate_runs(Run(Path("synthetic.csv"), dict(c), dict(run.metadata)), compensate=True)
+    est = cal.model.run(c["time_s"], f)[0]
+    plain = cubic(f)
+
+    def rmse(e):
+        return float(np.sqrt(np.nanmean((e - s) ** 2)))
+    return _Compensation(plain, est, cal.model_name, run_hysteresis(s, plain, d, cyc).percent,
+                         run_hysteresis(s, est, d, cyc).percent, rmse(plain), rmse(est), cal.selection.heldout_rmse)
 
 
 def _synthetic() -> _Synthetic:
     run = synthetic_run(cycles=3, peak_pa=50e3, points_per_ramp=100, seed=1)
     c = run.columns
     f, s, load = c["frequency_hz"], c["stress_pa"], c["direction"] >= 0
-    fits = {"linear": calibrate(f, s, degree=1), "cubic": calibrate(f, s, degree=3),
-            "loading_linear": calibrate(f[load], s[load], degree=1),
-            "loading_cubic": calibrate(f[load], s[load], degree=3),
-            "auto": calibrate(f, s, groups=c["cycle"])}
-    # Physics-informed: calibrate on C_FSR decoded from (f, DC) through the run's own circuit.
+    fits = {"linear": fit_polynomial(f, s, 1), "cubic": fit_polynomial(f, s, 3),
+            "loading_linear": fit_polynomial(f[load], s[load], 1),
+            "loading_cubic": fit_polynomial(f[load], s[load], 3)}
+    # Physics-informed: the cubic on C_FSR decoded from (f, DC) through the run's own circuit.
     c_dec = decode_capacitance(f, c["duty_cycle"], readout_from_metadata(run.metadata)[0])
-    fits["decoded_cubic"] = calibrate(c_dec, s, degree=3, x_name="c_fsr_farad", x_unit="F")
+    fits["decoded_cubic"] = fit_polynomial(c_dec, s, 3)
     return _Synthetic(
         columns=c,
         he_voltage=run_hysteresis(s, c["voltage_v"], c["direction"], c["cycle"]).percent,
         he_frequency=run_hysteresis(s, f, c["direction"], c["cycle"]).percent,
         fits=fits,
-        compensation=compare_compensation(f, s, degree=3, direction=c["direction"], cycle=c["cycle"]),
+        compensation=_compensation(run, fits["cubic"]),
         he_decoded=run_hysteresis(s, fits["decoded_cubic"](c_dec), c["direction"], c["cycle"]).percent,
     )
 
 
 def _fig_compensation(outdir: Path, syn: _Synthetic) -> Figure:
-    comp, f, s = syn.compensation, syn.columns["frequency_hz"], syn.columns["stress_pa"]
+    comp, s = syn.compensation, syn.columns["stress_pa"]
     fig, ax = new_figure(6.4, 4.2)
-    ax.plot(s / 1e3, (comp.plain(f) - s) / 1e3, ".", ms=3, label=f"plain cubic: HE {comp.he_before_percent:.2f} %")
-    ax.plot(s / 1e3, (comp.compensated(f) - s) / 1e3, ".", ms=3,
-            label=f"direction-aware, memory: HE {comp.he_after_percent:.2f} %")
+    ax.plot(s / 1e3, (comp.plain - s) / 1e3, ".", ms=3, label=f"plain cubic: HE {comp.he_before_percent:.2f} %")
+    ax.plot(s / 1e3, (comp.compensated - s) / 1e3, ".", ms=3,
+            label=f"fsrlab calibrate --compensate ({comp.model}): HE {comp.he_after_percent:.2f} %")
     ax.axhline(0, color="k", lw=0.8)
     ax.set_xlabel("reference σ (kPa)")
     ax.set_ylabel("calibrated σ − reference (kPa)")
@@ -91,10 +122,11 @@ def _fig_compensation(outdir: Path, syn: _Synthetic) -> Figure:
     return Figure(
         filename=path.name, title="Hysteresis compensation (extension beyond the paper)",
         paper="Not in the paper: a single cubic keeps the sensor's hysteresis in the calibrated force.",
-        fsrlab=f"HE of the calibrated stress (eq. 13) on the same synthetic run: plain cubic "
-               f"{comp.he_before_percent:.2f} %, direction-aware calibration with turning-point memory "
-               f"{comp.he_after_percent:.2f} % ({comp.ratio:.1f}× lower); RMSE {comp.rmse_before_pa / 1e3:.2f} → "
-               f"{comp.rmse_after_pa / 1e3:.2f} kPa.")
+        fsrlab=f"HE of the calibrated stress (eq. 13) on the synthetic run it was fitted on: plain cubic "
+               f"{comp.he_before_percent:.2f} %, fsrlab calibrate --compensate ({comp.model}: a monotone curve "
+               f"and play operators, chosen held out) {comp.he_after_percent:.2f} % ({comp.ratio:.1f}× lower); "
+               f"RMSE {comp.rmse_before_pa / 1e3:.2f} → {comp.rmse_after_pa / 1e3:.2f} kPa (held out: "
+               f"{comp.heldout_rmse_pa / 1e3:.2f} kPa).")
 
 
 def exact_mean(values) -> Decimal:
@@ -189,8 +221,8 @@ def _calibration_table(syn: _Synthetic, printed: dict) -> Table:
               row("synthetic, both branches, linear", "linear"), row("synthetic, both branches, cubic", "cubic"),
               row("synthetic, loading only, linear", "loading_linear"),
               row("synthetic, loading only, cubic", "loading_cubic"),
-              row(f"synthetic, degree by grouped CV ({fits['auto'].degree})", "auto"),
-              ["synthetic, direction-aware compensation", "", comp.rmse_after_pa / 1e3, ""],
+              [f"synthetic, fsrlab calibrate --compensate ({comp.model}), in sample", "",
+               comp.rmse_after_pa / 1e3, ""],
               row("synthetic, physics-informed: cubic on decoded C_FSR", "decoded_cubic")],
         fmt="{:.4f}",
         note="fsrlab calibrate on a synthetic run (VirtualFSR, R = 10 kΩ, ideal D1, 100 ms windows, 62.5 ns "
@@ -268,12 +300,13 @@ def _data(printed: dict, t4: PrintedTableCheck, t5: PrintedTableCheck, found: Dd
         "repeatability_in_force_terms": {name: f.to_dict() for name, f in force.items()},
         "figure17_synthetic": {"linear_r2": fits["linear"].r2, "cubic_r2": fits["cubic"].r2,
                                "loading_linear_r2": fits["loading_linear"].r2,
-                               "loading_cubic_r2": fits["loading_cubic"].r2, "cv_degree": fits["auto"].degree,
+                               "loading_cubic_r2": fits["loading_cubic"].r2,
                                "paper": {"linear_r2": fig17["linear"], "cubic_r2": fig17["cubic"]}},
         "physics_informed_synthetic": {"cubic_r2": fits["decoded_cubic"].r2, "rmse_pa": fits["decoded_cubic"].rmse,
                                        "he_percent": syn.he_decoded},
         "compensation_synthetic": {"he_before_percent": comp.he_before_percent, "he_after_percent": comp.he_after_percent,
-                                   "rmse_before_pa": comp.rmse_before_pa, "rmse_after_pa": comp.rmse_after_pa},
+                                   "rmse_before_pa": comp.rmse_before_pa, "rmse_after_pa": comp.rmse_after_pa,
+                                   "model": comp.model, "heldout_rmse_pa": comp.heldout_rmse_pa},
     }
 
 
