@@ -51,12 +51,14 @@ def test_force_units_are_their_definitions():
     assert FORCE_UNITS["lbf"] == 4.4482216152605 == scipy.constants.lbf  # exact by definition
     assert FORCE_UNITS["g"] == 9.80665e-3 and FORCE_UNITS["kg"] == 9.80665 == scipy.constants.g
     assert FORCE_UNITS["mN"] == 1e-3 and FORCE_UNITS["N"] == 1.0
-    assert TIME_UNITS == {"s": 1.0, "ms": 1e-3, "us": 1e-6}
+    assert FORCE_UNITS["kN"] == 1e3 and FORCE_UNITS["ozf"] == 4.4482216152605 / 16 == scipy.constants.lbf / 16
+    assert TIME_UNITS == {"s": 1.0, "ms": 1e-3, "us": 1e-6, "min": 60.0, "h": 3600.0}
 
 
 @pytest.mark.parametrize("unit, cell, newtons", [
     ("lbf", "1", 4.4482216152605), ("lbf", "2.5", 2.5 * 4.4482216152605), ("g", "1000", 9.80665),
-    ("g", "1", 9.80665e-3), ("kg", "0.5", 4.903325), ("mN", "250", 0.25), ("N", "3.5", 3.5),
+    ("g", "1", 9.80665e-3), ("kg", "0.5", 4.903325), ("mN", "250", 0.25), ("N", "3.5", 3.5), ("kN", "5", 5000.0),
+    ("ozf", "16", 4.4482216152605), ("oz", "1", 4.4482216152605 / 16), ("kgf", "2", 2 * 9.80665), ("lb", "1", 4.4482216152605),
 ])
 def test_force_column_converted_to_newtons(tmp_path, unit, cell, newtons):
     code, _, err, run = _import(tmp_path, f"time,fsr,force\n0,100,0\n1,200,{cell}\n", "--force-unit", unit)
@@ -65,7 +67,8 @@ def test_force_column_converted_to_newtons(tmp_path, unit, cell, newtons):
 
 
 @pytest.mark.parametrize("unit, cells, seconds", [
-    ("ms", ("0", "1500"), 1.5), ("us", ("0", "250"), 250e-6), ("s", ("0", "0.02"), 0.02),
+    ("ms", ("0", "1500"), 1.5), ("us", ("0", "250"), 250e-6), ("s", ("0", "0.02"), 0.02), ("µs", ("0", "250"), 250e-6),
+    ("min", ("0", "1.5"), 90.0), ("h", ("0", "0.25"), 900.0),
 ])
 def test_time_column_converted_to_seconds(tmp_path, unit, cells, seconds):
     code, _, err, run = _import(tmp_path, f"t,fsr\n{cells[0]},1\n{cells[1]},2\n", "--time", "t", "--time-unit", unit)
@@ -190,9 +193,9 @@ def test_encodings(tmp_path, encoding):
 
 def test_dialect_is_recorded(tmp_path):
     table = read_table(_write(tmp_path / "x.csv", DIALECTS["semicolon, decimal comma"]))
-    assert (table.delimiter, table.decimal, table.header_line, table.lines) == (";", ",", 1, [2, 3])
+    assert (table.delimiter, table.decimal, table.header_line, table.lines.tolist()) == (";", ",", 1, [2, 3])
     table = read_table(_write(tmp_path / "y.csv", DIALECTS["comments, blank lines, CRLF"]))
-    assert (table.delimiter, table.header_line, table.lines) == (",", 4, [5, 7])  # the lines an editor shows
+    assert (table.delimiter, table.header_line, table.lines.tolist()) == (",", 4, [5, 7])  # the lines an editor shows
 
 
 def test_skip_lines_and_date_times(tmp_path):
@@ -262,7 +265,7 @@ def test_python_api(tmp_path):
     imported = import_foreign(sensor, ref, force_unit="N")
     assert list(imported.columns) == ["time_s", "reading", "force_n"] and imported.matched == 50
     assert imported.rate_hz == pytest.approx(10.0)
-    with pytest.raises(ValueError, match="^force_unit: 'stone' is not one of g, kg, N, lbf, mN$"):
+    with pytest.raises(ValueError, match="^force_unit: 'stone' is not one of N, kN, mN, g, kg, lbf, ozf$"):
         import_foreign(sensor, force_unit="stone")
     with pytest.raises(ForeignFormatError, match="fsr.csv: line 1 \\(header\\): no column 'nope'") as info:
         import_foreign(sensor, reading="nope")
@@ -289,8 +292,8 @@ BAD = [
     ("comments only", "# nothing\n\n", [], r"in\.csv: empty file"),
     ("header only", "time,fsr\n", [], r"in\.csv: no data rows \(line 1 is the header\)"),
     ("duplicate header", "time,fsr,fsr\n0,1,2\n", [], r"in\.csv: line 1 \(header\), column 'fsr' \(2 and 3\): the same header name twice"),
-    ("force unit", "time,fsr\n0,1\n", ["--force-unit", "stone"], r"Invalid value for --force-unit: 'stone' is not one of g, kg, N, lbf, mN"),
-    ("time unit", "time,fsr\n0,1\n", ["--time-unit", "min"], r"Invalid value for --time-unit: 'min' is not one of s, ms, us"),
+    ("force unit", "time,fsr\n0,1\n", ["--force-unit", "stone"], r"Invalid value for --force-unit: 'stone' is not one of N, kN, mN, g, kg, lbf, ozf"),
+    ("time unit", "time,fsr\n0,1\n", ["--time-unit", "d"], r"Invalid value for --time-unit: 'd' is not one of s, ms, us, min, h"),
     ("reading unit", "time,fsr\n0,1\n", ["--reading-unit", "A"], r"Invalid value for --reading-unit: 'A' is not one of counts, V, mV, ohm, kohm"),
     ("zero rate", "fsr\n1\n", ["--rate", "0"], r"Invalid value for --rate: must be > 0 Hz, got 0"),
     ("negative rate", "fsr\n1\n", ["--rate", "-5"], r"Invalid value for --rate: must be > 0 Hz, got -5"),
@@ -426,3 +429,93 @@ def test_a_separator_in_every_row_is_not_a_header(tmp_path):
                                   "--force", "grams", name="with_header.csv")
     assert code == 0, err
     assert run["reading"].tolist() == [526, 515, 516] and "header on line 1" in out
+
+
+# ------------------------------------------------------------------------------------------------
+# Units stated in a header or units row: converted when known, refused otherwise (issue 40)
+# ------------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("header, cell, newtons", [
+    ("force (kN)", "5", 5000.0), ("force_kN", "5", 5000.0), ("load [mN]", "250", 0.25), ("force_oz", "16", 4.4482216152605),
+    ("weight (lb)", "1", 4.4482216152605), ("force_kgf", "1", 9.80665),
+])
+def test_force_unit_said_by_the_header_is_converted(tmp_path, header, cell, newtons):
+    code, out, err, run = _import(tmp_path, f"time,fsr,{header}\n0,100,0\n1,200,{cell}\n")
+    assert code == 0, err
+    assert run["force_n"][1] == pytest.approx(newtons, rel=1e-15) and "taken in N" not in out
+
+
+@pytest.mark.parametrize("header, cells, seconds", [
+    ("time (min)", ("0", "1.5"), 90.0), ("time_h", ("0", "0.5"), 1800.0), ("time [µs]", ("0", "250"), 250e-6),
+])
+def test_time_unit_said_by_the_header_is_converted(tmp_path, header, cells, seconds):
+    code, _, err, run = _import(tmp_path, f"{header},fsr\n{cells[0]},1\n{cells[1]},2\n")
+    assert code == 0, err
+    assert run["time_s"][1] == pytest.approx(seconds, rel=1e-15)
+
+
+@pytest.mark.parametrize("text, where, unit, option", [
+    ("time,fsr,force_stone\n0,1,5\n1,2,6\n", "line 1 (header), column 'force_stone' (3)", "stone", "--force-unit"),
+    ("time,fsr,force (MN)\n0,1,5\n1,2,6\n", "line 1 (header), column 'force (MN)' (3)", "MN", "--force-unit"),
+    ("time;fsr;force\ns;counts;dyn\n0;1;5\n1;2;6\n", "column 'force' (3): the units row under it", "dyn", "--force-unit"),
+    ("time (days),fsr\n0,1\n1,2\n", "column 'time (days)' (1)", "days", "--time-unit"),
+    ("time,fsr (uA)\n0,1\n1,2\n", "column 'fsr (uA)' (2)", "uA", "--reading-unit"),
+])
+def test_unit_not_known_is_refused_naming_file_column_and_unit(tmp_path, text, where, unit, option):
+    code, _, err, run = _import(tmp_path, text)
+    assert code == 2 and run is None
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert "in.csv: line 1 (header), " in err and where in err, err
+    assert f"unit '{unit}' is not a" in err and f"({option})" in err
+
+
+def test_header_that_says_no_unit_is_still_assumed_and_said(tmp_path):
+    code, out, err, run = _import(tmp_path, "time (UTC),fsr,force\n2024-01-01T00:00:00,1,2\n2024-01-01T00:00:01,2,3\n")
+    assert code == 0, err
+    assert run["time_s"].tolist() == [0.0, 1.0] or run["time_s"][1] - run["time_s"][0] == 1.0
+    assert "taken in N (its header does not say)" in out
+
+
+def test_reference_without_a_force_column_is_refused(tmp_path):
+    """The reference file's one other column (a temperature) is not taken as the force, nor is the sensor file
+    itself a reference."""
+    sensor = _write(tmp_path / "s.csv", "time,fsr\n0,1\n1,2\n")
+    ref = _write(tmp_path / "r.csv", "time,temp\n0,21\n1,22\n")
+    code, _, err = run_cli(["import", sensor, "--reference", ref, "-o", tmp_path / "o.csv"])
+    assert code == 2 and "r.csv: no force column found" in err and "(--force)" in err
+    code, _, err = run_cli(["import", sensor, "--reference", sensor, "-o", tmp_path / "o.csv"])
+    assert code == 2 and "Invalid value for --reference: " in err and "the sensor's file itself" in err
+    assert not (tmp_path / "o.csv").exists()
+
+
+def test_empty_output_and_huge_offset_are_one_line(tmp_path, recwarn):
+    sensor = _write(tmp_path / "s.csv", "time,fsr\n0,1\n1,2\n")
+    ref = _write(tmp_path / "r.csv", "time,force_N\n0,1\n1,2\n")
+    code, _, err = run_cli(["import", sensor, "-o", ""])
+    assert code == 2 and err.startswith("fsrlab: error: Invalid value for --output: is empty") and "PosixPath" not in err
+    code, _, err = run_cli(["import", sensor, "--reference", ref, "-o", tmp_path / "o.csv", "--offset-s", "1e300"])
+    assert code == 2 and "Invalid value for --offset-s: must be a time within" in err
+    close = _write(tmp_path / "c.csv", "time,force_N\n0,1\n0.01,2\n")
+    with pytest.raises(ValueError, match="^offset_s: .*makes two of them equal"):
+        import_foreign(sensor, close, offset_s=1e15)  # floats 0.125 apart there: 1e15 + 0.01 == 1e15
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
+def test_parameters_of_the_wrong_type_name_themselves(tmp_path):
+    sensor = _write(tmp_path / "s.csv", "time,fsr\n0,1\n1,2\n")
+    with pytest.raises(ValueError, match="^offset_s: must be a number, got str"):
+        import_foreign(sensor, offset_s="10%")
+    with pytest.raises(ValueError, match="^force_unit: must be a unit's name"):
+        import_foreign(sensor, force_unit=3)
+
+
+def test_a_large_file_reads_as_a_small_one(tmp_path):
+    """The numbers' fast path (numpy's parser) and the cell-by-cell path give the same run: the same file with
+    and without a quoted cell (which sends every column cell by cell)."""
+    rng = np.random.default_rng(0)
+    rows = "".join(f"{k * 10},{v},{f!r}\n" for k, (v, f) in enumerate(zip(rng.integers(0, 1023, 3000).tolist(),
+                                                                           rng.normal(500, 100, 3000).tolist())))
+    fast = import_foreign(_write(tmp_path / "a.csv", "millis,fsr,force_g\n" + rows))
+    slow = import_foreign(_write(tmp_path / "b.csv", "millis,fsr,force_g\n" + rows.replace("0,", '"0",', 1)))
+    for name in fast.columns:
+        assert np.array_equal(fast.columns[name], slow.columns[name]), name

@@ -330,11 +330,31 @@ def main(argv: list[str] | None = None) -> int:
         if os.environ.get("FSRLAB_DEBUG"):
             raise
         message = str(exc)
-        if isinstance(exc, FsrlabError) and exc.parameter in PARAMETER_OPTIONS:
-            message = f"{PARAMETER_OPTIONS[exc.parameter]}: {exc.reason}"
+        option = _option_of(exc.parameter, args) if isinstance(exc, FsrlabError) and exc.parameter else None
+        if option is not None:
+            message = f"Invalid value for {option}: {exc.reason}"
         print(f"fsrlab: error: {_one_line(message)}", file=sys.stderr)
         code = 2
     raise SystemExit(code)
+
+
+def _option_of(parameter: str, args: list[str]) -> str | None:
+    """The option of the command ``args`` run whose parameter is ``parameter`` (a library parameter's name, which
+    the command's own parameter shares: ``between_runs`` → ``--between-runs``), else
+    :data:`PARAMETER_OPTIONS`'s; None when neither has it. No message is read."""
+    command = _click_command()
+    for word in args:
+        if word.startswith("-") or not hasattr(command, "get_command"):
+            break
+        sub = command.get_command(None, word)
+        if sub is None:
+            break
+        command = sub
+    for param in getattr(command, "params", ()):
+        if param.name == parameter and getattr(param, "opts", None):
+            long = [o for o in param.opts if o.startswith("--")]
+            return (long or param.opts)[0] if param.param_type_name == "option" else param.human_readable_name
+    return PARAMETER_OPTIONS.get(parameter)
 
 
 def _one_line(message: str) -> str:

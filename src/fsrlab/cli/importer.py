@@ -12,15 +12,18 @@ from pathlib import Path
 import typer
 
 from fsrlab.cli import app
-from fsrlab.cli.options import check_out, emit_json, fail, hertz, option_names, seconds
+from fsrlab.cli.options import check_out, emit_json, fail, hertz, option_names, out_path, seconds
 
 # The option a user gives to settle a question about a column (ForeignFormatError.role).
 _ROLE_OPTIONS = {"time": "--time (or --rate)", "reading": "--reading", "force": "--force",
-                 "reference_time": "--reference-time (or --reference-rate)", "offset": "--offset-s"}
+                 "reference_time": "--reference-time (or --reference-rate)", "offset": "--offset-s",
+                 "time_unit": "--time-unit", "reading_unit": "--reading-unit", "force_unit": "--force-unit",
+                 "reference_time_unit": "--reference-time-unit"}
 _PARAMETERS = {"time_unit": "--time-unit", "reference_time_unit": "--reference-time-unit",
                "reading_unit": "--reading-unit", "force_unit": "--force-unit", "rate_hz": "--rate",
                "reference_rate_hz": "--reference-rate", "reference_time": "--reference-time",
-               "offset_s": "--offset-s", "skip_lines": "--skip-lines", "output": "--output"}
+               "offset_s": "--offset-s", "skip_lines": "--skip-lines", "output": "--output",
+               "reference": "--reference"}
 
 
 def _check_inputs(output: Path, inputs: list[Path]) -> None:
@@ -38,16 +41,16 @@ def _check_inputs(output: Path, inputs: list[Path]) -> None:
 def import_cmd(
     sensor: Path = typer.Argument(..., metavar="SENSOR.csv", help="The foreign CSV with the sensor's readout (and the force, without --reference)."),
     reference: Path = typer.Option(None, "--reference", metavar="REF.csv", help="A second foreign CSV with the reference force (another logger), aligned on the time stamps."),
-    output: Path = typer.Option(..., "--output", "-o", metavar="RUN.csv", help="The run to write: time_s [s], reading [its unit], force_n [N], and its sidecar RUN.meta.json."),
+    output: Path = typer.Option(..., "--output", "-o", metavar="RUN.csv", parser=out_path, help="The run to write: time_s [s], reading [its unit], force_n [N], and its sidecar RUN.meta.json."),
     time: str = typer.Option(None, "--time", metavar="COL", help="Time column of SENSOR.csv [header name or 1-based number], e.g. time_ms or 1 (default: found from the header)."),
-    time_unit: str = typer.Option(None, "--time-unit", help="Unit of the time column [s, ms or us] (default: what its header says, else s)."),
+    time_unit: str = typer.Option(None, "--time-unit", help="Unit of the time column [s, ms, us, min or h] (default: what its header says, else s; a unit it says that is none of these is refused)."),
     rate: float = typer.Option(None, "--rate", parser=hertz, help="Sample rate of SENSOR.csv when it has no time column [Hz], e.g. 100 or 1k: row k at k/rate."),
     reading: str = typer.Option(None, "--reading", metavar="COL", help="Readout column [header name or 1-based number] (default: found from the header: fsr, analog, adc, reading, ...); kept as 'reading'."),
     reading_unit: str = typer.Option(None, "--reading-unit", help="Unit of the readout, kept as it is [counts, V, mV, ohm or kohm] (default: what its header says, else counts)."),
     force: str = typer.Option(None, "--force", metavar="COL", help="Force column [header name or 1-based number], in REF.csv when given (default: found from the header: force, load, N, g, ...)."),
-    force_unit: str = typer.Option(None, "--force-unit", help="Unit of the force column [g, kg, N, lbf or mN], converted to force_n [N] with g0 = 9.80665 m/s² (default: what its header says, else N)."),
+    force_unit: str = typer.Option(None, "--force-unit", help="Unit of the force column [N, kN, mN, g, kg, lbf or ozf; also gf, kgf, lb, oz], converted to force_n [N] with g0 = 9.80665 m/s² (default: what its header says, else N; a unit it says that is none of these is refused)."),
     reference_time: str = typer.Option(None, "--reference-time", metavar="COL", help="Time column of REF.csv [header name or 1-based number] (default: found from the header)."),
-    reference_time_unit: str = typer.Option(None, "--reference-time-unit", help="Unit of REF.csv's time column [s, ms or us] (default: what its header says, else s)."),
+    reference_time_unit: str = typer.Option(None, "--reference-time-unit", help="Unit of REF.csv's time column [s, ms, us, min or h] (default: what its header says, else s)."),
     reference_rate: float = typer.Option(None, "--reference-rate", parser=hertz, help="Sample rate of REF.csv when it has no time column [Hz]."),
     offset: float = typer.Option(0.0, "--offset-s", parser=seconds, help="Added to REF.csv's times before the alignment [s], e.g. -0.25 or 250ms."),
     header: bool = typer.Option(None, "--header/--no-header", help="Whether the first line (after comments) is a header (default: when a cell of it is not a number)."),

@@ -181,19 +181,29 @@ def plain_numbers(message: str) -> str:
 
 @contextmanager
 def option_names(mapping: dict[str, str]) -> Iterator[None]:
-    """Re-raise a model's ``ValueError`` with its parameter names replaced by the CLI's option names.
+    """Re-raise a model's error as the invalid value of the option its parameter is.
 
-    Numpy reprs in the message become plain numbers (:func:`plain_numbers`); a message that starts
-    with an option is reported as that option's invalid value, any other as it is.
+    An :class:`~fsrlab.errors.FsrlabError` whose ``parameter`` is in ``mapping`` becomes that option's
+    invalid value with the error's ``reason``; its message is not read. For a plain ``ValueError`` (library
+    code that does not raise ``ParameterError`` yet) the parameter names in the message are replaced by the
+    options; a message that then starts with an option is reported as that option's invalid value, any
+    other as it is. Numpy reprs become plain numbers (:func:`plain_numbers`).
 
     Parameters
     ----------
     mapping : dict
         Model parameter name → option, e.g. ``{"modulus_pa": "--modulus"}``.
     """
+    from fsrlab.errors import FsrlabError
+
     try:
         yield
+    except FsrlabError as exc:
+        if exc.parameter in mapping:  # the library names its parameter: no message is read
+            raise typer.BadParameter(plain_numbers(exc.reason), param_hint=mapping[exc.parameter]) from None
+        raise
     except ValueError as exc:
+        # Plain ValueErrors of library code not yet raising ParameterError: its parameter's name leads the message.
         message = plain_numbers(str(exc))
         # Longest names first, so that "sigma_f_pa" is replaced before a shorter name inside it.
         for name in sorted(mapping, key=len, reverse=True):

@@ -22,43 +22,77 @@ from typing import Sequence
 
 import numpy as np
 
+from fsrlab.errors import ParameterError
 from fsrlab.io.foreign_read import ForeignFormatError, Table, is_number, read_table
 from fsrlab.io.runcells import COLUMN_LIMITS, OTHER_LIMIT
+from fsrlab.io.shown import shown
 from fsrlab.units import STANDARD_GRAVITY
 
 __all__ = ["TIME_UNITS", "FORCE_UNITS", "READING_UNITS", "ForeignFormatError", "Table", "read_table",
            "interpolate_reference", "Imported", "import_foreign", "write_imported"]
 
-#: Units of a time column per second: a cell is divided by it (50 ms -> 0.05 s, correctly rounded). [1/s]
-_PER_SECOND = {"s": 1.0, "ms": 1e3, "us": 1e6}
+#: A time column's unit as (times, divided by) to seconds: one correctly rounded operation per cell
+#: (50 ms -> 50 / 1000 s). [s]
+_TIME = {"s": (1.0, 1.0), "ms": (1.0, 1e3), "us": (1.0, 1e6), "min": (60.0, 1.0), "h": (3600.0, 1.0)}
 #: Seconds per unit of a time column. [s]
-TIME_UNITS = {k: 1.0 / v for k, v in _PER_SECOND.items()}
+TIME_UNITS = {k: m / d for k, (m, d) in _TIME.items()}
 #: The international pound (0.45359237 kg exactly, 1959 agreement; NIST SP 811 B.8). [kg]
 _POUND_KG = 0.45359237
-#: Newtons per unit of a force column; gram- and kilogram-force and lbf through the standard gravity. [N]
-_FORCE = {"g": (STANDARD_GRAVITY, 1e3), "kg": (STANDARD_GRAVITY, 1.0), "N": (1.0, 1.0),
-          "lbf": (_POUND_KG * STANDARD_GRAVITY, 1.0), "mN": (1.0, 1e3)}  # (times, divided by): one rounding for g and mN
+#: The avoirdupois ounce, 1/16 of the international pound (0.028349523125 kg exactly; NIST SP 811 B.8). [kg]
+_OUNCE_KG = _POUND_KG / 16
+#: Newtons per unit of a force column, as (times, divided by): one rounding for g and mN. Gram-, kilogram-,
+#: pound- and ounce-force through the standard gravity g0 = 9.80665 m/s² (CGPM 1901).
+_FORCE = {"N": (1.0, 1.0), "kN": (1e3, 1.0), "mN": (1.0, 1e3), "g": (STANDARD_GRAVITY, 1e3),
+          "kg": (STANDARD_GRAVITY, 1.0), "lbf": (_POUND_KG * STANDARD_GRAVITY, 1.0),
+          "ozf": (_OUNCE_KG * STANDARD_GRAVITY, 1.0)}
 FORCE_UNITS = {k: m / d for k, (m, d) in _FORCE.items()}
 #: Readout units kept as they are: option spelling -> unit written to the sidecar.
 READING_UNITS = {"counts": "count", "V": "V", "mV": "mV", "ohm": "Ω", "kohm": "kΩ"}
 
-_ALIASES = {"µs": "us", "μs": "us", "sec": "s", "count": "counts", "ω": "ohm", "ohms": "ohm", "kω": "kohm",
-            "kohms": "kohm", "gf": "g", "kgf": "kg"}
+# Other spellings of the units above (lower case). A mass unit in a force column (g, kg, lb, oz) is the force
+# standard gravity gives that mass: what a scale or a load cell calibrated with weights shows, and the only
+# force such a logger can mean; so ``oz`` is ounce-force and ``lb`` pound-force, as ``g`` is gram-force.
+_ALIASES = {
+    "time": {"sec": "s", "secs": "s", "second": "s", "seconds": "s", "msec": "ms", "millis": "ms",
+             "millisecond": "ms", "milliseconds": "ms", "µs": "us", "μs": "us", "usec": "us", "micros": "us",
+             "microsecond": "us", "microseconds": "us", "mins": "min", "minute": "min", "minutes": "min",
+             "hr": "h", "hrs": "h", "hour": "h", "hours": "h"},
+    "force": {"n": "N", "newton": "N", "newtons": "N", "kn": "kN", "kilonewton": "kN", "kilonewtons": "kN",
+              "millinewton": "mN", "millinewtons": "mN", "gf": "g", "gram": "g", "grams": "g", "kgf": "kg",
+              "kilogram": "kg", "kilograms": "kg", "kp": "kg", "lb": "lbf", "lbs": "lbf", "oz": "ozf"},
+    "reading": {"count": "counts", "ω": "ohm", "ohms": "ohm", "kω": "kohm", "kohms": "kohm"},
+}
+_TABLES = {"time": TIME_UNITS, "force": FORCE_UNITS, "reading": READING_UNITS}
+# Spellings whose case is the unit: MN is meganewton, not mN.
+_CASE_MATTERS = {"MN": "meganewtons"}
+
+
+def _canonical(text: str, kind: str) -> str | None:
+    """The canonical spelling of ``text`` as a unit of ``kind`` (time, force, reading), or None."""
+    if text in _CASE_MATTERS:
+        return None
+    table = _TABLES[kind]
+    if text in table:
+        return text
+    lower = text.lower()
+    return next((k for k in table if k.lower() == lower), None) or _ALIASES[kind].get(lower)
+
 
 # What a run can hold in these columns ("reading" is not listed in COLUMN_LIMITS and gets its
 # OTHER_LIMIT): a cell beyond is refused here, where its line is known.
 _LIMITS = {"time_s": COLUMN_LIMITS["time_s"][1], "reading": OTHER_LIMIT, "force_n": COLUMN_LIMITS["force_n"][1]}
 
 
-def _unit(value: str | None, table: dict, parameter: str) -> str | None:
-    """The canonical spelling of a unit of ``table`` (case-insensitive, a few aliases), or ValueError."""
+def _unit(value: str | None, kind: str, parameter: str) -> str | None:
+    """The canonical spelling of a unit of ``kind`` given as a parameter (case-insensitive, a few aliases)."""
     if value is None:
         return None
-    text = str(value).strip()
-    lower = {k.lower(): k for k in table}
-    key = lower.get(text.lower()) or lower.get(_ALIASES.get(text.lower(), "").lower())
+    if not isinstance(value, str):
+        raise ParameterError(f"must be a unit's name (one of {', '.join(_TABLES[kind])}), got {type(value).__name__}",
+                             parameter=parameter)
+    key = _canonical(value.strip(), kind)
     if key is None:
-        raise ValueError(f"{parameter}: {text!r} is not one of {', '.join(table)}")
+        raise ParameterError(f"{shown(value.strip())} is not one of {', '.join(_TABLES[kind])}", parameter=parameter)
     return key
 
 
@@ -70,7 +104,7 @@ _WORDS = {
     "time": ({"time", "timestamp", "elapsed", "millis", "micros", "datetime", "date", "clock", "ms", "us", "µs",
               "μs", "msec", "usec"}, {"s", "sec", "secs", "seconds", "t"}),
     "force": ({"force", "load", "loadcell", "weight", "mass", "reference", "ref", "hx711", "newton", "newtons",
-               "gram", "grams", "lbf", "lbs", "kgf", "gf", "kilograms"}, {"n", "g", "kg", "mn", "lb", "f"}),
+               "gram", "grams", "lbf", "lbs", "kgf", "gf", "kilograms", "ozf"}, {"n", "g", "kg", "mn", "lb", "f", "kn", "oz"}),
     "reading": ({"fsr", "analog", "analogread", "adc", "reading", "raw", "sensor", "counts", "voltage", "volts",
                  "resistance", "value", "val", "velostat", "pressure", "a0", "a1", "a2", "a3", "a4", "a5", "a6", "a7"},
                 {"v", "mv", "ohm", "ohms", "kohm", "ω", "kω"}),
@@ -78,12 +112,71 @@ _WORDS = {
 _INDEX_NAMES = {"n", "i", "index", "sample", "no", "nr", "row", "idx", "#", "id"}
 _UNIT_WORDS = {
     "time": [("us", {"us", "µs", "μs", "micros", "usec", "microseconds"}), ("ms", {"ms", "millis", "msec", "milliseconds"}),
-             ("s", {"s", "sec", "secs", "seconds"})],
-    "force": [("mN", {"mn"}), ("kg", {"kg", "kgf", "kilograms"}), ("lbf", {"lbf", "lb", "lbs"}),
-              ("g", {"g", "gf", "gram", "grams"}), ("N", {"n", "newton", "newtons"})],
+             ("s", {"s", "sec", "secs", "seconds"}), ("min", {"minutes"}), ("h", {"hours"})],
+    "force": [("mN", {"mn"}), ("kN", {"kn"}), ("kg", {"kg", "kgf", "kilograms"}), ("lbf", {"lbf", "lb", "lbs"}),
+              ("ozf", {"oz", "ozf"}), ("g", {"g", "gf", "gram", "grams"}), ("N", {"n", "newton", "newtons"})],
     "reading": [("mV", {"mv"}), ("kohm", {"kohm", "kω", "kohms"}), ("ohm", {"ohm", "ohms", "ω", "resistance"}),
                 ("V", {"v", "volts", "voltage"}), ("counts", {"counts", "count", "adc", "analog", "analogread"})],
 }
+# Units of other quantities, or of these quantities that fsrlab does not convert: stated in a header's last word
+# (``force_stone``), they are that column's unit, refused rather than taken as N or s.
+_OTHER_UNITS = {"st", "stone", "stones", "dyn", "dyne", "dynes", "kip", "kips", "pdl", "poundal", "ton", "tons",
+                "tonne", "tonnes", "mg", "ug", "µg", "lbm", "psi", "pa", "kpa", "mpa", "bar", "mbar", "ns", "ps",
+                "day", "days", "wk", "week", "weeks", "ua", "ma", "µa", "a", "uv", "µv", "hz", "khz", "pf", "nf",
+                "uf", "µf", "mohm", "mω"}
+# Words in brackets that say something else than a unit: "time (UTC)", "A0 (raw)".
+_NOT_UNITS = {"utc", "gmt", "local", "unix", "epoch", "iso", "raw", "avg", "mean", "filtered", "smoothed", "ref"}
+_BRACKETED = re.compile(r"[(\[{]\s*([^()\[\]{}]*?)\s*[)\]}]\s*$")
+_LAST_WORD = re.compile(r"(?:^|[\s_/.-])([^\s_/.()\[\]{}-]+)\s*$")
+_UNIT_LIKE = re.compile(r"^[A-Za-zµμΩω°]{1,8}[23²³]?(?:/[A-Za-zµμ]{1,3})?$")
+
+
+def _is_unit_word(text: str) -> bool:
+    return (any(_canonical(text, kind) for kind in _TABLES) or text.lower() in _OTHER_UNITS
+            or text in _CASE_MATTERS)
+
+
+def _said_unit(table: Table, j: int) -> tuple[str, str] | None:
+    """The unit a column's units row or header states, and where it says it; None if neither states one.
+
+    A header states its unit in brackets at its end (``force (kN)``, ``t [ms]``) or as its last word when
+    that word is a unit (``force_kN``, ``time/min``, ``millis``)."""
+    where = f"{table.path}: line {table.header_line} (header), {table.label(j)}"
+    unit = table.units_row[j].strip() if j < len(table.units_row) else ""
+    if unit:
+        inner = _BRACKETED.fullmatch(unit) or re.fullmatch(r"[(\[{]\s*(.*?)\s*[)\]}]", unit)
+        return (inner.group(1) if inner else unit), f"{where}: the units row under it"
+    name = table.names[j].strip() if j < len(table.names) else ""
+    m = _BRACKETED.search(name)
+    if m and m.group(1):
+        return m.group(1), where
+    m = _LAST_WORD.search(name)
+    if m and _is_unit_word(m.group(1)):
+        return m.group(1), where
+    return None
+
+
+def _unit_from_header(table: Table, j: int, role: str) -> str | None:
+    """The unit of column ``j`` for ``role`` (time, force, reading) its header or units row says; None when they
+    say none. A unit stated that is not one of the role's is refused, naming the file, the column and the unit."""
+    said = _said_unit(table, j)
+    if said is not None:
+        text, where = said
+        unit = _canonical(text, role)
+        if unit is not None:
+            return unit
+        if (_UNIT_LIKE.match(text) or _is_unit_word(text)) and text.lower() not in _NOT_UNITS | _WORDS[role][0]:
+            known = ", ".join(_TABLES[role])
+            raise ForeignFormatError(f"{where}: unit {shown(text)} is not a {role} unit fsrlab converts ({known}); "
+                                     f"it is refused rather than taken as {_DEFAULT_UNITS[role]}: give the column's "
+                                     "unit", role=f"{role}_unit")
+    name = table.names[j] if j < len(table.names) else ""
+    unit = table.units_row[j] if j < len(table.units_row) else ""
+    words = _tokens(f"{name} {unit}")
+    return next((u for u, spellings in _UNIT_WORDS[role] if words & spellings), None)
+
+
+_DEFAULT_UNITS = {"time": "s", "force": "N", "reading": "counts"}
 
 
 def _tokens(text: str) -> set[str]:
@@ -109,13 +202,6 @@ def _is_index(table: Table, j: int) -> bool:
     return j < len(table.names) and table.names[j].strip().lower() in _INDEX_NAMES
 
 
-def _unit_from_header(table: Table, j: int, role: str) -> str | None:
-    name = table.names[j] if j < len(table.names) else ""
-    unit = table.units_row[j] if j < len(table.units_row) else ""
-    words = _tokens(f"{name} {unit}")
-    return next((u for u, spellings in _UNIT_WORDS[role] if words & spellings), None)
-
-
 def _resolve(table: Table, spec: str | int, what: str) -> int:
     """The 0-based index of the column given by header name or 1-based number."""
     text = str(spec).strip()
@@ -136,8 +222,8 @@ def _resolve(table: Table, spec: str | int, what: str) -> int:
 
 def _increasing_column(table: Table, j: int) -> bool:
     try:
-        t = np.array([float(r[j].replace(",", ".")) for r in table.cells])
-    except (ValueError, IndexError):
+        t = table.numbers(j, "a time")
+    except ForeignFormatError:
         return False
     return t.size > 1 and bool(np.all(np.diff(t) > 0))
 
@@ -169,8 +255,8 @@ def _choose(table: Table, roles: Sequence[str], given: dict[str, str | int | Non
             raise ForeignFormatError(f"{table.path}: line {table.header_line} (header): "
                                      f"{' and '.join(table.label(j) for j in best)} could each be the "
                                      f"{kind}; say which", role=role)
-        elif kind in ("reading", "force") and len(scores) == 1 and (kind == "reading" or role == "force"
-                                                                      and "reading" not in roles):
+        elif kind == "reading" and len(scores) == 1:
+            # Never the force: in a reference file, the one column left may be anything (a temperature).
             j = next(iter(scores))
             out[role] = (j, "found: the only column left")
         else:
@@ -204,15 +290,15 @@ def _choose_headless(table: Table, roles, out, taken) -> dict[str, tuple[int, st
 
 def _values(table: Table, j: int, factor: tuple[float, float], column: str, unit: str) -> np.ndarray:
     """A value column in its run unit; an empty cell is missing (NaN)."""
-    out = np.full(len(table.cells), np.nan)
+    cells = table.numbers(j, f"a number in {unit}")
+    out = cells * factor[0] / factor[1]
     limit = _LIMITS[column]
-    for i in range(len(table.cells)):
-        text = table.cell(i, j)
-        if text:
-            out[i] = table.number(i, j, text, f"a number in {unit}") * factor[0] / factor[1]
-            if abs(out[i]) > limit:
-                raise ForeignFormatError(f"{table.where(i, j)}: {text} {unit} is beyond what a run's {column} can "
-                                         f"hold (±{limit:g}; docs/data-format.md)")
+    with np.errstate(invalid="ignore"):
+        beyond = np.flatnonzero(np.abs(out) > limit)
+    if beyond.size:
+        i = int(beyond[0])
+        raise ForeignFormatError(f"{table.where(i, j)}: {table.cell(i, j)} {unit} is beyond what a run's {column} can "
+                                 f"hold (±{limit:g}; docs/data-format.md)")
     return out
 
 
@@ -231,31 +317,50 @@ def _clock(text: str) -> float | None:
     return stamp.timestamp()
 
 
-def _times(table: Table, j: int, unit: str) -> tuple[np.ndarray, str]:
-    """Time [s] of every row, strictly increasing: numbers in ``unit``, or date-times; and their kind."""
-    t = np.empty(len(table.cells))
-    kind = ""
-    for i in range(len(table.cells)):
-        text = table.cell(i, j)
+def _is_clock(table: Table, j: int) -> bool:
+    """Whether a time column holds date-times or times of day (its first cell is one, not a number)."""
+    first = table.cell(0, j)
+    return bool(first) and not is_number(first) and _clock(first) is not None
+
+
+def _clock_times(table: Table, j: int) -> np.ndarray:
+    texts = table.texts(j)
+    t = np.empty(len(texts))
+    for i, text in enumerate(texts):
         if not text:
             raise ForeignFormatError(f"{table.where(i, j)}: empty cell, expected a time (every row needs one)")
         stamp = None if is_number(text) else _clock(text)
-        if not kind:
-            kind = "clock" if stamp is not None else "number"
-        if kind == "clock":
-            if stamp is None:
-                raise ForeignFormatError(f"{table.where(i, j)}: {text!r} is not a date-time or time of day "
-                                         f"like the column's first ({table.cells[0][j]!r})")
-            t[i] = stamp
-        else:
-            t[i] = table.number(i, j, text, f"a time in {unit}") / _PER_SECOND[unit]
-            if abs(t[i]) > _LIMITS["time_s"]:
-                raise ForeignFormatError(f"{table.where(i, j)}: {text} {unit} is beyond what a run's time_s can hold")
-        if i and not t[i] > t[i - 1]:
-            raise ForeignFormatError(f"{table.where(i, j)}: time does not increase ({text!r} after "
-                                     f"{table.cell(i - 1, j)!r} on line {table.lines[i - 1]}); rows must be in "
-                                     "time order, each at its own time")
-    return t, ("date-time" if kind == "clock" else unit)
+        if stamp is None:
+            raise ForeignFormatError(f"{table.where(i, j)}: {shown(text)} is not a date-time or time of day "
+                                     f"like the column's first ({shown(texts[0])})")
+        t[i] = stamp
+    return t
+
+
+def _times(table: Table, j: int, unit: str) -> tuple[np.ndarray, str]:
+    """Time [s] of every row, strictly increasing: numbers in ``unit``, or date-times; and their kind."""
+    if _is_clock(table, j):
+        t, said = _clock_times(table, j), "date-time"
+    else:
+        cells = table.numbers(j, f"a time in {unit}")
+        empty = np.flatnonzero(np.isnan(cells))
+        if empty.size:
+            raise ForeignFormatError(f"{table.where(int(empty[0]), j)}: empty cell, expected a time (every row "
+                                     "needs one)")
+        m, d = _TIME[unit]
+        t, said = cells * m / d, unit
+        beyond = np.flatnonzero(np.abs(t) > _LIMITS["time_s"])
+        if beyond.size:
+            i = int(beyond[0])
+            raise ForeignFormatError(f"{table.where(i, j)}: {table.cell(i, j)} {unit} is beyond what a run's time_s "
+                                     "can hold")
+    back = np.flatnonzero(~(np.diff(t) > 0))
+    if back.size:
+        i = int(back[0]) + 1
+        raise ForeignFormatError(f"{table.where(i, j)}: time does not increase ({shown(table.cell(i, j))} after "
+                                 f"{shown(table.cell(i - 1, j))} on line {table.lines[i - 1]}); rows must be in "
+                                 "time order, each at its own time")
+    return t, said
 
 
 def interpolate_reference(t: np.ndarray, t_ref: np.ndarray, values: np.ndarray) -> np.ndarray:
@@ -361,11 +466,11 @@ def _time_of(table: Table, role: str, chosen: dict, unit: str | None, rate_hz: f
                          f"column ({table.label(chosen[role][0])}); give either the column or a rate")
     if rate_hz is not None:
         mapping[role] = {"file": str(table.path), "rate_hz": rate_hz, "how": "given"}
-        return np.arange(len(table.cells)) / rate_hz
+        return np.arange(table.n_rows) / rate_hz
     if role not in chosen:
         return None
     j, how = chosen[role]
-    if unit is None:
+    if unit is None and not _is_clock(table, j):
         unit = _unit_from_header(table, j, "time")
         if unit is None:
             unit = "s"
@@ -400,15 +505,18 @@ def import_foreign(sensor: str | os.PathLike, reference: str | os.PathLike | Non
         Columns by header name or 1-based number; None: found from the header (``time``, ``ms``,
         ``millis``; ``fsr``, ``analog``, ``adc``, ``reading``; ``force``, ``load``, ``N``, ``g``...).
         ``force`` is in the reference file when there is one.
-    time_unit, reference_time_unit : {'s', 'ms', 'us'}, optional
-        Unit of a numeric time column (default: what its header says, else s).
+    time_unit, reference_time_unit : {'s', 'ms', 'us', 'min', 'h'}, optional
+        Unit of a numeric time column (default: what its header or units row says, else s; a unit stated
+        there that is not one of these is refused).
     rate_hz, reference_rate_hz : float, optional
         Sample rate of a file without a time column: row k is at k / rate. [Hz]
     reading_unit : {'counts', 'V', 'mV', 'ohm', 'kohm'}, optional
         Unit of the readout, kept as it is (default: what its header says, else counts).
-    force_unit : {'g', 'kg', 'N', 'lbf', 'mN'}, optional
-        Unit of the force column, converted to N with g0 = 9.80665 m/s² (default: what its header
-        says, else N).
+    force_unit : {'N', 'kN', 'mN', 'g', 'kg', 'lbf', 'ozf'}, optional
+        Unit of the force column, converted to N with g0 = 9.80665 m/s² (default: what its header or
+        units row says, else N; a unit stated there that is not one of these is refused). Also spelled
+        gf, kgf, lb and oz: a mass unit in a force column is the weight of that mass under standard
+        gravity, what a scale or a load cell calibrated with weights shows.
     offset_s : float
         Added to the reference's times before alignment. [s]
     header : bool, optional
@@ -422,21 +530,26 @@ def import_foreign(sensor: str | os.PathLike, reference: str | os.PathLike | Non
 
     Raises
     ------
-    ValueError
-        A parameter out of its range (the message starts with its name); :class:`ForeignFormatError`
-        for a file's problem (file, line, column).
+    ParameterError
+        A parameter out of its range or of the wrong type (``.parameter`` names it);
+        :class:`ForeignFormatError` for a file's problem (file, line, column), and for a unit its header
+        states that is not one of the role's.
     """
-    units = {"time_unit": (time_unit, TIME_UNITS), "reference_time_unit": (reference_time_unit, TIME_UNITS),
-             "reading_unit": (reading_unit, READING_UNITS), "force_unit": (force_unit, FORCE_UNITS)}
+    units = {"time_unit": (time_unit, "time"), "reference_time_unit": (reference_time_unit, "time"),
+             "reading_unit": (reading_unit, "reading"), "force_unit": (force_unit, "force")}
     time_unit, reference_time_unit, reading_unit, force_unit = (_unit(v, t, k) for k, (v, t) in units.items())
     for name, rate in (("rate_hz", rate_hz), ("reference_rate_hz", reference_rate_hz)):
-        if rate is not None and not (np.isfinite(rate) and rate > 0):
-            raise ValueError(f"{name}: must be > 0 Hz, got {rate:g}")
+        if rate is not None and not _number(rate, name) > 0:
+            raise ParameterError(f"must be > 0 Hz, got {rate:g}", parameter=name)
     if reference is None and (reference_time is not None or reference_rate_hz is not None):
-        raise ValueError(f"{'reference_time' if reference_time is not None else 'reference_rate_hz'}: given "
-                         "without a reference file")
-    if not np.isfinite(offset_s):
-        raise ValueError(f"offset_s: must be a finite time, got {offset_s!r}")
+        raise ParameterError("given without a reference file",
+                             parameter="reference_time" if reference_time is not None else "reference_rate_hz")
+    if not abs(_number(offset_s, "offset_s")) <= _LIMITS["time_s"]:
+        raise ParameterError(f"must be a time within ±{_LIMITS['time_s']:g} s (what a run's time_s holds), got "
+                             f"{offset_s!r}", parameter="offset_s")
+    if reference is not None and _same_file(Path(sensor), Path(reference)):
+        raise ParameterError(f"{reference} is the sensor's file itself; give the file the reference force was "
+                             "logged in", parameter="reference")
     notes: list[str] = []
     mapping: dict[str, dict] = {}
     sens = read_table(sensor, header, skip_lines)
@@ -464,29 +577,51 @@ def import_foreign(sensor: str | os.PathLike, reference: str | os.PathLike | Non
         if "force" in chosen:
             columns["force_n"] = _force(sens, chosen["force"], force_unit, notes, mapping)
     else:
-        rroles = (("reference_time",) if reference_time is not None or reference_rate_hz is None else ()) + ("force",)
-        rchosen = _choose(ref, rroles, {"reference_time": reference_time, "force": force})
-        if "reference_time" not in rchosen and reference_rate_hz is None:
-            raise ForeignFormatError(f"{ref.path}: no time column found ({_header_text(ref)}); say which column is "
-                                     "the reference's time, or give its sample rate", role="reference_time")
-        if "force" not in rchosen:
-            raise ForeignFormatError(f"{ref.path}: no force column found ({_header_text(ref)}); say which column "
-                                     "is the force", role="force")
-        t_ref = _time_of(ref, "reference_time", rchosen, reference_time_unit, reference_rate_hz, notes, mapping)
-        f_ref = _force(ref, rchosen["force"], force_unit, notes, mapping)
-        columns["force_n"] = interpolate_reference(t, t_ref + offset_s, f_ref)
+        columns["force_n"] = _reference_force(ref, sens, t, reference_time, reference_time_unit, reference_rate_hz,
+                                              force, force_unit, offset_s, notes, mapping)
         matched = int(np.isfinite(columns["force_n"]).sum())
-        if not np.isfinite(interpolate_reference(t, t_ref + offset_s, np.zeros_like(t_ref))).any():
-            raise ForeignFormatError(f"{ref.path}: no time in common with {sens.path} (sensor {t[0]:.6g} … "
-                                     f"{t[-1]:.6g} s, reference {t_ref[0] + offset_s:.6g} … {t_ref[-1] + offset_s:.6g} s "
-                                     f"with the offset of {offset_s:g} s): the two clocks differ; shift the reference "
-                                     "by an offset", role="offset")
     if "force_n" in columns:
         out_units["force_n"] = "N"
     sources = [sens.describe()] + ([ref.describe()] if ref is not None else [])
-    return Imported(columns=columns, units=out_units, mapping=mapping, sources=sources, rows=len(sens.cells),
+    return Imported(columns=columns, units=out_units, mapping=mapping, sources=sources, rows=sens.n_rows,
                     matched=matched, rate_hz=rate_hz if rate_hz is not None else _median_rate(t),
                     offset_s=float(offset_s), notes=notes)
+
+
+def _number(value, parameter: str) -> float:
+    """``value`` as a float; a string or another type is refused naming the parameter."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ParameterError(f"must be a number, got {type(value).__name__} {value!r}", parameter=parameter)
+    if not np.isfinite(value):
+        raise ParameterError(f"must be finite, got {value!r}", parameter=parameter)
+    return float(value)
+
+
+def _reference_force(ref: Table, sens: Table, t: np.ndarray, reference_time, reference_time_unit,
+                     reference_rate_hz, force, force_unit, offset_s: float, notes: list, mapping: dict) -> np.ndarray:
+    """The reference file's force [N] at the sensor's times ``t``: its time and force columns found or given,
+    its times shifted by ``offset_s``, linear between its samples."""
+    rroles = (("reference_time",) if reference_time is not None or reference_rate_hz is None else ()) + ("force",)
+    rchosen = _choose(ref, rroles, {"reference_time": reference_time, "force": force})
+    if "reference_time" not in rchosen and reference_rate_hz is None:
+        raise ForeignFormatError(f"{ref.path}: no time column found ({_header_text(ref)}); say which column is "
+                                 "the reference's time, or give its sample rate", role="reference_time")
+    if "force" not in rchosen:
+        raise ForeignFormatError(f"{ref.path}: no force column found ({_header_text(ref)}); say which column "
+                                 "is the force", role="force")
+    t_ref = _time_of(ref, "reference_time", rchosen, reference_time_unit, reference_rate_hz, notes, mapping)
+    f_ref = _force(ref, rchosen["force"], force_unit, notes, mapping)
+    shifted = t_ref + offset_s
+    if shifted.size > 1 and not np.all(np.diff(shifted) > 0):
+        raise ParameterError(f"{offset_s:g} s added to {ref.path}'s times makes two of them equal (a float's "
+                             "resolution); give an offset of the size of the clocks' difference", parameter="offset_s")
+    force_n = interpolate_reference(t, shifted, f_ref)
+    if not np.isfinite(interpolate_reference(t, shifted, np.zeros_like(t_ref))).any():
+        raise ForeignFormatError(f"{ref.path}: no time in common with {sens.path} (sensor {t[0]:.6g} … "
+                                 f"{t[-1]:.6g} s, reference {shifted[0]:.6g} … {shifted[-1]:.6g} s "
+                                 f"with the offset of {offset_s:g} s): the two clocks differ; shift the reference "
+                                 "by an offset", role="offset")
+    return force_n
 
 
 def _header_text(table: Table) -> str:

@@ -11,10 +11,12 @@ editor shows it) and the column. Which column is which, and what the cells mean,
 
 from __future__ import annotations
 
+import functools
 import hashlib
+import itertools
 import os
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Sequence
 
@@ -22,6 +24,7 @@ import numpy as np
 
 from fsrlab.errors import FileFormatError
 from fsrlab.io.csvtext import LongCellError, csv_cells
+from fsrlab.io.shown import shown
 
 __all__ = ["ForeignFormatError", "Table", "read_table", "is_number"]
 
@@ -67,7 +70,7 @@ def is_number(cell: str) -> bool:
 
 @dataclass
 class Table:
-    """The cells of a foreign file, as text.
+    """The cells of a foreign file, as text: the data lines kept whole, a column split out when it is read.
 
     Parameters
     ----------
@@ -79,49 +82,89 @@ class Table:
         File line of the header (1-based), None without one.
     units_row : list of str
         The units row under the header (e.g. ``s;N;V``), empty when there is none.
-    cells : list of list of str
-        Data rows, their cells stripped.
-    lines : list of int
-        File line of each data row (1-based, as a text editor counts, comments and blanks included).
+    body : list of str
+        The data lines, as the file has them (comments, blanks, header and units row left out).
+    lines : ndarray of int
+        File line of each data line (1-based, as a text editor counts, comments and blanks included).
     delimiter : str
         ``","``, ``";"``, ``"\\t"`` or ``" "`` (runs of white space).
     decimal : str
         ``"."`` or ``","`` (decimal comma).
     encoding : str
         ``"utf-8"``, ``"utf-16"`` or ``"latin-1"``.
+    sha256 : str
+        The file's SHA-256, of the bytes read.
     """
 
     path: Path
     names: list[str]
     header_line: int | None
     units_row: list[str]
-    cells: list[list[str]]
-    lines: list[int]
+    body: list[str]
+    lines: np.ndarray
     delimiter: str
     decimal: str
     encoding: str
+    sha256: str = ""
+    _numbers: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
+    def n_rows(self) -> int:
+        """Data rows."""
+        return len(self.body)
+
+    @functools.cached_property
     def n_columns(self) -> int:
         """Columns of the widest row or of the header."""
-        return max([len(self.names), *(len(r) for r in self.cells)], default=0)
+        if self.delimiter != " " and not self._quoted:
+            widest = max(map(str.count, self.body, itertools.repeat(self.delimiter, self.n_rows)), default=-1) + 1
+        else:
+            widest = max((len(self.row(i)) for i in range(self.n_rows)), default=0)
+        return max(len(self.names), widest)
+
+    @functools.cached_property
+    def _quoted(self) -> bool:
+        return any('"' in ln for ln in self.body)
+
+    @functools.cached_property
+    def _plain(self) -> bool:
+        """Whether the data lines are ASCII without quotes and underscores (numpy's parser reads them as fsrlab)."""
+        text = "".join(self.body)
+        return text.isascii() and '"' not in text and "_" not in text
 
     def label(self, j: int) -> str:
         """Column ``j`` (0-based) as a message names it: ``column 'fsr' (2)`` or ``column 2``."""
         name = self.names[j] if j < len(self.names) else ""
-        return f"column {name!r} ({j + 1})" if name else f"column {j + 1}"
+        return f"column {shown(name)} ({j + 1})" if name else f"column {j + 1}"
 
     def where(self, i: int, j: int) -> str:
         """Data row ``i``, column ``j`` (0-based) as a message names it: ``x.csv: line 4, column 'fsr' (2)``."""
         return f"{self.path}: line {self.lines[i]}, {self.label(j)}"
 
+    def row(self, i: int) -> list[str]:
+        """The cells of data row ``i`` (0-based), stripped."""
+        try:
+            return _split(self.body[i], self.delimiter)
+        except LongCellError as exc:
+            raise ForeignFormatError(f"{self.path}: line {self.lines[i]}: {exc}") from None
+
     def cell(self, i: int, j: int) -> str:
         """The text of data row ``i``, column ``j`` (0-based); ForeignFormatError when the row is short."""
-        row = self.cells[i]
+        row = self.row(i)
         if j >= len(row):
             raise ForeignFormatError(f"{self.where(i, j)}: missing cell (the line has {len(row)} cells, "
                                      f"{_DELIMITER_NAMES[self.delimiter]}-separated)")
         return row[j]
+
+    def texts(self, j: int) -> list[str]:
+        """The text of column ``j`` (0-based) in every data row; ForeignFormatError at the first short row."""
+        out = []
+        for i in range(self.n_rows):
+            row = self.row(i)
+            if j >= len(row):
+                self.cell(i, j)  # raises, naming the line
+            out.append(row[j])
+        return out
 
     def number(self, i: int, j: int, text: str, expected: str) -> float:
         """The finite number a cell's ``text`` holds in the file's decimal separator.
@@ -146,35 +189,88 @@ class Table:
         """
         cell = text.replace(",", ".") if self.decimal == "," else text
         if _NOT_FINITE.match(cell):
-            raise ForeignFormatError(f"{self.where(i, j)}: {text!r} is not a finite number "
+            raise ForeignFormatError(f"{self.where(i, j)}: {shown(text)} is not a finite number "
                                      "(leave the cell empty for a missing value)")
         if not _NUMBER.match(cell):
             point = "decimal comma" if self.decimal == "," else "decimal point"
-            raise ForeignFormatError(f"{self.where(i, j)}: non-numeric cell {text!r}, expected {expected} "
+            raise ForeignFormatError(f"{self.where(i, j)}: non-numeric cell {shown(text)}, expected {expected} "
                                      f"(a plain number, {point})")
         value = float(cell)
         if not np.isfinite(value):
-            raise ForeignFormatError(f"{self.where(i, j)}: {text!r} is beyond any finite number")
+            raise ForeignFormatError(f"{self.where(i, j)}: {shown(text)} is beyond any finite number")
         return value
+
+    def numbers(self, j: int, expected: str) -> np.ndarray:
+        """Column ``j`` (0-based) as finite numbers, NaN for an empty cell.
+
+        numpy's C parser reads the column when every cell of it is a plain number; otherwise the
+        cells are read one by one, and the first one that is not a finite number (:meth:`number`) or
+        is missing stops the import, naming its line.
+
+        Parameters
+        ----------
+        j : int
+            The column.
+        expected : str
+            What the column holds, for a message (``"a number in g"``).
+
+        Returns
+        -------
+        ndarray, shape (n_rows,)
+        """
+        if j not in self._numbers:
+            fast = self._parse_fast(j)
+            self._numbers[j] = fast if fast is not None else self._parse_slow(j, expected)
+        return self._numbers[j].copy()
+
+    def _parse_fast(self, j: int) -> np.ndarray | None:
+        body = self.body
+        # numpy reads quotes, 5_000 and other scripts' digits otherwise than a cell's plain number: cell by cell
+        if not self._plain:
+            return None
+        if self.decimal == ",":
+            body = [ln.replace(",", ".") for ln in body]
+        try:
+            values = np.loadtxt(body, delimiter=None if self.delimiter == " " else self.delimiter, usecols=j,
+                                ndmin=1, comments=None, dtype=np.float64)
+        except ValueError:
+            return None
+        if values.shape != (self.n_rows,) or not np.isfinite(values).all():
+            return None
+        return values
+
+    def _parse_slow(self, j: int, expected: str) -> np.ndarray:
+        texts = self.texts(j)
+        cells = [t.replace(",", ".") for t in texts] if self.decimal == "," else texts
+        out = np.full(len(cells), np.nan)
+        for i, cell in enumerate(cells):
+            if cell:
+                if _NUMBER.match(cell):
+                    out[i] = float(cell)
+                if not np.isfinite(out[i]):
+                    self.number(i, j, texts[i], expected)  # raises, saying what the cell is
+        return out
 
     def describe(self) -> dict:
         """How the file was read, for the sidecar and ``--json``."""
         return {"file": str(self.path), "delimiter": _DELIMITER_NAMES[self.delimiter], "decimal": self.decimal,
-                "header_line": self.header_line, "rows": len(self.cells), "encoding": self.encoding,
-                "sha256": hashlib.sha256(self.path.read_bytes()).hexdigest()}
+                "header_line": self.header_line, "rows": self.n_rows, "encoding": self.encoding,
+                "sha256": self.sha256 or hashlib.sha256(self.path.read_bytes()).hexdigest()}
 
 
-def _decode(path: Path) -> tuple[str, str]:
+def _decode(path: Path) -> tuple[str, str, str]:
+    """The file's text, its encoding and its SHA-256."""
     raw = path.read_bytes()
+    digest = hashlib.sha256(raw).hexdigest()
     if raw.startswith((b"\xff\xfe", b"\xfe\xff")):  # a spreadsheet's "Unicode text"
-        return raw.decode("utf-16"), "utf-16"
+        return raw.decode("utf-16"), "utf-16", digest
     try:
         text, encoding = raw.decode("utf-8-sig"), "utf-8"
     except UnicodeDecodeError:
         text, encoding = raw.decode("latin-1"), "latin-1"  # a Windows logger's °C or µ: never fails
     if "\x00" in text:
         raise ForeignFormatError(f"{path}: not a text file (NUL bytes)")
-    return text, encoding
+    return text, encoding, digest
 
 
 def _split(line: str, delimiter: str) -> list[str]:
@@ -189,14 +285,6 @@ def _count(line: str, delimiter: str) -> int:
         return len(_split(line, delimiter))
     except LongCellError:
         return len(line.split(delimiter))
-
-
-def _fails(line: str, delimiter: str) -> bool:
-    try:
-        _split(line, delimiter)
-    except LongCellError:
-        return True
-    return False
 
 
 def _sniff(lines: Sequence[str]) -> str:
@@ -256,38 +344,61 @@ def read_table(path: str | os.PathLike, header: bool | None = None, skip_lines: 
     p = Path(path)
     if skip_lines < 0:
         raise ValueError(f"skip_lines: must be >= 0, got {skip_lines}")
-    text, encoding = _decode(p)
-    numbered = [(k, ln) for k, ln in enumerate(re.split(r"\r\n|\r|\n", text), start=1)
-                if k > skip_lines and ln.strip() and not ln.lstrip().startswith("#")]
-    if not numbered:
+    text, encoding, digest = _decode(p)
+    numbers, body = _data_lines(text, skip_lines)
+    del text
+    if not body:
         raise ForeignFormatError(f"{p}: empty file (no header and no data rows"
                                  + (f" after the {skip_lines} skipped lines)" if skip_lines else ")"))
-    delimiter = _sniff([ln for _, ln in numbered[:50]])
-    try:
-        rows = [(k, _split(ln, delimiter)) for k, ln in numbered]
-    except LongCellError as exc:
-        k = next(k for k, ln in numbered if _count(ln, delimiter) and _fails(ln, delimiter))
-        raise ForeignFormatError(f"{p}: line {k}: {exc}") from None
+    delimiter = _sniff(body[:50])
+
+    def split(k: int) -> list[str]:
+        try:
+            return _split(body[k], delimiter)
+        except LongCellError as exc:
+            raise ForeignFormatError(f"{p}: line {numbers[k]}: {exc}") from None
+
+    head = [(int(numbers[k]), split(k)) for k in range(min(len(body), 202))]
     if header is None:
-        header = _looks_like_header(rows)
+        header = _looks_like_header(head)
     names: list[str] = []
-    header_line, units_row = None, []
+    header_line, units_row, first = None, [], 0
     if header:
-        header_line, names = rows[0][0], rows[0][1]
-        rows = rows[1:]
-        seen: dict[str, int] = {}
-        for j, name in enumerate(names):
-            if name and name in seen:
-                raise ForeignFormatError(f"{p}: line {header_line} (header), column {name!r} ({seen[name] + 1} and "
-                                         f"{j + 1}): the same header name twice; each column needs its own name")
-            seen.setdefault(name, j)
+        header_line, names = head[0]
+        first = 1
+        _check_names(p, header_line, names)
         # A units row under the header ("s;N;V"): no cell of it is a number.
-        if rows and any(rows[0][1]) and not any(is_number(c) for c in rows[0][1] if c):
-            units_row = rows[0][1]
-            rows = rows[1:]
-    if not rows:
+        if len(head) > 1 and any(head[1][1]) and not any(is_number(c) for c in head[1][1] if c):
+            units_row = head[1][1]
+            first = 2
+    if first >= len(body):
         raise ForeignFormatError(f"{p}: no data rows" + (f" (line {header_line} is the header)" if header_line else ""))
-    decimal = "," if any(_COMMA_NUMBER.match(c) for _, r in rows[:200] for c in r) else "."
-    return Table(path=p, names=names, header_line=header_line, units_row=units_row,
-                 cells=[r for _, r in rows], lines=[k for k, _ in rows], delimiter=delimiter, decimal=decimal,
-                 encoding=encoding)
+    decimal = "," if any(_COMMA_NUMBER.match(c) for _, r in head[first:first + 200] for c in r) else "."
+    return Table(path=p, names=names, header_line=header_line, units_row=units_row, body=body[first:],
+                 lines=numbers[first:], delimiter=delimiter, decimal=decimal, encoding=encoding, sha256=digest)
+
+
+def _check_names(p: Path, header_line: int, names: list[str]) -> None:
+    seen: dict[str, int] = {}
+    for j, name in enumerate(names):
+        if name and name in seen:
+            raise ForeignFormatError(f"{p}: line {header_line} (header), column {shown(name)} ({seen[name] + 1} and "
+                                     f"{j + 1}): the same header name twice; each column needs its own name")
+        seen.setdefault(name, j)
+
+
+# Line ends str.splitlines() knows besides \r and \n; with none of them in a file it splits as the CSV does.
+_OTHER_LINE_ENDS = re.compile("[\x0b\x0c\x1c\x1d\x1e\x85\u2028\u2029]")
+
+
+def _data_lines(text: str, skip_lines: int) -> tuple[np.ndarray, list[str]]:
+    """The lines that hold cells (1-based file line of each, and the text): after ``skip_lines``, without
+    blank and ``#`` comment lines."""
+    lines = text.splitlines() if _OTHER_LINE_ENDS.search(text) is None else re.split(r"\r\n|\r|\n", text)
+    if "#" not in text and "" not in lines[skip_lines:] and not any(map(str.isspace, lines[skip_lines:])):
+        return np.arange(skip_lines + 1, len(lines) + 1), lines[skip_lines:]
+    keep = [k for k in range(skip_lines, len(lines))
+            if (ln := lines[k]) and not ln.isspace() and not ln.lstrip().startswith("#")]
+    if len(keep) == len(lines) - skip_lines:
+        return np.arange(skip_lines + 1, len(lines) + 1), lines[skip_lines:]
+    return np.asarray(keep, dtype=np.int64) + 1, [lines[k] for k in keep]
