@@ -111,6 +111,8 @@ def loadcell(
         print(f"fsrlab: {exc}", file=sys.stderr)
         raise typer.Exit(1)
     except LinkError as exc:
+        if exc.parameter == "port" and not virtual:  # no board, or the port cannot be opened: as every command says it
+            fail(exc.reason, "--port")
         print(f"fsrlab: {plain_numbers(str(exc))}", file=sys.stderr)
         raise typer.Exit(1)
     except KeyboardInterrupt:
