@@ -56,3 +56,43 @@ def test_sketch_writes_then_refuses_naming_the_option(tmp_path):
 def test_flash_bad_input_is_one_line_naming_the_option(args, option, monkeypatch):
     code, out, err = run_cli(["firmware", "flash", *args])
     assert code == 2 and out == "" and err.count("\n") == 1 and option in err
+
+
+@pytest.mark.parametrize("directory, said", [("", "is empty"), ("/nonexistent/deep/dir", "/nonexistent/deep does not exist")])
+def test_sketch_refuses_an_empty_or_unrooted_folder(directory, said):
+    """The output policy: "" is not "here", and a mistyped path is not made from / (issue 40)."""
+    code, out, err = run_cli(["firmware", "sketch", directory])
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert err.startswith("fsrlab: error: Invalid value for DIR: ") and said in err
+    assert not __import__("os").path.exists("/nonexistent")
+
+
+def test_sketch_makes_one_folder_in_an_existing_one(tmp_path):
+    code, out, err = run_cli(["firmware", "sketch", tmp_path / "new"])
+    assert code == 0 and (tmp_path / "new" / "fsrlab_meter" / "fsrlab_meter.ino").is_file()
+    assert [p.name for p in (tmp_path / "new" / "fsrlab_meter").iterdir() if p.name.startswith(".")] == []
+
+
+def test_shipped_image_is_intel_hex():
+    """Reference: the Intel hex format (Intel, "Hexadecimal Object File Format Specification", rev. A, 1988):
+    the shipped image passes, and the same image with one checksum changed, cut before its end record, or
+    moved past 32 KiB does not."""
+    assert 1000 < firmware.check_intel_hex(firmware.hex_path()) <= firmware.FLASH_BYTES
+
+
+@pytest.mark.parametrize("change, said", [
+    (lambda t: t.replace(t.splitlines()[0], t.splitlines()[0][:-2] + ("00" if t.splitlines()[0][-2:] != "00" else "01")), "checksum"),
+    (lambda t: "\n".join(t.splitlines()[:-1]) + "\n", "no end-of-file record"),
+    (lambda t: ":020000040001F9\n" + t, "beyond an ATmega328P"),
+    (lambda t: "time_s,frequency_hz\n0,1\n", "is not an Intel hex record"),
+])
+def test_flash_refuses_a_file_that_is_not_an_uno_image_before_avrdude_runs(tmp_path, monkeypatch, change, said):
+    bad = tmp_path / "bad.hex"
+    bad.write_text(change(firmware.hex_path().read_text()))
+    ran = []
+    monkeypatch.setattr(firmware.subprocess, "run", lambda *a, **k: ran.append(a))
+    with pytest.raises(ValueError, match=said) as info:
+        firmware.flash("/dev/null", bad, avrdude="avrdude")
+    assert info.value.parameter == "hex_file" and ran == []
+    code, out, err = run_cli(["firmware", "flash", "--port", "/dev/null", "--hex", bad])
+    assert code == 2 and ran == [] and err.startswith("fsrlab: error: Invalid value for --hex: ") and said in err

@@ -13,6 +13,7 @@ Flashing goes through the Uno's bootloader (optiboot, STK500 v1 at 115200 baud) 
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
 import subprocess
@@ -22,10 +23,11 @@ from pathlib import Path
 
 from fsrlab.acquisition.messages import Identity
 from fsrlab.acquisition.serial_link import HandshakeError, LinkError, SerialLink, find_uno
-from fsrlab.errors import FsrlabError
+from fsrlab.errors import FsrlabError, ParameterError
 
 __all__ = ["SKETCH_NAME", "AVRDUDE_HINT", "FlashError", "ToolMissing", "FirmwareInfo", "FlashResult", "data_dir",
-           "hex_path", "sketch_files", "twin_sources", "firmware_info", "write_sketch", "avrdude_command", "flash"]
+           "hex_path", "sketch_files", "twin_sources", "firmware_info", "write_sketch", "check_intel_hex", "FLASH_BYTES",
+           "avrdude_command", "flash"]
 
 SKETCH_NAME = "fsrlab_meter"
 """Name of the sketch: its folder and its ``.ino`` (the Arduino IDE wants them equal)."""
@@ -141,10 +143,14 @@ def firmware_info() -> FirmwareInfo:
 def write_sketch(directory: str | Path, overwrite: bool = False) -> Path:
     """Write the sketch for the Arduino IDE into ``directory/fsrlab_meter/``.
 
+    The output policy (:mod:`fsrlab.io.outputs`): an empty ``directory`` is refused (it would mean "here");
+    ``directory`` is created when missing only where its parent exists (a mistyped path is not made from
+    ``/``); each file is written under a temporary name and renamed into place.
+
     Parameters
     ----------
     directory : str or Path
-        Where the sketch folder goes (created when missing), e.g. the IDE's sketchbook.
+        Where the sketch folder goes (created when missing, in an existing folder), e.g. the IDE's sketchbook.
     overwrite : bool
         Replace files of the sketch that already exist there (otherwise nothing is written).
 
@@ -157,18 +163,96 @@ def write_sketch(directory: str | Path, overwrite: bool = False) -> Path:
     ------
     FileExistsError
         When a file of the sketch exists and ``overwrite`` is false (the message names it).
+    OutputError
+        ``directory`` is empty, a file, or in a folder that does not exist (``.option`` is ``"directory"``).
     """
-    target = Path(directory) / SKETCH_NAME
+    from fsrlab.io.outputs import OutputError, output_path, write_bytes_atomic
+
+    base = output_path(directory, "directory")
+    if base.exists() and not base.is_dir():
+        raise OutputError("directory", f"{base} is a file, not a folder")
+    if not base.exists() and not base.parent.is_dir():
+        raise OutputError("directory", f"{base.parent} does not exist; give an existing folder (or one to make in "
+                                       "an existing folder)")
+    target = base / SKETCH_NAME
+    if target.exists() and not target.is_dir():
+        raise OutputError("directory", f"{target} is a file, not the sketch's folder")
     files = sketch_files()
     if not overwrite:
-        existing = [target / f.name for f in files if (target / f.name).exists()]
+        existing = [target / f.name for f in files if os.path.lexists(target / f.name)]
         if existing:
             raise FileExistsError(f"{existing[0]} exists ({len(existing)} of the sketch's {len(files)} files do); "
                                   "--overwrite replaces them")
     target.mkdir(parents=True, exist_ok=True)
     for f in files:
-        shutil.copyfile(f, target / f.name)
+        write_bytes_atomic(target / f.name, f.read_bytes())
     return target
+
+
+#: Bytes of an ATmega328P's flash: an image must fit below it. [bytes]
+FLASH_BYTES = 32 * 1024
+_HEX_LINE = re.compile(r":[0-9A-Fa-f]{10,}")
+
+
+def check_intel_hex(path: str | Path) -> int:
+    """Check that ``path`` is an Intel hex image for an Uno: every record well formed, its checksum right,
+    its data inside the ATmega328P's 32 KiB of flash, and an end-of-file record last.
+
+    Parameters
+    ----------
+    path : str or Path
+        The image.
+
+    Returns
+    -------
+    int
+        Bytes of data it holds. [bytes]
+
+    Raises
+    ------
+    FileFormatError
+        One line naming the file, the line and what is wrong (``.parameter`` is ``"hex_file"``).
+    OSError
+        The file cannot be read.
+    """
+    from fsrlab.errors import FileFormatError
+    from fsrlab.io.shown import shown
+
+    p = Path(path)
+    if p.stat().st_size > 8 * FLASH_BYTES:  # 32 KiB of data is at most ~90 KB of hex text
+        raise FileFormatError(f"{p}: {p.stat().st_size} bytes, more than an Intel hex image of an Uno's "
+                              f"{FLASH_BYTES // 1024} KiB of flash", parameter="hex_file")
+    lines = p.read_bytes().decode("ascii", errors="replace").splitlines()
+    total, base, ended = 0, 0, False
+    for k, line in enumerate(lines, start=1):
+        line = line.strip()
+        if not line:
+            continue
+        where = f"{p}: line {k}"
+        if ended:
+            raise FileFormatError(f"{where}: a record after the end-of-file record", parameter="hex_file")
+        if not _HEX_LINE.fullmatch(line) or len(line) % 2 == 0:
+            raise FileFormatError(f"{where}: {shown(line[:40])} is not an Intel hex record (':' then pairs of hex "
+                                  "digits); is this a firmware image?", parameter="hex_file")
+        record = bytes.fromhex(line[1:])
+        count, address, kind = record[0], int.from_bytes(record[1:3], "big"), record[3]
+        if len(record) != count + 5 or sum(record) & 0xFF:
+            raise FileFormatError(f"{where}: the record's length or checksum is wrong", parameter="hex_file")
+        if kind == 0:
+            if base + address + count > FLASH_BYTES:
+                raise FileFormatError(f"{where}: data at 0x{base + address:X}, beyond an ATmega328P's "
+                                      f"{FLASH_BYTES // 1024} KiB of flash", parameter="hex_file")
+            total += count
+        elif kind == 1:
+            ended = True
+        elif kind in (2, 4):
+            base = int.from_bytes(record[4:6], "big") << (4 if kind == 2 else 16)
+        elif kind not in (3, 5):
+            raise FileFormatError(f"{where}: record type {kind:02X} is not an Intel hex type", parameter="hex_file")
+    if not ended:
+        raise FileFormatError(f"{p}: no end-of-file record (:00000001FF); the image is cut short or not Intel hex",
+                              parameter="hex_file")
+    return total
 
 
 def avrdude_command(port: str, hex_file: str | Path | None = None, avrdude: str = "avrdude") -> list[str]:
@@ -220,16 +304,19 @@ def flash(port: str, hex_file: str | Path | None = None, *, avrdude: str | None 
         The board answered as another firmware version or protocol, or not at all.
     LinkError
         ``auto`` found no Uno or several.
+    FileFormatError
+        ``hex_file`` is not an Intel hex image for an Uno (:func:`check_intel_hex`), refused before avrdude runs.
     """
     if not check_timeout_s > 0:
-        raise ValueError(f"check_timeout_s must be > 0 s, got {check_timeout_s!r}")
-    exe = avrdude or shutil.which("avrdude")
-    if exe is None:
-        raise ToolMissing(f"avrdude is not installed: {AVRDUDE_HINT}")
+        raise ParameterError(f"must be > 0 s, got {check_timeout_s!r}", parameter="check_timeout_s")
     info = firmware_info()
     image = Path(hex_file) if hex_file is not None else info.hex_path
     if not image.is_file():
-        raise FileNotFoundError(f"no firmware image at {image}")
+        raise ParameterError(f"no firmware image at {image}", parameter="hex_file")
+    check_intel_hex(image)  # before avrdude runs: avrdude takes a minute to give up on a file that is not one
+    exe = avrdude or shutil.which("avrdude")
+    if exe is None:
+        raise ToolMissing(f"avrdude is not installed: {AVRDUDE_HINT}")
     device = find_uno() if port == "auto" else str(port)
     command = avrdude_command(device, image, exe)
     try:

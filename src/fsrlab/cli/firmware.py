@@ -46,7 +46,7 @@ def hex_(
 
 @firmware_app.command("sketch")
 def sketch(
-    directory: Path = typer.Argument(..., metavar="DIR", help="Folder that gets the sketch folder fsrlab_meter/ (created when missing), e.g. your Arduino sketchbook."),
+    directory: str = typer.Argument(..., metavar="DIR", help="Folder that gets the sketch folder fsrlab_meter/ (created when missing, in an existing folder), e.g. your Arduino sketchbook."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace the sketch's files if they exist there (otherwise nothing is written)."),
 ) -> None:
     """Write the firmware's sketch for the Arduino IDE into DIR/fsrlab_meter/; prints the .ino's path.
@@ -63,12 +63,14 @@ def sketch(
     """
     from fsrlab.acquisition.firmware import SKETCH_NAME, write_sketch
 
-    if directory.exists() and not directory.is_dir():
-        fail(f"{directory} is a file, not a folder", "DIR")
+    from fsrlab.io.outputs import OutputError
+
     try:
         folder = write_sketch(directory, overwrite=overwrite)
     except FileExistsError as exc:
         fail(str(exc), "DIR")
+    except OutputError as exc:
+        fail(exc.message, "DIR")
     typer.echo(str((folder / f"{SKETCH_NAME}.ino").resolve()))
 
 
@@ -98,6 +100,10 @@ def flash(
         fail(f"must be > 0 s, got {check_timeout:g} s", "--check-timeout")
     if hex_file is not None and not hex_file.is_file():
         fail(f"no such file: {hex_file}", "--hex")
+    if hex_file is not None:
+        from fsrlab.acquisition.firmware import check_intel_hex
+
+        check_intel_hex(hex_file)  # refused before any port is looked at (its FileFormatError names --hex)
     result = flash_board(port, hex_file, check_timeout_s=check_timeout)
     ident = result.identity
     if json_out:

@@ -32,7 +32,7 @@ from pathlib import Path
 from typing import Iterable, Iterator
 
 __all__ = ["OutputError", "output_path", "check_output", "protected_paths", "same_file", "atomic_path",
-           "write_text_atomic", "atomic_run", "replace_run", "run_files"]
+           "write_text_atomic", "write_bytes_atomic", "atomic_run", "replace_run", "run_files"]
 
 
 class OutputError(ValueError):
@@ -270,6 +270,23 @@ def write_text_atomic(path, text: str) -> Path:
     """
     with atomic_path(path) as tmp:
         tmp.write_text(text, encoding="utf-8")
+    return Path(path)
+
+
+def write_bytes_atomic(path, data: bytes) -> Path:
+    """Write ``data`` to ``path`` through a temporary file and one rename.
+
+    Parameters
+    ----------
+    path : path-like
+    data : bytes
+
+    Returns
+    -------
+    Path
+    """
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(data)
     return Path(path)
 
 
