@@ -52,6 +52,11 @@ def test_calibrate_and_apply_through_the_flat_api(tmp_path):
     bench = synthetic_run(cycles=3, points_per_ramp=40, seed=1).write(tmp_path / "bench.csv")
     other = synthetic_run(cycles=1, points_per_ramp=40, seed=2).write(tmp_path / "other.csv")
     cal = fl.calibrate(fl.load_run(bench))
+    assert isinstance(cal, fl.Calibration) and repr(cal).startswith("Calibration(stress_pa(frequency_hz): ")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    assert cal.plot().get_lines()  # README: results draw themselves, cal.plot()
     path = fl.save_calibration(cal, tmp_path / "cal.json")
     est = fl.apply(fl.load_calibration(path), fl.load_run(other))
     assert est["stress_pa_estimate"].size == fl.load_run(other)["stress_pa"].size
