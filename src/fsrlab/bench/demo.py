@@ -396,11 +396,11 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
     except ValueError as exc:
         say(f"      known-weight calibration not possible: {exc}")
     result.numbers["calibration"] = {"model": cal.model_name, "reference": cal.y_name,
-                                     "cv_rmse": cal.selection.heldout_rmse, "unit": cal.y_unit, "lag_s": cal.lag_s,
+                                     "heldout_rmse": cal.selection.heldout_rmse, "unit": cal.y_unit, "lag_s": cal.lag_s,
                                      "delay_s": cal.model.delay_s, "scheme": cal.selection.scheme}
     if known is not None:
         result.numbers["known_weight_calibration"] = {"model": known.model_name, "reference": known.y_name,
-                                                      "cv_rmse": known.selection.heldout_rmse, "unit": known.y_unit,
+                                                      "heldout_rmse": known.selection.heldout_rmse, "unit": known.y_unit,
                                                       "scheme": known.selection.scheme}
     done("calibration", t0, f"{cal.model_name}, held-out RMSE {cal.selection.heldout_rmse:.3g} {cal.y_unit}"
          + (f"; known weights: {known.model_name}, held-out RMSE {known.selection.heldout_rmse:.3g} {known.y_unit}"

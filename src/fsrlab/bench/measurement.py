@@ -12,7 +12,7 @@ resistive one (op-amp V0, eq. 38) as in its Table 3:
   run holds dead-weight series, and what is missing otherwise;
 - **extension:** the creep of each readout over every held load of the run
   (:func:`fsrlab.metrics.creep.creep_of_run`: drift per decade of time, total drift, time constant);
-- **extension:** the calibration (model chosen by grouped cross-validation, its CV error, lag and
+- **extension:** the calibration (every choice scored held out: its model, held-out error, lag, delay and
   uncertainty) and the hysteresis error of the compensated estimate
   (:func:`fsrlab.calibration.heldout_runs.calibrate_runs`, :func:`~fsrlab.calibration.apply.apply_calibration`).
 
@@ -140,8 +140,9 @@ class RunReport:
         (None when not determined); empty with ``creep_reason``.
     creep_reason : str or None
     calibration : dict or None
-        ``model``, ``x``, ``y``, ``cv_rmse``, ``r2``, ``lag_s``, ``delay_s`` (held-out), ``uncertainty_max``,
-        ``uncertainty_median``, ``compensated``, ``source``, ``full_scale``; None with ``calibration_reason``.
+        ``model``, ``x``, ``y``, ``y_unit``, ``heldout_rmse``, ``r2``, ``lag_s``, ``delay_s``, ``uncertainty_max``,
+        ``uncertainty_median``, ``compensated``, ``source``, ``full_scale``, ``scheme``; None with
+        ``calibration_reason``.
     calibration_reason : str or None
     estimate : ReadoutHysteresis or None
         Eq. (13) of the calibrated (compensated) estimate.
@@ -378,10 +379,10 @@ def _calibration_summary(cal, source: str) -> dict:
     table = np.asarray(getattr(m.uncertainty, "table", []), dtype=float)
     table = table[np.isfinite(table)]
     return {"model": cal.model_name, "x": cal.x_name, "y": cal.y_name, "y_unit": cal.y_unit,
-            "cv_rmse": cal.selection.heldout_rmse, "r2": cal.r2, "lag_s": cal.lag_s, "delay_s": m.delay_s,
+            "heldout_rmse": cal.selection.heldout_rmse, "r2": cal.r2, "lag_s": cal.lag_s, "delay_s": m.delay_s,
             "uncertainty_max": float(table.max()) if table.size else None,
             "uncertainty_median": float(np.median(table)) if table.size else None,
-            "compensated": m.has_memory, "compensation_he_percent": None, "full_scale": cal.full_scale,
+            "compensated": m.has_memory, "full_scale": cal.full_scale,
             "source": source, "scheme": cal.selection.scheme}
 
 
@@ -413,8 +414,6 @@ def measure_run(run, placements=None, weights_run=None, calibration=None, calibr
     RunFormatError, ValueError
         An unreadable run, placements file or calibration (the message names the file).
     """
-    from fsrlab.calibration.apply import apply_calibration
-    from fsrlab.calibration.heldout_runs import calibrate_runs
     from fsrlab.calibration.readout import run_reference
     from fsrlab.io.runformat import load_run
 
@@ -466,8 +465,19 @@ def measure_run(run, placements=None, weights_run=None, calibration=None, calibr
                                  "(zero and unloading readings)")
 
     rep.creep, rep.creep_reason = _creep(run)
+    rep.curves = {"reference": y}
+    _calibrated(rep, run, calibration, calibrate)
+    return rep
 
-    # Calibration and the compensated estimate.
+
+def _calibrated(rep: RunReport, run, calibration, calibrate: bool) -> None:
+    """The calibration (given, or fitted on the run itself by :func:`fsrlab.calibrate` with its compensation),
+    the estimate it gives on the run, its hysteresis error and, for a given calibration on a run with its
+    reference, their agreement: into ``rep``, or the reason why not."""
+    from fsrlab.calibration.apply import apply_calibration
+    from fsrlab.calibration.heldout_runs import calibrate_runs
+    from fsrlab.calibration.readout import run_reference
+
     cal, source = None, ""
     if calibration is not None:
         from fsrlab.calibration.document import load_calibration
@@ -482,23 +492,21 @@ def measure_run(run, placements=None, weights_run=None, calibration=None, calibr
             rep.calibration_reason = f"the run cannot be calibrated on itself: {str(exc).split(': ', 1)[-1]}"
     else:
         rep.calibration_reason = "no calibration given"
-    rep.curves = {"reference": y}
-    if cal is not None:
-        rep.calibration = _calibration_summary(cal, source)
-        try:
-            est = apply_calibration(cal, run)
-        except ValueError as exc:
-            rep.calibration_reason = f"the calibration does not apply to this run: {exc}"
-        else:
-            col = f"{cal.y_name}_estimate"
-            rep.estimate = _hysteresis(est, col, "calibrated estimate")
-            rep.curves["estimate"] = est[col] if col in est else None
-            rep.curves["estimate_reference"] = run_reference(est, cal.y_name)[0]
-            unc = f"{cal.y_name}_uncertainty"
-            rep.curves["estimate_uncertainty"] = est[unc] if unc in est else None
-            rep.curves["time"] = est["time_s"] if "time_s" in est else None
-            if calibration is not None and cal.y_name in est:  # a validation run: how the calibration holds on it
-                from fsrlab.calibration.agreement import agreement
+    if cal is None:
+        return
+    rep.calibration = _calibration_summary(cal, source)
+    try:
+        est = apply_calibration(cal, run)
+    except ValueError as exc:
+        rep.calibration_reason = f"the calibration does not apply to this run: {exc}"
+        return
+    col, unc = f"{cal.y_name}_estimate", f"{cal.y_name}_uncertainty"
+    rep.estimate = _hysteresis(est, col, "calibrated estimate")
+    rep.curves["estimate"] = est[col] if col in est else None
+    rep.curves["estimate_reference"] = run_reference(est, cal.y_name)[0]
+    rep.curves["estimate_uncertainty"] = est[unc] if unc in est else None
+    rep.curves["time"] = est["time_s"] if "time_s" in est else None
+    if calibration is not None and cal.y_name in est:  # a validation run: how the calibration holds on it
+        from fsrlab.calibration.agreement import agreement
 
-                rep.agreement = agreement(est[cal.y_name], est[col], est[unc] if unc in est else None)
-    return rep
+        rep.agreement = agreement(est[cal.y_name], est[col], est[unc] if unc in est else None)

@@ -119,9 +119,8 @@ def _cal_text(title: str, c: dict | None) -> str:
     """One calibration's line on the index page."""
     if not c:
         return f"{title}: none"
-    how = f"held-out RMSE ({c['scheme']})" if c.get("scheme") else "cross-validated RMSE"
-    return html.escape(f"{title}: {c['model']} against {c['reference']}, {how} "
-                       f"{_num(c['cv_rmse'])} {c['unit']}")
+    return html.escape(f"{title}: {c['model']} against {c['reference']}, held-out RMSE ({c['scheme']}) "
+                       f"{_num(c['heldout_rmse'])} {c['unit']}")
 
 
 def _write_index(result: DemoResult, sensor_text: str, s: DemoSettings) -> None:

@@ -238,10 +238,9 @@ def build_sections(rep, outdir: Path) -> list[Section]:
     cal = rep.calibration
     if cal is not None:
         u = cal["y_unit"]
-        held = cal.get("scheme")
-        crow = [[f"model (chosen by {'held-out error: ' + held if held else 'grouped cross-validation'})", cal["model"]],
+        crow = [[f"model (chosen by held-out error: {cal['scheme']})", cal["model"]],
                 ["readout", cal["x"]], ["reference", f"{cal['y']} [{u}]"], ["source", cal["source"]],
-                ["held-out RMSE" if held else "CV RMSE", f"{_f(cal['cv_rmse'], '.4g')} {u}"],
+                ["held-out RMSE", f"{_f(cal['heldout_rmse'], '.4g')} {u}"],
                 ["R² (in sample)", _f(cal["r2"], ".4f")],
                 ["lag of the readout", f"{_f(cal['lag_s'], '.3f')} s"],
                 *([["delay of the reference (estimate from the readout this much earlier)",
@@ -249,9 +248,6 @@ def build_sections(rep, outdir: Path) -> list[Section]:
                 ["standard uncertainty, median / largest bin", f"{_f(cal['uncertainty_median'], '.4g')} / "
                                                                 f"{_f(cal['uncertainty_max'], '.4g')} {u}"],
                 ["causal compensation", "yes" if cal["compensated"] else "no"]]
-        if cal.get("compensation_he_percent"):
-            b, a = cal["compensation_he_percent"]
-            crow.append(["HE on the calibration data, plain / compensated", f"{_f(b)} % / {_f(a)} %"])
         if rep.estimate is not None:
             crow.append(["HE of the estimate on this run", f"{_f(rep.estimate.percent)} %"
                          + (f" ({rep.estimate.reason})" if rep.estimate.reason else "")])
