@@ -260,66 +260,22 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
     RuntimeError
         A recording that failed (the message says which and why).
     """
-    import dataclasses
     import os
     import shutil
     import tempfile
     from concurrent.futures import Future, ThreadPoolExecutor
 
-    from fsrlab.bench.protocols import SPEEDS, SpringPlan, WeightsPlan, run_protocol, twin_status
-    from fsrlab.io.outputs import replace_run
+    from fsrlab.bench.protocols import SpringPlan, WeightsPlan
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     s = settings
     sensor_obj, sensor_text = demo_sensor(sensor)
-    if device not in ("auto", "twin", "virtual"):
-        raise ValueError(f"device: must be auto, twin or virtual, got {device!r}")
-    if s.speed not in SPEEDS:
-        raise ValueError(f"speed: must be one of {', '.join(SPEEDS)}, got {s.speed!r}")
-    ok, reason = twin_status()
-    if device == "twin" and not ok:
-        raise ValueError(f"device: the digital twin is not available: {reason}")
-    bench = "twin" if (device == "twin" or (device == "auto" and ok)) else "virtual"
+    bench, reason = _bench_device(device, s.speed)
     result = DemoResult(index=out / "index.html", device=bench)
     steps = DemoSteps(result, total, say)
     step, done = steps.step, steps.done
-
-    def recorder(label: str, total_s: float | None):
-        last = [time.monotonic()]
-
-        def on_status(st) -> None:
-            now = time.monotonic()
-            if now - last[0] >= 3.0:
-                last[0] = now
-                say(f"      {label}: {st.elapsed_s:.0f} s" + (f" of {total_s:.0f} s" if total_s else "")
-                    + f", {st.frames} windows")
-        return on_status
-
-    def record(plan, name: str, seed: int, label: str, total_s: float | None, settle=None):
-        nonlocal bench
-        path, final = staging / name, out / name  # recorded aside, renamed into place when complete
-        used = bench  # (runs recorded at once: another one may fall back meanwhile)
-        try:
-            run = run_protocol(plan, path, device=used, sensor=sensor_obj, seed=seed, window_ms=s.window_ms,
-                               overwrite=True, on_status=recorder(label, total_s), settle=settle, speed=s.speed)
-        except Exception as exc:  # noqa: BLE001 - the twin failing: say so and use the Python device
-            if used != "twin" or device == "twin":
-                raise
-            say(f"      {label}: the digital twin failed ({type(exc).__name__}: {exc}); using the Python virtual device")
-            bench = result.device = "virtual"
-            run = run_protocol(plan, path, device="virtual", sensor=sensor_obj, seed=seed, window_ms=s.window_ms,
-                               overwrite=True, on_status=recorder(label, total_s), settle=settle, speed=s.speed)
-        if run.result.failed or not run.result.frames:
-            raise RuntimeError(f"{final}: the recording failed: {run.result.message.replace(str(path), str(final))}")
-        replace_run(path, final)  # the sidecar first, naming its CSV: a stop between the two is told when read
-        run.result = dataclasses.replace(run.result, file=final)
-        if run.placements is not None:
-            placed = final.with_name(run.placements.name)
-            os.replace(run.placements, placed)
-            run.placements = placed
-        result.files[name] = final
-        return run
+    rec = None
 
     # 1. The bench and the spring runs. Faster than real time, the three recordings run at once (each its own
     # meter and time axis): the machine's cores share the simulations.
@@ -330,9 +286,9 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
 
     def later(*args, **kwargs) -> Future:
         if pool is not None:
-            return pool.submit(record, *args, **kwargs)
+            return pool.submit(rec.record, *args, **kwargs)
         f: Future = Future()
-        f.set_result(record(*args, **kwargs))
+        f.set_result(rec.record(*args, **kwargs))
         return f
 
     pace = "faster than real time, the three runs at once" if at_once else "in real time"
@@ -341,13 +297,14 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
               f"{s.cycles} cycles 0 → {s.peak_pa / 1e3:g} kPa → 0 of {s.period_s:g} s, twice (calibration run, test run); "
               f"{pace}")
     staging = Path(tempfile.mkdtemp(prefix=f"{STAGING_PREFIX}{os.getpid()}-", dir=out))
+    rec = _BenchRecorder(out, staging, bench, device, sensor_obj, s, result, say)
     try:
         f1 = later(spring, "calibration-run.csv", s.seed, "calibration run", spring.duration_s)
         f2 = later(spring, "test-run.csv", s.seed + 1, "test run", spring.duration_s)
         fw = later(weights, "weights-run.csv", s.seed + 2, "dead weights", None,
                    settle={"hold_s": s.settle_hold_s}) if at_once else None
         r1, r2 = f1.result(), f2.result()
-        done("spring runs", t0, f"{r1.result.frames} + {r2.result.frames} windows on the {bench} bench")
+        done("spring runs", t0, f"{r1.result.frames} + {r2.result.frames} windows on the {rec.bench} bench")
         if after_spring is not None:
             after_spring()
 
@@ -366,15 +323,93 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
     result.files["placements"] = rw.placements
     done("dead weights", t0, f"{rw.summary['recorded']} of {len(weights.steps())} placements recorded")
 
-    # 3. Calibration.
-    from fsrlab.calibration.document import save_calibration
-    from fsrlab.calibration.apply import apply_calibration
-    from fsrlab.calibration.heldout_runs import calibrate_runs
+    cal = _calibrate_and_apply(out, result, steps, say)
+    return DemoChain(result, cal, sensor_text, steps)
 
+
+class _BenchRecorder:
+    """Records one protocol of the demo aside (in ``staging``) and renames it into ``out`` once complete; when the
+    twin fails and it was not asked for by name, says so and records on the Python virtual device instead."""
+
+    def __init__(self, out: Path, staging: Path, bench: str, device: str, sensor, settings: DemoSettings,
+                 result: DemoResult, say: Callable[[str], None]):
+        self.out, self.staging, self.bench, self.device = out, staging, bench, device
+        self.sensor, self.settings, self.result, self.say = sensor, settings, result, say
+
+    def _on_status(self, label: str, total_s: float | None):
+        last = [time.monotonic()]
+
+        def on_status(st) -> None:
+            now = time.monotonic()
+            if now - last[0] >= 3.0:
+                last[0] = now
+                self.say(f"      {label}: {st.elapsed_s:.0f} s" + (f" of {total_s:.0f} s" if total_s else "")
+                         + f", {st.frames} windows")
+        return on_status
+
+    def _run(self, plan, path: Path, bench: str, seed: int, label: str, total_s, settle):
+        from fsrlab.bench.protocols import run_protocol
+
+        s = self.settings
+        return run_protocol(plan, path, device=bench, sensor=self.sensor, seed=seed, window_ms=s.window_ms,
+                            overwrite=True, on_status=self._on_status(label, total_s), settle=settle, speed=s.speed)
+
+    def record(self, plan, name: str, seed: int, label: str, total_s: float | None, settle=None):
+        import dataclasses
+        import os
+
+        from fsrlab.io.outputs import replace_run
+
+        path, final = self.staging / name, self.out / name  # recorded aside, renamed into place when complete
+        used = self.bench  # (runs recorded at once: another one may fall back meanwhile)
+        try:
+            run = self._run(plan, path, used, seed, label, total_s, settle)
+        except Exception as exc:  # noqa: BLE001 - the twin failing: say so and use the Python device
+            if used != "twin" or self.device == "twin":
+                raise
+            self.say(f"      {label}: the digital twin failed ({type(exc).__name__}: {exc}); using the Python virtual "
+                     "device")
+            self.bench = self.result.device = "virtual"
+            run = self._run(plan, path, "virtual", seed, label, total_s, settle)
+        if run.result.failed or not run.result.frames:
+            raise RuntimeError(f"{final}: the recording failed: {run.result.message.replace(str(path), str(final))}")
+        replace_run(path, final)  # the sidecar first, naming its CSV: a stop between the two is told when read
+        run.result = dataclasses.replace(run.result, file=final)
+        if run.placements is not None:
+            placed = final.with_name(run.placements.name)
+            os.replace(run.placements, placed)
+            run.placements = placed
+        self.result.files[name] = final
+        return run
+
+
+
+def _bench_device(device: str, speed: str) -> tuple[str, str]:
+    """The bench the demo records on (``twin`` or ``virtual``) and why the twin is not available (or "")."""
+    from fsrlab.bench.protocols import SPEEDS, twin_status
+
+    if device not in ("auto", "twin", "virtual"):
+        raise ValueError(f"device: must be auto, twin or virtual, got {device!r}")
+    if speed not in SPEEDS:
+        raise ValueError(f"speed: must be one of {', '.join(SPEEDS)}, got {speed!r}")
+    ok, reason = twin_status()
+    if device == "twin" and not ok:
+        raise ValueError(f"device: the digital twin is not available: {reason}")
+    return ("twin" if (device == "twin" or (device == "auto" and ok)) else "virtual"), reason
+
+
+def _calibrate_and_apply(out: Path, result: "DemoResult", steps: "DemoSteps", say: Callable[[str], None]):
+    """Steps 3 and 4 of the chain: the calibration run calibrated (:func:`fsrlab.calibrate`, compensation tried),
+    the dead weights calibrated against m·g by the same engine, and the calibration applied to the test run."""
     import numpy as np
 
+    from fsrlab.calibration.apply import apply_calibration
+    from fsrlab.calibration.document import save_calibration
+    from fsrlab.calibration.heldout_runs import calibrate_runs
     from fsrlab.io.runformat import load_run
+    from fsrlab.io.runwriter import write_run
 
+    step, done = steps.step, steps.done
     calrun = load_run(out / "calibration-run.csv")
     # The load cell when the meter has one (the virtual meter emulates an HX711): the reference a bench
     # with hardware has; else the stress the bench applied.
@@ -395,23 +430,20 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
         result.files["known-weight calibration"] = save_calibration(known, out / "known-weight-calibration.json")
     except ValueError as exc:
         say(f"      known-weight calibration not possible: {exc}")
-    result.numbers["calibration"] = {"model": cal.model_name, "reference": cal.y_name,
-                                     "heldout_rmse": cal.selection.heldout_rmse, "unit": cal.y_unit, "lag_s": cal.lag_s,
-                                     "delay_s": cal.model.delay_s, "scheme": cal.selection.scheme}
-    if known is not None:
-        result.numbers["known_weight_calibration"] = {"model": known.model_name, "reference": known.y_name,
-                                                      "heldout_rmse": known.selection.heldout_rmse, "unit": known.y_unit,
-                                                      "scheme": known.selection.scheme}
+    for key, c in (("calibration", cal), ("known_weight_calibration", known)):
+        if c is not None:
+            result.numbers[key] = {"model": c.model_name, "reference": c.y_name, "heldout_rmse": c.selection.heldout_rmse,
+                                   "unit": c.y_unit, "lag_s": c.lag_s, "delay_s": c.model.delay_s,
+                                   "scheme": c.selection.scheme}
     done("calibration", t0, f"{cal.model_name}, held-out RMSE {cal.selection.heldout_rmse:.3g} {cal.y_unit}"
          + (f"; known weights: {known.model_name}, held-out RMSE {known.selection.heldout_rmse:.3g} {known.y_unit}"
             if known is not None else ""))
 
     # 4. Compensation on the test run.
-    from fsrlab.io.runwriter import write_run
-
     t0 = step("compensation: the calibration applied to the test run (causal estimate, row by row)")
     est = apply_calibration(cal, out / "test-run.csv")
     result.files["estimate"] = write_run(out / "test-estimate.csv", est.columns, est.metadata, overwrite=True)
     done("compensation", t0, f"{out / 'test-estimate.csv'}")
-    return DemoChain(result, cal, sensor_text, steps)
+    return cal
+
 
