@@ -1,8 +1,8 @@
 """One contract for every calibration fsrlab makes or reads, in the spirit of scikit-learn's check_estimator.
 
-Every kind the engine can produce -- each readout variable its static curves are fitted in
-(:data:`fsrlab.calibration.monotone.VARIABLES`, read from the engine so a new one is covered), with and
-without memory, each readout column (a 555's frequency, ADC counts, C_FSR decoded through the sidecar's
+Every kind the engine can produce -- each static curve family and each readout variable its curves are
+fitted in (read from the engine's candidates and :data:`fsrlab.calibration.monotone.VARIABLES`, so a new one
+is covered), with and without memory, each readout column (a 555's frequency, ADC counts, C_FSR decoded through the sidecar's
 circuit) -- and a version-1 file of each earlier layout, pass the same checks, each a property that must hold:
 
 * stepping one reading at a time (``estimator()``) gives the batch estimate and uncertainty (to 1e-9);
@@ -27,6 +27,7 @@ import pytest
 
 from fsrlab.calibration.apply import apply_calibration
 from fsrlab.calibration.document import load_calibration, save_calibration
+from fsrlab.calibration import heldout_model
 from fsrlab.calibration.heldout import Recording
 from fsrlab.calibration.heldout_model import calibrate_recordings
 from fsrlab.calibration.heldout_runs import calibrate_runs
@@ -37,6 +38,9 @@ from fsrlab.virtual.handloaded import fsr_bench_run
 from stepping import assert_steps_as_batch
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "calibration"
+#: The static curve families the engine tries, read from its candidates (variable, family, size); candidates of
+#: (variable, size) are of one family, the piecewise-linear curve.
+FAMILIES = sorted({c[1] for c in heldout_model.STATIC_CANDIDATES if len(c) == 3}) or ["piecewise"]
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 
@@ -50,10 +54,16 @@ def _divider(kind: str, seed: int, duration_s: float = 40.0) -> Run:
                                                           "force_n": "N"}})
 
 
-def _wrapped(run: Run, x: str, variable: str, compensate: bool) -> Calibration:
-    """The engine restricted to one readout variable, as the result type ``fsrlab.calibrate`` returns."""
+def _wrapped(run: Run, x: str, compensate: bool, variable: str | None = None, family: str | None = None) -> Calibration:
+    """The engine restricted to one readout variable or one static family, as the result type ``fsrlab.calibrate``
+    returns."""
     rec = Recording(run["time_s"], np.asarray(run[x], dtype=float), run["force_n"], str(run.path))
-    model, sel = calibrate_recordings([rec], compensate=compensate, variables=(variable,))
+    kw = {} if variable is None else {"variables": (variable,)}
+    with pytest.MonkeyPatch.context() as mp:
+        if family is not None and len(heldout_model.STATIC_CANDIDATES[0]) == 3:
+            mp.setattr(heldout_model, "STATIC_CANDIDATES",
+                       tuple(c for c in heldout_model.STATIC_CANDIDATES if c[1] == family))
+        model, sel = calibrate_recordings([rec], compensate=compensate, **kw)
     return Calibration(model, sel, x, "force_n", "", "N", [str(run.path)], None, int(rec.usable.sum()))
 
 
@@ -70,6 +80,7 @@ def test_run():
 def _kinds():
     kinds = [pytest.param(("variable", v, c), id=f"{v}-{'memory' if c else 'static'}")
              for v in VARIABLES for c in (False, True)]
+    kinds += [pytest.param(("family", f, False), id=f"family-{f}") for f in FAMILIES]
     kinds += [pytest.param(("readout", x, None), id=f"readout-{x}") for x in ("frequency_hz", "c_fsr_farad", "reading")]
     kinds += [pytest.param(("file", name, None), id=name) for name in
               ("v1-cross-validated", "v1-cv-memory", "v1-held-out")]
@@ -88,8 +99,10 @@ def made(train):
         what, name, compensate = kind
         if what == "variable":
             x = "reading" if name == "conductance" else "r_ohm"  # ADC counts; a positive resistance for the others
-            cal, run = _wrapped(train, x, name, compensate), None
+            cal, run = _wrapped(train, x, compensate, variable=name), None
             assert name in cal.model.static_name  # the variable asked for
+        elif what == "family":
+            cal, run = _wrapped(train, "r_ohm", compensate, family=name), None
         elif what == "readout" and name == "reading":
             cal, run = calibrate_runs(train, x="reading", reference="force_n", compensate=True), None
         elif what == "readout":
