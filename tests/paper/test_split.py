@@ -83,3 +83,28 @@ def test_tolerances_as_stated(kind, printed, predicted, ok):
 def test_tolerances_are_stated_in_the_docs():
     text = DOCS.read_text(encoding="utf-8")
     assert "±25 %" in text and "factor 2 or 1 pp" in text and "ΔR²\\| ≤ 0.01" in text
+
+
+def test_range_to_sd_ratio_closed_forms():
+    # n = 2: the range |x1 - x2| is √2 times the sample SD exactly. n = 5: the control-chart constants
+    # d2(5) = 2.326 and c4(5) = 0.9400 (ASTM STP 15D / Montgomery, Table VI), printed to 4 digits.
+    assert split.range_to_sd_ratio(2) == pytest.approx(np.sqrt(2), rel=1e-9)
+    assert split.range_to_sd_ratio(5) == pytest.approx(2.326 / 0.9400, rel=5e-4)
+    with pytest.raises(ValueError, match="n:"):
+        split.range_to_sd_ratio(1)
+
+
+def test_trivial_baseline_counts_the_repeatability_predictions(lists, paper):
+    _, pred = lists
+    base = split.trivial_baseline(pred)
+    re = [e for e in pred if e["kind"] == "re"]
+    assert base["n"] == len(re) == 36
+    # The team's independent re-check (issue 41): a trivial predictor meets 30 of these 36, the bench 23.
+    assert base["within_tolerance"] == 30
+    assert base["bench_within_tolerance"] == sum(e["within_tolerance"] for e in re)
+    t4 = paper["table4_repeatability_capacitive_kHz"]["200g"]
+    assert base["rows"]["table4.200g.sensor1.RE2"] == t4["mean_RE2"]
+    assert base["rows"]["table4.200g.sensor1.RE1"] == pytest.approx(split.range_to_sd_ratio(5) * t4["mean_RE2"])
+    # Mean RE1 follows from the fitted mean RE2: marked as implied by that target.
+    means = [e for e in pred if e["id"].endswith("mean_RE1")]
+    assert len(means) == 4 and all(e["implied_by_target"].endswith("mean_RE2") for e in means)

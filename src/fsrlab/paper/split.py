@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["TOLERANCES", "within_tolerance", "targets", "predictions"]
+__all__ = ["TOLERANCES", "within_tolerance", "targets", "predictions", "range_to_sd_ratio", "trivial_baseline"]
 
 #: Tolerance of each kind of prediction (docs/experiment.md, "Targets and predictions"):
 #: ``reading``: |predicted/printed − 1| ≤ 0.25 (the four sensors' printed means at one load span ×1.4);
@@ -123,7 +123,8 @@ def predictions(exp, expected_re2_per_sensor: dict | None = None) -> list:
     list of dict
         ``id``, ``source``, ``quantity``, ``unit``, ``kind`` (of :data:`TOLERANCES`), ``printed``,
         ``predicted``, ``residual``, ``relative_residual``, ``within_tolerance``: per sensor and
-        load RE1 and RE2 of Tables 4 and 5 and their printed mean RE1, Table 5's mean reading per
+        load RE1 and RE2 of Tables 4 and 5 and their printed mean RE1 (``implied_by_target``: the
+        mean RE2 target that sets it, RE1 ≈ :func:`range_to_sd_ratio` × RE2 for five readings), Table 5's mean reading per
         sensor, and Figure 17's R² (fitted on both branches of sensor 1's cycle: the paper does not
         say which data it fitted, erratum X1).
     """
@@ -155,10 +156,79 @@ def predictions(exp, expected_re2_per_sensor: dict | None = None) -> list:
                 out.append(_entry(f"{name}.{load}.sensor{i + 1}.RE2", source, f"RE2 at {load}, sensor {i + 1}",
                                   "%", "re", tab["RE2_percent"][i], re2[i], **extra))
             out.append(_entry(f"{name}.{load}.mean_RE1", source, f"mean RE1 of the four sensors at {load}", "%", "re",
-                              tab["mean_RE1"], float(np.mean(re1))))
+                              tab["mean_RE1"], float(np.mean(re1)), implied_by_target=f"{name}.{load}.mean_RE2"))
     f17 = p["figure17_fit_r2"]
     for deg in ("linear", "cubic"):
         out.append(_entry(f"figure17.{deg}_r2", "Figure 17", f"R² of the {deg} σ(f) fit (sensor 1, both branches)",
                           "1", "r2", f17[deg], exp.fig17["both"][deg],
                           other_data={k: v[deg] for k, v in exp.fig17.items() if k != "both"}))
     return out
+
+
+def range_to_sd_ratio(n: int = 5) -> float:
+    """E[range] / E[sample standard deviation] of ``n`` normal draws, d2(n)/c4(n): E[RE1]/E[RE2]. [1]
+
+    Parameters
+    ----------
+    n : int
+        Readings in a set (the paper's tables: 5).
+
+    Returns
+    -------
+    float
+        2.474 for n = 5 (d2 = 2.326, c4 = 0.9400).
+
+    Notes
+    -----
+    ``d2(n) = ∫ 1 − Φ(x)^n − (1 − Φ(x))^n dx`` (the expected range in units of σ) and
+    ``c4(n) = √(2/(n−1)) Γ(n/2)/Γ((n−1)/2)`` (the sample standard deviation's bias), both standard
+    results for normal samples.
+    """
+    from scipy.integrate import quad
+    from scipy.special import gammaln
+    from scipy.stats import norm
+
+    if int(n) != n or n < 2:
+        raise ValueError(f"n: must be an integer >= 2, got {n!r}")
+    d2 = quad(lambda x: 1.0 - norm.cdf(x) ** n - norm.sf(x) ** n, -np.inf, np.inf)[0]
+    c4 = np.sqrt(2.0 / (n - 1)) * np.exp(gammaln(n / 2) - gammaln((n - 1) / 2))
+    return float(d2 / c4)
+
+
+def trivial_baseline(pred: list) -> dict:
+    """How many repeatability predictions a predictor that knows only each table's fitted mean RE2 meets.
+
+    The bench's repeatability predictions take their level from the mean RE2 of Tables 4 and 5, which
+    the preset is fitted to. The trivial predictor gives every sensor its table's printed mean RE2, and
+    :func:`range_to_sd_ratio` (five readings) times it for each RE1 and the mean RE1; its count within
+    the same :data:`TOLERANCES` is what the bench's count should be read against.
+
+    Parameters
+    ----------
+    pred : list of dict
+        :func:`predictions`.
+
+    Returns
+    -------
+    dict
+        ``predictor`` (text), ``n`` (repeatability predictions), ``within_tolerance`` (the trivial
+        predictor's count), ``bench_within_tolerance`` (the bench's count over the same predictions) and
+        ``rows`` (``{id: trivial value}``).
+    """
+    from fsrlab.reference import paper_values
+
+    p = paper_values()
+    tables = {"table4": p["table4_repeatability_capacitive_kHz"], "table5": p["table5_repeatability_traditional_V"]}
+    ratio = range_to_sd_ratio(5)
+    rows, hits, bench = {}, 0, 0
+    for e in pred:
+        if e["kind"] != "re":
+            continue
+        name, load, what = e["id"].split(".")[0], e["id"].split(".")[1], e["id"].split(".")[-1]
+        mean_re2 = float(tables[name][load]["mean_RE2"])
+        value = mean_re2 if what == "RE2" else ratio * mean_re2
+        rows[e["id"]] = value
+        hits += within_tolerance("re", e["printed"], value)
+        bench += bool(e["within_tolerance"])
+    return {"predictor": f"each table's printed mean RE2 for every sensor, {ratio:.2f}× it for RE1 (five readings)",
+            "n": len(rows), "within_tolerance": int(hits), "bench_within_tolerance": int(bench), "rows": rows}
