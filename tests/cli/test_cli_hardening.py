@@ -118,7 +118,7 @@ def test_apply_json_counts_are_true(runs, cal, tmp_path):
     from fsrlab.io.runwriter import write_run
 
     meta = json.loads(sidecar_path(runs / "other.csv").read_text())
-    write_run(tmp_path / "r.csv", {k: v for k, v in c.items() if k not in ("c_fsr_farad", "r_fsr_ohm")}, meta)
+    write_run(tmp_path / "r.csv", {k: v for k, v in c.items() if k not in ("c_fsr_farad", "r_fsr_ohm")}, meta, overwrite=True)
     code, out, err = run_cli(["apply", cal, tmp_path / "r.csv", "-o", tmp_path / "e.csv", "--json", "--margin", "10%"])
     assert code == 0, err
     d = json.loads(out)

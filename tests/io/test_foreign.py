@@ -401,7 +401,7 @@ def test_every_option_shows_its_unit():
     for param in command.params:
         if param.param_type_name == "option" and not param.is_flag and param.name not in ("reference", "output"):
             assert re.search(r"\[[^\]]+\]", param.help or ""), f"{param.opts[0]}: no [unit]"
-    assert "[g, kg, N, lbf or mN]" in " ".join(_help().split())
+    assert "[N, kN, mN, g, kg, lbf or ozf; also gf, kgf, lb, oz]" in " ".join(_help().split())
 
 
 def test_help_ends_with_examples_that_run(tmp_path, monkeypatch):

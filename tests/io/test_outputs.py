@@ -163,3 +163,45 @@ def test_recording_outputs_refused_before_the_device(work):
     (work / "w.placements.csv").write_text("mine")
     _refused(["weights", "--virtual", "--masses", "0,100g", "--out", "w.csv"], work, "w.placements.csv exists")
     _refused(["bench", "weights", "--virtual", "--out", "w.csv"], work, "w.placements.csv exists")
+
+
+# ------------------------------------------------------------------------------------------------
+# The same policy in the library (issue 40): fl.write_run, import's write_imported
+# ------------------------------------------------------------------------------------------------
+
+def test_write_run_refuses_to_replace_unless_asked(tmp_path):
+    import fsrlab as fl
+
+    path = fl.write_run(tmp_path / "r.csv", {"time_s": [0.0, 1.0]})
+    digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    with pytest.raises(FileExistsError, match="r.csv exists"):
+        fl.write_run(path, {"time_s": [5.0]})
+    assert hashlib.sha256(path.read_bytes()).hexdigest() == digest
+    assert fl.load_run(fl.write_run(path, {"time_s": [5.0]}, overwrite=True))["time_s"].tolist() == [5.0]
+
+
+@pytest.mark.parametrize("target", ["", " ", "in.csv", "in.meta.json"])
+def test_write_run_refuses_an_empty_path_and_its_inputs(tmp_path, target, monkeypatch):
+    """Even with overwrite=True: an input (or its sidecar, through the run's own sidecar) is never replaced."""
+    import fsrlab as fl
+    from fsrlab.errors import FsrlabError
+
+    monkeypatch.chdir(tmp_path)
+    src = fl.write_run("in.csv", {"time_s": [0.0, 1.0]})
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    with pytest.raises(OutputError) as info:
+        fl.write_run(target if target != "in.meta.json" else "in", {"time_s": [5.0]}, overwrite=True, inputs=[src])
+    assert isinstance(info.value, FsrlabError) and info.value.parameter == "path"
+    assert str(info.value).startswith("path: ")
+    assert ("is empty" in str(info.value)) if not target.strip() else ("overwrite=True never replaces an input"
+                                                                       in str(info.value))
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
+
+
+def test_library_refusals_say_overwrite_true_and_the_cli_says_its_option(tmp_path):
+    f = tmp_path / "a.json"
+    f.write_text("x")
+    with pytest.raises(OutputError, match=r"^path: .*a\.json exists; pass overwrite=True to replace it$"):
+        check_output(f, "path")
+    with pytest.raises(OutputError, match=r"^--out: .*a\.json exists; pass --overwrite to replace it$"):
+        check_output(f, "--out")

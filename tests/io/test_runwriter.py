@@ -172,7 +172,7 @@ def test_write_run_interrupted_leaves_the_old_run_and_no_temporary(tmp_path, mon
 
     monkeypatch.setattr(os, "fsync", interrupted_fsync)
     with pytest.raises(KeyboardInterrupt):
-        write_run(old, {"time_s": [0.1, 0.2, 0.3], "frequency_hz": [1.0, 2.0, 3.0]})
+        write_run(old, {"time_s": [0.1, 0.2, 0.3], "frequency_hz": [1.0, 2.0, 3.0]}, overwrite=True)
     monkeypatch.undo()
     assert files() == before and set(before) == {"run.csv", "run.meta.json"}
     # A directory that does not exist is named as the user gave it, not as a temporary file.
@@ -200,7 +200,7 @@ def replace(src, dst):
     real(src, dst)
 os.replace = replace
 write_run(sys.argv[1], {"time_s": [0.1, 0.2], "frequency_hz": [7000.0, 7100.0]},
-          {"circuit": {"r_ohm": 4.7e3, "diode": True}})
+          {"circuit": {"r_ohm": 4.7e3, "diode": True}}, overwrite=True)
 """
 
 
@@ -224,7 +224,7 @@ def test_write_run_stopped_between_its_two_renames_leaves_no_pair_that_passes_fo
     assert done.returncode == (9 if how == "kill" else -signal.SIGINT), done.stderr
     with pytest.raises(RunFormatError, match=r"run\.csv: not the CSV its sidecar run\.meta\.json was written with"):
         load_run(path)
-    write_run(path, *_NEW)  # written again: one run
+    write_run(path, *_NEW, overwrite=True)  # written again: one run
     run = load_run(path)
     assert list(run["frequency_hz"]) == [7000.0, 7100.0] and run.metadata["circuit"]["r_ohm"] == 4.7e3
 

@@ -6,7 +6,6 @@ Thin: the options go to :func:`fsrlab.io.foreign.import_foreign`, the run is wri
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import typer
@@ -23,18 +22,7 @@ _PARAMETERS = {"time_unit": "--time-unit", "reference_time_unit": "--reference-t
                "reading_unit": "--reading-unit", "force_unit": "--force-unit", "rate_hz": "--rate",
                "reference_rate_hz": "--reference-rate", "reference_time": "--reference-time",
                "offset_s": "--offset-s", "skip_lines": "--skip-lines", "output": "--output",
-               "reference": "--reference"}
-
-
-def _check_inputs(output: Path, inputs: list[Path]) -> None:
-    """The run and its sidecar are written beside the inputs, never over one of them."""
-    from fsrlab.io.schema import sidecar_path
-
-    for target in (output, sidecar_path(output)):
-        for source in inputs:
-            if os.path.lexists(source) and os.path.lexists(target) and os.path.samefile(source, target) \
-                    or target.resolve() == source.resolve():
-                fail(f"{target} is the input {source}; the run is written beside it, never over it", "--output")
+               "reference": "--reference", "path": "--output"}
 
 
 @app.command("import")
@@ -77,8 +65,7 @@ def import_cmd(
     from fsrlab.io.foreign import ForeignFormatError, import_foreign, write_imported
 
     inputs = [sensor] + ([reference] if reference is not None else [])
-    _check_inputs(output, inputs)
-    check_out(output, overwrite, option="--output")
+    check_out(output, overwrite, inputs=inputs, option="--output")
     if rate is not None and not rate > 0:
         fail(f"must be > 0 Hz, got {rate:g}", "--rate")
     if reference_rate is not None and not reference_rate > 0:

@@ -659,20 +659,16 @@ def write_imported(imported: Imported, path: str | os.PathLike, overwrite: bool 
 
     Raises
     ------
-    ValueError
-        ``output: ...`` when the run or its sidecar would replace a source file.
+    OutputError
+        An empty ``path``, or a run or sidecar that would replace a source file or its sidecar (the output
+        policy, :mod:`fsrlab.io.outputs`; ``.parameter`` is ``"path"``).
     FileExistsError
         The run exists and ``overwrite`` is False.
     """
     from fsrlab.io.runwriter import write_run
-    from fsrlab.io.schema import sidecar_path
 
-    out = Path(path)
-    for target in (out, sidecar_path(out)):
-        for source in imported.sources:
-            if _same_file(target, Path(source["file"])):
-                raise ValueError(f"output: {target} is the source file {source['file']}; write the run elsewhere")
-    return write_run(out, imported.columns, imported.metadata, overwrite=overwrite)
+    return write_run(path, imported.columns, imported.metadata, overwrite=overwrite,
+                     inputs=[source["file"] for source in imported.sources])
 
 
 def _same_file(a: Path, b: Path) -> bool:

@@ -31,25 +31,40 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Iterable, Iterator
 
-__all__ = ["OutputError", "output_path", "check_output", "protected_paths", "same_file", "atomic_path",
+from fsrlab.errors import ParameterError
+
+__all__ = ["OutputError", "output_path", "check_output", "refuse_inputs", "protected_paths", "same_file", "atomic_path",
            "write_text_atomic", "write_bytes_atomic", "atomic_run", "replace_run", "run_files"]
 
 
-class OutputError(ValueError):
+class OutputError(ParameterError):
     """An output the policy refuses.
 
     Parameters
     ----------
     option : str
-        The option or argument that names the output, e.g. ``"--output"``.
+        The option or argument that names the output, e.g. ``"--output"``, or the library function's
+        parameter, e.g. ``"path"`` (then also :attr:`~fsrlab.errors.FsrlabError.parameter`).
     message : str
         What is wrong and what is allowed.
     """
 
     def __init__(self, option: str, message: str):
-        super().__init__(f"{option}: {message}")
+        library = bool(option) and not option.startswith("-") and option.isidentifier()
+        super().__init__(message, parameter=option if library else None)
+        if not library:  # an option's name leads the message as a parameter's does
+            self.args = (f"{option}: {message}" if option else message,)
         self.option = option
         self.message = message
+
+    def __str__(self) -> str:
+        return self.args[0]
+
+
+def _overwrite_hint(option: str) -> str:
+    """How the caller asks for a replacement: ``--overwrite`` on the command line, ``overwrite=True`` in Python."""
+    return "pass --overwrite" if not option or option.startswith("-") or not option.isidentifier() else \
+        "pass overwrite=True"
 
 
 def output_path(text, option: str = "--out") -> Path:
@@ -191,15 +206,11 @@ def check_output(path, option: str, *, overwrite: bool = False, inputs: Iterable
         if clash is not None:
             raise OutputError(option, f"it would replace {clash}; choose another directory")
         if target.is_dir() and not overwrite and any(os.scandir(target)):
-            raise OutputError(option, f"{target} exists and is not empty; pass --overwrite to replace the files "
-                                      "this command writes in it, or choose a new directory")
+            raise OutputError(option, f"{target} exists and is not empty; {_overwrite_hint(option)} to replace the "
+                                      "files written in it, or choose a new directory")
         return target
     files = run_files(target) if kind == "run" else (target,)
-    for f in files:
-        clash = _input_clash(f, protected)
-        if clash is not None:
-            raise OutputError(option, f"{f} is {clash}; write the output to another file "
-                                      "(--overwrite never replaces an input)")
+    refuse_inputs(target, option, inputs, kind)
     if kind == "run" and target.name.lower().endswith(".meta.json"):
         raise OutputError(option, f"{target} is named like a run's sidecar; give the run's CSV file, e.g. "
                                   f"{target.with_name(target.name[:-len('.meta.json')] + '-2.csv')}")
@@ -218,8 +229,37 @@ def check_output(path, option: str, *, overwrite: bool = False, inputs: Iterable
     if not overwrite:
         for f in files:
             if os.path.lexists(f):
-                raise OutputError(option, f"{f} exists; pass --overwrite to replace it")
+                raise OutputError(option, f"{f} exists; {_overwrite_hint(option)} to replace it")
     return target
+
+
+def refuse_inputs(path, option: str, inputs: Iterable, kind: str = "file") -> None:
+    """Refuse an output that is one of ``inputs`` or an input's sidecar (the policy's one rule ``overwrite``
+    does not lift).
+
+    Parameters
+    ----------
+    path : path-like
+        The output.
+    option : str
+        The option or parameter naming it, for the message.
+    inputs : iterable of path-like
+        The inputs (None entries skipped).
+    kind : {"file", "run"}
+        ``"run"``: the output's sidecar is checked too.
+
+    Raises
+    ------
+    OutputError
+    """
+    target = Path(path)
+    protected = protected_paths(inputs)
+    for f in run_files(target) if kind == "run" else (target,):
+        clash = _input_clash(f, protected)
+        if clash is not None:
+            flag = "--overwrite" if _overwrite_hint(option).endswith("--overwrite") else "overwrite=True"
+            raise OutputError(option, f"{f} is {clash}; write the output to another file "
+                                      f"({flag} never replaces an input)")
 
 
 @contextmanager

@@ -311,7 +311,7 @@ class RunWriter:
 
 
 def write_run(path: str | os.PathLike, columns: Mapping[str, Any], metadata: Mapping[str, Any] | None = None,
-              overwrite: bool = True) -> Path:
+              overwrite: bool = False, inputs: Sequence[str | os.PathLike] = ()) -> Path:
     """Write a whole run at once from column arrays.
 
     Both files are written under temporary names beside the run and renamed over ``NAME.meta.json`` and
@@ -329,19 +329,32 @@ def write_run(path: str | os.PathLike, columns: Mapping[str, Any], metadata: Map
     metadata : mapping, optional
         As for :class:`RunWriter`.
     overwrite : bool
-        As for :class:`RunWriter`: with False an existing run raises ``FileExistsError``.
+        Replace an existing run (its CSV or sidecar); with False (the default) one raises ``FileExistsError``.
+    inputs : sequence of path-like
+        Files the run was made from: neither they nor their sidecars are ever replaced, even with ``overwrite``.
 
     Returns
     -------
     Path
         The CSV file written.
+
+    Raises
+    ------
+    FileExistsError
+        The run exists and ``overwrite`` is False.
+    OutputError
+        An empty ``path``, or one that is an input or an input's sidecar (the output policy,
+        :func:`fsrlab.io.outputs.check_output`); ``.parameter`` is ``"path"``.
     """
+    from fsrlab.io.outputs import output_path, refuse_inputs
+
+    path = output_path(path, "path")
+    refuse_inputs(path, "path", inputs, kind="run")
     names = list(columns)
     arrays = [np.asarray(columns[c]) for c in names]
     n = {a.shape for a in arrays}
     if len(n) != 1 or arrays[0].ndim != 1:
         raise ValueError("columns: every column must be a 1-D array of the same length")
-    path = Path(path)
     if not overwrite:
         for existing in (path, sidecar_path(path)):
             if os.path.lexists(existing):
