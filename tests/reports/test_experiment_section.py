@@ -66,6 +66,10 @@ def test_paper_json_experiment_has_printed_beside_virtual_bench(built, paper):
     assert fit["he_tm"]["printed"] == t3["traditional"]
     assert all(abs(r) < 0.05 for r in fit["he_tm"]["residual"])  # the preset is fitted to these rows
     assert len(d["preset"]["parameters"]) == 4 and d["misses"]
+    # Issue 41: the predictions beside what a predictor knowing only the fitted mean RE2 gets, in data and text.
+    tb = d["trivial_baseline"]
+    assert tb["n"] == 36 and tb["within_tolerance"] == 30
+    assert f"meets {tb['within_tolerance']} of the same {tb['n']}" in s.intro and "beforehand" not in s.intro
 
 
 def test_table3_mean_shown_as_the_paper_rounds():

@@ -3,8 +3,9 @@
 :func:`targets` lists every printed number the preset's fits use (:func:`fsrlab.paper.preset_fit.fit_target_list`,
 the fit's own list), each with the value the fit reached; :func:`predictions` lists every other printed
 number of §6 that the virtual bench (:func:`fsrlab.paper.experiment.run_experiment`) produces, each with
-the bench's value and whether it lies within the tolerance :data:`TOLERANCES` (stated in
-docs/experiment.md before the comparison). No printed number is in both lists.
+the bench's value and whether it lies within the tolerance :data:`TOLERANCES` (docs/experiment.md; they
+landed with the comparison). :func:`trivial_baseline` counts the same repeatability predictions for a
+predictor that knows only the fitted mean RE2. No printed number is in both lists.
 
 References
 ----------

@@ -320,7 +320,7 @@ def build(outdir: Path) -> Section:
         "table2": {**ours.to_dict(),
                    "paper": {"resistance_per_area_percent": t2["resistance_per_area"],
                              "capacitance_per_area_percent": t2["capacitance_per_area"]},
-                   "phi0_reproducing_paper_eV": fit.phi0_ev,
+                   "phi0_fitted_to_table2_eV": fit.phi0_ev,
                    "resistance_per_area_percent_at_that_phi0": list(fit.table.resistance_percent)},
         "table2_voltage_sweep": {"table1_phi0": sweep.to_dict(), "fitted_phi0": fitted_sweep.to_dict()},
     }
