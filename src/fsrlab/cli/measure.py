@@ -24,6 +24,42 @@ def _estimator(cal):
     return cal.estimator()
 
 
+class _RowEstimates:
+    """The recorder's ``on_row``: each window's readout through the calibration's estimator (its time ages the
+    memory), the estimate, in_range and uncertainty (and the force, when an area gives one) added to the row,
+    counted, kept as the last, and shown on the live line."""
+
+    def __init__(self, est, columns: list[str], to_force, live: "_Live"):
+        self.est, self.columns, self.to_force, self.live = est, columns, to_force, live
+        self.counts = {"estimated": 0, "out_of_range": 0}
+        self.last: dict = {}
+
+    def __call__(self, m, row):
+        est, ref, to_force, g = self.est, self.est.reference, self.to_force, STANDARD_GRAVITY
+        value = row.get(est.x)
+        t = row.get("time_s")  # the memory's creep ages by the row's time, not by the calibration's row step
+        e, u, inside = est.step(value if value is not None and math.isfinite(value) else None,
+                                t if t is not None and math.isfinite(t) else None)
+        row = dict(row)
+        row[f"{ref}_estimate"] = e
+        row["in_range"] = (1 if inside else 0) if value is not None and math.isfinite(value) else None
+        row[f"{ref}_uncertainty"] = u
+        force = to_force(e) if (to_force and e is not None) else None
+        if "force_n_estimate" in self.columns:
+            row["force_n_estimate"] = force
+        self.counts["estimated"] += e is not None
+        self.counts["out_of_range"] += row["in_range"] == 0
+        self.last.update({"time_s": row["time_s"], ref + "_estimate": e, "force_n": force,
+                          "force_g": None if force is None else force / g * 1e3, "in_range": bool(inside),
+                          "reference_force_n": row.get("force_n")})
+        text = (f"force {fmt_value(force, '.3f')} N = {fmt_value(None if force is None else force / g * 1e3, '.0f')} g"
+                if to_force else f"stress {fmt_value(e, '.0f')} Pa (no area: give --sensor or --area for a force)")
+        if row.get("force_n") is not None:
+            text += f"   load cell {row['force_n']:.3f} N"
+        self.live.show(text + ("" if inside else "   (outside the calibrated range)"))
+        return row
+
+
 class _Live(LiveView):
     """Live line of the force on stderr (rich, redrawn in place) when stderr is a terminal; notices as acquire's."""
 
@@ -60,8 +96,8 @@ def measure(
 
     Each window's readout goes through the calibration; the run gets the estimate
     (stress_pa_estimate [Pa], force_n_estimate [N] when an area is known or the calibration gives
-    force) and in_range (1 inside the calibrated readout range, 0 outside; no estimate beyond 10 %
-    of the range's span, as fsrlab apply). Stress becomes force with --sensor, --area or the
+    force) and in_range (1 inside the calibrated readout range, 0 outside; every reading estimated
+    and fed to the memory, as fsrlab apply). Stress becomes force with --sensor, --area or the
     virtual sensor's area. A calibration recorded with another circuit than the meter's (with --port
     the one --r, --c-off, --diode, --vcc and --r-f, --drive describe, which the run's sidecar records)
     or on range 1 only is refused (exit 2); without --r it cannot be checked (a warning).
@@ -110,35 +146,8 @@ def measure(
     columns = [f"{ref}_estimate", "in_range"] + (["force_n_estimate"] if ref != "force_n" and to_force else [])
     columns.append(f"{ref}_uncertainty")
     metadata["calibration"] = {"file": str(cal), "x": est.x, "reference": ref, "estimator": "Calibration.estimator"}
-    counts = {"estimated": 0, "out_of_range": 0}
-    last: dict = {}
-    g = STANDARD_GRAVITY
-
     with _Live(not quiet, f"fsrlab measure {out}  (Ctrl-C ends)") as live:
-        def on_row(m, row):
-            value = row.get(est.x)
-            t = row.get("time_s")  # the memory's creep ages by the row's time, not by the calibration's row step
-            e, u, inside = est.step(value if value is not None and math.isfinite(value) else None,
-                                    t if t is not None and math.isfinite(t) else None)
-            row = dict(row)
-            row[f"{ref}_estimate"] = e
-            row["in_range"] = (1 if inside else 0) if value is not None and math.isfinite(value) else None
-            row[f"{ref}_uncertainty"] = u
-            force = to_force(e) if (to_force and e is not None) else None
-            if "force_n_estimate" in columns:
-                row["force_n_estimate"] = force
-            counts["estimated"] += e is not None
-            counts["out_of_range"] += row["in_range"] == 0
-            last.update({"time_s": row["time_s"], ref + "_estimate": e, "force_n": force,
-                         "force_g": None if force is None else force / g * 1e3, "in_range": bool(inside),
-                         "reference_force_n": row.get("force_n")})
-            text = (f"force {fmt_value(force, '.3f')} N = {fmt_value(None if force is None else force / g * 1e3, '.0f')} g"
-                    if to_force else f"stress {fmt_value(e, '.0f')} Pa (no area: give --sensor or --area for a force)")
-            if row.get("force_n") is not None:
-                text += f"   load cell {row['force_n']:.3f} N"
-            live.show(text + ("" if inside else "   (outside the calibrated range)"))
-            return row
-
+        on_row = _RowEstimates(est, columns, to_force, live)
         try:
             with SerialLink(port) as link, sigterm_as_interrupt():
                 result = record(link, out, duration if duration is not None else 10 * 365 * 86400.0, window_ms=window_ms,
@@ -149,6 +158,7 @@ def measure(
         finally:
             if device is not None:
                 device.close()
+    counts, last = on_row.counts, on_row.last
     info = {**result_dict(result), **counts, "last": last}
     if json_out:
         emit_json(info)
