@@ -105,13 +105,7 @@ def live(
     except ValueError as exc:
         fail(str(exc).split(": ", 1)[1], "--host")
     if out is not None:
-        from fsrlab.io.outputs import OutputError, check_output
-
-        try:
-            check_output(out, "--out", inputs=[cal, loadcell], kind="run")
-        except OutputError as exc:  # live has no --overwrite: it never replaces a run
-            fail(exc.message.replace("pass --overwrite to replace it", "live never replaces a run: give a new name"),
-                 "--out")
+        _check_new_run(out, [cal, loadcell])
     circuits = meter.sidecar(None, "--virtual" if virtual else None)  # the page may switch to either range
     sensor_meta, area_m2 = sensor_area(sensor, area)
     lc = loadcell_option(loadcell)
@@ -123,36 +117,10 @@ def live(
 
     device, reference, health = None, None, None
     metadata: dict = {**circuits, **({"sensor": sensor_meta} if sensor_meta else {})}
-    steps = None
-    if masses is not None:
-        from fsrlab.bench.weights import plan_steps
-
-        try:
-            masses_kg = mass_list(masses)
-        except typer.BadParameter as exc:
-            fail(exc.message, "--masses")
-        if len(masses_kg) < 2:
-            fail(f"give at least two masses, e.g. 0,100g; got {masses!r}", "--masses")
-        if not 1 <= repeat <= 1000:
-            fail(f"must be 1 to 1000 cycles, got {repeat}", "--repeat")
-        if out is None:
-            fail("the guided calibration writes a run: give --out RUN.csv", "--masses")
-        steps = plan_steps(masses_kg, repeat, unload)
+    steps = None if masses is None else _guided_steps(masses, repeat, unload, out)
     place = None
     if virtual:
-        check_virtual(profile, peak, period, meter.virtual_c_off_farad, 0.0, 0.0, seed)
-        if steps is not None:  # a virtual bench that places the masses of the plan
-
-            device, source, place = virtual_bench(steps, seed, area_m2, STANDARD_GRAVITY)
-        else:
-            device, source = make_virtual_device(profile, peak, period, meter.virtual_c_off_farad, seed, 0.0, 0.0, True,
-                                                 80, area_m2)
-        if unplug_after is not None:
-            if unplug_after < 1:
-                fail(f"must be >= 1 window, got {unplug_after}", "--unplug-after")
-            from fsrlab.virtual.device import Faults
-
-            device.faults = Faults(unplug_after=unplug_after)
+        device, source, place = _virtual_meter(profile, peak, period, meter, seed, steps, area_m2, unplug_after)
         if lc is None:
             lc = device.load_cell.calibration()
         area_m2 = source.sensor.area_m2
@@ -192,6 +160,53 @@ def live(
         if device is not None:
             device.close()
         fail(f"cannot serve on {host}:{http_port}: {exc.strerror or exc}", "--host" if host != "127.0.0.1" else "--http-port")
+    _serve(srv, session, link, device, json_out, open_browser, duration)
+    if json_out:
+        _json_line({"frames": session.status.frames, "recorded": session.status.recorded, "state": session.status.state})
+    else:
+        typer.echo(f"fsrlab live: {session.status.frames} windows shown; {session.status.state}: {session.status.message}")
+
+
+def _guided_steps(masses: str, repeat: int, unload: bool, out: Path | None):
+    """The placements of ``--masses`` (the guided known-weight calibration on the page), or one line naming the
+    option at fault."""
+    from fsrlab.bench.weights import plan_steps
+
+    try:
+        masses_kg = mass_list(masses)
+    except typer.BadParameter as exc:
+        fail(exc.message, "--masses")
+    if len(masses_kg) < 2:
+        fail(f"give at least two masses, e.g. 0,100g; got {masses!r}", "--masses")
+    if not 1 <= repeat <= 1000:
+        fail(f"must be 1 to 1000 cycles, got {repeat}", "--repeat")
+    if out is None:
+        fail("the guided calibration writes a run: give --out RUN.csv", "--masses")
+    return plan_steps(masses_kg, repeat, unload)
+
+
+def _virtual_meter(profile: str, peak: float, period: float, meter: MeterCircuit, seed, steps, area_m2,
+                   unplug_after: int | None):
+    """``--virtual``: the virtual device (a bench that places the plan's masses with ``--masses``), its source,
+    and the placing callback (None without masses)."""
+    check_virtual(profile, peak, period, meter.virtual_c_off_farad, 0.0, 0.0, seed)
+    place = None
+    if steps is not None:  # a virtual bench that places the masses of the plan
+        device, source, place = virtual_bench(steps, seed, area_m2, STANDARD_GRAVITY)
+    else:
+        device, source = make_virtual_device(profile, peak, period, meter.virtual_c_off_farad, seed, 0.0, 0.0, True,
+                                             80, area_m2)
+    if unplug_after is not None:
+        if unplug_after < 1:
+            fail(f"must be >= 1 window, got {unplug_after}", "--unplug-after")
+        from fsrlab.virtual.device import Faults
+
+        device.faults = Faults(unplug_after=unplug_after)
+    return device, source, place
+
+
+def _serve(srv, session, link, device, json_out: bool, open_browser: bool, duration: float | None) -> None:
+    """Say where the page is, open it when asked, and serve until Ctrl-C or ``duration`` [s]; then close all."""
     if json_out:
         _json_line({"url": srv.url, "token": srv.token})
     else:
@@ -214,7 +229,14 @@ def live(
         link.close()
         if device is not None:
             device.close()
-    if json_out:
-        _json_line({"frames": session.status.frames, "recorded": session.status.recorded, "state": session.status.state})
-    else:
-        typer.echo(f"fsrlab live: {session.status.frames} windows shown; {session.status.state}: {session.status.message}")
+
+
+def _check_new_run(out: Path, inputs: list) -> None:
+    """``--out``: a run that does not exist yet (live has no --overwrite: it never replaces a run)."""
+    from fsrlab.io.outputs import OutputError, check_output
+
+    try:
+        check_output(out, "--out", inputs=inputs, kind="run")
+    except OutputError as exc:
+        fail(exc.message.replace("pass --overwrite to replace it", "live never replaces a run: give a new name"),
+             "--out")
