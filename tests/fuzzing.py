@@ -70,11 +70,14 @@ OTHER_UNITS = [v for pool in VALID.values() for v in pool]
 
 INPUTS = ["run.csv", "other.csv", "min.csv", "table.csv", "iso.csv", "cal.json", "empty.csv", "notes.txt"]
 ELSEWHERE = ["missing.csv", ".", "sub", "sub/new.csv", "run.csv/x", "new.csv", "out.json", "run.meta.json",
-             "nodir/new.csv"]
+             "nodir/new.csv", "new\x1b[2J.csv", "missing\x1b]0;title\x07.csv", "a\u202eb.csv"]
 CORRUPTIBLE = ["run.csv", "run.meta.json", "other.csv", "other.meta.json", "min.csv", "table.csv", "iso.csv",
                "cal.json"]
 BAD_CELLS = ["nan", "NaN", "1e308", "-1e308", "inf", "", "abc", "1,5", "0", "-0", "1e-320", "  ", "1e999", '"',
-             "10k", "١"]
+             "10k", "١", "200g\x1b[2J", "\x1b]0;title\x07", "a\u202eb", "\x9b31m"]
+#: Terminal control characters (ECMA-48 C0 and C1, DEL) and Unicode's bidirectional overrides: never printed raw
+#: (fsrlab.io.shown.printable, the one rendering boundary); line feed and tab are text.
+RAW_CONTROL = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u202a-\u202e\u2066-\u2069]")
 BAD_JSON = [None, "abc", 1e308, -1, [], {}, True, float("nan"), float("inf"), 0, "", [1, "a"], {"a": None}]
 
 

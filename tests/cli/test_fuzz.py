@@ -53,7 +53,7 @@ from hypothesis import strategies as st
 
 import fsrlab
 from fsrlab.cli import app
-from fuzzing import (ELSEWHERE, ENG, FILE_NAME, GARBAGE, INPUTS, NON_FINITE, OTHER_UNITS, RKM, TEXT,
+from fuzzing import (ELSEWHERE, ENG, FILE_NAME, GARBAGE, INPUTS, NON_FINITE, OTHER_UNITS, RAW_CONTROL, RKM, TEXT,
                      VALID, apply_corruptions, columns_of, copy_named, corruption, execute, hashes, listing,
                      write_corpus)
 
@@ -444,6 +444,9 @@ def _check(code, out, err, shown, elapsed, args, columns) -> list[str]:
             problems.append("exit 2 without exactly one line on stderr")
         elif not _names_something(err, args, args[0], columns):
             problems.append("exit 2 naming no option, argument, file, row or column")
+    raw = RAW_CONTROL.search(out + err)
+    if raw is not None:
+        problems.append(f"printed a control character raw: {raw.group(0)!r}")
     if ".tmp" in err and ".tmp" not in " ".join(args):
         problems.append("names an internal temporary file")
     # Help text may speak of nan; a port is a name (doctor --port nan reports "board on nan"), not a number.

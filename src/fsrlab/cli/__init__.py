@@ -299,6 +299,15 @@ def main(argv: list[str] | None = None) -> int:
     if not args:  # bare ``fsrlab``: the help, as a successful command
         args = ["--help"]
     command = _click_command()
+    from fsrlab.cli.console import escaped_output
+
+    with escaped_output():  # the one rendering boundary: nothing printed acts on the terminal
+        code = _run(command, args)
+    raise SystemExit(code)
+
+
+def _run(command, args: list[str]) -> int:
+    """Run the click ``command`` on ``args``; the exit code, every error said in one line on stderr."""
     try:
         # In non-standalone mode typer returns an explicit Exit's code, or the command's value.
         result = command.main(args=args, prog_name="fsrlab", standalone_mode=False)
@@ -335,7 +344,7 @@ def main(argv: list[str] | None = None) -> int:
             message = f"Invalid value for {option}: {exc.reason}"
         print(f"fsrlab: error: {_one_line(message)}", file=sys.stderr)
         code = 2
-    raise SystemExit(code)
+    return code
 
 
 def _option_of(parameter: str, args: list[str]) -> str | None:

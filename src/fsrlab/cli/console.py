@@ -1,6 +1,7 @@
-"""What a recording command shows and reads on the terminal: the live table of the recording (:class:`LiveView`),
-a person's answers typed on stdin (:class:`Keyboard`), and SIGTERM taken as Ctrl-C. Re-exported by :mod:`fsrlab.cli.options`, where the
-command modules take them from."""
+"""What fsrlab shows and reads on the terminal: the one rendering boundary (:class:`EscapedStream`,
+:func:`escaped_output`: everything a command prints passes :func:`fsrlab.io.shown.printable`), the live table of a
+recording (:class:`LiveView`), a person's answers typed on stdin (:class:`Keyboard`), and SIGTERM taken as Ctrl-C.
+Re-exported by :mod:`fsrlab.cli.options`, where the command modules take them from."""
 
 from __future__ import annotations
 
@@ -10,6 +11,59 @@ import signal
 import sys
 import threading
 from contextlib import contextmanager
+
+
+class EscapedStream:
+    """A text stream that writes what it is given through :func:`fsrlab.io.shown.printable`: a control character
+    in a table cell, a title, a column name, a file name or a message is printed as its escape (``\\x1b``), never
+    sent to the terminal.
+
+    It says it is not a terminal, so rich tables and click print plain text through it (their own styling escapes
+    would be escaped too); :attr:`raw` is the stream underneath, for the one writer that draws on the terminal
+    itself (:class:`LiveView`, whose content it escapes).
+
+    Parameters
+    ----------
+    raw : text stream
+        ``sys.stdout`` or ``sys.stderr`` as they were.
+    """
+
+    def __init__(self, raw) -> None:
+        self.raw = raw
+
+    def write(self, text: str) -> int:
+        if not isinstance(text, str):
+            raise TypeError(f"write() argument must be str, not {type(text).__name__}")
+        from fsrlab.io.shown import printable
+
+        self.raw.write(printable(text))
+        return len(text)
+
+    def writelines(self, lines) -> None:
+        for line in lines:
+            self.write(line)
+
+    def isatty(self) -> bool:
+        return False
+
+    def __getattr__(self, name):  # flush, fileno, encoding, errors, buffer, ...
+        return getattr(self.raw, name)
+
+
+@contextmanager
+def escaped_output():
+    """``sys.stdout`` and ``sys.stderr`` as :class:`EscapedStream` for the duration of a command."""
+    saved = sys.stdout, sys.stderr
+    sys.stdout, sys.stderr = (s if isinstance(s, EscapedStream) else EscapedStream(s) for s in saved)
+    try:
+        yield
+    finally:
+        sys.stdout, sys.stderr = saved
+
+
+def raw_stream(stream):
+    """The stream under an :class:`EscapedStream` (``stream`` itself otherwise)."""
+    return stream.raw if isinstance(stream, EscapedStream) else stream
 
 
 def fmt_value(value: float, spec: str) -> str:
@@ -22,9 +76,12 @@ class LiveView:
     def __init__(self, enabled: bool, title: str) -> None:
         from rich.console import Console
 
-        self.console = Console(stderr=True)
+        from fsrlab.io.shown import printable
+
+        # The terminal itself (the live table moves the cursor); what it shows is escaped here.
+        self.console = Console(file=raw_stream(sys.stderr))
         self.enabled = enabled and self.console.is_terminal
-        self.title = title
+        self.title = printable(title, keep="")
         self.live = None
 
     def __enter__(self) -> "LiveView":
@@ -54,7 +111,9 @@ class LiveView:
     def notice(self, text: str) -> None:
         """One line on stderr, above the live table when there is one (shown even with --quiet)."""
         if self.live is not None:
-            self.console.print(f"fsrlab: {text}", markup=False, highlight=False)
+            from fsrlab.io.shown import printable
+
+            self.console.print(f"fsrlab: {printable(text, keep='')}", markup=False, highlight=False)
         else:
             print(f"fsrlab: {text}", file=sys.stderr, flush=True)
 

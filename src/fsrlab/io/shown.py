@@ -13,10 +13,19 @@ import re
 import unicodedata
 from typing import Iterable
 
-__all__ = ["shown", "shown_list", "number_cell", "NUMBER"]
+__all__ = ["shown", "shown_list", "printable", "number_cell", "NUMBER"]
 
 # ASCII digits, an optional sign, point and exponent; nan and inf in any case (checked later by value).
 NUMBER = re.compile(r"^[+-]?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|nan|inf|infinity)$", re.IGNORECASE)
+
+
+_CONTROL_CATEGORIES = ("Cc", "Cf", "Zl", "Zp", "Cs", "Co", "Cn")
+_ASCII_CONTROL = re.compile("[\x00-\x08\x0b-\x1f\x7f]")  # all but tab and line feed
+
+
+def _code(ch: str) -> str:
+    return (f"\\x{ord(ch):02x}" if ord(ch) < 0x100 else f"\\u{ord(ch):04x}" if ord(ch) < 0x10000
+            else f"\\U{ord(ch):08x}")
 
 
 def _escape(text: str) -> str:
@@ -24,12 +33,37 @@ def _escape(text: str) -> str:
     for ch in text:
         if ch == "\\":
             out.append("\\\\")
-        elif unicodedata.category(ch) in ("Cc", "Cf", "Zl", "Zp", "Cs", "Co", "Cn"):
-            out.append(f"\\x{ord(ch):02x}" if ord(ch) < 0x100 else f"\\u{ord(ch):04x}" if ord(ch) < 0x10000
-                       else f"\\U{ord(ch):08x}")
+        elif unicodedata.category(ch) in _CONTROL_CATEGORIES:
+            out.append(_code(ch))
         else:
             out.append(ch)
     return "".join(out)
+
+
+def printable(text: str, keep: str = "\n\t") -> str:
+    """``text`` as fsrlab prints it: every control or format character but those in ``keep`` written as its
+    escape (ESC as ``\\x1b``, U+202E as ``\\u202e``), so that nothing printed acts on a terminal.
+
+    The one rendering boundary: :func:`fsrlab.cli.main` passes everything a command writes to stdout and
+    stderr through it (:class:`fsrlab.cli.console.EscapedStream`). Backslashes are left as they are (a
+    message that quotes a name with :func:`shown` has escaped it already).
+
+    Parameters
+    ----------
+    text : str
+    keep : str
+        Control characters printed as they are (line feed and tab by default).
+
+    Returns
+    -------
+    str
+    """
+    if text.isascii():
+        if keep == "\n\t" and _ASCII_CONTROL.search(text) is None:
+            return text
+        return "".join(ch if ch in keep or not (ch < " " or ch == "\x7f") else _code(ch) for ch in text)
+    return "".join(ch if ch in keep or unicodedata.category(ch) not in _CONTROL_CATEGORIES else _code(ch)
+                   for ch in text)
 
 
 def shown(text, limit: int = 60) -> str:
