@@ -53,7 +53,7 @@ _LAZY = {
     "PAPER": ("fsrlab.physics.params", "PAPER"),
     # metrics
     "hysteresis_error": ("fsrlab.metrics.hysteresis", "hysteresis_error"),
-    "hysteresis_of_run": ("fsrlab.calibration.readout", "hysteresis_of_run"),
+    "hysteresis_of_run": ("fsrlab.bench.measurement", "hysteresis_of_run"),
     "repeatability": ("fsrlab.metrics.repeatability", "repeatability"),
     "iso376": ("fsrlab.metrics.iso376", "iso376"),
     "creep_of_run": ("fsrlab.metrics.creep", "creep_of_run"),

@@ -5,7 +5,7 @@ gathers what the paper judges its sensors by, the capacitive readout (555 freque
 resistive one (op-amp V0, eq. 38) as in its Table 3:
 
 - the hysteresis error (eq. 13) per cycle and overall of each readout
-  (:func:`fsrlab.calibration.readout.hysteresis_of_run`);
+  (:func:`hysteresis_of_run`);
 - RE1 and RE2 (eq. 39) per load from the placements (:func:`fsrlab.metrics.repeatability.grouped_repeatability`),
   each mass reached from below once per cycle as in Tables 4 and 5;
 - **extension:** the ISO 376 quantities and class (:func:`fsrlab.metrics.iso376.iso376`) when the
@@ -24,15 +24,107 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-__all__ = ["READOUTS", "ReadoutHysteresis", "PlacementRepeatability", "RunReport", "placement_means",
-           "placements_repeatability", "iso376_of_placements", "measure_run"]
+if TYPE_CHECKING:
+    from fsrlab.metrics.cycles import RunHysteresis
+
+__all__ = ["READOUTS", "ReadoutHysteresis", "PlacementRepeatability", "RunReport", "run_reference", "hysteresis_of_run",
+           "placement_means", "placements_repeatability", "iso376_of_placements", "measure_run"]
 
 READOUTS = (("frequency_hz", "capacitive (555 frequency f)", "Hz"), ("voltage_v", "resistive (op-amp V0)", "V"))
 """The two readouts compared: column, name, unit."""
+
+
+def run_reference(run, reference: str | None = None) -> tuple[np.ndarray, str, str]:
+    """The reference of a run: ``force_n`` [N] or ``stress_pa`` [Pa].
+
+    Parameters
+    ----------
+    run : Run
+        A loaded run.
+    reference : {"force_n", "stress_pa"}, optional
+        Which one (default: ``stress_pa`` when the run has it, else ``force_n``). ``stress_pa``
+        from a run with only ``force_n`` needs the sidecar's sensor area (:meth:`Run.stress_pa`).
+
+    Returns
+    -------
+    values : ndarray
+    name : str
+    unit : str
+        ``"N"`` or ``"Pa"``.
+
+    Raises
+    ------
+    ValueError
+        ``reference`` not one of the two.
+    RunFormatError
+        The run has no such reference.
+    """
+    from fsrlab.io.runformat import RunFormatError
+
+    if reference not in (None, "force_n", "stress_pa"):
+        raise ValueError(f"reference: must be force_n or stress_pa, got {reference!r}")
+    if reference is None:
+        reference = "stress_pa" if "stress_pa" in run else ("force_n" if "force_n" in run else None)
+    if reference is None:
+        raise RunFormatError(f"{run.path}: no reference: the run has neither 'force_n' nor 'stress_pa' "
+                             f"(columns: {', '.join(run.columns)})")
+    if reference == "stress_pa":
+        return run.stress_pa(), "stress_pa", "Pa"
+    return run["force_n"], "force_n", "N"
+
+
+def hysteresis_of_run(run, quantity: str = "frequency_hz", threshold: float = 0.05,
+                      reference: str | None = None) -> "RunHysteresis":
+    """Hysteresis error (eq. 13) of one column of a run, per cycle and overall.
+
+    Parameters
+    ----------
+    run : Run or path
+        A run with ``stress_pa`` (or ``force_n``) and the quantity.
+    quantity : str
+        Column whose hysteresis is measured (``frequency_hz``, ``voltage_v``, ``stress_pa_estimate``, ...).
+    threshold : float
+        Reversal threshold as a fraction of the stress span, used without a direction column. [1]
+    reference : {"force_n", "stress_pa"}, optional
+        The reference the branches follow (default: ``stress_pa`` when the run has it, else
+        ``force_n``, which needs no sensor area; the result's "stress" is then a force [N]).
+
+    Returns
+    -------
+    RunHysteresis
+        See :func:`fsrlab.metrics.cycles.run_hysteresis`.
+
+    Raises
+    ------
+    ValueError
+        No complete cycle, or the quantity does not respond to the stress (a dead sensor,
+        :func:`fsrlab.metrics.hysteresis.check_response`).
+    """
+    import dataclasses
+    import re
+
+    from fsrlab.io.runformat import Run, RunFormatError, load_run
+    from fsrlab.metrics.cycles import run_hysteresis
+
+    run = run if isinstance(run, Run) else load_run(run)
+    stress, ref_name, ref_unit = run_reference(run, reference)
+    if quantity in ("stress_pa", "force_n"):
+        raise ValueError(f"quantity: {quantity} is a reference column (the {ref_name} the branches follow, or it "
+                         "divided by the area); give a readout such as frequency_hz")
+    q = run[quantity]
+    # eq. (13)'s functions speak of stresses [Pa]; on a force reference their levels are newtons.
+    in_unit = (lambda text: text) if ref_unit == "Pa" else (lambda text: re.sub(r"(\d) Pa\b", r"\1 " + ref_unit, text))
+    try:
+        res = run_hysteresis(stress, q, run.columns.get("direction"), run.columns.get("cycle"), threshold, name=quantity)
+    except RunFormatError:
+        raise
+    except ValueError as exc:
+        raise ValueError(f"{run.path}: {in_unit(str(exc))}") from None
+    return res if ref_unit == "Pa" else dataclasses.replace(res, method=in_unit(res.method))
 
 
 @dataclass
@@ -195,8 +287,7 @@ class RunReport:
 
 
 def _hysteresis(run, quantity: str, label: str) -> ReadoutHysteresis:
-    from fsrlab.calibration.readout import hysteresis_of_run
-
+    
     if quantity not in run or not np.isfinite(run[quantity]).any():
         return ReadoutHysteresis(quantity, label, reason=f"the run has no {quantity} readings")
     try:
@@ -414,7 +505,6 @@ def measure_run(run, placements=None, weights_run=None, calibration=None, calibr
     RunFormatError, ValueError
         An unreadable run, placements file or calibration (the message names the file).
     """
-    from fsrlab.calibration.readout import run_reference
     from fsrlab.io.runformat import load_run
 
     run = run if hasattr(run, "n_rows") else load_run(run)
@@ -476,7 +566,6 @@ def _calibrated(rep: RunReport, run, calibration, calibrate: bool) -> None:
     reference, their agreement: into ``rep``, or the reason why not."""
     from fsrlab.calibration.apply import apply_calibration
     from fsrlab.calibration.heldout_runs import calibrate_runs
-    from fsrlab.calibration.readout import run_reference
 
     cal, source = None, ""
     if calibration is not None:

@@ -2,7 +2,7 @@
 
 Before one calibration engine, ``fsrlab calibrate --method cv`` wrote a polynomial or a conductance or
 power-law family chosen by grouped cross-validation, a floor (dead zone), play-operator memory and an
-uncertainty table. :func:`legacy_model` turns such a file into a :class:`LegacyModel`, which a
+uncertainty table. :class:`LegacyModel` reads such a file, and a
 :class:`~fsrlab.calibration.result.Calibration` applies like any other: the static curve, the floor, the
 memory (the play operators and creep averages of :mod:`fsrlab.calibration.operators`, stepped one
 reading at a time, every reading fed whatever the margin) and the uncertainty by level and direction
@@ -21,7 +21,7 @@ from numpy.polynomial import chebyshev
 from fsrlab.calibration.heldout_uncertainty import LevelUncertainty
 from fsrlab.calibration.operators import MemoryState, directions, memory_features
 
-__all__ = ["is_legacy", "legacy_model", "LegacyModel"]
+__all__ = ["is_legacy", "LegacyModel", "LegacyStepper"]
 
 
 def is_legacy(d: dict) -> bool:
@@ -215,23 +215,3 @@ def _uncertainty(table: dict) -> LevelUncertainty:
     if sigma.ndim != 2 or sigma.shape != (edges.size + 1, 3) or np.any(sigma < 0):
         raise ValueError("uncertainty: sigma must be (level bins) x 3 numbers >= 0")
     return LevelUncertainty(edges, sigma, float(sigma.min()), 0.0)
-
-
-def legacy_model(d: dict) -> LegacyModel:
-    """The model of an earlier cross-validated calibration document (:func:`is_legacy`).
-
-    Parameters
-    ----------
-    d : dict
-        The document.
-
-    Returns
-    -------
-    LegacyModel
-
-    Raises
-    ------
-    KeyError, TypeError, ValueError
-        An entry missing or malformed.
-    """
-    return LegacyModel(d)

@@ -1,9 +1,8 @@
-"""What a recorded run holds for a calibration: its readout, its reference, its branches, cycles and circuit.
+"""What a recorded run holds for a calibration: its readout (C_FSR decoded through its circuit), its provenance.
 
 The calibration reads a run through these functions (:mod:`fsrlab.calibration.heldout_runs`,
 :mod:`fsrlab.calibration.result`, :mod:`fsrlab.calibration.apply`); they pass the run's columns and
-sidecar to the computations on arrays. The hysteresis error of a run (:func:`hysteresis_of_run`) follows
-its ``direction`` and ``cycle`` columns when it has them, else the branches found from the reference.
+sidecar to the computations on arrays.
 
 References
 ----------
@@ -17,10 +16,8 @@ import numpy as np
 from fsrlab.calibration.provenance import recorded_with
 from fsrlab.circuits.circuit import LM555Circuit, readout_from_metadata
 from fsrlab.io.runformat import Run, RunFormatError, load_run
-from fsrlab.metrics.cycles import RunHysteresis, run_hysteresis
 
-__all__ = ["C_FSR", "run_circuit", "decode_capacitance", "run_readout",
-           "run_reference", "reference_reversed", "run_recorded_with", "hysteresis_of_run"]
+__all__ = ["C_FSR", "run_circuit", "decode_capacitance", "run_readout", "reference_reversed", "run_recorded_with"]
 
 #: The decoded-capacitance variable of the physics-informed calibration. [F]
 C_FSR = "c_fsr_farad"
@@ -28,11 +25,6 @@ C_FSR = "c_fsr_farad"
 
 def _as_run(run) -> Run:
     return run if isinstance(run, Run) else load_run(run)
-
-
-def _recorded(run: Run):
-    """The run's own ``direction`` and ``cycle`` columns (None where absent): the only place read."""
-    return run.columns.get("direction"), run.columns.get("cycle")
 
 
 def run_circuit(run: Run, circuit: LM555Circuit | None = None) -> LM555Circuit:
@@ -169,43 +161,6 @@ def reference_reversed(y) -> str | None:
     return None
 
 
-def run_reference(run: Run, reference: str | None = None) -> tuple[np.ndarray, str, str]:
-    """The reference of a run: ``force_n`` [N] or ``stress_pa`` [Pa].
-
-    Parameters
-    ----------
-    run : Run
-        A loaded run.
-    reference : {"force_n", "stress_pa"}, optional
-        Which one (default: ``stress_pa`` when the run has it, else ``force_n``). ``stress_pa``
-        from a run with only ``force_n`` needs the sidecar's sensor area (:meth:`Run.stress_pa`).
-
-    Returns
-    -------
-    values : ndarray
-    name : str
-    unit : str
-        ``"N"`` or ``"Pa"``.
-
-    Raises
-    ------
-    ValueError
-        ``reference`` not one of the two.
-    RunFormatError
-        The run has no such reference.
-    """
-    if reference not in (None, "force_n", "stress_pa"):
-        raise ValueError(f"reference: must be force_n or stress_pa, got {reference!r}")
-    if reference is None:
-        reference = "stress_pa" if "stress_pa" in run else ("force_n" if "force_n" in run else None)
-    if reference is None:
-        raise RunFormatError(f"{run.path}: no reference: the run has neither 'force_n' nor 'stress_pa' "
-                             f"(columns: {', '.join(run.columns)})")
-    if reference == "stress_pa":
-        return run.stress_pa(), "stress_pa", "Pa"
-    return run["force_n"], "force_n", "N"
-
-
 def run_recorded_with(run: Run, used=None):
     """What a run was recorded with: its sidecar's circuits and the ranges of its readings.
 
@@ -225,50 +180,3 @@ def run_recorded_with(run: Run, used=None):
         return recorded_with(run.metadata, run.columns.get("range"), used)
     except ValueError as exc:
         raise RunFormatError(f"{run.path}: its sidecar's circuit: {exc}") from None
-
-
-def hysteresis_of_run(run, quantity: str = "frequency_hz", threshold: float = 0.05,
-                      reference: str | None = None) -> RunHysteresis:
-    """Hysteresis error (eq. 13) of one column of a run, per cycle and overall.
-
-    Parameters
-    ----------
-    run : Run or path
-        A run with ``stress_pa`` (or ``force_n``) and the quantity.
-    quantity : str
-        Column whose hysteresis is measured (``frequency_hz``, ``voltage_v``, ``stress_pa_estimate``, ...).
-    threshold : float
-        Reversal threshold as a fraction of the stress span, used without a direction column. [1]
-    reference : {"force_n", "stress_pa"}, optional
-        The reference the branches follow (default: ``stress_pa`` when the run has it, else
-        ``force_n``, which needs no sensor area; the result's "stress" is then a force [N]).
-
-    Returns
-    -------
-    RunHysteresis
-        See :func:`fsrlab.metrics.cycles.run_hysteresis`.
-
-    Raises
-    ------
-    ValueError
-        No complete cycle, or the quantity does not respond to the stress (a dead sensor,
-        :func:`fsrlab.metrics.hysteresis.check_response`).
-    """
-    import dataclasses
-    import re
-
-    run = _as_run(run)
-    stress, ref_name, ref_unit = run_reference(run, reference)
-    if quantity in ("stress_pa", "force_n"):
-        raise ValueError(f"quantity: {quantity} is a reference column (the {ref_name} the branches follow, or it "
-                         "divided by the area); give a readout such as frequency_hz")
-    q = run[quantity]
-    # eq. (13)'s functions speak of stresses [Pa]; on a force reference their levels are newtons.
-    in_unit = (lambda text: text) if ref_unit == "Pa" else (lambda text: re.sub(r"(\d) Pa\b", r"\1 " + ref_unit, text))
-    try:
-        res = run_hysteresis(stress, q, *_recorded(run), threshold, name=quantity)
-    except RunFormatError:
-        raise
-    except ValueError as exc:
-        raise ValueError(f"{run.path}: {in_unit(str(exc))}") from None
-    return res if ref_unit == "Pa" else dataclasses.replace(res, method=in_unit(res.method))

@@ -260,7 +260,8 @@ class Calibration:
         meta = {k: v for k, v in run.metadata.items() if k not in _FILE_KEYS}
         meta["units"] = dict(run.units, **{ycol: self.y_unit, ucol: self.y_unit, "in_range": "1"})
         meta["calibration"] = {**({} if self.path is None else {"file": str(self.path)}), "x": self.x_name,
-                               "reference": self.y_name, "model": _model_name(model), "method": METHOD, "lag_s": self.lag_s,
+                               "reference": self.y_name, "model": _model_name(model),
+                               "method": "cross-validated (an earlier fsrlab's file, read-only)" if self.read_only else METHOD, "lag_s": self.lag_s,
                                "created": self.created, "readout_range": [lo, hi],
                                "margin": margin if math.isfinite(margin) else None,
                                "counts": _counts(run, self.x_name, columns[ycol], given, inside, kept, est)}

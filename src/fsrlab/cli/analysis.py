@@ -44,7 +44,7 @@ def hysteresis(
       fsrlab hysteresis examples/bench.csv
       fsrlab hysteresis examples/bench.csv --quantity voltage_v --json
     """
-    from fsrlab.calibration.readout import hysteresis_of_run
+    from fsrlab.bench.measurement import hysteresis_of_run
 
     if not 0 < threshold < 1:
         fail(f"must be a fraction in (0, 1), got {threshold:g}", "--threshold")
