@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import hashlib
 import json
 import math
 import os
@@ -333,6 +334,19 @@ def table(results: list[dict], summ: dict, prefix: list[str]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def tree_state(src: Path) -> dict:
+    """The git commit of the source tree fsrlab runs from and a hash of its uncommitted changes (other people
+    may be editing it while the check runs: compare the state before and after)."""
+    def git(*args: str) -> str:
+        p = subprocess.run(["git", "-C", str(src), *args], capture_output=True, text=True, check=False)
+        return p.stdout.strip() if p.returncode == 0 else ""
+
+    diff = git("diff", "HEAD", "--", ".")
+    untracked = git("ls-files", "--others", "--exclude-standard", "--", ".")
+    return {"tree": str(src), "commit": git("rev-parse", "--short", "HEAD"),
+            "uncommitted": hashlib.sha1((diff + untracked).encode()).hexdigest()[:10] if diff or untracked else None}
+
+
 def parse_pairs(spec: str | None) -> list[int]:
     if not spec:
         return list(range(len(PAIRS)))
@@ -368,11 +382,19 @@ def main(argv=None) -> int:
     else:
         prefix = [str(Path(sys.executable).with_name("fsrlab"))]
     idx = parse_pairs(a.pairs)
+    tree = Path(a.src).resolve() if a.src else ROOT / "src"
+    before = tree_state(tree)
     t0 = time.perf_counter()
     with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as pool:
         results = list(pool.map(lambda i: score_pair(i, prefix, Path(a.data), a.timeout), idx))
     summ = summary(results)
-    doc = {"fsrlab": prefix, "data": str(a.data), "criteria": CRITERIA, "developed_on": DEVELOPED_ON,
+    after = tree_state(tree)
+    state = f"source {tree}: commit {before['commit'] or '?'}" + (
+        f", uncommitted changes {before['uncommitted']}" if before["uncommitted"] else ", clean")
+    if after != before:
+        state += f"; CHANGED while the check ran (after: {after['commit']}, {after['uncommitted']})"
+    doc = {"fsrlab": prefix, "source_before": before, "source_after": after, "data": str(a.data),
+           "criteria": CRITERIA, "developed_on": DEVELOPED_ON,
            "same_session": sorted(SAME_SESSION), "seconds": round(time.perf_counter() - t0, 1), "pairs": results,
            "summary": summ}
     if a.json_out:
@@ -381,7 +403,7 @@ def main(argv=None) -> int:
         json.dump(doc, sys.stdout, indent=1, default=float)
         print()
     else:
-        sys.stdout.write(table(results, summ, prefix))
+        sys.stdout.write(state + "\n" + table(results, summ, prefix))
         print(f"\n{len(results)} pairs in {time.perf_counter() - t0:.0f} s")
     return 0
 

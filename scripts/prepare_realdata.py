@@ -27,7 +27,7 @@ outside the repository and do not commit it. Conversions as docs/calibration.md 
     6 and session 2 → 6 no longer give docs/calibration.md's polynomial figures, without it all 39 pairs
     do). Lines that are not two numbers (a first line cut off) are dropped. No time stamps: rows taken
     as 0.1 s apart.
-``lupasic_velostat__pikeP_force_F_expE.csv`` (14 files) -- github.com/Lupasic/tactile-sensor-velostat
+``lupasic_velostat__pikeP_force_F_expE.csv`` (15 files) -- github.com/Lupasic/tactile-sensor-velostat
     (commit c319860, **no licence file**: do not redistribute). A Velostat film pressed 16 times per run
     by a UR5e arm against a Futek LTH350 load cell: ``src/experimental_data/velostat_data/.../exp_*.txt``
     (``<readout> <unix time>``, about 143 rows/s) and ``futek_data/.../exp_*.txt`` (``<force [N]> <unix
@@ -48,7 +48,7 @@ outside the repository and do not commit it. Conversions as docs/calibration.md 
     (``<strain count> <sum of 5 ADC readings>``). The authors' conversion (``tactile_calibration.py``):
     ``force_n`` = (strain − 1660130) / ((1667333 − 1660130) / 160 g) / 1000 × 9.81; ``reading`` the sum
     divided by the 5 samples (a mean ADC count). No time stamps: rows taken as 0.1 s apart.
-``belli_insole__*.csv`` (10 files) -- github.com/ami-iit/paper_belli_2023_sensors_insole-calibration
+``belli_insole__*.csv`` (11 files) -- github.com/ami-iit/paper_belli_2023_sensors_insole-calibration
     (commit 34f0241, **BSD-3-Clause**). One taxel of a capacitive insole in a machine-controlled air
     chamber, ``Data/*_insole/*.mat`` (``experiment.C``: message id, time stamp [s], 280 taxels' 8-bit
     counts; ``experiment.P``: the chamber's pressure [bar], no time stamps). As the authors do
