@@ -142,12 +142,11 @@ class Calibration:
     def __repr__(self) -> str:
         lo, hi = self.x_range
         rmse = self.selection.heldout_rmse
-        score = (f"held-out RMSE {rmse:.4g} {self.y_unit}".rstrip() if math.isfinite(rmse) else "")
-        if self.read_only:
-            score = "read-only (an earlier fsrlab's file)"
+        score = ("read-only (an earlier fsrlab's file)" if self.read_only else
+                 f"held-out RMSE {rmse:.4g} {self.y_unit}".rstrip() if math.isfinite(rmse) else None)
         runs = f"{self.n} readings of {len(self.sources)} run{'s' if len(self.sources) != 1 else ''}"
-        return (f"Calibration({self.y_name}({self.x_name}): {self.model_name}, {score}, readout {lo:.6g} … {hi:.6g}"
-                f"{' ' + self.x_unit if self.x_unit else ''}, {runs})")
+        parts = [self.model_name, score, f"readout {lo:.6g} … {hi:.6g}{' ' + self.x_unit if self.x_unit else ''}", runs]
+        return f"Calibration({self.y_name}({self.x_name}): {', '.join(p for p in parts if p)})"
 
     # ---------------------------------------------------------------------------------- the file
     def to_dict(self) -> dict:
