@@ -61,6 +61,9 @@ class HeldoutCalibration:
         Static curves whose mean is the static estimate in place of ``static`` (model averaging, see
         :data:`fsrlab.calibration.heldout_model.MIX_SE`); the memory's level and its correction stay
         those fitted around ``static``. Empty: ``static`` alone.
+    creep_start : float
+        The creep averages at a recording's first reading, a fraction of its level
+        (:data:`fsrlab.calibration.operators.CREEP_START`; 1 in files written before it). [1]
     """
 
     static: StaticCurve
@@ -76,6 +79,7 @@ class HeldoutCalibration:
     delay_s: float = 0.0
     hysteresis_range: "np.ndarray | None" = None
     mix: tuple = ()
+    creep_start: float = 1.0
 
     def without_memory(self) -> "HeldoutCalibration":
         """The static curve alone (the estimate before compensation), with its own uncertainty."""
@@ -136,7 +140,7 @@ class HeldoutCalibration:
         if self.has_memory:
             if features is None:
                 u = self.level(x) if u is None else u
-                features = memory_features(u, t, self.thresholds, self.time_constants, self.scaled)
+                features = memory_features(u, t, self.thresholds, self.time_constants, self.scaled, self.creep_start)
             est = est + clip_hysteresis(features, self.hysteresis_range) @ self.weights
         return est
 
@@ -152,7 +156,7 @@ class HeldoutCalibration:
                 "uncertainty_plain": None if self.uncertainty_plain is None else self.uncertainty_plain.to_dict(),
                 "delay_s": self.delay_s,
                 "hysteresis_range": None if self.hysteresis_range is None else self.hysteresis_range.tolist(),
-                "static_mix": [m.to_dict() for m in self.mix]}
+                "static_mix": [m.to_dict() for m in self.mix], "creep_start": self.creep_start}
 
     @classmethod
     def from_dict(cls, d: dict) -> "HeldoutCalibration":
@@ -175,10 +179,13 @@ class HeldoutCalibration:
                 raise ValueError("hysteresis_range: two rows (least, largest) of one finite value per play threshold, "
                                  "least ≤ largest")
         unc, plain = d.get("uncertainty"), d.get("uncertainty_plain")
+        start = float(d.get("creep_start", 1.0))
+        if not 0 <= start <= 1:
+            raise ValueError(f"creep_start: must be a fraction from 0 to 1 of the first level, got {start!r}")
         return cls(curve_from_dict(d["static"]), curve_from_dict(d["curve"]), thr, tau, w, fs, row,
                    None if unc is None else LevelUncertainty.from_dict(unc), bool(d.get("level_scaled_hysteresis", False)),
                    None if plain is None else LevelUncertainty.from_dict(plain), delay, rng,
-                   tuple(curve_from_dict(m) for m in d.get("static_mix", ())))
+                   tuple(curve_from_dict(m) for m in d.get("static_mix", ())), start)
 
 
 def clip_hysteresis(features: np.ndarray, hysteresis_range: "np.ndarray | None") -> np.ndarray:
@@ -212,7 +219,7 @@ class Stepper:
 
     def __init__(self, cal: HeldoutCalibration):
         self.cal = cal
-        self.state = MemoryState(cal.thresholds, cal.time_constants, cal.scaled)
+        self.state = MemoryState(cal.thresholds, cal.time_constants, cal.scaled, cal.creep_start)
         self.state.dt_default = cal.row_s
         self.line = DelayLine(cal.delay_s)
         self._t = None

@@ -5,10 +5,13 @@ readout, reference) and returns a :class:`HeldoutCalibration`. Every choice is s
 :mod:`fsrlab.calibration.heldout` (other recordings, or later blocks of one) and taken in order of
 complexity:
 
-1. **static curve** (:mod:`fsrlab.calibration.monotone`): straight line in the readout, then more
-   segments, in the divider's conductance ratio (ADC counts or a rail given) and in the logarithm of
-   the readout (readings all above zero). The memory is fitted around the simplest candidate within
-   one standard error of the best held-out error; the static estimate is the **mean of the candidates
+1. **static curve**: piecewise linear (:mod:`fsrlab.calibration.monotone`), polynomials of degree 2 to
+   5 and monotone cubic splines (:mod:`fsrlab.calibration.curves`), simplest first
+   (:data:`STATIC_CANDIDATES`), in the readout variables its physics names
+   (:func:`fsrlab.calibration.heldout.readout_variables`: the readout, the divider's conductance ratio,
+   a resistance's conductance 1/R, the logarithm). A polynomial that falls somewhere over the calibrated
+   readings is not tried. The memory is fitted around the simplest curve that cannot fall (piecewise or
+   spline) within one standard error of the best held-out error; the static estimate is the **mean of the candidates
    within** :data:`MIX_SE` **standard error** (model averaging: which of several curves that score
    alike holds on the next recording is left to chance by picking one);
 2. **delay** of the reference (:mod:`fsrlab.calibration.delay`, its ``delay_trials``): the estimate
@@ -32,7 +35,9 @@ complexity:
 Steps 2 to 4 are kept only when they **win**: the delay and the lag by a held-out mean squared error
 lower by more than one standard error (paired over chunks) and by at least :data:`MIN_GAIN` of the
 simpler calibration's, lower in most held-out recordings or blocks and higher in none; the memory by
-more than one standard error and :data:`MIN_GAIN`. Otherwise the simpler calibration is kept and the
+more than :data:`MEMORY_Z` standard errors (one-sided 95 %: it is the best of many trials) and
+:data:`MIN_GAIN`, and higher in no held-out recording or block by more than :data:`MEMORY_Z` of that
+part's own standard errors. Otherwise the simpler calibration is kept and the
 :class:`Selection` says why. What each rule did on real recordings: docs/calibration.md.
 
 The memory is fed with every reading, in time order; what an estimate reports (margin, range) does
@@ -52,7 +57,8 @@ from fsrlab.calibration.heldout_uncertainty import REPEATABILITY, LevelUncertain
 from fsrlab.calibration.heldout import (Part, Recording, chunk_ids, held_out_splits, orientation, paired_gain, readout_rail,
                                         readout_variables, scheme_name)
 from fsrlab.calibration.curves import fit_static, static_system
-from fsrlab.calibration.operators import CREEP_TIME_CONSTANTS_S, PLAY_THRESHOLDS, directions, memory_features
+from fsrlab.calibration.operators import (CREEP_START, CREEP_TIME_CONSTANTS_S, PLAY_THRESHOLDS, directions,
+                                          memory_features)
 
 __all__ = ["STATIC_CANDIDATES", "MIX_SE", "RIDGES", "HeldoutCalibration", "LevelUncertainty", "Selection",
            "calibrate_recordings"]
@@ -91,6 +97,12 @@ RIDGES = (1e-3, 1e-2, 1e-1, 1.0)
 #: (5 %: 2.5 % of its RMSE): a smaller gain held out within one run is not worth terms another recording
 #: may not share. [1]
 MIN_GAIN = 0.05
+#: Standard errors by which a memory's held-out gain must exceed zero to be kept, and by which it may not
+#: fall below zero in any held-out part: one-sided 95 % (the normal quantile 1.645), not one standard
+#: error (84 %) as for the simpler steps -- the memory is the best of the :data:`MEMORY_VARIANTS` ×
+#: :data:`RIDGES` trials, curve held and refitted, with its weight fitted on the same held-out errors, so
+#: its held-out gain is an optimistic estimate. [1]
+MEMORY_Z = 1.645
 #: The memory models tried, each with every ridge weight: (play thresholds, creep time constants,
 #: growing with the level). [1]
 MEMORY_VARIANTS = ((PLAY_THRESHOLDS, (), False), (PLAY_THRESHOLDS, (), True), ((), CREEP_TIME_CONSTANTS_S, False),
@@ -206,7 +218,7 @@ class _Cache:
     def _full(self, key, rec: Recording, level):
         if key not in self.features:
             u = level(rec.x)
-            full = memory_features(u, rec.t, PLAY_THRESHOLDS, CREEP_TIME_CONSTANTS_S, False)
+            full = memory_features(u, rec.t, PLAY_THRESHOLDS, CREEP_TIME_CONSTANTS_S, False, CREEP_START)
             self.features[key] = (np.maximum(u, 0.0).astype(np.float32), full.astype(np.float32))
         return self.features[key]
 
@@ -271,7 +283,7 @@ def _fit(parts: list[Part], ch: _Choice, sign: int, adc, cache: _Cache | None = 
                 best = (r, curve, w)
     _, curve, w = best
     return HeldoutCalibration(static, curve, tuple(ch.thresholds), tuple(ch.time_constants), w, fs, row_s,
-                              scaled=ch.scaled, hysteresis_range=hysteresis_range)
+                              scaled=ch.scaled, hysteresis_range=hysteresis_range, creep_start=CREEP_START)
 
 
 def _row_step(recs: list[Recording]) -> float:
@@ -301,13 +313,14 @@ def _blend(static: HeldoutCalibration, mem: HeldoutCalibration, alpha: float) ->
     c, k = mem.curve, static.curve
     curve = c.with_coef((1 - alpha) * k.coef + alpha * c.coef)
     return HeldoutCalibration(mem.static, curve, mem.thresholds, mem.time_constants, alpha * mem.weights,
-                              mem.full_scale, mem.row_s, scaled=mem.scaled, hysteresis_range=mem.hysteresis_range)
+                              mem.full_scale, mem.row_s, scaled=mem.scaled, hysteresis_range=mem.hysteresis_range,
+                              creep_start=mem.creep_start)
 
 
 def _memory_step(sel: Selection, score, scored: dict, cache: _Cache, base: _Choice, plain):
     """The memory trial of lowest held-out error, and the weight ``alpha`` in [0, 1] of its correction
     (trial − base) that minimises the held-out error of ``plain + alpha·(trial − base)`` (stacking);
-    (None, 1) unless that blend wins over ``plain`` by more than one standard error. The trials with
+    (None, 1) unless that blend wins over ``plain`` (:data:`MEMORY_Z`, :data:`MIN_GAIN`, no part worse). The trials with
     the static curve held come first: one with the curve refitted is taken only when it wins over the
     best of them by more than one standard error and :data:`MIN_GAIN`. ``plain``: the held-out
     errors, chunk ids, estimates and parts of the static estimate (``base``'s, or the mean of the
@@ -339,25 +352,41 @@ def _memory_step(sel: Selection, score, scored: dict, cache: _Cache, base: _Choi
     gain, se = paired_gain(e_s, blended, ids)
     folds = _fold_gains(plain, (blended, ids, None, parts))
     least = MIN_GAIN * float(np.mean(e_s ** 2))
-    kept = bool(alpha > 0 and gain > se and gain >= least)
+    worse = _parts_worse(e_s, blended, ids, parts)
+    kept = bool(alpha > 0 and gain > MEMORY_Z * se and gain >= least and not worse)
     lower = sum(f > 0 for f in folds)
     curve = (f"the curve refitted with it (held-out MSE lower by {g_refit:.4g} ± {se_refit:.4g} than with the curve "
              "held)" if refitted else f"the static curve held (refitting it: {g_refit:.4g} ± {se_refit:.4g})")
     head = (f"{best.name}, {curve}, its correction weighted {alpha:.3g}: held-out MSE lower by {gain:.4g} ± {se:.4g}, "
             f"lower in {lower} of {len(folds)} held-out parts")
-    short = ("not more than one standard error" if not gain > se else
-             f"less than {100 * MIN_GAIN:.0f} % of the simpler calibration's")
+    short = (f"not more than {MEMORY_Z:g} standard errors" if not gain > MEMORY_Z * se else
+             f"less than {100 * MIN_GAIN:.0f} % of the simpler calibration's" if gain < least else
+             f"higher in {worse} held-out part(s) by more than {MEMORY_Z:g} of their standard errors")
     sel.steps.append({"step": "memory", "tried": best.name, "weight": alpha, "gain": gain, "se": se, "kept": kept,
                       "curve_refitted": refitted, "refit_gain": g_refit, "refit_se": se_refit,
                       "heldout_rmse_at_weight_1": _rmse(e_s + d), "heldout_gain_by_part": folds,
-                      "why": head + (f" (more than one standard error and {100 * MIN_GAIN:.0f} % of the simpler "
-                                     "calibration's)" if kept else f": {short}, so the simpler calibration is kept")})
+                      "why": head + (f" (more than {MEMORY_Z:g} standard errors and {100 * MIN_GAIN:.0f} % of the "
+                                     "simpler calibration's, no held-out part worse)" if kept else
+                                     f": {short}, so the simpler calibration is kept")})
     for other in held + refit:  # the held-out errors of the trials not kept are no longer needed
         if other is not best or not kept:
             scored.pop(other, None)
     cache.features.clear()
     cache.systems.clear()
     return (best, alpha) if kept else (None, 1.0)
+
+
+def _parts_worse(e_simple: np.ndarray, e_complex: np.ndarray, chunks: np.ndarray, parts: list) -> int:
+    """Held-out parts (recordings or blocks) in which the complex choice's MSE is higher than the simple one's
+    by more than :data:`MEMORY_Z` standard errors, paired over the part's own chunks."""
+    worse = 0
+    for p in parts:
+        if p.stop - p.start < 2:
+            continue
+        ids = np.unique(chunks[p], return_inverse=True)[1]
+        gain, se = paired_gain(e_simple[p], e_complex[p], ids)
+        worse += bool(gain < -MEMORY_Z * se)
+    return worse
 
 
 def _best_of(trials, errors, let_go):
