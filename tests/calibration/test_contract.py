@@ -170,15 +170,23 @@ def test_the_static_curve_is_monotone(kind, made):
     assert (d >= -1e-9 * np.ptp(y)).all() or (d <= 1e-9 * np.ptp(y)).all()
 
 
-def test_an_earlier_cross_validated_file_gives_what_it_gave():
-    """A polynomial-5 with a floor and play-operator memory, written by the earlier engine (--method cv):
-    read-only, it gives the estimates the earlier fsrlab gave on the same run (printed in
-    v1-cv-memory.expected.json; to 1e-9 N, the arithmetic's order differs), its memory fed every reading."""
-    expected = json.loads((DATA / "v1-cv-memory.expected.json").read_text())
-    cal = load_calibration(DATA / "v1-cv-memory.json")
-    assert cal.read_only and cal.model.has_memory and cal.model.floor is not None
+@pytest.mark.parametrize("name", ["v1-cv-memory", "v1-held-out"])
+def test_a_version_1_file_gives_what_it_gave(name):
+    """A file of each earlier layout -- the cross-validated engine's polynomial-5 with a floor and play-operator
+    memory, and the held-out engine's before version 2 -- gives the estimates the earlier fsrlab gave on the same
+    run (printed in ``<name>.expected.json``; to 1e-9 N, the arithmetic's order differs), its memory fed every
+    reading; the held-out file's uncertainty too (the cross-validated one dropped its quantization term)."""
+    expected = json.loads((DATA / f"{name}.expected.json").read_text())
+    cal = load_calibration(DATA / f"{name}.json")
+    assert cal.model.has_memory
+    if name == "v1-cv-memory":
+        assert cal.read_only and cal.model.floor is not None
     out = cal.estimate(_divider("motor", 3))  # the run the expected estimates were printed for
     rows = expected["rows"]
-    want = np.array([np.nan if v is None else v for v in expected["force_n_estimate"]])
-    np.testing.assert_allclose(out["force_n_estimate"][rows], want, rtol=0, atol=1e-9)
+
+    def values(key):
+        return np.array([np.nan if v is None else v for v in expected[key]])
+    np.testing.assert_allclose(out["force_n_estimate"][rows], values("force_n_estimate"), rtol=0, atol=1e-9)
     np.testing.assert_array_equal(out["in_range"][rows], expected["in_range"])
+    if "force_n_uncertainty" in expected:
+        np.testing.assert_allclose(out["force_n_uncertainty"][rows], values("force_n_uncertainty"), rtol=0, atol=1e-9)
