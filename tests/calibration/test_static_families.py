@@ -170,6 +170,9 @@ def test_a_smooth_calibration_with_memory_round_trips_and_steps_as_the_batch(smo
     rec, cal, _ = smooth_with_memory
     assert cal.has_memory and {m.family for m in cal.mix + (cal.static,)} - {"piecewise"}
     back = HeldoutCalibration.from_dict(json.loads(json.dumps(cal.to_dict())))
+    assert back.creep_start == cal.creep_start == 0.5
+    older = {k: v for k, v in cal.to_dict().items() if k != "creep_start"}
+    assert HeldoutCalibration.from_dict(older).creep_start == 1.0  # files written before it: as they were
     x = rec.x.copy()
     x[[50, 51]] = (-20.0, 2000.0)  # beyond the readings both ways
     batch = cal.run(rec.t, x)[0]
