@@ -220,7 +220,7 @@ def test_a_memory_does_no_harm_on_loading_only_and_unloading_only_runs(train, se
     (triangle); hand 7 → 0.77, 0.52, 0.75; one triangle → 0.44, 0.67, 0.48 (with the creep averages
     started at the first level, as before CREEP_START: unloading 0.88, 1.10 and 2.27)."""
     rec, _ = _recording(*train)
-    cal, sel = calibrate_recordings([rec], compensate=True)
+    cal, _ = calibrate_recordings([rec], compensate=True)
     assert cal.has_memory and cal.creep_start == 0.5
     for name, (other, truth) in _ramp_parts(seed).items():
         assert _comp_over_plain(cal, other, truth) <= 1.05, name

@@ -13,7 +13,12 @@ import numpy as np
 import pytest
 
 import fsrlab as fl
-from fsrlab.calibration.curves import PolynomialCurve, SplineCurve, curve_from_dict, fit_static
+from fsrlab.calibration.curves import (
+    PolynomialCurve,
+    SplineCurve,
+    curve_from_dict,
+    fit_static,
+)
 from fsrlab.calibration.heldout import Recording
 from fsrlab.calibration.heldout_calibration import HeldoutCalibration
 from fsrlab.calibration.heldout_model import calibrate_recordings

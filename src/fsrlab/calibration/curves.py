@@ -24,8 +24,15 @@ from functools import cached_property
 
 import numpy as np
 
-from fsrlab.calibration.monotone import (CurveSystem, MonotoneCurve, StaticCurve, common_fields, curve_system,
-                                         knots_for, readout_variable)
+from fsrlab.calibration.monotone import (
+    CurveSystem,
+    MonotoneCurve,
+    StaticCurve,
+    common_fields,
+    curve_system,
+    knots_for,
+    readout_variable,
+)
 
 __all__ = ["FAMILIES", "PolynomialCurve", "SplineCurve", "curve_template", "static_system", "fit_static",
            "curve_from_dict"]

@@ -12,9 +12,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from fsrlab.calibration.curves import curve_from_dict
 from fsrlab.calibration.delay import DelayLine, delayed
 from fsrlab.calibration.heldout_uncertainty import LevelUncertainty
-from fsrlab.calibration.curves import curve_from_dict
 from fsrlab.calibration.monotone import StaticCurve
 from fsrlab.calibration.operators import MemoryState, directions, memory_features
 

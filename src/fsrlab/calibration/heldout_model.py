@@ -51,14 +51,28 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from fsrlab.calibration.curves import fit_static, static_system
 from fsrlab.calibration.delay import DELAY_ROWS, delay_trials, delayed
+from fsrlab.calibration.heldout import (
+    Part,
+    Recording,
+    chunk_ids,
+    held_out_splits,
+    orientation,
+    paired_gain,
+    readout_rail,
+    readout_variables,
+    scheme_name,
+)
 from fsrlab.calibration.heldout_calibration import HeldoutCalibration, clip_hysteresis
 from fsrlab.calibration.heldout_uncertainty import REPEATABILITY, LevelUncertainty
-from fsrlab.calibration.heldout import (Part, Recording, chunk_ids, held_out_splits, orientation, paired_gain, readout_rail,
-                                        readout_variables, scheme_name)
-from fsrlab.calibration.curves import fit_static, static_system
-from fsrlab.calibration.operators import (CREEP_START, CREEP_TIME_CONSTANTS_S, PLAY_THRESHOLDS, directions,
-                                          memory_features)
+from fsrlab.calibration.operators import (
+    CREEP_START,
+    CREEP_TIME_CONSTANTS_S,
+    PLAY_THRESHOLDS,
+    directions,
+    memory_features,
+)
 
 __all__ = ["STATIC_CANDIDATES", "MIX_SE", "RIDGES", "HeldoutCalibration", "LevelUncertainty", "Selection",
            "calibrate_recordings"]
