@@ -379,12 +379,12 @@ KNOWN: list[tuple] = [
     ("calibration-null", ("apply",), r"traceback", _corrupted("cal.json", "set"),
      "apply with a calibration whose chebyshev_coefficients is null: TypeError 'len() of unsized object' "
      "(traceback, exit 1) in analysis/calibration.py: analysis/calibration_io does not check the file's types",
-     (["apply", "cal.json", "run.csv", "-o", "new.csv"], [], _set_json("cal.json", ("chebyshev_coefficients",), None))),
+     (["apply", "cal.json", "run.csv", "-o", "new.csv"], [], _set_json("cal.json", ("calibration", "static"), None))),
     ("calibration-values", ("apply",), r"RuntimeWarning|naming no|non-finite", _corrupted("cal.json", "set"),
      "apply with a calibration value out of range (compensation threshold 0, coefficients inf or 1e308): "
      "'threshold must be a fraction of the stress span in (0, 1), got 0.0' names an internal parameter, not the "
      "file; inf/0 give RuntimeWarnings (analysis/calibration_io does not validate values)",
-     (["apply", "cal.json", "run.csv", "-o", "new.csv"], [], _set_json("cal.json", ("compensation", "threshold"), 0))),
+     (["apply", "cal.json", "run.csv", "-o", "new.csv"], [], _set_json("cal.json", ("calibration", "full_scale"), 0))),
     ("sidecar-non-finite", ("apply",), r"naming no", _err("not JSON compliant"),
      "apply on a run whose sidecar holds NaN (sensor.area_m2): 'Out of range float values are not JSON "
      "compliant: nan', exit 2 naming no file (runformat: sidecar values not checked; write_run)",

@@ -69,7 +69,7 @@ def load_calibration(path: str | os.PathLike) -> Calibration:
     d = read_calibration_document(p)
     try:
         cal = Calibration.from_dict(d, p)
-    except (KeyError, TypeError, ValueError, IndexError) as exc:
+    except (KeyError, TypeError, ValueError, IndexError, AttributeError) as exc:  # a value of another type too
         raise ValueError(f"{p}: calibration file incomplete or malformed ({type(exc).__name__}: {exc})") from None
     lo, hi = cal.x_range
     with np.errstate(all="ignore"):
