@@ -13,7 +13,10 @@ on every request, the websocket included, before any handler runs:
   cookie the page sets), static files and the websocket too; a missing or wrong one gets 403 and
   no handler runs (nothing is logged but the request line);
 - only the page (``/``), its websocket (``/ws``), BokehJS's files (``/static/...``) and
-  ``/favicon.ico`` are served; any other path (Bokeh's ``/metadata``, ``/autoload.js``) is 404.
+  ``/favicon.ico`` are served; any other path (Bokeh's ``/metadata``, ``/autoload.js``) is 404;
+- a websocket request must ask for Bokeh's subprotocol (else 400, one access-log line, no traceback)
+  and, when it has an ``Origin``, come from the page it names in ``Host`` (else 403);
+- the access log never holds the token (``/ws?token=…``).
 """
 
 from __future__ import annotations
@@ -23,7 +26,8 @@ import re
 import secrets
 import socket
 
-__all__ = ["LOOPBACK_NAMES", "WILDCARD_BINDS", "COOKIE", "check_bind_host", "host_name", "HostPolicy", "guard"]
+__all__ = ["LOOPBACK_NAMES", "WILDCARD_BINDS", "COOKIE", "check_bind_host", "host_name", "origin_netloc", "redacted",
+           "log_request", "HostPolicy", "guard"]
 
 LOOPBACK_NAMES = ("127.0.0.1", "localhost", "::1")
 WILDCARD_BINDS = ("0.0.0.0", "::")
@@ -138,8 +142,12 @@ class HostPolicy:
         """Whether the path is one the live page uses."""
         return bool(_PATHS.match(path or ""))
 
-    def refusal(self, host: str | None, path: str, given: str | None) -> tuple[int, str] | None:
-        """``(status, text)`` of the refusal for a request, or None when it may pass."""
+    def refusal(self, host: str | None, path: str, given: str | None, headers=None) -> tuple[int, str] | None:
+        """``(status, text)`` of the refusal for a request, or None when it may pass.
+
+        ``headers`` (the request's): a websocket request is refused with 400 unless it asks for Bokeh's
+        subprotocol (``bokeh, <session token>``), and with 403 when its ``Origin`` is not the page it names
+        in ``Host``."""
         if not self.host_ok(host):
             return 403, ("403: this fsrlab live page answers only to " + ", ".join(sorted(self.names))
                          + (" or an IP address" if self.wildcard else "") + "\n")
@@ -147,7 +155,54 @@ class HostPolicy:
             return 403, "403: this fsrlab live page needs the token printed with its URL\n"
         if not self.path_ok(path):
             return 404, "404: not found\n"
+        if path == "/ws" and headers is not None:
+            protocols = [p.strip() for p in (headers.get("Sec-WebSocket-Protocol") or "").split(",")]
+            if len(protocols) != 2 or protocols[0] != "bokeh" or not protocols[1]:
+                return 400, "400: the live page's websocket speaks Bokeh's protocol (subprotocol bokeh) only\n"
+            origin = headers.get("Origin")
+            if origin is not None and origin_netloc(origin) != (host or "").strip().lower():
+                return 403, "403: this websocket is the live page's own (its Origin must be the page)\n"
         return None
+
+
+def origin_netloc(origin: str) -> str | None:
+    """The ``host[:port]`` of an ``Origin`` header, in lower case (None when it is not a URL)."""
+    from urllib.parse import urlsplit
+
+    try:
+        netloc = urlsplit(origin.strip()).netloc
+    except ValueError:
+        return None
+    return netloc.lower() or None
+
+
+_TOKEN_IN_URI = re.compile(r"(?i)([?&]token=)[^&#\s]*")
+
+
+def redacted(uri: str) -> str:
+    """``uri`` with the value of its ``token`` query arguments replaced by ``…`` (for a log line).
+
+    Parameters
+    ----------
+    uri : str
+        A request's path and query, e.g. ``/ws?token=abc``.
+
+    Returns
+    -------
+    str
+    """
+    return _TOKEN_IN_URI.sub(r"\1…", uri)
+
+
+def log_request(handler) -> None:
+    """Tornado's access log line (``status METHOD uri (ip) time``), the token left out of the uri."""
+    from tornado.log import access_log
+
+    status = handler.get_status()
+    method = access_log.info if status < 400 else access_log.warning if status < 500 else access_log.error
+    request = handler.request
+    method("%d %s %s (%s) %.2fms", status, request.method, redacted(request.uri or ""), request.remote_ip,
+           1000.0 * request.request_time())
 
 
 def _request_token(request) -> str | None:
@@ -159,14 +214,18 @@ def _request_token(request) -> str | None:
     return cookie.value if cookie is not None else None
 
 
-def guard(application, policy: HostPolicy) -> None:
-    """Put ``policy`` in front of every route of a Tornado application (Bokeh's ``BokehTornado``).
+def guard(application, policy: HostPolicy, origin: str | None = None) -> None:
+    """Put ``policy`` in front of every route of a Tornado application (Bokeh's ``BokehTornado``), and log
+    its requests without the token (:func:`log_request`).
 
     Parameters
     ----------
     application : tornado.web.Application
         The application; its routing is wrapped in place, before the server starts.
     policy : HostPolicy
+    origin : str, optional
+        The one origin Bokeh's ``allow_websocket_origin`` lists (``http://127.0.0.1:5006``): a websocket
+        request whose Origin the policy found to be the page's own is passed on with it.
     """
     from tornado.web import RequestHandler
 
@@ -183,9 +242,14 @@ def guard(application, policy: HostPolicy) -> None:
     route = application.find_handler
 
     def find_handler(request, **kwargs):
-        refusal = policy.refusal(request.headers.get("Host"), request.path, _request_token(request))
+        refusal = policy.refusal(request.headers.get("Host"), request.path, _request_token(request), request.headers)
         if refusal is not None:
             return application.get_handler_delegate(request, Refused, {"status": refusal[0], "text": refusal[1]})
+        if request.path == "/ws" and origin is not None and "Origin" in request.headers:
+            # The Origin is the page's own (checked above); Bokeh's allow list, which cannot hold an IPv6
+            # address, is given the one origin it lists.
+            request.headers["Origin"] = origin
         return route(request, **kwargs)
 
     application.find_handler = find_handler
+    application.settings["log_function"] = log_request

@@ -14,7 +14,7 @@ from __future__ import annotations
 import secrets
 from dataclasses import dataclass
 
-__all__ = ["LiveServer", "start_server"]
+__all__ = ["LiveServer", "start_server", "page_url"]
 
 COOKIE = "fsrlab_token"
 
@@ -95,25 +95,53 @@ def start_server(make_doc, host: str = "127.0.0.1", port: int = 5006, token: str
     from bokeh.application.handlers.function import FunctionHandler
     from bokeh.server.server import Server
 
-    from fsrlab.live.hosts import HostPolicy, guard
+    from fsrlab.live.hosts import LOOPBACK_NAMES, HostPolicy, check_bind_host, guard
 
-    local = host in ("127.0.0.1", "localhost", "::1")
+    host = check_bind_host(host)
+    local = host in LOOPBACK_NAMES
     if not local and token is None:
         token = secrets.token_urlsafe(16)
     if port == 0:  # the origin allowlist must name the port: take a free one now
-        import socket
-
-        with socket.socket() as probe:
-            probe.bind((host, 0))
-            port = probe.getsockname()[1]
-    names = ["127.0.0.1", "localhost"] if local else [host]
-    options = {"address": host, "port": port, "allow_websocket_origin": [f"{n}:{port}" for n in names],
+        port = _free_port(host)
+    # Bokeh's origin allowlist takes names and IPv4 addresses only: it lists one origin, and the guard, having
+    # checked that a websocket's Origin is the page it names in Host, hands Bokeh that one (fsrlab.live.hosts).
+    origin = f"127.0.0.1:{port}"
+    options = {"address": host, "port": port, "allow_websocket_origin": [origin],
                "check_unused_sessions_milliseconds": 2000, "unused_session_lifetime_milliseconds": 5000}
     if not local:
         options["auth_provider"] = _token_auth(token)
     server = Server({"/": Application(FunctionHandler(make_doc))}, **options)
-    guard(server._tornado, HostPolicy(host, None if local else token))
+    guard(server._tornado, HostPolicy(host, None if local else token), origin=f"http://{origin}")
     server.start()
-    shown = "127.0.0.1" if local else host
-    url = f"http://{shown}:{port}/" + (f"?token={token}" if token else "")
-    return LiveServer(server, url, token if not local else None)
+    return LiveServer(server, page_url(host, port, None if local else token), token if not local else None)
+
+
+def page_url(host: str, port: int, token: str | None = None) -> str:
+    """The live page's address for a server bound to ``host``: the loopback as ``127.0.0.1`` (or ``[::1]`` when
+    bound there), an IPv6 address in brackets (RFC 3986 §3.2.2), the token in the query.
+
+    Parameters
+    ----------
+    host : str
+        The interface bound (:func:`fsrlab.live.hosts.check_bind_host`).
+    port : int
+        The TCP port. [1]
+    token : str, optional
+
+    Returns
+    -------
+    str
+    """
+    shown = "127.0.0.1" if host in ("127.0.0.1", "localhost") else host
+    if ":" in shown:
+        shown = f"[{shown}]"
+    return f"http://{shown}:{port}/" + (f"?token={token}" if token else "")
+
+
+def _free_port(host: str) -> int:
+    import socket
+
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    with socket.socket(family) as probe:
+        probe.bind((host, 0))
+        return probe.getsockname()[1]
