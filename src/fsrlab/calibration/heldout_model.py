@@ -425,8 +425,10 @@ def _refit_wins(gain: float, se: float, mse_held: float) -> bool:
 
 
 def _mix(parts: list[Part], mixed: list, sign: int, adc) -> tuple:
-    """The static curves of ``mixed`` fitted on ``parts`` (:attr:`HeldoutCalibration.mix`)."""
-    return tuple(_fit(parts, m, sign, adc).static for m in mixed)
+    """The static curves of ``mixed`` fitted on ``parts`` (:attr:`HeldoutCalibration.mix`), but a polynomial
+    that falls somewhere over these readings (it rose over the undelayed ones it was chosen on)."""
+    curves = (_fit(parts, m, sign, adc).static for m in mixed)
+    return tuple(c for c in curves if c.is_monotone())
 
 
 def _gain_spread(splits, static: _Choice, ch: _Choice, alpha: float, sign: int, adc, mixed=()) -> float:
