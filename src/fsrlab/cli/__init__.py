@@ -321,7 +321,7 @@ def _run(command, args: list[str]) -> int:
             print(exc.ctx.get_help())
             code = 0
         else:
-            message = exc.format_message()
+            message = _click_message(exc)
             ctx = getattr(exc, "ctx", None)
             if message.strip() == "Missing command." and ctx is not None and hasattr(ctx.command, "list_commands"):
                 message = (f"{ctx.command_path}: missing command (argument COMMAND): one of "
@@ -366,9 +366,17 @@ def _option_of(parameter: str, args: list[str]) -> str | None:
     return PARAMETER_OPTIONS.get(parameter)
 
 
+def _click_message(exc) -> str:
+    """click's message for a usage error; an option's invalid value names the option as fail() and option_names
+    do (``Invalid value for --r: ...``), where click would quote each of its spellings (``'--output' / '-o'``)."""
+    param = getattr(exc, "param", None)
+    if (type(exc).__name__ == "BadParameter" and exc.param_hint is None and param is not None
+            and param.param_type_name == "option" and param.opts):
+        return f"Invalid value for {param.opts[0]}: {exc.message}"
+    return exc.format_message()
+
+
 def _one_line(message: str) -> str:
     from fsrlab.cli.options import plain_numbers
 
-    # click quotes the option it found ("'--r'"), fail() and option_names do not: one spelling.
-    message = re.sub(r"^Invalid value for '(-[^']*)'(?: / '-[^']*')*", r"Invalid value for \1", message.strip())
-    return " ".join(plain_numbers(message).split())
+    return " ".join(plain_numbers(message.strip()).split())

@@ -462,8 +462,8 @@ def _entry(table: Table, role: str, j: int, how: str, unit: str) -> dict:
 def _time_of(table: Table, role: str, chosen: dict, unit: str | None, rate_hz: float | None, notes: list,
              mapping: dict) -> np.ndarray | None:
     if role in chosen and rate_hz is not None:
-        raise ValueError(f"{'reference_' if role.startswith('reference') else ''}rate_hz: {table.path} has a time "
-                         f"column ({table.label(chosen[role][0])}); give either the column or a rate")
+        raise ParameterError(f"{table.path} has a time column ({table.label(chosen[role][0])}); give either the "
+                             "column or a rate", parameter=f"{'reference_' if role.startswith('reference') else ''}rate_hz")
     if rate_hz is not None:
         mapping[role] = {"file": str(table.path), "rate_hz": rate_hz, "how": "given"}
         return np.arange(table.n_rows) / rate_hz
