@@ -1,6 +1,7 @@
-// fsrlab meter: the background (everything but the edge handlers): serial protocol v2
+// fsrlab meter: the background (everything but the edge handlers): serial protocol v3
 // (docs/protocol.md), commands, measurement windows, the ADC on A0, the C_off switch on D4, the
-// reference load cell's HX711 on D2 (DOUT) and D3 (SCK).
+// reference load cell's HX711 on D2 (DOUT) and D3 (SCK), and the channel scan of a CD74HC4051
+// multiplexer on the timing node (select lines S0..S2 on D5..D7, inhibit on D9; docs/multiplexing.md).
 // Matute et al. 2018, J. Sensors 6561901, doi:10.1155/2018/6561901, section 5.
 //
 // The edges are served by the interrupt handlers of capture.S / capture.cpp (see capture.h). This
@@ -20,6 +21,14 @@
 #define WINDOW_MIN 10u
 #define WINDOW_MAX 60000u
 #define WINDOW_DEFAULT 100u
+#define SCAN_MAX 255u      // channel mask: bit k = channel k of the multiplexer
+#define DWELL_MIN 1u       // counting time per channel in a scan [ms]
+#define DWELL_MAX 60000u
+#define DWELL_DEFAULT 3u
+#define SETTLE_MAX 100u    // periods discarded after the first edge that follows a switch
+#define SETTLE_DEFAULT 2u
+#define MUX_SHIFT 5        // S0..S2 on PD5..PD7 (D5..D7): written together, in one write of PORTD
+#define MUX_BITS (7u << MUX_SHIFT)
 #define CMD_MAX 32u        // longest command line, '\n' included [bytes]
 #define SNAP_WAIT_MS 2u    // the handler answers a snapshot request at the next rising edge; after
                            // this long without one the background takes it itself
@@ -109,7 +118,7 @@ static void service(void) {
 // the CPU, and a 10 ms window leaves it ~19000 cycles for everything, frame included). The ring
 // has room for a whole frame (MAX_FRAME) before one begins; bytes already written may go out while
 // the rest is formatted.
-#define MAX_FRAME 112u  // protocol v2 line limit (the longest frame, a v2 M frame, is 100 bytes)
+#define MAX_FRAME 112u  // protocol line limit (the longest frame, a v3 M frame, is 108 bytes)
 static uint16_t seq_next;
 static uint16_t crc;
 static const uint32_t pow10_tab[10] = {1ul, 10ul, 100ul, 1000ul, 10000ul, 100000ul,
@@ -212,12 +221,27 @@ static uint16_t window_ms = WINDOW_DEFAULT;
 static uint32_t win_end_ms;     // end of the window in progress [ms]
 static uint32_t win_end8;       // ... [8 us]
 static CaptureSums base;        // the sums at the window's start
-enum { SNAP_NONE, SNAP_BASE, SNAP_FRAME };
+enum { SNAP_NONE, SNAP_BASE, SNAP_FRAME, SNAP_FIRST };
 static uint8_t snap_want;
 static uint32_t snap_due8;      // due time of the pending snapshot [8 us]
-static uint32_t fr_t;           // the pending frame: end time, window, range
+static uint32_t fr_t;           // the pending frame: end time, window, range, channel, scan
 static uint16_t fr_window;
-static uint8_t fr_range;
+static uint8_t fr_range, fr_channel;
+static uint16_t fr_scan;
+// The scan (a mask of more than one channel): for each channel in turn, select it, wait for the
+// first rising edge after the switch (SNAP_FIRST) and SETTLE complete periods more (SC_SETTLE),
+// take the base at the next rising edge (SNAP_BASE), count for DWELL ms (SC_COUNT), send the
+// reading. A mask of one channel is the single-channel meter: contiguous windows of WINDOW ms.
+static uint8_t scan_mask = 1, channel;
+static uint8_t scan_set;        // a SCAN was accepted since boot: M frames carry channel and scan (v3);
+                                // until then they are version 2's (the background's time at 50 kHz is
+                                // scarce: a single-channel meter sends no byte more than before)
+static uint16_t scan_no, dwell_ms = DWELL_DEFAULT;
+static uint8_t settle_n = SETTLE_DEFAULT;
+enum { SC_FIRST, SC_SETTLE, SC_BASE, SC_COUNT };
+static uint8_t scan_phase = SC_COUNT;
+static uint32_t settle_p1;      // periods at the first edge after the switch
+static uint32_t settle_t8;      // when the channel was selected [8 us]
 static uint32_t adc_sum;
 static uint16_t adc_n;
 
@@ -234,6 +258,77 @@ static void window_restart(void) {
   snap_request(SNAP_BASE, now8);
 }
 
+static uint8_t scanning(void) { return (uint8_t)(scan_mask & (scan_mask - 1u)) != 0; }  // > 1 channel
+
+static void mux_select(uint8_t ch) {
+  channel = ch;
+  // one write: the three select lines change together (only the background writes PORTD)
+  PORTD = (uint8_t)((PORTD & (uint8_t)~MUX_BITS) | (uint8_t)(ch << MUX_SHIFT));
+}
+
+static uint8_t first_channel(void) {
+  uint8_t ch = 0;
+  while (!(scan_mask & (1u << ch))) ch++;
+  return ch;
+}
+
+// Complete periods so far (the handler writes them: read with interrupts off, ~10 cycles).
+static uint32_t periods_now(void) {
+  uint8_t sreg = SREG;
+  cli();
+  uint32_t p = capture_state.acc.periods;
+  SREG = sreg;
+  return p;
+}
+
+// The channel just selected: its first rising edge ends the period that spans the switch.
+static void settle_begin(void) {
+  clock_poll();
+  settle_t8 = now8;
+  scan_phase = SC_FIRST;
+  snap_request(SNAP_FIRST, now8);
+}
+
+// Select the next channel of the mask (the scan number counts the returns to the first one).
+static void scan_next(void) {
+  uint8_t ch = channel;
+  do {
+    ch = (uint8_t)((ch + 1u) & 7u);
+  } while (!(scan_mask & (1u << ch)));
+  if (ch <= channel) scan_no++;
+  mux_select(ch);
+  settle_begin();
+}
+
+// START, or a new mask while started: from the first channel of the mask.
+static void measure_restart(void) {
+  mux_select(first_channel());
+  if (scanning()) settle_begin();
+  else {
+    scan_phase = SC_COUNT;
+    window_restart();
+  }
+}
+
+// SETTLE periods after the first edge (or, for an open or very slow channel, one dwell after the
+// switch): the base is taken at the next rising edge.
+static void settle_poll(void) {
+  if (!running || scan_phase != SC_SETTLE || snap_want != SNAP_NONE) return;
+  if ((uint32_t)(periods_now() - settle_p1) + 1u < settle_n &&
+      now8 - settle_t8 < (uint32_t)dwell_ms * T2_PER_MS)
+    return;
+  scan_phase = SC_BASE;
+  snap_request(SNAP_BASE, now8);
+}
+
+// A scan's base has been taken: the reading counts from it for DWELL ms.
+static void count_begin(void) {
+  clock_poll();
+  win_end_ms = now_ms + dwell_ms;
+  win_end8 = now8 + (uint32_t)dwell_ms * T2_PER_MS;
+  scan_phase = SC_COUNT;
+}
+
 static void adc_poll(void) {
   if (ADCSRA & _BV(ADSC)) return;
   adc_sum += ADC;
@@ -242,13 +337,23 @@ static void adc_poll(void) {
 }
 
 static void window_poll(void) {
-  if (!running || snap_want != SNAP_NONE || (int32_t)(now8 + EARLY - win_end8) < 0) return;
+  if (!running || snap_want != SNAP_NONE || scan_phase != SC_COUNT ||
+      (int32_t)(now8 + EARLY - win_end8) < 0)
+    return;
   fr_t = win_end_ms;
-  fr_window = window_ms;
   fr_range = range_sel;
+  fr_channel = channel;
+  fr_scan = scan_no;
   snap_request(SNAP_FRAME, win_end8);
-  win_end_ms += window_ms;
-  win_end8 += (uint32_t)window_ms * T2_PER_MS;
+  if (scanning()) {
+    fr_window = dwell_ms;
+    scan_phase = SC_BASE;  // (the next reading begins after the switch: no window until then)
+  } else {
+    fr_window = window_ms;
+    scan_no++;
+    win_end_ms += window_ms;
+    win_end8 += (uint32_t)window_ms * T2_PER_MS;
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -367,43 +472,64 @@ static void snap_poll(void) {
   if (!capture_ready() && (int32_t)(now8 - snap_due8) >= (int32_t)(SNAP_WAIT_MS * T2_PER_MS))
     capture_snapshot_now();
   if (!capture_ready()) return;
-  // the handler does not touch snap until the next request
-  const CaptureSums &n = *(const CaptureSums *)&capture_state.snap;
+  // a copy: in a scan the next request (after the switch) comes before the frame is written
+  CaptureSums n = *(const CaptureSums *)&capture_state.snap;
+  CaptureSums b = base;
+  uint8_t why = snap_want;
   uint16_t adc = adc_n ? (uint16_t)((adc_sum + adc_n / 2u) / adc_n) : 0;
   adc_sum = 0;
   adc_n = 0;
-  if (snap_want == SNAP_FRAME) {
-    uint32_t high = n.sum_high - base.sum_high;
-    frame_begin(s_M);
-    field_u32(fr_t);
-    field_u32(fr_window);
-    field_u32(n.periods - base.periods);
-    field_u32(n.sum_low - base.sum_low + high);
-    field_u32(high);
-    field_u32(n.missed - base.missed);
-    field_u32(adc);
-    field_u32(fr_range);
-    // the reference: ref_ok at the window's end (snap_due8); no count without it (docs/protocol.md)
-    uint8_t ok = ref_seen && (int32_t)(snap_due8 - ref_last8) < (int32_t)REF_OK_8;
-    uint16_t rn = ok ? ref_cur.n : 0;
-    field_u32(ok);
-    field_u32(rn);
-    field_i32(rn ? ref_mean(ref_cur.sum, rn) : 0);
-    frame_end();
-  }
+  // the reference: ref_ok at the window's end (snap_due8); no count without it (docs/protocol.md)
+  uint8_t ok = ref_seen && (int32_t)(snap_due8 - ref_last8) < (int32_t)REF_OK_8;
+  RefAcc ref = ref_cur;
   base = n;
   ref_cur = ref_next;  // (a base discards the conversions before it)
   ref_next.sum = 0;
   ref_next.n = 0;
   snap_want = SNAP_NONE;
+  if (running && why == SNAP_FIRST) {
+    settle_p1 = n.periods;
+    if (settle_n) scan_phase = SC_SETTLE;
+    else count_begin();  // the first edge itself is the base
+  } else if (running && why == SNAP_BASE && scan_phase == SC_BASE) {
+    count_begin();
+  }
+  if (why != SNAP_FRAME) return;
+  // the pending frame's own values: window_poll may ask for the next window's end while this one waits
+  // for room in the transmit ring
+  uint32_t t = fr_t;
+  uint16_t win = fr_window, sc = fr_scan;
+  uint8_t rg = fr_range, ch = fr_channel;
+  if (running && scanning()) scan_next();  // the next channel settles while this frame goes out
+  uint32_t high = n.sum_high - b.sum_high;
+  frame_begin(s_M);
+  field_u32(t);
+  field_u32(win);
+  field_u32(n.periods - b.periods);
+  field_u32(n.sum_low - b.sum_low + high);
+  field_u32(high);
+  field_u32(n.missed - b.missed);
+  field_u32(adc);
+  field_u32(rg);
+  uint16_t rn = ok ? ref.n : 0;
+  field_u32(ok);
+  field_u32(rn);
+  field_i32(rn ? ref_mean(ref.sum, rn) : 0);
+  if (scan_set) {
+    field_u32(ch);
+    field_u32(sc);
+  }
+  frame_end();
 }
 
 // ---------------------------------------------------------------------------------------------
 // Commands (matches fsrlab.acquisition.protocol.parse_command; docs/protocol.md).
-enum { C_ID, C_START, C_STOP, C_WINDOW, C_RANGE, C_COUNT };
-static const char cmd_names[C_COUNT][7] PROGMEM = {"ID", "START", "STOP", "WINDOW", "RANGE"};
-static const uint16_t cmd_max[C_COUNT] = {0, 0, 0, WINDOW_MAX, 1};  // 0: takes no value
-static const uint16_t cmd_min[C_COUNT] = {0, 0, 0, WINDOW_MIN, 0};
+enum { C_ID, C_START, C_STOP, C_WINDOW, C_RANGE, C_SCAN, C_DWELL, C_SETTLE, C_COUNT };
+static const char cmd_names[C_COUNT][7] PROGMEM = {"ID", "START", "STOP", "WINDOW", "RANGE",
+                                                   "SCAN", "DWELL", "SETTLE"};
+static const uint16_t cmd_max[C_COUNT] = {0, 0, 0, WINDOW_MAX, 1, SCAN_MAX, DWELL_MAX,
+                                          SETTLE_MAX};  // 0: takes no value
+static const uint16_t cmd_min[C_COUNT] = {0, 0, 0, WINDOW_MIN, 0, 1, DWELL_MIN, 0};
 
 static uint8_t is_space(uint8_t c) {
   return c == ' ' || (c >= '\t' && c <= '\f' && c != '\n') || (c >= 0x1c && c <= 0x1f);
@@ -482,7 +608,8 @@ static void handle_line(void) {
     case C_START:
       if (!running) {
         running = 1;
-        window_restart();
+        scan_no = 0;
+        measure_restart();
       }
       break;
     case C_STOP:
@@ -490,7 +617,19 @@ static void handle_line(void) {
       break;
     case C_WINDOW:
       window_ms = value;
-      if (running) window_restart();
+      if (running && !scanning()) window_restart();
+      break;
+    case C_SCAN:
+      scan_mask = (uint8_t)value;
+      scan_set = 1;
+      if (running) measure_restart();
+      else mux_select(first_channel());
+      break;
+    case C_DWELL:  // (the reading in progress keeps its own; the next one counts this long)
+      dwell_ms = value;
+      break;
+    case C_SETTLE:
+      settle_n = (uint8_t)value;
       break;
     case C_RANGE:
       range_sel = (uint8_t)value;
@@ -515,6 +654,11 @@ static void hw_init(void) {
   // C_off range switch on D4 = PD4, low at boot (range 0)
   DDRD |= _BV(PD4);
   PORTD &= (uint8_t)~_BV(PD4);
+  // multiplexer: S0..S2 on D5..D7 low (channel 0), inhibit on D9 = PB1 low (the switch enabled)
+  PORTD &= (uint8_t)~MUX_BITS;
+  DDRD |= MUX_BITS;
+  PORTB &= (uint8_t)~_BV(PB1);
+  DDRB |= _BV(PB1);
   // HX711: DOUT on D2 input with pull-up, SCK on D3 output low (a long high powers it down)
   DDRD &= (uint8_t)~_BV(PD2);
   PORTD |= _BV(PD2);
@@ -559,6 +703,7 @@ void meter_run(void) {
     adc_poll();
     ref_poll();
     window_poll();
+    settle_poll();
     snap_poll();
   }
 }

@@ -150,8 +150,8 @@ def test_range_switch_adds_c_off_and_lowers_the_frequency():
 
 def test_handshake_refuses_another_protocol_version():
     with SerialLink("loop://") as link:
-        link.serial.write(encode_frame("ID", 0, ("fsrlab-meter", "3.0.0", 3, 16000000)))
-        with pytest.raises(HandshakeError, match="protocol version 3"):
+        link.serial.write(encode_frame("ID", 0, ("fsrlab-meter", "4.0.0", 4, 16000000)))
+        with pytest.raises(HandshakeError, match="protocol version 4"):
             link.handshake(timeout_s=1.0)
 
 

@@ -33,7 +33,7 @@ def test_recording_writes_a_valid_run(tmp_path):
     run = load_run(tmp_path / "run.csv")
     assert result.ended == "duration" and result.dropped == 0
     assert run.n_rows == result.frames > 0
-    # A protocol-2 device: the load cell's columns follow (empty force_n: no load-cell calibration given).
+    # A protocol-3 device (2 and later): the load cell's columns follow (empty force_n: no load-cell calibration given).
     assert list(run.columns) == list(COLUMNS) + ["stress_pa", "reference_raw", "force_n"]
     assert np.all(np.isfinite(run["reference_raw"])) and np.all(np.isnan(run["force_n"]))
     assert np.all(np.diff(run["time_s"]) > 0) and np.all(np.diff(run["seq"]) == 1)
@@ -44,7 +44,7 @@ def test_recording_writes_a_valid_run(tmp_path):
     assert np.corrcoef(run["stress_pa"], run["frequency_hz"])[0, 1] > 0.9
     meta = run.metadata
     assert meta["complete"] and meta["rows"] == run.n_rows
-    assert meta["acquisition"]["window_ms"] == 20 and meta["acquisition"]["protocol_version"] == 2
+    assert meta["acquisition"]["window_ms"] == 20 and meta["acquisition"]["protocol_version"] == 3
 
 
 def test_device_clock_recording_is_exact_and_loses_nothing(tmp_path):

@@ -12,7 +12,7 @@ import math
 from dataclasses import dataclass
 
 from fsrlab.hardware import ADC_V_PER_COUNT, F_CPU
-from fsrlab.acquisition.protocol import M_FIELDS_V2, Frame, ProtocolError, check_fields
+from fsrlab.acquisition.protocol import M_FIELDS_V2, M_FIELDS_V3, Frame, ProtocolError, check_fields
 
 __all__ = ["decode_sums", "Measurement", "Identity", "Ack", "DeviceError"]
 
@@ -77,6 +77,11 @@ class Measurement:
     ref_mean : float
         Mean of those conversions, raw 24-bit two's-complement counts as the firmware rounds it
         (``floor(sum/n + 1/2)``); NaN when ``ref_n == 0``, never 0 in its place. [count]
+    channel : int
+        Protocol v3: the multiplexer channel the window measured (0..7); 0 for versions 1 and 2.
+    scan : int or None
+        Protocol v3: the scan the reading belongs to (a single channel: the window's number since
+        ``START``), modulo 65536; None for versions 1 and 2.
     """
 
     seq: int
@@ -93,6 +98,8 @@ class Measurement:
     ref_ok: int | None = None
     ref_n: int = 0
     ref_mean: float = math.nan
+    channel: int = 0
+    scan: int | None = None
 
     @classmethod
     def from_frame(cls, frame: Frame) -> "Measurement":
@@ -117,10 +124,12 @@ class Measurement:
         check_fields("M", frame.fields)
         t_ms, window, periods, sum_p, sum_h, missed, adc, rng = (int(f) for f in frame.fields[:8])
         f, duty = decode_sums(periods, sum_p, sum_h)
-        if len(frame.fields) == M_FIELDS_V2:
-            ref_ok, ref_n, ref_mean = (int(x) for x in frame.fields[8:])
+        if len(frame.fields) >= M_FIELDS_V2:
+            ref_ok, ref_n, ref_mean = (int(x) for x in frame.fields[8:11])
+            channel, scan = (int(frame.fields[11]), int(frame.fields[12])) if len(frame.fields) == M_FIELDS_V3 \
+                else (0, None)
             return cls(frame.seq, t_ms, window, periods, sum_p, sum_h, missed, adc, rng, f, duty,
-                       ref_ok, ref_n, float(ref_mean) if ref_n > 0 else math.nan)
+                       ref_ok, ref_n, float(ref_mean) if ref_n > 0 else math.nan, channel, scan)
         return cls(frame.seq, t_ms, window, periods, sum_p, sum_h, missed, adc, rng, f, duty)
 
     @property

@@ -1,4 +1,4 @@
-"""Serial protocol (version 2; version 1 still read) between the fsrlab meter (Arduino firmware) and the host: pure framing, no I/O.
+"""Serial protocol (version 3; versions 1 and 2 still read) between the fsrlab meter (Arduino firmware) and the host: pure framing, no I/O.
 
 The device sends one ASCII frame per line, ``$<TYPE>,<SEQ>[,<field>...]*<CRC>\\r\\n``, where CRC is
 CRC-16/CCITT-FALSE over the bytes strictly between ``$`` and ``*``; the host sends short command
@@ -25,7 +25,9 @@ from fsrlab.errors import FsrlabError
 from fsrlab.hardware import ADC_BITS, ADC_COUNTS, ADC_V_PER_COUNT, ADC_VREF_V, CAPTURE_MAX_HZ, F_CPU, TICK_S
 
 __all__ = [
-    "PROTOCOL_VERSION", "SUPPORTED_PROTOCOLS", "M_FIELDS_V1", "M_FIELDS_V2", "HX711_MIN", "HX711_MAX", "F_CPU", "TICK_S", "ADC_BITS", "ADC_COUNTS", "ADC_VREF_V", "ADC_V_PER_COUNT", "DEFAULT_BAUD", "MAX_LINE", "MAX_COMMAND", "SEQ_MODULO",
+    "PROTOCOL_VERSION", "SUPPORTED_PROTOCOLS", "M_FIELDS_V1", "M_FIELDS_V2", "M_FIELDS_V3", "CHANNELS",
+    "SCAN_MASK_MAX", "DWELL_MS_MIN", "DWELL_MS_MAX", "DWELL_MS_DEFAULT", "SETTLE_MAX", "SETTLE_DEFAULT",
+    "channel_mask", "mask_channels", "parse_channels", "HX711_MIN", "HX711_MAX", "F_CPU", "TICK_S", "ADC_BITS", "ADC_COUNTS", "ADC_VREF_V", "ADC_V_PER_COUNT", "DEFAULT_BAUD", "MAX_LINE", "MAX_COMMAND", "SEQ_MODULO",
     "UINT32_MODULO", "CAPTURE_MAX_HZ",
     "WINDOW_MS_MIN", "WINDOW_MS_MAX", "WINDOW_MS_DEFAULT", "DEVICE_NAME", "FRAME_TYPES", "COMMANDS",
     "ERR_UNKNOWN_COMMAND", "ERR_BAD_VALUE", "ERR_LINE_TOO_LONG",
@@ -34,14 +36,24 @@ __all__ = [
     "max_frame_rate", "min_frame_length", "max_frame_length",
 ]
 
-PROTOCOL_VERSION = 2
+PROTOCOL_VERSION = 3
 """Version of this protocol, sent in the ``ID`` frame of a current device (and the virtual device)."""
-SUPPORTED_PROTOCOLS = (1, 2)
-"""Versions the host reads: version 1 devices (no reference fields) keep working."""
+SUPPORTED_PROTOCOLS = (1, 2, 3)
+"""Versions the host reads: version 1 (no reference fields) and 2 (no channel) devices keep working."""
 M_FIELDS_V1 = 8
 """Fields after ``SEQ`` of a version-1 ``M`` frame (``t_ms`` .. ``range``)."""
 M_FIELDS_V2 = 11
 """Fields after ``SEQ`` of a version-2 ``M`` frame: version 1's plus ``ref_ok``, ``ref_n``, ``ref_mean``."""
+M_FIELDS_V3 = 13
+"""Fields after ``SEQ`` of a version-3 ``M`` frame: version 2's plus ``channel``, ``scan``."""
+CHANNELS = 8
+"""Channels of the meter's multiplexer (a CD74HC4051: 0..7)."""
+SCAN_MASK_MAX = 2**CHANNELS - 1
+"""Largest channel mask of ``SCAN`` (bit k = channel k; at least one bit set)."""
+DWELL_MS_MIN, DWELL_MS_MAX, DWELL_MS_DEFAULT = 1, 60000, 3
+"""Allowed and boot values of the counting time per channel in a scan of more than one channel. [ms]"""
+SETTLE_MAX, SETTLE_DEFAULT = 100, 2
+"""Largest and boot value of ``SETTLE``: periods discarded after the first edge that follows a switch."""
 HX711_MIN, HX711_MAX = -(2**23), 2**23 - 1
 """Range of the HX711's 24-bit two's-complement output (``ref_mean`` of an ``M`` frame). [count]"""
 DEFAULT_BAUD = 115200
@@ -64,15 +76,17 @@ ERR_UNKNOWN_COMMAND, ERR_BAD_VALUE, ERR_LINE_TOO_LONG = 1, 2, 3
 
 _U32 = UINT32_MODULO - 1
 # Per type: number of fields after TYPE and SEQ (min, max).
-FRAME_TYPES: dict[str, tuple[int, int]] = {"M": (M_FIELDS_V1, M_FIELDS_V2), "ID": (4, 4), "ACK": (1, 2), "ERR": (2, 2)}
+FRAME_TYPES: dict[str, tuple[int, int]] = {"M": (M_FIELDS_V1, M_FIELDS_V3), "ID": (4, 4), "ACK": (1, 2), "ERR": (2, 2)}
 """Frame types and how many fields follow ``SEQ`` (minimum, maximum; an ``M`` frame has exactly
-:data:`M_FIELDS_V1` or :data:`M_FIELDS_V2`)."""
+:data:`M_FIELDS_V1`, :data:`M_FIELDS_V2` or :data:`M_FIELDS_V3`)."""
 # Commands and the allowed range of their value (None: takes no value).
 COMMANDS: dict[str, tuple[int, int] | None] = {
     "ID": None, "START": None, "STOP": None,
     "WINDOW": (WINDOW_MS_MIN, WINDOW_MS_MAX), "RANGE": (0, 1),
+    "SCAN": (1, SCAN_MASK_MAX), "DWELL": (DWELL_MS_MIN, DWELL_MS_MAX), "SETTLE": (0, SETTLE_MAX),
 }
-"""Host commands (the same in versions 1 and 2) and the inclusive range of their value (``None``: no value)."""
+"""Host commands and the inclusive range of their value (``None``: no value); ``SCAN``, ``DWELL`` and
+``SETTLE`` are version 3's."""
 
 _HEX = frozenset(b"0123456789ABCDEF")
 _DOLLAR, _NL, _CR, _STAR = 0x24, 0x0A, 0x0D, 0x2A
@@ -183,7 +197,7 @@ def encode_frame(kind: str, seq: int, fields=()) -> bytes:
     lo, hi = FRAME_TYPES[kind]
     if not lo <= len(fields) <= hi:
         raise ValueError(f"fields: a {kind} frame has {lo}..{hi} fields after SEQ, got {len(fields)}")
-    signed = kind == "M" and len(fields) == M_FIELDS_V2  # ref_mean, the last field, has a sign
+    signed = kind == "M" and len(fields) >= M_FIELDS_V2  # ref_mean (field 11) has a sign
     parts = [kind, str(seq)]
     for k, value in enumerate(fields):
         if isinstance(value, bool):
@@ -210,9 +224,9 @@ def min_frame_length() -> int:
 
 
 def max_frame_length() -> int:
-    """Length of the longest valid frame: a version-2 ``M`` frame with every number at its widest. [byte]"""
+    """Length of the longest valid frame: a version-3 ``M`` frame with every number at its widest. [byte]"""
     return len(encode_frame("M", SEQ_MODULO - 1, (_U32, WINDOW_MS_MAX, _U32, _U32, _U32, _U32, 1023, 1, 1, 65535,
-                                                  HX711_MIN)))
+                                                  HX711_MIN, CHANNELS - 1, SEQ_MODULO - 1)))
 
 
 def max_frame_rate(baud: float, frame_bytes: int | None = None, bits_per_byte: int = 10) -> float:
@@ -262,7 +276,7 @@ def _int24(text: str) -> int:
 
 
 def check_fields(kind: str, fields: tuple[str, ...]) -> None:
-    """Raise ProtocolError when the fields of a known frame type are not valid protocol (v1 or v2).
+    """Raise ProtocolError when the fields of a known frame type are not valid protocol (v1, v2 or v3).
 
     Parameters
     ----------
@@ -275,15 +289,18 @@ def check_fields(kind: str, fields: tuple[str, ...]) -> None:
     if not lo <= len(fields) <= hi:
         raise ProtocolError(f"{kind} frame with {len(fields)} fields")
     if kind == "M":
-        if len(fields) not in (M_FIELDS_V1, M_FIELDS_V2):
+        if len(fields) not in (M_FIELDS_V1, M_FIELDS_V2, M_FIELDS_V3):
             raise ProtocolError(f"M frame with {len(fields)} fields")
         t_ms, window, periods, sum_p, sum_h, missed, adc, rng = (_uint(f) for f in fields[:M_FIELDS_V1])
         if adc > 1023 or rng > 1 or window == 0 or sum_h > sum_p or (periods > 0 and sum_p == 0):
             raise ProtocolError("M frame values out of range")
-        if len(fields) == M_FIELDS_V2:
+        if len(fields) >= M_FIELDS_V2:
             ref_ok, ref_n, ref_mean = _uint(fields[8]), _uint(fields[9], 65535), _int24(fields[10])
             if ref_ok > 1 or (ref_ok == 0 and ref_n > 0) or (ref_n == 0 and ref_mean != 0):
                 raise ProtocolError("M frame reference values out of range")
+        if len(fields) == M_FIELDS_V3:
+            _uint(fields[11], CHANNELS - 1)
+            _uint(fields[12], SEQ_MODULO - 1)
     elif kind == "ID":
         _uint(fields[2])
         _uint(fields[3])
@@ -502,9 +519,11 @@ def encode_command(name: str, value: int | None = None) -> bytes:
     Parameters
     ----------
     name : str
-        ``ID``, ``START``, ``STOP``, ``WINDOW`` or ``RANGE``.
+        ``ID``, ``START``, ``STOP``, ``WINDOW``, ``RANGE``, ``SCAN``, ``DWELL`` or ``SETTLE``.
     value : int, optional
-        Window length for ``WINDOW`` (10..60000) [ms]; switch state for ``RANGE`` (0 or 1).
+        Window length for ``WINDOW`` (10..60000) [ms]; switch state for ``RANGE`` (0 or 1); channel
+        mask for ``SCAN`` (1..255, bit k = channel k); counting time per channel for ``DWELL``
+        (1..60000) [ms]; periods discarded after a switch's first edge for ``SETTLE`` (0..100).
 
     Returns
     -------
@@ -577,3 +596,92 @@ def _token(word: str) -> str:
     """The command word as reported in ``$ERR``: printable ASCII without ``,*$``, ≤ 12 chars, ``?`` if empty."""
     safe = "".join(c for c in word if c.isascii() and c.isprintable() and c not in ",*$ ")[:12]
     return safe or "?"
+
+
+def channel_mask(channels) -> int:
+    """The ``SCAN`` mask of a set of multiplexer channels.
+
+    Parameters
+    ----------
+    channels : iterable of int
+        Distinct channels, each 0..7 (at least one).
+
+    Returns
+    -------
+    int
+        Bit k set for channel k, 1..255.
+
+    Raises
+    ------
+    ParameterError
+        An empty set, a repeated channel or one outside 0..7 (``parameter="channels"``).
+    """
+    from fsrlab.errors import ParameterError
+
+    chans = list(channels)
+    if not chans:
+        raise ParameterError("at least one channel is needed", parameter="channels")
+    mask = 0
+    for ch in chans:
+        if isinstance(ch, bool) or not hasattr(ch, "__index__"):
+            raise ParameterError(f"{ch!r} is not a channel number 0..{CHANNELS - 1}", parameter="channels")
+        ch = int(ch)
+        if not 0 <= ch < CHANNELS:
+            raise ParameterError(f"{ch} is outside 0..{CHANNELS - 1} (the multiplexer has {CHANNELS})",
+                                 parameter="channels")
+        if mask & (1 << ch):
+            raise ParameterError(f"channel {ch} is given twice", parameter="channels")
+        mask |= 1 << ch
+    return mask
+
+
+def mask_channels(mask: int) -> tuple[int, ...]:
+    """The channels of a ``SCAN`` mask, in scan order (ascending).
+
+    Parameters
+    ----------
+    mask : int
+        1..255.
+
+    Returns
+    -------
+    tuple of int
+    """
+    from fsrlab.errors import ParameterError
+
+    if isinstance(mask, bool) or not isinstance(mask, int) or not 1 <= mask <= SCAN_MASK_MAX:
+        raise ParameterError(f"a channel mask is an integer 1..{SCAN_MASK_MAX}, got {mask!r}", parameter="mask")
+    return tuple(k for k in range(CHANNELS) if mask >> k & 1)
+
+
+def parse_channels(text: str) -> tuple[int, ...]:
+    """Channels written as on a command line: ``0-7``, ``0,2,5``, ``1-3,6`` or ``4``.
+
+    Parameters
+    ----------
+    text : str
+        Channel numbers 0..7 and ranges ``a-b`` (a ≤ b), separated by commas.
+
+    Returns
+    -------
+    tuple of int
+        The channels, ascending.
+
+    Raises
+    ------
+    ParameterError
+        Anything else, a repeated channel or one outside 0..7 (``parameter="channels"``).
+    """
+    from fsrlab.errors import ParameterError
+
+    chans: list[int] = []
+    for part in str(text).replace(" ", "").split(","):
+        lo, sep, hi = part.partition("-")
+        if not lo.isdigit() or (sep and not hi.isdigit()) or not lo.isascii() or not hi.isascii():
+            raise ParameterError(f"{text!r} is not a list of channels 0..{CHANNELS - 1} such as 0-7 or 0,2,5",
+                                 parameter="channels")
+        a, b = int(lo), int(hi) if sep else int(lo)
+        if b < a:
+            raise ParameterError(f"the range {part} runs backwards", parameter="channels")
+        chans.extend(range(a, b + 1))
+    return mask_channels(channel_mask(chans))

@@ -27,6 +27,12 @@ empty — never 0 — in a window without a conversion (no HX711, or a 10 sample
 conversions) or, for ``force_n``, without a calibration; such windows are counted
 (:attr:`RecordResult.no_reference`). With a sensor area, ``stress_pa = force_n / area``. A
 version-1 device records as before, without these columns.
+
+Several sensors on one meter (protocol version 3, a multiplexer: docs/multiplexing.md): with ``scan``
+(:class:`~fsrlab.acquisition.stream.Scan`) the meter scans those channels and the run is in the long
+format, one row per channel reading (:data:`SCAN_COLUMNS`: ``time_s, channel, scan, frequency_hz, ...``,
+each reading with its own time), and the sidecar holds the channel map (``channels``: each channel's
+``sensor_id`` and position ``x_m``, ``y_m``) and the scan's settings (``acquisition.scan``).
 """
 
 from __future__ import annotations
@@ -42,19 +48,62 @@ from typing import Callable, Sequence
 from fsrlab.acquisition.messages import Identity, Measurement
 from fsrlab.acquisition.protocol import WINDOW_MS_DEFAULT, WINDOW_MS_MAX, WINDOW_MS_MIN, Frame, ParserStats
 from fsrlab.acquisition.serial_link import DeviceGone, LinkError, SerialLink
-from fsrlab.acquisition.stream import CLOCKS, Gap, WindowStream, window_row
+from fsrlab.acquisition.stream import CLOCKS, Gap, Scan, WindowStream, window_row
 
-__all__ = ["COLUMNS", "REFERENCE_COLUMNS", "FAILED_ENDINGS", "Gap", "RecordStatus", "RecordResult", "default_stall_s", "record",
+__all__ = ["COLUMNS", "SCAN_COLUMNS", "REFERENCE_COLUMNS", "Scan", "channel_map", "FAILED_ENDINGS", "Gap", "RecordStatus", "RecordResult", "default_stall_s", "record",
            "window_row", "result_dict"]
 
 COLUMNS = ("time_s", "frequency_hz", "duty_cycle", "voltage_v", "periods", "missed", "range", "seq")
 """Run columns written for every window (``stress_pa`` is added when a reference is given)."""
+
+SCAN_COLUMNS = ("time_s", "channel", "scan", "frequency_hz", "duty_cycle", "voltage_v", "periods", "missed", "range",
+                "seq")
+"""Run columns of a multi-channel recording (long format: one row per channel reading)."""
 
 REFERENCE_COLUMNS = ("reference_raw", "force_n")
 """Columns added for a protocol-version-2 device (the load cell's reference)."""
 
 FAILED_ENDINGS = ("disconnected", "error", "failed", "stalled", "empty")
 """Values of :attr:`RecordResult.ended` for a run that did not end as asked (the CLI exits with 1)."""
+
+
+def channel_map(channels, given=None) -> list[dict]:
+    """The sidecar's channel map: per channel its ``sensor_id`` and position (PhysioNet's gait database keeps one).
+
+    Parameters
+    ----------
+    channels : sequence of int
+        The channels recorded.
+    given : sequence of dict, optional
+        Entries ``{"channel": k, "sensor_id": str, "x_m": float, "y_m": float}`` (any subset of the keys
+        but ``channel``); a channel not given gets ``sensor_id`` ``fsr<k>`` and no position.
+
+    Returns
+    -------
+    list of dict
+        One entry per recorded channel, in channel order.
+    """
+    from fsrlab.errors import ParameterError
+
+    known: dict[int, dict] = {}
+    for entry in given or ():
+        if not isinstance(entry, dict) or not isinstance(entry.get("channel"), int) or isinstance(entry["channel"], bool):
+            raise ParameterError(f"every entry needs an integer 'channel', got {entry!r}",
+                                 parameter="channel_map")
+        unknown = set(entry) - {"channel", "sensor_id", "x_m", "y_m"}
+        if unknown:
+            raise ParameterError(f"unknown key(s) {', '.join(sorted(unknown))} "
+                                 "(known: channel, sensor_id, x_m, y_m)", parameter="channel_map")
+        known[entry["channel"]] = entry
+    out = []
+    for k in channels:
+        e = known.get(k, {})
+        out.append({"channel": k, "sensor_id": str(e.get("sensor_id", f"fsr{k}")), "x_m": e.get("x_m"),
+                    "y_m": e.get("y_m")})
+    ids = [e["sensor_id"] for e in out]
+    if len(set(ids)) != len(ids):
+        raise ParameterError("sensor ids must differ between channels", parameter="channel_map")
+    return out
 
 
 def default_stall_s(window_ms: int) -> float:
@@ -210,7 +259,8 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
            on_event: Callable[[str], None] | None = None, health: Callable[[], str | None] | None = None,
            overwrite: bool = False, loadcell=None, area_m2: float | None = None,
            extra_columns: Sequence[str] = (), on_row: Callable[[Measurement, dict], dict | None] | None = None,
-           final_metadata: Callable[[], dict] | None = None, clock: str = "host") -> RecordResult:
+           final_metadata: Callable[[], dict] | None = None, clock: str = "host", scan: Scan | None = None,
+           channels_meta: list | None = None) -> RecordResult:
     """Record ``duration_s`` seconds of measurement windows into a run file.
 
     Parameters
@@ -267,6 +317,11 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
         (hardware, or a virtual meter in real time); ``device``, the run's own time axis (``time_s``,
         from the device's ``t_ms``): the run ends with the first window that reaches ``duration_s``,
         for a virtual meter faster than real time. Stalls are wall time either way.
+    scan : Scan, optional
+        Scan these multiplexer channels (a protocol-3 meter): one row per channel reading, with
+        ``channel`` and ``scan`` (:data:`SCAN_COLUMNS`).
+    channels_meta : list of dict, optional
+        The channel map's entries (:func:`channel_map`); default ``fsr<k>`` without positions.
 
     Returns
     -------
@@ -307,7 +362,9 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
         for existing in (path, sidecar_path(path)):
             if os.path.lexists(existing):
                 raise FileExistsError(f"{existing} exists; a run is replaced only when asked to")
+    chan_map = _channel_map_of(scan, channels_meta)
     ident = link.handshake(timeout_s=handshake_timeout_s)
+    _require_scanning(scan, ident, link)
     link.stop()  # a device left running by a previous session: start from a clean state
     has_ref = ident.protocol_version >= 2
     stress_from_force = reference is None and area_m2 is not None and loadcell is not None and has_ref
@@ -322,9 +379,10 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
 
     stream = WindowStream(link, window_ms, range_, has_ref, stall_s, loadcell, area_m2 if stress_from_force else None,
                           reference, on_event=on_event, on_gap=save_gaps, clock=clock,
-                          end_s=duration_s if on_device else None)
+                          end_s=duration_s if on_device else None, scan=scan)
     first_seq = stream.configure()
-    columns = list(COLUMNS) + (["stress_pa"] if reference is not None or stress_from_force else [])
+    columns = list(COLUMNS if scan is None else SCAN_COLUMNS)
+    columns += ["stress_pa"] if reference is not None or stress_from_force else []
     columns += [c for c in (REFERENCE_COLUMNS if has_ref else ()) if c not in columns]
     columns += [c for c in extra_columns if c not in columns]
     meta = dict(metadata or {})
@@ -337,6 +395,7 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
                            "firmware_version": ident.firmware_version, "protocol_version": ident.protocol_version,
                            "window_ms": window_ms, "range": range_, "duration_s": duration_s, "clock": clock,
                            "stall_s": stall_s, "first_seq": first_seq}
+    _scan_metadata(meta, scan, chan_map)
     meta["gaps"] = []
     parser = link.parser
     lost0, bad0 = parser.lost, parser.bad_frames
@@ -469,3 +528,34 @@ def result_dict(result: RecordResult) -> dict:
     if result.run_s is not None:
         out["run_s"] = round(result.run_s, 3)
     return out
+
+
+def _channel_map_of(scan: Scan | None, entries) -> list[dict] | None:
+    """The checked channel map of a multi-channel recording (before the device is touched)."""
+    if scan is None:
+        return None
+    if not isinstance(scan, Scan):
+        raise ValueError(f"scan must be a Scan, got {type(scan).__name__}")
+    return channel_map(scan.channels, entries)
+
+
+def _require_scanning(scan: Scan | None, ident: Identity, link: SerialLink) -> None:
+    """A scan needs a version-3 meter."""
+    if scan is not None and ident.protocol_version < 3:
+        raise LinkError(f"{link.port} speaks protocol version {ident.protocol_version}: scanning channels needs "
+                        "version 3 (firmware 3.0.0 or later: fsrlab flash)")
+
+
+def _scan_metadata(meta: dict, scan: Scan | None, chan_map: list[dict] | None) -> None:
+    """The scan's settings (``acquisition.scan``) and the channel map (``channels``, over a bench's own entries)."""
+    if scan is None:
+        return
+    meta["acquisition"]["scan"] = scan.to_dict()
+    meta["channels"] = [{**(entry or {}), **m} for m, entry in
+                        zip(chan_map, _by_channel(meta.get("channels"), scan.channels), strict=True)]
+
+
+def _by_channel(entries, channels) -> list[dict | None]:
+    """A source's per-channel sidecar entries (``channels`` of a virtual bench) lined up with ``channels``."""
+    found = {e.get("channel"): e for e in entries or () if isinstance(e, dict)}
+    return [found.get(k) for k in channels]

@@ -28,7 +28,7 @@ from typing import Callable, Iterator
 from fsrlab.acquisition.messages import Measurement
 from fsrlab.acquisition.protocol import SEQ_MODULO, UINT32_MODULO, Frame
 
-__all__ = ["CLOCKS", "Gap", "WindowStream", "configure", "window_row"]
+__all__ = ["CLOCKS", "Gap", "Scan", "WindowStream", "configure", "window_row"]
 
 CLOCKS = ("host", "device")
 """What a run's time axis and length count: this computer's clock, or the device's own (its ``t_ms``)."""
@@ -55,6 +55,51 @@ class Gap:
     def to_dict(self) -> dict:
         """``{"start_s", "length_s"}`` rounded to ms, as the sidecar's ``gaps`` holds them."""
         return {"start_s": round(self.start_s, 3), "length_s": round(self.length_s, 3)}
+
+
+@dataclass(frozen=True)
+class Scan:
+    """What a multi-channel recording asks of a version-3 meter (docs/protocol.md, ``SCAN``).
+
+    Attributes
+    ----------
+    channels : tuple of int
+        Multiplexer channels, each 0..7, in scan order (ascending).
+    dwell_ms : int
+        Counting time per channel (used when more than one channel is scanned). [ms]
+    settle : int
+        Periods discarded after the first edge that follows a switch.
+    """
+
+    channels: tuple[int, ...]
+    dwell_ms: int = 3
+    settle: int = 2
+
+    def __post_init__(self) -> None:
+        from fsrlab.acquisition.protocol import (
+            DWELL_MS_MAX, DWELL_MS_MIN, SETTLE_MAX, channel_mask, mask_channels,
+        )
+        from fsrlab.errors import ParameterError
+
+        object.__setattr__(self, "channels", mask_channels(channel_mask(self.channels)))
+        if isinstance(self.dwell_ms, bool) or not isinstance(self.dwell_ms, int) \
+                or not DWELL_MS_MIN <= self.dwell_ms <= DWELL_MS_MAX:
+            raise ParameterError(f"must be an integer {DWELL_MS_MIN}..{DWELL_MS_MAX} ms, got {self.dwell_ms!r}",
+                                 parameter="dwell_ms")
+        if isinstance(self.settle, bool) or not isinstance(self.settle, int) or not 0 <= self.settle <= SETTLE_MAX:
+            raise ParameterError(f"must be an integer 0..{SETTLE_MAX} periods, got {self.settle!r}",
+                                 parameter="settle")
+
+    @property
+    def mask(self) -> int:
+        """The ``SCAN`` mask."""
+        from fsrlab.acquisition.protocol import channel_mask
+
+        return channel_mask(self.channels)
+
+    def to_dict(self) -> dict:
+        """``{"channels", "dwell_ms", "settle"}`` as the sidecar's ``acquisition.scan`` keeps it."""
+        return {"channels": list(self.channels), "dwell_ms": self.dwell_ms, "settle": self.settle}
 
 
 def window_row(m: Measurement, time_s: float, has_ref: bool, loadcell=None, area_m2: float | None = None,
@@ -95,8 +140,9 @@ def window_row(m: Measurement, time_s: float, has_ref: bool, loadcell=None, area
     return row
 
 
-def configure(link, window_ms: int, range_: int) -> int:
-    """Send the window and the range, then START; return the sequence number the first window will carry.
+def configure(link, window_ms: int, range_: int, scan: Scan | None = None) -> int:
+    """Send the window and the range (and a scan's mask, dwell, settle), then START; return the sequence
+    number the first window will carry.
 
     Parameters
     ----------
@@ -106,11 +152,17 @@ def configure(link, window_ms: int, range_: int) -> int:
         Measurement window. [ms]
     range_ : int
         C_off switch, 0 or 1.
+    scan : Scan, optional
+        The channels to scan (a version-3 meter).
 
     Returns
     -------
     int
     """
+    if scan is not None:
+        link.command("SCAN", scan.mask)
+        link.command("DWELL", scan.dwell_ms)
+        link.command("SETTLE", scan.settle)
     link.set_window(window_ms)
     link.set_range(range_)
     return (link.start().seq + 1) % SEQ_MODULO
@@ -149,6 +201,9 @@ class WindowStream:
     end_s : float, optional
         On the ``device`` clock: the run's length; the first window whose ``time_s`` reaches it is the
         last one yielded. [s]
+    scan : Scan, optional
+        Channels scanned (sent again after a reset); the rows then carry ``channel`` and ``scan``
+        (the scan number unwrapped past 65535, counted from the run's first).
 
     Attributes
     ----------
@@ -171,7 +226,7 @@ class WindowStream:
                  area_m2: float | None = None, reference: Callable[[Frame], float] | None = None,
                  on_event: Callable[[str], None] | None = None, on_gap: Callable[[float], None] | None = None,
                  on_reset: Callable[[], None] | None = None, clock: str = "host",
-                 end_s: float | None = None) -> None:
+                 end_s: float | None = None, scan: Scan | None = None) -> None:
         if clock not in CLOCKS:
             raise ValueError(f"clock must be host or device, got {clock!r}")
         if end_s is not None and clock != "device":
@@ -190,10 +245,13 @@ class WindowStream:
         self._anchor_ms: int | None = None  # device t_ms at START (start of the first window after it)
         self._offset_s = 0.0
         self._cell_ok: int | None = None  # the HX711's last state (ref_ok), to say when it goes or comes back
+        self.scan = scan
+        self._scan_last: int | None = None  # the device's last scan number (mod 65536)
+        self._scan_total = -1  # the run's scan count of that frame
 
     def configure(self) -> int:
         """Send the settings in force and START; return the first window's sequence number."""
-        return configure(self.link, self.window_ms, self.range)
+        return configure(self.link, self.window_ms, self.range, self.scan)
 
     def begin(self, t_start: float | None = None) -> None:
         """Start the time axis and the silence clock (at START; default now)."""
@@ -257,6 +315,7 @@ class WindowStream:
             if frame.reset:
                 restart = True
                 self._anchor_ms = None
+                self._scan_last = None
             if frame.kind != "M":
                 continue
             m = Measurement.from_frame(frame)
@@ -271,6 +330,8 @@ class WindowStream:
             self.run_s = self._offset_s + ((m.t_ms - self._anchor_ms) % UINT32_MODULO) / 1000.0
             row = window_row(m, self.run_s, self.has_ref, self.loadcell, self.area_m2,
                              self.reference(frame) if self.reference is not None else None)
+            if self.scan is not None:
+                row["channel"], row["scan"] = m.channel, self._unwrap_scan(m.scan)
             if self.has_ref and m.ref_ok != self._cell_ok:
                 if m.ref_ok == 0:
                     self._event(f"no load cell: the meter reports no HX711 (ref_ok 0) from {row['time_s']:.1f} s "
@@ -283,3 +344,15 @@ class WindowStream:
             self.configure()
             if self.on_reset is not None:
                 self.on_reset()
+
+    def _unwrap_scan(self, scan: int | None) -> int:
+        """The run's scan number: the device's counts on (mod 65536), a restart of it (reset) moves on by one."""
+        if scan is None:
+            return 0
+        if self._scan_last is None:
+            self._scan_total += 1
+        else:
+            d = (scan - self._scan_last) % SEQ_MODULO
+            self._scan_total += d if d < SEQ_MODULO // 2 else 1
+        self._scan_last = scan
+        return self._scan_total

@@ -20,6 +20,69 @@ from fsrlab.cli.options import (
     window_ms_option,
 )
 
+CHANNELS_HELP = ("Multiplexer channels to scan (a protocol-3 meter with a CD74HC4051, docs/multiplexing.md): 0-7, "
+                 "0,2,5, 1-3,6. The run is then one row per channel reading (time_s, channel, scan, frequency_hz, ...). "
+                 "With --virtual: a bench of sensors, channel k under the profile at peak x (k+1)/(highest channel+1).")
+DWELL_HELP = "Counting time per channel in a scan [s], 1ms to 60s in whole milliseconds (default 3ms)."
+SETTLE_HELP = "Periods discarded after the first edge that follows a switch of channel [1], 0..100 (default 2)."
+
+
+def scan_options(channels: str | None, dwell: float, settle: int, channel_map: Path | None = None):
+    """The ``Scan`` and channel map of ``--channels``, ``--dwell``, ``--settle``, ``--channel-map`` (None without channels)."""
+    if channels is None:
+        for given, name in ((dwell is not None, "--dwell"), (settle is not None, "--settle"),
+                            (channel_map is not None, "--channel-map")):
+            if given:
+                fail("needs --channels (it sets how the meter scans them)", name)
+        return None, None
+    from fsrlab.acquisition.protocol import parse_channels
+    from fsrlab.acquisition.stream import Scan
+    from fsrlab.errors import ParameterError
+
+    names = {"channels": "--channels", "dwell_ms": "--dwell", "settle": "--settle"}
+    dwell_ms = 3 if dwell is None else round(dwell * 1000.0, 6)
+    if dwell_ms != int(dwell_ms):
+        fail(f"the meter counts whole milliseconds, got {dwell_ms:g} ms", "--dwell")
+    try:
+        scan = Scan(parse_channels(channels), int(dwell_ms), 2 if settle is None else settle)
+    except ParameterError as err:
+        fail(err.reason, names.get(err.parameter, "--channels"))
+    entries = None
+    if channel_map is not None:
+        import json
+
+        try:
+            entries = json.loads(channel_map.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:
+            fail(f"cannot read {channel_map}: {exc}", "--channel-map")
+        from fsrlab.acquisition.recorder import channel_map as check_map
+
+        try:
+            check_map(scan.channels, entries)
+        except ParameterError as err:
+            fail(err.reason, "--channel-map")
+    return scan, entries
+
+
+def mux_source(channels: int, profile: str, peak: float, period: float, c_off: float, sensor_model=None,
+               area_m2: float | None = None):
+    """A virtual bench of ``channels`` sensors behind a CD74HC4051, channel k under the profile at peak·(k+1)/channels."""
+    from fsrlab.physics.sensor import VirtualFSR
+    from fsrlab.virtual.sources import VIRTUAL_CIRCUIT, MuxSource, StressProfile
+
+    prof = StressProfile(kind=profile, peak_pa=peak, period_s=period)
+
+    def factory(k: int):
+        if sensor_model is not None:
+            return sensor_model
+        return VirtualFSR() if area_m2 is None else VirtualFSR(area_m2=area_m2)
+
+    try:
+        return MuxSource.scaled(channels, prof, factory, VIRTUAL_CIRCUIT.replace(c_off_farad=c_off))
+    except ValueError as err:
+        fail(str(err), "--peak")
+
+
 @app.command("acquire")
 @meter_circuit_options(virtual_c_off=True)
 def acquire(
@@ -46,6 +109,10 @@ def acquire(
     hx711_rate: int = typer.Option(80, "--hx711-rate", help=RATE_HELP),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No live display (notices of gaps still go to stderr)."),
     json_out: bool = typer.Option(False, "--json", help='Print {"frames", "dropped", "duration_s", "file"} as JSON, "no_reference" (windows without a load-cell conversion) for a protocol-2 device, and "run_s" (the run\'s length on the device\'s clock) with --speed max.'),
+    channels: str = typer.Option(None, "--channels", metavar="LIST", help=CHANNELS_HELP),
+    dwell: float = typer.Option(None, "--dwell", parser=seconds, metavar="TIME", help=DWELL_HELP),
+    settle: int = typer.Option(None, "--settle", help=SETTLE_HELP),
+    channel_map: Path = typer.Option(None, "--channel-map", metavar="MAP.json", help="The sensors' ids and positions for the sidecar: a JSON list of {\"channel\", \"sensor_id\", \"x_m\", \"y_m\"} [m] (default fsr<k>, no position)."),
     meter: MeterCircuit = MeterCircuit(),
 ) -> None:
     """Record measurement windows (frequency, duty cycle, A0 voltage) from an fsrlab meter into a run file.
@@ -64,6 +131,7 @@ def acquire(
     \b
       fsrlab acquire --virtual --duration 10s --window 20ms --out bench.csv
       fsrlab acquire --port auto --r 10k --c-off 1n --diode --duration 1.5min --range 1 --out bench.csv
+      fsrlab acquire --port /dev/pts/3 --channels 0-7 --duration 5s --out run.csv
     """
     from fsrlab.acquisition.recorder import record, result_dict
     from fsrlab.acquisition.serial_link import SerialLink
@@ -84,6 +152,7 @@ def acquire(
         if not 0 <= v <= 1:
             fail(f"must be in 0..1, got {v:g}", name)
     check_rate(hx711_rate)
+    scan, map_entries = scan_options(channels, dwell, settle, channel_map)
     circuits = meter.sidecar(range_, "--virtual" if virtual else None)
     sensor_meta, area_m2 = sensor_area(sensor, area)
     cal = loadcell_option(loadcell)
@@ -96,6 +165,11 @@ def acquire(
         check_virtual(profile, peak, period, c_off, corrupt, drop, seed)
         device, source = make_virtual_device(profile, peak, period, c_off, seed, corrupt, drop, not no_loadcell,
                                              hx711_rate, area_m2, speed=speed)
+        if scan is not None:
+            from fsrlab.virtual.device import VirtualDevice
+
+            source = mux_source(max(scan.channels) + 1, profile, peak, period, c_off, area_m2=area_m2)
+            device = VirtualDevice(source, faults=device.faults, seed=seed, load_cell=device.load_cell, speed=speed)
         if cal is None and device.load_cell is not None:
             cal = device.load_cell.calibration()
         port = device.open()
@@ -117,14 +191,15 @@ def acquire(
             result = record(link, out, duration, window_ms=window_ms, range_=range_, metadata=metadata,
                             reference=reference, on_status=view.update, on_event=view.notice, stall_s=stall,
                             health=health, overwrite=overwrite, loadcell=cal, area_m2=area_m2,
-                            clock="device" if speed == "max" else "host")
+                            clock="device" if speed == "max" else "host", scan=scan, channels_meta=map_entries)
     finally:
         if device is not None:
             device.close()
     if json_out:
         emit_json(result_dict(result))
     else:
-        typer.echo(f"{out}: {result.frames} windows, {result.dropped} dropped, {result.duration_s:.1f} s "
+        typer.echo(f"{out}: {result.frames} {'windows' if scan is None else f'readings of {len(scan.channels)} channels'}, "
+                   f"{result.dropped} dropped, {result.duration_s:.1f} s "
                    f"({result.stats.bad_frames} corrupt lines, {result.stats.resets} device resets, "
                    f"{len(result.gaps)} gaps)"
                    + (f"; {result.no_reference} windows without a load-cell reading" if result.reference else ""))
@@ -150,6 +225,7 @@ def virtual_device(
     seed: int = typer.Option(None, "--seed", help=SEED_HELP),
     corrupt: float = typer.Option("0", "--corrupt", parser=fraction, metavar="FRACTION", help=CORRUPT_HELP),
     drop: float = typer.Option("0", "--drop", parser=fraction, metavar="FRACTION", help=DROP_HELP),
+    channels: int = typer.Option(None, "--channels", metavar="N", help="Sensors behind a multiplexer, 1..8 [1]: channel k under the profile at peak x (k+1)/N (scan them with acquire --channels)."),
     json_out: bool = typer.Option(False, "--json", help='Print {"port": PATH} as JSON (one line) instead of the bare path.'),
 ) -> None:
     """Emulate an fsrlab meter on a pseudo-terminal; prints its path (open it with --port PATH or any serial tool).
@@ -161,13 +237,21 @@ def virtual_device(
     \b
       fsrlab virtual-device --duration 10min --profile sine --peak 80k --period 2s
       fsrlab virtual-device --corrupt 1% --drop 0.5% --seed 1
+      fsrlab virtual-device --channels 8
     """
     import json
 
     if duration is not None and not duration > 0:
         fail(f"must be > 0 s, got {duration:g} s", "--duration")
     check_virtual(profile, peak, period, c_off, corrupt, drop, seed)
+    if channels is not None and not 1 <= channels <= 8:
+        fail(f"must be 1..8, got {channels}", "--channels")
     device, _ = make_virtual_device(profile, peak, period, c_off, seed, corrupt, drop)
+    if channels is not None:
+        from fsrlab.virtual.device import VirtualDevice
+
+        device = VirtualDevice(mux_source(channels, profile, peak, period, c_off), faults=device.faults, seed=seed,
+                               load_cell=device.load_cell)
     path = device.open(thread=False)
     typer.echo(json.dumps({"port": path}) if json_out else path)
     sys.stdout.flush()

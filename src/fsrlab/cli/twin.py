@@ -26,6 +26,7 @@ def twin(
     seed: int = typer.Option(0, "--seed", help="Random seed of the load cell's noise (an integer)."),
     no_loadcell: bool = typer.Option(False, "--no-loadcell", help="No HX711 on D2/D3 (ref_ok 0: reference columns empty)."),
     hx711_rate: int = typer.Option(80, "--hx711-rate", help=RATE_HELP.replace("Virtual device: t", "T")),
+    channels: int = typer.Option(None, "--channels", metavar="N", help="Sensors behind a CD74HC4051 multiplexer on the timing node, 1..8 [1]: channel k under the profile at peak x (k+1)/N; the firmware's select lines D5..D7 pick the one the 555 sees (scan them with acquire --channels)."),
     json_out: bool = typer.Option(False, "--json", help='Print {"port": PATH} as JSON (one line) instead of the bare path.'),
 ) -> None:
     """Run the digital twin: the meter's real firmware in simavr on a pty; prints its path first.
@@ -44,6 +45,7 @@ def twin(
     \b
       fsrlab twin --profile triangle --peak 50k --period 4s
       fsrlab twin --speed max --duration 30s --sensor interlink-402 --json
+      fsrlab twin --channels 8 --profile triangle --speed max --duration 5s
     """
     import json
 
@@ -54,6 +56,8 @@ def twin(
     if seed < 0:
         fail(f"must be an integer >= 0, got {seed}", "--seed")
     check_rate(hx711_rate)
+    if channels is not None and not 1 <= channels <= 8:
+        fail(f"must be 1..8, got {channels}", "--channels")
     check_virtual(profile, peak, period, c_off, 0.0, 0.0, None)
     model, _ = virtual_sensor_option(sensor)
     area_m2 = None if model is not None else sensor_area(sensor, None)[1]
@@ -65,6 +69,10 @@ def twin(
         fail(reason)
     _, source = make_virtual_device(profile, peak, period, c_off, None, 0.0, 0.0, load_cell=False, area_m2=area_m2,
                                 sensor_model=model)
+    if channels is not None:
+        from fsrlab.cli.acquisition import mux_source
+
+        source = mux_source(channels, profile, peak, period, c_off, model, area_m2)
     from fsrlab.acquisition.loadcell import LoadCellModel
 
     cell = None if no_loadcell else LoadCellModel(rate_sps=hx711_rate)

@@ -2,8 +2,8 @@
 
 :class:`VirtualDevice` opens a pseudo-terminal pair (``os.openpty``, raw mode), keeps the master
 side and offers the slave's path (``/dev/pts/N``) to any program that opens serial ports. It answers
-``ID``/``START``/``STOP``/``WINDOW``/``RANGE`` as docs/protocol.md prescribes and, while started,
-sends one ``M`` frame per window: in real time (``speed="realtime"``), or as fast as the host reads
+``ID``/``START``/``STOP``/``WINDOW``/``RANGE``/``SCAN``/``DWELL``/``SETTLE`` as docs/protocol.md prescribes
+and, while started, sends one ``M`` frame per window (per channel reading in a scan): in real time (``speed="realtime"``), or as fast as the host reads
 them (``speed="max"``: the device's clock is simulated and moves one window at a time, each frame
 written once the host has read all but a few of the ones before, so nothing is lost and the
 windows' times are the same simulated time axis).
@@ -21,7 +21,11 @@ noise, the 10-bit A0 conversion. The load cell under the sensor and its HX711
 (:mod:`fsrlab.acquisition.loadcell`, :class:`~fsrlab.acquisition.loadcell.LoadCellModel`) see the
 applied force, stress × the sensor's area, and fill the ``M`` frame's reference (protocol version 2:
 ``ref_ok``, ``ref_n``, ``ref_mean``) with their own conversion times, noise and lag; ``load_cell=None``
-emulates a meter without an HX711 (``ref_ok`` 0). Optional faults (:class:`Faults`) corrupt, drop or add bytes,
+emulates a meter without an HX711 (``ref_ok`` 0). With a :class:`~fsrlab.virtual.sources.MuxSource` the
+device has a multiplexer: a scan of more than one channel measures each for ``DWELL`` ms after the time the
+firmware spends settling (the first edge after the switch and ``SETTLE`` periods), an open channel
+gives readings without periods; A0 and the load cell follow the source's reference channel.
+A plain source is channel 0, the other channels are open. Optional faults (:class:`Faults`) corrupt, drop or add bytes,
 reset the device or unplug it, for tests.
 
 References
@@ -48,8 +52,8 @@ import numpy as np
 from fsrlab.acquisition.loadcell import LoadCellModel, window_reference
 from fsrlab.virtual.meter import MeterState, measure
 from fsrlab.acquisition.protocol import (
-    DEVICE_NAME, MAX_COMMAND, PROTOCOL_VERSION, SEQ_MODULO, UINT32_MODULO, WINDOW_MS_DEFAULT, CommandError,
-    encode_frame, parse_command
+    DEVICE_NAME, DWELL_MS_DEFAULT, MAX_COMMAND, PROTOCOL_VERSION, SEQ_MODULO, SETTLE_DEFAULT, UINT32_MODULO,
+    WINDOW_MS_DEFAULT, CommandError, encode_frame, mask_channels, parse_command
 )
 from fsrlab.hardware import F_CPU
 from fsrlab.physics.sensor import A201_AREA_M2
@@ -61,7 +65,7 @@ __all__ = ["FIRMWARE_VERSION", "SPEEDS", "Faults", "VirtualDevice"]
 SPEEDS = ("realtime", "max")
 """Pacing of the device's clock: ``realtime`` (the wall clock) or ``max`` (simulated, as fast as the host reads)."""
 
-FIRMWARE_VERSION = "1.0.0-virtual"
+FIRMWARE_VERSION = "3.0.0-virtual"
 """Firmware version the virtual device reports in its ``ID`` frame."""
 
 
@@ -115,6 +119,17 @@ class _State:
     resets_done: int = 0
     line: bytearray = field(default_factory=bytearray)
     overflow: bool = False
+    scan_mask: int = 1
+    dwell_ms: int = DWELL_MS_DEFAULT
+    settle: int = SETTLE_DEFAULT
+    channel: int = 0
+    scan_no: int = 0
+    scan_set: bool = False  # a SCAN was accepted since boot: M frames carry channel and scan
+
+    @property
+    def scanning(self) -> bool:
+        """More than one channel in the mask: readings of DWELL ms with a settling time between them."""
+        return self.scan_mask & (self.scan_mask - 1) != 0
 
 
 class VirtualDevice:
@@ -355,20 +370,78 @@ class VirtualDevice:
             self._send_frame("ID", (DEVICE_NAME, FIRMWARE_VERSION, PROTOCOL_VERSION, F_CPU), faults=False)
         elif name == "START" and not st.started:
             st.started = True
-            st.window_start = st.start_time = self._now()
-            st.current_ms = st.window_ms
-            st.meter = MeterState.started(self._rng)
+            st.start_time = self._now()
+            st.scan_no = 0
+            self._restart_measuring(st.start_time)
         elif name == "STOP":
             st.started = False
+        elif name == "SCAN":
+            st.scan_mask = int(value)
+            st.scan_set = True
+            st.channel = mask_channels(st.scan_mask)[0]
+            if st.started:  # as the firmware: the scan restarts from the mask's first channel
+                self._restart_measuring(self._now())
+        elif name == "DWELL":
+            st.dwell_ms = int(value)
+        elif name == "SETTLE":
+            st.settle = int(value)
         elif name == "WINDOW":
             st.window_ms = int(value)
-            if st.started:  # as the firmware: the window in progress restarts with the new length
+            if st.started and not st.scanning:  # as the firmware: the window in progress restarts
                 st.window_start = self._now()
                 st.current_ms = st.window_ms
                 st.meter = st.meter.restarted()
         elif name == "RANGE":
             st.range_ = int(value)
         self._send_frame("ACK", (name,) if value is None else (name, value), faults=False)
+
+    def _restart_measuring(self, now: float) -> None:
+        """START, or a new mask while started: the first channel of the mask, a new window or reading."""
+        st = self._st
+        st.channel = mask_channels(st.scan_mask)[0]
+        st.meter = MeterState.started(self._rng)
+        if st.scanning:
+            st.window_start = now + self._settle_s(now)
+            st.current_ms = st.dwell_ms
+        else:
+            st.window_start = now
+            st.current_ms = st.window_ms
+
+    def _channel_signal(self, t0: float, t1: float) -> Signal:
+        """The selected channel's signal (a plain source is channel 0; the others are open)."""
+        st = self._st
+        if hasattr(self.source, "channel"):
+            return self.source.window(t0, t1, st.range_, channel=st.channel)
+        if st.channel == 0:
+            return self.source.window(t0, t1, st.range_)
+        return Signal(math.nan, math.nan, 0.0, math.nan)
+
+    def _settle_s(self, now: float) -> float:
+        """Time the firmware spends after a switch before it counts: the first edge and SETTLE periods;
+        an open channel waits one dwell and the 2 ms after which the firmware stops waiting for an edge. [s]"""
+        st = self._st
+        t = now - st.start_time
+        f = self._channel_signal(t, t + 1e-3).frequency_hz
+        if not (math.isfinite(f) and f > 0):
+            return st.dwell_ms / 1000.0 + 0.004
+        return (st.settle + 1.0) / f
+
+    def _next_reading(self, t_end: float) -> None:
+        """After a window: the next one follows at once; in a scan, the next channel after its settling."""
+        st = self._st
+        if not st.scanning:
+            st.window_start = t_end
+            st.current_ms = st.window_ms
+            st.scan_no = (st.scan_no + 1) % SEQ_MODULO
+            return
+        chans = mask_channels(st.scan_mask)
+        later = [c for c in chans if c > st.channel]
+        if not later:
+            st.scan_no = (st.scan_no + 1) % SEQ_MODULO
+        st.channel = later[0] if later else chans[0]
+        st.meter = st.meter.restarted()
+        st.window_start = t_end + self._settle_s(t_end)
+        st.current_ms = st.dwell_ms
 
     def _feed_commands(self, data: bytes) -> None:
         st = self._st
@@ -390,7 +463,10 @@ class VirtualDevice:
         """Close the current window at device time ``t_end`` and send its ``M`` frame."""
         st = self._st
         t0, t1 = st.window_start, t_end
-        sig = self.source.window(t0 - st.start_time, t1 - st.start_time, st.range_)
+        sig = self._channel_signal(t0 - st.start_time, t1 - st.start_time)
+        if hasattr(self.source, "channel"):  # A0 and the load cell: the reference channel's
+            ref_sig = self.source.window(t0 - st.start_time, t1 - st.start_time, st.range_)
+            sig = Signal(sig.frequency_hz, sig.duty_cycle, ref_sig.voltage_v, sig.stress_pa)
         m, st.meter = measure(sig.frequency_hz, sig.duty_cycle, sig.voltage_v, t1 - t0, state=st.meter,
                               rng=self._rng, start_s=t0, frequency_noise=self.frequency_noise,
                               jitter_s=self.jitter_s, adc_noise_v=self.adc_noise_v)
@@ -400,6 +476,8 @@ class VirtualDevice:
         t_ms = round(t1 * 1000) if self.speed == "max" else int(t1 * 1000)  # (max: whole ms already)
         fields = (t_ms % UINT32_MODULO, st.current_ms, int(m.periods[0]), min(int(m.sum_period_ticks[0]), u32),
                   min(int(m.sum_high_ticks[0]), u32), 0, int(m.adc[0]), st.range_, ref.ref_ok, ref.ref_n, ref.ref_mean)
+        if st.scan_set:  # as the firmware: version 2's fields until a SCAN
+            fields += (st.channel, st.scan_no)
         fault = self.faults
         st.m_frames += 1
         if fault.reset_after is not None and st.m_frames > fault.reset_after and st.resets_done == 0:
@@ -437,8 +515,7 @@ class VirtualDevice:
                         self._measure(t_end)
                         st = self._st
                         if st.started:
-                            st.window_start = t_end
-                            st.current_ms = st.window_ms
+                            self._next_reading(t_end)
                         if self.speed != "max":
                             continue
                     wait = min(wait, max(t_end - now, 0.0))

@@ -24,8 +24,8 @@ import numpy as np
 from fsrlab.circuits.circuit import PAPER_CIRCUIT, PAPER_OPAMP, LM555Circuit, OpAmpReadout
 from fsrlab.physics.sensor import A201_AREA_M2
 
-__all__ = ["Signal", "SignalSource", "ConstantSource", "StressProfile", "PhysicsSource", "sensor_metadata",
-           "PROFILE_KINDS", "VIRTUAL_CIRCUIT"]
+__all__ = ["Signal", "SignalSource", "ConstantSource", "StressProfile", "PhysicsSource", "MuxSource",
+           "sensor_metadata", "PROFILE_KINDS", "VIRTUAL_CIRCUIT"]
 
 PROFILE_KINDS = ("triangle", "sine", "steps", "hold")
 """Shapes of :class:`StressProfile`."""
@@ -188,6 +188,10 @@ class PhysicsSource:
         (:attr:`OpAmpReadout.fsr_voltage_v`).
     dt_s : float
         Time step on which the stress history is sampled. [s]
+    mux : Multiplexer, optional
+        The sensor sits behind a multiplexer's switch (:mod:`fsrlab.circuits.mux`): its R_on and node
+        capacitance enter the timing network (:attr:`circuit` becomes the 555 with ``R + R_on``, and
+        :meth:`parts` gives ``R_FSR + R_on``, ``C_FSR + C_node``); the sidecar keeps the circuit as given.
 
     Notes
     -----
@@ -197,7 +201,7 @@ class PhysicsSource:
     """
 
     def __init__(self, profile: StressProfile | None = None, sensor=None, circuit: LM555Circuit = VIRTUAL_CIRCUIT,
-                 opamp: OpAmpReadout = PAPER_OPAMP, dt_s: float = 0.005) -> None:
+                 opamp: OpAmpReadout = PAPER_OPAMP, dt_s: float = 0.005, mux=None) -> None:
         from fsrlab.physics.sensor import VirtualFSR
 
         if not dt_s > 0:
@@ -207,7 +211,10 @@ class PhysicsSource:
                 raise ValueError(f"{name} must be an {cls.__name__}, got {type(obj).__name__}")
         self.profile = profile or StressProfile()
         self.sensor = sensor if sensor is not None else VirtualFSR()
-        self.circuit, self.opamp = circuit, opamp
+        self.mux = mux
+        self.given_circuit = circuit
+        self.circuit = circuit if mux is None else mux.timing_circuit(circuit)
+        self.opamp = opamp
         period = self.profile.period_s
         self.dt_s = min(dt_s, period / 20)
         self._t = np.arange(0.0, 2 * period + self.dt_s, self.dt_s)
@@ -216,13 +223,20 @@ class PhysicsSource:
         self._stress = np.asarray(resp.stress_pa, dtype=float)
         self._r = np.asarray(resp.r_fsr_ohm, dtype=float)
         self._c = np.asarray(resp.c_fsr_farad, dtype=float)
+        if mux is not None:
+            from fsrlab.circuits.mux import mux_parts
+
+            self._r, self._c = mux_parts(self._r, self._c, mux)
         r_opamp = self.sensor.respond(stress, voltage_v=opamp.fsr_voltage_v).r_fsr_ohm
         self._v = np.asarray(opamp.output_v(r_opamp), dtype=float)  # Eq. (38)
 
     def metadata(self) -> dict:
         """Sidecar content of a run recorded from this source: ``circuit``, ``opamp``, ``sensor``."""
-        return {"circuit": self.circuit.to_dict(), "opamp": self.opamp.to_dict(),
+        meta = {"circuit": self.given_circuit.to_dict(), "opamp": self.opamp.to_dict(),
                 "sensor": sensor_metadata(self.sensor)}
+        if self.mux is not None:
+            meta["mux"] = self.mux.to_dict()
+        return meta
 
     def force_n(self, t_s) -> np.ndarray:
         """Applied force at times ``t_s`` since START [s]: the profile's stress × the sensor's area. [N]"""
@@ -268,3 +282,119 @@ class PhysicsSource:
             f = 1.0 / float(np.mean(period))
             duty = float(np.mean(osc.tau_high_s) / np.mean(period))
         return Signal(f, duty, float(np.mean(self._v[idx])), float(np.mean(self._stress[idx])))
+
+
+class MuxSource:
+    """Several sensors behind the meter's multiplexer, one :class:`PhysicsSource` per channel.
+
+    Parameters
+    ----------
+    sources : sequence of PhysicsSource or None
+        Channel k's source (built with the same ``mux`` and circuit); None: an open channel (no
+        sensor: the 555 gives no edges while it is selected). At most 8.
+    reference_channel : int
+        The channel whose sensor sits on the load cell and on A0's op-amp readout (the reference is
+        single-channel).
+
+    Notes
+    -----
+    Every sensor follows its own profile whether or not it is selected (its hysteresis memory
+    included). :meth:`scaled` builds the usual test bench: channel k under the profile at
+    ``peak × (k + 1) / n``.
+    """
+
+    def __init__(self, sources, reference_channel: int = 0) -> None:
+        from fsrlab.errors import ParameterError
+
+        self.sources = tuple(sources)
+        if not 1 <= len(self.sources) <= 8:
+            raise ParameterError(f"1..8 channels, got {len(self.sources)}", parameter="sources")
+        live = [s for s in self.sources if s is not None]
+        if not live:
+            raise ParameterError("at least one channel needs a sensor", parameter="sources")
+        if any(s.circuit != live[0].circuit for s in live):
+            raise ParameterError("every channel shares the meter's one 555 circuit", parameter="sources")
+        if not 0 <= reference_channel < len(self.sources) or self.sources[reference_channel] is None:
+            raise ParameterError(f"{reference_channel!r} is not a channel with a sensor",
+                                 parameter="reference_channel")
+        self.reference_channel = reference_channel
+        ref = self.sources[reference_channel]
+        self.circuit, self.opamp, self.mux = ref.circuit, ref.opamp, ref.mux
+        self.dt_s = min(s.dt_s for s in live)
+        self.profile = ref.profile
+        self.sensor = ref.sensor
+
+    @classmethod
+    def scaled(cls, channels: int, profile: StressProfile | None = None, sensor_factory=None,
+               circuit: LM555Circuit = VIRTUAL_CIRCUIT, mux=None, dt_s: float = 0.005) -> "MuxSource":
+        """``channels`` sensors, channel k under ``profile`` with its peak scaled by (k + 1)/channels.
+
+        Parameters
+        ----------
+        channels : int
+            1..8.
+        profile : StressProfile, optional
+            The full-scale profile (default ``StressProfile()``).
+        sensor_factory : callable, optional
+            ``sensor_factory(k)`` → channel k's virtual sensor (default a ``VirtualFSR()`` each).
+        circuit : LM555Circuit
+            The meter's 555.
+        mux : Multiplexer, optional
+            Default the CD74HC4051 (:data:`fsrlab.circuits.mux.CD74HC4051`).
+        dt_s : float
+            Time step of the sensors' stress histories. [s]
+        """
+        from dataclasses import replace
+
+        from fsrlab.circuits.mux import CD74HC4051
+        from fsrlab.errors import ParameterError
+
+        if isinstance(channels, bool) or not isinstance(channels, int) or not 1 <= channels <= 8:
+            raise ParameterError(f"must be an integer 1..8, got {channels!r}", parameter="channels")
+        profile = profile or StressProfile()
+        mux = mux or CD74HC4051
+        out = []
+        for k in range(channels):
+            peak = profile.base_pa + (profile.peak_pa - profile.base_pa) * (k + 1) / channels
+            sensor = sensor_factory(k) if sensor_factory is not None else None
+            out.append(PhysicsSource(replace(profile, peak_pa=peak), sensor, circuit, dt_s=dt_s, mux=mux))
+        return cls(out)
+
+    @property
+    def channels(self) -> int:
+        """Channels behind the switch (with or without a sensor)."""
+        return len(self.sources)
+
+    def channel(self, k: int):
+        """Channel k's source, or None when it is open (or beyond the channels wired)."""
+        return self.sources[k] if 0 <= k < len(self.sources) else None
+
+    def parts(self, t_s):
+        """The reference channel's parts (A0's op-amp readout): see :meth:`PhysicsSource.parts`."""
+        return self.sources[self.reference_channel].parts(t_s)
+
+    def force_n(self, t_s) -> np.ndarray:
+        """Force on the load cell: the reference channel's. [N]"""
+        return self.sources[self.reference_channel].force_n(t_s)
+
+    def window(self, t0_s: float, t1_s: float, range_: int, channel: int | None = None) -> Signal:
+        """Channel ``channel``'s signal (default the reference channel); an open channel has no frequency."""
+        src = self.channel(self.reference_channel if channel is None else channel)
+        if src is None:
+            return Signal(math.nan, math.nan, 0.0, math.nan)
+        return src.window(t0_s, t1_s, range_)
+
+    def metadata(self) -> dict:
+        """The reference channel's sidecar content, ``mux``, and ``channels``: per channel its sensor and profile."""
+        meta = self.sources[self.reference_channel].metadata()
+        chans = []
+        for k, s in enumerate(self.sources):
+            entry = {"channel": k, "sensor_id": f"fsr{k}", "open": s is None}
+            if s is not None:
+                p = s.profile
+                entry["sensor"] = sensor_metadata(s.sensor)
+                entry["profile"] = {"kind": p.kind, "peak_pa": p.peak_pa, "period_s": p.period_s, "base_pa": p.base_pa}
+            chans.append(entry)
+        meta["channels"] = chans
+        meta["reference_channel"] = self.reference_channel
+        return meta

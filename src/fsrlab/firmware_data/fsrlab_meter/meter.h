@@ -1,10 +1,10 @@
 // fsrlab meter: input-capture frequency and duty-cycle meter for the Arduino Uno (ATmega328P, 16 MHz).
-// Protocol v2: docs/protocol.md (normative); frames "$TYPE,SEQ,...*CRC\r\n".
+// Protocol v3: docs/protocol.md (normative); frames "$TYPE,SEQ,...*CRC\r\n".
 #ifndef FSRLAB_METER_H
 #define FSRLAB_METER_H
 
-#define METER_FW_VERSION "2.0.0"
-#define METER_PROTOCOL_VERSION 2
+#define METER_FW_VERSION "3.0.0"
+#define METER_PROTOCOL_VERSION 3
 
 #ifdef __cplusplus
 extern "C" {

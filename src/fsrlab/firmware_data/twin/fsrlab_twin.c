@@ -14,15 +14,17 @@
  *   'A' value=MV           A0 is MV millivolts from `cycle` on (time order)
  *   'H' value=RAW          HX711 conversions made from `cycle` on read RAW (24-bit two's complement)
  * Edges and the limit of an epoch other than the harness's current one are ignored: the epoch goes
- * up by one at every change of D4 (the C_off switch), so edges computed for the old capacitance
- * and still in the pipe never reach D8. At a change of D4 the queued edges are dropped and the run
- * waits until the caller has sent edges for the new epoch (and a new limit).
+ * up by one at every change of D4 (the C_off switch) or of D5..D7 (the multiplexer's select lines
+ * S0..S2, written together), so edges computed for the old capacitance or channel and still in the
+ * pipe never reach D8. At such a change the queued edges are dropped and the run waits until the
+ * caller has sent edges for the new epoch (and a new limit).
  * End of stdin ends the run (the caller has gone).
  *
  * Output, on stderr, one line each, starting with '#':
  *   #READY                        firmware loaded, waiting for input
  *   #T <cycle>                    progress, every 5 ms of simulated time and when waiting for edges
- *   #PD4 <cycle> <level> <epoch> <edges>   D4 changed; <edges>: edges applied to D8 so far
+ *   #SW <cycle> <d4> <channel> <epoch> <edges>   D4 or the channel (D5..D7) changed; <edges>: edges
+ *                                 applied to D8 so far
  *   #HX..., #HX_SCK               the HX711 model (hx711_model.h)
  *   #END <cycles> <edges>         at the end
  * The firmware's bytes go to the UART fd; the bytes read from it are fed to USART0, one per 87 us
@@ -82,7 +84,7 @@ static int edge_armed;
 static uint64_t edges_applied;
 static uint32_t epoch, rx_epoch;
 static uint64_t limit;                    /* confirmed: all edges before it are queued */
-static int pd4_level, pd4_changed;
+static int pd4_level, mux_channel, pd4_changed;
 
 static unsigned e_count(void) { return e_tail - e_head; }
 
@@ -186,12 +188,15 @@ static void read_uart(void) {
   }
 }
 
-/* ------------------------------------------------------------------ D4 */
-static void pd4_cb(struct avr_irq_t *irq, uint32_t value, void *param) {
-  (void)irq; (void)param;
-  int v = value ? 1 : 0;
-  if (v == pd4_level) return;
+/* ------------------------------------------------------------------ D4, D5..D7 */
+#define PORTD_DATA 0x2B /* PORTD in the data space: the whole byte is written before any pin's irq */
+static void portd_cb(struct avr_irq_t *irq, uint32_t value, void *param) {
+  (void)irq; (void)param; (void)value;
+  uint8_t port = avr->data[PORTD_DATA];
+  int v = (port >> 4) & 1, ch = (port >> 5) & 7;
+  if (v == pd4_level && ch == mux_channel) return; /* (the other pins of the same write) */
   pd4_level = v;
+  mux_channel = ch;
   epoch++;
   /* edges computed with the old capacitance: dropped; wait for the caller's new ones */
   avr_cycle_timer_cancel(avr, edge_cb, NULL);
@@ -199,7 +204,7 @@ static void pd4_cb(struct avr_irq_t *irq, uint32_t value, void *param) {
   e_tail = e_head;
   limit = avr->cycle;
   pd4_changed = 1;
-  fprintf(stderr, "#PD4 %llu %d %u %llu\n", (unsigned long long)avr->cycle, v, epoch,
+  fprintf(stderr, "#SW %llu %d %d %u %llu\n", (unsigned long long)avr->cycle, v, ch, epoch,
           (unsigned long long)edges_applied);
 }
 
@@ -319,7 +324,8 @@ int main(int argc, char **argv) {
 
   uart_in = mcu_uart(avr, uart_out_cb);
 
-  avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 4), pd4_cb, NULL);
+  for (int pin = 4; pin <= 7; pin++)
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), pin), portd_cb, NULL);
   pin_irq = avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('B'), 0);
   avr_raise_irq(pin_irq, 0);
   adc0 = avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0);

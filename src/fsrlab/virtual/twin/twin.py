@@ -90,6 +90,9 @@ class Twin:
         self.on_notice = None
         self.notices: deque[str] = deque(maxlen=100)
         self.d4_changes: list[tuple[float, int]] = []
+        self.channel_changes: deque[tuple[float, int]] = deque(maxlen=100000)
+        self.multiplexed = hasattr(self.source, "channel")
+        self._d4_level = self._channel = 0  # the firmware's boot state
         self.edges_sent = 0
         self._proc: subprocess.Popen | None = None
         self._slave: int | None = None
@@ -247,12 +250,17 @@ class Twin:
                 with self._cond:
                     self._progress = int(parts[1])
                     self._cond.notify_all()
-            elif parts[0] == "#PD4":
-                cycle, level, epoch, consumed = (int(x) for x in parts[1:5])
+            elif parts[0] == "#SW":
+                cycle, level, channel, epoch, consumed = (int(x) for x in parts[1:6])
                 with self._cond:
-                    self._events.append((cycle, level, epoch, consumed))
+                    self._events.append((cycle, level, channel, epoch, consumed))
                     self._progress = max(self._progress, cycle)
-                    self.d4_changes.append((cycle / F_CPU_HZ, level))
+                    if level != self._d4_level:
+                        self.d4_changes.append((cycle / F_CPU_HZ, level))
+                        self._d4_level = level
+                    if channel != self._channel:
+                        self.channel_changes.append((cycle / F_CPU_HZ, channel))
+                        self._channel = channel
                     self._cond.notify_all()
             elif not parts[0].startswith("#HX") and parts[0] != "#READY":
                 self._stderr_tail.append(line)
@@ -298,8 +306,9 @@ class Twin:
             target = max(progress_s + self.LOOKAHEAD_S, stream.done_s + self.CHUNK_S)
             parts = []
             if events:
-                for cycle, level, epoch, consumed in events:
-                    chunk = stream.switch(cycle / F_CPU_HZ, level, consumed, target)
+                for cycle, level, channel, epoch, consumed in events:
+                    chunk = stream.switch(cycle / F_CPU_HZ, level, consumed, target,
+                                          channel if self.multiplexed else None)
                     parts = [pack_records("P", epoch, 0)]  # earlier epochs' edges are void
                     self.edges_sent = consumed
             else:
