@@ -176,7 +176,7 @@ class SplineCurve(StaticCurve):
         from scipy.interpolate import BSpline
 
         vc = np.clip(np.asarray(v, dtype=float), self.breaks[0], self.breaks[-1])
-        b = BSpline.design_matrix(vc, self._knots, SPLINE_DEGREE).toarray()
+        b = BSpline(self._knots, np.eye(self.coef.size), SPLINE_DEGREE)(vc)  # each basis function at vc
         return np.cumsum(b[:, ::-1], axis=1)[:, ::-1][:, 1:]  # column i: the sum of basis functions i and after
 
     def lower_bounds(self):
