@@ -45,15 +45,23 @@ def loadcell(
       fsrlab loadcell tare --virtual --capacity 5kg -o lc.json
       fsrlab loadcell scale --virtual --mass 500g --cal lc.json
     """
-    from fsrlab.acquisition.loadcell_reading import NoLoadCell, read_reference
-    from fsrlab.acquisition.loadcell import LoadCellError, scale_from_readings, tare_from_readings
-    from fsrlab.acquisition.serial_link import LinkError, SerialLink
-
     action = action.strip().lower()
     if action not in ("tare", "scale"):
         fail(f"must be tare or scale, got {action!r}", "ACTION")
     if virtual == (port is not None):
         fail("give exactly one of --port PORT|auto and --virtual", "--port")
+    window_ms = _reading_options(duration, window, hx711_rate, seed)
+    tare, target = _files(action, out, cal, mass, capacity, overwrite)
+    readings = _read(action, port, virtual, mass, gravity, seed, hx711_rate, duration, window_ms, target)
+    result, warning = _calibration(action, readings, tare, mass, gravity, capacity, target)
+    result.save(target)
+    if warning:
+        print(f"fsrlab: warning: {warning}", file=sys.stderr)
+    _say(action, result, readings, target, mass, gravity, json_out)
+
+
+def _reading_options(duration: float, window: float, hx711_rate: int, seed: int | None) -> int:
+    """The window in ms; one line naming the option for a duration, rate or seed out of range."""
     if not duration > 0:
         fail(f"must be > 0 s, got {duration:g} s", "--duration")
     window_ms = window_ms_option(window)
@@ -63,7 +71,12 @@ def loadcell(
     check_rate(hx711_rate)
     if seed is not None and seed < 0:
         fail(f"must be an integer >= 0, got {seed}", "--seed")
-    tare = None
+    return window_ms
+
+
+def _files(action: str, out: Path | None, cal: Path | None, mass: float | None, capacity: float | None,
+           overwrite: bool):
+    """The tare read from --cal (scale) and the file to write, checked before the meter is read."""
     if action == "tare":
         if out is None:
             fail("tare needs the file to write, e.g. -o lc.json", "--out")
@@ -71,33 +84,39 @@ def loadcell(
             fail("--mass and --cal belong to scale (fsrlab loadcell scale --mass 500g --cal lc.json)", "--mass")
         if capacity is not None and not capacity > 0:
             fail(f"must be > 0 kg, got {capacity:g} kg", "--capacity")
-        target = checked(out, "--out", overwrite=overwrite)
-    else:
-        if cal is None:
-            fail("scale needs the tare's file, e.g. --cal lc.json", "--cal")
-        if mass is None or not mass > 0:
-            fail("scale needs the known mass > 0 on the cell, e.g. --mass 500g", "--mass")
-        if capacity is not None:
-            fail("the capacity is given at the tare (fsrlab loadcell tare --capacity 5kg)", "--capacity")
-        tare = loadcell_option(cal, "--cal", scaled=False)
-        if out is None:
-            target = cal  # the scale factor added to the tare's file, as asked
-        else:
-            from fsrlab.io.outputs import same_file
+        return None, checked(out, "--out", overwrite=overwrite)
+    if cal is None:
+        fail("scale needs the tare's file, e.g. --cal lc.json", "--cal")
+    if mass is None or not mass > 0:
+        fail("scale needs the known mass > 0 on the cell, e.g. --mass 500g", "--mass")
+    if capacity is not None:
+        fail("the capacity is given at the tare (fsrlab loadcell tare --capacity 5kg)", "--capacity")
+    tare = loadcell_option(cal, "--cal", scaled=False)
+    if out is None:
+        return tare, cal  # the scale factor added to the tare's file, as asked
+    from fsrlab.io.outputs import same_file
 
-            if same_file(out, cal):
-                fail(f"{out} is the --cal file; leave -o out to add the scale factor to it", "--out")
-            target = checked(out, "--out", overwrite=overwrite, inputs=[cal])
+    if same_file(out, cal):
+        fail(f"{out} is the --cal file; leave -o out to add the scale factor to it", "--out")
+    return tare, checked(out, "--out", overwrite=overwrite, inputs=[cal])
+
+
+def _read(action, port, virtual: bool, mass, gravity: float, seed, hx711_rate: int, duration: float, window_ms: int,
+          target: Path):
+    """The load cell's readings over ``duration`` (the virtual bench loads it itself); a link's failure ends the
+    command (no board: one line naming --port, exit 2; otherwise exit 1)."""
+    from fsrlab.acquisition.loadcell_reading import NoLoadCell, read_reference
+    from fsrlab.acquisition.serial_link import LinkError, SerialLink
 
     device = None
-    force = 0.0 if action == "tare" else mass * gravity
     if virtual:
         from fsrlab.acquisition.loadcell import LoadCellModel
-        from fsrlab.virtual.sources import ConstantSource
-        from fsrlab.virtual.device import VirtualDevice
         from fsrlab.physics.sensor import A201_AREA_M2
+        from fsrlab.virtual.device import VirtualDevice
+        from fsrlab.virtual.sources import ConstantSource
 
         # The virtual bench: the cell unloaded for a tare, the mass on it for a scale.
+        force = 0.0 if action == "tare" else mass * gravity
         device = VirtualDevice(ConstantSource(stress_pa=force / A201_AREA_M2), seed=seed,
                                load_cell=LoadCellModel(rate_sps=hx711_rate))
         port = device.open()
@@ -106,7 +125,7 @@ def loadcell(
             if not virtual:
                 what = "nothing on the load cell" if action == "tare" else f"{mass * 1e3:g} g on the load cell"
                 print(f"fsrlab: reading for {duration:g} s with {what}; keep it still", file=sys.stderr)
-            readings = read_reference(link, duration, window_ms)
+            return read_reference(link, duration, window_ms)
     except NoLoadCell as exc:
         print(f"fsrlab: {exc}", file=sys.stderr)
         raise typer.Exit(1)
@@ -121,6 +140,12 @@ def loadcell(
     finally:
         if device is not None:
             device.close()
+
+
+def _calibration(action: str, readings, tare, mass, gravity: float, capacity, target: Path):
+    """The tare or the scale from the readings, and a warning (or None); a refused one ends the command, exit 1."""
+    from fsrlab.acquisition.loadcell import LoadCellError, scale_from_readings, tare_from_readings
+
     try:
         if action == "tare":
             result, warning = tare_from_readings(readings.means, None if capacity is None else capacity * gravity), None
@@ -133,9 +158,10 @@ def loadcell(
         result.tare["capacity_kg"] = capacity
         result.tare["gravity_m_s2"] = gravity
     (result.tare if action == "tare" else result.scale)["conversions"] = readings.conversions
-    result.save(target)
-    if warning:
-        print(f"fsrlab: warning: {warning}", file=sys.stderr)
+    return result, warning
+
+
+def _say(action: str, result, readings, target: Path, mass, gravity: float, json_out: bool) -> None:
     summary = {"file": str(target), "action": action, "offset_counts": result.offset_counts,
                "scale_counts_per_n": result.scale_counts_per_n, "capacity_n": result.capacity_n,
                "windows": len(readings.means), "conversions": readings.conversions,
