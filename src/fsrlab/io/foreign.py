@@ -563,6 +563,7 @@ def import_foreign(sensor: str | os.PathLike, reference: str | os.PathLike | Non
     if ref is not None and "time" not in chosen and rate_hz is None:
         raise ForeignFormatError(f"{sens.path}: no time column found ({_header_text(sens)}); two files are aligned "
                                  "on their times: say which column is the time, or give the sample rate", role="time")
+    sens.prefetch(j for j, _ in chosen.values())  # one pass of numpy's parser for the columns used
     t = _time_of(sens, "time", chosen, time_unit, rate_hz, notes, mapping)
     columns: dict[str, np.ndarray] = {}
     out_units: dict[str, str] = {}

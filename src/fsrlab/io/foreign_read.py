@@ -223,7 +223,19 @@ class Table:
             self._numbers[j] = fast if fast is not None else self._parse_slow(j, expected)
         return self._numbers[j].copy()
 
-    def _parse_fast(self, j: int) -> np.ndarray | None:
+    def prefetch(self, columns) -> None:
+        """Read the numeric ``columns`` (0-based) with one pass of numpy's parser, for :meth:`numbers`; a column
+        the parser cannot read alone is left to :meth:`numbers`."""
+        wanted = sorted({j for j in columns if j not in self._numbers})
+        if len(wanted) > 1:
+            values = self._parse_fast(wanted)
+            if values is not None:
+                for k, j in enumerate(wanted):
+                    self._numbers[j] = values[:, k]
+
+    def _parse_fast(self, j) -> np.ndarray | None:
+        """Column ``j`` (or the columns of a list, as a 2-D array) by numpy's parser; None when it cannot read
+        every cell of them as a finite number."""
         body = self.body
         # numpy reads quotes, 5_000 and other scripts' digits otherwise than a cell's plain number: cell by cell
         if not self._plain:
@@ -232,10 +244,11 @@ class Table:
             body = [ln.replace(",", ".") for ln in body]
         try:
             values = np.loadtxt(body, delimiter=None if self.delimiter == " " else self.delimiter, usecols=j,
-                                ndmin=1, comments=None, dtype=np.float64)
+                                ndmin=1 if isinstance(j, int) else 2, comments=None, dtype=np.float64)
         except ValueError:
             return None
-        if values.shape != (self.n_rows,) or not np.isfinite(values).all():
+        shape = (self.n_rows,) if isinstance(j, int) else (self.n_rows, len(j))
+        if values.shape != shape or not np.isfinite(values).all():
             return None
         return values
 
