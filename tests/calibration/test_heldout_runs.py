@@ -200,3 +200,19 @@ def test_rail_refuses_what_cannot_be_a_full_scale(tmp_path, args, says):
     p = _volts(tmp_path / "v.csv")
     code, _, err = run_cli(["calibrate", p, "--x", "reading", *args])
     assert code == 2 and len(err.strip().splitlines()) == 1 and "--rail" in err and says in err, err
+
+
+def test_a_resistance_column_is_calibrated_in_its_conductance(tmp_path):
+    """A run whose readout is declared in ohms (the FSR's resistance behind the hand-loaded divider, a Bouc–Wen
+    film: not the engine's model) is calibrated in 1/R and its logarithm, never in the ohms themselves: the unit
+    reaches the engine (heldout.readout_variables); the same readings without a unit are tried in the readout too."""
+    run = fsr_bench_run("hand", seed=4, duration_s=40)
+    counts = np.round(run.columns["voltage_v"] / 5.0 * 1023)
+    ohms = 10e3 * (1023.0 / (counts + 0.5) - 1.0)
+    cols = {"time_s": run.columns["time_s"], "r_fsr": ohms, "force_n": run.columns["force_n"]}
+    declared = write_run(tmp_path / "ohm.csv", cols, {"units": {"time_s": "s", "r_fsr": "Ω", "force_n": "N"}})
+    plain = write_run(tmp_path / "plain.csv", cols, {"units": {"time_s": "s", "force_n": "N"}})
+    names = [c["name"] for c in calibrate_runs(declared, x="r_fsr", reference="force_n").selection.candidates]
+    assert names and all(n.startswith(("reciprocal", "log")) for n in names), names
+    names = [c["name"] for c in calibrate_runs(plain, x="r_fsr", reference="force_n").selection.candidates]
+    assert any(n.startswith("readout") for n in names), names

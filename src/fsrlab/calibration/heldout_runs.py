@@ -143,7 +143,8 @@ def _recording(run: Run, x: str, ref: str, circuit) -> tuple[Recording, str, str
     values, _ = run_readout(run, x, circuit)
     t = np.asarray(run["time_s"], dtype=float) if "time_s" in run else np.arange(run.n_rows, dtype=float)
     rec = Recording(t, np.asarray(values, dtype=float), np.asarray(run[ref], dtype=float), str(run.path))
-    return rec, run.units.get(x) or KNOWN_COLUMNS.get(x, ""), run.units.get(ref) or KNOWN_COLUMNS.get(ref, "")
+    xu = run.units.get(x) or KNOWN_COLUMNS.get(x, "") or ("F" if x == C_FSR else "")
+    return rec, xu, run.units.get(ref) or KNOWN_COLUMNS.get(ref, "")
 
 
 def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, compensate: bool = False,
@@ -156,7 +157,9 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
         Recordings of the same sensor and readout.
     x : str
         Readout column, or ``c_fsr_farad``: C_FSR decoded from ``frequency_hz`` and ``duty_cycle``
-        through the circuit of the run's sidecar (:func:`fsrlab.calibration.readout.run_readout`). [its unit]
+        through the circuit of the run's sidecar (:func:`fsrlab.calibration.readout.run_readout`). Its unit
+        and name pass to the engine: a resistance (a unit in ohms, a column named ``*_ohm``) is calibrated in
+        its conductance (:func:`fsrlab.calibration.heldout.readout_variables`). [its unit]
     reference : {"force_n", "stress_pa"}, optional
         Reference column (default: ``stress_pa`` when the runs have it, else ``force_n``).
     compensate : bool
@@ -216,7 +219,8 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
     try:
         model, sel = calibrate_recordings(recs, compensate=bool(compensate), lag=lag_rows,
                                           rail=_divider_rail(runs[0], x) if rail is None else float(rail),
-                                          between_runs=None if between_runs is None else float(between_runs))
+                                          between_runs=None if between_runs is None else float(between_runs),
+                                          unit=xu, name=x)  # a resistance is calibrated in its conductance
     except ValueError as exc:
         names = ", ".join(str(r.path) for r in runs)
         raise ValueError(f"{names}: {x} and {ref}: {exc}") from None
