@@ -67,6 +67,12 @@ def test_a_smooth_quiet_readout_is_calibrated_as_closely_as_numpys_best_polynomi
     est = np.asarray(fl.apply(cal, fl.load_run(path))[f"{reference}_estimate"], dtype=float)
     rms = float(np.sqrt(np.mean((est - truth) ** 2)))
     assert rms <= max(3 * _numpy_best(x, truth + noise, truth), 0.25 * sigma)
+    if seed == 0:  # measure/live one reading at a time equal apply, beyond the readings too
+        from stepping import assert_steps_as_batch
+
+        wider = write_run(tmp_path / "wider.csv", {"time_s": t, column: np.r_[x[:400] * 1.2, x[400:] * 0.8],
+                                                   reference: truth})
+        assert_steps_as_batch(cal, wider, reference)
 
 
 def _noisy(seed: int, n: int = 300):
