@@ -60,8 +60,7 @@ def bench(
       fsrlab bench spring --virtual --cycles 3 --period 3s --out spring.csv --report spring-report
       fsrlab bench weights --port auto --r 10k --diode --sensor flexiforce-a201 --repeat 5 --out weights.csv
     """
-    from fsrlab.bench.protocols import CreepPlan, SpringPlan, WeightsPlan, run_protocol, twin_status
-    from fsrlab.acquisition.recorder import result_dict
+    from fsrlab.bench.protocols import run_protocol, twin_status
 
     if protocol not in _PROTOCOLS:
         fail(f"must be one of {', '.join(_PROTOCOLS)}, got {protocol!r}", "PROTOCOL")
@@ -72,36 +71,7 @@ def bench(
     window_ms = window_ms_option(window)
     if seed is not None and seed < 0:
         fail(f"must be an integer >= 0, got {seed}", "--seed")
-    try:
-        if protocol == "spring":
-            if not 1 <= cycles <= 100000:
-                fail(f"must be 1 to 100000 cycles, got {cycles}", "--cycles")
-            if not peak > 0:
-                fail(f"must be > 0 Pa, got {peak:g} Pa", "--peak")
-            if not period > 2 * window_ms / 1000.0:
-                fail(f"must be longer than two windows ({2 * window_ms / 1000.0:g} s), got {period:g} s", "--period")
-            plan = SpringPlan(peak_pa=peak, cycles=cycles, period_s=period)
-        elif protocol == "weights":
-            try:
-                m = mass_list(masses_opt)
-            except typer.BadParameter as exc:
-                fail(exc.message, "--masses")
-            if not 1 <= repeat <= 1000:
-                fail(f"must be 1 to 1000, got {repeat}", "--repeat")
-            if not window_ms / 1000.0 <= settle_hold <= 3600:
-                fail(f"must be one window ({window_ms / 1000.0:g} s) to 1 h, got {settle_hold:g} s", "--settle-hold")
-            try:
-                plan = WeightsPlan(masses_kg=tuple(m), repeat=repeat)
-            except ValueError as exc:
-                fail(str(exc).replace("masses_kg", "masses"), "--masses")
-        else:
-            if not mass > 0:
-                fail(f"must be > 0 kg, got {mass:g} kg", "--mass")
-            if not 2 * window_ms / 1000.0 < hold <= 7 * 86400:
-                fail(f"must be longer than two windows and at most 7 days, got {hold:g} s", "--hold")
-            plan = CreepPlan(mass_kg=mass, hold_s=hold, before_s=min(2.0, hold / 4), after_s=min(5.0, hold / 2))
-    except ValueError as exc:
-        fail(str(exc), "--" + protocol)
+    plan = _plan(protocol, window_ms, cycles, peak, period, masses_opt, repeat, settle_hold, mass, hold)
     if twin:
         ok, reason = twin_status()
         if not ok:
@@ -123,20 +93,7 @@ def bench(
         checked(report, "--report", overwrite=overwrite, inputs=[out, loadcell], kind="dir",
                 names=("index.html", "report.json"))
     device = "virtual" if virtual else "twin" if twin else "port"
-    confirm = None
-    if device == "port":
-
-        keyboard = Keyboard()
-        confirm = keyboard.answer
-
-        def announce(text: str) -> None:
-            if "press Enter" in text:
-                keyboard.drain()  # a line typed before the question does not answer it
-            print(f"fsrlab: {text}", file=sys.stderr, flush=True)
-    else:
-        def announce(text: str) -> None:
-            if not quiet:
-                print(f"fsrlab: virtual bench: {text.split(', then press Enter')[0]}", file=sys.stderr, flush=True)
+    announce, confirm = _announcer(device, quiet)
     if device != "port" and sensor_obj is None:
         from fsrlab.bench.protocols import virtual_sensor
 
@@ -159,6 +116,66 @@ def bench(
             fail(f"the virtual sensor model has no valid response at this load ({exc}); choose a smaller one",
                  "--peak" if protocol == "spring" else "--masses" if protocol == "weights" else "--mass")
         raise
+    _finish(run, out, report, protocol, device, meter, json_out)
+
+
+def _plan(protocol: str, window_ms: int, cycles: int, peak: float, period: float, masses_opt: str, repeat: int,
+          settle_hold: float, mass: float, hold: float):
+    """The protocol's plan from its options; one line naming the option out of range."""
+    from fsrlab.bench.protocols import CreepPlan, SpringPlan, WeightsPlan
+
+    try:
+        if protocol == "spring":
+            if not 1 <= cycles <= 100000:
+                fail(f"must be 1 to 100000 cycles, got {cycles}", "--cycles")
+            if not peak > 0:
+                fail(f"must be > 0 Pa, got {peak:g} Pa", "--peak")
+            if not period > 2 * window_ms / 1000.0:
+                fail(f"must be longer than two windows ({2 * window_ms / 1000.0:g} s), got {period:g} s", "--period")
+            return SpringPlan(peak_pa=peak, cycles=cycles, period_s=period)
+        if protocol == "weights":
+            try:
+                m = mass_list(masses_opt)
+            except typer.BadParameter as exc:
+                fail(exc.message, "--masses")
+            if not 1 <= repeat <= 1000:
+                fail(f"must be 1 to 1000, got {repeat}", "--repeat")
+            if not window_ms / 1000.0 <= settle_hold <= 3600:
+                fail(f"must be one window ({window_ms / 1000.0:g} s) to 1 h, got {settle_hold:g} s", "--settle-hold")
+            try:
+                return WeightsPlan(masses_kg=tuple(m), repeat=repeat)
+            except ValueError as exc:
+                fail(str(exc).replace("masses_kg", "masses"), "--masses")
+        if not mass > 0:
+            fail(f"must be > 0 kg, got {mass:g} kg", "--mass")
+        if not 2 * window_ms / 1000.0 < hold <= 7 * 86400:
+            fail(f"must be longer than two windows and at most 7 days, got {hold:g} s", "--hold")
+        return CreepPlan(mass_kg=mass, hold_s=hold, before_s=min(2.0, hold / 4), after_s=min(5.0, hold / 2))
+    except ValueError as exc:
+        fail(str(exc), "--" + protocol)
+
+
+def _announcer(device: str, quiet: bool):
+    """How the bench says its steps (``announce``) and reads a person's answer (``confirm``; None unattended)."""
+    if device == "port":
+        keyboard = Keyboard()
+
+        def announce(text: str) -> None:
+            if "press Enter" in text:
+                keyboard.drain()  # a line typed before the question does not answer it
+            print(f"fsrlab: {text}", file=sys.stderr, flush=True)
+        return announce, keyboard.answer
+
+    def announce_virtual(text: str) -> None:
+        if not quiet:
+            print(f"fsrlab: virtual bench: {text.split(', then press Enter')[0]}", file=sys.stderr, flush=True)
+    return announce_virtual, None
+
+
+def _finish(run, out: Path, report: Path | None, protocol: str, device: str, meter: MeterCircuit, json_out: bool) -> None:
+    """The report when asked, the summary printed, and the exit code of a recording that failed or stopped short."""
+    from fsrlab.acquisition.recorder import result_dict
+
     result = run.result
     report_index = None
     if report is not None and not result.failed and result.frames:
