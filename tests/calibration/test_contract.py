@@ -132,6 +132,7 @@ def test_a_saved_calibration_gives_identical_estimates(kind, made, test_run, tmp
     a, b = cal.estimate(run), again.estimate(run)
     np.testing.assert_array_equal(a[col], b[col])
     np.testing.assert_array_equal(a[f"{cal.y_name}_uncertainty"], b[f"{cal.y_name}_uncertainty"])
+    assert again.to_dict() == json.loads(json.dumps(cal.to_dict()))  # the whole file, selection included
     if not cal.read_only:
         assert json.loads((tmp_path / "cal.json").read_text())["version"] == 2
 

@@ -212,7 +212,13 @@ def test_a_resistance_column_is_calibrated_in_its_conductance(tmp_path):
     cols = {"time_s": run.columns["time_s"], "r_fsr": ohms, "force_n": run.columns["force_n"]}
     declared = write_run(tmp_path / "ohm.csv", cols, {"units": {"time_s": "s", "r_fsr": "Ω", "force_n": "N"}})
     plain = write_run(tmp_path / "plain.csv", cols, {"units": {"time_s": "s", "force_n": "N"}})
-    names = [c["name"] for c in calibrate_runs(declared, x="r_fsr", reference="force_n").selection.candidates]
+    cal = calibrate_runs(declared, x="r_fsr", reference="force_n")
+    names = [c["name"] for c in cal.selection.candidates]
     assert names and all(n.startswith(("reciprocal", "log")) for n in names), names
+    # the file keeps which variables were tried and why, and the command line says it
+    again = load_calibration(save_calibration(cal, tmp_path / "cal.json"))
+    assert again.selection.readout == cal.selection.readout and "resistance" in cal.selection.readout["why"]
+    code, out, err = run_cli(["calibrate", declared, "--x", "r_fsr", "--reference", "force_n", "--json"])
+    assert code == 0 and json.loads(out)["readout_variables"]["variables"] == ["reciprocal", "log"], err
     names = [c["name"] for c in calibrate_runs(plain, x="r_fsr", reference="force_n").selection.candidates]
     assert any(n.startswith("readout") for n in names), names

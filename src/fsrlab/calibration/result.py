@@ -193,6 +193,7 @@ class Calibration:
         sel = Selection(str(s.get("scheme", "")), list(s.get("candidates", [])), list(s.get("steps", [])),
                         int(s.get("lag_rows", 0)), float(s.get("heldout_rmse", math.nan)),
                         float(s.get("heldout_rmse_plain", math.nan)), s.get("gain_spread"))
+        sel.readout = dict(s.get("readout") or {})  # which readout variables were tried and used, and why
         return cls(HeldoutCalibration.from_dict(d["calibration"]), sel, sources=list(d.get("sources", [])),
                    n=int(d.get("n", 0)), r2=float(d.get("r2") if d.get("r2") is not None else math.nan), **common)
 

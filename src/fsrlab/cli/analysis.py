@@ -235,7 +235,8 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
            "delay_s": cal.model.delay_s, "heldout_rmse": sel.heldout_rmse, "heldout_rmse_percent_fs": 100 * sel.heldout_rmse / fs,
            "heldout_rmse_plain": sel.heldout_rmse_plain, "full_scale": fs, "readout_range": list(cal.x_range),
            "compensated": cal.model.has_memory, "uncertainty_relative": cal.model.uncertainty.relative,
-           "gain_spread": sel.gain_spread, "steps": sel.steps, "candidates": sel.candidates}
+           "gain_spread": sel.gain_spread, "readout_variables": sel.readout, "steps": sel.steps,
+           "candidates": sel.candidates}
     if output is not None:
         save_calibration(cal, output)
     warn(warnings)
@@ -266,6 +267,8 @@ def _calibration_table(cal, run_files: list[Path], unit: str | None, between_run
     if cal.model.has_memory:
         table.add_row(f"held-out RMSE without compensation ({u})", f"{k * sel.heldout_rmse_plain:.4g}")
     table.add_row(f"readout range ({cal.x_unit or '1'})", f"{cal.x_range[0]:.6g} … {cal.x_range[1]:.6g}")
+    if sel.readout:
+        table.add_row("readout variable", f"{', '.join(sel.readout.get('used', []))} ({sel.readout.get('why', '')})")
     rel, spread = cal.model.uncertainty.relative, sel.gain_spread
     floor = "the floor given by --between-runs" if between_runs is not None else "the assumed floor"
     table.add_row("relative uncertainty between runs (%)", f"{100 * rel:.3g} " + (
