@@ -31,7 +31,7 @@ def report(
     The hysteresis error (eq. 13) per cycle and overall of the capacitive readout (555 frequency)
     and the resistive one (op-amp V0) as in Table 3; RE1/RE2 (eq. 39) per load from dead-weight
     placements as in Tables 4 and 5; the ISO 376 quantities and class when the placements allow
-    them (else what is missing); the calibration (model, CV error, lag, uncertainty) and the HE of
+    them (else what is missing); the calibration (model, held-out error, lag, uncertainty) and the HE of
     its compensated estimate; plots of the loops and of the estimate. Prints the path of index.html.
 
     Examples:
