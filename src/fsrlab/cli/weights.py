@@ -60,9 +60,9 @@ def weights(
       fsrlab weights --virtual --masses 0,100g,200g,400g --repeat 3 --unload --window 20ms --hold 200ms -o w.csv
       fsrlab weights --port auto --r 10k --diode --masses 0,50g,100g,200g,500g --repeat 5 --unload -o w.csv
     """
-    from fsrlab.acquisition.recorder import record, result_dict
+    from fsrlab.acquisition.recorder import record
     from fsrlab.acquisition.serial_link import SerialLink
-    from fsrlab.bench.weights import READOUTS, WeightsProcedure, placements_table, plan_steps
+    from fsrlab.bench.weights import WeightsProcedure, plan_steps
 
     try:
         masses_kg = mass_list(masses)
@@ -70,24 +70,7 @@ def weights(
         fail(exc.message, "--masses")
     if virtual == (port is not None):
         fail("give exactly one of --port PORT|auto and --virtual", "--port")
-    if len(masses_kg) < 2:
-        fail(f"give at least two masses, e.g. 0,100g; got {masses!r}", "--masses")
-    if not 1 <= repeat <= 1000:
-        fail(f"must be 1 to 1000 cycles, got {repeat}", "--repeat")
-    if x not in READOUTS:
-        fail(f"must be one of {', '.join(READOUTS)}, got {x!r}", "--x")
-    window_ms = window_ms_option(window)
-    if not 2 <= settle_windows <= 10000:
-        fail(f"must be 2 to 10000 windows, got {settle_windows}", "--settle-windows")
-    if not 0 < max_drift <= 1:
-        fail(f"must be in (0, 1], got {max_drift:g}", "--max-drift")
-    if not timeout >= settle_windows * window_ms / 1000.0:
-        fail(f"must be at least --settle-windows windows ({settle_windows * window_ms / 1000.0:g} s), got {timeout:g} s",
-             "--timeout")
-    if not window_ms / 1000.0 <= hold <= 3600:
-        fail(f"must be one window ({window_ms / 1000.0:g} s) to 1 h, got {hold:g} s", "--hold")
-    if seed is not None and seed < 0:
-        fail(f"must be an integer >= 0, got {seed}", "--seed")
+    window_ms = _check_options(masses, masses_kg, repeat, x, window, settle_windows, max_drift, timeout, hold, seed)
     circuits = meter.sidecar(0, "--virtual" if virtual else None)  # recorded on range 0
     sensor_meta, area_m2 = sensor_area(sensor, area)
     cal = loadcell_option(loadcell)
@@ -149,7 +132,42 @@ def weights(
     finally:
         if device is not None:
             device.close()
-    summary = proc.summary()
+    _finish(proc.summary(), result, out, x, len(steps), force_source, virtual, meter, json_out)
+
+
+def _check_options(masses: str, masses_kg: list, repeat: int, x: str, window: float, settle_windows: int,
+                   max_drift: float, timeout: float, hold: float, seed: int | None) -> int:
+    """The window in ms; one line naming the option out of range."""
+    from fsrlab.bench.weights import READOUTS
+
+    if len(masses_kg) < 2:
+        fail(f"give at least two masses, e.g. 0,100g; got {masses!r}", "--masses")
+    if not 1 <= repeat <= 1000:
+        fail(f"must be 1 to 1000 cycles, got {repeat}", "--repeat")
+    if x not in READOUTS:
+        fail(f"must be one of {', '.join(READOUTS)}, got {x!r}", "--x")
+    window_ms = window_ms_option(window)
+    if not 2 <= settle_windows <= 10000:
+        fail(f"must be 2 to 10000 windows, got {settle_windows}", "--settle-windows")
+    if not 0 < max_drift <= 1:
+        fail(f"must be in (0, 1], got {max_drift:g}", "--max-drift")
+    if not timeout >= settle_windows * window_ms / 1000.0:
+        fail(f"must be at least --settle-windows windows ({settle_windows * window_ms / 1000.0:g} s), got {timeout:g} s",
+             "--timeout")
+    if not window_ms / 1000.0 <= hold <= 3600:
+        fail(f"must be one window ({window_ms / 1000.0:g} s) to 1 h, got {hold:g} s", "--hold")
+    if seed is not None and seed < 0:
+        fail(f"must be an integer >= 0, got {seed}", "--seed")
+    return window_ms
+
+
+def _finish(summary: dict, result, out: Path, x: str, n_steps: int, force_source: str, virtual: bool,
+            meter: MeterCircuit, json_out: bool) -> None:
+    """The placements table written, the summary printed, and the exit code of a recording that failed or stopped
+    short."""
+    from fsrlab.acquisition.recorder import result_dict
+    from fsrlab.bench.weights import placements_table
+
     placements = out.with_name(out.stem + ".placements.csv")
     try:
         write_text_atomic(placements, placements_table(summary, x))
@@ -160,7 +178,7 @@ def weights(
     if json_out:
         emit_json(info)
     else:
-        typer.echo(f"{out}: {summary['recorded']} of {len(steps)} steps recorded ({summary['skipped']} skipped), "
+        typer.echo(f"{out}: {summary['recorded']} of {n_steps} steps recorded ({summary['skipped']} skipped), "
                    f"{result.frames} windows; force_n: {force_source}; per placement: {placements}")
         if not virtual and not result.failed and (note := meter.warning(out)):
             warn([note])
