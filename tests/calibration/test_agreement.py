@@ -47,8 +47,14 @@ def test_missing_estimates_uncertainties_and_too_few_rows():
     assert ag.estimated == int((np.isfinite(est) & (y > LOADED * 5.0)).sum()) and ag.coverage is None
     assert agreement(y, np.where(y > 4.9, y, np.nan)) is None  # fewer than ten loaded rows estimated
     assert agreement(np.zeros(50), y) is None  # a reference that never rises
-    with pytest.raises(ValueError, match="estimate"):
+    from fsrlab.errors import ParameterError
+
+    with pytest.raises(ParameterError) as info:
         agreement(y, y[:-1])
+    assert info.value.parameter == "estimate"
+    with pytest.raises(ParameterError) as info:
+        agreement(y, y, y[:-1])
+    assert info.value.parameter == "uncertainty"
 
 
 @pytest.fixture(scope="module")

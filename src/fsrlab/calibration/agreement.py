@@ -17,6 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fsrlab.errors import ParameterError
+
 __all__ = ["LOADED", "COVERAGE_AIM", "MIN_ROWS", "Agreement", "agreement"]
 
 #: Rows whose reference is above this share of the run's largest count as loaded. [1]
@@ -107,11 +109,16 @@ def agreement(reference, estimate, uncertainty=None) -> Agreement | None:
     Agreement or None
         None when the reference does not rise above zero or fewer than :data:`MIN_ROWS` loaded rows
         have an estimate.
+
+    Raises
+    ------
+    ParameterError
+        ``estimate`` or ``uncertainty`` not one value per reference row.
     """
     y = np.asarray(reference, dtype=float)
     est = np.asarray(estimate, dtype=float)
     if y.shape != est.shape:
-        raise ValueError(f"estimate: one value per reference row, got {est.shape} for {y.shape}")
+        raise ParameterError(f"one value per reference row, got {est.shape} for {y.shape}", parameter="estimate")
     finite = np.isfinite(y)
     if not finite.any() or not np.nanmax(y) > 0:
         return None
@@ -128,7 +135,7 @@ def agreement(reference, estimate, uncertainty=None) -> Agreement | None:
     if uncertainty is not None:
         u = np.asarray(uncertainty, dtype=float)
         if u.shape != y.shape:
-            raise ValueError(f"uncertainty: one value per reference row, got {u.shape} for {y.shape}")
+            raise ParameterError(f"one value per reference row, got {u.shape} for {y.shape}", parameter="uncertainty")
         has_u = np.isfinite(u[got])
         if has_u.any():
             coverage = float(np.mean(np.abs(e[has_u]) <= 2.0 * u[got][has_u]))

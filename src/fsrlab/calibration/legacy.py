@@ -183,7 +183,13 @@ class LegacyModel:
 
 
 class LegacyStepper:
-    """:meth:`LegacyModel.run` one reading at a time: ``step(x, t) -> (estimate or None, direction)``."""
+    """:meth:`LegacyModel.run` one reading at a time: ``step(x, t) -> (estimate or None, direction)``.
+
+    Parameters
+    ----------
+    model : LegacyModel
+        The earlier file's model.
+    """
 
     def __init__(self, model: LegacyModel):
         self.model = model
