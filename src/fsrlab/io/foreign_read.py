@@ -106,7 +106,7 @@ class Table:
     decimal: str
     encoding: str
     sha256: str = ""
-    _numbers: dict = field(default_factory=dict, repr=False, compare=False)
+    _numbers: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def n_rows(self) -> int:

@@ -166,7 +166,17 @@ class HostPolicy:
 
 
 def origin_netloc(origin: str) -> str | None:
-    """The ``host[:port]`` of an ``Origin`` header, in lower case (None when it is not a URL)."""
+    """The ``host[:port]`` of an ``Origin`` header, in lower case (None when it is not a URL).
+
+    Parameters
+    ----------
+    origin : str
+        ``"http://localhost:5006"``, ``"http://[::1]:5006"``.
+
+    Returns
+    -------
+    str or None
+    """
     from urllib.parse import urlsplit
 
     try:
@@ -195,7 +205,13 @@ def redacted(uri: str) -> str:
 
 
 def log_request(handler) -> None:
-    """Tornado's access log line (``status METHOD uri (ip) time``), the token left out of the uri."""
+    """Tornado's access log line (``status METHOD uri (ip) time``), the token left out of the uri.
+
+    Parameters
+    ----------
+    handler : tornado.web.RequestHandler
+        The request's handler, when it has finished (Tornado's ``log_function`` setting).
+    """
     from tornado.log import access_log
 
     status = handler.get_status()
