@@ -30,6 +30,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
+from fsrlab.errors import ParameterError
+
 __all__ = ["DEMO_SENSOR", "demo_sensor", "DemoSettings", "DemoResult", "DemoSteps", "DemoChain", "run_chain",
            "remove_stale_staging"]
 
@@ -389,12 +391,12 @@ def _bench_device(device: str, speed: str) -> tuple[str, str]:
     from fsrlab.bench.protocols import SPEEDS, twin_status
 
     if device not in ("auto", "twin", "virtual"):
-        raise ValueError(f"device: must be auto, twin or virtual, got {device!r}")
+        raise ParameterError(f"must be auto, twin or virtual, got {device!r}", parameter="device")
     if speed not in SPEEDS:
-        raise ValueError(f"speed: must be one of {', '.join(SPEEDS)}, got {speed!r}")
+        raise ParameterError(f"must be one of {', '.join(SPEEDS)}, got {speed!r}", parameter="speed")
     ok, reason = twin_status()
     if device == "twin" and not ok:
-        raise ValueError(f"device: the digital twin is not available: {reason}")
+        raise ParameterError(f"the digital twin is not available: {reason}", parameter="device")
     return ("twin" if (device == "twin" or (device == "auto" and ok)) else "virtual"), reason
 
 

@@ -28,6 +28,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from fsrlab.errors import ParameterError
+
 if TYPE_CHECKING:
     from fsrlab.metrics.cycles import RunHysteresis
 
@@ -66,7 +68,7 @@ def run_reference(run, reference: str | None = None) -> tuple[np.ndarray, str, s
     from fsrlab.io.runformat import RunFormatError
 
     if reference not in (None, "force_n", "stress_pa"):
-        raise ValueError(f"reference: must be force_n or stress_pa, got {reference!r}")
+        raise ParameterError(f"must be force_n or stress_pa, got {reference!r}", parameter="reference")
     if reference is None:
         reference = "stress_pa" if "stress_pa" in run else ("force_n" if "force_n" in run else None)
     if reference is None:
@@ -113,8 +115,8 @@ def hysteresis_of_run(run, quantity: str = "frequency_hz", threshold: float = 0.
     run = run if isinstance(run, Run) else load_run(run)
     stress, ref_name, ref_unit = run_reference(run, reference)
     if quantity in ("stress_pa", "force_n"):
-        raise ValueError(f"quantity: {quantity} is a reference column (the {ref_name} the branches follow, or it "
-                         "divided by the area); give a readout such as frequency_hz")
+        raise ParameterError(f"{quantity} is a reference column (the {ref_name} the branches follow, or it "
+                             "divided by the area); give a readout such as frequency_hz", parameter="quantity")
     q = run[quantity]
     # eq. (13)'s functions speak of stresses [Pa]; on a force reference their levels are newtons.
     in_unit = (lambda text: text) if ref_unit == "Pa" else (lambda text: re.sub(r"(\d) Pa\b", r"\1 " + ref_unit, text))

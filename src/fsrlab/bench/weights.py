@@ -32,6 +32,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from fsrlab.acquisition.loadcell import STANDARD_GRAVITY
+from fsrlab.errors import ParameterError
 
 __all__ = ["STABILITY", "Step", "plan_steps", "WeightsProcedure", "READOUTS", "placements_table"]
 
@@ -88,14 +89,14 @@ def plan_steps(masses_kg: Sequence[float], repeat: int = 1, unload: bool = False
     """
     m = [float(x) for x in masses_kg]
     if len(m) < 2:
-        raise ValueError(f"masses: at least two are needed (e.g. 0,100g), got {len(m)}")
+        raise ParameterError(f"at least two are needed (e.g. 0,100g), got {len(m)}", parameter="masses")
     for a, b in zip(m, m[1:]):
         if not b > a:
-            raise ValueError(f"masses must increase, got {b * 1e3:g} g after {a * 1e3:g} g")
+            raise ParameterError(f"must increase, got {b * 1e3:g} g after {a * 1e3:g} g", parameter="masses")
     if m[0] < 0 or not all(math.isfinite(x) for x in m):
-        raise ValueError("masses must be finite and >= 0 kg")
+        raise ParameterError("must be finite and >= 0 kg", parameter="masses")
     if repeat < 1:
-        raise ValueError(f"repeat must be >= 1, got {repeat}")
+        raise ParameterError(f"must be >= 1, got {repeat}", parameter="repeat")
     steps: list[Step] = []
     for cycle in range(repeat):
         for mass in m:
@@ -144,9 +145,9 @@ class WeightsProcedure:
                  max_drift: float = STABILITY["max_drift"], timeout_s: float = STABILITY["timeout_s"],
                  hold_s: float = STABILITY["hold_s"], sensor_label: int = 1) -> None:
         if x not in READOUTS:
-            raise ValueError(f"x must be one of {', '.join(READOUTS)}, got {x!r}")
+            raise ParameterError(f"must be one of {', '.join(READOUTS)}, got {x!r}", parameter="x")
         if settle_windows < 2:
-            raise ValueError(f"settle_windows must be >= 2, got {settle_windows}")
+            raise ParameterError(f"must be >= 2, got {settle_windows}", parameter="settle_windows")
         for name, v in (("max_drift", max_drift), ("timeout_s", timeout_s), ("hold_s", hold_s)):
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be > 0, got {v!r}")

@@ -15,6 +15,7 @@ import numpy as np
 
 from fsrlab.calibration.provenance import recorded_with
 from fsrlab.circuits.circuit import LM555Circuit, readout_from_metadata
+from fsrlab.errors import ParameterError
 from fsrlab.io.runformat import Run, RunFormatError, load_run
 
 __all__ = ["C_FSR", "run_circuit", "decode_capacitance", "run_readout", "reference_reversed", "run_recorded_with"]
@@ -85,17 +86,17 @@ def decode_capacitance(frequency_hz, duty_cycle, circuit: LM555Circuit | None = 
     f = np.asarray(frequency_hz, dtype=float)
     d = np.asarray(duty_cycle, dtype=float)
     if f.shape != d.shape:
-        raise ValueError("frequency_hz and duty_cycle must have the same length")
+        raise ParameterError("must have one value per frequency_hz reading", parameter="duty_cycle")
     ok = np.isfinite(f) & np.isfinite(d)
     if range_ is None:
         states = [(circuit, ok)]
     else:
         r = np.asarray(range_, dtype=float)
         if r.shape != f.shape:
-            raise ValueError("range_ must have one value per reading")
+            raise ParameterError("must have one value per reading", parameter="range_")
         bad = np.isfinite(r) & ~np.isin(r, (0.0, 1.0))
         if bad.any():
-            raise ValueError(f"range_: must be 0 (C_off out) or 1 (C_off in), got {r[bad][0]:g}")
+            raise ParameterError(f"must be 0 (C_off out) or 1 (C_off in), got {r[bad][0]:g}", parameter="range_")
         states = [(circuit.on_range(0), ok & (r == 0)), (circuit.on_range(1), ok & (r == 1))]
     out = np.full(f.shape, np.nan)
     for circ, m in states:

@@ -30,8 +30,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout
-from fsrlab.circuits.circuit import PAPER_CIRCUIT, PAPER_OPAMP
+from fsrlab.circuits.circuit import (
+    PAPER_CIRCUIT,
+    PAPER_OPAMP,
+    LM555Circuit,
+    OpAmpReadout,
+)
+from fsrlab.errors import ParameterError
 from fsrlab.units import STANDARD_GRAVITY
 
 __all__ = ["SpringCycle", "spring_cycle", "DeadWeights", "dead_weights", "figure17_fits", "Experiment",
@@ -166,14 +171,14 @@ def dead_weights(sensor, mass_kg: float, placements: int = 5, load_area_m2: floa
     -------
     DeadWeights
     """
-    from fsrlab.virtual.meter import measure
     from fsrlab.metrics.repeatability import repeatability
     from fsrlab.physics.paper_sensor import DEAD_WEIGHT_AREA_M2
+    from fsrlab.virtual.meter import measure
 
     if not (np.isfinite(mass_kg) and mass_kg > 0):
-        raise ValueError(f"mass_kg must be > 0, got {mass_kg!r}")
+        raise ParameterError(f"must be > 0, got {mass_kg!r}", parameter="mass_kg")
     if placements < 2:
-        raise ValueError(f"placements must be >= 2, got {placements!r}")
+        raise ParameterError(f"must be >= 2, got {placements!r}", parameter="placements")
     area = DEAD_WEIGHT_AREA_M2 if load_area_m2 is None else float(load_area_m2)
     sigma = mass_kg * STANDARD_GRAVITY / area
     rng = np.random.default_rng(seed)
@@ -252,8 +257,8 @@ def figure17_counterexample(he_percent: float = 14.2, width: float = 0.03, point
     is a small stress error. A both-branch fit of a loop with a 14 % HE can therefore reach the printed
     R² values; the virtual sensors' gap, spread over the range, cannot.
     """
-    from fsrlab.paper.polyfit import fit_polynomial
     from fsrlab.metrics.hysteresis import hysteresis_error
+    from fsrlab.paper.polyfit import fit_polynomial
 
     x = np.linspace(0.0, 1.0, points)
     s = 10e3 * x

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Callable
 
 from fsrlab import __version__
+from fsrlab.errors import ParameterError
 from fsrlab.io.outputs import write_text_atomic
 from fsrlab.reports.html import render_html
 from fsrlab.reports.model import Section
@@ -225,7 +226,7 @@ class ReportProcess:
         env["PYTHONPATH"] = os.pathsep.join([root, *filter(None, [env.get("PYTHONPATH")])])
         self.outdir = Path(outdir)
         if not int(nice) >= 0:
-            raise ValueError(f"nice: must be >= 0 (a lower priority or the same), got {nice!r}")
+            raise ParameterError(f"must be >= 0 (a lower priority or the same), got {nice!r}", parameter="nice")
         self._proc = subprocess.Popen([sys.executable, "-c", self._CODE, str(self.outdir), str(int(nice))],
                                       stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
 
