@@ -120,3 +120,21 @@ def test_calibrate_on_decoded_capacitance_stores_the_circuit_and_apply_reuses_it
     assert code == 0
     np.testing.assert_allclose(load_run(tmp_path / "est.csv")["stress_pa_estimate"],
                                apply_calibration(ref, runs / "other.csv")["stress_pa_estimate"], rtol=1e-12)
+
+
+def test_apply_says_an_earlier_file_is_applied_read_only(runs, tmp_path, capsys):
+    """A version-1 file of the cross-validated engine (tests/data/calibration) applies, with one warning line that
+    says so and that its branch compensation is not applied; --margin changes no estimate inside the range
+    (the memory takes every reading; the earlier engine's margin changed estimates in range, issue 37)."""
+    from pathlib import Path
+
+    old = Path(__file__).resolve().parents[1] / "data" / "calibration" / "v1-cross-validated.json"
+    out = {}
+    for margin in ("0", "200%"):
+        code, _, err = run_cli(["apply", old, runs / "other.csv", "-o", tmp_path / f"m{margin[0]}.csv", "--margin",
+                                margin], capsys)
+        assert code == 0 and err.count("\n") == 1 and "read-only" in err and "not applied" in err, err
+        out[margin] = load_run(tmp_path / f"m{margin[0]}.csv")
+    inside = out["0"]["in_range"] == 1
+    assert inside.sum() > 0
+    np.testing.assert_array_equal(out["0"]["stress_pa_estimate"][inside], out["200%"]["stress_pa_estimate"][inside])

@@ -343,6 +343,9 @@ def apply_cmd(
     if cal.recorded_with is None:
         warnings.append(f"{cal_file} does not record the circuit and range its data were recorded with (written by an "
                         f"earlier fsrlab, or not from a run): {run_file} is not checked against them")
+    if cal.read_only:
+        warnings.append(f"{cal_file} was written by the earlier cross-validated engine: applied read-only"
+                        + (f"; {cal.model.note}" if cal.model.note else ""))
     differences = check_readout(cal, run)
     if differences and not force:
         raise ProvenanceError(f"{differences[0]}: the same readout means another stress there; calibrate on a run "
