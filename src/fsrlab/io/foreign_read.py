@@ -22,7 +22,7 @@ from typing import Sequence
 
 import numpy as np
 
-from fsrlab.errors import FileFormatError
+from fsrlab.errors import FileFormatError, ParameterError
 from fsrlab.io.csvtext import LongCellError, csv_cells
 from fsrlab.io.shown import shown
 
@@ -356,7 +356,7 @@ def read_table(path: str | os.PathLike, header: bool | None = None, skip_lines: 
     """
     p = Path(path)
     if skip_lines < 0:
-        raise ValueError(f"skip_lines: must be >= 0, got {skip_lines}")
+        raise ParameterError(f"must be >= 0, got {skip_lines}", parameter="skip_lines")
     text, encoding, digest = _decode(p)
     numbers, body = _data_lines(text, skip_lines)
     del text

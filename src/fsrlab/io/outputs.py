@@ -193,7 +193,7 @@ def check_output(path, option: str, *, overwrite: bool = False, inputs: Iterable
         The output is refused; the message says why and what to do.
     """
     if kind not in ("file", "run", "dir"):
-        raise ValueError(f"kind: must be file, run or dir, got {kind!r}")
+        raise ParameterError(f"must be file, run or dir, got {kind!r}", parameter="kind")
     target = output_path(path, option)
     protected = protected_paths(inputs)
     if kind == "dir":

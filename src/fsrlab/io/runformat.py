@@ -268,11 +268,11 @@ def read_table(path: str | os.PathLike, required: Sequence[str], hint: str = "")
         except LongCellError as exc:
             raise FileFormatError(f"{p}: line {exc.line}: {exc}") from None
     if not table:
-        raise ValueError(f"{p}: empty file" + (f" ({hint})" if hint else ""))
+        raise FileFormatError(f"{p}: empty file" + (f" ({hint})" if hint else ""))
     header = [h.strip() for h in table[0]]
     for col in required:
         if col not in header:
-            raise ValueError(f"{p}: column {col!r} missing (columns: {_names(header)})")
+            raise FileFormatError(f"{p}: column {col!r} missing (columns: {_names(header)})")
     rows = [(k, row) for k, row in enumerate(table[1:], start=1) if any(c.strip() for c in row)]
     return {c: i for i, c in enumerate(header)}, rows, p
 

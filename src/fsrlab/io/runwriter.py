@@ -18,6 +18,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from fsrlab.errors import ParameterError
 from fsrlab.io.outputs import atomic_run
 from fsrlab.io.schema import CSV_SHA256, FORMAT, KNOWN_COLUMNS, VERSION, check_columns, sidecar_path
 
@@ -40,7 +41,7 @@ def _format_value(value: Any) -> str:
     if math.isnan(v):
         return ""
     if math.isinf(v):
-        raise ValueError(f"row value must be finite, got {value!r}")
+        raise ParameterError(f"value must be finite, got {value!r}", parameter="row")
     if v.is_integer() and abs(v) < 1e15:
         return str(int(v))
     return repr(v)
@@ -55,7 +56,7 @@ def _format_column(values: np.ndarray) -> list[str]:
         return [_format_value(v) for v in values.tolist()]
     inf = np.isinf(values)
     if inf.any():
-        raise ValueError(f"row value must be finite, got {values[inf][0]!r}")
+        raise ParameterError(f"values must be finite, got {values[inf][0]!r}", parameter="columns")
     finite = np.isfinite(values)
     whole = finite & (np.abs(values) < 1e15)
     whole[whole] = values[whole] == np.trunc(values[whole])
@@ -259,7 +260,7 @@ class RunWriter:
         """
         unknown = [k for k in row if k not in self._set]
         if unknown:
-            raise ValueError(f"row: unknown columns {unknown}; the run has {self.columns}")
+            raise ParameterError(f"unknown columns {unknown}; the run has {self.columns}", parameter="row")
         line = ",".join(_format_value(row.get(c)) for c in self.columns) + "\n"
         self._raw(line)
         self.rows += 1
@@ -354,7 +355,7 @@ def write_run(path: str | os.PathLike, columns: Mapping[str, Any], metadata: Map
     arrays = [np.asarray(columns[c]) for c in names]
     n = {a.shape for a in arrays}
     if len(n) != 1 or arrays[0].ndim != 1:
-        raise ValueError("columns: every column must be a 1-D array of the same length")
+        raise ParameterError("every column must be a 1-D array of the same length", parameter="columns")
     if not overwrite:
         for existing in (path, sidecar_path(path)):
             if os.path.lexists(existing):

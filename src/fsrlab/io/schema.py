@@ -11,7 +11,7 @@ from collections import Counter
 from pathlib import Path
 from typing import Sequence
 
-from fsrlab.errors import FileFormatError
+from fsrlab.errors import FileFormatError, ParameterError
 from fsrlab.io.shown import shown, shown_list
 
 __all__ = ["FORMAT", "VERSION", "KNOWN_COLUMNS", "QUANTITY_COLUMNS", "CSV_SHA256", "RunFormatError", "check_columns",
@@ -76,14 +76,14 @@ def check_columns(columns: Sequence[str]) -> list[str]:
     """
     cols = [str(c) for c in columns]
     if not cols:
-        raise ValueError("columns must name at least one column")
+        raise ParameterError("must name at least one column", parameter="columns")
     for c in cols:
         if not c or c != c.strip() or any(ch in c for ch in ',"\r\n'):
-            raise ValueError(f"columns: invalid column name {shown(c)} (no commas, quotes, newlines or edge spaces)")
+            raise ParameterError(f"invalid column name {shown(c)} (no commas, quotes, newlines or edge spaces)", parameter="columns")
     # One count per name (linear): a header of 100,000 columns is checked in milliseconds.
     dup = sorted(c for c, n in Counter(cols).items() if n > 1)
     if dup:
-        raise ValueError(f"columns: duplicate column names {shown_list(dup)}")
+        raise ParameterError(f"duplicate column names {shown_list(dup)}", parameter="columns")
     return cols
 
 

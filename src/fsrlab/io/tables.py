@@ -13,6 +13,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from fsrlab.errors import FileFormatError
 from fsrlab.io.runcells import OTHER_LIMIT
 from fsrlab.io.runformat import read_table, where
 from fsrlab.io.shown import number_cell, shown
@@ -54,9 +55,9 @@ def _label(cell: str) -> Any:
 def _check_number(p, k: int, column: str, value: float, cell: str, low: float = -OTHER_LIMIT) -> None:
     """A cell must hold a finite number within what a reading can be (not 1e308)."""
     if not np.isfinite(value):
-        raise ValueError(f"{where(p, k, column)}: {cell.strip()!r} is not a finite number")
+        raise FileFormatError(f"{where(p, k, column)}: {cell.strip()!r} is not a finite number")
     if not low <= value <= OTHER_LIMIT:
-        raise ValueError(f"{where(p, k, column)}: {value:g} is beyond what the column can hold "
+        raise FileFormatError(f"{where(p, k, column)}: {value:g} is beyond what the column can hold "
                          f"({low:g} to {OTHER_LIMIT:g})")
 
 
@@ -77,7 +78,7 @@ def load_grouped_csv(path: str | os.PathLike) -> tuple[list, list, np.ndarray]:
 
     Raises
     ------
-    ValueError
+    FileFormatError
         One line naming the file, the row and the column for a missing column, an empty,
         non-numeric or non-finite reading, or one beyond what a reading can be (above 1e100).
     """
@@ -87,17 +88,17 @@ def load_grouped_csv(path: str | os.PathLike) -> tuple[list, list, np.ndarray]:
     for k, row in rows:
         for name, j in (("load", il), ("sensor", isn), ("reading", ir)):
             if j >= len(row) or not row[j].strip():
-                raise ValueError(f"{where(p, k, name)}: empty cell")
+                raise FileFormatError(f"{where(p, k, name)}: empty cell")
         try:
             v = number_cell(row[ir].strip())
         except ValueError:
-            raise ValueError(f"{where(p, k, 'reading')}: non-numeric cell {shown(row[ir].strip())}") from None
+            raise FileFormatError(f"{where(p, k, 'reading')}: non-numeric cell {shown(row[ir].strip())}") from None
         _check_number(p, k, "reading", v, row[ir])
         loads.append(_label(row[il].strip()))
         sensors.append(_label(row[isn].strip()))
         values.append(v)
     if not values:
-        raise ValueError(f"{p}: no readings")
+        raise FileFormatError(f"{p}: no readings")
     return loads, sensors, np.array(values)
 
 
@@ -122,7 +123,7 @@ def load_iso376_csv(path) -> tuple[np.ndarray, list[CalibrationSeries]]:
 
     Raises
     ------
-    ValueError
+    FileFormatError
         One line naming the file, row and column for a missing column, an empty, non-numeric or
         non-finite cell, a value beyond what a reading can be (magnitude above 1e100), a negative
         force, a second reading at the same force and direction of a series, a series whose
@@ -140,44 +141,44 @@ def load_iso376_csv(path) -> tuple[np.ndarray, list[CalibrationSeries]]:
                 vals[col] = 1.0
                 continue
             if not cell:
-                raise ValueError(f"{where(p, k, col)}: empty cell")
+                raise FileFormatError(f"{where(p, k, col)}: empty cell")
             try:
                 vals[col] = number_cell(cell)
             except ValueError:
-                raise ValueError(f"{where(p, k, col)}: non-numeric cell {shown(cell)}") from None
+                raise FileFormatError(f"{where(p, k, col)}: non-numeric cell {shown(cell)}") from None
             _check_number(p, k, col, vals[col], cell, 0.0 if col == "force_n" else -OTHER_LIMIT)
         d = vals.get("direction", 1.0)
         if d not in (1.0, -1.0):
-            raise ValueError(f"{where(p, k, 'direction')}: must be +1 or -1, got {d:g}")
+            raise FileFormatError(f"{where(p, k, 'direction')}: must be +1 or -1, got {d:g}")
         label = row[ix["series"]].strip() if ix["series"] < len(row) else ""
         if not label:
-            raise ValueError(f"{where(p, k, 'series')}: empty cell")
+            raise FileFormatError(f"{where(p, k, 'series')}: empty cell")
         s = data.setdefault(label, {"rot": vals["rotation_deg"], "inc": {}, "dec": {}, "z0": None, "z1": None})
         if vals["rotation_deg"] != s["rot"]:
-            raise ValueError(f"{where(p, k, 'rotation_deg')}: series {label!r} was at {s['rot']:g}°, not {vals['rotation_deg']:g}°")
+            raise FileFormatError(f"{where(p, k, 'rotation_deg')}: series {label!r} was at {s['rot']:g}°, not {vals['rotation_deg']:g}°")
         if vals["force_n"] == 0:
             key = "z0" if d > 0 else "z1"
             if s[key] is not None:
-                raise ValueError(f"{where(p, k, 'force_n')}: series {label!r} already has its zero reading "
+                raise FileFormatError(f"{where(p, k, 'force_n')}: series {label!r} already has its zero reading "
                                  f"{'before' if d > 0 else 'after'} the forces")
             s[key] = vals["reading"]
         else:
             branch = s["inc" if d > 0 else "dec"]
             if vals["force_n"] in branch:
-                raise ValueError(f"{where(p, k, 'force_n')}: series {label!r} already has a reading at "
+                raise FileFormatError(f"{where(p, k, 'force_n')}: series {label!r} already has a reading at "
                                  f"{vals['force_n']:g} N ({'increasing' if d > 0 else 'decreasing'})")
             branch[vals["force_n"]] = vals["reading"]
     if not data:
-        raise ValueError(f"{p}: no readings")
+        raise FileFormatError(f"{p}: no readings")
     first = next(iter(data.values()))
     forces = np.array(sorted(first["inc"]))
     if forces.size < 2:
-        raise ValueError(f"{p}: series {next(iter(data))!r} has {forces.size} increasing force(s) above 0 N; "
+        raise FileFormatError(f"{p}: series {next(iter(data))!r} has {forces.size} increasing force(s) above 0 N; "
                          "ISO 376 needs at least 2 (8 or more, spread over 20–100 % of the range)")
     series = []
     for label, s in data.items():
         if sorted(s["inc"]) != forces.tolist():
-            raise ValueError(f"{p}: series {label!r} has increasing forces {sorted(s['inc'])}, not those of the first series {forces.tolist()}")
+            raise FileFormatError(f"{p}: series {label!r} has increasing forces {sorted(s['inc'])}, not those of the first series {forces.tolist()}")
         dec = None
         if s["dec"]:
             dec = [s["dec"].get(f, np.nan) for f in forces]

@@ -26,6 +26,8 @@ import re
 import secrets
 import socket
 
+from fsrlab.errors import ParameterError
+
 __all__ = ["LOOPBACK_NAMES", "WILDCARD_BINDS", "COOKIE", "check_bind_host", "host_name", "origin_netloc", "redacted",
            "log_request", "HostPolicy", "guard"]
 
@@ -60,14 +62,14 @@ def check_bind_host(host: str) -> str:
     if text.startswith("[") and text.endswith("]"):
         text = text[1:-1]
     if not text:
-        raise ValueError("host: is empty; give an interface address such as 127.0.0.1 (default) or 0.0.0.0")
+        raise ParameterError("is empty; give an interface address such as 127.0.0.1 (default) or 0.0.0.0", parameter="host")
     try:
         ipaddress.ip_address(text)
         return text
     except ValueError:
         pass
     if not _BIND_NAME.match(text) or len(text) > 253:
-        raise ValueError(f"host: {host!r} is neither an IP address nor a host name; give e.g. 127.0.0.1 or 0.0.0.0")
+        raise ParameterError(f"{host!r} is neither an IP address nor a host name; give e.g. 127.0.0.1 or 0.0.0.0", parameter="host")
     return text
 
 
