@@ -307,7 +307,10 @@ class Twin:
             parts = []
             if events:
                 for cycle, level, channel, epoch, consumed in events:
-                    chunk = stream.switch(cycle / F_CPU_HZ, level, consumed, target,
+                    # a look-ahead from the switch (the stream's end before it is void: with a switch every
+                    # few ms, as a scan makes, a target from it would run away)
+                    t_sw = cycle / F_CPU_HZ
+                    chunk = stream.switch(t_sw, level, consumed, max(progress_s, t_sw) + self.LOOKAHEAD_S,
                                           channel if self.multiplexed else None)
                     parts = [pack_records("P", epoch, 0)]  # earlier epochs' edges are void
                     self.edges_sent = consumed
