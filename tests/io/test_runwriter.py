@@ -20,8 +20,8 @@ from fsrlab.io.runformat import RunFormatError, load_run, sidecar_path
 from fsrlab.io.runwriter import RunWriter, write_run
 
 
-def _run(path, rows=3):
-    with RunWriter(path, ["time_s", "frequency_hz"]) as w:
+def _run(path, rows=3, overwrite=False):
+    with RunWriter(path, ["time_s", "frequency_hz"], overwrite=overwrite) as w:
         for i in range(rows):
             w.write({"time_s": i * 0.1, "frequency_hz": 5000.0 + i})
 
@@ -44,9 +44,12 @@ def test_an_existing_run_is_kept_without_overwrite(tmp_path, which):
 def test_overwrite_replaces_and_a_new_run_needs_no_flag(tmp_path):
     path = tmp_path / "run.csv"
     _run(path, rows=5)
-    _run(path, rows=2)  # the default replaces, as before
+    with pytest.raises(FileExistsError, match="run.csv exists"):
+        _run(path, rows=2)  # the default refuses (the output policy)
+    assert load_run(path).n_rows == 5
+    _run(path, rows=2, overwrite=True)
     assert load_run(path).n_rows == 2
-    with RunWriter(tmp_path / "new.csv", ["time_s"], overwrite=False) as w:
+    with RunWriter(tmp_path / "new.csv", ["time_s"]) as w:
         w.write({"time_s": 0.0})
     assert load_run(tmp_path / "new.csv").n_rows == 1
 
@@ -83,7 +86,7 @@ def test_replacing_a_run_never_leaves_its_csv_beside_a_sidecar_not_its_own(tmp_p
 
     monkeypatch.setattr(runwriter, "_prepare_json", full)
     with pytest.raises(OSError, match="run.meta.json"):
-        RunWriter(path, ["time_s", "force_n"])
+        RunWriter(path, ["time_s", "force_n"], overwrite=True)
     assert {p: p.read_bytes() for p in (path, sidecar_path(path))} == before
     monkeypatch.undo()
 
@@ -96,17 +99,17 @@ def test_replacing_a_run_never_leaves_its_csv_beside_a_sidecar_not_its_own(tmp_p
 
     monkeypatch.setattr(runwriter.os, "replace", no_rename)
     with pytest.raises(OSError, match="run.meta.json"):
-        RunWriter(path, ["time_s", "force_n"])
+        RunWriter(path, ["time_s", "force_n"], overwrite=True)
     monkeypatch.undo()
     assert not sidecar_path(path).exists()  # the old sidecar went before the old rows
     assert path.read_text() == "time_s,force_n\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.csv"]  # no temporary left behind
-    _run(path, rows=3)
+    _run(path, rows=3, overwrite=True)
     rows = path.read_bytes()
     sidecar_path(path).unlink()
     sidecar_path(path).mkdir()  # a directory where the sidecar goes: refused before the old rows go
     with pytest.raises(OSError, match="run.meta.json"):
-        RunWriter(path, ["time_s", "force_n"])
+        RunWriter(path, ["time_s", "force_n"], overwrite=True)
     assert path.read_bytes() == rows
 
 

@@ -158,7 +158,7 @@ class RunWriter:
         (e.g. ``{"r_ohm": 10e3, "c_off_farad": 0, "diode": true}``), ``sensor`` (e.g.
         ``{"model": "FlexiForce A201-1", "area_m2": 7.1e-5}``), ``origin``, ``notes``; other keys are kept.
     overwrite : bool
-        Replace an existing run (the default). With False, an existing CSV or sidecar raises
+        Replace an existing run. With False (the default), an existing CSV or sidecar raises
         ``FileExistsError`` naming it, and nothing is written.
 
     Raises
@@ -175,8 +175,13 @@ class RunWriter:
     """
 
     def __init__(self, path: str | os.PathLike, columns: Sequence[str], metadata: Mapping[str, Any] | None = None,
-                 overwrite: bool = True):
-        self.path = Path(path)
+                 overwrite: bool = False):
+        if metadata is not None and not isinstance(metadata, Mapping):
+            raise TypeError(f"metadata: must be a mapping (a dict of the sidecar's content), got "
+                            f"{type(metadata).__name__}")
+        from fsrlab.io.outputs import output_path
+
+        self.path = output_path(path, "path")
         self.columns = check_columns(columns)
         self._set = set(self.columns)
         self.metadata = _build_metadata(self.columns, metadata)
