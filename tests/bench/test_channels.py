@@ -100,3 +100,33 @@ def test_crosstalk_matrix_in_the_twin(built):
     x = crosstalk(twin_meter, duration_s=0.4)
     assert x.matrix.shape == (8, 8)
     assert x.worst < 1e-3
+
+
+def test_cli_calibrate_channels_writes_one_file_keyed_by_sensor(four_channel_run, tmp_path):
+    import json
+
+    import fsrlab.cli.channels  # noqa: F401 - registers the commands (until fsrlab.cli.COMMANDS lists them)
+    from typer.testing import CliRunner
+
+    from fsrlab.cli import app
+
+    out = tmp_path / "channels.json"
+    r = CliRunner().invoke(app, ["calibrate-channels", str(four_channel_run), "--out", str(out), "--json"])
+    assert r.exit_code == 0, r.output
+    assert sorted(json.loads(out.read_text())["sensors"]) == ["fsr0", "fsr1", "fsr2", "fsr3"]
+    again = CliRunner().invoke(app, ["calibrate-channels", str(four_channel_run), "--out", str(out)])
+    assert again.exit_code == 2 and "--out" in again.output  # an existing file is replaced only when asked
+
+
+def test_cli_crosstalk_json():
+    import json
+
+    import fsrlab.cli.channels  # noqa: F401
+    from typer.testing import CliRunner
+
+    from fsrlab.cli import app
+
+    r = CliRunner().invoke(app, ["crosstalk", "--channels", "0-2", "--duration", "0.3s", "--json"])
+    assert r.exit_code == 0, r.output
+    doc = json.loads(r.output)
+    assert np.array(doc["matrix"]).shape == (3, 3) and doc["worst"] < 2e-3

@@ -100,11 +100,30 @@ class ChannelCalibrations:
                                  f"{', '.join(sorted(self.by_sensor))})", parameter="run")
         return out
 
+    def save(self, path, overwrite: bool = False, inputs=()) -> Path:
+        """Write :meth:`to_dict` as JSON (the output policy of :mod:`fsrlab.io.outputs`: atomic, an existing
+        file replaced only with ``overwrite``, never one of ``inputs``)."""
+        import json
+
+        from fsrlab.io.outputs import check_output, write_text_atomic
+
+        out = check_output(path, "path", overwrite=overwrite, inputs=inputs)
+        return write_text_atomic(out, json.dumps(self.to_dict(), indent=2, default=_jsonable) + "\n")
+
     def to_dict(self) -> dict:
         """``{"kind": "fsrlab multi-channel calibration", "sensors": {id: {"channel", "calibration"}}}``."""
         return {"kind": "fsrlab multi-channel calibration",
                 "sensors": {sid: {"channel": self.channels[sid], "calibration": cal.to_dict()}
                             for sid, cal in self.by_sensor.items()}}
+
+
+def _jsonable(value):
+    """numpy scalars and arrays in a calibration's dictionary, as JSON numbers and lists."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"not JSON serialisable: {type(value).__name__}")
 
 
 def calibrate_channels(run, **options) -> ChannelCalibrations:
