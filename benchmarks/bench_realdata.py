@@ -1,27 +1,40 @@
-"""Calibration on real third-party recordings: the held-out calibration against the best plain polynomial.
+"""Calibration on real third-party recordings: the held-out calibration against plain polynomials.
 
-The recordings are not part of fsrlab (most have no licence that allows redistribution): point
-``FSRLAB_REALDATA`` at a directory of CSV files with the columns ``time_s,reading,force_n`` (time
-[s], the raw readout as recorded, the reference [N]) named as below; without it this benchmark says
-"skipped". Nothing is downloaded. Sources (docs/calibration.md): an FSR in a divider read by
-``analogRead`` with an HX711 load cell, hand-loaded and servo-driven (LucasWestfal/
-FSR_calibration_techniques); a Velostat film pressed by a UR5e arm against a Futek load cell
-(Lupasic/tactile-sensor-velostat); FSRs under a phantom pressed by hand on a force plate
-(priyanshum17/pressure, MIT); a piezoresistive taxel read through a divider with the authors' force
-conversion (TAMS-Group/tams_tactile_sensor_array_hardware); one taxel of a capacitive insole (8-bit
+Of the 40 recordings the 39 pairs below use, 2 are in fsrlab's repository: the capacitive insole's
+``left_t34_calibration`` and ``left_t34_validation1`` (tests/data/real/belli-insole/, BSD-3-Clause), enough
+for one pair alone (the calibration run's halves). The others are not: three of the five sources
+(LucasWestfal, Lupasic, TAMS: 25 recordings) have no licence, so they cannot be redistributed, and the
+force plate's (MIT) and the rest of the insole's are not committed either. ``scripts/prepare_realdata.py``
+builds all 40 on your machine from local copies of the five
+sources into a directory of CSV files ``time_s,reading,force_n`` (time [s], the raw readout as recorded, the
+reference [N]); point ``FSRLAB_REALDATA`` at it. Without it this benchmark says "skipped". Nothing is
+downloaded. Sources (docs/calibration.md; conversions in prepare_realdata.py's docstring, e.g. the
+westfal session 06 taken as logged): an FSR in a divider read by ``analogRead`` with an HX711 load cell,
+hand-loaded and servo-driven (LucasWestfal/FSR_calibration_techniques); a Velostat film pressed by a UR5e
+arm against a Futek load cell (Lupasic/tactile-sensor-velostat); FSRs under a phantom pressed by hand on a
+force plate (priyanshum17/pressure, MIT); a piezoresistive taxel read through a divider with the authors'
+force conversion (TAMS-Group/tams_tactile_sensor_array_hardware); one taxel of a capacitive insole (8-bit
 counts) in an air chamber whose pressure times the taxel's area is the reference
 (ami-iit/paper_belli_2023_sensors_insole-calibration, BSD-3-Clause).
 
-For each train → test pair: :func:`fsrlab.calibration.heldout_runs.calibrate_runs` (what
-``fsrlab calibrate TRAIN.csv --x reading --reference force_n [--compensate]`` runs) on the training
-runs, then :func:`fsrlab.calibration.apply.apply_calibration` (``fsrlab apply``) on the test run; RMSE over the loaded rows (reference above
-5 % of the test's maximum) in % of the test's reference span, as a ratio to the best plain polynomial
-(degree 1–5 in the raw readout fitted on the same training rows, the degree that is best **on the
-test run**: an oracle the calibration does not have); the share of loaded rows whose error lies
-within ±2u; the share of loaded rows left without an estimate. Beside the oracle, the polynomial a user
-without the test's reference can fit: its degree chosen on the training runs alone (leave one recording
-out, or the first 70 % of one run fitted and the rest scored), and the calibrations' ratios to it. Beside it, measured in the same run,
-the in-run cross-validated calibration (``--method cv --compensate``, one training run only).
+The first :data:`DEVELOPED_ON` pairs are those the calibration was developed on; the others were added later
+and only measured. Every table and summary shows the two groups apart.
+
+For each train → test pair: :func:`fsrlab.calibrate` (what ``fsrlab calibrate TRAIN.csv --x reading
+--reference force_n [--compensate]`` runs) on the training runs, then :func:`fsrlab.apply` (``fsrlab
+apply``) on the test run; RMSE over the loaded rows (reference above 5 % of the test's maximum) in % of the
+test's reference span. Peers, all fitted on the same training rows:
+
+- the best plain polynomial (degree 1–5 in the raw readout, the degree that is best **on the test run**: an
+  oracle the calibration does not have); the ratios in the pair tables are against it;
+- the polynomial a user without the test's reference can fit: its degree chosen on the training runs alone
+  (leave one recording out, or the first 70 % of one run fitted and the rest scored), in the raw reading;
+- the same in the variable the physics names (:func:`physics_variable`: 1/reading when the training reading
+  is positive, spans more than a decade and falls as the force rises, as a resistance does; else the
+  reading), the peer of issue 37's criteria.
+
+Also: the share of loaded rows whose error lies within ±2u (the criterion applies to the pairs recorded in
+one session, :data:`SAME_SESSION`, marked S); the share of loaded rows left without an estimate.
 
 Then a robustness table: a few of those pairs with their reference logged ``k`` readings late (the
 readout's first ``k`` rows and the reference's last ``k`` dropped, in the training and the test runs
@@ -45,7 +58,7 @@ from pathlib import Path
 
 import numpy as np
 
-TITLE = "Calibration on real recordings (held-out selection vs the best plain polynomial)"
+TITLE = "Calibration on real recordings (held-out selection vs plain polynomials)"
 
 #: (name, train files or (file, part), test files or (file, part)); part: "first half" / "second half".
 PAIRS = (
@@ -117,6 +130,14 @@ PAIRS = (
 #: The first pairs of PAIRS, those the calibration was developed on; the others were added later and
 #: only measured (their figures are summed up apart, as the less flattering check).
 DEVELOPED_ON = 21
+
+#: Indices of PAIRS whose training and test rows come from one session (the ±2u criterion applies to them):
+#: halves of one run, a repeat recorded minutes later on the same mounting (the robot's Velostat series,
+#: 25 Nov 2021, 13:58-15:19, one mounting per indenter), hand and servo runs of one numbered FSR session.
+#: Not: another FSR session, another cover on the taxel (bare vs silicone), another force-plate experiment
+#: (the phantom placed again), the insole's runs after a restart of its logger (another clock base) or
+#: another day.
+SAME_SESSION = frozenset({0, 1, 2, 3, 4, 6, 7, 8, 9, 13, 14, 15, 16, 18, 20, 22, 23, 24, 26, 27, 28, 29, 30, 31, 33})
 
 
 #: Pairs (by name) and reference delays [readings] of the robustness table.
@@ -226,13 +247,38 @@ def _best_polynomial(train, test) -> tuple[float, int]:
     return best
 
 
-def _fair_polynomial(train, test) -> tuple[float, int]:
-    """(RMSE [% of the test's span] over the loaded test rows, degree) of the plain polynomial whose degree 1–5
-    is chosen on the training runs alone, as a user without the test's reference must: by leave-one-recording-out
-    mean squared error with two or more runs, else fitted on the first 70 % of the run and scored on the rest."""
+def _as(x: np.ndarray, variable: str) -> np.ndarray:
+    """The reading in ``variable``: itself (``reading``) or its reciprocal (``1/reading``, NaN where ≤ 0)."""
+    if variable == "reading":
+        return x
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(x > 0, 1.0 / x, np.nan)
+
+
+def physics_variable(train) -> str:
+    """``1/reading`` when the pooled training reading is positive, spans more than a decade and falls as the
+    force rises (Spearman ρ < 0: a resistance, whose conductance follows the force), else ``reading``."""
+    x, y = (np.concatenate(v) for v in zip(*(_columns(p) for p in train)))
+    ok = np.isfinite(x) & np.isfinite(y)
+    x, y = x[ok], y[ok]
+    if x.size < 3 or x.min() <= 0 or x.max() / x.min() <= 10:
+        return "reading"
+    def rank(v):
+        return np.argsort(np.argsort(v, kind="stable"), kind="stable").astype(float)
+
+    return "1/reading" if np.corrcoef(rank(x), rank(y))[0, 1] < 0 else "reading"
+
+
+def _fair_polynomial(train, test, variable: str = "reading") -> tuple[float, int]:
+    """(RMSE [% of the test's span] over the loaded test rows, degree) of the plain polynomial in ``variable``
+    (``reading`` or ``1/reading``) whose degree 1–5 is chosen on the training runs alone, as a user without
+    the test's reference must: by leave-one-recording-out mean squared error with two or more runs, else
+    fitted on the first 70 % of the run and scored on the rest. Test rows where the variable is undefined
+    are left out."""
     cols = []
     for p in train:
         x, y = _columns(p)
+        x = _as(x, variable)
         ok = np.isfinite(x) & np.isfinite(y)
         cols.append((x[ok], y[ok]))
 
@@ -252,18 +298,19 @@ def _fair_polynomial(train, test) -> tuple[float, int]:
     xs, ys = (np.concatenate(v) for v in zip(*cols))
     x, y = (np.concatenate(v) for v in zip(*(_columns(p) for p in test)))
     loaded = y > 0.05 * np.nanmax(y)
-    e = np.polynomial.Polynomial.fit(xs, ys, degree)(x[loaded]) - y[loaded]
+    e = np.polynomial.Polynomial.fit(xs, ys, degree)(_as(x[loaded], variable)) - y[loaded]
+    e = e[np.isfinite(e)]
     return 100 * float(np.sqrt(np.mean(e ** 2))) / (np.nanmax(y) - np.nanmin(y)), degree
 
 
 def _applied(cal, test) -> tuple:
     """The estimate's error, its uncertainty (NaN where the calibration gives none) and the reference, over
     the test runs, each calibrated by ``cal`` (what ``fsrlab apply`` writes)."""
-    from fsrlab.calibration.apply import apply_calibration
+    import fsrlab as fl
 
     errs, us, ys = [], [], []
     for p in test:
-        run = apply_calibration(cal, str(p))
+        run = fl.apply(cal, fl.load_run(str(p)))
         y = np.asarray(run["force_n"], float)
         errs.append(np.asarray(run["force_n_estimate"], float) - y)
         u = run["force_n_uncertainty"] if "force_n_uncertainty" in run else np.full(y.size, np.nan)
@@ -275,7 +322,7 @@ def _applied(cal, test) -> tuple:
 def late_scores(root: Path, tmp: Path, train_specs, test_specs) -> list | None:
     """(k, RMSE of the compensated estimate as a multiple of k = 0's, delay found [readings]) for k = 0 and
     each of :data:`LATE_ROWS`; an entry's ratio is None where ``calibrate`` refused the shifted runs."""
-    from fsrlab.calibration.heldout_runs import calibrate_runs
+    import fsrlab as fl
 
     train = [_read(root, s, tmp) for s in train_specs]
     test = [_read(root, s, tmp) for s in test_specs]
@@ -286,7 +333,7 @@ def late_scores(root: Path, tmp: Path, train_specs, test_specs) -> list | None:
         tr = [_late(p, k, tmp, f"train{i}") for i, p in enumerate(train)]
         te = [_late(p, k, tmp, f"test{i}") for i, p in enumerate(test)]
         try:
-            cal = calibrate_runs([str(p) for p in tr], x="reading", reference="force_n", compensate=True)
+            cal = fl.calibrate([str(p) for p in tr], x="reading", reference="force_n", compensate=True)
         except ValueError:
             out.append((k, None, None))
             continue
@@ -306,30 +353,20 @@ def pair_scores(root: Path, tmp: Path, train_specs, test_specs) -> dict | None:
         return None
     poly, degree = _best_polynomial(train, test)
     fair, fair_degree = _fair_polynomial(train, test)
-    out = {"poly": poly, "degree": degree, "fair": fair, "fair_degree": fair_degree, "cv": None}
-    if len(train) == 1:  # the in-run cross-validated calibration (--method cv), one run only
-        from fsrlab.calibration.fit import calibrate_run
-
-        try:
-            old = calibrate_run(str(train[0]), x="reading", reference="force_n", compensate=True)
-        except ValueError:
-            old = None
-        if old is not None:
-            e, _, y = _applied(old, test)
-            loaded = y > 0.05 * np.nanmax(y)
-            got = loaded & np.isfinite(e)
-            out["cv"] = {"ratio": 100 * np.sqrt(np.mean(e[got] ** 2)) / (np.nanmax(y) - np.nanmin(y)) / poly,
-                         "missing": float(np.mean(~np.isfinite(e[loaded])))}
+    variable = physics_variable(train)
+    phys, phys_degree = (fair, fair_degree) if variable == "reading" else _fair_polynomial(train, test, variable)
+    out = {"poly": poly, "degree": degree, "fair": fair, "fair_degree": fair_degree, "phys": phys,
+           "phys_degree": phys_degree, "phys_variable": variable}
     for comp in (False, True):
         out["comp" if comp else "plain"] = _scored(train, test, poly, comp)
     return out
 
 
 def _scored(train, test, poly: float, compensate: bool) -> dict:
-    """``calibrate_runs`` on ``train`` applied to ``test``: ratio to ``poly`` [% of span], coverage, missing share."""
-    from fsrlab.calibration.heldout_runs import calibrate_runs
+    """``fsrlab.calibrate`` on ``train`` applied to ``test``: ratio to ``poly`` [% of span], coverage, missing share."""
+    import fsrlab as fl
 
-    cal = calibrate_runs([str(p) for p in train], x="reading", reference="force_n", compensate=compensate)
+    cal = fl.calibrate([str(p) for p in train], x="reading", reference="force_n", compensate=compensate)
     e, u, y = _applied(cal, test)
     loaded = y > 0.05 * np.nanmax(y)
     span = np.nanmax(y) - np.nanmin(y)
@@ -358,57 +395,90 @@ def fault_scores(root: Path, tmp: Path, fault) -> list:
     return out
 
 
+PAIR_HEADER = ("| # | pair | S | best polynomial (degree) | polynomial, degree chosen on training: reading (degree) | "
+               "same in the physics variable (variable, degree) | plain ×, ±2u | `--compensate` ×, ±2u, missing | "
+               "compensated / plain | model chosen |")
+PAIR_RULE = "|---:|---|:-:|---:|---:|---:|---:|---:|---:|---|"
+
+
+def _pair_row(i: int, name: str, s: dict) -> str:
+    p, c = s["plain"], s["comp"]
+    delay = f", delay {c['delay_rows']:.2g} rows" if c["delay_rows"] else ""
+    return (f"| {i} | {name} | {'S' if i in SAME_SESSION else ''} | {s['poly']:.2f} % ({s['degree']}) | "
+            f"{s['fair']:.2f} % ({s['fair_degree']}) | {s['phys']:.2f} % ({s['phys_variable']}, {s['phys_degree']}) | "
+            f"×{p['ratio']:.2f}, {100 * p['coverage']:.0f} % | "
+            f"×{c['ratio']:.2f}, {100 * c['coverage']:.0f} %, {100 * c['missing']:.1f} % | "
+            f"{c['ratio'] / p['ratio']:.3f} | {c['model']}{delay} |")
+
+
+def _summary(scores: dict) -> list[str]:
+    """The summary table: issue 37's figures for the pairs developed on, those added later, and all."""
+    groups = ((f"first {DEVELOPED_ON} (developed on)", lambda i: i < DEVELOPED_ON),
+              (f"later {len(PAIRS) - DEVELOPED_ON} (measured only)", lambda i: i >= DEVELOPED_ON),
+              ("all", lambda i: True))
+    cols = []
+    for label, member in groups:
+        got = {i: s for i, s in scores.items() if s is not None and member(i)}
+        if not got:
+            cols.append((label, None))
+            continue
+        idx = sorted(got)
+        comp = np.array([got[i]["comp"]["ratio"] for i in idx])
+        plain = np.array([got[i]["plain"]["ratio"] for i in idx])
+        oracle = np.array([got[i]["poly"] for i in idx])
+        fair = np.array([got[i]["fair"] for i in idx]) / oracle
+        phys = np.array([got[i]["phys"] for i in idx]) / oracle
+        same = [i for i in idx if i in SAME_SESSION]
+
+        def gm(v):
+            return f"×{np.exp(np.mean(np.log(v))):.3f}"
+
+        def worst(v, idx=idx):
+            return f"×{v.max():.2f} (#{idx[int(np.argmax(v))]})"
+
+        cp = comp / plain
+        cols.append((label, {
+            "pairs": str(len(idx)),
+            "compensated / plain: worst; pairs above ×1.05": f"{worst(cp)}; {int((cp > 1.05).sum())}",
+            "`--compensate` vs the oracle: geometric mean; worst": f"{gm(comp)}; {worst(comp)}",
+            "`--compensate` vs the polynomial in the physics variable, degree chosen on training: geometric mean; worst":
+                f"{gm(comp / phys)}; {worst(comp / phys)}",
+            "same, plain calibration": f"{gm(plain / phys)}; {worst(plain / phys)}",
+            "`--compensate` vs the polynomial in the raw reading, degree chosen on training: geometric mean; worst":
+                f"{gm(comp / fair)}; {worst(comp / fair)}",
+            "±2u (compensated) ≥ 90 %, same-session pairs": f"{sum(got[i]['comp']['coverage'] >= 0.9 for i in same)} of "
+                                                             f"{len(same)}",
+            "loaded rows without an estimate: largest share": f"{100 * max(got[i]['comp']['missing'] for i in idx):.1f} %",
+        }))
+    keys = next((list(v) for _, v in cols if v), [])
+    out = [("**Summary** (issue 37's criteria: compensated ≤ ×1.05 plain on every pair; geometric mean ≤ ×0.80 and "
+            "worst ≤ ×1.25 against the polynomial in the physics variable; ±2u ≥ 90 % on same-session pairs; "
+            "≤ 2 % of loaded rows without an estimate):"), "", "| | " + " | ".join(label for label, _ in cols) + " |",
+           "|---|" + "---|" * len(cols)]
+    out += [f"| {k} | " + " | ".join(v[k] if v else "—" for _, v in cols) + " |" for k in keys]
+    return out
+
+
 def run() -> str:
     root = os.environ.get("FSRLAB_REALDATA")
     if not root or not Path(root).is_dir():
         return ("skipped: set FSRLAB_REALDATA to a directory of real recordings (time_s,reading,force_n CSV files; "
                 "see this module's docstring)\n")
-    lines = ["| pair | best polynomial (degree) | polynomial, degree chosen on training (degree) | plain ×, ±2u coverage | "
-             "`--compensate` ×, ±2u coverage, missing | model chosen | `--method cv --compensate` ×, missing |",
-             "|---|---:|---:|---:|---:|---|---:|"]
-    ratios, covers, later, plains, fairs = [], [], [], [], []
-    unaltered = {}  # pair index -> (compensated ratio, coverage), for the faults' table
+    rows, scores = {}, {}
     with tempfile.TemporaryDirectory() as tmp:
         for i, (name, tr, te) in enumerate(PAIRS):
             s = pair_scores(Path(root), Path(tmp), tr, te)
-            if s is None:
-                lines.append(f"| {name} | not found | | | | | |")
-                continue
-            p, c = s["plain"], s["comp"]
-            ratios.append(c["ratio"])
-            plains.append(p["ratio"])
-            covers.append(c["coverage"])
-            fairs.append(s["fair"] / s["poly"])
-            later.append(i >= DEVELOPED_ON)
-            unaltered[i] = (c["ratio"], c["coverage"])
-            old = s["cv"]
-            cv = f"×{old['ratio']:.2f}, {100 * old['missing']:.1f} %" if old else "— (one run only)"
-            delay = f", delay {c['delay_rows']:.2g} rows" if c["delay_rows"] else ""
-            lines.append(f"| {name} | {s['poly']:.2f} % ({s['degree']}) | {s['fair']:.2f} % ({s['fair_degree']}) | "
-                         f"×{p['ratio']:.2f}, {100 * p['coverage']:.0f} % | "
-                         f"×{c['ratio']:.2f}, {100 * c['coverage']:.0f} %, {100 * c['missing']:.1f} % | {c['model']}{delay} | "
-                         f"{cv} |")
-    r, cov, later = np.asarray(ratios), np.asarray(covers), np.asarray(later, dtype=bool)
-    for which, m in (("all", np.ones(r.size, dtype=bool)), (f"the first {DEVELOPED_ON} (developed on)", ~later),
-                     ("the pairs added later (measured only)", later)):
-        if m.any() and (which == "all" or later.any()):
-            lines.append("")
-            lines.append(f"Geometric mean of the `--compensate` ratios, {which}: ×{np.exp(np.mean(np.log(r[m]))):.2f} "
-                         f"over {int(m.sum())} pairs; worst ×{r[m].max():.2f}; {int((r[m] <= 1.0).sum())} of "
-                         f"{int(m.sum())} at most ×1.00; ±2u coverage at least 90 % on {int((cov[m] >= 0.9).sum())} "
-                         f"of {int(m.sum())}.")
-    if r.size:
-        either, capped = np.minimum(r, np.asarray(plains)), np.minimum(r, 1.0)
-        lines += ["", "Bounds of a do-no-harm rule, from the same figures: with hindsight, the better of the plain and "
-                  f"the `--compensate` calibration on each pair ×{np.exp(np.mean(np.log(either))):.2f} "
-                  f"({int((either <= 1.0).sum())} of {r.size} at most ×1.00); every ratio above ×1.00 taken as "
-                  f"×1.00 ×{np.exp(np.mean(np.log(capped))):.2f}."]
-        vs = r / np.asarray(fairs)
-        lines += ["", "Against the polynomial whose degree is chosen on the training runs (the peer a user without the "
-                  f"test's reference can fit; itself ×{np.exp(np.mean(np.log(fairs))):.2f} the best polynomial): "
-                  f"`--compensate` ×{np.exp(np.mean(np.log(vs))):.2f}, worst ×{vs.max():.2f}, "
-                  f"{int((vs <= 1.0).sum())} of {r.size} at most ×1.00; the plain calibration "
-                  f"×{np.exp(np.mean(np.log(np.asarray(plains) / np.asarray(fairs)))):.2f}."]
+            scores[i] = s
+            rows[i] = f"| {i} | {name} | not found | | | | | | | |" if s is None else _pair_row(i, name, s)
+    lines = []
+    for title, idx in ((f"Pairs the calibration was developed on (the first {DEVELOPED_ON})", range(DEVELOPED_ON)),
+                       (f"Pairs added later, measured only ({len(PAIRS) - DEVELOPED_ON})",
+                        range(DEVELOPED_ON, len(PAIRS)))):
+        lines += [f"**{title}.** Ratios are RMSE over the best polynomial's (the oracle, first column); S: "
+                  "training and test recorded in one session.", "", PAIR_HEADER, PAIR_RULE]
+        lines += [rows[i] for i in idx] + [""]
+    lines += _summary(scores)
+    unaltered = {i: (s["comp"]["ratio"], s["comp"]["coverage"]) for i, s in scores.items() if s is not None}
     lines += ["", "The reference logged k readings late (robustness): the compensated estimate's RMSE as a multiple of "
               "the same pair's with k = 0, and the delay found [readings].", "",
               "| pair | k = 0: delay | " + " | ".join(f"k = {k}" for k in LATE_ROWS) + " |",
