@@ -112,6 +112,12 @@ class LiveSession:
         Sidecar content of the runs recorded (circuit, sensor, origin).
     stall_s : float
         Silence that counts as a stall. [s]
+    scan : Scan, optional
+        Several sensors behind the meter's multiplexer (protocol 3): the meter scans these channels, the
+        windows carry ``channel`` and ``scan``, :meth:`channels` keeps each channel's latest reading and
+        its link health, and a recording is in the long format (``SCAN_COLUMNS``).
+    channel_map : list of dict, optional
+        The sensors' ids and positions (:func:`fsrlab.acquisition.recorder.channel_map`).
     weights : dict, optional
         The guided known-weight calibration the page offers: ``steps`` (:func:`fsrlab.bench.weights.plan_steps`),
         ``place`` (``place(step) -> time or None``: the virtual bench places the mass), ``x``, ``gravity_m_s2``
@@ -122,7 +128,14 @@ class LiveSession:
                  reference: Callable | None = None, loadcell=None, area_m2: float | None = None,
                  estimator: Callable | None = None,
                  health: Callable[[], str | None] | None = None, metadata: dict | None = None,
-                 stall_s: float = 2.0, weights: dict | None = None) -> None:
+                 stall_s: float = 2.0, weights: dict | None = None, scan=None, channel_map=None) -> None:
+        from fsrlab.acquisition.recorder import channel_map as make_map
+
+        self.scan = scan
+        self.channel_map = make_map(scan.channels, channel_map) if scan is not None else []
+        self._chan: dict[int, dict] = {e["channel"]: {**e, "frequency_hz": math.nan, "estimate": math.nan,
+                                                      "readings": 0, "missed": 0, "no_oscillation": 0,
+                                                      "time_s": math.nan} for e in self.channel_map}
         self.link = link
         self.reference = reference
         self.loadcell = loadcell
@@ -161,7 +174,16 @@ class LiveSession:
             total = self._total
             n = min(total - cursor, len(self._rows))
             rows = list(self._rows)[len(self._rows) - n:] if n > 0 else []
-        return total, {c: [r[c] for r in rows] for c in COLUMNS}
+        cols = COLUMNS + (("channel",) if self.scan is not None else ())
+        return total, {c: [r.get(c) for r in rows] for c in cols}
+
+    def channels(self) -> list[dict]:
+        """Each scanned channel's latest reading and health: ``channel``, ``sensor_id``, ``x_m``, ``y_m``,
+        ``frequency_hz`` [Hz] and ``estimate`` (NaN without one), ``time_s`` [s], ``readings``, ``missed`` (edges
+        missed in all its readings) and ``no_oscillation`` (its readings without a period: an open channel, or
+        a sensor out of oscillation). Empty without a scan."""
+        with self._lock:
+            return [dict(self._chan[k]) for k in sorted(self._chan)]
 
     def command(self, name: str, value=None) -> None:
         """Queue a command for the device thread: ``range`` (0/1), ``window`` [ms], ``record`` (a path),
@@ -198,9 +220,12 @@ class LiveSession:
             st.device = f"{ident.name} {ident.firmware_version} (protocol {ident.protocol_version})"
             self._has_ref = ident.protocol_version >= 2
             self.link.stop()
+            if self.scan is not None and ident.protocol_version < 3:
+                raise LinkError(f"{self.link.port} speaks protocol {ident.protocol_version}: scanning channels needs 3")
             self._stream = WindowStream(self.link, st.window_ms, st.range, self._has_ref, self.stall_s, self.loadcell,
                                         None, self.reference, on_event=self._event, on_gap=self._gap,
-                                        on_reset=lambda: self._event("device restarted; its settings sent again"))
+                                        on_reset=lambda: self._event("device restarted; its settings sent again"),
+                                        scan=self.scan)
             self._stream.configure()
             self._stream.begin()
             st.state, st.message = "running", f"reading {self.link.port}"
@@ -254,6 +279,12 @@ class LiveSession:
                 self._collect_tare(row, now)
                 self._guide(m, row)
                 with self._lock:
+                    if self.scan is not None and m.channel in self._chan:
+                        c = self._chan[m.channel]
+                        c.update(frequency_hz=row["frequency_hz"], estimate=row["estimate"], time_s=row["time_s"])
+                        c["readings"] += 1
+                        c["missed"] += m.missed
+                        c["no_oscillation"] += m.periods == 0
                     self._rows.append(row)
                     self._total += 1
                     st.frames += 1
@@ -413,13 +444,14 @@ class LiveSession:
     # ------------------------------------------------------------- recording
     def _open_recording(self, path: Path) -> None:
         from fsrlab.acquisition.recorder import COLUMNS as RUN_COLUMNS
-        from fsrlab.acquisition.recorder import REFERENCE_COLUMNS
+        from fsrlab.acquisition.recorder import REFERENCE_COLUMNS, SCAN_COLUMNS
         from fsrlab.io.runwriter import RunWriter
 
         if self._writer is not None:
             self._event(f"already recording to {self.status.recording}")
             return
-        columns = list(RUN_COLUMNS) + (["stress_pa"] if self.reference is not None else [])
+        columns = list(RUN_COLUMNS if self.scan is None else SCAN_COLUMNS)
+        columns += ["stress_pa"] if self.reference is not None else []
         columns += list(REFERENCE_COLUMNS) if self._has_ref else []
         meta = dict(self.metadata)
         meta.setdefault("origin", f"fsrlab live from {self.link.port}")
@@ -430,6 +462,9 @@ class LiveSession:
                                "device": ident.name if ident else "",
                                "firmware_version": ident.firmware_version if ident else "",
                                "protocol_version": ident.protocol_version if ident else None}
+        if self.scan is not None:
+            meta["acquisition"]["scan"] = self.scan.to_dict()
+            meta["channels"] = self.channel_map
         self._writer = RunWriter(path, columns, meta, overwrite=False)  # never replaces a run
         self._record_t0 = None
         self.status.recording, self.status.recorded = str(path), 0
