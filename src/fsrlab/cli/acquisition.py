@@ -130,8 +130,7 @@ def acquire(
 
     \b
       fsrlab acquire --virtual --duration 10s --window 20ms --out bench.csv
-      fsrlab acquire --port auto --r 10k --c-off 1n --diode --duration 1.5min --range 1 --out bench.csv
-      fsrlab acquire --port /dev/pts/3 --channels 0-7 --duration 5s --out run.csv
+      fsrlab acquire --port auto --r 10k --c-off 1n --diode --channels 0-7 --duration 1.5min --out bench.csv
     """
     from fsrlab.acquisition.recorder import record, result_dict
     from fsrlab.acquisition.serial_link import SerialLink
@@ -236,8 +235,7 @@ def virtual_device(
 
     \b
       fsrlab virtual-device --duration 10min --profile sine --peak 80k --period 2s
-      fsrlab virtual-device --corrupt 1% --drop 0.5% --seed 1
-      fsrlab virtual-device --channels 8
+      fsrlab virtual-device --channels 8 --corrupt 1% --drop 0.5% --seed 1
     """
     import json
 
