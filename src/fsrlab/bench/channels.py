@@ -264,7 +264,18 @@ def crosstalk(open_meter, channels=tuple(range(8)), load_pa: float = 50e3, durat
 
 
 def virtual_meter(source):
-    """``open_meter`` for :func:`crosstalk`: the Python virtual device at ``speed="max"``, no load cell."""
+    """``open_meter`` for :func:`crosstalk`: the Python virtual device at ``speed="max"``, no load cell.
+
+    Parameters
+    ----------
+    source : MuxSource
+        The sensors behind the multiplexer.
+
+    Returns
+    -------
+    context manager
+        Yields the meter's serial port (a pty path).
+    """
     from contextlib import contextmanager
 
     from fsrlab.virtual.device import VirtualDevice
@@ -278,7 +289,18 @@ def virtual_meter(source):
 
 
 def twin_meter(source):
-    """``open_meter`` for :func:`crosstalk`: the digital twin (the real firmware in simavr) at ``speed="max"``."""
+    """``open_meter`` for :func:`crosstalk`: the digital twin (the real firmware in simavr) at ``speed="max"``.
+
+    Parameters
+    ----------
+    source : MuxSource
+        The sensors behind the multiplexer.
+
+    Returns
+    -------
+    context manager
+        Yields the meter's serial port (a pty path).
+    """
     from contextlib import contextmanager
 
     from fsrlab.virtual.twin import Twin

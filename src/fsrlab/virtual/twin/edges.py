@@ -86,6 +86,9 @@ class EdgeStream:
         Stress profile, sensor and circuit (its ``c_off_farad`` is what range 1 switches in).
     range0 : int
         C_off switch at time 0 (the firmware boots with range 0).
+    channel0 : int
+        Multiplexer channel selected at time 0 (the firmware boots with channel 0; a
+        :class:`~fsrlab.virtual.sources.MuxSource` only).
 
     Notes
     -----
