@@ -64,6 +64,10 @@ COMMANDS = {
     "demo": ("demo", "The measurement chain on a virtual bench: record, calibrate, compensate, report; then the paper "
                      "report."),
     "import": ("importer", "Import a foreign CSV (your own sketch, a data logger, a spreadsheet) as a run."),
+    "calibrate-channels": ("channels", "Calibrate every channel of a multi-channel run from one command; one file "
+                                       "keyed by sensor id."),
+    "crosstalk": ("channels", "Cross-talk check: load one channel at a time, read all of them; prints the channels × "
+                              "channels matrix."),
     "ports": ("ports", "List the serial ports with what is known about each, and what --port auto picks."),
     "doctor": ("doctor", "Say what this machine has for fsrlab and what each thing enables, with install commands."),
     "firmware": ("firmware", "The meter's firmware shipped in the package: its image (hex), its sketch, flashing an "
