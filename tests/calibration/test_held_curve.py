@@ -17,8 +17,8 @@ import pytest
 from scipy.optimize import lsq_linear
 
 from fsrlab.calibration import heldout_model as hm
+from fsrlab.calibration.curves import fit_static, static_system
 from fsrlab.calibration.heldout import Recording
-from fsrlab.calibration.monotone import fit_monotone, monotone_system
 
 RATE_HZ = 20.0
 DATA = Path(__file__).resolve().parents[1] / "data" / "real" / "belli-insole"
@@ -29,8 +29,8 @@ def test_the_held_fit_is_bounded_least_squares_on_what_the_curve_leaves():
     x = np.sort(rng.uniform(0, 1000, 400))
     feats = rng.normal(size=(400, 3))
     y = 0.02 * x + feats @ np.array([0.5, -0.3, 0.0]) + rng.normal(0, 0.05, 400)
-    curve, _ = fit_monotone(x, y, "readout", 4, 1, None)
-    system = monotone_system(x, y, "readout", 4, 1, None, extra=feats)
+    curve = fit_static(x, y, "piecewise", 4, "readout", 1, None)
+    system = static_system(x, y, "piecewise", 4, "readout", 1, None, extra=feats)
     r = y - curve(x)
     for signs, lam in (([1, 1, 1], 0.0), ([1, -1, 1], 1e-2), ([-1, -1, -1], 0.1)):
         sg = np.array(signs, float)
@@ -40,9 +40,9 @@ def test_the_held_fit_is_bounded_least_squares_on_what_the_curve_leaves():
         np.testing.assert_allclose(w, ref, atol=1e-6)
         assert rss == pytest.approx(float(np.sum((r - feats @ w) ** 2)), rel=1e-6)
     with pytest.raises(ValueError):
-        system.solve_extra(fit_monotone(x, y, "readout", 2, 1, None)[0])
+        system.solve_extra(fit_static(x, y, "piecewise", 2, "readout", 1, None))
     # columns that never move (a level that stayed put) and no ridge: no weights, the curve's residual
-    still = monotone_system(x, y, "readout", 4, 1, None, extra=np.zeros((400, 2)))
+    still = static_system(x, y, "piecewise", 4, "readout", 1, None, extra=np.zeros((400, 2)))
     w, rss = still.solve_extra(curve)
     assert np.all(w == 0) and rss == pytest.approx(float(np.sum(r ** 2)), rel=1e-6)
 

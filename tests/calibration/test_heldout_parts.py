@@ -12,8 +12,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from fsrlab.calibration.curves import fit_static
 from fsrlab.calibration.heldout import BLOCKS, Recording, held_out_splits, paired_gain
-from fsrlab.calibration.monotone import MonotoneCurve, adc_full_scale, fit_monotone, readout_variable
+from fsrlab.calibration.monotone import MonotoneCurve, adc_full_scale, readout_variable
 from fsrlab.calibration.operators import MemoryState, directions, memory_features
 
 
@@ -76,7 +77,7 @@ def test_monotone_curve_never_decreases_and_is_flat_below_its_readings(seed, seg
     rng = np.random.default_rng(seed)
     x = np.sort(rng.uniform(0, 800, 200))
     y = 5 * (x / 800) ** 2 + rng.normal(0, 1.0, x.size)  # noisy enough to pull a free fit downwards
-    curve, _ = fit_monotone(x, y, "readout", segments, 1, None)
+    curve = fit_static(x, y, "piecewise", segments, "readout", 1, None)
     grid = np.linspace(-100, 1200, 500)
     v = curve(grid)
     assert np.all(np.diff(v) >= -1e-9 * max(1.0, np.abs(v).max()))
@@ -92,7 +93,7 @@ def test_one_reading_at_a_time_gives_the_curve_of_the_whole_array(seed, segments
     x = np.sort(rng.uniform(20, 1000, 300))
     g = (x / (1023 - x)) if sign > 0 else ((1023 - x) / x)
     y = 3 * g ** 0.8 + rng.normal(0, 0.05, x.size)
-    curve, _ = fit_monotone(x, y, variable, segments, sign, 1023.0)
+    curve = fit_static(x, y, "piecewise", segments, variable, sign, 1023.0)
     grid = np.r_[np.linspace(-50, 1100, 301), x[:20]]
     assert [curve.at(float(v)) for v in grid] == pytest.approx(curve(grid).tolist(), rel=1e-12, abs=1e-12)
 
@@ -102,7 +103,7 @@ def test_monotone_curve_extrapolates_linearly_in_the_readout_with_its_top_half_s
     x = np.linspace(0, 800, 400) if sign > 0 else np.linspace(223, 1023, 400)
     g = x / (1023 - x) if sign > 0 else (1023 - x) / x
     y = 2.0 * g  # a force proportional to the conductance ratio
-    curve, _ = fit_monotone(x, y, "conductance", 4, sign, 1023.0)
+    curve = fit_static(x, y, "piecewise", 4, "conductance", sign, 1023.0)
     top, mid = (x.max(), x.mean()) if sign > 0 else (x.min(), x.mean())
     v = curve(np.array([top, top + 50 * sign, top + 100 * sign]))
     assert v[2] - v[1] == pytest.approx(v[1] - v[0], rel=1e-9)  # straight beyond the range
@@ -125,8 +126,8 @@ def test_log_variable_is_the_oriented_logarithm_and_its_curve_inverts_it():
     assert np.isfinite(readout_variable(np.array([0.0, -1.0]), "log", 1, None)).all()
     y = 30.0 / x ** 0.8  # a resistance-like reading falling as a power law of the force
     xs = np.geomspace(2.0, 2000.0, 300)
-    curve, _ = fit_monotone(xs, 30.0 / xs ** 0.8, "log", 8, -1, None)
-    straight, _ = fit_monotone(xs, 30.0 / xs ** 0.8, "readout", 8, -1, None)
+    curve = fit_static(xs, 30.0 / xs ** 0.8, "piecewise", 8, "log", -1, None)
+    straight = fit_static(xs, 30.0 / xs ** 0.8, "piecewise", 8, "readout", -1, None)
     grid = np.geomspace(1.0, 4000.0, 400)
     assert np.all(np.diff(curve(grid)) <= 1e-9)  # falls as the reading rises: monotone in the force's sense
     # eight segments in ln x follow the power law (knots at quantiles, spread over three decades); eight
@@ -142,7 +143,7 @@ def test_log_variable_is_the_oriented_logarithm_and_its_curve_inverts_it():
 
 def test_curve_round_trips_and_refuses_a_decreasing_segment():
     x = np.linspace(0, 1, 50)
-    curve, _ = fit_monotone(x, 3 * x, "readout", 2, 1, None)
+    curve = fit_static(x, 3 * x, "piecewise", 2, "readout", 1, None)
     again = MonotoneCurve.from_dict(curve.to_dict())
     assert np.array_equal(again(x), curve(x))
     bad = curve.to_dict()

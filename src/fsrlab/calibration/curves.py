@@ -265,7 +265,7 @@ def fit_static(x, y, family: str, size: int, variable: str, sign: int, adc: floa
     family, size, variable, sign, adc
         See :func:`curve_template`.
     lam : float
-        The piecewise curve's ridge weight on its change of slope (:func:`fsrlab.calibration.monotone.fit_monotone`). [1]
+        Ridge weight on the change of slope between segments or basis functions, relative to the number of readings. [1]
     """
     return static_system(x, y, family, size, variable, sign, adc).solve(lam)[0]
 

@@ -32,8 +32,7 @@ from functools import cached_property
 import numpy as np
 
 __all__ = ["VARIABLES", "TOP_SLOPE_SPAN", "adc_full_scale", "readout_variable", "StaticCurve", "MonotoneCurve",
-           "fit_monotone", "bounded_fit", "bounded_solve", "CurveSystem", "MonotoneSystem", "curve_system",
-           "monotone_system"]
+           "bounded_solve", "CurveSystem", "curve_system"]
 
 #: The readout variables a curve can be fitted in. [1]
 VARIABLES = ("readout", "conductance", "reciprocal", "log")
@@ -109,33 +108,12 @@ def _basis(v: np.ndarray, knots: np.ndarray, extra: int = 0) -> np.ndarray:
     return out
 
 
-def bounded_fit(a: np.ndarray, y: np.ndarray, lower: np.ndarray, penalty: np.ndarray | None = None) -> np.ndarray:
-    """Least squares ``a·c ≈ y`` with ``c ≥ lower`` and a ridge ``‖penalty·c‖²``, through the normal equations.
+def bounded_solve(gram: np.ndarray, atb: np.ndarray, n: int, lower: np.ndarray,
+                  penalty: np.ndarray | None = None) -> np.ndarray:
+    """Least squares ``a·c ≈ y`` with ``c ≥ lower`` and a ridge ``‖penalty·c‖²``, from its normal equations.
 
     Columns are scaled to unit root mean square first; the normal equations keep the memory to the
     number of columns squared, whatever the number of readings.
-
-    Parameters
-    ----------
-    a : ndarray, shape (n, k)
-        Design matrix.
-    y : ndarray, shape (n,)
-        Targets.
-    lower : ndarray, shape (k,)
-        Lower bound of each coefficient (``-inf``: free).
-    penalty : ndarray, shape (m, k), optional
-        Ridge rows.
-
-    Returns
-    -------
-    ndarray, shape (k,)
-    """
-    return bounded_solve(a.T @ a, a.T @ y, a.shape[0], lower, penalty)
-
-
-def bounded_solve(gram: np.ndarray, atb: np.ndarray, n: int, lower: np.ndarray,
-                  penalty: np.ndarray | None = None) -> np.ndarray:
-    """:func:`bounded_fit` from its normal equations.
 
     Parameters
     ----------
@@ -163,8 +141,9 @@ def bounded_solve(gram: np.ndarray, atb: np.ndarray, n: int, lower: np.ndarray,
     ata = ata + 1e-12 * np.trace(ata) / k * np.eye(k)
     chol = np.linalg.cholesky(ata)
     rhs = np.linalg.solve(chol, atb)
-    if not np.any(np.isfinite(lower)):  # no bound: the least-squares solution itself
-        return np.linalg.solve(chol.T, rhs) / scale
+    free = np.linalg.solve(chol.T, rhs) / scale
+    if np.all(free >= lower):  # no bound reached: the least-squares solution is the bounded one (convex)
+        return free
     res = lsq_linear(chol.T, rhs, bounds=(lower * scale, np.inf), method="bvls")
     return res.x / scale
 
@@ -376,16 +355,12 @@ class MonotoneCurve(StaticCurve):
 
     @classmethod
     def from_dict(cls, d: dict) -> "MonotoneCurve":
+        variable, sign, adc, coef, rng = common_fields(d, "monotone curve")
         knots = np.asarray(d["knots"], dtype=float)
-        coef = np.asarray(d["coefficients"], dtype=float)
         if knots.size < 2 or coef.size != knots.size or np.any(np.diff(knots) <= 0) or np.any(coef[1:] < 0):
             raise ValueError("monotone curve: knots must increase, one coefficient per segment plus the intercept, "
                              "the segments' coefficients >= 0")
-        if int(d["sign"]) not in (1, -1):
-            raise ValueError(f"monotone curve: sign must be 1 or -1, got {d['sign']!r}")
-        lo, hi = (float(v) for v in d["readout_range"])
-        return cls(str(d["variable"]), int(d["sign"]), None if d.get("adc") is None else float(d["adc"]), knots, coef,
-                   (lo, hi))
+        return cls(variable, sign, adc, knots, coef, rng)
 
 
 def knots_for(v: np.ndarray, segments: int) -> np.ndarray:
@@ -441,8 +416,9 @@ class CurveSystem:
 
     def solve(self, lam: float = 1e-3, extra_lower: np.ndarray | None = None, extra_lam: float = 0.0,
               extra_signs: np.ndarray | None = None) -> tuple[StaticCurve, np.ndarray, float]:
-        """The curve, the extra columns' weights and the residual sum of squares (see :func:`fit_monotone`);
-        ``extra_signs``: the extra columns multiplied by these signs first (the weights returned are of the
+        """The curve, the extra columns' weights and the residual sum of squares: ``lam`` the ridge weight
+        on the curve's change of slope, ``extra_lower``, ``extra_lam`` the extra columns' lower bounds and
+        ridge weight (relative to the number of readings); ``extra_signs``: the extra columns multiplied by these signs first (the weights returned are of the
         columns as given)."""
         k = self.curve.coef.size
         m = self.extra
@@ -486,10 +462,6 @@ class CurveSystem:
         return w, max(float(w @ g_ff @ w - 2 * w @ b + rr), 0.0)
 
 
-#: The name :func:`monotone_system` has always returned. [1]
-MonotoneSystem = CurveSystem
-
-
 def curve_system(template: StaticCurve, x, y, extra: np.ndarray | None = None) -> CurveSystem:
     """The :class:`CurveSystem` of ``template``'s family on readings ``x``, reference ``y`` and further columns.
 
@@ -514,55 +486,3 @@ def curve_system(template: StaticCurve, x, y, extra: np.ndarray | None = None) -
     if m:
         a[:, k:] = extra
     return CurveSystem(template, a.T @ a, a.T @ y, float(y @ y), x.size)
-
-
-def monotone_system(x, y, variable: str, segments: int, sign: int, adc: float | None,
-                    extra: np.ndarray | None = None) -> CurveSystem:
-    """The :class:`CurveSystem` of a :class:`MonotoneCurve` on readings, reference and further columns.
-
-    Parameters
-    ----------
-    x, y : array_like
-        Readings and reference, finite.
-    variable, sign, adc
-        See :func:`readout_variable`.
-    segments : int
-        Number of linear segments (knots at quantiles of the readings). [1]
-    extra : ndarray, shape (n, m), optional
-        Further columns (memory features) fitted with the curve.
-    """
-    x = np.asarray(x, dtype=float)
-    knots = knots_for(readout_variable(x, variable, sign, adc), segments)
-    template = MonotoneCurve(variable, sign, adc, knots, np.zeros(knots.size), (float(x.min()), float(x.max())))
-    return curve_system(template, x, y, extra)
-
-
-def fit_monotone(x, y, variable: str, segments: int, sign: int, adc: float | None, lam: float = 1e-3,
-                 extra: np.ndarray | None = None, extra_lower: np.ndarray | None = None,
-                 extra_lam: float = 0.0) -> tuple[MonotoneCurve, np.ndarray]:
-    """Fit a :class:`MonotoneCurve` (and, optionally, weights of extra columns fitted jointly).
-
-    Parameters
-    ----------
-    x, y : array_like
-        Readings and reference, finite.
-    variable, sign, adc
-        See :func:`readout_variable`.
-    segments : int
-        Number of linear segments (knots at quantiles of the readings). [1]
-    lam : float
-        Ridge weight on the change of slope between segments, relative to the number of readings. [1]
-    extra : ndarray, shape (n, m), optional
-        Further columns (memory features) fitted with the curve.
-    extra_lower : ndarray, shape (m,), optional
-        Lower bounds of their weights (0: non-negative, -inf: free).
-    extra_lam : float
-        Ridge weight on the extra columns' weights, relative to the number of readings. [1]
-
-    Returns
-    -------
-    curve : MonotoneCurve
-    weights : ndarray, shape (m,)
-    """
-    curve, w, _ = monotone_system(x, y, variable, segments, sign, adc, extra).solve(lam, extra_lower, extra_lam)
-    return curve, w
