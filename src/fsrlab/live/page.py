@@ -75,6 +75,17 @@ def _fmt(v, spec: str) -> str:
     return "—" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, spec)
 
 
+def _html(text) -> str:
+    """A text the page shows inside its HTML (messages, file names, the device, the event log): control
+    characters as their escapes (:func:`fsrlab.io.shown.printable`, the one rendering boundary), then ``&``,
+    ``<`` and ``>`` as entities, so that neither a terminal escape nor markup in a file name acts on the page."""
+    import html
+
+    from fsrlab.io.shown import printable
+
+    return html.escape(printable(str(text)), quote=False)
+
+
 def make_document(doc, session, controller: Controller, reference_label: str = "reference",
                   reference_unit: str = "", reference_scale: float = 1.0, title: str = "fsrlab live") -> None:
     """Fill a Bokeh document (one browser tab) with the live view of ``session``.
@@ -204,15 +215,15 @@ def make_document(doc, session, controller: Controller, reference_label: str = "
             return
         state["status_at"] = now
         st = session.status
-        text = (f"<b>{st.state}</b> {st.message} · {st.device} · "
+        text = (f"<b>{_html(st.state)}</b> {_html(st.message)} · {_html(st.device)} · "
                        f"<span id='fps'>{st.frames_per_s:.1f}</span> frames/s · frames {st.frames} · "
                        f"dropped <span id='dropped'>{st.dropped}</span> · corrupt {st.corrupt} · missed edges "
                        f"{st.missed} · stalls {st.stalls} · range {st.range} · window {st.window_ms} ms"
-                       + (f" · <b>recording</b> <span id='recording'>{st.recording}</span> ({st.recorded} rows)"
+                       + (f" · <b>recording</b> <span id='recording'>{_html(st.recording)}</span> ({st.recorded} rows)"
                           if st.recording else ""))
         if text != status.text:
             status.text = text
-        said = (f"<b>{st.weights}</b>: " if st.weights else "") + f"<span id='prompt'>{st.prompt}</span>" \
+        said = (f"<b>{_html(st.weights)}</b>: " if st.weights else "") + f"<span id='prompt'>{_html(st.prompt)}</span>" \
             if (st.prompt or st.weights) else prompt.text
         if said != prompt.text:
             prompt.text = said
@@ -220,14 +231,14 @@ def make_document(doc, session, controller: Controller, reference_label: str = "
         if label != record.label:
             record.label = label
             record.button_type = "danger" if st.recording else "success"
-        log = "<br>".join(st.events[-5:])
+        log = "<br>".join(_html(e) for e in st.events[-5:])
         if log != events.text:
             events.text = log
 
     doc.add_periodic_callback(update, int(UPDATE_S * 1000))
     doc.on_session_destroyed(lambda ctx: controller.release(doc))
     doc.title = title
-    doc.add_root(column(Div(text=f"<h2 style='margin:4px 0'>{title}</h2>"), status, latest,
+    doc.add_root(column(Div(text=f"<h2 style='margin:4px 0'>{_html(title)}</h2>"), status, latest,
                         row(record, tare, rng, window, role), row(start_w, placed, skip, prompt, sizing_mode="stretch_width"), row(column(f_fig, d_fig, v_fig, r_fig, sizing_mode="stretch_width"),
                                                               loop, sizing_mode="stretch_width"),
                         events, sizing_mode="stretch_width"))
