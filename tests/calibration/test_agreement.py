@@ -123,3 +123,35 @@ def test_apply_says_when_some_loaded_rows_have_no_estimate(insole):
     assert code == 0, err
     assert ag["estimated_rows"] == ag["loaded_rows"] - 50
     assert f"the {ag['estimated_rows']} estimated of its {ag['loaded_rows']} loaded rows" in stdout
+
+
+@pytest.mark.parametrize("bad", [-0.1, np.inf, -np.inf])
+def test_a_negative_or_infinite_uncertainty_is_refused_naming_it(bad):
+    # Reference: issue 40 ("fl.agreement returns None silently on negative or infinite uncertainties"): a
+    # standard uncertainty is >= 0 and finite by definition (GUM 2.3.1); NaN stays "no uncertainty here".
+    from fsrlab.errors import ParameterError
+
+    y = np.linspace(0.5, 10.0, 50)
+    u = np.full(y.size, 0.4)
+    u[7] = bad
+    with pytest.raises(ParameterError) as info:
+        agreement(y, y + 0.1, u)
+    assert info.value.parameter == "uncertainty" and "row 7" in str(info.value)
+    u[7] = np.nan  # one row without an uncertainty: the others still give the coverage
+    assert agreement(y, y + 0.1, u).coverage == 1.0
+    with pytest.raises(ParameterError) as info:  # refused before "no loaded rows" could return None
+        agreement(np.zeros(50), np.zeros(50), np.full(50, -1.0))
+    assert info.value.parameter == "uncertainty"
+
+
+@pytest.mark.parametrize("argument", ["reference", "estimate", "uncertainty"])
+def test_values_that_are_not_numbers_are_refused_naming_their_parameter(argument):
+    # Reference: issue 40's API fuzzer: a str, a dict or a list of words is a ParameterError naming the
+    # argument, never numpy's "could not convert string to float".
+    from fsrlab.errors import ParameterError
+
+    args = {"reference": np.ones(30), "estimate": np.ones(30), "uncertainty": np.ones(30)}
+    for bad in ("x", {"a": 1}, ["a"] * 30):
+        with pytest.raises(ParameterError) as info:
+            agreement(**{**args, argument: bad})
+        assert info.value.parameter == argument

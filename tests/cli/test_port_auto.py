@@ -32,6 +32,7 @@ def no_ports(monkeypatch):
     ["measure", "--port", "auto", "--cal", str(EXAMPLES / "calibration.json"), "-o", "{d}/m.csv"],
     ["firmware", "flash", "--port", "auto"],
     ["loadcell", "tare", "--port", "auto", "-o", "{d}/lc.json"],
+    ["live", "--port", "auto", "-o", "{d}/l.csv"],
 ])
 def test_no_board_is_one_line_exit_2(tmp_path, no_ports, command):
     code, _, err = run_cli([a.format(d=tmp_path) for a in command])

@@ -2,8 +2,7 @@
 exists, is its input, is its input's sidecar, or is empty, refuses and changes no file.
 
 Reference: the output policy (fsrlab.io.outputs, README "Files written"); each case compares the sha256 of
-every file in the directory before and after. The library's functions that do not follow it yet (engine's
-calibration and report writers) are strict xfails: each passes, and must lose its marker, once it does.
+every file in the directory before and after.
 """
 
 from __future__ import annotations
@@ -62,28 +61,55 @@ def _sketch(case):
 def _save_calibration(case):
     cal = fl.load_calibration("calibration.json")
     target = {"exists": "old.json", "input": "bench.csv", "sidecar": "bench.meta.json", "empty": ""}[case]
-    fl.save_calibration(cal, target)
+    fl.save_calibration(cal, target, overwrite=case != "exists", inputs=["bench.csv"])
 
 
 def _report(case):
     if case == "sidecar":
         pytest.skip("a report is a directory: no sidecar")
-    fl.report("bench.csv", {"exists": "rep", "input": "bench.csv", "empty": ""}[case])
+    fl.report("bench.csv", {"exists": "rep", "input": "bench.csv", "empty": ""}[case], overwrite=case != "exists")
 
 
-ENGINE = pytest.mark.xfail(strict=True, reason="issue 40: calibration/document.py and reports/run_report.py do not "
-                                                "call fsrlab.io.outputs.check_output yet (helper engine's files)")
+def _paper_report(case):
+    if case in ("input", "sidecar"):
+        pytest.skip("the reproduction report has no input")
+    fl.paper_report({"exists": "rep", "empty": ""}[case])
+
+
 WRITERS = {"write_run": _write_run, "write_imported": _import, "write_sketch": _sketch,
-           "save_calibration": _save_calibration, "report": _report}
-OPEN = {("save_calibration", "exists"), ("save_calibration", "input"), ("save_calibration", "sidecar"),
-        ("report", "exists"), ("report", "empty")}
+           "save_calibration": _save_calibration, "report": _report, "paper_report": _paper_report}
 
 
-@pytest.mark.parametrize("writer, case", [pytest.param(w, c, marks=ENGINE if (w, c) in OPEN else ())
-                                          for w in WRITERS for c in CASES])
+@pytest.mark.parametrize("writer, case", [(w, c) for w in WRITERS for c in CASES])
 def test_writer_refuses_and_changes_nothing(work, writer, case):
     before = _hashes(work)
     with pytest.raises((ValueError, FileExistsError)) as info:
         WRITERS[writer](case)
     assert "Traceback" not in str(info.value)
     assert _hashes(work) == before
+
+
+def test_save_calibration_replaces_only_when_asked_and_never_its_own_runs(work):
+    # Reference: the output policy (fsrlab.io.outputs): overwrite=True replaces an output; the runs the
+    # calibration was fitted on (cal.sources) stay protected without being named in inputs.
+    cal = fl.calibrate("bench.csv", x="frequency_hz")
+    written = fl.save_calibration(cal, "old.json", overwrite=True)
+    assert fl.load_calibration(written).x_name == "frequency_hz"
+    before = _hashes(work)
+    with pytest.raises(fl.ParameterError) as info:
+        fl.save_calibration(cal, "bench.meta.json", overwrite=True)
+    assert info.value.parameter == "path" and "sidecar" in str(info.value)
+    assert _hashes(work) == before
+
+
+def test_refusals_name_the_parameter(work):
+    # Reference: issue 40 ("raises a FsrlabError naming the parameter"): the library's refusals carry the
+    # Python parameter, not a command-line option.
+    cal = fl.load_calibration("calibration.json")
+    for call, parameter in ((lambda: fl.save_calibration(cal, "old.json"), "path"),
+                            (lambda: fl.report("bench.csv", "rep"), "outdir"),
+                            (lambda: fl.paper_report(""), "outdir"),
+                            (lambda: fl.save_calibration(cal, "x.json", overwrite="yes"), "overwrite")):
+        with pytest.raises(fl.ParameterError) as info:
+            call()
+        assert info.value.parameter == parameter and "--" not in str(info.value)

@@ -69,7 +69,7 @@ def test_an_interrupted_run_report_keeps_the_old_index(tmp_path, monkeypatch):
     (out / "report.json").write_text("{}\n")
     _half_text_then_interrupted(monkeypatch)
     with pytest.raises(KeyboardInterrupt):
-        write_run_report(EXAMPLES / "bench.csv", out)
+        write_run_report(EXAMPLES / "bench.csv", out, overwrite=True)
     monkeypatch.undo()
     assert (out / "index.html").read_text() == "<p>the old report</p>\n"
     assert (out / "report.json").read_text() == "{}\n"
@@ -87,6 +87,6 @@ def test_an_interrupted_paper_report_keeps_its_old_files(tmp_path, monkeypatch):
     monkeypatch.setattr(paper, "build_sections", lambda outdir, progress=None: [])  # the files, not the sections
     _half_text_then_interrupted(monkeypatch)
     with pytest.raises(KeyboardInterrupt):
-        paper.write_report(out)
+        paper.write_report(out, overwrite=True)
     monkeypatch.undo()
     assert _files(out) == before and not [p for p in out.iterdir() if p.name.startswith(".")]

@@ -424,12 +424,14 @@ def _calibrate_and_apply(out: Path, result: "DemoResult", steps: "DemoSteps", sa
     refused = [s for s in cal.selection.steps if s["step"] == "memory" and not s["kept"]]
     if refused:
         say(f"      {refused[0]['step']} not kept: {refused[0]['why']}")
-    result.files["calibration"] = save_calibration(cal, out / "calibration.json")
+    # The demo's files in ``out`` are replaced (its caller checked the directory: the output policy).
+    result.files["calibration"] = save_calibration(cal, out / "calibration.json", overwrite=True)
     known = None
     try:
         # The same engine on the dead weights' readings against m·g.
         known = calibrate_runs(out / "weights-run.csv", x="frequency_hz", reference="force_n")
-        result.files["known-weight calibration"] = save_calibration(known, out / "known-weight-calibration.json")
+        result.files["known-weight calibration"] = save_calibration(known, out / "known-weight-calibration.json",
+                                                                     overwrite=True)
     except ValueError as exc:
         say(f"      known-weight calibration not possible: {exc}")
     for key, c in (("calibration", cal), ("known_weight_calibration", known)):

@@ -113,12 +113,21 @@ def agreement(reference, estimate, uncertainty=None) -> Agreement | None:
     Raises
     ------
     ParameterError
-        ``estimate`` or ``uncertainty`` not one value per reference row.
+        An argument that is not numbers; ``estimate`` or ``uncertainty`` not one value per reference row;
+        an uncertainty below zero or infinite (NaN: no uncertainty for that row).
     """
-    y = np.asarray(reference, dtype=float)
-    est = np.asarray(estimate, dtype=float)
+    y = _values(reference, "reference")
+    est = _values(estimate, "estimate")
     if y.shape != est.shape:
         raise ParameterError(f"one value per reference row, got {est.shape} for {y.shape}", parameter="estimate")
+    u = None if uncertainty is None else _values(uncertainty, "uncertainty")
+    if u is not None:
+        if u.shape != y.shape:
+            raise ParameterError(f"one value per reference row, got {u.shape} for {y.shape}", parameter="uncertainty")
+        bad = np.isinf(u) | (u < 0)  # NaN compares False: a row without an uncertainty
+        if bad.any():
+            raise ParameterError(f"a standard uncertainty is >= 0 and finite (NaN where none), got "
+                                 f"{u[bad][0]!r} at row {int(np.flatnonzero(bad)[0])}", parameter="uncertainty")
     finite = np.isfinite(y)
     if not finite.any() or not np.nanmax(y) > 0:
         return None
@@ -132,13 +141,21 @@ def agreement(reference, estimate, uncertainty=None) -> Agreement | None:
     else:
         slope, intercept = float("nan"), float("nan")
     coverage = None
-    if uncertainty is not None:
-        u = np.asarray(uncertainty, dtype=float)
-        if u.shape != y.shape:
-            raise ParameterError(f"one value per reference row, got {u.shape} for {y.shape}", parameter="uncertainty")
+    if u is not None:
         has_u = np.isfinite(u[got])
         if has_u.any():
             coverage = float(np.mean(np.abs(e[has_u]) <= 2.0 * u[got][has_u]))
     return Agreement(loaded=int(loaded.sum()), estimated=int(got.sum()), rmse=float(np.sqrt(np.mean(e ** 2))),
                      span=float(np.nanmax(y) - np.nanmin(y)), bias=float(np.mean(e)), slope=float(slope),
                      intercept=float(intercept), coverage=coverage)
+
+
+def _values(values, parameter: str) -> np.ndarray:
+    """``values`` as a float array, or a :class:`ParameterError` naming ``parameter`` (not numbers)."""
+    if isinstance(values, (str, bytes, dict)):
+        raise ParameterError(f"must be an array of numbers, got {type(values).__name__}", parameter=parameter)
+    try:
+        with np.errstate(all="ignore"):
+            return np.asarray(values, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ParameterError(f"must be an array of numbers ({exc})", parameter=parameter) from None

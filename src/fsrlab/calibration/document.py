@@ -21,7 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from fsrlab.calibration.result import Calibration
+from fsrlab.calibration.result import Calibration, require_calibration
+from fsrlab.errors import ParameterError
 from fsrlab.io.calibration_file import CALIBRATION_FORMAT, read_calibration_document, write_calibration_document
 
 __all__ = ["CALIBRATION_FORMAT", "save_calibration", "load_calibration"]
@@ -31,19 +32,44 @@ __all__ = ["CALIBRATION_FORMAT", "save_calibration", "load_calibration"]
 _MAX_ESTIMATE = 1e30
 
 
-def save_calibration(cal: Calibration, path: str | os.PathLike) -> Path:
-    """Write a calibration to a JSON file (atomically: an interrupted write leaves the old file or none).
+def save_calibration(cal: Calibration, path: str | os.PathLike, overwrite: bool = False, inputs=()) -> Path:
+    """Write a calibration to a JSON file, through the output policy (:mod:`fsrlab.io.outputs`).
+
+    Written atomically (an interrupted write leaves the old file or none). An existing file is replaced
+    only with ``overwrite=True``; the runs it was calibrated on (``cal.sources``), ``inputs`` and their
+    sidecars never are, and an empty path is refused.
 
     Parameters
     ----------
     cal : Calibration
+        From :func:`fsrlab.calibrate` or :func:`load_calibration`.
     path : str or path-like
+        The JSON file.
+    overwrite : bool
+        Replace an existing file.
+    inputs : iterable of path-like
+        Further files never to replace (with their sidecars), e.g. the runs a command read.
 
     Returns
     -------
     Path
+
+    Raises
+    ------
+    ParameterError
+        ``cal`` not a :class:`Calibration`, ``overwrite`` not a bool.
+    OutputError
+        The output refused (a :class:`~fsrlab.errors.ParameterError` naming ``path``).
     """
-    return write_calibration_document(cal.to_dict(), path)
+    from fsrlab.io.outputs import check_output
+
+    require_calibration(cal)
+    if not isinstance(overwrite, bool):
+        raise ParameterError(f"must be True or False, got {overwrite!r}", parameter="overwrite")
+    if isinstance(inputs, (str, os.PathLike)):
+        inputs = [inputs]
+    target = check_output(path, "path", overwrite=overwrite, inputs=[*inputs, *cal.sources])
+    return write_calibration_document(cal.to_dict(), target)
 
 
 def load_calibration(path: str | os.PathLike) -> Calibration:

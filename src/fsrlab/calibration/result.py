@@ -40,7 +40,7 @@ from fsrlab.errors import ParameterError
 from fsrlab.io.calibration_file import CALIBRATION_FORMAT, CALIBRATION_VERSION
 from fsrlab.io.runformat import Run, RunFormatError
 
-__all__ = ["METHOD", "MARGIN", "Calibration", "Estimator", "as_margin"]
+__all__ = ["METHOD", "MARGIN", "Calibration", "Estimator", "as_margin", "require_calibration"]
 
 #: The ``method`` of a calibration file written by this fsrlab.
 METHOD = "held-out"
@@ -72,6 +72,32 @@ def as_margin(margin) -> float:
     if not float(margin) >= 0:
         raise ParameterError(f"must be a fraction >= 0 of the calibrated span, got {margin!r}", parameter="margin")
     return float(margin)
+
+
+def require_calibration(cal, parameter: str = "cal") -> "Calibration":
+    """``cal`` itself when it is a :class:`Calibration`; anything else is refused naming ``parameter``.
+
+    Parameters
+    ----------
+    cal : Calibration
+        The value given.
+    parameter : str
+        The parameter's name, for the error.
+
+    Returns
+    -------
+    Calibration
+
+    Raises
+    ------
+    ParameterError
+        Not a :class:`Calibration` (a path: load it with :func:`fsrlab.load_calibration` first).
+    """
+    if not isinstance(cal, Calibration):
+        hint = "; load the file with fsrlab.load_calibration first" if isinstance(cal, (str, Path)) else ""
+        raise ParameterError(f"must be a Calibration (fsrlab.calibrate, fsrlab.load_calibration), got "
+                             f"{type(cal).__name__}{hint}", parameter=parameter)
+    return cal
 
 
 @dataclass(repr=False)

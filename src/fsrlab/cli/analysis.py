@@ -238,7 +238,7 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
            "gain_spread": sel.gain_spread, "readout_variables": sel.readout, "steps": sel.steps,
            "candidates": sel.candidates}
     if output is not None:
-        save_calibration(cal, output)
+        save_calibration(cal, output, overwrite=True, inputs=run_files)  # checked by the command already
     warn(warnings)
     if json_out:
         emit_json(out)

@@ -181,7 +181,8 @@ def _finish(run, out: Path, report: Path | None, protocol: str, device: str, met
     if report is not None and not result.failed and result.frames:
         from fsrlab.reports.run_report import write_run_report
 
-        report_index = write_run_report(out, report, placements=run.placements).index
+        # --report was checked before the recording (the output policy); the run is its input.
+        report_index = write_run_report(out, report, placements=run.placements, overwrite=True).index
     info = {**result_dict(result), "protocol": run.protocol, "device": run.device,
             "placements": None if run.placements is None else str(run.placements),
             "report": None if report_index is None else str(report_index)}

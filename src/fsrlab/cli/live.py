@@ -13,6 +13,7 @@ from fsrlab.cli.options import (
     loadcell_option, make_virtual_device, mass_list, meter_circuit_options, meter_differences, out_path, pascals,
     refuse_other_meter, seconds, sensor_area, virtual_bench, warn, window_ms_option,
 )
+from fsrlab.errors import FsrlabError
 from fsrlab.io.jsonable import to_jsonable
 from fsrlab.units import STANDARD_GRAVITY
 
@@ -146,6 +147,8 @@ def live(
     except Exception as exc:  # noqa: BLE001 - one line: the port could not be opened
         if device is not None:
             device.close()
+        if isinstance(exc, FsrlabError) and exc.parameter == "port":  # e.g. --port auto and no board: as acquire says it
+            fail(exc.reason, "--port")
         fail(f"cannot open {port}: {exc}", "--port")
     session = LiveSession(link, window_ms=window_ms, range_=range_, reference=reference, loadcell=lc, area_m2=area_m2,
                           estimator=estimator, health=health, metadata=metadata, weights=weights)

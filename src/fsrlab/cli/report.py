@@ -42,7 +42,8 @@ def paper(
     console = Console(stderr=True)
     try:
         with console.status("building report") as status:
-            result = write_report(out, progress=lambda name: status.update(f"building report: {name}"))
+            result = write_report(out, progress=lambda name: status.update(f"building report: {name}"),
+                                  overwrite=True)  # checked above
     except OSError as exc:
         fail(f"cannot write the report into {out}: {exc.strerror or exc}", "--out")
     if json_out:

@@ -55,7 +55,7 @@ def report(
             names=("index.html", "report.json"))
     try:
         files = write_run_report(run, out, placements=placements, weights_run=weights_run, calibration=cal,
-                                 calibrate=not no_calibration)
+                                 calibrate=not no_calibration, overwrite=True)  # checked above
     except OSError as exc:
         if exc.filename and Path(exc.filename).parent == out:
             fail(f"cannot write the report into {out}: {exc.strerror or exc}", "--out")

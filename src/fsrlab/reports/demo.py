@@ -62,7 +62,8 @@ def run_demo(out="demo", settings: DemoSettings = DemoSettings(), sensor=None, d
         # report takes what they leave.
         from fsrlab.reports.paper import start_report
 
-        started.append((start_report(Path(out) / "paper", nice=10), time.monotonic()))
+        # The demo's directory was checked by its caller; its files are replaced (run_chain).
+        started.append((start_report(Path(out) / "paper", nice=10, overwrite=True), time.monotonic()))
 
     try:
         return _run_demo(run_chain(out, settings, sensor, device, 7 if paper else 6, say,
@@ -84,7 +85,7 @@ def _run_demo(chain, s: DemoSettings, paper: bool, started: list) -> DemoResult:
 
     t0 = step("measurement report of the test run: HE of f and V0 (Table 3), RE1/RE2 (eq. 39), ISO 376, calibration")
     rep = write_run_report(out / "test-run.csv", out / "measurement", weights_run=out / "weights-run.csv",
-                           calibration=cal)
+                           calibration=cal, overwrite=True)
     result.files["measurement report"] = rep.index
     hs = {h.quantity: h.percent for h in rep.report.hysteresis}
     result.numbers.update({"he_frequency_percent": hs.get("frequency_hz"), "he_voltage_percent": hs.get("voltage_v"),

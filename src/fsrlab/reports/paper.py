@@ -166,8 +166,12 @@ def build_sections(outdir: Path, progress: Callable[[str], None] | None = None,
     return [built[m.__name__] for m in modules]
 
 
-def write_report(outdir: str | Path, progress: Callable[[str], None] | None = None) -> ReportResult:
+def write_report(outdir: str | Path, progress: Callable[[str], None] | None = None,
+                 overwrite: bool = False) -> ReportResult:
     """Build the reproduction report.
+
+    The output policy (:mod:`fsrlab.io.outputs`): ``outdir`` is refused when it holds anything unless
+    ``overwrite=True``, and when empty; each file is written atomically.
 
     Parameters
     ----------
@@ -175,12 +179,19 @@ def write_report(outdir: str | Path, progress: Callable[[str], None] | None = No
         Directory to write ``index.html``, ``paper.json`` and the PNG figures into (created).
     progress : callable, optional
         Called with each section's name before it is built.
+    overwrite : bool
+        Write into a directory that is not empty (its files of the same names are replaced).
 
     Returns
     -------
     ReportResult
+
+    Raises
+    ------
+    OutputError
+        ``outdir`` refused (a :class:`~fsrlab.errors.ParameterError` naming ``outdir``).
     """
-    out = Path(outdir)
+    out = _checked_outdir(outdir, overwrite)
     out.mkdir(parents=True, exist_ok=True)
     sections = build_sections(out, progress)
     data: dict = {"fsrlab_version": __version__,
@@ -206,15 +217,17 @@ class ReportProcess:
         As for :func:`write_report`.
     nice : int
         Added to the process's niceness (``os.nice``, where it exists), 0: as this process.
+    overwrite : bool
+        As for :func:`write_report` (checked in this process, before the other starts).
     """
 
     _CODE = ("import os, pickle, sys\n"
              "if int(sys.argv[2]) and hasattr(os, 'nice'):\n"
              "    os.nice(int(sys.argv[2]))\n"
              "from fsrlab.reports.paper import write_report\n"
-             "pickle.dump(write_report(sys.argv[1]), sys.stdout.buffer)\n")
+             "pickle.dump(write_report(sys.argv[1], overwrite=True), sys.stdout.buffer)\n")
 
-    def __init__(self, outdir: str | Path, nice: int = 0) -> None:
+    def __init__(self, outdir: str | Path, nice: int = 0, overwrite: bool = False) -> None:
         import subprocess
         import sys
 
@@ -224,7 +237,10 @@ class ReportProcess:
         # The same fsrlab as this process's, wherever it was imported from.
         root = str(Path(fsrlab.__file__).resolve().parents[1])
         env["PYTHONPATH"] = os.pathsep.join([root, *filter(None, [env.get("PYTHONPATH")])])
-        self.outdir = Path(outdir)
+        # Checked here, before the process starts (it writes with overwrite=True).
+        self.outdir = _checked_outdir(outdir, overwrite)
+        if isinstance(nice, bool) or not hasattr(nice, "__index__"):
+            raise ParameterError(f"must be an int >= 0, got {nice!r}", parameter="nice")
         if not int(nice) >= 0:
             raise ParameterError(f"must be >= 0 (a lower priority or the same), got {nice!r}", parameter="nice")
         self._proc = subprocess.Popen([sys.executable, "-c", self._CODE, str(self.outdir), str(int(nice))],
@@ -251,7 +267,7 @@ class ReportProcess:
         self._proc.communicate()
 
 
-def start_report(outdir: str | Path, nice: int = 0) -> ReportProcess:
+def start_report(outdir: str | Path, nice: int = 0, overwrite: bool = False) -> ReportProcess:
     """Start :func:`write_report` in a Python process of its own and return at once.
 
     Parameters
@@ -261,6 +277,8 @@ def start_report(outdir: str | Path, nice: int = 0) -> ReportProcess:
     nice : int
         Niceness added to the report's process and its own (the second process, ngspice): the demo gives 10,
         so that the recordings it draws beside keep the cores they need and the report takes what they leave.
+    overwrite : bool
+        As for :func:`write_report` (checked before the process starts).
 
     Returns
     -------
@@ -269,4 +287,13 @@ def start_report(outdir: str | Path, nice: int = 0) -> ReportProcess:
         thread or a fork: it competes with nothing of this process for the interpreter lock, and it
         inherits none of its open files (the demo draws the report while its last recording runs).
     """
-    return ReportProcess(outdir, nice)
+    return ReportProcess(outdir, nice, overwrite)
+
+
+def _checked_outdir(outdir, overwrite) -> Path:
+    """``outdir`` through the output policy (a directory; ``overwrite`` a bool)."""
+    from fsrlab.io.outputs import check_output
+
+    if not isinstance(overwrite, bool):
+        raise ParameterError(f"must be True or False, got {overwrite!r}", parameter="overwrite")
+    return check_output(outdir, "outdir", overwrite=overwrite, kind="dir")

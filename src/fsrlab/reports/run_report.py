@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -292,26 +293,42 @@ def _calibration_section(rep, outdir: Path) -> Section:
 
 
 def write_run_report(run, outdir, placements=None, weights_run=None, calibration=None,
-                     calibrate: bool = True) -> RunReportFiles:
+                     calibrate: bool = True, overwrite: bool = False) -> RunReportFiles:
     """Measure a run and write its report (``index.html``, ``report.json``, PNGs) into ``outdir``.
+
+    The output policy (:mod:`fsrlab.io.outputs`): ``outdir`` is refused when it holds anything unless
+    ``overwrite=True``; it is never one of the inputs (the run, ``weights_run``, ``placements``, the
+    calibration's file) or an input's sidecar, nor empty. Each file is written atomically.
 
     Parameters
     ----------
     run : Run or path
         The run.
     outdir : path-like
-        Created if missing.
+        The report's directory, created if missing.
     placements, weights_run, calibration, calibrate
         As :func:`fsrlab.bench.measurement.measure_run`.
+    overwrite : bool
+        Write into a directory that is not empty (its files of the same names are replaced).
 
     Returns
     -------
     RunReportFiles
+
+    Raises
+    ------
+    OutputError
+        ``outdir`` refused (a :class:`~fsrlab.errors.ParameterError` naming ``outdir``).
     """
     from fsrlab.bench.measurement import measure_run
+    from fsrlab.errors import ParameterError
+    from fsrlab.io.outputs import check_output
     from fsrlab.reports.html import render_html
 
-    outdir = Path(outdir)
+    if not isinstance(overwrite, bool):
+        raise ParameterError(f"must be True or False, got {overwrite!r}", parameter="overwrite")
+    outdir = check_output(outdir, "outdir", overwrite=overwrite, kind="dir", names=("index.html", "report.json"),
+                          inputs=[_input_path(p) for p in (run, weights_run, placements, calibration)])
     rep = measure_run(run, placements=placements, weights_run=weights_run, calibration=calibration,
                       calibrate=calibrate)
     outdir.mkdir(parents=True, exist_ok=True)
@@ -326,3 +343,10 @@ def write_run_report(run, outdir, placements=None, weights_run=None, calibration
     figures = [outdir / f.filename for s in sections for f in s.figures]
     return RunReportFiles(index, js, figures, rep)
 
+
+def _input_path(value):
+    """The file an input was read from: a path as given, a run's or a calibration's ``path``, else None."""
+    if isinstance(value, (str, os.PathLike)):
+        return value if os.fspath(value).strip() else None
+    found = getattr(value, "path", None)
+    return found if isinstance(found, (str, os.PathLike)) else None
