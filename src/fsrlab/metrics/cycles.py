@@ -8,8 +8,7 @@ span), which ignores noise smaller than the threshold. A cycle is a loading bran
 unloading branch; the turning-point reading belongs to both, so each branch spans the full range.
 
 :func:`row_directions` and :func:`row_cycles` are the one rule for a run's branches and cycles
-(its columns when present, else from the stress), used alike by :func:`split_cycles`, by the
-calibration's cross-validation groups and by :mod:`fsrlab.calibration.fit`.
+(its columns when present, else from the stress), used by :func:`split_cycles`.
 
 The hysteresis error itself is eq. (13) as implemented by
 :func:`fsrlab.metrics.hysteresis.hysteresis_error` (branches interpolated onto a common stress

@@ -9,7 +9,7 @@ triangle). The sensor is deliberately *another* model than the calibration's:
   ``dz = dF·(A − (β·sgn(dF·z) + γ)·|z|^n)`` (A = 1, n = 1, β = γ, saturating at ±z_max =
   15 % of full scale), with the sensor seeing the effective force ``F_e = F·(1 − h·z/z_max)``
   (an FSR conducts more on unloading than on loading at the same force, and not at all at none);
-  fsrlab compensates with play operators (:mod:`fsrlab.calibration.play`), a different family;
+  fsrlab compensates with play operators (:mod:`fsrlab.calibration.operators`), a different family;
 * **creep**: ``F_e`` is multiplied by ``1 + κ·(0.6·F₃ + 0.4·F₄₀)/FS``, with ``F₃`` and ``F₄₀``
   first-order relaxations of F (time constants 3 s and 40 s), so a held load reads more and more
   and no load reads nothing;
