@@ -152,8 +152,8 @@ def test_demo_draws_the_reproduction_report_while_the_dead_weights_are_recorded(
     started = []
     real = paper.start_report
 
-    def spy(outdir, nice=0):
-        started.append(real(outdir, nice))
+    def spy(outdir, nice=0, **kwargs):
+        started.append(real(outdir, nice, **kwargs))
         return started[-1]
 
     monkeypatch.setattr(paper, "start_report", spy)

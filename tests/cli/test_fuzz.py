@@ -65,8 +65,8 @@ COLLECT = os.environ.get("FSRLAB_FUZZ_COLLECT")
 
 # Cases per 10 000 of the slow commands (a valid acquire takes ~0.5 s, a valid design ~60 ms);
 # the rest of the cases are split evenly among the other commands.
-SLOW = {"acquire": 60, "virtual-device": 80, "paper": 30, "design": 500, "weights": 60, "measure": 60, "loadcell": 60,
-        "bench": 60, "demo": 10, "report": 60, "twin": 40,
+SLOW = {"acquire": 60, "virtual-device": 80, "paper": 20, "design": 500, "weights": 60, "measure": 60, "loadcell": 60,
+        "bench": 60, "demo": 10, "report": 60, "twin": 40, "crosstalk": 30, "calibrate-channels": 60,
         # a command group: its own command lines are few (hypothesis runs out of distinct ones near 60)
         "firmware": 40}
 

@@ -209,6 +209,10 @@ def _scan_means(open_meter, source, channels, duration_s: float, path: Path):
         raise RuntimeError(f"cross-talk recording failed: {result.message}")
     run = load_run(path)
     ch, f = run.columns["channel"], run.columns["frequency_hz"]
+    empty = [k for k in channels if not np.any(np.isfinite(f[ch == k]))]
+    if empty:
+        raise RuntimeError(f"cross-talk: channel {empty[0]} gave no reading in {duration_s:g} s of simulated time; "
+                           "give a longer duration (each channel needs its dwell and settling in every scan)")
     means = np.array([np.nanmean(f[ch == k]) for k in channels])
     spread = np.array([np.nanstd(f[ch == k]) / np.nanmean(f[ch == k]) for k in channels])
     return means, spread

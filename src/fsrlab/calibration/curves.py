@@ -250,7 +250,17 @@ def curve_template(x, family: str, size: int, variable: str, sign: int, adc: flo
 def static_system(x, y, family: str, size: int, variable: str, sign: int, adc: float | None,
                   extra: np.ndarray | None = None) -> CurveSystem:
     """The normal equations of a ``family`` curve (:func:`curve_template`) on readings ``x``, reference ``y``
-    and ``extra`` columns (:class:`fsrlab.calibration.monotone.CurveSystem`)."""
+    and ``extra`` columns (:class:`fsrlab.calibration.monotone.CurveSystem`).
+
+    Parameters
+    ----------
+    x, y : array_like
+        Readings and reference, finite.
+    family, size, variable, sign, adc
+        See :func:`curve_template`.
+    extra : ndarray, optional
+        More columns fitted with the curve (a memory's features), one row per reading.
+    """
     return curve_system(curve_template(x, family, size, variable, sign, adc), x, y, extra)
 
 
@@ -271,7 +281,13 @@ def fit_static(x, y, family: str, size: int, variable: str, sign: int, adc: floa
 
 
 def curve_from_dict(d: dict) -> StaticCurve:
-    """A static curve from its file form (:meth:`to_dict`); without ``family``: a piecewise curve (older files)."""
+    """A static curve from its file form (:meth:`to_dict`); without ``family``: a piecewise curve (older files).
+
+    Parameters
+    ----------
+    d : dict
+        The curve's file form.
+    """
     family = d.get("family", "piecewise")
     if family == "polynomial":
         return PolynomialCurve.from_dict(d)

@@ -91,6 +91,8 @@ def crosstalk_cmd(
             fail(reason, "--twin")
     try:
         result = crosstalk(twin_meter if twin else virtual_meter, chans, load, duration)
+    except ValueError as err:  # the stress the virtual sensor takes (its model's range): the one left unchecked
+        fail(str(getattr(err, "reason", err)), "--load")
     except RuntimeError as err:
         print(f"fsrlab: {plain_numbers(str(err))}", file=__import__("sys").stderr)
         raise typer.Exit(1) from None

@@ -44,7 +44,6 @@ def twin(
 
     \b
       fsrlab twin --profile triangle --peak 50k --period 4s
-      fsrlab twin --speed max --duration 30s --sensor interlink-402 --json
       fsrlab twin --channels 8 --profile triangle --speed max --duration 5s
     """
     import json
