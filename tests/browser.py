@@ -108,7 +108,7 @@ def model_length(driver, name: str, column: str) -> int:
       return col.length;""", name, column)
 
 
-def wait_for(fn, timeout_s: float = 20.0, interval_s: float = 0.1):
+def wait_for(fn, timeout_s: float = 60.0, interval_s: float = 0.1):
     """Call ``fn`` until it returns a truthy value; that value, or the last one at the timeout."""
     deadline = time.monotonic() + timeout_s
     value = fn()
