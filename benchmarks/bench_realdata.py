@@ -31,7 +31,7 @@ test's reference span. Peers, all fitted on the same training rows:
   (leave one recording out, or the first 70 % of one run fitted and the rest scored), in the raw reading;
 - the same in the variable the physics names (:func:`physics_variable`: 1/reading when the training reading
   is positive, spans more than a decade and falls as the force rises, as a resistance does; else the
-  reading), the peer of issue 37's criteria.
+  reading), the peer of the acceptance criteria.
 
 Also: the share of loaded rows whose error lies within ±2u (the criterion applies to the pairs recorded in
 one session, :data:`SAME_SESSION`, marked S); the share of loaded rows left without an estimate.
@@ -412,7 +412,7 @@ def _pair_row(i: int, name: str, s: dict) -> str:
 
 
 def _summary(scores: dict) -> list[str]:
-    """The summary table: issue 37's figures for the pairs developed on, those added later, and all."""
+    """The summary table: the acceptance criteria's figures for the pairs developed on, those added later, and all."""
     groups = ((f"first {DEVELOPED_ON} (developed on)", lambda i: i < DEVELOPED_ON),
               (f"later {len(PAIRS) - DEVELOPED_ON} (measured only)", lambda i: i >= DEVELOPED_ON),
               ("all", lambda i: True))
@@ -451,7 +451,7 @@ def _summary(scores: dict) -> list[str]:
             "loaded rows without an estimate: largest share": f"{100 * max(got[i]['comp']['missing'] for i in idx):.1f} %",
         }))
     keys = next((list(v) for _, v in cols if v), [])
-    out = [("**Summary** (issue 37's criteria: compensated ≤ ×1.05 plain on every pair; geometric mean ≤ ×0.80 and "
+    out = [("**Summary** (the criteria: compensated ≤ ×1.05 plain on every pair; geometric mean ≤ ×0.80 and "
             "worst ≤ ×1.25 against the polynomial in the physics variable; ±2u ≥ 90 % on same-session pairs; "
             "≤ 2 % of loaded rows without an estimate):"), "", "| | " + " | ".join(label for label, _ in cols) + " |",
            "|---|" + "---|" * len(cols)]

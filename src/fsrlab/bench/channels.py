@@ -1,5 +1,5 @@
 """Several FSRs on one meter: a multi-channel run split by channel, calibrated per channel, and the
-cross-talk check (issue 39; docs/multiplexing.md).
+cross-talk check (docs/multiplexing.md).
 
 A run recorded with ``acquire --channels`` is in the long format, one row per channel reading with a
 ``channel`` column and the channel map in its sidecar (``channels``: each channel's ``sensor_id``).
