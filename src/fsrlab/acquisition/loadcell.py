@@ -32,9 +32,9 @@ from __future__ import annotations
 import datetime as _dt
 import json
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Sequence
 
 import numpy as np
 
@@ -123,7 +123,7 @@ class LoadCellModel:
         """Mean delay of a conversion behind the force: half a conversion period. [s]"""
         return 0.5 / self.rate_sps
 
-    def calibration(self) -> "LoadCellCalibration":
+    def calibration(self) -> LoadCellCalibration:
         """The exact calibration of this cell (its own offset and scale): what a perfect tare and
         scale would find; the virtual bench's default."""
         return LoadCellCalibration(self.offset_counts, self.scale_counts_per_n, self.capacity_n, _now(),
@@ -378,7 +378,7 @@ def load_loadcell(path) -> LoadCellCalibration:
 
 
 def _now() -> str:
-    return _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat().replace("+00:00", "Z")
+    return _dt.datetime.now(_dt.UTC).replace(microsecond=0).isoformat().replace("+00:00", "Z")
 
 
 def tare_from_readings(counts: Sequence[float], capacity_n: float | None = None,

@@ -11,8 +11,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from fsrlab.hardware import ADC_V_PER_COUNT, F_CPU
 from fsrlab.acquisition.protocol import M_FIELDS_V2, M_FIELDS_V3, Frame, ProtocolError, check_fields
+from fsrlab.hardware import ADC_V_PER_COUNT, F_CPU
 
 __all__ = ["decode_sums", "Measurement", "Identity", "Ack", "DeviceError"]
 
@@ -102,7 +102,7 @@ class Measurement:
     scan: int | None = None
 
     @classmethod
-    def from_frame(cls, frame: Frame) -> "Measurement":
+    def from_frame(cls, frame: Frame) -> Measurement:
         """Decode an ``M`` frame.
 
         Parameters
@@ -163,7 +163,7 @@ class Identity:
     f_cpu_hz: int
 
     @classmethod
-    def from_frame(cls, frame: Frame) -> "Identity":
+    def from_frame(cls, frame: Frame) -> Identity:
         """Decode an ``ID`` frame; raises :class:`ProtocolError` for any other kind."""
         if frame.kind != "ID":
             raise ProtocolError(f"frame kind must be 'ID', got {frame.kind!r}")
@@ -191,7 +191,7 @@ class Ack:
     value: int | None
 
     @classmethod
-    def from_frame(cls, frame: Frame) -> "Ack":
+    def from_frame(cls, frame: Frame) -> Ack:
         """Decode an ``ACK`` frame; raises :class:`ProtocolError` for any other kind."""
         if frame.kind != "ACK":
             raise ProtocolError(f"frame kind must be 'ACK', got {frame.kind!r}")
@@ -218,7 +218,7 @@ class DeviceError:
     token: str
 
     @classmethod
-    def from_frame(cls, frame: Frame) -> "DeviceError":
+    def from_frame(cls, frame: Frame) -> DeviceError:
         """Decode an ``ERR`` frame; raises :class:`ProtocolError` for any other kind."""
         if frame.kind != "ERR":
             raise ProtocolError(f"frame kind must be 'ERR', got {frame.kind!r}")

@@ -16,7 +16,14 @@ import serial
 from serial.tools import list_ports
 
 from fsrlab.acquisition.messages import Ack, DeviceError, Identity
-from fsrlab.acquisition.protocol import DEFAULT_BAUD, DEVICE_NAME, SUPPORTED_PROTOCOLS, Frame, FrameParser, encode_command
+from fsrlab.acquisition.protocol import (
+    DEFAULT_BAUD,
+    DEVICE_NAME,
+    SUPPORTED_PROTOCOLS,
+    Frame,
+    FrameParser,
+    encode_command,
+)
 from fsrlab.errors import FsrlabError
 
 __all__ = ["UNO_USB_IDS", "LinkError", "DeviceGone", "HandshakeError", "CommandRejected", "UsbPort",
@@ -332,7 +339,7 @@ class SerialLink:
         except Exception:  # noqa: BLE001 - closing an unplugged port may fail; nothing to do
             pass
 
-    def __enter__(self) -> "SerialLink":
+    def __enter__(self) -> SerialLink:
         return self
 
     def __exit__(self, *exc) -> None:

@@ -22,8 +22,8 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
-from typing import Callable, Iterator
 
 from fsrlab.acquisition.messages import Measurement
 from fsrlab.acquisition.protocol import SEQ_MODULO, UINT32_MODULO, Frame
@@ -77,7 +77,11 @@ class Scan:
 
     def __post_init__(self) -> None:
         from fsrlab.acquisition.protocol import (
-            DWELL_MS_MAX, DWELL_MS_MIN, SETTLE_MAX, channel_mask, mask_channels,
+            DWELL_MS_MAX,
+            DWELL_MS_MIN,
+            SETTLE_MAX,
+            channel_mask,
+            mask_channels,
         )
         from fsrlab.errors import ParameterError
 

@@ -26,9 +26,10 @@ The sensor is chosen in one place, :func:`demo_sensor`.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 from fsrlab.errors import ParameterError
 
@@ -400,7 +401,7 @@ def _bench_device(device: str, speed: str) -> tuple[str, str]:
     return ("twin" if (device == "twin" or (device == "auto" and ok)) else "virtual"), reason
 
 
-def _calibrate_and_apply(out: Path, result: "DemoResult", steps: "DemoSteps", say: Callable[[str], None]):
+def _calibrate_and_apply(out: Path, result: DemoResult, steps: DemoSteps, say: Callable[[str], None]):
     """Steps 3 and 4 of the chain: the calibration run calibrated (:func:`fsrlab.calibrate`, compensation tried),
     the dead weights calibrated against m·g by the same engine, and the calibration applied to the test run."""
     import numpy as np

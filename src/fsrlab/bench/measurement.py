@@ -80,7 +80,7 @@ def run_reference(run, reference: str | None = None) -> tuple[np.ndarray, str, s
 
 
 def hysteresis_of_run(run, quantity: str = "frequency_hz", threshold: float = 0.05,
-                      reference: str | None = None) -> "RunHysteresis":
+                      reference: str | None = None) -> RunHysteresis:
     """Hysteresis error (eq. 13) of one column of a run, per cycle and overall.
 
     Parameters
@@ -289,7 +289,7 @@ class RunReport:
 
 
 def _hysteresis(run, quantity: str, label: str) -> ReadoutHysteresis:
-    
+
     if quantity not in run or not np.isfinite(run[quantity]).any():
         return ReadoutHysteresis(quantity, label, reason=f"the run has no {quantity} readings")
     try:

@@ -24,9 +24,9 @@ from __future__ import annotations
 
 import math
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
 
 from fsrlab.bench.weights import Step, plan_steps
 from fsrlab.units import STANDARD_GRAVITY

@@ -90,7 +90,7 @@ class PolynomialCurve(StaticCurve):
     def lower_bounds(self):
         return np.full(self.coef.size, -np.inf)
 
-    def with_coef(self, coef) -> "PolynomialCurve":
+    def with_coef(self, coef) -> PolynomialCurve:
         return PolynomialCurve(self.variable, self.sign, self.adc, self.centre, self.half_width,
                                np.asarray(coef, dtype=float), self.x_range)
 
@@ -113,7 +113,7 @@ class PolynomialCurve(StaticCurve):
         return {"family": "polynomial", **self._common_dict(), "centre": self.centre, "half_width": self.half_width}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "PolynomialCurve":
+    def from_dict(cls, d: dict) -> PolynomialCurve:
         variable, sign, adc, coef, rng = common_fields(d, "polynomial curve")
         centre, half = float(d["centre"]), float(d["half_width"])
         if not (np.isfinite(centre) and half > 0 and np.isfinite(half)) or coef.size > 6:
@@ -198,7 +198,7 @@ class SplineCurve(StaticCurve):
             d[i, 1 + i], d[i, 2 + i] = -mean / span[i], mean / span[i + 1]
         return np.sqrt(lam * n) * d
 
-    def with_coef(self, coef) -> "SplineCurve":
+    def with_coef(self, coef) -> SplineCurve:
         return SplineCurve(self.variable, self.sign, self.adc, self.breaks, np.asarray(coef, dtype=float),
                            self.x_range)
 
@@ -206,7 +206,7 @@ class SplineCurve(StaticCurve):
         return {"family": "spline", **self._common_dict(), "breaks": self.breaks.tolist()}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "SplineCurve":
+    def from_dict(cls, d: dict) -> SplineCurve:
         variable, sign, adc, coef, rng = common_fields(d, "spline curve")
         breaks = np.asarray(d["breaks"], dtype=float)
         if (breaks.ndim != 1 or breaks.size < 2 or np.any(np.diff(breaks) <= 0)

@@ -73,15 +73,15 @@ class HeldoutCalibration:
     weights: np.ndarray = field(default_factory=lambda: np.zeros(0))
     full_scale: float = 1.0
     row_s: float = 1.0
-    uncertainty: "LevelUncertainty | None" = None
+    uncertainty: LevelUncertainty | None = None
     scaled: bool = False
-    uncertainty_plain: "LevelUncertainty | None" = None
+    uncertainty_plain: LevelUncertainty | None = None
     delay_s: float = 0.0
-    hysteresis_range: "np.ndarray | None" = None
+    hysteresis_range: np.ndarray | None = None
     mix: tuple = ()
     creep_start: float = 1.0
 
-    def without_memory(self) -> "HeldoutCalibration":
+    def without_memory(self) -> HeldoutCalibration:
         """The static curve alone (the estimate before compensation), with its own uncertainty."""
         if not self.has_memory:
             return self
@@ -144,7 +144,7 @@ class HeldoutCalibration:
             est = est + clip_hysteresis(features, self.hysteresis_range) @ self.weights
         return est
 
-    def stepper(self) -> "Stepper":
+    def stepper(self) -> Stepper:
         """The same estimates one reading at a time."""
         return Stepper(self)
 
@@ -159,7 +159,7 @@ class HeldoutCalibration:
                 "static_mix": [m.to_dict() for m in self.mix], "creep_start": self.creep_start}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "HeldoutCalibration":
+    def from_dict(cls, d: dict) -> HeldoutCalibration:
         thr = tuple(float(v) for v in d.get("thresholds", ()))
         tau = tuple(float(v) for v in d.get("time_constants_s", ()))
         w = np.asarray(d.get("weights", []), dtype=float)
@@ -188,7 +188,7 @@ class HeldoutCalibration:
                    tuple(curve_from_dict(m) for m in d.get("static_mix", ())), start)
 
 
-def clip_hysteresis(features: np.ndarray, hysteresis_range: "np.ndarray | None") -> np.ndarray:
+def clip_hysteresis(features: np.ndarray, hysteresis_range: np.ndarray | None) -> np.ndarray:
     """Memory features with their first (hysteresis) columns clipped to the range they had on the
     calibration data; the creep columns after them as they are (NaN rows stay NaN).
 

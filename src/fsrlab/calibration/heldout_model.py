@@ -206,7 +206,7 @@ class _Choice:
         kind = {"piecewise": "", "polynomial": "poly", "spline": "spline"}[self.family]
         return f"{self.variable}-{kind}{self.segments}"
 
-    def but(self, **kw) -> "_Choice":
+    def but(self, **kw) -> _Choice:
         d = dict(self.__dict__)
         d.update(kw)
         return _Choice(**d)
@@ -240,11 +240,11 @@ class _Cache:
         return self.features[key]
 
     @staticmethod
-    def _columns(ch: "_Choice") -> list:
+    def _columns(ch: _Choice) -> list:
         return ([j for j, r in enumerate(PLAY_THRESHOLDS) if r in ch.thresholds] +
                 [len(PLAY_THRESHOLDS) + j for j, v in enumerate(CREEP_TIME_CONSTANTS_S) if v in ch.time_constants])
 
-    def memory(self, key, rec: Recording, level, ch: "_Choice") -> np.ndarray:
+    def memory(self, key, rec: Recording, level, ch: _Choice) -> np.ndarray:
         """The features of ``ch``'s variant over the whole recording ``rec`` for the level function ``level``."""
         u, full = self._full(key, rec, level)
         f = full[:, self._columns(ch)].astype(float)
@@ -252,7 +252,7 @@ class _Cache:
             f *= u.astype(float)[:, None]
         return f
 
-    def memory_term(self, key, rec: Recording, level, ch: "_Choice", weights: np.ndarray,
+    def memory_term(self, key, rec: Recording, level, ch: _Choice, weights: np.ndarray,
                     hysteresis_range: np.ndarray | None = None) -> np.ndarray:
         """``clip_hysteresis(memory(...), hysteresis_range) @ weights`` in float32."""
         u, full = self._full(key, rec, level)

@@ -17,7 +17,7 @@ Examples
 from __future__ import annotations
 
 import math
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
 
 import numpy as np
@@ -229,4 +229,4 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
     lag_s = float(f"{sel.lag_rows * model.row_s:.10g}")  # without the float noise of the step
     return Calibration(model, sel, x, ref, xu, yu, [str(r.path) for r in runs], rws[0],
                        int(sum(int(r.usable.sum()) for r in recs)),
-                       datetime.now(timezone.utc).isoformat(timespec="seconds"), r2=r2, circuit=circuit, lag_s=lag_s)
+                       datetime.now(UTC).isoformat(timespec="seconds"), r2=r2, circuit=circuit, lag_s=lag_s)

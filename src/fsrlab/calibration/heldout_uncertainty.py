@@ -57,7 +57,7 @@ class LevelUncertainty:
 
     @classmethod
     def fit(cls, err, estimate, direction, bins: int = 4, least: int = 20,
-            relative: float = REPEATABILITY) -> "LevelUncertainty":
+            relative: float = REPEATABILITY) -> LevelUncertainty:
         err, estimate, direction = (np.asarray(v) for v in (err, estimate, direction))
         q = COVERAGE
         pooled = float(np.quantile(np.abs(err), q)) / 2
@@ -89,7 +89,7 @@ class LevelUncertainty:
                 "relative": self.relative, "coverage": COVERAGE}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "LevelUncertainty":
+    def from_dict(cls, d: dict) -> LevelUncertainty:
         t = np.asarray(d["u_by_direction"], dtype=float)
         e = np.asarray(d["level_edges"], dtype=float)
         rel = float(d.get("relative", 0.0))

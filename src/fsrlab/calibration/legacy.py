@@ -131,7 +131,7 @@ class LegacyModel:
     def has_memory(self) -> bool:
         return self.memory is not None
 
-    def without_memory(self) -> "LegacyModel":
+    def without_memory(self) -> LegacyModel:
         return LegacyModel(self.document, memory=False) if self.has_memory else self
 
     def curve_estimate(self, x) -> np.ndarray:
@@ -174,7 +174,7 @@ class LegacyModel:
         c = self.coef[k + 2 * n_p:]
         return out + creep @ c[:n_s] + (w[..., None] * creep) @ c[n_s:]
 
-    def stepper(self) -> "LegacyStepper":
+    def stepper(self) -> LegacyStepper:
         return LegacyStepper(self)
 
     def to_dict(self) -> dict:

@@ -181,7 +181,7 @@ class StaticCurve:
         """Ridge rows of a fit with ``columns`` columns in all on ``n`` readings (none by default)."""
         return np.zeros((0, columns))
 
-    def with_coef(self, coef) -> "StaticCurve":
+    def with_coef(self, coef) -> StaticCurve:
         """The same curve (variable, basis, range) with other coefficients."""
         raise NotImplementedError
 
@@ -313,7 +313,7 @@ class MonotoneCurve(StaticCurve):
     def penalty(self, columns: int, lam: float, n: int) -> np.ndarray:
         return smoothness_penalty(self.knots, columns, lam, n)
 
-    def with_coef(self, coef) -> "MonotoneCurve":
+    def with_coef(self, coef) -> MonotoneCurve:
         return MonotoneCurve(self.variable, self.sign, self.adc, self.knots, np.asarray(coef, dtype=float),
                              self.x_range)
 
@@ -354,7 +354,7 @@ class MonotoneCurve(StaticCurve):
                 "coefficients": self.coef.tolist(), "readout_range": list(self.x_range)}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "MonotoneCurve":
+    def from_dict(cls, d: dict) -> MonotoneCurve:
         variable, sign, adc, coef, rng = common_fields(d, "monotone curve")
         knots = np.asarray(d["knots"], dtype=float)
         if knots.size < 2 or coef.size != knots.size or np.any(np.diff(knots) <= 0) or np.any(coef[1:] < 0):

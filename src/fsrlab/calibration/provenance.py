@@ -66,7 +66,7 @@ class RecordedWith:
                 "range": None if self.ranges is None else list(self.ranges)}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "RecordedWith":
+    def from_dict(cls, d: dict) -> RecordedWith:
         """Inverse of :meth:`to_dict`."""
         if not isinstance(d, dict):
             raise ValueError(f"recorded_with: expected a mapping, got {type(d).__name__}")

@@ -74,7 +74,7 @@ def as_margin(margin) -> float:
     return float(margin)
 
 
-def require_calibration(cal, parameter: str = "cal") -> "Calibration":
+def require_calibration(cal, parameter: str = "cal") -> Calibration:
     """``cal`` itself when it is a :class:`Calibration`; anything else is refused naming ``parameter``.
 
     Parameters
@@ -188,7 +188,7 @@ class Calibration:
                 "selection": self.selection.to_dict(), "calibration": self.model.to_dict()}
 
     @classmethod
-    def from_dict(cls, d: dict, path: Path | None = None) -> "Calibration":
+    def from_dict(cls, d: dict, path: Path | None = None) -> Calibration:
         """Inverse of :meth:`to_dict`, for version 2 and both layouts of version 1.
 
         Raises
@@ -224,7 +224,7 @@ class Calibration:
                    n=int(d.get("n", 0)), r2=float(d.get("r2") if d.get("r2") is not None else math.nan), **common)
 
     # ---------------------------------------------------------------------------------- applying
-    def estimator(self, margin: float | None = None, compensation: bool = True) -> "Estimator":
+    def estimator(self, margin: float | None = None, compensation: bool = True) -> Estimator:
         """A causal estimator: ``step(reading, t=None) -> (estimate, uncertainty, in_range)``, equal to
         :meth:`estimate` row by row."""
         return Estimator(self, margin, compensation)

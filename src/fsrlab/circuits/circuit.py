@@ -23,7 +23,6 @@ from __future__ import annotations
 import math
 from dataclasses import MISSING, asdict, dataclass, fields, replace
 
-
 from fsrlab.circuits.checks import check_lm555
 
 __all__ = ["LM555Circuit", "OpAmpReadout", "readout_from_metadata", "PAPER_CIRCUIT", "PAPER_OPAMP"]
@@ -96,7 +95,7 @@ class LM555Circuit:
                     self.lower_fraction, self.upper_fraction, self.discharge_ohm)
 
     @classmethod
-    def with_control(cls, control_v: float, **parts) -> "LM555Circuit":
+    def with_control(cls, control_v: float, **parts) -> LM555Circuit:
         """A circuit whose control pin (5) is driven to ``control_v``.
 
         Parameters
@@ -119,7 +118,7 @@ class LM555Circuit:
         upper = control_v / vcc
         return cls(**{**parts, "lower_fraction": upper / 2, "upper_fraction": upper})
 
-    def replace(self, **changes) -> "LM555Circuit":
+    def replace(self, **changes) -> LM555Circuit:
         """A copy with some parts changed (validated again)."""
         return replace(self, **changes)
 
@@ -128,7 +127,7 @@ class LM555Circuit:
         """Typical voltage across the FSR: the middle of the capacitor's swing between the thresholds. [V]"""
         return 0.5 * (self.lower_fraction + self.upper_fraction) * self.vcc_v
 
-    def on_range(self, range_) -> "LM555Circuit":
+    def on_range(self, range_) -> LM555Circuit:
         """The circuit as the meter runs it on ``range_`` (0: FSR alone, 1: C_off switched in)."""
         return self if range_ else self.replace(c_off_farad=0.0)
 
@@ -198,7 +197,7 @@ class LM555Circuit:
         return {"topology": "lm555-astable", **asdict(self)}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "LM555Circuit":
+    def from_dict(cls, d: dict) -> LM555Circuit:
         """Inverse of :meth:`to_dict` (missing parts with a default take it; unknown parts are an error)."""
         return _from_dict(cls, d, "LM555")
 
@@ -259,7 +258,7 @@ class OpAmpReadout:
         return {"topology": "opamp-inverting", **asdict(self)}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "OpAmpReadout":
+    def from_dict(cls, d: dict) -> OpAmpReadout:
         """Inverse of :meth:`to_dict`."""
         return _from_dict(cls, d, "op-amp")
 

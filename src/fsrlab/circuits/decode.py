@@ -16,10 +16,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsrlab.hardware import TICK_S
 from fsrlab.circuits.checks import check_lm555
 from fsrlab.circuits.lm555 import NoOscillationError, minimum_n_ratio
 from fsrlab.circuits.phases import timing_per_rc
+from fsrlab.hardware import TICK_S
 
 __all__ = ["DecodeResult", "decode"]
 

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsrlab.hardware import CAPTURE_MAX_HZ, TICK_S
 from fsrlab.circuits.lm555 import astable, minimum_n_ratio, sensitivity
+from fsrlab.hardware import CAPTURE_MAX_HZ, TICK_S
 
 __all__ = ["E12", "DesignResult", "design"]
 

@@ -88,7 +88,7 @@ class NoOscillationError(FsrlabError, ValueError):
 
     @classmethod
     def for_diode_drop(cls, diode_drop_v: float, vcc_v: float, upper_fraction: float,
-                       where: str = "") -> "NoOscillationError":
+                       where: str = "") -> NoOscillationError:
         """The error for a diode drop that leaves the charge no headroom (condition ``"diode_drop"``).
 
         Parameters

@@ -17,8 +17,8 @@ Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, eqs. (23), (2
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Sequence
 
 import numpy as np
 

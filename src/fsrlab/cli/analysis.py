@@ -9,15 +9,27 @@ a command that fails prints its one error line only.
 from __future__ import annotations
 
 import math
-
 from pathlib import Path
 
 import typer
 
 from fsrlab.cli import app
 from fsrlab.cli.options import (
-    OVERWRITE_HELP, SKIP_HELP, checked, emit_json, eng, fail, fraction, load_run_warned, missing_column, number,
-    option_names, out_path, reading_file, skipped_json, warn,
+    OVERWRITE_HELP,
+    SKIP_HELP,
+    checked,
+    emit_json,
+    eng,
+    fail,
+    fraction,
+    load_run_warned,
+    missing_column,
+    number,
+    option_names,
+    out_path,
+    reading_file,
+    skipped_json,
+    warn,
 )
 from fsrlab.units import STANDARD_GRAVITY
 
@@ -93,8 +105,8 @@ def repeatability(
       fsrlab repeatability examples/repeatability.csv
       fsrlab repeatability examples/repeatability.csv --ddof 0 --json
     """
-    from fsrlab.metrics.repeatability import grouped_repeatability
     from fsrlab.io.tables import load_grouped_csv
+    from fsrlab.metrics.repeatability import grouped_repeatability
 
     if ddof not in (0, 1):
         fail(f"must be 0 or 1, got {ddof}", "--ddof")
@@ -326,8 +338,8 @@ def apply_cmd(
       fsrlab apply examples/calibration.json examples/other.csv -o estimate.csv
       fsrlab apply examples/calibration.json examples/other.csv -o estimate.csv --no-compensation --json --overwrite
     """
-    from fsrlab.calibration.document import load_calibration
     from fsrlab.calibration.apply import apply_calibration, check_readout
+    from fsrlab.calibration.document import load_calibration
     from fsrlab.errors import ProvenanceError
     from fsrlab.io.runwriter import write_run
 
@@ -414,8 +426,8 @@ def iso376_cmd(
       fsrlab iso376 examples/iso376.csv
       fsrlab iso376 examples/iso376.csv --creep 8396.6,8404.8 --json
     """
-    from fsrlab.metrics.iso376 import iso376
     from fsrlab.io.tables import load_iso376_csv
+    from fsrlab.metrics.iso376 import iso376
 
     if degree not in (1, 2, 3):
         fail(f"must be 1, 2 or 3, got {degree}", "--degree")

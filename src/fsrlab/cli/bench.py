@@ -9,9 +9,27 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli.options import (
-    Keyboard, LiveView, MeterCircuit, check_out, check_speed, checked, emit_json, fail, loadcell_option, mass_list,
-    masses, meter_circuit_options, out_path, pascals, plain_numbers, seconds, sensor_area, sigterm_as_interrupt,
-    virtual_sensor_option, warn, window_ms_option,
+    Keyboard,
+    LiveView,
+    MeterCircuit,
+    check_out,
+    check_speed,
+    checked,
+    emit_json,
+    fail,
+    loadcell_option,
+    mass_list,
+    masses,
+    meter_circuit_options,
+    out_path,
+    pascals,
+    plain_numbers,
+    seconds,
+    sensor_area,
+    sigterm_as_interrupt,
+    virtual_sensor_option,
+    warn,
+    window_ms_option,
 )
 
 _PROTOCOLS = ("spring", "weights", "creep")

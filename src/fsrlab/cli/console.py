@@ -84,7 +84,7 @@ class LiveView:
         self.title = printable(title, keep="")
         self.live = None
 
-    def __enter__(self) -> "LiveView":
+    def __enter__(self) -> LiveView:
         if self.enabled:
             from rich.live import Live
 

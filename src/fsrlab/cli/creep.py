@@ -13,8 +13,18 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli.options import (
-    SKIP_HELP, checked, emit_json, fail, fraction, load_run_warned, missing_column, option_names, out_path, seconds,
-    skipped_json, warn,
+    SKIP_HELP,
+    checked,
+    emit_json,
+    fail,
+    fraction,
+    load_run_warned,
+    missing_column,
+    option_names,
+    out_path,
+    seconds,
+    skipped_json,
+    warn,
 )
 from fsrlab.io.outputs import atomic_path
 

@@ -62,7 +62,6 @@ def sketch(
       fsrlab firmware sketch ~/Arduino --overwrite
     """
     from fsrlab.acquisition.firmware import SKETCH_NAME, write_sketch
-
     from fsrlab.io.outputs import OutputError
 
     try:

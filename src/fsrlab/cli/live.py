@@ -9,9 +9,27 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli.options import (
-    AREA_HELP, LOADCELL_HELP, SENSOR_HELP, MeterCircuit, areas, check_virtual, fail, load_frame_calibration,
-    loadcell_option, make_virtual_device, mass_list, meter_circuit_options, meter_differences, out_path, pascals,
-    refuse_other_meter, seconds, sensor_area, virtual_bench, warn, window_ms_option,
+    AREA_HELP,
+    LOADCELL_HELP,
+    SENSOR_HELP,
+    MeterCircuit,
+    areas,
+    check_virtual,
+    fail,
+    load_frame_calibration,
+    loadcell_option,
+    make_virtual_device,
+    mass_list,
+    meter_circuit_options,
+    meter_differences,
+    out_path,
+    pascals,
+    refuse_other_meter,
+    seconds,
+    sensor_area,
+    virtual_bench,
+    warn,
+    window_ms_option,
 )
 from fsrlab.errors import FsrlabError
 from fsrlab.io.jsonable import to_jsonable

@@ -9,9 +9,21 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli.options import (
-    GRAVITY_HELP, check_rate, checked, emit_json, fail, gravity_value, loadcell_option, masses, out_path,
-    plain_numbers, seconds, sigterm_as_interrupt, window_ms_option,
+    GRAVITY_HELP,
+    check_rate,
+    checked,
+    emit_json,
+    fail,
+    gravity_value,
+    loadcell_option,
+    masses,
+    out_path,
+    plain_numbers,
+    seconds,
+    sigterm_as_interrupt,
+    window_ms_option,
 )
+
 
 @app.command("loadcell")
 def loadcell(

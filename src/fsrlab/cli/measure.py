@@ -11,12 +11,36 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli.options import (
-    AREA_HELP, LiveView, LOADCELL_HELP, PEAK_HELP, PERIOD_HELP, PROFILE_HELP, SENSOR_HELP, MeterCircuit, areas,
-    check_out, check_virtual, emit_json, fail, fmt_value, load_frame_calibration, loadcell_option, make_virtual_device,
-    meter_circuit_options, out_path, pascals, plain_numbers, refuse_other_meter, seconds, sensor_area,
-    sigterm_as_interrupt, warn, window_ms_option,
+    AREA_HELP,
+    LOADCELL_HELP,
+    PEAK_HELP,
+    PERIOD_HELP,
+    PROFILE_HELP,
+    SENSOR_HELP,
+    LiveView,
+    MeterCircuit,
+    areas,
+    check_out,
+    check_virtual,
+    emit_json,
+    fail,
+    fmt_value,
+    load_frame_calibration,
+    loadcell_option,
+    make_virtual_device,
+    meter_circuit_options,
+    out_path,
+    pascals,
+    plain_numbers,
+    refuse_other_meter,
+    seconds,
+    sensor_area,
+    sigterm_as_interrupt,
+    warn,
+    window_ms_option,
 )
 from fsrlab.units import STANDARD_GRAVITY
+
 
 def _estimator(cal):
     """The calibration's estimator (:meth:`fsrlab.calibration.result.Calibration.estimator`): one reading at
@@ -29,7 +53,7 @@ class _RowEstimates:
     memory), the estimate, in_range and uncertainty (and the force, when an area gives one) added to the row,
     counted, kept as the last, and shown on the live line."""
 
-    def __init__(self, est, columns: list[str], to_force, live: "_Live"):
+    def __init__(self, est, columns: list[str], to_force, live: _Live):
         self.est, self.columns, self.to_force, self.live = est, columns, to_force, live
         self.counts = {"estimated": 0, "out_of_range": 0}
         self.last: dict = {}

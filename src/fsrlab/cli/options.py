@@ -34,10 +34,11 @@ import inspect
 import json
 import math
 import re
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Iterator
+from typing import Any
 
 import typer
 
@@ -313,9 +314,9 @@ def make_virtual_device(profile: str, peak: float, period: float, c_off: float, 
                     corrupt: float, drop: float, load_cell: bool = True, rate: int = 80, area_m2: float | None = None,
                     sensor_model=None, speed: str = "realtime"):
     from fsrlab.acquisition.loadcell import LoadCellModel
-    from fsrlab.virtual.sources import VIRTUAL_CIRCUIT, PhysicsSource, StressProfile
-    from fsrlab.virtual.device import Faults, VirtualDevice
     from fsrlab.physics.sensor import VirtualFSR
+    from fsrlab.virtual.device import Faults, VirtualDevice
+    from fsrlab.virtual.sources import VIRTUAL_CIRCUIT, PhysicsSource, StressProfile
 
     prof = StressProfile(kind=profile, peak_pa=peak, period_s=period)
     sensor = sensor_model if sensor_model is not None else VirtualFSR() if area_m2 is None else VirtualFSR(area_m2=area_m2)
@@ -350,8 +351,8 @@ def window_ms_option(window_s: float) -> int:
     return int(ms)
 
 
-from fsrlab.cli.outputs import OVERWRITE_DIR_HELP, OVERWRITE_HELP, check_out, checked, out_path  # noqa: E402,F401
 from fsrlab.cli.console import Keyboard, LiveView, fmt_value, sigterm_as_interrupt  # noqa: E402,F401
+from fsrlab.cli.outputs import OVERWRITE_DIR_HELP, OVERWRITE_HELP, check_out, checked, out_path  # noqa: E402,F401
 
 
 def virtual_bench(steps, seed: int | None, area_m2: float | None, gravity_m_s2: float):
@@ -361,9 +362,9 @@ def virtual_bench(steps, seed: int | None, area_m2: float | None, gravity_m_s2: 
     procedure's ``place``); the meter has the virtual device's emulated HX711. One line naming ``--masses``
     when the virtual sensor has no response up to the largest mass.
     """
+    from fsrlab.physics.sensor import VirtualFSR
     from fsrlab.virtual.bench_source import BenchSource
     from fsrlab.virtual.device import VirtualDevice
-    from fsrlab.physics.sensor import VirtualFSR
 
     try:
         bench = BenchSource([s.mass_kg * gravity_m_s2 for s in steps],

@@ -3,14 +3,14 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from contextlib import contextmanager
-from typing import Iterator
 
 import typer
 
-from fsrlab.hardware import CAPTURE_MAX_HZ
 from fsrlab.cli import app
 from fsrlab.cli.options import emit_json, fail, farads, fraction, hertz, ohms, option_names, seconds, volts
+from fsrlab.hardware import CAPTURE_MAX_HZ
 from fsrlab.units import format_eng
 
 _NAMES = {"control_v": "--vctrl", "discharge_ohm": "--rdis", "r_ohm": "--r", "r_fsr_ohm": "--rfsr", "c_fsr_farad": "--cfsr", "c_off_farad": "--coff",
@@ -43,9 +43,9 @@ _NO_OSCILLATION = {"charge": "--r/--rfsr", "diode_drop": "--diode-drop", "discha
 @contextmanager
 def _model_errors(diode: bool = False) -> Iterator[None]:
     """Model errors as one line naming the options; numpy's overflow warnings silenced (results are checked)."""
-    from fsrlab.circuits.lm555 import NoOscillationError
-
     import numpy as np
+
+    from fsrlab.circuits.lm555 import NoOscillationError
 
     with option_names(_NAMES), np.errstate(all="ignore"):
         try:

@@ -8,8 +8,22 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli.options import (
-    C_OFF_HELP, PEAK_HELP, PERIOD_HELP, PROFILE_HELP, RATE_HELP, SENSOR_HELP, check_rate, check_virtual, fail,
-    farads, make_virtual_device, pascals, plain_numbers, seconds, sensor_area, sigterm_as_interrupt,
+    C_OFF_HELP,
+    PEAK_HELP,
+    PERIOD_HELP,
+    PROFILE_HELP,
+    RATE_HELP,
+    SENSOR_HELP,
+    check_rate,
+    check_virtual,
+    fail,
+    farads,
+    make_virtual_device,
+    pascals,
+    plain_numbers,
+    seconds,
+    sensor_area,
+    sigterm_as_interrupt,
     virtual_sensor_option,
 )
 

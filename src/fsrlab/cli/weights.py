@@ -10,9 +10,29 @@ import typer
 
 from fsrlab.cli import app
 from fsrlab.cli.options import (
-    AREA_HELP, GRAVITY_HELP, Keyboard, SENSOR_HELP, MeterCircuit, areas, check_out, checked, emit_json, fail, fraction,
-    gravity_value, loadcell_option, mass_list, meter_circuit_options, out_path, plain_numbers, seconds, sensor_area,
-    sigterm_as_interrupt, virtual_bench, warn, window_ms_option,
+    AREA_HELP,
+    GRAVITY_HELP,
+    SENSOR_HELP,
+    Keyboard,
+    MeterCircuit,
+    areas,
+    check_out,
+    checked,
+    emit_json,
+    fail,
+    fraction,
+    gravity_value,
+    loadcell_option,
+    mass_list,
+    meter_circuit_options,
+    out_path,
+    plain_numbers,
+    seconds,
+    sensor_area,
+    sigterm_as_interrupt,
+    virtual_bench,
+    warn,
+    window_ms_option,
 )
 from fsrlab.io.outputs import write_text_atomic
 

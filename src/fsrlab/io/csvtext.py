@@ -9,7 +9,7 @@ says so in one line naming the file, the line and what the limit is (:class:`Lon
 from __future__ import annotations
 
 import csv
-from typing import Iterable, Iterator
+from collections.abc import Iterable, Iterator
 
 __all__ = ["LongCellError", "csv_cells", "csv_rows", "long_cell_text"]
 

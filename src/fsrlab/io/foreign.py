@@ -15,10 +15,11 @@ from __future__ import annotations
 
 import os
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from datetime import datetime, time as clock_time, timezone
+from datetime import UTC, datetime
+from datetime import time as clock_time
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 
@@ -313,7 +314,7 @@ def _clock(text: str) -> float | None:
             return None
         return t.hour * 3600 + t.minute * 60 + t.second + t.microsecond * 1e-6
     if stamp.tzinfo is None:
-        stamp = stamp.replace(tzinfo=timezone.utc)
+        stamp = stamp.replace(tzinfo=UTC)
     return stamp.timestamp()
 
 

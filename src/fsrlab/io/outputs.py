@@ -27,9 +27,9 @@ import hashlib
 import json
 import os
 import secrets
+from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Iterable, Iterator
 
 from fsrlab.errors import ParameterError
 

@@ -12,8 +12,9 @@ it left out (:class:`BadRow`) instead of the first error.
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 from pathlib import Path
-from typing import NamedTuple, Sequence
+from typing import NamedTuple
 
 import numpy as np
 

@@ -16,16 +16,24 @@ import hashlib
 import json
 import math
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 
 from fsrlab.errors import FileFormatError
 from fsrlab.io.csvtext import LongCellError, csv_cells, csv_rows
 from fsrlab.io.schema import (
-    CSV_SHA256, FORMAT, KNOWN_COLUMNS, QUANTITY_COLUMNS, VERSION, RunFormatError, check_columns, sidecar_path, where,
+    CSV_SHA256,
+    FORMAT,
+    KNOWN_COLUMNS,
+    QUANTITY_COLUMNS,
+    VERSION,
+    RunFormatError,
+    check_columns,
+    sidecar_path,
+    where,
 )
 from fsrlab.io.shown import shown_list
 

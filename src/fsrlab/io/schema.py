@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import os
 from collections import Counter
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
 
 from fsrlab.errors import FileFormatError, ParameterError
 from fsrlab.io.shown import shown, shown_list

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import re
 import unicodedata
-from typing import Iterable
+from collections.abc import Iterable
 
 __all__ = ["shown", "shown_list", "printable", "number_cell", "NUMBER"]
 

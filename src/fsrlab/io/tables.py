@@ -8,8 +8,9 @@ one-line error messages (file, row, column) are those of :mod:`fsrlab.io.runform
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 

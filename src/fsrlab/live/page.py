@@ -106,7 +106,7 @@ def make_document(doc, session, controller: Controller, reference_label: str = "
         Page title.
     """
     from bokeh.layouts import column, row
-    from bokeh.models import (Band, Button, ColumnDataSource, Div, RadioButtonGroup, Select)
+    from bokeh.models import Band, Button, ColumnDataSource, Div, RadioButtonGroup, Select
     from bokeh.plotting import figure
 
     empty = {c: [] for c in ("time_s", "seq", "frequency_khz", "duty_pct", "voltage_v", "reference", "estimate",

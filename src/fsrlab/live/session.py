@@ -17,9 +17,9 @@ import queue
 import threading
 import time
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
 
 from fsrlab.acquisition.stream import WindowStream
 
@@ -194,7 +194,7 @@ class LiveSession:
         self._commands.put((name, value))
 
     # ---------------------------------------------------------------- thread
-    def start(self) -> "LiveSession":
+    def start(self) -> LiveSession:
         """Start the device thread."""
         self._thread = threading.Thread(target=self._run, name="fsrlab-live-device", daemon=True)
         self._thread.start()

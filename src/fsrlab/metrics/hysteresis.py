@@ -10,8 +10,8 @@ Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, eq. (13), Tab
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 from scipy.constants import e, epsilon_0, h, m_e

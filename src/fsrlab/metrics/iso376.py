@@ -48,8 +48,8 @@ A. Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901 (the quanti
 from __future__ import annotations
 
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Sequence
 
 import numpy as np
 

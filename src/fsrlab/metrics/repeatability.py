@@ -16,8 +16,9 @@ doi:10.1155/2018/6561901, eq. (39), Tables 4 and 5.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 

@@ -377,7 +377,7 @@ class PaperFSR:
         if self.area_fraction_0 > 1:
             raise ValueError(f"area_fraction_0 must be in (0, 1], got {self.area_fraction_0!r}")
 
-    def replace(self, **changes) -> "PaperFSR":
+    def replace(self, **changes) -> PaperFSR:
         """A copy with some parameters changed (validated again)."""
         return replace(self, **changes)
 

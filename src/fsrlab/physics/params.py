@@ -11,7 +11,6 @@ Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, Table 1.
 from __future__ import annotations
 
 import math
-
 from dataclasses import asdict, dataclass
 
 __all__ = ["PaperParameters", "PAPER", "check_positive", "check_finite"]

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import html
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 from fsrlab.bench.demo import DemoResult, DemoSettings, run_chain
 

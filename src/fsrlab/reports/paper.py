@@ -12,10 +12,10 @@ import importlib
 import json
 import os
 import pickle
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Callable
 
 from fsrlab import __version__
 from fsrlab.errors import ParameterError

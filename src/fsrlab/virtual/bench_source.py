@@ -9,12 +9,11 @@ memory), the 555 and the op-amp answer as with :class:`~fsrlab.virtual.sources.P
 
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
-from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout
-from fsrlab.circuits.circuit import PAPER_OPAMP
+from fsrlab.circuits.circuit import PAPER_OPAMP, LM555Circuit, OpAmpReadout
 
 __all__ = ["BenchSource"]
 
@@ -56,8 +55,8 @@ class BenchSource:
     def __init__(self, forces_n: Sequence[float], sensor=None, circuit: LM555Circuit | None = None,
                  opamp: OpAmpReadout = PAPER_OPAMP, ramp_s: float = 0.15, ramp_points: int = 16,
                  load_area_m2: float | None = None, seed: int | None = None) -> None:
-        from fsrlab.virtual.sources import VIRTUAL_CIRCUIT
         from fsrlab.physics.sensor import VirtualFSR
+        from fsrlab.virtual.sources import VIRTUAL_CIRCUIT
 
         f = np.asarray(forces_n, dtype=float)
         if f.ndim != 1 or f.size == 0 or not np.all(np.isfinite(f)) or np.any(f < 0):

@@ -50,14 +50,23 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fsrlab.acquisition.loadcell import LoadCellModel, window_reference
-from fsrlab.virtual.meter import MeterState, measure
 from fsrlab.acquisition.protocol import (
-    DEVICE_NAME, DWELL_MS_DEFAULT, MAX_COMMAND, PROTOCOL_VERSION, SEQ_MODULO, SETTLE_DEFAULT, UINT32_MODULO,
-    WINDOW_MS_DEFAULT, CommandError, encode_frame, mask_channels, parse_command
+    DEVICE_NAME,
+    DWELL_MS_DEFAULT,
+    MAX_COMMAND,
+    PROTOCOL_VERSION,
+    SEQ_MODULO,
+    SETTLE_DEFAULT,
+    UINT32_MODULO,
+    WINDOW_MS_DEFAULT,
+    CommandError,
+    encode_frame,
+    mask_channels,
+    parse_command,
 )
 from fsrlab.hardware import F_CPU
 from fsrlab.physics.sensor import A201_AREA_M2
-
+from fsrlab.virtual.meter import MeterState, measure
 from fsrlab.virtual.sources import PhysicsSource, Signal, SignalSource
 
 __all__ = ["FIRMWARE_VERSION", "SPEEDS", "Faults", "VirtualDevice"]
@@ -253,7 +262,7 @@ class VirtualDevice:
                 except OSError:
                     pass
 
-    def __enter__(self) -> "VirtualDevice":
+    def __enter__(self) -> VirtualDevice:
         if self._master is None:
             self.open()
         return self

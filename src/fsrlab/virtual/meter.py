@@ -92,7 +92,7 @@ class MeterState:
     last_edge_ticks: float | None = None
 
     @classmethod
-    def started(cls, rng: np.random.Generator) -> "MeterState":
+    def started(cls, rng: np.random.Generator) -> MeterState:
         """State at START: a random phase of the 555 (one uniform draw), no edge captured yet.
 
         Parameters
@@ -102,7 +102,7 @@ class MeterState:
         """
         return cls(phase=float(rng.random()))
 
-    def restarted(self) -> "MeterState":
+    def restarted(self) -> MeterState:
         """State when a window restarts (``WINDOW`` while started): same phase, no edge captured."""
         return MeterState(self.phase)
 

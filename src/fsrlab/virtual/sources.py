@@ -326,7 +326,7 @@ class MuxSource:
 
     @classmethod
     def scaled(cls, channels: int, profile: StressProfile | None = None, sensor_factory=None,
-               circuit: LM555Circuit = VIRTUAL_CIRCUIT, mux=None, dt_s: float = 0.005) -> "MuxSource":
+               circuit: LM555Circuit = VIRTUAL_CIRCUIT, mux=None, dt_s: float = 0.005) -> MuxSource:
         """``channels`` sensors, channel k under ``profile`` with its peak scaled by (k + 1)/channels.
 
         Parameters

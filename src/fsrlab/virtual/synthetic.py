@@ -19,8 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout
-from fsrlab.circuits.circuit import PAPER_CIRCUIT, PAPER_OPAMP
+from fsrlab.circuits.circuit import PAPER_CIRCUIT, PAPER_OPAMP, LM555Circuit, OpAmpReadout
 
 __all__ = ["triangle_stress", "SyntheticRun", "synthetic_run"]
 
@@ -122,9 +121,9 @@ def synthetic_run(cycles: int = 3, peak_pa: float = 50e3, points_per_ramp: int =
         ``voltage_v``, ``periods``, ``cycle`` (:func:`fsrlab.physics.history.cycle_numbers`),
         ``direction`` and the truth; metadata with ``circuit`` and ``opamp`` (their ``to_dict``).
     """
-    from fsrlab.virtual.meter import measure
     from fsrlab.physics.history import branch_directions, cycle_numbers
     from fsrlab.physics.sensor import VirtualFSR
+    from fsrlab.virtual.meter import measure
 
     if not (np.isfinite(window_s) and window_s > 0):
         raise ValueError(f"window_s must be > 0, got {window_s!r}")

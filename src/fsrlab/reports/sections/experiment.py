@@ -15,12 +15,18 @@ from pathlib import Path
 
 import numpy as np
 
+from fsrlab.paper.experiment import Experiment, run_experiment
 from fsrlab.paper.holdout import cross_readout_spreads
 from fsrlab.paper.preset_fit import (
-    FIT_PARAMETERS, SHARED_FIT_PARAMETERS, SPREADS, preset_targets, quick_response, re2_design_per_sensor
+    FIT_PARAMETERS,
+    SHARED_FIT_PARAMETERS,
+    SPREADS,
+    preset_targets,
+    quick_response,
+    re2_design_per_sensor,
 )
-from fsrlab.paper.split import TOLERANCES, predictions, targets as fit_targets, trivial_baseline
-from fsrlab.paper.experiment import Experiment, run_experiment
+from fsrlab.paper.split import TOLERANCES, predictions, trivial_baseline
+from fsrlab.paper.split import targets as fit_targets
 from fsrlab.physics.paper_sensor import DEAD_WEIGHT_AREA_M2, PAPER_SENSOR_COMMON, paper_sensors
 from fsrlab.reference import paper_values
 from fsrlab.reports.figures import new_figure, save

@@ -22,13 +22,18 @@ from fsrlab.circuits.circuit import readout_from_metadata
 from fsrlab.io.runformat import Run
 from fsrlab.metrics.cycles import run_hysteresis
 from fsrlab.metrics.repeatability import (
-    DdofFinding, ForceRepeatability, PrintedTableCheck, ddof_finding, force_repeatability, recompute_printed_table
+    DdofFinding,
+    ForceRepeatability,
+    PrintedTableCheck,
+    ddof_finding,
+    force_repeatability,
+    recompute_printed_table,
 )
 from fsrlab.paper.polyfit import fit_polynomial
-from fsrlab.virtual.synthetic import synthetic_run
 from fsrlab.reference import paper_values
 from fsrlab.reports.figures import new_figure, save
 from fsrlab.reports.model import Erratum, Figure, Section, Table
+from fsrlab.virtual.synthetic import synthetic_run
 
 
 def _loads(printed: dict) -> dict:

@@ -10,17 +10,25 @@ This module draws and words them; the errata O1–O5 are worded in
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from concurrent.futures import Future
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
 from fsrlab.circuits.decomposition import frequency_decomposition
 from fsrlab.circuits.lm555 import astable, duty_cycle_limits, minimum_n_ratio, sensitivity, tau_ratio
-from fsrlab.circuits.paper_ratio import (RatioMinimum, SimulatedRatios, TauRatioTable, minimum_eq32_as_printed,
-                                         n_where_ratio_equals, start_tau_ratios, tau_ratio_eq32_as_printed,
-                                         tau_ratio_eq37_as_printed, tau_ratio_table)
+from fsrlab.circuits.paper_ratio import (
+    RatioMinimum,
+    SimulatedRatios,
+    TauRatioTable,
+    minimum_eq32_as_printed,
+    n_where_ratio_equals,
+    start_tau_ratios,
+    tau_ratio_eq32_as_printed,
+    tau_ratio_eq37_as_printed,
+    tau_ratio_table,
+)
 from fsrlab.circuits.spice import ngspice_available
 from fsrlab.reference import paper_values
 from fsrlab.reports.figures import new_figure, plain_log_labels, save

@@ -12,13 +12,18 @@ from pathlib import Path
 import numpy as np
 from scipy.constants import electron_volt, epsilon_0
 
+from fsrlab.paper.table2 import (
+    BarrierHeightFit,
+    CycleErrorTable,
+    VoltageSweep,
+    cycle_error_table,
+    fit_barrier_height,
+    simmons_terms,
+    voltage_sweep,
+)
 from fsrlab.physics.electrical import capacitance_per_area, resistance_per_area
 from fsrlab.physics.params import PAPER, PaperParameters
 from fsrlab.physics.separation import separation_history, separation_loading, separation_unloading
-from fsrlab.paper.table2 import simmons_terms
-from fsrlab.paper.table2 import (
-    BarrierHeightFit, CycleErrorTable, VoltageSweep, cycle_error_table, fit_barrier_height, voltage_sweep
-)
 from fsrlab.physics.tunneling import current_density
 from fsrlab.reference import paper_values
 from fsrlab.reports.figures import new_figure, save

@@ -30,7 +30,6 @@ import math
 import os
 import subprocess
 import threading
-import time
 import tty
 from collections import deque
 
@@ -174,7 +173,7 @@ class Twin:
                 pass
             self._slave = None
 
-    def __enter__(self) -> "Twin":
+    def __enter__(self) -> Twin:
         if self.port is None:
             self.open()
         return self
