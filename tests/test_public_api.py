@@ -22,7 +22,7 @@ def test_import_fsrlab_loads_no_numpy():
 def test_the_names_a_user_calibrates_with_resolve():
     from fsrlab.calibration.apply import apply_calibration
     from fsrlab.calibration.document import load_calibration, save_calibration
-    from fsrlab.calibration.heldout_runs import calibrate_runs
+    from fsrlab.calibration.runs import calibrate_runs
     from fsrlab.io.runformat import load_run
     from fsrlab.reports.run_report import write_run_report
 

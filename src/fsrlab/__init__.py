@@ -59,7 +59,7 @@ _LAZY = {
     "creep_of_run": ("fsrlab.metrics.creep", "creep_of_run"),
     # calibration
     "Calibration": ("fsrlab.calibration.result", "Calibration"),
-    "calibrate": ("fsrlab.calibration.heldout_runs", "calibrate_runs"),
+    "calibrate": ("fsrlab.calibration.runs", "calibrate_runs"),
     "apply": ("fsrlab.calibration.apply", "apply_calibration"),
     "check_readout": ("fsrlab.calibration.apply", "check_readout"),
     "agreement": ("fsrlab.calibration.agreement", "agreement"),

@@ -94,7 +94,7 @@ def test_measure_refuses_a_calibration_made_on_another_circuit_or_range(tmp_path
     # The provenance check of fsrlab apply (calibration.apply.readout_differences), before any window is read:
     # the virtual meter runs VIRTUAL_CIRCUIT on range 0.
     from fsrlab.calibration.document import save_calibration
-    from fsrlab.calibration.heldout_runs import calibrate_runs
+    from fsrlab.calibration.runs import calibrate_runs
     from fsrlab.io.runwriter import write_run
     from fsrlab.virtual.sources import VIRTUAL_CIRCUIT
     from fsrlab.virtual.synthetic import synthetic_run

@@ -142,7 +142,7 @@ def test_report_cli_writes_html_json_and_pngs(tmp_path):
 
 def test_report_cli_with_a_calibration_file(tmp_path):
     from fsrlab.calibration.document import save_calibration
-    from fsrlab.calibration.heldout_runs import calibrate_runs
+    from fsrlab.calibration.runs import calibrate_runs
 
     run = _loop_run(tmp_path / "loop.csv")
     cal = save_calibration(calibrate_runs(run, compensate=True), tmp_path / "cal.json")

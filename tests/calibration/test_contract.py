@@ -2,7 +2,7 @@
 
 Every kind the engine can produce -- each static curve family, each readout variable its curves are
 fitted in and each memory variant (read from the engine's candidates, :data:`fsrlab.calibration.monotone.VARIABLES`
-and ``heldout_model.MEMORY_VARIANTS``, so a new one is covered), with and without memory, each readout column (a 555's frequency, ADC counts, C_FSR decoded through the sidecar's
+and ``selection.MEMORY_VARIANTS``, so a new one is covered), with and without memory, each readout column (a 555's frequency, ADC counts, C_FSR decoded through the sidecar's
 circuit) -- and a version-1 file of each earlier layout, pass the same checks, each a property that must hold:
 
 * stepping one reading at a time (``estimator()``) gives the batch estimate and uncertainty (to 1e-9);
@@ -27,10 +27,10 @@ import pytest
 
 from fsrlab.calibration.apply import apply_calibration
 from fsrlab.calibration.document import load_calibration, save_calibration
-from fsrlab.calibration import heldout_model
-from fsrlab.calibration.heldout import Recording
-from fsrlab.calibration.heldout_model import calibrate_recordings
-from fsrlab.calibration.heldout_runs import calibrate_runs
+from fsrlab.calibration import selection
+from fsrlab.calibration.scoring import Recording
+from fsrlab.calibration.selection import calibrate_recordings
+from fsrlab.calibration.runs import calibrate_runs
 from fsrlab.calibration.monotone import VARIABLES
 from fsrlab.calibration.result import Calibration
 from fsrlab.io.runformat import Run, load_run
@@ -40,9 +40,9 @@ from stepping import assert_steps_as_batch
 DATA = Path(__file__).resolve().parents[1] / "data" / "calibration"
 #: The static curve families the engine tries, read from its candidates (variable, family, size); candidates of
 #: (variable, size) are of one family, the piecewise-linear curve.
-FAMILIES = sorted({c[1] for c in heldout_model.STATIC_CANDIDATES if len(c) == 3}) or ["piecewise"]
+FAMILIES = sorted({c[1] for c in selection.STATIC_CANDIDATES if len(c) == 3}) or ["piecewise"]
 #: The memory variants the engine tries (play thresholds, creep time constants, growing with the level).
-MEMORIES = list(heldout_model.MEMORY_VARIANTS)
+MEMORIES = list(selection.MEMORY_VARIANTS)
 
 
 def _memory_id(variant) -> str:
@@ -69,11 +69,11 @@ def _wrapped(run: Run, x: str, compensate: bool, variable: str | None = None, fa
     rec = Recording(run["time_s"], np.asarray(run[x], dtype=float), run["force_n"], str(run.path))
     kw = {} if variable is None else {"variables": (variable,)}
     with pytest.MonkeyPatch.context() as mp:
-        if family is not None and len(heldout_model.STATIC_CANDIDATES[0]) == 3:
-            mp.setattr(heldout_model, "STATIC_CANDIDATES",
-                       tuple(c for c in heldout_model.STATIC_CANDIDATES if c[1] == family))
+        if family is not None and len(selection.STATIC_CANDIDATES[0]) == 3:
+            mp.setattr(selection, "STATIC_CANDIDATES",
+                       tuple(c for c in selection.STATIC_CANDIDATES if c[1] == family))
         if memory is not None:
-            mp.setattr(heldout_model, "MEMORY_VARIANTS", (memory,))
+            mp.setattr(selection, "MEMORY_VARIANTS", (memory,))
         model, sel = calibrate_recordings([rec], compensate=compensate, **kw)
     return Calibration(model, sel, x, "force_n", "", "N", [str(run.path)], None, int(rec.usable.sum()))
 

@@ -1,4 +1,4 @@
-"""The reference's delay (calibration/delay.py and its step in heldout_model.py).
+"""The reference's delay (calibration/delay.py and its step in selection.py).
 
 References: a ramp delayed by τ is the ramp at t − τ (closed form); the one-reading-at-a-time line
 equals the batch (property); a load cell that integrates over its 100 ms conversion and reports it at
@@ -14,11 +14,11 @@ import numpy as np
 import pytest
 
 from fsrlab.calibration import delay as dl
-from fsrlab.calibration import heldout_model as hm
+from fsrlab.calibration import selection as hm
 from fsrlab.calibration.delay import DelayLine, delayed
-from fsrlab.calibration.heldout import ALIGNED, Recording, _rank_correlation
-from fsrlab.calibration.heldout_calibration import HeldoutCalibration
-from fsrlab.calibration.heldout_model import calibrate_recordings
+from fsrlab.calibration.scoring import ALIGNED, Recording, _rank_correlation
+from fsrlab.calibration.model import HeldoutCalibration
+from fsrlab.calibration.selection import calibrate_recordings
 
 
 def test_a_delayed_ramp_is_the_ramp_earlier():
@@ -140,7 +140,7 @@ def test_the_delay_survives_the_file_and_the_stepper():
 def test_apply_and_the_live_estimator_agree_with_a_delay(tmp_path):
     """What ``fsrlab apply`` writes and what ``measure``/``live`` step (``live_estimator``) are the same
     estimates and uncertainties when the calibration holds a delay."""
-    from fsrlab.calibration.heldout_runs import calibrate_runs
+    from fsrlab.calibration.runs import calibrate_runs
     from fsrlab.io.runwriter import write_run
     from stepping import assert_steps_as_batch
 
@@ -158,7 +158,7 @@ def test_the_run_report_names_the_delay(tmp_path):
     """A run's measurement report states the delay of the calibration it applied (the file's value)."""
     import json
 
-    from fsrlab.calibration.heldout_runs import calibrate_runs
+    from fsrlab.calibration.runs import calibrate_runs
     from fsrlab.io.runwriter import write_run
     from fsrlab.reports.run_report import write_run_report
 

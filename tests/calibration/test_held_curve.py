@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 from scipy.optimize import lsq_linear
 
-from fsrlab.calibration import heldout_model as hm
+from fsrlab.calibration import selection as hm
 from fsrlab.calibration.curves import fit_static, static_system
-from fsrlab.calibration.heldout import Recording
+from fsrlab.calibration.scoring import Recording
 
 RATE_HZ = 20.0
 DATA = Path(__file__).resolve().parents[1] / "data" / "real" / "belli-insole"

@@ -13,7 +13,7 @@ import pytest
 from clirun import run_cli
 from fsrlab.calibration.apply import apply_calibration
 from fsrlab.calibration.document import load_calibration, save_calibration
-from fsrlab.calibration.heldout_runs import calibrate_runs
+from fsrlab.calibration.runs import calibrate_runs
 from fsrlab.calibration.result import Calibration
 from fsrlab.errors import ProvenanceError
 from fsrlab.io.runformat import load_run
@@ -205,7 +205,7 @@ def test_rail_refuses_what_cannot_be_a_full_scale(tmp_path, args, says):
 def test_a_resistance_column_is_calibrated_in_its_conductance(tmp_path):
     """A run whose readout is declared in ohms (the FSR's resistance behind the hand-loaded divider, a Bouc–Wen
     film: not the engine's model) is calibrated in 1/R and its logarithm, never in the ohms themselves: the unit
-    reaches the engine (heldout.readout_variables); the same readings without a unit are tried in the readout too."""
+    reaches the engine (scoring.readout_variables); the same readings without a unit are tried in the readout too."""
     run = fsr_bench_run("hand", seed=4, duration_s=40)
     counts = np.round(run.columns["voltage_v"] / 5.0 * 1023)
     ohms = 10e3 * (1023.0 / (counts + 0.5) - 1.0)

@@ -8,8 +8,8 @@ saturation behind a divider read by a 10-bit ADC, an HX711 reference): not the m
 import numpy as np
 import pytest
 
-from fsrlab.calibration.heldout import Recording
-from fsrlab.calibration.heldout_model import LevelUncertainty, calibrate_recordings
+from fsrlab.calibration.scoring import Recording
+from fsrlab.calibration.selection import LevelUncertainty, calibrate_recordings
 from fsrlab.virtual.handloaded import fsr_bench_run
 
 
@@ -68,8 +68,8 @@ def test_do_no_harm_keeps_the_plain_curve_when_memory_does_not_generalise():
     assert len(memory_steps) == 1 and not memory_steps[0]["kept"]
     assert "simpler calibration is kept" in memory_steps[0]["why"]
     # the rejected candidate did fit its own rows better: the rule, not the fit, made the choice
-    from fsrlab.calibration.heldout import Part
-    from fsrlab.calibration.heldout_model import PLAY_THRESHOLDS, _Choice, _fit
+    from fsrlab.calibration.scoring import Part
+    from fsrlab.calibration.selection import PLAY_THRESHOLDS, _Choice, _fit
 
     ch = _Choice(cal.curve.variable, cal.curve.size, family=cal.curve.family)
     part = [Part(rec, rec.usable)]
@@ -133,8 +133,8 @@ def test_the_memory_is_weighted_by_stacking_and_the_blend_is_exact(hand):
     error of ``static + w·(memory − static)``, so the blend's held-out RMSE is at most the plain
     estimate's (w = 0) and at most the full correction's (w = 1), a property of the least-squares
     weight; and the calibration written is that blend exactly (its curve a monotone one)."""
-    from fsrlab.calibration.heldout import Part
-    from fsrlab.calibration.heldout_model import _blend, _Choice, _fit, PLAY_THRESHOLDS
+    from fsrlab.calibration.scoring import Part
+    from fsrlab.calibration.selection import _blend, _Choice, _fit, PLAY_THRESHOLDS
 
     rec, _ = hand
     cal, sel = calibrate_recordings([rec], compensate=True)
@@ -155,7 +155,7 @@ def test_a_gain_under_five_percent_of_the_mse_is_not_worth_a_memory(monkeypatch)
     """A memory that wins by more than one standard error but by less than MIN_GAIN of the plain curve's
     held-out MSE is not kept, and the step says which test it failed; with MIN_GAIN = 0 the same memory
     is kept, so the rule made the choice."""
-    from fsrlab.calibration import heldout_model as hm
+    from fsrlab.calibration import selection as hm
 
     monkeypatch.setattr(hm, "DELAY_ROWS", ())  # the memory's rule alone (a delay also averages the noise)
     rng = np.random.default_rng(11)
@@ -182,7 +182,7 @@ def test_a_gain_under_five_percent_of_the_mse_is_not_worth_a_memory(monkeypatch)
 
 def test_a_part_made_worse_beyond_its_own_standard_error_is_counted():
     """Closed form: the paired standard error within each held-out part (its own chunks)."""
-    from fsrlab.calibration.heldout_model import MEMORY_Z, _parts_worse
+    from fsrlab.calibration.selection import MEMORY_Z, _parts_worse
 
     rng = np.random.default_rng(0)
     e = rng.normal(0, 1, 400)

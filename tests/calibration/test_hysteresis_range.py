@@ -15,9 +15,9 @@ import json
 import numpy as np
 import pytest
 
-from fsrlab.calibration.heldout import Part, Recording
-from fsrlab.calibration.heldout_calibration import HeldoutCalibration, clip_hysteresis
-from fsrlab.calibration.heldout_model import _Choice, _fit
+from fsrlab.calibration.scoring import Part, Recording
+from fsrlab.calibration.model import HeldoutCalibration, clip_hysteresis
+from fsrlab.calibration.selection import _Choice, _fit
 from fsrlab.calibration.operators import CREEP_TIME_CONSTANTS_S, PLAY_THRESHOLDS, memory_features
 
 RATE_HZ = 20.0

@@ -9,8 +9,8 @@ the calibration chosen with it is closer to the truth than the best one without 
 
 import numpy as np
 
-from fsrlab.calibration.heldout import Recording
-from fsrlab.calibration.heldout_model import calibrate_recordings
+from fsrlab.calibration.scoring import Recording
+from fsrlab.calibration.selection import calibrate_recordings
 
 
 def _film(seed: int, n: int = 4000, rate_hz: float = 50.0) -> tuple[Recording, np.ndarray]:
@@ -60,7 +60,7 @@ def test_the_log_variable_is_not_offered_when_a_reading_is_not_above_zero():
 def test_a_log_calibration_steps_as_the_batch_and_survives_a_file(tmp_path):
     """Property: ``live``/``measure`` one reading at a time equal ``apply`` (tests/stepping.py), also for
     readings at or below zero in the new run (clipped to the calibrated range: finite estimates)."""
-    from fsrlab.calibration.heldout_runs import calibrate_runs
+    from fsrlab.calibration.runs import calibrate_runs
     from fsrlab.io.runwriter import write_run
     from stepping import assert_steps_as_batch
 

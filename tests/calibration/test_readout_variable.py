@@ -11,8 +11,8 @@ Selection says which one was used and why.
 import numpy as np
 import pytest
 
-from fsrlab.calibration.heldout import Recording, readout_variables
-from fsrlab.calibration.heldout_model import calibrate_recordings
+from fsrlab.calibration.scoring import Recording, readout_variables
+from fsrlab.calibration.selection import calibrate_recordings
 from fsrlab.virtual.handloaded import fsr_bench_run
 
 R_M, VCC = 10e3, 5.0  # fsr_bench_run's divider [Ω, V]

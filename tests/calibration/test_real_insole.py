@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from fsrlab.calibration.apply import apply_calibration
-from fsrlab.calibration.heldout_runs import calibrate_runs
+from fsrlab.calibration.runs import calibrate_runs
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "real" / "belli-insole"
 

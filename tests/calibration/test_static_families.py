@@ -19,9 +19,9 @@ from fsrlab.calibration.curves import (
     curve_from_dict,
     fit_static,
 )
-from fsrlab.calibration.heldout import Recording
-from fsrlab.calibration.heldout_calibration import HeldoutCalibration
-from fsrlab.calibration.heldout_model import calibrate_recordings
+from fsrlab.calibration.scoring import Recording
+from fsrlab.calibration.model import HeldoutCalibration
+from fsrlab.calibration.selection import calibrate_recordings
 from fsrlab.calibration.monotone import MonotoneCurve
 from fsrlab.io.runwriter import write_run
 

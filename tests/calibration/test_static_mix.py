@@ -12,11 +12,11 @@ import json
 import numpy as np
 import pytest
 
-from fsrlab.calibration import heldout_model as hm
+from fsrlab.calibration import selection as hm
 from fsrlab.calibration.delay import delayed
-from fsrlab.calibration.heldout import Recording
-from fsrlab.calibration.heldout_calibration import HeldoutCalibration
-from fsrlab.calibration.heldout_model import calibrate_recordings
+from fsrlab.calibration.scoring import Recording
+from fsrlab.calibration.model import HeldoutCalibration
+from fsrlab.calibration.selection import calibrate_recordings
 from fsrlab.virtual.handloaded import fsr_bench_run
 
 

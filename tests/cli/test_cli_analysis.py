@@ -106,7 +106,7 @@ def test_calibrate_on_decoded_capacitance_stores_the_circuit_and_apply_reuses_it
     # Reference: the library called directly on the same run (the CLI only renders), and the circuit of
     # the run's sidecar (R = 10 kΩ, ideal D1) that C_FSR is decoded through.
     from fsrlab.calibration.apply import apply_calibration
-    from fsrlab.calibration.heldout_runs import calibrate_runs
+    from fsrlab.calibration.runs import calibrate_runs
     from fsrlab.circuits.circuit import LM555Circuit
 
     cal = tmp_path / "calc.json"

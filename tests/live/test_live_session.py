@@ -182,7 +182,7 @@ def test_tare_while_the_load_moves_is_refused_saying_why(tmp_path):
 def test_a_calibration_recorded_on_another_range_is_refused_with_the_reason(tmp_path, monkeypatch):
     from fsrlab.virtual.sources import VIRTUAL_CIRCUIT
     from fsrlab.calibration.document import save_calibration
-    from fsrlab.calibration.heldout_runs import calibrate_runs
+    from fsrlab.calibration.runs import calibrate_runs
     from fsrlab.virtual.synthetic import synthetic_run
     from fsrlab.io.runwriter import write_run
 

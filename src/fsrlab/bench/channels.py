@@ -142,7 +142,7 @@ def calibrate_channels(run, **options) -> ChannelCalibrations:
     -------
     ChannelCalibrations
     """
-    from fsrlab.calibration.heldout_runs import calibrate_runs
+    from fsrlab.calibration.runs import calibrate_runs
 
     by_sensor, channels = {}, {}
     reference = options.get("reference")

@@ -408,7 +408,7 @@ def _calibrate_and_apply(out: Path, result: DemoResult, steps: DemoSteps, say: C
 
     from fsrlab.calibration.apply import apply_calibration
     from fsrlab.calibration.document import save_calibration
-    from fsrlab.calibration.heldout_runs import calibrate_runs
+    from fsrlab.calibration.runs import calibrate_runs
     from fsrlab.io.runformat import load_run
     from fsrlab.io.runwriter import write_run
 

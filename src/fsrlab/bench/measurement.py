@@ -14,7 +14,7 @@ resistive one (op-amp V0, eq. 38) as in its Table 3:
   (:func:`fsrlab.metrics.creep.creep_of_run`: drift per decade of time, total drift, time constant);
 - **extension:** the calibration (every choice scored held out: its model, held-out error, lag, delay and
   uncertainty) and the hysteresis error of the compensated estimate
-  (:func:`fsrlab.calibration.heldout_runs.calibrate_runs`, :func:`~fsrlab.calibration.apply.apply_calibration`).
+  (:func:`fsrlab.calibration.runs.calibrate_runs`, :func:`~fsrlab.calibration.apply.apply_calibration`).
 
 Each part that the data do not allow is None with a one-line reason.
 """
@@ -567,7 +567,7 @@ def _calibrated(rep: RunReport, run, calibration, calibrate: bool) -> None:
     the estimate it gives on the run, its hysteresis error and, for a given calibration on a run with its
     reference, their agreement: into ``rep``, or the reason why not."""
     from fsrlab.calibration.apply import apply_calibration
-    from fsrlab.calibration.heldout_runs import calibrate_runs
+    from fsrlab.calibration.runs import calibrate_runs
 
     cal, source = None, ""
     if calibration is not None:

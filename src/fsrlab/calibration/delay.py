@@ -7,7 +7,7 @@ average, an instant half a reading or more before the row it sits in. A calibrat
 the reference *as recorded* (fsrlab's default) then estimates best from the readout as it was that
 much earlier. The delay is causal (only past readings are used), so :class:`DelayLine` gives the
 same estimates one reading at a time, and ``0`` is the default hypothesis
-(:mod:`fsrlab.calibration.heldout_model` keeps a delay only where it wins on held-out data). A
+(:mod:`fsrlab.calibration.selection` keeps a delay only where it wins on held-out data). A
 reference logged by another device and joined by its time stamps, or filtered, can be many readings
 late: :func:`delay_trials` lists the delays the calibration tries.
 """

@@ -6,7 +6,7 @@ calibrated ``readout_range``, ``lag_s``, ``n``, ``r2``, ``created``, ``sources``
 (the circuit and range the runs were recorded with, checked when applied:
 :meth:`fsrlab.calibration.provenance.RecordedWith.to_dict`), ``circuit`` (the LM555 C_FSR was decoded
 through, or null), ``selection`` (what was tried and why) and ``calibration`` (the curve, the memory,
-the uncertainty: :meth:`fsrlab.calibration.heldout_calibration.HeldoutCalibration.to_dict`). docs/calibration.md
+the uncertainty: :meth:`fsrlab.calibration.model.HeldoutCalibration.to_dict`). docs/calibration.md
 describes each entry.
 
 Files of version 1 load too, read-only: those of the held-out engine (``"method": "held-out"``, the same

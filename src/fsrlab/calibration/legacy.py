@@ -6,7 +6,7 @@ uncertainty table. :class:`LegacyModel` reads such a file, and a
 :class:`~fsrlab.calibration.result.Calibration` applies like any other: the static curve, the floor, the
 memory (the play operators and creep averages of :mod:`fsrlab.calibration.operators`, stepped one
 reading at a time, every reading fed whatever the margin) and the uncertainty by level and direction
-(:class:`~fsrlab.calibration.heldout_uncertainty.LevelUncertainty`, without the quantization term).
+(:class:`~fsrlab.calibration.uncertainty.LevelUncertainty`, without the quantization term).
 The branch polynomials (``"compensation"``) of those files are not applied: they needed the whole run
 (or labels of their own); the static curve is, and :attr:`LegacyModel.note` says so. Nothing here fits.
 """
@@ -18,7 +18,7 @@ import math
 import numpy as np
 from numpy.polynomial import chebyshev
 
-from fsrlab.calibration.heldout_uncertainty import LevelUncertainty
+from fsrlab.calibration.uncertainty import LevelUncertainty
 from fsrlab.calibration.operators import MemoryState, directions, memory_features
 
 __all__ = ["is_legacy", "LegacyModel", "LegacyStepper"]

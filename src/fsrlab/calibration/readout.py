@@ -1,6 +1,6 @@
 """What a recorded run holds for a calibration: its readout (C_FSR decoded through its circuit), its provenance.
 
-The calibration reads a run through these functions (:mod:`fsrlab.calibration.heldout_runs`,
+The calibration reads a run through these functions (:mod:`fsrlab.calibration.runs`,
 :mod:`fsrlab.calibration.result`, :mod:`fsrlab.calibration.apply`); they pass the run's columns and
 sidecar to the computations on arrays.
 

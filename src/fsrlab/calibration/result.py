@@ -1,6 +1,6 @@
 """The one calibration result, :class:`Calibration`: estimate a run, step readings, save, plot.
 
-**Extension beyond the paper.** What :func:`fsrlab.calibrate` (:func:`fsrlab.calibration.heldout_runs.calibrate_runs`)
+**Extension beyond the paper.** What :func:`fsrlab.calibrate` (:func:`fsrlab.calibration.runs.calibrate_runs`)
 returns and :func:`fsrlab.load_calibration` reads. One contract for every calibration, whatever its
 curve, memory and readout variable:
 
@@ -30,8 +30,8 @@ from pathlib import Path
 
 import numpy as np
 
-from fsrlab.calibration.heldout_calibration import HeldoutCalibration
-from fsrlab.calibration.heldout_model import Selection
+from fsrlab.calibration.model import HeldoutCalibration
+from fsrlab.calibration.selection import Selection
 from fsrlab.calibration.legacy import LegacyModel, is_legacy
 from fsrlab.calibration.provenance import RecordedWith
 from fsrlab.calibration.readout import C_FSR, run_readout

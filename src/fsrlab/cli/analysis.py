@@ -1,7 +1,7 @@
 """``fsrlab hysteresis``, ``repeatability``, ``calibrate``, ``apply``, ``iso376``: what a user does with recorded runs.
 
 Thin commands: they parse options and render; runs are calibrated by
-:func:`fsrlab.calibration.heldout_runs.calibrate_runs` and converted by :func:`fsrlab.calibration.apply.apply_calibration`; files follow docs/data-format.md. Warnings (an incomplete run,
+:func:`fsrlab.calibration.runs.calibrate_runs` and converted by :func:`fsrlab.calibration.apply.apply_calibration`; files follow docs/data-format.md. Warnings (an incomplete run,
 skipped rows, an unchecked calibration) go to stderr, each once, when the command has a result;
 a command that fails prints its one error line only.
 """
@@ -221,10 +221,10 @@ def _lag_option(lag: str) -> float | str:
 def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, compensate: bool, unit: str | None,
                         lag: str, skip_bad_rows: bool, output: Path | None, json_out: bool,
                         rail: float | None = None, between_runs: float | None = None) -> None:
-    """``fsrlab calibrate`` (:func:`fsrlab.calibration.heldout_runs.calibrate_runs`): the calibration, its file,
+    """``fsrlab calibrate`` (:func:`fsrlab.calibration.runs.calibrate_runs`): the calibration, its file,
     and its JSON or table."""
     from fsrlab.calibration.document import save_calibration
-    from fsrlab.calibration.heldout_runs import calibrate_runs
+    from fsrlab.calibration.runs import calibrate_runs
 
     warnings: list[str] = []
     runs = []

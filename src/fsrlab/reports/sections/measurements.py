@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fsrlab.calibration.heldout_runs import calibrate_runs
+from fsrlab.calibration.runs import calibrate_runs
 from fsrlab.calibration.readout import decode_capacitance
 from fsrlab.circuits.circuit import readout_from_metadata
 from fsrlab.io.runformat import Run

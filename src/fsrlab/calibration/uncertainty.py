@@ -1,7 +1,7 @@
 """The uncertainty of a held-out calibration: by level and direction, from its held-out errors.
 
 **Extension beyond the paper.** :class:`LevelUncertainty` turns the held-out errors of the
-calibration :mod:`fsrlab.calibration.heldout_model` chose into a standard uncertainty per estimate:
+calibration :mod:`fsrlab.calibration.selection` chose into a standard uncertainty per estimate:
 the :data:`COVERAGE` quantile of |error| in each level and direction cell, plus a relative term for
 what changes from one recording to the next (:data:`REPEATABILITY`) and half of any extrapolation.
 """

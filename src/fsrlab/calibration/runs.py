@@ -1,6 +1,6 @@
 """Calibrate from one or more recorded runs, every choice scored held out: :func:`calibrate_runs`.
 
-**Extension beyond the paper.** The orchestration of :mod:`fsrlab.calibration.heldout_model` on
+**Extension beyond the paper.** The orchestration of :mod:`fsrlab.calibration.selection` on
 runs: it checks its arguments, reads each run's readout (a column, or C_FSR decoded through the run's
 circuit), reference and times, and returns a :class:`~fsrlab.calibration.result.Calibration`; it
 holds no model of its own. ``fsrlab calibrate RUN.csv [RUN2.csv ...]`` and :func:`fsrlab.calibrate` are it.
@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from fsrlab.calibration.heldout import Recording
-from fsrlab.calibration.heldout_model import calibrate_recordings
+from fsrlab.calibration.scoring import Recording
+from fsrlab.calibration.selection import calibrate_recordings
 from fsrlab.calibration.provenance import mismatches, recorded_with
 from fsrlab.calibration.readout import C_FSR, reference_reversed, run_circuit, run_readout
 from fsrlab.calibration.result import METHOD, Calibration
@@ -159,7 +159,7 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
         Readout column, or ``c_fsr_farad``: C_FSR decoded from ``frequency_hz`` and ``duty_cycle``
         through the circuit of the run's sidecar (:func:`fsrlab.calibration.readout.run_readout`). Its unit
         and name pass to the engine: a resistance (a unit in ohms, a column named ``*_ohm``) is calibrated in
-        its conductance (:func:`fsrlab.calibration.heldout.readout_variables`). [its unit]
+        its conductance (:func:`fsrlab.calibration.scoring.readout_variables`). [its unit]
     reference : {"force_n", "stress_pa"}, optional
         Reference column (default: ``stress_pa`` when the runs have it, else ``force_n``).
     compensate : bool
@@ -177,7 +177,7 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
     between_runs : float, optional
         Relative standard uncertainty between recordings, the floor of the uncertainty's term for what
         changes from one recording to the next, in [0, 1]: default
-        :data:`~fsrlab.calibration.heldout_uncertainty.REPEATABILITY` (15 %); the held-out runs' gain
+        :data:`~fsrlab.calibration.uncertainty.REPEATABILITY` (15 %); the held-out runs' gain
         spread when it is larger. docs/calibration.md: 1–8 % for a film under a robot, about 20 % for
         an FSR placed by hand from one session to the next. [1]
 

@@ -1,4 +1,4 @@
-"""The calibration :func:`fsrlab.calibration.heldout_model.calibrate_recordings` writes, and its stepper.
+"""The calibration :func:`fsrlab.calibration.selection.calibrate_recordings` writes, and its stepper.
 
 **Extension beyond the paper.** A monotone curve of the readout plus weighted memory features
 (hysteresis play operators and creep averages of the level, :mod:`fsrlab.calibration.operators`),
@@ -14,7 +14,7 @@ import numpy as np
 
 from fsrlab.calibration.curves import curve_from_dict
 from fsrlab.calibration.delay import DelayLine, delayed
-from fsrlab.calibration.heldout_uncertainty import LevelUncertainty
+from fsrlab.calibration.uncertainty import LevelUncertainty
 from fsrlab.calibration.monotone import StaticCurve
 from fsrlab.calibration.operators import MemoryState, directions, memory_features
 
@@ -59,7 +59,7 @@ class HeldoutCalibration:
         clipped (files written before it). [1]
     mix : tuple of StaticCurve
         Static curves whose mean is the static estimate in place of ``static`` (model averaging, see
-        :data:`fsrlab.calibration.heldout_model.MIX_SE`); the memory's level and its correction stay
+        :data:`fsrlab.calibration.selection.MIX_SE`); the memory's level and its correction stay
         those fitted around ``static``. Empty: ``static`` alone.
     creep_start : float
         The creep averages at a recording's first reading, a fraction of its level

@@ -2,13 +2,13 @@
 
 **Extension beyond the paper.** :func:`calibrate_recordings` takes one or more recordings (time,
 readout, reference) and returns a :class:`HeldoutCalibration`. Every choice is scored by
-:mod:`fsrlab.calibration.heldout` (other recordings, or later blocks of one) and taken in order of
+:mod:`fsrlab.calibration.scoring` (other recordings, or later blocks of one) and taken in order of
 complexity:
 
 1. **static curve**: piecewise linear (:mod:`fsrlab.calibration.monotone`), polynomials of degree 2 to
    5 and monotone cubic splines (:mod:`fsrlab.calibration.curves`), simplest first
    (:data:`STATIC_CANDIDATES`), in the readout variables its physics names
-   (:func:`fsrlab.calibration.heldout.readout_variables`: the readout, the divider's conductance ratio,
+   (:func:`fsrlab.calibration.scoring.readout_variables`: the readout, the divider's conductance ratio,
    a resistance's conductance 1/R, the logarithm). A polynomial that falls somewhere over the calibrated
    readings is not tried. The memory is fitted around the simplest curve that cannot fall (piecewise or
    spline) within one standard error of the best held-out error; the static estimate is the **mean of the candidates
@@ -53,7 +53,7 @@ import numpy as np
 
 from fsrlab.calibration.curves import fit_static, static_system
 from fsrlab.calibration.delay import DELAY_ROWS, delay_trials, delayed
-from fsrlab.calibration.heldout import (
+from fsrlab.calibration.scoring import (
     Part,
     Recording,
     chunk_ids,
@@ -64,8 +64,8 @@ from fsrlab.calibration.heldout import (
     readout_variables,
     scheme_name,
 )
-from fsrlab.calibration.heldout_calibration import HeldoutCalibration, clip_hysteresis
-from fsrlab.calibration.heldout_uncertainty import REPEATABILITY, LevelUncertainty
+from fsrlab.calibration.model import HeldoutCalibration, clip_hysteresis
+from fsrlab.calibration.uncertainty import REPEATABILITY, LevelUncertainty
 from fsrlab.calibration.operators import (
     CREEP_START,
     CREEP_TIME_CONSTANTS_S,
@@ -92,7 +92,7 @@ def _coefficients(family: str, size: int) -> int:
 
 #: Static candidates, simplest first (fewest coefficients, then the piecewise curve before the polynomial
 #: before the spline, then :data:`_VARIABLE_ORDER`): (readout variable, family, size). Which variables
-#: are tried: :func:`fsrlab.calibration.heldout.readout_variables`. [1]
+#: are tried: :func:`fsrlab.calibration.scoring.readout_variables`. [1]
 STATIC_CANDIDATES = tuple(sorted(((v, f, k) for f, sizes in FAMILY_SIZES.items() for k in sizes for v in _VARIABLE_ORDER),
                                  key=lambda c: (_coefficients(c[1], c[2]), list(FAMILY_SIZES).index(c[1]),
                                                 _VARIABLE_ORDER.index(c[0]))))
@@ -144,7 +144,7 @@ class Selection:
     Parameters
     ----------
     scheme : str
-        How choices were scored (:func:`fsrlab.calibration.heldout.scheme_name`).
+        How choices were scored (:func:`fsrlab.calibration.scoring.scheme_name`).
     candidates : list of dict
         Every candidate tried: ``name`` and ``heldout_rmse``. [unit of the reference]
     steps : list of dict
@@ -159,7 +159,7 @@ class Selection:
     readout : dict
         The readout variables: ``variables`` (tried), ``used`` (by the static estimate: its curve's, or
         those of the curves averaged) and ``why`` (the physics of the readout,
-        :func:`fsrlab.calibration.heldout.readout_variables`).
+        :func:`fsrlab.calibration.scoring.readout_variables`).
     """
 
     scheme: str
@@ -660,14 +660,14 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
         Rows the readout lags the reference (default 0), or ``"auto"``: 0 unless a shift wins.
     variables : sequence of str, optional
         Readout variables tried (default: those the readout's physics names,
-        :func:`fsrlab.calibration.heldout.readout_variables`; ``conductance`` only with a rail: ADC counts,
+        :func:`fsrlab.calibration.scoring.readout_variables`; ``conductance`` only with a rail: ADC counts,
         or ``rail`` given; ``log`` and ``reciprocal`` only when every usable reading is above zero).
     rail : float, optional
         The readout's full scale when it is not ADC counts: a divider's supply voltage for its
         voltage (the conductance ratio is then V/(Vcc − V), or its mirror). [unit of the readout]
     between_runs : float, optional
         The floor of the uncertainty's relative term for what changes from one recording to the next
-        (default :data:`~fsrlab.calibration.heldout_uncertainty.REPEATABILITY`); the held-out
+        (default :data:`~fsrlab.calibration.uncertainty.REPEATABILITY`); the held-out
         recordings' gain spread when it is larger. [1]
     unit, name : str
         The readout's unit and column name, when known (a resistance is calibrated in its conductance).
