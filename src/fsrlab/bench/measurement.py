@@ -539,7 +539,7 @@ def measure_run(run, placements=None, weights_run=None, calibration=None, calibr
         except ValueError:
             raise ValueError(f"{placements}: load: the mass in g (200 or 200g), got {loads[0]!r}") from None
         means = [{"load_g": ld, "sensor": sn, "direction": d, "cycle": 0, "frequency_hz": float(v)}
-                 for ld, sn, d, v in zip(load_g, sensors, direction, readings)]
+                 for ld, sn, d, v in zip(load_g, sensors, direction, readings, strict=True)]
         rep.repeatability_source = f"placements file {Path(placements).name} (reading: frequency)"
     if means is None:
         rep.repeatability_reason = ("no dead-weight placements: record them with fsrlab bench weights and pass the run "

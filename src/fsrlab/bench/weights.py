@@ -90,7 +90,7 @@ def plan_steps(masses_kg: Sequence[float], repeat: int = 1, unload: bool = False
     m = [float(x) for x in masses_kg]
     if len(m) < 2:
         raise ParameterError(f"at least two are needed (e.g. 0,100g), got {len(m)}", parameter="masses")
-    for a, b in zip(m, m[1:]):
+    for a, b in zip(m, m[1:], strict=False):
         if not b > a:
             raise ParameterError(f"must increase, got {b * 1e3:g} g after {a * 1e3:g} g", parameter="masses")
     if m[0] < 0 or not all(math.isfinite(x) for x in m):
@@ -266,7 +266,7 @@ class WeightsProcedure:
         """The sidecar's ``weights.steps``: per step its mass, direction, cycle, status, rows, time to
         settle [s] and the mean readout of its steady windows."""
         out = []
-        for r, v in zip(self.results, self._values):
+        for r, v in zip(self.results, self._values, strict=True):
             out.append({**r, "mean_reading": float(np.mean(v)) if v else None})
         return {"steps": out, "recorded": sum(r["status"] == "recorded" for r in self.results),
                 "skipped": sum(r["status"].startswith("skipped") for r in self.results),

@@ -74,7 +74,7 @@ def delayed(t, x, delay_s: float) -> np.ndarray:
     t = np.asarray(t, dtype=float)
     back = np.flatnonzero(np.diff(t) < 0) + 1  # where the time goes back: each stretch on its own
     if back.size:
-        return np.concatenate([delayed(tt, xx, delay_s) for tt, xx in zip(np.split(t, back), np.split(x, back))])
+        return np.concatenate([delayed(tt, xx, delay_s) for tt, xx in zip(np.split(t, back), np.split(x, back), strict=True)])
     ok = np.isfinite(x) & np.isfinite(t)
     if not ok.any():
         return x

@@ -225,7 +225,7 @@ class Stepper:
         self._t = None
         self._rest = cal.static.rest
         rng = cal.hysteresis_range  # clip_hysteresis's bounds as Python floats, for one reading at a time
-        self._clip = [] if rng is None else list(zip(rng[0].tolist(), rng[1].tolist()))
+        self._clip = [] if rng is None else list(zip(rng[0].tolist(), rng[1].tolist(), strict=True))
 
     def step(self, x: float | None, t: float | None = None) -> tuple[float | None, int]:
         if x is None or not np.isfinite(x):
@@ -244,5 +244,5 @@ class Stepper:
         if cal.has_memory:
             for j, (lo, hi) in enumerate(self._clip):
                 feats[j] = min(max(feats[j], lo), hi)
-            est += sum(f * float(w) for f, w in zip(feats, cal.weights))
+            est += sum(f * float(w) for f, w in zip(feats, cal.weights, strict=True))
         return est, d

@@ -87,7 +87,7 @@ def _ema(u: np.ndarray, dt: np.ndarray, tau: float, start: float = 1.0) -> np.nd
                 out[1:], _ = lfilter([a[0]], [1.0, a[0] - 1.0], u[1:], zi=[(1.0 - a[0]) * out[0]])
             else:
                 q = float(out[0])
-                for i, (ai, ui) in enumerate(zip(a.tolist(), u[1:].tolist()), start=1):
+                for i, (ai, ui) in enumerate(zip(a.tolist(), u[1:].tolist(), strict=True), start=1):
                     q = q + ai * (ui - q)
                     out[i] = q
         return out
@@ -98,7 +98,7 @@ def _ema(u: np.ndarray, dt: np.ndarray, tau: float, start: float = 1.0) -> np.nd
     a = (1.0 - np.exp(-dt / tau)).tolist()
     out = []
     q = float(u[0])
-    for ai, ui in zip(a, u.tolist()):
+    for ai, ui in zip(a, u.tolist(), strict=True):
         q = q + ai * (ui - q)
         out.append(q)
     return np.asarray(out)

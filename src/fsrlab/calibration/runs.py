@@ -210,8 +210,8 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
     if reversed_why:
         raise ValueError(f"{ref}: {reversed_why}: a load cell mounted or wired the wrong way round, or the wrong "
                          "column")
-    rws = [recorded_with(r.metadata, r.columns.get("range"), rec.usable) for r, rec in zip(runs, recs)]
-    for other, run in zip(rws[1:], runs[1:]):
+    rws = [recorded_with(r.metadata, r.columns.get("range"), rec.usable) for r, rec in zip(runs, recs, strict=True)]
+    for other, run in zip(rws[1:], runs[1:], strict=True):
         diff = mismatches(x, rws[0], other, circuit)
         if diff:
             raise ValueError(f"{run.path}: recorded with {diff[0][0]}, {runs[0].path} with {diff[0][1]}: "

@@ -48,7 +48,7 @@ def plot_twin(x, left, right, ax=None, xlabel: str | None = None):
         _, ax = plt.subplots(layout="constrained")
     axes = (ax, ax.twinx())
     handles = []
-    for axis, (y, std, label, unit), color in zip(axes, (left, right), ("C0", "C1")):
+    for axis, (y, std, label, unit), color in zip(axes, (left, right), ("C0", "C1"), strict=True):
         ys = np.atleast_1d(np.asarray(y, dtype=float))
         if ys.shape != xs.shape:
             raise ValueError(f"{label}: needs one value per x ({xs.size}), got shape {ys.shape}")

@@ -83,7 +83,7 @@ def hysteresis(
     level = "σd" if ref == "stress_pa" else "Fd"
     for col in ("cycle", "HE (%)", f"{level} ({shown})"):
         table.add_column(col, justify="right")
-    for n, c in zip(res.cycle_numbers, res.cycles):
+    for n, c in zip(res.cycle_numbers, res.cycles, strict=True):
         table.add_row(str(n), f"{c.percent:.2f}", f"{c.stress_at_max_pa * factor:.4g}")
     table.add_row("overall", f"{res.percent:.2f}", f"{res.stress_at_max_pa * factor:.4g}")
     console = Console()

@@ -72,7 +72,7 @@ def import_cmd(
         fail(f"must be > 0 Hz, got {reference_rate:g}", "--reference-rate")
     if skip_lines < 0:
         fail(f"must be >= 0 lines, got {skip_lines}", "--skip-lines")
-    for path, option in zip(inputs, ("SENSOR.csv", "--reference")):
+    for path, option in zip(inputs, ("SENSOR.csv", "--reference"), strict=False):
         if path.is_dir():
             fail(f"{path} is a directory, not a file", option)
         if not path.exists():

@@ -387,5 +387,5 @@ def replace_run(src, dst) -> None:
         fh.write(json.dumps(doc, indent=2, allow_nan=False) + "\n")
         fh.flush()
         os.fsync(fh.fileno())
-    for s, d in reversed(list(zip(run_files(src), run_files(dst)))):
+    for s, d in reversed(list(zip(run_files(src), run_files(dst), strict=True))):
         os.replace(s, d)

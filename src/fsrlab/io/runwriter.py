@@ -372,7 +372,7 @@ def write_run(path: str | os.PathLike, columns: Mapping[str, Any], metadata: Map
                 n_rows = arrays[0].shape[0]
                 for k in range(0, n_rows, _CHUNK_ROWS):  # the text of a chunk of rows at a time: memory bounded
                     cells = [_format_column(a[k:k + _CHUNK_ROWS]) for a in arrays]
-                    w._raw("".join([",".join(row) + "\n" for row in zip(*cells)]))
+                    w._raw("".join([",".join(row) + "\n" for row in zip(*cells, strict=True)]))
                 w.rows = n_rows
     except OSError as exc:  # name the run, not the temporary files
         raise _user_error(exc, path) from None

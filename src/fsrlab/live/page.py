@@ -194,7 +194,7 @@ def make_document(doc, session, controller: Controller, reference_label: str = "
                    "frequency_khz": [f / 1e3 for f in cols["frequency_hz"]],
                    "duty_pct": [100 * d for d in cols["duty_cycle"]], "voltage_v": cols["voltage_v"],
                    "reference": ref, "estimate": est,
-                   "lower": [e - u for e, u in zip(est, unc)], "upper": [e + u for e, u in zip(est, unc)]}
+                   "lower": [e - u for e, u in zip(est, unc, strict=True)], "upper": [e + u for e, u in zip(est, unc, strict=True)]}
             for key, values in new.items():
                 pending[key].extend(values)
             i = n - 1

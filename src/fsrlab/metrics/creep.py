@@ -394,7 +394,7 @@ class RunCreep:
             import matplotlib.pyplot as plt
 
             _, ax = plt.subplots()
-        for k, (h, s, r) in enumerate(zip(self.holds, self.elapsed, self.readings)):
+        for k, (h, s, r) in enumerate(zip(self.holds, self.elapsed, self.readings, strict=True)):
             a = h.log.a
             if not (np.isfinite(a) and a != 0 and s.size):
                 continue

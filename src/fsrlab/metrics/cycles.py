@@ -184,7 +184,7 @@ def _runs(labels: np.ndarray) -> list[tuple[int, int, int]]:
     brk = np.flatnonzero(vals[1:] != vals[:-1]) + 1
     starts = np.concatenate([[0], brk])
     stops = np.concatenate([brk, [idx.size]])
-    return [(int(vals[s]), int(idx[s]), int(idx[e - 1]) + 1) for s, e in zip(starts, stops)]
+    return [(int(vals[s]), int(idx[s]), int(idx[e - 1]) + 1) for s, e in zip(starts, stops, strict=True)]
 
 
 def _pair(labels: np.ndarray, x: np.ndarray, number0: int = 0, rows: np.ndarray | None = None) -> list[Cycle]:

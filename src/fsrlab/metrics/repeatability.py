@@ -454,7 +454,7 @@ def grouped_repeatability(load: Sequence, sensor: Sequence, reading, ddof: int =
     if not (len(load) == len(sensor) == x.shape[0]) or x.ndim != 1:
         raise ValueError("load, sensor and reading must be 1-D and of the same length")
     order: dict[tuple, list[int]] = {}
-    for i, key in enumerate(zip(load, sensor)):
+    for i, key in enumerate(zip(load, sensor, strict=True)):
         order.setdefault(key, []).append(i)
     groups = []
     for (ld, sn), idx in order.items():

@@ -207,7 +207,7 @@ def quick_response(sensor, points: int = 41, circuit: LM555Circuit = PAPER_CIRCU
     for key, q in (("he_tm", v), ("he_pm", f)):
         he[key] = float(hysteresis_error(up, q[:n], up[::-1], q[n - 1:]).percent)
     out = {"f0": float(f[0]), "f10": float(f[n - 1]), "v0": float(v[0]), "v10": float(v[n - 1]), **he}
-    for key, rr in zip(weights, placed):
+    for key, rr in zip(weights, placed, strict=True):
         out[key] = float(circuit.astable(rr.r_fsr_ohm[-1], rr.c_fsr_farad[-1], check=False).frequency_hz)
     return out
 
@@ -264,7 +264,7 @@ def _codec(names: list, table: dict):
         return np.array([np.log(getattr(sensor, n)) if table[n][2] else getattr(sensor, n) for n in names])
 
     def dec(x) -> dict:
-        return {n: float(np.exp(v)) if table[n][2] else float(v) for n, v in zip(names, x)}
+        return {n: float(np.exp(v)) if table[n][2] else float(v) for n, v in zip(names, x, strict=True)}
 
     return lo, hi, enc, dec
 
@@ -317,7 +317,7 @@ def fit_paper_preset(start=None, max_nfev: int = 300, repeatability: bool = Fals
     def fun(x):
         out = []
         sensors = sensors_of(x)
-        for s, want in zip(sensors, wants):
+        for s, want in zip(sensors, wants, strict=True):
             try:
                 # a state on a seam of the piecewise tunnelling equations is not a fit (film_regimes)
                 if film_regimes(s) != {11}:
@@ -458,8 +458,8 @@ def fit_placement_spread(sensors) -> tuple[dict, dict]:
     sol = least_squares(lambda x: np.log(np.sqrt(a @ np.exp(2 * x)) / printed), x0, bounds=(lo, hi))
     var = np.exp(2 * sol.x)
     pred = np.sqrt(a @ var)
-    return {n: float(np.sqrt(v)) for n, v in zip(SPREADS, var)}, {
-        lab: {"printed_re2": float(r), "predicted_re2": float(q)} for lab, r, q in zip(labels, printed, pred)}
+    return {n: float(np.sqrt(v)) for n, v in zip(SPREADS, var, strict=True)}, {
+        lab: {"printed_re2": float(r), "predicted_re2": float(q)} for lab, r, q in zip(labels, printed, pred, strict=True)}
 
 
 def re2_design(sensors) -> tuple[np.ndarray, np.ndarray, list]:

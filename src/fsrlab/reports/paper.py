@@ -105,7 +105,7 @@ class _Side:
             status, value = pickle.loads(data)
             if status != "ok":
                 raise value
-            self._result = dict(zip(self.names, value))
+            self._result = dict(zip(self.names, value, strict=True))
         return self._result[name]
 
 

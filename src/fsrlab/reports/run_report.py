@@ -54,7 +54,7 @@ def _loops_figure(rep, outdir: Path) -> Figure | None:
     axes = list(axes) if len(drawn) > 1 else [axes]
     scale = 1e-3 if rep.reference == "stress_pa" else 1.0
     unit = "kPa" if rep.reference == "stress_pa" else rep.reference_unit
-    for a, h in zip(axes, drawn):
+    for a, h in zip(axes, drawn, strict=True):
         r = h.result
         for c in r.cycles:
             a.plot(c.stress_pa * scale, c.q_load, "-", color="tab:blue", alpha=0.35, lw=0.9)

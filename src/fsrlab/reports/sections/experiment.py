@@ -48,7 +48,7 @@ def _fig19(outdir: Path, exp: Experiment, key: str, scale: float, unit: str, lab
            name: str) -> Path:
     fig, ax = new_figure(6.4, 4.2)
     ax.axhspan(printed_range[0], printed_range[1], color="0.9", zorder=0, label="paper's range (Fig. 19)")
-    for i, (c, color) in enumerate(zip(exp.cycles, _COLORS), start=1):
+    for i, (c, color) in enumerate(zip(exp.cycles, _COLORS, strict=False), start=1):
         sl, ql, su, qu = c.branches(key)
         ax.plot(sl / 1e3, ql * scale, "-", color=color, lw=1.4, label=f"sensor {i} loading")
         ax.plot(su / 1e3, qu * scale, "--", color=color, lw=1.2, label=f"sensor {i} unloading")
@@ -87,7 +87,7 @@ def _table3(exp: Experiment, printed: dict) -> tuple[Table, dict]:
     t3 = printed["table3_hysteresis_error_percent"]
     tm, pm = exp.he_traditional, exp.he_proposed
     rows = [[s, a, b, b - a, c, d, d - c] for s, a, b, c, d in zip(t3["sensor"], t3["traditional"], tm,
-                                                                        t3["proposed"], pm)]
+                                                                        t3["proposed"], pm, strict=True)]
     rows.append(["mean", t3["traditional_mean"], float(tm.mean()), float(tm.mean()) - t3["traditional_mean"],
                  t3["proposed_mean"], float(pm.mean()), float(pm.mean()) - t3["proposed_mean"]])
     data = {"sensor": t3["sensor"],
@@ -163,7 +163,7 @@ def _fit_table(sensors, fits: list, targets: list) -> tuple[Table, dict]:
     rows = []
     for k in keys:
         row = [names[k]]
-        for got, want in zip(fits, targets):
+        for got, want in zip(fits, targets, strict=True):
             row += [want[k] * scale.get(k, 1.0), got[k] * scale.get(k, 1.0)]
         rows.append(row)
     params = [{k: getattr(s, k) for k in (*PAPER_SENSOR_COMMON, *SHARED_FIT_PARAMETERS, *FIT_PARAMETERS, *SPREADS)}
@@ -172,7 +172,7 @@ def _fit_table(sensors, fits: list, targets: list) -> tuple[Table, dict]:
             "fixed": list(PAPER_SENSOR_COMMON), "shared_fitted": list(SHARED_FIT_PARAMETERS),
             "own_fitted": list(FIT_PARAMETERS),
             "fit": {k: {"printed": [t[k] for t in targets], "fitted": [g[k] for g in fits],
-                        "residual": [g[k] - t[k] for g, t in zip(fits, targets)]} for k in keys}}
+                        "residual": [g[k] - t[k] for g, t in zip(fits, targets, strict=True)]} for k in keys}}
     cols = ["printed number"] + [c for i in range(1, 5) for c in (f"paper {i}", f"fit {i}")]
     table = Table(title="The fitted paper-sensor preset: each printed number it was fitted to, and the fit's value",
                   columns=cols, rows=rows, fmt="{:.3g}",
@@ -272,7 +272,7 @@ def build(outdir: Path) -> Section:
     t3, d3 = _table3(exp, printed)
     a, re2_printed, labels, a_per = re2_design_per_sensor(sensors)
     sd2 = np.array([getattr(sensors[0], n) for n in SPREADS]) ** 2
-    expected = dict(zip(labels, np.sqrt(a @ sd2).tolist()))
+    expected = dict(zip(labels, np.sqrt(a @ sd2).tolist(), strict=True))
     expected_per = {lab: np.sqrt(a_per[j] @ sd2).tolist() for j, lab in enumerate(labels)}
     t4, d4 = _repeat_table(exp, printed, "table4_repeatability_capacitive_kHz", "frequency_khz", "re_frequency",
                            "kHz", "Table 4: re-placements, proposed readout (555 frequency)",

@@ -173,7 +173,7 @@ def shown_as_printed(value: Decimal, places: int = 2) -> str:
 
 def _table3(printed: dict, syn: _Synthetic) -> Table:
     trad, prop = printed["traditional"], printed["proposed"]
-    rows = [[s, a, b] for s, a, b in zip(printed["sensor"], trad, prop)]
+    rows = [[s, a, b] for s, a, b in zip(printed["sensor"], trad, prop, strict=True)]
     rows.append(["mean (paper)", printed["traditional_mean"], printed["proposed_mean"]])
     # Exact decimal means of the printed rows, rounded half up as the paper does: float formatting would
     # show 23.345 as 23.34 (the binary double of 23.345 lies just below it).

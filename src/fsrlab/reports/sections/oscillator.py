@@ -191,7 +191,7 @@ def _stress_figure(outdir: Path) -> tuple[Figure, dict]:
     fig, axes = new_figure(11.0, 4.2, ncols=2)
     out = {"stress_pa": [float(stress[0]), float(stress[-1])], "r_fsr_ohm": [float(rf[0]), float(rf[-1])],
            "c_fsr_farad": [float(cf[0]), float(cf[-1])]}
-    for ax, diode in zip(axes, (True, False)):
+    for ax, diode in zip(axes, (True, False), strict=True):
         parts = frequency_decomposition(R_OHM, rf, cf, diode=diode)
         ax.plot(stress / 1e3, parts.frequency_hz / 1e3, "k-", lw=2, label="f (R_FSR and C_FSR change)")
         ax.plot(stress / 1e3, parts.c_only_hz / 1e3, "C0--", label="only C_FSR changes")

@@ -215,7 +215,7 @@ def _erratum_p2(axis_ranges: dict, fit: BarrierHeightFit) -> Erratum:
 def _fig_sweep(outdir: Path, sweeps: list[tuple[str, VoltageSweep]]) -> Figure:
     """Extension: HE of R_A and C_A versus u for Table 1's and the fitted φ0."""
     fig, ax = new_figure()
-    for (tag, sw), style in zip(sweeps, ("-", "--")):
+    for (tag, sw), style in zip(sweeps, ("-", "--"), strict=True):
         t = sw.table
         ax.plot(t.u_v, t.resistance_percent, "C0" + style, label=f"R_A, {tag}")
         lo, hi = sw.crossings_v[:2]
