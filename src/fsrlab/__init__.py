@@ -21,7 +21,11 @@ from __future__ import annotations
 
 import importlib
 
-from fsrlab.errors import FileFormatError, FsrlabError, ParameterError, ProvenanceError
+# Re-exported (redundant aliases: ``__all__`` below is computed, so a linter cannot read it).
+from fsrlab.errors import FileFormatError as FileFormatError
+from fsrlab.errors import FsrlabError as FsrlabError
+from fsrlab.errors import ParameterError as ParameterError
+from fsrlab.errors import ProvenanceError as ProvenanceError
 
 __version__ = "0.1.0"
 
