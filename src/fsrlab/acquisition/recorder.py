@@ -428,7 +428,7 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
                     break
                 if health is not None and (reason := health()):
                     raise _Failure(reason)
-                for frame, m, row in stream.windows():
+                for _frame, m, row in stream.windows():
                     if on_row is not None:
                         row = on_row(m, row)
                         if row is None:

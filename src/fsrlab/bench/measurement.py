@@ -423,7 +423,7 @@ def iso376_of_placements(placements: list[dict], quantity: str = "frequency_hz")
     for c in sorted({p["cycle"] for p in placements}):
         ps = [p for p in placements if p["cycle"] == c]
 
-        def at(load, direction):
+        def at(load, direction, ps=ps):  # called in this iteration only
             v = [p[quantity] for p in ps if p["load_g"] == load and p["direction"] == direction]
             return float(v[0]) if v and math.isfinite(v[0]) else math.nan
         inc = [at(ld, +1) for ld in loads]

@@ -18,8 +18,8 @@ import math
 import numpy as np
 from numpy.polynomial import chebyshev
 
-from fsrlab.calibration.uncertainty import LevelUncertainty
 from fsrlab.calibration.operators import MemoryState, directions, memory_features
+from fsrlab.calibration.uncertainty import LevelUncertainty
 
 __all__ = ["is_legacy", "LegacyModel", "LegacyStepper"]
 

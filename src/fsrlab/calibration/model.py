@@ -14,9 +14,9 @@ import numpy as np
 
 from fsrlab.calibration.curves import curve_from_dict
 from fsrlab.calibration.delay import DelayLine, delayed
-from fsrlab.calibration.uncertainty import LevelUncertainty
 from fsrlab.calibration.monotone import StaticCurve
 from fsrlab.calibration.operators import MemoryState, directions, memory_features
+from fsrlab.calibration.uncertainty import LevelUncertainty
 
 __all__ = ["HeldoutCalibration", "Stepper", "clip_hysteresis"]
 

@@ -30,11 +30,11 @@ from pathlib import Path
 
 import numpy as np
 
-from fsrlab.calibration.model import HeldoutCalibration
-from fsrlab.calibration.selection import Selection
 from fsrlab.calibration.legacy import LegacyModel, is_legacy
+from fsrlab.calibration.model import HeldoutCalibration
 from fsrlab.calibration.provenance import RecordedWith
 from fsrlab.calibration.readout import C_FSR, run_readout
+from fsrlab.calibration.selection import Selection
 from fsrlab.circuits.circuit import LM555Circuit
 from fsrlab.errors import ParameterError
 from fsrlab.io.calibration_file import CALIBRATION_FORMAT, CALIBRATION_VERSION

@@ -22,11 +22,11 @@ from pathlib import Path
 
 import numpy as np
 
-from fsrlab.calibration.scoring import Recording
-from fsrlab.calibration.selection import calibrate_recordings
 from fsrlab.calibration.provenance import mismatches, recorded_with
 from fsrlab.calibration.readout import C_FSR, reference_reversed, run_circuit, run_readout
 from fsrlab.calibration.result import METHOD, Calibration
+from fsrlab.calibration.scoring import Recording
+from fsrlab.calibration.selection import calibrate_recordings
 from fsrlab.errors import ParameterError
 from fsrlab.io.runformat import KNOWN_COLUMNS, Run, load_run
 

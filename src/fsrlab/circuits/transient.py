@@ -217,7 +217,10 @@ def simulate(r_ohm: float, r_fsr_ohm, c_fsr_farad, c_off_farad: float = 0.0, dio
             return fast
     else:
         t, v, high = loop.run(times, t, v, high, max_rising)
-    as_arr = (lambda parts: np.concatenate(parts) if parts else np.empty(0))
+
+    def as_arr(parts):
+        return np.concatenate(parts) if parts else np.empty(0)
+
     return TransientResult(
         rising_s=np.asarray(loop.rising), falling_s=np.asarray(loop.falling),
         t_s=as_arr(loop.wt) if waveform else None, v_cap_v=as_arr(loop.wv) if waveform else None,

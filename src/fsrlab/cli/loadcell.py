@@ -140,15 +140,15 @@ def _read(action, port, virtual: bool, mass, gravity: float, seed, hx711_rate: i
             return read_reference(link, duration, window_ms)
     except NoLoadCell as exc:
         print(f"fsrlab: {exc}", file=sys.stderr)
-        raise typer.Exit(1)
+        raise typer.Exit(1) from None
     except LinkError as exc:
         if exc.parameter == "port" and not virtual:  # no board, or the port cannot be opened: as every command says it
             fail(exc.reason, "--port")
         print(f"fsrlab: {plain_numbers(str(exc))}", file=sys.stderr)
-        raise typer.Exit(1)
+        raise typer.Exit(1) from None
     except KeyboardInterrupt:
         print(f"fsrlab: interrupted: nothing written to {target}", file=sys.stderr)
-        raise typer.Exit(1)
+        raise typer.Exit(1) from None
     finally:
         if device is not None:
             device.close()
@@ -165,7 +165,7 @@ def _calibration(action: str, readings, tare, mass, gravity: float, capacity, ta
             result, warning = scale_from_readings(tare, readings.means, mass, gravity)
     except LoadCellError as exc:
         print(f"fsrlab: {exc}; {target} not written", file=sys.stderr)
-        raise typer.Exit(1)
+        raise typer.Exit(1) from None
     if action == "tare" and capacity is not None:
         result.tare["capacity_kg"] = capacity
         result.tare["gravity_m_s2"] = gravity

@@ -170,16 +170,20 @@ def _value_checks(path: Path, body: list[str], header: list[str], data: np.ndarr
         if isinstance(limits[0], tuple):
             bad = np.flatnonzero(fin & ~np.isin(col, [v for v, _ in limits]))
             allowed = ", ".join(f"{v:g} ({label})" for v, label in limits)
-            text = lambda i, col=col, name=name, allowed=allowed: (
-                f"{where(path, i + 1, name)}: {col[i]:g} is not one of {allowed}")
+
+            def text(i, col=col, name=name, allowed=allowed):
+                return f"{where(path, i + 1, name)}: {col[i]:g} is not one of {allowed}"
+
         else:
             lo, hi = limits
             bad = np.flatnonzero(fin & ((col < lo) | (col > hi)))
             unit = KNOWN_COLUMNS.get(name, "")
             unit = f" {unit}" if unit not in ("", "1") else ""
-            text = lambda i, col=col, name=name, lo=lo, hi=hi, unit=unit: (
-                f"{where(path, i + 1, name)}: {col[i]:g} is beyond what the column can hold ({lo:g} to {hi:g}{unit}; "
-                "docs/data-format.md)")
+
+            def text(i, col=col, name=name, lo=lo, hi=hi, unit=unit):
+                return (f"{where(path, i + 1, name)}: {col[i]:g} is beyond what the column can hold "
+                        f"({lo:g} to {hi:g}{unit}; docs/data-format.md)")
+
         if bad.size:
             checks.append((bad, j, text))
         if name == "time_s":

@@ -267,7 +267,7 @@ class LiveSession:
             if self.health is not None and (reason := self.health()):
                 raise DeviceGone(reason)
             self._do_commands()
-            for frame, m, row in stream.windows():
+            for _frame, m, row in stream.windows():
                 now = time.monotonic()
                 stream.written += 1
                 row["reference"] = self._force(row)

@@ -138,7 +138,7 @@ def _fig_memory(outdir: Path) -> Figure:
     ax.plot(path[:200] / 1e3, separation_loading(path[:200]) * 1e9, "k:", label="eq. (1)")
     xs = np.linspace(0, sf, 300)
     ax.plot(xs / 1e3, separation_unloading(xs, sf) * 1e9, "k--", lw=0.8, label="eq. (9), σf = 322 kPa")
-    for i, sp, ss in hist.turning_points:
+    for _i, sp, ss in hist.turning_points:
         ax.plot(sp / 1e3, ss * 1e9, "ko", ms=3)
     ax.set(xlabel="stress σ (kPa)", ylabel="separation s (nm)", title="Extension: separation with memory (k = 2)")
     ax.legend(fontsize=8)
