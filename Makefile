@@ -6,7 +6,7 @@ STAMP  := $(VENV)/.installed-stamp
 REPORT ?= report
 DEMO   ?= demo
 
-.PHONY: venv sysdeps demo test bench firmware clean live-screenshot
+.PHONY: venv sysdeps demo lint test bench firmware clean live-screenshot
 
 venv: $(STAMP)
 
@@ -28,7 +28,12 @@ demo: venv
 	@$(MAKE) -s -C firmware >/dev/null 2>&1 || echo "firmware and twin not built (make sysdeps installs the tools): the demo uses the Python virtual device"
 	$(BIN)/fsrlab demo --out $(DEMO)
 
-test: venv sysdeps firmware
+# ruff with the configuration in pyproject.toml ([tool.ruff]: pyflakes, pycodestyle, bugbear, import order,
+# pyupgrade, McCabe complexity at most 15) over the package.
+lint: venv
+	$(BIN)/ruff check src
+
+test: venv lint sysdeps firmware
 	$(BIN)/python -m pytest
 
 bench: venv sysdeps firmware
