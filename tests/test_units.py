@@ -1,7 +1,8 @@
 """Engineering notation as circuit people write it."""
 
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
 from fsrlab.units import format_eng, parse_eng
 

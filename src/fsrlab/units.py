@@ -16,6 +16,9 @@ import math
 import re
 from dataclasses import dataclass
 from decimal import Decimal
+from numbers import Integral, Real
+
+from fsrlab.errors import ParameterError
 
 __all__ = ["PREFIXES", "QUANTITIES", "STANDARD_GRAVITY", "Quantity", "parse_eng", "parse_quantity", "format_eng"]
 
@@ -53,31 +56,34 @@ def parse_eng(text: str | float | int, name: str | None = "value") -> float:
 
     Raises
     ------
-    ValueError
-        If the text is not a finite number in engineering notation; the message names ``name``.
+    ParameterError
+        If the text is not a finite number in engineering notation; its ``parameter`` is ``name``.
+    TypeError
+        If ``text`` is neither a number nor a str.
     """
-    if isinstance(text, (int, float)):
+    if isinstance(text, Real) and not isinstance(text, bool):
         value = float(text)
     else:
-        match = _PLAIN.match(text)
+        match = _PLAIN.match(_text(text, name))
         if match:
             value = float(match.group(1)) * PREFIXES[match.group(2) or ""]
         else:
             rkm = _RKM.match(text)
             if not rkm:
-                raise ValueError(
-                    f"{_lead(name)}cannot read {text!r}; write a number with an optional SI prefix "
-                    "such as 10k, 4.7n, 470p, 1M, 4k7"
-                )
+                raise ParameterError(f"cannot read {text!r}; write a number with an optional SI prefix "
+                                     "such as 10k, 4.7n, 470p, 1M, 4k7", parameter=name)
             scale = 1.0 if rkm.group(2) == "R" else PREFIXES[rkm.group(2)]
             value = float(f"{rkm.group(1)}.{rkm.group(3)}") * scale
     if not math.isfinite(value):
-        raise ValueError(f"{_lead(name)}must be a finite number, got {text!r}")
+        raise ParameterError(f"must be a finite number, got {text!r}", parameter=name)
     return value
 
 
-def _lead(name: str | None) -> str:
-    return f"{name}: " if name else ""
+def _text(text, name: str | None) -> str:
+    """``text`` when it is a str; a TypeError naming the field otherwise."""
+    if not isinstance(text, str):
+        raise TypeError(f"{name or 'text'}: must be a number or a str such as '10k', got {type(text).__name__}")
+    return text
 
 
 @dataclass(frozen=True)
@@ -178,10 +184,13 @@ def parse_quantity(text: str | float | int, quantity: str, name: str | None = No
 
     Raises
     ------
-    ValueError
+    ParameterError
         If the value is not finite, cannot be read, carries the unit of another quantity, uses a
         lower-case ``m`` on a resistance or capacitance, ``m`` on a duration, or is a fraction
-        above 1 without ``%``; the message says how to write it.
+        above 1 without ``%``; the message says how to write it, and ``parameter`` is ``name``
+        (``quantity`` for an unknown quantity).
+    TypeError
+        If ``text`` is neither a number nor a str.
 
     Notes
     -----
@@ -189,61 +198,61 @@ def parse_quantity(text: str | float | int, quantity: str, name: str | None = No
     ``1M`` is a megohm, and a lower-case ``1m`` is as likely a slip for it as a milliohm. Durations
     take ``s``, ``ms``, ``us``, ``ns``, ``min`` and ``h``; ``1m`` is refused (minutes or milli?).
     """
-    try:
-        q = QUANTITIES[quantity]
-    except KeyError:
-        raise ValueError(f"quantity must be one of {', '.join(QUANTITIES)}, got {quantity!r}") from None
-    lead = _lead(name)
-    if isinstance(text, (int, float)) and not isinstance(text, bool):
+    q = QUANTITIES.get(quantity) if isinstance(quantity, str) else None
+    if q is None:
+        raise ParameterError(f"must be one of {', '.join(QUANTITIES)}, got {quantity!r}", parameter="quantity")
+    if isinstance(text, Real) and not isinstance(text, bool):
         value, unit = float(text), ""
         if not math.isfinite(value):
-            raise ValueError(f"{lead}must be a finite number, got {value:g}")
+            raise ParameterError(f"must be a finite number, got {value:g}", parameter=name)
     else:
-        value, unit = _read(str(text), q, lead)
+        value, unit = _read(_text(text, name), q, name)
     if quantity == "fraction" and unit == "" and abs(value) > 1:
-        raise ValueError(f"{lead}{text!r} is not a fraction (0..1): write {text}% for {value / 100:g}, "
-                         f"or a number from 0 to 1")
+        raise ParameterError(f"{text!r} is not a fraction (0..1): write {text}% for {value / 100:g}, "
+                             f"or a number from 0 to 1", parameter=name)
     return value
 
 
-def _read(text: str, q: Quantity, lead: str) -> tuple[float, str]:
+def _read(text: str, q: Quantity, name: str | None) -> tuple[float, str]:
     compact = "".join(text.split())
     if _NOT_FINITE.match(compact):
-        raise ValueError(f"{lead}must be a finite number, got {text!r}")
+        raise ParameterError(f"must be a finite number, got {text!r}", parameter=name)
     rkm = _RKM_ANY.match(compact) if q.rkm else None
     if rkm:
         digits, letter, decimals, unit = rkm.groups()
         if unit in q.units and (letter != "R" or q.symbol == "Ω"):
             number = f"{digits}.{decimals}"
             if letter == "m":
-                raise ValueError(f"{lead}{_milli_message(number, float(number), q, text)}")
+                raise ParameterError(_milli_message(number, float(number), q, text), parameter=name)
             value = _scaled(number, 1.0 if letter == "R" else PREFIXES[letter])
-            return _finite(value, text, lead), unit
+            return _finite(value, text, name), unit
     match = _NUMBER_AND_SUFFIX.match(compact)
     if not match:
-        raise ValueError(f"{lead}cannot read {text!r} as {q.what}; write e.g. {q.examples}")
+        raise ParameterError(f"cannot read {text!r} as {q.what}; write e.g. {q.examples}", parameter=name)
     number, suffix = match.groups()
     readings = _readings(suffix, q)
     if not q.milli and any(prefix == "m" for prefix, _, _ in readings):
-        raise ValueError(f"{lead}{_milli_message(number, float(number), q, text)}")
+        raise ParameterError(_milli_message(number, float(number), q, text), parameter=name)
     if len({factor for _, _, factor in readings}) > 1:  # e.g. "5m" for a length: 5 m or 5 mm
         spelled = ", or ".join(
             f"{number}{prefix}{q.symbol} for {_scaled(number, factor):g} {q.symbol}" if unit == "" else
             f"{_scaled(number, factor):g} for {_scaled(number, factor):g} {q.symbol}"
             for prefix, unit, factor in readings)
-        raise ValueError(f"{lead}{text!r} is ambiguous: write {spelled}")
+        raise ParameterError(f"{text!r} is ambiguous: write {spelled}", parameter=name)
     if not readings:
         if q is QUANTITIES["duration"] and suffix == "m":
-            raise ValueError(f"{lead}{text!r} is ambiguous (minutes or milliseconds?): write {number}min for "
-                             f"{float(number) * 60:g} s or {number}ms for {float(number) * 1e-3:g} s")
+            raise ParameterError(f"{text!r} is ambiguous (minutes or milliseconds?): write {number}min for "
+                                 f"{float(number) * 60:g} s or {number}ms for {float(number) * 1e-3:g} s",
+                                 parameter=name)
         other = next((o for o in QUANTITIES.values()
                       if o is not q and any(u for _, u, _ in _readings(suffix, o))), None)
         if other is not None:
             unit_text = f"in {q.symbol}" if q.symbol else "without a unit"
-            raise ValueError(f"{lead}{text!r} is {other.what}, not {q.what}: write it {unit_text}, e.g. {q.examples}")
-        raise ValueError(f"{lead}cannot read {text!r} as {q.what}; write e.g. {q.examples}")
+            raise ParameterError(f"{text!r} is {other.what}, not {q.what}: write it {unit_text}, e.g. {q.examples}",
+                                 parameter=name)
+        raise ParameterError(f"cannot read {text!r} as {q.what}; write e.g. {q.examples}", parameter=name)
     _, unit, factor = readings[0]
-    return _finite(_scaled(number, factor), text, lead), unit
+    return _finite(_scaled(number, factor), text, name), unit
 
 
 def _scaled(number: str, factor: float) -> float:
@@ -254,9 +263,9 @@ def _scaled(number: str, factor: float) -> float:
     return float(number) * factor
 
 
-def _finite(value: float, text: str, lead: str) -> float:
+def _finite(value: float, text: str, name: str | None) -> float:
     if not math.isfinite(value):
-        raise ValueError(f"{lead}must be a finite number, got {text!r}")
+        raise ParameterError(f"must be a finite number, got {text!r}", parameter=name)
     return value
 
 
@@ -270,13 +279,27 @@ def format_eng(value: float, unit: str = "", digits: int = 4) -> str:
     unit : str
         Unit symbol appended after the prefix.
     digits : int
-        Significant digits.
+        Significant digits, ≥ 1.
 
     Returns
     -------
     str
         The formatted value.
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is not a real number or ``digits`` not an int.
+    ParameterError
+        If ``digits`` is below 1.
     """
+    if not isinstance(value, Real) or isinstance(value, bool):
+        raise TypeError(f"value: must be a real number, got {type(value).__name__}")
+    if not isinstance(digits, Integral) or isinstance(digits, bool):
+        raise TypeError(f"digits: must be an int, got {type(digits).__name__}")
+    if digits < 1:
+        raise ParameterError(f"must be at least 1, got {digits}", parameter="digits")
+    unit = str(unit)
     if value == 0 or not math.isfinite(value):
         return f"{value:g} {unit}".strip()
     exponent = int(math.floor(math.log10(abs(value)) / 3) * 3)

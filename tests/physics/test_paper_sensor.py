@@ -3,9 +3,18 @@
 import numpy as np
 import pytest
 
-from fsrlab.physics.paper_sensor import (PAPER_SENSOR_NAMES, PaperFSR, conductive_area, contact_resistance,
-                                         creep_factor, hold_time, memory_stress, paper_sensor, paper_sensors,
-                                         series_contact)
+from fsrlab.physics.paper_sensor import (
+    PAPER_SENSOR_NAMES,
+    PaperFSR,
+    conductive_area,
+    contact_resistance,
+    creep_factor,
+    hold_time,
+    memory_stress,
+    paper_sensor,
+    paper_sensors,
+    series_contact,
+)
 from fsrlab.physics.separation import separation_history
 
 CYCLE = np.concatenate([np.linspace(0, 10e3, 21), np.linspace(10e3, 0, 21)[1:]])
@@ -143,8 +152,8 @@ def test_presets_registry_names_the_paper_sensors():
 
 
 def test_virtual_device_source_accepts_a_paper_sensor():
-    from fsrlab.virtual.sources import PhysicsSource, StressProfile
     from fsrlab.circuits.circuit import PAPER_CIRCUIT
+    from fsrlab.virtual.sources import PhysicsSource, StressProfile
 
     # The preset's range: the paper's 0-10 kPa spring cycle.
     src = PhysicsSource(StressProfile(peak_pa=10e3), sensor=paper_sensor(1), circuit=PAPER_CIRCUIT)

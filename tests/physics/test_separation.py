@@ -2,7 +2,8 @@
 
 import numpy as np
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
 from fsrlab.physics.params import PAPER
 from fsrlab.physics.separation import separation_history, separation_loading, separation_unloading

@@ -9,8 +9,7 @@ import pytest
 from fsrlab.physics.electrical import capacitance, capacitance_per_area, resistance_per_area
 from fsrlab.physics.params import PAPER
 from fsrlab.physics.tunneling import current_density, tunneling_regime
-
-from reference_physics import E, EPS0, ME, H, REL
+from reference_physics import EPS0, ME, REL, E, H
 from reference_physics import j11 as j11_scalar
 from reference_physics import j12 as j12_scalar
 

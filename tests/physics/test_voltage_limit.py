@@ -8,8 +8,7 @@ import pytest
 from fsrlab.physics.electrical import resistance_per_area
 from fsrlab.physics.params import PAPER
 from fsrlab.physics.tunneling import SMALL_U_FRACTION, current_density, voltage_limit
-
-from reference_physics import E, REL, TABLE1, j11, j12
+from reference_physics import REL, TABLE1, E, j11, j12
 
 PHI0_V = TABLE1["phi0"] / E  # φ0/e = 0.223 V
 S_F = TABLE1["s0"] * (1 - TABLE1["sigma_f"] / TABLE1["modulus"])  # eq. (3): smallest separation of the cycle

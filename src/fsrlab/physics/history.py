@@ -10,53 +10,32 @@ from __future__ import annotations
 
 import numpy as np
 
+from fsrlab.errors import ParameterError
+from fsrlab.physics.params import check_finite, float_array
+
 __all__ = ["turning_points", "branch_directions", "cycle_numbers"]
 
 
 def _check_threshold(threshold: float) -> float:
-    if not (0 < threshold < 1):
-        raise ValueError(f"threshold must be a fraction of the stress span in (0, 1), got {threshold!r}")
+    check_finite("threshold", threshold)
+    if np.ndim(threshold) or not (0 < threshold < 1):
+        raise ParameterError(f"must be a fraction of the stress span in (0, 1), got {threshold!r}",
+                             parameter="threshold")
     return float(threshold)
 
 
-def turning_points(stress_pa, threshold: float = 0.05) -> np.ndarray:
-    """Indices of the confirmed turning points of a stress sequence, with its first and last index.
+def _history(stress_pa) -> np.ndarray:
+    x = float_array("stress_pa", stress_pa)
+    if x.ndim > 1:
+        raise ParameterError(f"must be one-dimensional (a history in time order), got shape {x.shape}",
+                             parameter="stress_pa")
+    return x.ravel()
 
-    Parameters
-    ----------
-    stress_pa : array_like, shape (n,)
-        Reference stress in time order. [Pa]
-    threshold : float
-        A reversal counts once the stress has come back from its running extremum by more than
-        ``threshold`` times the span ``max - min`` (noise below that is ignored). [1]
 
-    Returns
-    -------
-    ndarray of int
-        Increasing indices: 0, the turning points (first reading at each extremum), n - 1.
-    """
-    x = np.asarray(stress_pa, dtype=float)
-    threshold = _check_threshold(threshold)
+def _confirmed(x: np.ndarray, cand: list[int], thr: float) -> list[int]:
+    """0, the candidates (local extrema) confirmed as turning points by a move back of more than ``thr``,
+    and the last index."""
     n = x.size
-    if n < 2:
-        return np.arange(n)
-    if not np.all(np.isfinite(x)):
-        raise ValueError("stress_pa must be finite (drop rows without a reference stress first)")
-    span = float(x.max() - x.min())
-    if span == 0:
-        return np.array([0, n - 1])
-    thr = threshold * span
-    # Only local extrema can be turning points: reduce to them first (vectorised), then scan.
-    d = np.sign(np.diff(x))
-    nz = np.flatnonzero(d)
-    if nz.size == 0:
-        return np.array([0, n - 1])
-    cand = [0]
-    ds = d[nz]
-    change = np.flatnonzero(ds[1:] != ds[:-1])
-    # the extremum is the first reading after the last move in the old direction
-    cand.extend((nz[change] + 1).tolist())
-    cand.append(n - 1)
     pivots = [0]
     trend = 0  # 0: not yet moved beyond the threshold; +1 rising; -1 falling
     hi_i = lo_i = ext_i = 0
@@ -85,7 +64,48 @@ def turning_points(stress_pa, threshold: float = 0.05) -> np.ndarray:
                 trend, ext_i = 1, i
     if pivots[-1] != n - 1:
         pivots.append(n - 1)
-    return np.array(sorted(set(pivots)))
+    return pivots
+
+
+def turning_points(stress_pa, threshold: float = 0.05) -> np.ndarray:
+    """Indices of the confirmed turning points of a stress sequence, with its first and last index.
+
+    Parameters
+    ----------
+    stress_pa : array_like, shape (n,)
+        Reference stress in time order. [Pa]
+    threshold : float
+        A reversal counts once the stress has come back from its running extremum by more than
+        ``threshold`` times the span ``max - min`` (noise below that is ignored). [1]
+
+    Returns
+    -------
+    ndarray of int
+        Increasing indices: 0, the turning points (first reading at each extremum), n - 1.
+    """
+    x = _history(stress_pa)
+    threshold = _check_threshold(threshold)
+    n = x.size
+    if n < 2:
+        return np.arange(n)
+    if not np.all(np.isfinite(x)):
+        raise ParameterError("must be finite (drop rows without a reference stress first)", parameter="stress_pa")
+    span = float(x.max() - x.min())
+    if span == 0:
+        return np.array([0, n - 1])
+    thr = threshold * span
+    # Only local extrema can be turning points: reduce to them first (vectorised), then scan.
+    d = np.sign(np.diff(x))
+    nz = np.flatnonzero(d)
+    if nz.size == 0:
+        return np.array([0, n - 1])
+    cand = [0]
+    ds = d[nz]
+    change = np.flatnonzero(ds[1:] != ds[:-1])
+    # the extremum is the first reading after the last move in the old direction
+    cand.extend((nz[change] + 1).tolist())
+    cand.append(n - 1)
+    return np.array(sorted(set(_confirmed(x, cand, thr))))
 
 
 def branch_directions(stress_pa, threshold: float = 0.05) -> np.ndarray:
@@ -104,16 +124,14 @@ def branch_directions(stress_pa, threshold: float = 0.05) -> np.ndarray:
         +1 on rising segments, -1 on falling ones, 0 where the stress never moves beyond the
         threshold. A turning-point reading carries the label of the segment it ends.
     """
-    x = np.asarray(stress_pa, dtype=float)
+    x = _history(stress_pa)
     piv = turning_points(x, threshold)
     out = np.zeros(x.size, dtype=int)
-    for a, b in zip(piv[:-1], piv[1:]):
+    for a, b in zip(piv[:-1], piv[1:], strict=True):
         out[a + 1:b + 1] = int(np.sign(x[b] - x[a]))
     if x.size > 1:
         out[0] = out[1]
     return out
-
-
 
 
 def cycle_numbers(direction) -> np.ndarray:
@@ -130,7 +148,7 @@ def cycle_numbers(direction) -> np.ndarray:
         0 for the first cycle, then 1, 2, ... from each reading that starts a loading branch after
         an unloading one.
     """
-    lab = np.nan_to_num(np.asarray(direction, dtype=float)).astype(int)
+    lab = np.nan_to_num(float_array("direction", direction).ravel()).astype(int)
     nz = np.flatnonzero(lab != 0)
     starts = np.zeros(lab.size, dtype=int)
     if nz.size > 1:

@@ -27,8 +27,17 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from fsrlab.errors import ParameterError
 from fsrlab.physics.electrical import capacitance, resistance_per_area
-from fsrlab.physics.params import PAPER, check_finite, check_positive
+from fsrlab.physics.params import (
+    PAPER,
+    check_at_least,
+    check_between,
+    check_finite,
+    check_int,
+    check_positive,
+    float_array,
+)
 from fsrlab.physics.sensor import A201_AREA_M2, SensorResponse
 from fsrlab.physics.separation import separation_history
 
@@ -65,10 +74,9 @@ def contact_resistance(stress_pa, r_c0_ohm: float, sigma_c_pa: float):
     contact resistance that falls as the asperities flatten (``∝ 1/(1 + σ/σ_c)``) is the usual
     first-order form for FSR electrode contacts.
     """
-    if not r_c0_ohm >= 0:
-        raise ValueError(f"r_c0_ohm must be >= 0 Ω, got {r_c0_ohm!r}")
+    check_at_least("r_c0_ohm", r_c0_ohm, 0.0, "Ω")
     check_positive("sigma_c_pa", sigma_c_pa, "Pa")
-    r = r_c0_ohm * sigma_c_pa / (sigma_c_pa + np.asarray(stress_pa, dtype=float))
+    r = r_c0_ohm * sigma_c_pa / (sigma_c_pa + float_array("stress_pa", stress_pa))
     return float(r) if np.ndim(r) == 0 else r
 
 
@@ -102,12 +110,18 @@ def series_contact(voltage_v, r_contact_ohm, film_resistance, iterations: int = 
     root in (0, V] is unique and found by bisection. ``R_C = 0`` gives ``u = V`` exactly (the
     paper's model).
     """
-    v = np.asarray(voltage_v, dtype=float)
-    rc = np.asarray(r_contact_ohm, dtype=float)
+    v = float_array("voltage_v", voltage_v)
+    rc = float_array("r_contact_ohm", r_contact_ohm)
     check_positive("voltage_v", v, "V")
-    if np.any(~(rc >= 0)):
-        raise ValueError(f"r_contact_ohm must be >= 0 Ω, got {r_contact_ohm!r}")
-    v, rc = np.broadcast_arrays(v, rc)
+    check_at_least("r_contact_ohm", rc, 0.0, "Ω")
+    if not callable(film_resistance):
+        raise TypeError(f"film_resistance: must be a function of the voltage u, got {type(film_resistance).__name__}")
+    iterations = check_int("iterations", iterations, 0)
+    try:
+        v, rc = np.broadcast_arrays(v, rc)
+    except ValueError:
+        raise ParameterError(f"shape {rc.shape} does not broadcast with voltage_v's {v.shape}",
+                             parameter="r_contact_ohm") from None
     lo = np.zeros(v.shape)
     hi = v.astype(float).copy()
     if np.all(rc == 0):
@@ -150,7 +164,7 @@ def memory_stress(stress_pa, k: float):
     "presents also additional hysteresis" at unloading, which it does not model. The branches meet
     at every turning point.
     """
-    stress = np.asarray(stress_pa, dtype=float).ravel()
+    stress = float_array("stress_pa", stress_pa).ravel()
     check_finite("stress_pa", stress)
     scale = 10.0 * max(float(stress.max(initial=0.0)), 1.0)
     hist = separation_history(stress, s0_m=1.0, modulus_pa=scale, k=k)
@@ -181,12 +195,11 @@ def creep_factor(hold_s, beta: float, tau_s: float):
     β·ln 10 per decade for t ≫ τ, the form fsrlab's creep analysis fits
     (:mod:`fsrlab.metrics.creep`, log drift).
     """
-    if not beta >= 0:
-        raise ValueError(f"beta must be >= 0, got {beta!r}")
+    check_at_least("beta", beta, 0.0)
     check_positive("tau_s", tau_s, "s")
-    t = np.asarray(hold_s, dtype=float)
+    t = float_array("hold_s", hold_s)
     if np.any(t < 0):
-        raise ValueError("hold_s must be >= 0 s")
+        raise ParameterError("must be >= 0 s", parameter="hold_s")
     f = 1.0 + beta * np.log1p(t / tau_s)
     return float(f) if np.ndim(f) == 0 else f
 
@@ -208,12 +221,14 @@ def hold_time(time_s, stress_pa, tolerance_pa: float = 1.0):
     ndarray
         Hold time at each sample (0 where the stress has just changed). [s]
     """
-    t = np.asarray(time_s, dtype=float).ravel()
-    s = np.asarray(stress_pa, dtype=float).ravel()
+    t = float_array("time_s", time_s).ravel()
+    s = float_array("stress_pa", stress_pa).ravel()
+    check_at_least("tolerance_pa", tolerance_pa, 0.0, "Pa")
     if t.shape != s.shape:
-        raise ValueError("time_s and stress_pa must have the same length")
+        raise ParameterError(f"must have time_s's length ({t.size}), got {s.size}", parameter="stress_pa")
+    check_finite("time_s", t)
     if t.size > 1 and np.any(np.diff(t) < 0):
-        raise ValueError("time_s must be non-decreasing")
+        raise ParameterError("must be non-decreasing", parameter="time_s")
     moved = np.concatenate([[True], np.abs(np.diff(s)) > tolerance_pa])
     start = np.maximum.accumulate(np.where(moved, np.arange(t.size), 0))
     return t - t[start]
@@ -242,9 +257,9 @@ def conductive_area(x_pa, area_m2: float, fraction_0: float, growth_pa: float, e
     """
     check_positive("area_m2", area_m2, "m²")
     check_positive("growth_pa", growth_pa, "Pa")
-    if not 0 < fraction_0 <= 1:
-        raise ValueError(f"fraction_0 must be in (0, 1], got {fraction_0!r}")
-    a = np.minimum(area_m2 * fraction_0 * (1.0 + np.asarray(x_pa, dtype=float) / growth_pa) ** exponent, area_m2)
+    check_between("fraction_0", fraction_0, 0.0, 1.0, lower_open=True)
+    check_finite("exponent", exponent)
+    a = np.minimum(area_m2 * fraction_0 * (1.0 + float_array("x_pa", x_pa) / growth_pa) ** exponent, area_m2)
     return float(a) if np.ndim(a) == 0 else a
 
 
@@ -367,15 +382,10 @@ class PaperFSR:
             check_positive(name, getattr(self, name))
         for name in ("parasitic_farad", "contact_ohm", "creep_beta", "placement_stress_sd", "placement_contact_sd",
                      "placement_area_sd"):
-            v = getattr(self, name)
-            check_finite(name, v)
-            if v < 0:
-                raise ValueError(f"{name} must be >= 0, got {v!r}")
+            check_at_least(name, getattr(self, name), 0.0)
         for name in ("k", "area_k"):
-            if not getattr(self, name) >= 1:
-                raise ValueError(f"{name} must be >= 1, got {getattr(self, name)!r}")
-        if self.area_fraction_0 > 1:
-            raise ValueError(f"area_fraction_0 must be in (0, 1], got {self.area_fraction_0!r}")
+            check_at_least(name, getattr(self, name), 1.0)
+        check_between("area_fraction_0", self.area_fraction_0, 0.0, 1.0, lower_open=True)
 
     def replace(self, **changes) -> PaperFSR:
         """A copy with some parameters changed (validated again)."""
@@ -460,15 +470,13 @@ class PaperFSR:
                area_factor=1.0) -> dict:
         """:meth:`respond` up to the contact solve: the checked inputs, separation, area and contact."""
         check_positive("voltage_v", voltage_v, "V")
-        sigma = np.asarray(stress_pa, dtype=float).ravel()
-        check_finite("stress_pa", sigma)
-        if sigma.size and sigma.min() < 0:
-            raise ValueError("stress_pa must be >= 0 Pa")
-        eff = sigma * np.asarray(stress_factor, dtype=float)
+        sigma = float_array("stress_pa", stress_pa).ravel()
+        check_at_least("stress_pa", sigma, 0.0, "Pa")
+        eff = sigma * float_array("stress_factor", stress_factor)
         if time_s is not None:
             eff = eff * creep_factor(hold_time(time_s, sigma), self.creep_beta, self.creep_tau_s)
         if eff.size and eff.max() >= self.modulus_pa:
-            raise ValueError(f"stress_pa must stay below modulus_pa = {self.modulus_pa:g} Pa")
+            raise ParameterError(f"must stay below modulus_pa = {self.modulus_pa:g} Pa", parameter="stress_pa")
         hist = separation_history(eff, s0_m=self.s0_m, modulus_pa=self.modulus_pa, k=self.k)  # Eqs. (1), (9)
         s = hist.separation_m
         area = conductive_area(memory_stress(eff, self.area_k), self.area_m2, self.area_fraction_0,
@@ -564,12 +572,14 @@ def paper_sensor(which) -> PaperFSR:
     if isinstance(which, str):
         key = which.strip().lower()
         if key not in PAPER_SENSOR_NAMES:
-            raise ValueError(f"paper sensor must be one of {', '.join(PAPER_SENSOR_NAMES)}, got {which!r}")
+            raise ParameterError(f"must be 1-4 or one of {', '.join(PAPER_SENSOR_NAMES)}, got {which!r}",
+                                 parameter="which")
         i = PAPER_SENSOR_NAMES.index(key) + 1
     else:
-        i = int(which)
+        i = check_int("which", which)
         if not 1 <= i <= 4:
-            raise ValueError(f"paper sensor number must be 1-4, got {which!r}")
+            raise ParameterError(f"must be 1-4 or one of {', '.join(PAPER_SENSOR_NAMES)}, got {which!r}",
+                                 parameter="which")
     return PaperFSR(name=PAPER_SENSOR_NAMES[i - 1], **PAPER_SENSOR_COMMON, **PAPER_SENSOR_PARAMETERS[i - 1])
 
 

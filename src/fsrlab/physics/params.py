@@ -13,54 +13,220 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass
 
-__all__ = ["PaperParameters", "PAPER", "check_positive", "check_finite"]
+from fsrlab.errors import ParameterError
+
+__all__ = ["PaperParameters", "PAPER", "check_positive", "check_finite", "check_at_least", "check_between", "check_int",
+           "float_array", "plain"]
 
 #: The electronvolt in joules: CODATA 2018, exact since the 2019 SI (e = 1.602176634e-19 C); equal to
 #: ``scipy.constants.electron_volt``, written out so that importing the parameters does not import scipy.
 electron_volt = 1.602176634e-19
 
 
-def check_finite(name: str, value) -> None:
-    """Raise ``ValueError`` naming ``name`` unless every element of ``value`` is finite.
+def _numbers(name: str, value):
+    """``value`` as a float or a float array; a TypeError naming ``name`` when it holds no numbers."""
+    if isinstance(value, (int, float)):  # a number (bool included): no numpy needed
+        return float(value)
+    if isinstance(value, (str, bytes)) or value is None:
+        raise TypeError(f"{name}: must be a number or an array of numbers, got {type(value).__name__}")
+    import numpy as np
+
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name}: must be a number or an array of numbers, got {type(value).__name__}") from None
+
+
+def float_array(name: str, value):
+    """``value`` as a float ndarray; a TypeError naming ``name`` when it is not numbers.
 
     Parameters
     ----------
     name : str
         Parameter name for the message.
     value : float or array_like
-        The value to check.
+        Numbers (a str, bytes, None or a mapping is refused rather than converted).
+
+    Returns
+    -------
+    ndarray of float
     """
-    if isinstance(value, (int, float)) and not isinstance(value, bool):  # a number: no numpy needed
-        if not math.isfinite(value):
-            raise ValueError(f"{name} must be finite, got {value!r}")
-        return
     import numpy as np
 
-    if not np.all(np.isfinite(np.asarray(value, dtype=float))):
-        raise ValueError(f"{name} must be finite, got {value!r}")
+    return np.asarray(_numbers(name, value), dtype=float)
 
 
-def check_positive(name: str, value, unit: str = "") -> None:
-    """Raise ``ValueError`` naming ``name`` unless ``value`` is finite and > 0 (every element).
+def plain(value) -> str:
+    """A value as a message shows it.
+
+    Parameters
+    ----------
+    value : object
+        A number is written as a user writes it (``322000``, not ``np.float64(322000.0)``), anything else by
+        its ``repr``, cut at 80 characters.
+
+    Returns
+    -------
+    str
+    """
+    from numbers import Real
+
+    if isinstance(value, Real) and not isinstance(value, bool):
+        return f"{float(value):g}"
+    return f"{value!r}"[:80]
+
+
+def check_finite(name: str, value) -> None:
+    """Raise :class:`~fsrlab.errors.ParameterError` naming ``name`` unless every element of ``value`` is finite.
 
     Parameters
     ----------
     name : str
-        Parameter name for the message.
+        Parameter name for the message and the error's ``parameter``.
+    value : float or array_like
+        The value to check.
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is not a number or an array of numbers (the message names ``name``).
+    ParameterError
+        If an element is nan or ±inf.
+    """
+    x = _numbers(name, value)
+    if isinstance(x, float):
+        finite = math.isfinite(x)
+    else:
+        import numpy as np
+
+        finite = bool(np.all(np.isfinite(x)))
+    if not finite:
+        raise ParameterError(f"must be finite, got {plain(value)}", parameter=name)
+
+
+def check_positive(name: str, value, unit: str = "") -> None:
+    """Raise :class:`~fsrlab.errors.ParameterError` naming ``name`` unless ``value`` is finite and > 0 (every element).
+
+    Parameters
+    ----------
+    name : str
+        Parameter name for the message and the error's ``parameter``.
     value : float or array_like
         The value to check.
     unit : str
         Unit shown in the message.
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is not a number or an array of numbers (the message names ``name``).
+    ParameterError
+        If an element is not finite or not > 0.
+    """
+    check_at_least(name, value, 0.0, unit, strict=True)
+
+
+def check_at_least(name: str, value, lower: float, unit: str = "", strict: bool = False) -> None:
+    """Raise :class:`~fsrlab.errors.ParameterError` naming ``name`` unless ``value`` is finite and ≥ ``lower``.
+
+    Parameters
+    ----------
+    name : str
+        Parameter name for the message and the error's ``parameter``.
+    value : float or array_like
+        The value to check (every element).
+    lower : float
+        The smallest value allowed.
+    unit : str
+        Unit shown in the message.
+    strict : bool
+        Require ``value > lower`` instead.
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is not a number or an array of numbers (the message names ``name``).
+    ParameterError
+        If an element is not finite or below the bound.
     """
     check_finite(name, value)
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        positive = value > 0
+    x = _numbers(name, value)
+    if isinstance(x, float):
+        ok = x > lower if strict else x >= lower
     else:
         import numpy as np
 
-        positive = bool(np.all(np.asarray(value, dtype=float) > 0))
-    if not positive:
-        raise ValueError(f"{name} must be > 0{(' ' + unit) if unit else ''}, got {value!r}")
+        ok = bool(np.all(x > lower if strict else x >= lower))
+    if not ok:
+        bound = f"{'>' if strict else '>='} {lower:g}{(' ' + unit) if unit else ''}"
+        raise ParameterError(f"must be {bound}, got {plain(value)}", parameter=name)
+
+
+def check_between(name: str, value, lower: float, upper: float, unit: str = "", *, lower_open: bool = False,
+                  upper_open: bool = False) -> None:
+    """Raise :class:`~fsrlab.errors.ParameterError` naming ``name`` unless ``value`` is finite and within bounds.
+
+    Parameters
+    ----------
+    name : str
+        Parameter name for the message and the error's ``parameter``.
+    value : float or array_like
+        The value to check (every element).
+    lower, upper : float
+        The bounds, included unless ``lower_open`` / ``upper_open``.
+    unit : str
+        Unit shown in the message.
+    lower_open, upper_open : bool
+        Exclude the bound.
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is not a number or an array of numbers (the message names ``name``).
+    ParameterError
+        If an element is not finite or outside the bounds.
+    """
+    check_finite(name, value)
+    import numpy as np
+
+    x = np.asarray(_numbers(name, value))
+    ok = (x > lower if lower_open else x >= lower) & (x < upper if upper_open else x <= upper)
+    if not bool(np.all(ok)):
+        interval = f"{'(' if lower_open else '['}{lower:g}, {upper:g}{')' if upper_open else ']'}"
+        raise ParameterError(f"must be in {interval}{(' ' + unit) if unit else ''}, got {plain(value)}",
+                             parameter=name)
+
+
+def check_int(name: str, value, lower: int | None = None) -> int:
+    """``value`` as an int, or an error naming ``name``.
+
+    Parameters
+    ----------
+    name : str
+        Parameter name for the message and the error's ``parameter``.
+    value : int
+        An integer (a bool or a float is refused).
+    lower : int, optional
+        The smallest value allowed.
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is not an integer (the message names ``name``).
+    ParameterError
+        If it is below ``lower``.
+    """
+    from numbers import Integral
+
+    if not isinstance(value, Integral) or isinstance(value, bool):
+        raise TypeError(f"{name}: must be an int, got {type(value).__name__}")
+    if lower is not None and value < lower:
+        raise ParameterError(f"must be >= {lower}, got {value}", parameter=name)
+    return int(value)
 
 
 @dataclass(frozen=True)
@@ -100,11 +266,10 @@ class PaperParameters:
         check_positive("u_v", self.u_v, "V")
         check_positive("phi0_j", self.phi0_j, "J")
         check_positive("eps_r", self.eps_r)
-        check_finite("k", self.k)
+        check_at_least("k", self.k, 1.0)
         if not self.modulus_pa > self.sigma_f_pa:
-            raise ValueError(f"modulus_pa must be > sigma_f_pa ({self.sigma_f_pa:g} Pa), got {self.modulus_pa:g}")
-        if not self.k >= 1:
-            raise ValueError(f"k must be >= 1, got {self.k!r}")
+            raise ParameterError(f"must be > sigma_f_pa ({self.sigma_f_pa:g} Pa), got {self.modulus_pa:g}",
+                                 parameter="modulus_pa")
 
     def as_dict(self) -> dict:
         """Values keyed by name, plus the barrier height in eV for display."""

@@ -19,6 +19,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from fsrlab.errors import ParameterError
+
 __all__ = ["SensorPreset", "SENSOR_PRESETS", "sensor_preset"]
 
 
@@ -82,10 +84,10 @@ def sensor_preset(name: str) -> SensorPreset:
 
     Raises
     ------
-    ValueError
+    ParameterError
         For an unknown name; the message lists the presets.
     """
-    key = str(name).strip().lower()
+    key = name.strip().lower() if isinstance(name, str) else None
     if key not in SENSOR_PRESETS:
-        raise ValueError(f"sensor must be one of {', '.join(SENSOR_PRESETS)}, got {name!r}")
+        raise ParameterError(f"must be one of {', '.join(SENSOR_PRESETS)}, got {name!r}", parameter="name")
     return SENSOR_PRESETS[key]

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsrlab.physics.electrical import capacitance, resistance_per_area
-from fsrlab.physics.params import PAPER, check_positive
+from fsrlab.physics.params import PAPER, check_at_least, check_between, check_positive
 from fsrlab.physics.separation import separation_history
 
 __all__ = ["VirtualFSR", "SensorResponse", "A201_AREA_M2"]
@@ -112,11 +112,9 @@ class VirtualFSR:
                      "dielectric_fraction_0", "dielectric_half_pa", "conductive_fraction_0",
                      "conductive_growth_pa"):
             check_positive(name, getattr(self, name))
-        if not self.k >= 1:
-            raise ValueError(f"k must be >= 1, got {self.k!r}")
+        check_at_least("k", self.k, 1.0)
         for name in ("dielectric_fraction_0", "conductive_fraction_0"):
-            if getattr(self, name) > 1:
-                raise ValueError(f"{name} must be in (0, 1], got {getattr(self, name)!r}")
+            check_between(name, getattr(self, name), 0.0, 1.0, lower_open=True)
 
     def respond(self, stress_pa, voltage_v: float = 2.5) -> SensorResponse:
         """Electrical response along a stress history.

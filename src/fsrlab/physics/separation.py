@@ -14,7 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsrlab.physics.params import PAPER, check_finite, check_positive
+from fsrlab.errors import ParameterError
+from fsrlab.physics.params import PAPER, check_at_least, check_finite, check_positive, float_array, plain
 
 __all__ = [
     "separation_loading",
@@ -31,11 +32,10 @@ def _check_material(s0_m: float, modulus_pa: float) -> None:
 
 def _check_cycle(sigma_f_pa: float, modulus_pa: float, k: float) -> None:
     check_positive("sigma_f_pa", sigma_f_pa, "Pa")
-    check_finite("k", k)
-    if not modulus_pa > sigma_f_pa:
-        raise ValueError(f"modulus_pa must be > sigma_f_pa ({float(sigma_f_pa):g} Pa), got {float(modulus_pa):g}")
-    if not k >= 1:
-        raise ValueError(f"k must be >= 1, got {float(k):g}")
+    check_at_least("k", k, 1.0)
+    if not np.all(np.asarray(modulus_pa) > sigma_f_pa):
+        raise ParameterError(f"must be > sigma_f_pa ({plain(sigma_f_pa)} Pa), got {plain(modulus_pa)}",
+                             parameter="modulus_pa")
 
 
 def _loading(stress, s0_m, modulus_pa):
@@ -83,7 +83,7 @@ def separation_loading(stress_pa, s0_m: float = PAPER.s0_m, modulus_pa: float = 
     Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901.
     """
     _check_material(s0_m, modulus_pa)
-    stress = np.asarray(stress_pa, dtype=float)
+    stress = float_array("stress_pa", stress_pa)
     s = np.where((stress >= 0) & (stress < modulus_pa), _loading(stress, s0_m, modulus_pa), np.nan)  # Eq. (1)
     return s if s.ndim else float(s)
 
@@ -128,7 +128,7 @@ def separation_unloading(
     """
     _check_material(s0_m, modulus_pa)
     _check_cycle(sigma_f_pa, modulus_pa, k)
-    stress = np.asarray(stress_pa, dtype=float)
+    stress = float_array("stress_pa", stress_pa)
     inside = (stress >= 0) & (stress <= sigma_f_pa)
     s = _unloading(np.where(inside, stress, 0.0), sigma_f_pa, s0_m, modulus_pa, k)  # Eq. (9), simplified
     s = np.where(inside, s, np.nan)
@@ -206,13 +206,11 @@ def separation_history(
     Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901.
     """
     _check_material(s0_m, modulus_pa)
-    check_finite("k", k)
-    if not k >= 1:
-        raise ValueError(f"k must be >= 1, got {float(k):g}")
-    stress = np.asarray(stress_pa, dtype=float).ravel()
+    check_at_least("k", k, 1.0)
+    stress = float_array("stress_pa", stress_pa).ravel()
     check_finite("stress_pa", stress)
     if stress.size and (stress.min() < 0 or stress.max() >= modulus_pa):
-        raise ValueError(f"stress_pa must lie in [0, modulus_pa={modulus_pa:g}) Pa")
+        raise ParameterError(f"must lie in [0, modulus_pa={modulus_pa:g}) Pa", parameter="stress_pa")
 
     s = np.empty_like(stress)
     direction = np.zeros(stress.size, dtype=np.int8)

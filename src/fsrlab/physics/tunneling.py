@@ -15,7 +15,8 @@ import numpy as np
 from scipy.constants import e, h, m_e
 from scipy.optimize import brentq
 
-from fsrlab.physics.params import PAPER, check_positive
+from fsrlab.errors import ParameterError
+from fsrlab.physics.params import PAPER, check_finite, check_positive, float_array
 
 __all__ = ["REGIMES", "SMALL_U_FRACTION", "tunneling_regime", "current_density", "voltage_limit"]
 
@@ -24,6 +25,12 @@ REGIMES = {10: "u ≈ 0 (eq. 10)", 11: "u ≤ φ0/e (eq. 11)", 12: "u > φ0/e (e
 
 #: The paper gives no number for "u ≈ 0"; fsrlab uses eq. (10) where e·u ≤ this fraction of φ0.
 SMALL_U_FRACTION = 0.01
+
+
+def _check_small_u(small_u_fraction: float) -> None:
+    check_finite("small_u_fraction", small_u_fraction)
+    if not 0 <= small_u_fraction < 1:
+        raise ParameterError(f"must be in [0, 1), got {small_u_fraction!r}", parameter="small_u_fraction")
 
 
 def tunneling_regime(u_v, phi0_j: float = PAPER.phi0_j, small_u_fraction: float = SMALL_U_FRACTION):
@@ -53,9 +60,8 @@ def tunneling_regime(u_v, phi0_j: float = PAPER.phi0_j, small_u_fraction: float 
     twice eq. (11) (2.15× at s0, 2.06× at s_f).
     """
     check_positive("phi0_j", phi0_j, "J")
-    if not 0 <= small_u_fraction < 1:
-        raise ValueError(f"small_u_fraction must be in [0, 1), got {small_u_fraction!r}")
-    regime = _regime(np.asarray(u_v, dtype=float), phi0_j, small_u_fraction)
+    _check_small_u(small_u_fraction)
+    regime = _regime(float_array("u_v", u_v), phi0_j, small_u_fraction)
     return regime if regime.ndim else int(regime)
 
 
@@ -137,7 +143,7 @@ def current_density(
     small_u_fraction : float
         Threshold of u ≈ 0 for ``"auto"``, as a fraction of φ0/e. [-]
     validate : bool
-        True (default): raise ``ValueError`` unless ``u_v``, ``s_m`` and ``phi0_j`` are finite and > 0
+        True (default): raise :class:`~fsrlab.errors.ParameterError` unless ``u_v``, ``s_m`` and ``phi0_j`` are finite and > 0
         (and, with ``"auto"``, ``small_u_fraction`` is in [0, 1)). False: skip those checks, for a
         caller that made them once before calling many times (a root finder's inner loop); the
         numbers are the same.
@@ -171,15 +177,15 @@ def current_density(
         check_positive("phi0_j", phi0_j, "J")
         check_positive("u_v", u_v, "V")
         check_positive("s_m", s_m, "m")
-    u_in, s_in = np.asarray(u_v, dtype=float), np.asarray(s_m, dtype=float)
-    if regime == "auto":
-        if validate and not 0 <= small_u_fraction < 1:
-            raise ValueError(f"small_u_fraction must be in [0, 1), got {small_u_fraction!r}")
+    u_in, s_in = float_array("u_v", u_v), float_array("s_m", s_m)
+    if isinstance(regime, str) and regime == "auto":
+        if validate:
+            _check_small_u(small_u_fraction)
         which_u = _regime(u_in, phi0_j, small_u_fraction)  # decided on u alone
-    elif regime in (10, 11, 12):
+    elif not isinstance(regime, bool) and isinstance(regime, (int, np.integer)) and regime in (10, 11, 12):
         which_u = np.full(u_in.shape, int(regime))
     else:
-        raise ValueError(f"regime must be 'auto', 10, 11 or 12, got {regime!r}")
+        raise ParameterError(f"must be 'auto', 10, 11 or 12, got {regime!r}", parameter="regime")
     equations = {10: _eq10, 11: _eq11, 12: _eq12}
     first = int(which_u.flat[0]) if which_u.size else 12
     with np.errstate(over="ignore", under="ignore", invalid="ignore", divide="ignore"):
@@ -253,8 +259,7 @@ def voltage_limit(s_m, phi0_j: float = PAPER.phi0_j, small_u_fraction: float = S
     """
     check_positive("phi0_j", phi0_j, "J")
     check_positive("s_m", s_m, "m")
-    if not 0 <= small_u_fraction < 1:
-        raise ValueError(f"small_u_fraction must be in [0, 1), got {small_u_fraction:g}")
+    _check_small_u(small_u_fraction)
     root = math.sqrt(2 * m_e * phi0_j)
 
     def one(s: float) -> float:
