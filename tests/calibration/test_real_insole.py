@@ -45,14 +45,19 @@ def validation():
     return y, loaded, rmse, poly, out
 
 
-def test_the_compensated_estimate_beats_the_oracle_polynomial_and_the_plain_curve(validation):
+def test_the_memory_that_made_a_held_out_block_worse_is_not_kept_and_the_estimate_is_no_worse(validation):
+    """The memory (hysteresis and creep) lowers the calibration run's held-out error overall but raises it in
+    its first held-out block, so it is not kept: on this validation run of the same day it would have been
+    0.81x the plain curve, on two runs of another day 1.06x (benchmarks/bench_realdata.py, pairs 32 and 35) --
+    which one a new recording is cannot be told from the calibration run, and the rule does no harm."""
     y, loaded, rmse, poly, out = validation
     est, _, cal = out[True]
     assert np.all(np.isfinite(est[loaded]))  # every loaded row estimated
-    assert cal.model.has_memory
-    # measured: 0.68 of the oracle polynomial (0.19 N against 0.28 N), the plain curve 1.04
-    assert rmse(est) < 0.8 * poly
-    assert rmse(est) < 0.8 * rmse(out[False][0])
+    memory = next(s for s in cal.selection.steps if s["step"] == "memory")
+    assert not memory["kept"] and min(memory["heldout_gain_by_part"]) < 0 < max(memory["heldout_gain_by_part"])
+    assert rmse(est) <= 1.05 * rmse(out[False][0])  # issue's do-no-harm bound
+    # measured 1.04x the oracle polynomial (0.295 N against 0.285 N): its degree is chosen on this very run
+    assert rmse(est) < 1.1 * poly
 
 
 def test_its_uncertainty_covers_the_errors_on_the_new_run(validation):
