@@ -33,6 +33,7 @@ from fsrlab.calibration.monotone import (
     knots_for,
     readout_variable,
 )
+from fsrlab.errors import FileFormatError, ParameterError
 
 __all__ = ["FAMILIES", "PolynomialCurve", "SplineCurve", "curve_template", "static_system", "fit_static",
            "curve_from_dict"]
@@ -117,7 +118,7 @@ class PolynomialCurve(StaticCurve):
         variable, sign, adc, coef, rng = common_fields(d, "polynomial curve")
         centre, half = float(d["centre"]), float(d["half_width"])
         if not (np.isfinite(centre) and half > 0 and np.isfinite(half)) or coef.size > 6:
-            raise ValueError("polynomial curve: centre finite, half_width > 0, degree at most 5")
+            raise FileFormatError("polynomial curve: centre finite, half_width > 0, degree at most 5")
         return cls(variable, sign, adc, centre, half, coef, rng)
 
 
@@ -211,7 +212,7 @@ class SplineCurve(StaticCurve):
         breaks = np.asarray(d["breaks"], dtype=float)
         if (breaks.ndim != 1 or breaks.size < 2 or np.any(np.diff(breaks) <= 0)
                 or coef.size != breaks.size + SPLINE_DEGREE - 1 or np.any(coef[1:] < 0)):
-            raise ValueError("spline curve: breaks must increase, one coefficient per basis function, the rises >= 0")
+            raise FileFormatError("spline curve: breaks must increase, one coefficient per basis function, the rises >= 0")
         return cls(variable, sign, adc, breaks, coef, rng)
 
 
@@ -244,7 +245,7 @@ def curve_template(x, family: str, size: int, variable: str, sign: int, adc: flo
         inner = inner[(inner > lo) & (inner < hi)]
         breaks = np.r_[lo, inner, hi if hi > lo else lo + 1.0]
         return SplineCurve(variable, sign, adc, breaks, np.zeros(breaks.size + SPLINE_DEGREE - 1), rng)
-    raise ValueError(f"family: must be one of {', '.join(FAMILIES)}, got {family!r}")
+    raise ParameterError(f"must be one of {', '.join(FAMILIES)}, got {family!r}", parameter="family")
 
 
 def static_system(x, y, family: str, size: int, variable: str, sign: int, adc: float | None,
@@ -295,4 +296,4 @@ def curve_from_dict(d: dict) -> StaticCurve:
         return SplineCurve.from_dict(d)
     if family == "piecewise":
         return MonotoneCurve.from_dict(d)
-    raise ValueError(f"static curve: family must be one of {', '.join(FAMILIES)}, got {family!r}")
+    raise FileFormatError(f"static curve: family must be one of {', '.join(FAMILIES)}, got {family!r}")

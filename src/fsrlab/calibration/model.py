@@ -17,6 +17,7 @@ from fsrlab.calibration.delay import DelayLine, delayed
 from fsrlab.calibration.monotone import StaticCurve
 from fsrlab.calibration.operators import MemoryState, directions, memory_features
 from fsrlab.calibration.uncertainty import LevelUncertainty
+from fsrlab.errors import FileFormatError
 
 __all__ = ["HeldoutCalibration", "Stepper", "clip_hysteresis"]
 
@@ -164,24 +165,24 @@ class HeldoutCalibration:
         tau = tuple(float(v) for v in d.get("time_constants_s", ()))
         w = np.asarray(d.get("weights", []), dtype=float)
         if w.size != len(thr) + len(tau):
-            raise ValueError("weights: one per play threshold and creep time constant")
+            raise FileFormatError("weights: one per play threshold and creep time constant")
         if any(not 0 < r < 1 for r in thr) or any(not v > 0 for v in tau):
-            raise ValueError("thresholds must lie in (0, 1) and time constants be > 0")
+            raise FileFormatError("thresholds must lie in (0, 1) and time constants be > 0")
         fs, row, delay = float(d["full_scale"]), float(d["row_s"]), float(d.get("delay_s", 0.0))
         if not (fs > 0 and row > 0):
-            raise ValueError("full_scale and row_s must be > 0")
+            raise FileFormatError("full_scale and row_s must be > 0")
         if not 0 <= delay < 3600:
-            raise ValueError("delay_s must lie in [0, 3600) s")
+            raise FileFormatError("delay_s must lie in [0, 3600) s")
         rng = d.get("hysteresis_range")
         if rng is not None:
             rng = np.asarray(rng, dtype=float)
             if rng.shape != (2, len(thr)) or not np.all(np.isfinite(rng)) or np.any(rng[0] > rng[1]):
-                raise ValueError("hysteresis_range: two rows (least, largest) of one finite value per play threshold, "
+                raise FileFormatError("hysteresis_range: two rows (least, largest) of one finite value per play threshold, "
                                  "least ≤ largest")
         unc, plain = d.get("uncertainty"), d.get("uncertainty_plain")
         start = float(d.get("creep_start", 1.0))
         if not 0 <= start <= 1:
-            raise ValueError(f"creep_start: must be a fraction from 0 to 1 of the first level, got {start!r}")
+            raise FileFormatError(f"creep_start: must be a fraction from 0 to 1 of the first level, got {start!r}")
         return cls(curve_from_dict(d["static"]), curve_from_dict(d["curve"]), thr, tau, w, fs, row,
                    None if unc is None else LevelUncertainty.from_dict(unc), bool(d.get("level_scaled_hysteresis", False)),
                    None if plain is None else LevelUncertainty.from_dict(plain), delay, rng,

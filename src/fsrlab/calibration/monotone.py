@@ -31,6 +31,8 @@ from functools import cached_property
 
 import numpy as np
 
+from fsrlab.errors import FileFormatError, ParameterError
+
 __all__ = ["VARIABLES", "TOP_SLOPE_SPAN", "adc_full_scale", "readout_variable", "StaticCurve", "MonotoneCurve",
            "bounded_solve", "CurveSystem", "curve_system"]
 
@@ -90,7 +92,8 @@ def readout_variable(x, name: str, sign: int, adc: float | None) -> np.ndarray:
     if name == "reciprocal":
         return -sign / np.maximum(x, np.finfo(float).tiny)
 
-    raise ValueError(f"variable: must be one of {', '.join(VARIABLES)} (conductance only for ADC counts), got {name!r}")
+    raise ParameterError(f"must be one of {', '.join(VARIABLES)} (conductance only for ADC counts), got {name!r}",
+                         parameter="variable")
 
 
 def _basis(v: np.ndarray, knots: np.ndarray, extra: int = 0) -> np.ndarray:
@@ -250,15 +253,15 @@ class StaticCurve:
 def common_fields(d: dict, what: str) -> tuple:
     """(variable, sign, adc, coefficients, readout range) of a curve's file form, checked."""
     if str(d["variable"]) not in VARIABLES:
-        raise ValueError(f"{what}: variable must be one of {', '.join(VARIABLES)}, got {d['variable']!r}")
+        raise FileFormatError(f"{what}: variable must be one of {', '.join(VARIABLES)}, got {d['variable']!r}")
     if int(d["sign"]) not in (1, -1):
-        raise ValueError(f"{what}: sign must be 1 or -1, got {d['sign']!r}")
+        raise FileFormatError(f"{what}: sign must be 1 or -1, got {d['sign']!r}")
     lo, hi = (float(v) for v in d["readout_range"])
     if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
-        raise ValueError(f"{what}: readout_range must be two finite readings, least first")
+        raise FileFormatError(f"{what}: readout_range must be two finite readings, least first")
     coef = np.asarray(d["coefficients"], dtype=float)
     if coef.ndim != 1 or coef.size < 2 or not np.all(np.isfinite(coef)):
-        raise ValueError(f"{what}: coefficients must be finite numbers, at least two")
+        raise FileFormatError(f"{what}: coefficients must be finite numbers, at least two")
     return str(d["variable"]), int(d["sign"]), None if d.get("adc") is None else float(d["adc"]), coef, (lo, hi)
 
 
@@ -358,7 +361,7 @@ class MonotoneCurve(StaticCurve):
         variable, sign, adc, coef, rng = common_fields(d, "monotone curve")
         knots = np.asarray(d["knots"], dtype=float)
         if knots.size < 2 or coef.size != knots.size or np.any(np.diff(knots) <= 0) or np.any(coef[1:] < 0):
-            raise ValueError("monotone curve: knots must increase, one coefficient per segment plus the intercept, "
+            raise FileFormatError("monotone curve: knots must increase, one coefficient per segment plus the intercept, "
                              "the segments' coefficients >= 0")
         return cls(variable, sign, adc, knots, coef, rng)
 
@@ -447,7 +450,7 @@ class CurveSystem:
         the extra columns fitted to what the curve leaves."""
         k = self.curve.coef.size
         if curve.coef.size != k:
-            raise ValueError("the curve held must have the system's knots")
+            raise ParameterError("must have the system's knots", parameter="curve")
         g_ff, g_fc = self.gram[k:, k:], self.gram[k:, :k]
         b = self.atb[k:] - g_fc @ curve.coef
         m = b.size

@@ -36,7 +36,7 @@ from fsrlab.calibration.provenance import RecordedWith
 from fsrlab.calibration.readout import C_FSR, run_readout
 from fsrlab.calibration.selection import Selection
 from fsrlab.circuits.circuit import LM555Circuit
-from fsrlab.errors import ParameterError
+from fsrlab.errors import FileFormatError, ParameterError
 from fsrlab.io.calibration_file import CALIBRATION_FORMAT, CALIBRATION_VERSION
 from fsrlab.io.runformat import Run, RunFormatError
 
@@ -203,7 +203,7 @@ class Calibration:
         circuit = None if not parts else LM555Circuit.from_dict(parts)
         lag = d.get("lag_s")
         if lag is not None and (isinstance(lag, bool) or not isinstance(lag, (int, float)) or not math.isfinite(lag)):
-            raise ValueError(f"lag_s must be a finite number of seconds or null, got {lag!r}")
+            raise FileFormatError(f"lag_s must be a finite number of seconds or null, got {lag!r}")
         lag = 0.0 if lag is None else float(lag)
         common = dict(x_name=str(d["x"]), y_name=str(d["y"]), x_unit=str(units.get("x", "")),
                       y_unit=str(units.get("y", "")), recorded_with=rw, created=str(d.get("created", "")), path=path,

@@ -203,19 +203,19 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
         rec, xu, yu = _recording(run, x, ref, circuit)
         recs.append(rec)
         if int(rec.usable.sum()) < MIN_READINGS:
-            raise ValueError(f"{run.path}: {x} and {ref}: fewer than {MIN_READINGS} readings with both values present "
-                             "(held-out scoring cuts a run into blocks)")
+            raise ParameterError(f"{run.path}: {x} and {ref}: fewer than {MIN_READINGS} readings with both values "
+                                 "present (held-out scoring cuts a run into blocks)", parameter="runs")
     y_all = np.concatenate([r.y[r.usable] for r in recs])
     reversed_why = reference_reversed(y_all)
     if reversed_why:
-        raise ValueError(f"{ref}: {reversed_why}: a load cell mounted or wired the wrong way round, or the wrong "
-                         "column")
+        raise ParameterError(f"{ref}: {reversed_why}: a load cell mounted or wired the wrong way round, or the "
+                             "wrong column", parameter="reference")
     rws = [recorded_with(r.metadata, r.columns.get("range"), rec.usable) for r, rec in zip(runs, recs, strict=True)]
     for other, run in zip(rws[1:], runs[1:], strict=True):
         diff = mismatches(x, rws[0], other, circuit)
         if diff:
-            raise ValueError(f"{run.path}: recorded with {diff[0][0]}, {runs[0].path} with {diff[0][1]}: "
-                             "calibrate runs of one readout together")
+            raise ParameterError(f"{run.path}: recorded with {diff[0][0]}, {runs[0].path} with {diff[0][1]}: "
+                                 "calibrate runs of one readout together", parameter="runs")
     try:
         model, sel = calibrate_recordings(recs, compensate=bool(compensate), lag=lag_rows,
                                           rail=_divider_rail(runs[0], x) if rail is None else float(rail),
@@ -223,7 +223,9 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
                                           unit=xu, name=x)  # a resistance is calibrated in its conductance
     except ValueError as exc:
         names = ", ".join(str(r.path) for r in runs)
-        raise ValueError(f"{names}: {x} and {ref}: {exc}") from None
+        why = exc.reason if isinstance(exc, ParameterError) else str(exc)
+        raise ParameterError(f"{names}: {x} and {ref}: {why}",
+                             parameter=getattr(exc, "parameter", None) or "runs") from None
     est = np.concatenate([model.run(r.t, r.x)[0][r.usable] for r in recs])
     r2 = float(1 - np.sum((est - y_all) ** 2) / np.sum((y_all - y_all.mean()) ** 2)) if np.ptp(y_all) > 0 else math.nan
     lag_s = float(f"{sel.lag_rows * model.row_s:.10g}")  # without the float noise of the step

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsrlab.calibration.monotone import adc_full_scale
+from fsrlab.errors import ParameterError
 
 __all__ = ["BLOCKS", "CHUNKS", "Recording", "Part", "held_out_splits", "scheme_name", "paired_gain", "orientation",
            "readout_rail", "RESISTANCE_UNITS", "readout_variables"]
@@ -111,7 +112,7 @@ def held_out_splits(recs: list[Recording]) -> list[tuple[list[Part], list[Part]]
     # block edges at equal counts of usable rows: a stretch without a reference makes no empty block
     used = np.flatnonzero(rec.usable)
     if used.size < BLOCKS:
-        raise ValueError(f"fewer than {BLOCKS} readings with both the readout and the reference")
+        raise ParameterError(f"fewer than {BLOCKS} readings with both the readout and the reference")
     cut = used[np.linspace(0, used.size, BLOCKS + 1).astype(int)[1:-1]]
     edges = np.r_[0, cut, n]
     idx = np.arange(n)
@@ -184,7 +185,7 @@ def orientation(recs: list[Recording], late_rows=()) -> tuple[int, float | None]
     x_all = np.concatenate([r.x[r.usable] for r in recs])
     y_all = np.concatenate([r.y[r.usable] for r in recs])
     if x_all.size > 2 and not np.ptp(y_all) > 0:
-        raise ValueError("the reference does not change: nothing to calibrate against")
+        raise ParameterError("the reference does not change: nothing to calibrate against")
     rho = _rank_correlation(x_all, y_all) if x_all.size > 2 else float("nan")
     if np.isfinite(rho) and abs(rho) < ALIGNED and len(late_rows):
         shifted = _shifted_correlations(recs, [k for j in late_rows for k in (j, -j)])
@@ -193,7 +194,7 @@ def orientation(recs: list[Recording], late_rows=()) -> tuple[int, float | None]
         if k is not None and abs(shifted[k]) > abs(rho) + 0.2:
             rho = shifted[k]
     if not np.isfinite(rho) or abs(rho) < 0.1:
-        raise ValueError("the readout does not respond to the reference" + (
+        raise ParameterError("the readout does not respond to the reference" + (
             " (it does not change)" if not np.isfinite(rho) else f" (rank correlation {rho:.2f})"))
     return (1 if rho > 0 else -1), adc_full_scale(x_all)
 

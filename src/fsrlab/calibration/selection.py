@@ -55,6 +55,14 @@ import numpy as np
 
 from fsrlab.calibration.curves import fit_static, static_system
 from fsrlab.calibration.delay import DELAY_ROWS, delay_trials, delayed
+from fsrlab.calibration.model import HeldoutCalibration, clip_hysteresis
+from fsrlab.calibration.operators import (
+    CREEP_START,
+    CREEP_TIME_CONSTANTS_S,
+    PLAY_THRESHOLDS,
+    directions,
+    memory_features,
+)
 from fsrlab.calibration.scoring import (
     Part,
     Recording,
@@ -66,15 +74,7 @@ from fsrlab.calibration.scoring import (
     readout_variables,
     scheme_name,
 )
-from fsrlab.calibration.model import HeldoutCalibration, clip_hysteresis
 from fsrlab.calibration.uncertainty import REPEATABILITY, LevelUncertainty
-from fsrlab.calibration.operators import (
-    CREEP_START,
-    CREEP_TIME_CONSTANTS_S,
-    PLAY_THRESHOLDS,
-    directions,
-    memory_features,
-)
 
 __all__ = ["STATIC_CANDIDATES", "MIX_SE", "RIDGES", "HeldoutCalibration", "LevelUncertainty", "Selection",
            "calibrate_recordings"]
@@ -447,10 +447,11 @@ def _held_out(splits, ch: _Choice, sign: int, adc, cache: _Cache):
     trim = max(abs(k) for k in LAG_ROWS)
     for i, (fit_parts, test_parts) in enumerate(splits):
         cal = _fit(fit_parts, ch, sign, adc, cache, i)
-        for j, p in enumerate(test_parts):
+        for p in test_parts:
             key = (i, ch.variable, ch.family, ch.segments, ch.lag, ch.delay, id(p.rec))
             # with the curve held, its values on the part are the static curve's, the same for every trial
-            e = cache.static(("values",) + key, lambda: cal.curve(p.rec.x)) if ch.held else cal.curve(p.rec.x)
+            x = p.rec.x
+            e = cache.static(("values",) + key, lambda c=cal, x=x: c.curve(x)) if ch.held else cal.curve(x)
             if cal.has_memory:
                 e = e + cache.memory_term(key, p.rec, cal.level, ch, cal.weights, cal.hysteresis_range)
             y = _shifted(p.rec, ch.lag)

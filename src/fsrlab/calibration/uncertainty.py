@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fsrlab.errors import FileFormatError
+
 __all__ = ["COVERAGE", "REPEATABILITY", "LevelUncertainty"]
 
 #: Quantile of the held-out |error| that ±2u covers in each level and direction cell. [1]
@@ -94,5 +96,5 @@ class LevelUncertainty:
         e = np.asarray(d["level_edges"], dtype=float)
         rel = float(d.get("relative", 0.0))
         if t.ndim != 2 or t.shape != (e.size + 1, 3) or np.any(t < 0) or not 0 <= rel < 10:
-            raise ValueError("uncertainty: one row of 3 non-negative values per level bin, relative in [0, 10)")
+            raise FileFormatError("uncertainty: one row of 3 non-negative values per level bin, relative in [0, 10)")
         return cls(e, t, float(d["pooled"]), rel)
