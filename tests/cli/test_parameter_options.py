@@ -29,6 +29,17 @@ def test_option_of_a_parameter(command, parameter, option):
     assert _option_of(parameter, command.split()) == option
 
 
+def test_a_parameter_that_is_an_argument_is_named_by_its_metavar(tmp_path):
+    """A run with too few readings: the library names ``runs``, the command's argument of that name; the line
+    names it as the help shows it (its metavar), exit 2, no traceback."""
+    assert _option_of("runs", ["calibrate"]) == "RUN.csv [RUN2.csv ...]"
+    run = tmp_path / "few.csv"
+    run.write_text("time_s,force_n,reading\n0,1,2\n1,2,3\n")
+    code, _, err = run_cli(["calibrate", run, "--x", "reading", "--reference", "force_n", "-o", tmp_path / "c.json"])
+    assert code == 2 and "Traceback" not in err and len(err.strip().splitlines()) == 1
+    assert err.startswith("fsrlab: error: Invalid value for RUN.csv [RUN2.csv ...]: ") and "fewer than 20" in err
+
+
 def test_a_parameter_error_is_said_as_its_options_invalid_value(monkeypatch, tmp_path):
     """A message that happens to hold another option's words is not rewritten: the parameter decides."""
     import fsrlab.io.foreign as foreign

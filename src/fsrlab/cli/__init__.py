@@ -365,7 +365,9 @@ def _option_of(parameter: str, args: list[str]) -> str | None:
     for param in getattr(command, "params", ()):
         if param.name == parameter and getattr(param, "opts", None):
             long = [o for o in param.opts if o.startswith("--")]
-            return (long or param.opts)[0] if param.param_type_name == "option" else param.human_readable_name
+            if param.param_type_name == "option":
+                return (long or param.opts)[0]
+            return getattr(param, "metavar", None) or param.name.upper()  # an argument: its metavar (RUN.csv)
     return PARAMETER_OPTIONS.get(parameter)
 
 

@@ -163,10 +163,10 @@ def _unit_option(unit: str | None, reference: str) -> tuple[str, float]:
 
 @app.command("calibrate")
 def calibrate_cmd(
-    run_files: list[Path] = typer.Argument(..., metavar="RUN.csv [RUN2.csv ...]", help="One or more runs of the same sensor and readout, each with the reference force_n [N] or stress_pa [Pa] and the readout; time_s [s] optional (row order otherwise)."),
+    runs: list[Path] = typer.Argument(..., metavar="RUN.csv [RUN2.csv ...]", help="One or more runs of the same sensor and readout, each with the reference force_n [N] or stress_pa [Pa] and the readout; time_s [s] optional (row order otherwise)."),
     x: str = typer.Option("frequency_hz", "--x", help="Readout to calibrate: any numeric column, e.g. frequency_hz [Hz], duty_cycle [1], voltage_v [V], reading [counts] (a run from fsrlab import), or c_fsr_farad [F]: C_FSR decoded from frequency_hz and duty_cycle through the circuit of the run's sidecar."),
     reference: str = typer.Option(None, "--reference", help="Reference column: force_n [N] (no sensor area needed) or stress_pa [Pa] (default: stress_pa if the run has it, else force_n)."),
-    compensate: bool = typer.Option(False, "--compensate", help="Also try the causal hysteresis and creep compensation (play operators with memory, exponential averages; extension beyond the paper): fitted to what the static curve leaves unless refitting the curve with it wins held out, its correction weighted by the held-out error, kept only when it lowers that error by more than its standard error and 5 % of the MSE."),
+    compensate: bool = typer.Option(False, "--compensate", help="Also try the causal hysteresis and creep compensation (play operators with memory, exponential averages; extension beyond the paper): fitted to what the static curve leaves unless refitting the curve with it wins held out, its correction weighted by the held-out error, kept only when it lowers that error by more than 1.645 standard errors and 5 % of the MSE, and in every held-out part."),
     unit: str = typer.Option(None, "--unit", help="Display unit of the errors in the table [N, g, Pa or kPa] (default: the reference's, N or Pa); --json and the file stay SI."),
     lag: str = typer.Option("0", "--lag", help="Lag of the readout behind the reference [s] (rows without time_s), e.g. 0.02, 0 or auto (a shift of whole rows searched, kept only when it wins held out). Default 0: the estimate is of the reference as recorded, and a delay of the reference is tried."),
     rail: float = typer.Option(None, "--rail", parser=eng, help="Full scale of a divider's readout [unit of the readout], e.g. 5 for a voltage read across a divider on 5 V, 3.3 on 3.3 V: the FSR's conductance ratio V/(rail − V) is then tried as the curve's variable (default: the run's sidecar, or the ADC's full scale for integer counts). Every reading must lie below it."),
@@ -198,10 +198,10 @@ def calibrate_cmd(
         fail(f"{x} is a reference column: a calibration of the reference against itself (or against itself "
              "divided by the area) says nothing; give a readout such as frequency_hz", "--x")
     if output is not None:
-        checked(output, "--output", overwrite=overwrite, inputs=run_files)
+        checked(output, "--output", overwrite=overwrite, inputs=runs)
     if rail is not None and not (math.isfinite(rail) and rail > 0):
         fail(f"must be a full scale > 0 in the readout's unit, got {rail:g}", "--rail")
-    _calibrate_held_out(run_files, x, reference, compensate, unit, lag, skip_bad_rows, output, json_out, rail=rail,
+    _calibrate_held_out(runs, x, reference, compensate, unit, lag, skip_bad_rows, output, json_out, rail=rail,
                         between_runs=between_runs)
 
 
