@@ -129,14 +129,16 @@ def firmware_info() -> FirmwareInfo:
 
     Raises
     ------
-    ValueError
+    FileFormatError
         When ``meter.h`` does not define ``METER_FW_VERSION`` and ``METER_PROTOCOL_VERSION``.
     """
     header = (data_dir() / SKETCH_NAME / "meter.h").read_text(encoding="utf-8")
     version = re.search(r'^#define\s+METER_FW_VERSION\s+"([^"]+)"', header, re.M)
     protocol = re.search(r"^#define\s+METER_PROTOCOL_VERSION\s+(\d+)", header, re.M)
     if not version or not protocol:
-        raise ValueError("the shipped meter.h defines no METER_FW_VERSION or METER_PROTOCOL_VERSION")
+        from fsrlab.errors import FileFormatError
+
+        raise FileFormatError("the shipped meter.h defines no METER_FW_VERSION or METER_PROTOCOL_VERSION")
     return FirmwareInfo(version.group(1), int(protocol.group(1)), hex_path())
 
 

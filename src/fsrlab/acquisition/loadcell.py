@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from fsrlab.acquisition.protocol import HX711_MAX, HX711_MIN
-from fsrlab.errors import FsrlabError
+from fsrlab.errors import FsrlabError, ParameterError
 from fsrlab.units import STANDARD_GRAVITY
 
 __all__ = ["HX711_RATES", "STANDARD_GRAVITY", "TARE_STABILITY", "LoadCellModel", "WindowReference",
@@ -101,17 +101,19 @@ class LoadCellModel:
 
     def __post_init__(self) -> None:
         if self.rate_sps not in HX711_RATES:
-            raise ValueError(f"rate_sps must be 10 or 80 samples/s, got {self.rate_sps!r}")
+            raise ParameterError(f"must be 10 or 80 samples/s, got {self.rate_sps!r}", parameter="rate_sps")
         if not (math.isfinite(self.scale_counts_per_n) and self.scale_counts_per_n > 0):
-            raise ValueError(f"scale_counts_per_n must be > 0 count/N, got {self.scale_counts_per_n!r}")
+            raise ParameterError(f"must be > 0 count/N, got {self.scale_counts_per_n!r}",
+                                 parameter="scale_counts_per_n")
         if not (math.isfinite(self.noise_counts) and self.noise_counts >= 0):
-            raise ValueError(f"noise_counts must be >= 0 count, got {self.noise_counts!r}")
+            raise ParameterError(f"must be >= 0 count, got {self.noise_counts!r}", parameter="noise_counts")
         if not (math.isfinite(self.capacity_n) and self.capacity_n > 0):
-            raise ValueError(f"capacity_n must be > 0 N, got {self.capacity_n!r}")
-        if not (math.isfinite(self.offset_counts) and math.isfinite(self.drift_counts_per_s)):
-            raise ValueError("offset_counts and drift_counts_per_s must be finite")
+            raise ParameterError(f"must be > 0 N, got {self.capacity_n!r}", parameter="capacity_n")
+        for name in ("offset_counts", "drift_counts_per_s"):
+            if not math.isfinite(getattr(self, name)):
+                raise ParameterError(f"must be finite, got {getattr(self, name)!r}", parameter=name)
         if not 0 <= self.phase_s < 1.0 / self.rate_sps:
-            raise ValueError(f"phase_s must be in [0, {1.0 / self.rate_sps:g}) s, got {self.phase_s!r}")
+            raise ParameterError(f"must be in [0, {1.0 / self.rate_sps:g}) s, got {self.phase_s!r}", parameter="phase_s")
 
     @property
     def period_s(self) -> float:

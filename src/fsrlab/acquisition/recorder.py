@@ -329,8 +329,8 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
 
     Raises
     ------
-    ValueError
-        A parameter out of range.
+    ParameterError
+        A parameter out of range (``.parameter`` names it).
     FileExistsError
         The run or its sidecar exists and ``overwrite`` is False.
     LinkError
@@ -338,53 +338,80 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
     OSError
         The run file could not be created (the device is stopped again).
     """
-    from fsrlab.io.runformat import sidecar_path
-    from fsrlab.io.runwriter import RunWriter
-
-    if not duration_s > 0:
-        raise ValueError(f"duration_s must be > 0 s, got {duration_s!r}")
-    if clock not in CLOCKS:
-        raise ValueError(f"clock must be host or device, got {clock!r}")
-    on_device = clock == "device"
-    if not WINDOW_MS_MIN <= window_ms <= WINDOW_MS_MAX:
-        raise ValueError(f"window_ms must be in {WINDOW_MS_MIN}..{WINDOW_MS_MAX} ms, got {window_ms!r}")
-    if range_ not in (0, 1):
-        raise ValueError(f"range must be 0 or 1, got {range_!r}")
-    stall_s = default_stall_s(window_ms) if stall_s is None else float(stall_s)
-    if not stall_s > window_ms / 1000.0:
-        raise ValueError(f"stall_s must be longer than one window ({window_ms / 1000.0:g} s), got {stall_s!r}")
-    if area_m2 is not None and not (math.isfinite(area_m2) and area_m2 > 0):
-        raise ValueError(f"area_m2 must be > 0 m², got {area_m2!r}")
-    if loadcell is not None and not loadcell.scaled:
-        raise ValueError("loadcell: the load-cell calibration has a tare but no scale factor; run fsrlab loadcell scale")
+    stall_s = _checked_settings(duration_s, clock, window_ms, range_, stall_s, area_m2, loadcell)
     path = Path(path)
-    if not overwrite:
-        for existing in (path, sidecar_path(path)):
-            if os.path.lexists(existing):
-                raise FileExistsError(f"{existing} exists; a run is replaced only when asked to")
+    _refuse_existing(path, overwrite)
     chan_map = _channel_map_of(scan, channels_meta)
     ident = link.handshake(timeout_s=handshake_timeout_s)
     _require_scanning(scan, ident, link)
     link.stop()  # a device left running by a previous session: start from a clean state
     has_ref = ident.protocol_version >= 2
     stress_from_force = reference is None and area_m2 is not None and loadcell is not None and has_ref
+    on_device = clock == "device"
+    rec = _Recording(link, has_ref, on_device, on_row=on_row, on_status=on_status, stop=stop, health=health,
+                     status_interval_s=status_interval_s, sync_interval_s=sync_interval_s)
+    rec.stream = WindowStream(link, window_ms, range_, has_ref, stall_s, loadcell,
+                              area_m2 if stress_from_force else None, reference, on_event=on_event,
+                              on_gap=rec.save_gaps, clock=clock, end_s=duration_s if on_device else None, scan=scan)
+    first_seq = rec.stream.configure()
+    columns = _run_columns(scan, reference is not None or stress_from_force, has_ref, extra_columns)
+    meta = _run_metadata(metadata, link, ident, loadcell, area_m2)
+    meta["acquisition"].update({"window_ms": window_ms, "range": range_, "duration_s": duration_s, "clock": clock,
+                                "stall_s": stall_s, "first_seq": first_seq})
+    _scan_metadata(meta, scan, chan_map)
+    meta["gaps"] = []
+    rec.writer = _open_run(link, path, columns, meta, overwrite)
+    rec.run(duration_s, window_ms, path, final_metadata)
+    return RecordResult(rec.frames, rec.dropped, rec.duration_s, path, rec.ended, rec.message, link.parser.stats(),
+                        ident, tuple(rec.stream.gaps), has_ref, rec.no_ref, rec.stream.run_s if on_device else None)
 
-    def save_gaps(now: float) -> None:
-        # The open gap's length so far is on disk too, in case the process dies during it.
-        shown = stream.gaps + ([stream.open_gap(now)] if stream.in_gap else [])
-        try:
-            writer.update_metadata({"gaps": [g.to_dict() for g in shown]})
-        except OSError as exc:
-            raise _Failure(str(exc)) from None
 
-    stream = WindowStream(link, window_ms, range_, has_ref, stall_s, loadcell, area_m2 if stress_from_force else None,
-                          reference, on_event=on_event, on_gap=save_gaps, clock=clock,
-                          end_s=duration_s if on_device else None, scan=scan)
-    first_seq = stream.configure()
+def _checked_settings(duration_s, clock, window_ms, range_, stall_s, area_m2, loadcell) -> float:
+    """``record``'s settings checked before the device is touched; the stall time (its default filled in). [s]"""
+    from fsrlab.errors import ParameterError
+
+    if not duration_s > 0:
+        raise ParameterError(f"must be > 0 s, got {duration_s!r}", parameter="duration_s")
+    if clock not in CLOCKS:
+        raise ParameterError(f"must be host or device, got {clock!r}", parameter="clock")
+    if not WINDOW_MS_MIN <= window_ms <= WINDOW_MS_MAX:
+        raise ParameterError(f"must be in {WINDOW_MS_MIN}..{WINDOW_MS_MAX} ms, got {window_ms!r}",
+                             parameter="window_ms")
+    if range_ not in (0, 1):
+        raise ParameterError(f"must be 0 or 1, got {range_!r}", parameter="range_")
+    stall_s = default_stall_s(window_ms) if stall_s is None else float(stall_s)
+    if not stall_s > window_ms / 1000.0:
+        raise ParameterError(f"must be longer than one window ({window_ms / 1000.0:g} s), got {stall_s!r}",
+                             parameter="stall_s")
+    if area_m2 is not None and not (math.isfinite(area_m2) and area_m2 > 0):
+        raise ParameterError(f"must be > 0 m², got {area_m2!r}", parameter="area_m2")
+    if loadcell is not None and not loadcell.scaled:
+        raise ParameterError("the load-cell calibration has a tare but no scale factor; run fsrlab loadcell scale",
+                             parameter="loadcell")
+    return stall_s
+
+
+def _refuse_existing(path: Path, overwrite: bool) -> None:
+    """An existing run or sidecar is replaced only when asked to (checked before the device is touched)."""
+    from fsrlab.io.runformat import sidecar_path
+
+    if not overwrite:
+        for existing in (path, sidecar_path(path)):
+            if os.path.lexists(existing):
+                raise FileExistsError(f"{existing} exists; a run is replaced only when asked to")
+
+
+def _run_columns(scan: Scan | None, stress: bool, has_ref: bool, extra_columns: Sequence[str]) -> list[str]:
+    """The run's columns: the windows' (one channel or a scan's), ``stress_pa``, the load cell's and the extra ones."""
     columns = list(COLUMNS if scan is None else SCAN_COLUMNS)
-    columns += ["stress_pa"] if reference is not None or stress_from_force else []
+    columns += ["stress_pa"] if stress else []
     columns += [c for c in (REFERENCE_COLUMNS if has_ref else ()) if c not in columns]
     columns += [c for c in extra_columns if c not in columns]
+    return columns
+
+
+def _run_metadata(metadata: dict | None, link: SerialLink, ident: Identity, loadcell, area_m2: float | None) -> dict:
+    """The sidecar at the start: the caller's content, the load cell, the sensor's area and the device."""
     meta = dict(metadata or {})
     if loadcell is not None:
         meta["load_cell"] = loadcell.to_dict()
@@ -392,117 +419,172 @@ def record(link: SerialLink, path, duration_s: float, window_ms: int = WINDOW_MS
         meta["sensor"] = {**(meta.get("sensor") or {}), "area_m2": area_m2}
     meta.setdefault("origin", f"fsrlab acquire from {link.port}")
     meta["acquisition"] = {"port": link.port, "baud": link.baud, "device": ident.name,
-                           "firmware_version": ident.firmware_version, "protocol_version": ident.protocol_version,
-                           "window_ms": window_ms, "range": range_, "duration_s": duration_s, "clock": clock,
-                           "stall_s": stall_s, "first_seq": first_seq}
-    _scan_metadata(meta, scan, chan_map)
-    meta["gaps"] = []
-    parser = link.parser
-    lost0, bad0 = parser.lost, parser.bad_frames
+                           "firmware_version": ident.firmware_version, "protocol_version": ident.protocol_version}
+    return meta
+
+
+def _open_run(link: SerialLink, path: Path, columns: list[str], meta: dict, overwrite: bool):
+    """The run file, created with its header and sidecar; if it cannot be, the device is stopped again."""
+    from fsrlab.io.runwriter import RunWriter
+
     try:
-        writer = RunWriter(path, columns, meta, overwrite=overwrite)
+        return RunWriter(path, columns, meta, overwrite=overwrite)
     except BaseException:  # e.g. no such directory: do not leave the device running
         try:
             link.command("STOP", timeout_s=0.5)
         except LinkError:
             pass
         raise
-    t_start = time.monotonic()
-    stream.begin(t_start)
-    t_end = t_start + duration_s if not on_device else math.inf  # on the device clock the stream ends the run
-    frames, ended, message, dropped, no_ref = 0, "duration", "", 0, 0
-    last: Measurement | None = None
-    recent: list[float] = []
-    next_status = t_start
-    next_sync = t_start + sync_interval_s
-    gaps = stream.gaps
 
-    try:
+
+class _Recording:
+    """One recording: the loop over the stream's windows, each window's row, and the run file kept up to date.
+
+    ``stream`` and ``writer`` are set by :func:`record` once the device is configured and the file is open.
+    The counters (``frames``, ``no_ref``, ``dropped``) and the ending (``ended``, ``message``,
+    ``duration_s``) are what :class:`RecordResult` reports.
+    """
+
+    def __init__(self, link: SerialLink, has_ref: bool, on_device: bool, *, on_row, on_status, stop, health,
+                 status_interval_s: float, sync_interval_s: float):
+        self.link, self.has_ref, self.on_device = link, has_ref, on_device
+        self.on_row, self.on_status, self.stop, self.health = on_row, on_status, stop, health
+        self.status_interval_s, self.sync_interval_s = status_interval_s, sync_interval_s
+        self.stream: WindowStream | None = None
+        self.writer = None
+        self.frames, self.no_ref, self.dropped = 0, 0, 0
+        self.ended, self.message, self.duration_s = "duration", "", 0.0
+        self.last: Measurement | None = None
+        self.recent: list[float] = []  # when the last second's rows were written, for the rate shown
+
+    def save_gaps(self, now: float) -> None:
+        """The stream's ``on_gap``: the gaps so far into the sidecar, the open one's length so far too, in case
+        the process dies during it."""
+        stream = self.stream
+        shown = stream.gaps + ([stream.open_gap(now)] if stream.in_gap else [])
         try:
-            while True:
-                now = time.monotonic()
-                if now >= t_end or stream.complete:
-                    break
-                if stop is not None and stop.is_set():
-                    ended = "stopped"
-                    break
-                if health is not None and (reason := health()):
-                    raise _Failure(reason)
-                for _frame, m, row in stream.windows():
-                    if on_row is not None:
-                        row = on_row(m, row)
-                        if row is None:
-                            last = m
-                            continue
-                    if has_ref and row.get("reference_raw") is None:
-                        no_ref += 1
-                    try:
-                        writer.write(row)
-                    except OSError as exc:
-                        raise _Failure(str(exc)) from None
-                    frames += 1
-                    stream.written = frames
-                    last = m
-                    recent.append(time.monotonic())
-                now = time.monotonic()
-                if now >= next_sync:
-                    try:
-                        writer.sync()
-                    except OSError as exc:
-                        raise _Failure(str(exc)) from None
-                    next_sync = now + sync_interval_s
-                if on_status is not None and now >= next_status:
-                    recent = [t for t in recent if t > now - 1.0]
-                    span = min(now - t_start, 1.0)
-                    elapsed = stream.run_s if on_device else now - t_start
-                    on_status(RecordStatus(elapsed, frames, len(recent) / span if span > 0 else 0.0,
-                                           last.frequency_hz if last else math.nan,
-                                           last.duty_cycle if last else math.nan,
-                                           parser.lost - lost0, parser.bad_frames, parser.resets))
-                    next_status = now + status_interval_s
+            self.writer.update_metadata({"gaps": [g.to_dict() for g in shown]})
+        except OSError as exc:
+            raise _Failure(str(exc)) from None
+
+    def run(self, duration_s: float, window_ms: int, path: Path, final_metadata) -> None:
+        """Record until the duration is over, the stream is complete, ``stop`` is set or something fails; however
+        it ends, the device is stopped (if it still answers) and the file closed with every row written."""
+        parser = self.link.parser
+        lost0, bad0 = parser.lost, parser.bad_frames
+        t_start = time.monotonic()
+        self.stream.begin(t_start)
+        t_end = t_start + duration_s if not self.on_device else math.inf  # on the device clock the stream ends it
+        try:
+            self._until_ended(t_start, t_end, lost0)
+            self.dropped = parser.lost - lost0  # frames sent while recording that never made it
+            if self.ended not in ("disconnected", "error", "failed"):
+                try:
+                    self.link.command("STOP", timeout_s=0.5)
+                except (LinkError, KeyboardInterrupt):
+                    pass
+        finally:
+            self.duration_s = time.monotonic() - t_start
+            self._close(t_start, window_ms, duration_s, path, final_metadata, lost0, bad0)
+
+    def _until_ended(self, t_start: float, t_end: float, lost0: int) -> None:
+        """The loop, and how it ended (``ended``, ``message``): whatever fails, the rows so far stay in the file."""
+        try:
+            self._loop(t_start, t_end, lost0)
         except KeyboardInterrupt:
-            ended = "interrupted"
+            self.ended = "interrupted"
         except DeviceGone as exc:
-            reason = health() if health is not None else None  # a failed device closes its port
-            ended, message = ("failed", reason) if reason else ("disconnected", str(exc))
+            reason = self.health() if self.health is not None else None  # a failed device closes its port
+            self.ended, self.message = ("failed", reason) if reason else ("disconnected", str(exc))
         except LinkError as exc:  # no answer while re-configuring after a reset
-            ended, message = "error", str(exc)
+            self.ended, self.message = "error", str(exc)
         except _Failure as exc:
-            ended, message = "failed", str(exc)
+            self.ended, self.message = "failed", str(exc)
         except Exception as exc:  # noqa: BLE001 - whatever it is, the rows so far are kept and the run says why
-            ended, message = "failed", f"recording failed: {type(exc).__name__}: {exc}"
-        dropped = parser.lost - lost0  # frames sent while recording that never made it
-        if ended not in ("disconnected", "error", "failed"):
+            self.ended, self.message = "failed", f"recording failed: {type(exc).__name__}: {exc}"
+
+    def _loop(self, t_start: float, t_end: float, lost0: int) -> None:
+        """Read windows, write their rows, sync the file and report progress until the run is over."""
+        next_status = t_start
+        next_sync = t_start + self.sync_interval_s
+        while True:
+            now = time.monotonic()
+            if now >= t_end or self.stream.complete:
+                return
+            if self.stop is not None and self.stop.is_set():
+                self.ended = "stopped"
+                return
+            if self.health is not None and (reason := self.health()):
+                raise _Failure(reason)
+            self._write_windows()
+            now = time.monotonic()
+            if now >= next_sync:
+                try:
+                    self.writer.sync()
+                except OSError as exc:
+                    raise _Failure(str(exc)) from None
+                next_sync = now + self.sync_interval_s
+            if self.on_status is not None and now >= next_status:
+                self.on_status(self._status(now, t_start, lost0))
+                next_status = now + self.status_interval_s
+
+    def _write_windows(self) -> None:
+        """Each window the stream has now: ``on_row`` may complete it or leave it out; its row written at once."""
+        for _frame, m, row in self.stream.windows():
+            if self.on_row is not None:
+                row = self.on_row(m, row)
+                if row is None:
+                    self.last = m
+                    continue
+            if self.has_ref and row.get("reference_raw") is None:
+                self.no_ref += 1
             try:
-                link.command("STOP", timeout_s=0.5)
-            except (LinkError, KeyboardInterrupt):
-                pass
-    finally:
-        duration = time.monotonic() - t_start
+                self.writer.write(row)
+            except OSError as exc:
+                raise _Failure(str(exc)) from None
+            self.frames += 1
+            self.stream.written = self.frames
+            self.last = m
+            self.recent.append(time.monotonic())
+
+    def _status(self, now: float, t_start: float, lost0: int) -> RecordStatus:
+        """The progress shown: rows and their rate over the last second, the last window, the link's counters."""
+        parser, last = self.link.parser, self.last
+        self.recent = [t for t in self.recent if t > now - 1.0]
+        span = min(now - t_start, 1.0)
+        elapsed = self.stream.run_s if self.on_device else now - t_start
+        return RecordStatus(elapsed, self.frames, len(self.recent) / span if span > 0 else 0.0,
+                            last.frequency_hz if last else math.nan, last.duty_cycle if last else math.nan,
+                            parser.lost - lost0, parser.bad_frames, parser.resets)
+
+    def _close(self, t_start: float, window_ms: int, duration_s: float, path: Path, final_metadata,
+               lost0: int, bad0: int) -> None:
+        """The ending in words, the counters, gaps and ``final_metadata()`` into the sidecar; the file closed."""
+        stream, writer, duration = self.stream, self.writer, self.duration_s
+        gaps = stream.gaps
         in_gap = stream.in_gap
         if in_gap:
             gaps.append(Gap(stream.silent_since - t_start, t_start + duration - stream.silent_since))
-        st = parser.stats()
-        empty_reason = _empty_reason(ended, window_ms, duration_s, st.bad_frames - bad0, st.lost - lost0)
-        ended, message = _ending(ended, message, frames, duration, gaps, in_gap, empty_reason, path)
-        writer.metadata["acquisition"].update(
-            {"ended": ended, "frames": frames, "dropped": dropped, "resets": st.resets,
-             "bad_checksum": st.bad_checksum, "malformed": st.malformed, "garbage_bytes": st.garbage_bytes,
-             "recorded_s": round(duration, 3)})
-        if on_device:
-            writer.metadata["acquisition"]["run_s"] = round(stream.run_s, 3)
-        if has_ref:
-            writer.metadata["acquisition"]["no_reference"] = no_ref
+        st = self.link.parser.stats()
+        empty_reason = _empty_reason(self.ended, window_ms, duration_s, st.bad_frames - bad0, st.lost - lost0)
+        self.ended, self.message = _ending(self.ended, self.message, self.frames, duration, gaps, in_gap,
+                                           empty_reason, path)
+        acquisition = writer.metadata["acquisition"]
+        acquisition.update({"ended": self.ended, "frames": self.frames, "dropped": self.dropped, "resets": st.resets,
+                            "bad_checksum": st.bad_checksum, "malformed": st.malformed,
+                            "garbage_bytes": st.garbage_bytes, "recorded_s": round(duration, 3)})
+        if self.on_device:
+            acquisition["run_s"] = round(stream.run_s, 3)
+        if self.has_ref:
+            acquisition["no_reference"] = self.no_ref
         writer.metadata["gaps"] = [g.to_dict() for g in gaps]
-        writer.metadata["ended"] = message
+        writer.metadata["ended"] = self.message
         if final_metadata is not None:
             try:
                 writer.metadata.update(final_metadata())
             except Exception as exc:  # noqa: BLE001 - the rows are what matters; say what is missing
                 writer.metadata["final_metadata_error"] = f"{type(exc).__name__}: {exc}"
         writer.close()
-    return RecordResult(frames, dropped, duration, path, ended, message, parser.stats(), ident, tuple(gaps),
-                        has_ref, no_ref, stream.run_s if on_device else None)
 
 
 def result_dict(result: RecordResult) -> dict:
@@ -535,7 +617,9 @@ def _channel_map_of(scan: Scan | None, entries) -> list[dict] | None:
     if scan is None:
         return None
     if not isinstance(scan, Scan):
-        raise ValueError(f"scan must be a Scan, got {type(scan).__name__}")
+        from fsrlab.errors import ParameterError
+
+        raise ParameterError(f"must be a Scan, got {type(scan).__name__}", parameter="scan")
     return channel_map(scan.channels, entries)
 
 

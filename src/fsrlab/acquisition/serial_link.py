@@ -24,7 +24,7 @@ from fsrlab.acquisition.protocol import (
     FrameParser,
     encode_command,
 )
-from fsrlab.errors import FsrlabError
+from fsrlab.errors import FsrlabError, ParameterError
 
 __all__ = ["UNO_USB_IDS", "LinkError", "DeviceGone", "HandshakeError", "CommandRejected", "UsbPort",
            "find_uno", "SerialLink"]
@@ -165,9 +165,9 @@ class SerialLink:
 
     def __init__(self, port: str, baud: int = DEFAULT_BAUD, read_timeout_s: float = 0.05) -> None:
         if not baud > 0:
-            raise ValueError(f"baud must be > 0, got {baud!r}")
+            raise ParameterError(f"must be > 0, got {baud!r}", parameter="baud")
         if not read_timeout_s >= 0:
-            raise ValueError(f"read_timeout_s must be >= 0 s, got {read_timeout_s!r}")
+            raise ParameterError(f"must be >= 0 s, got {read_timeout_s!r}", parameter="read_timeout_s")
         self.port = find_uno() if port == "auto" else str(port)
         self.baud = int(baud)
         try:

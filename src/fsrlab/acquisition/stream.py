@@ -231,10 +231,12 @@ class WindowStream:
                  on_event: Callable[[str], None] | None = None, on_gap: Callable[[float], None] | None = None,
                  on_reset: Callable[[], None] | None = None, clock: str = "host",
                  end_s: float | None = None, scan: Scan | None = None) -> None:
+        from fsrlab.errors import ParameterError
+
         if clock not in CLOCKS:
-            raise ValueError(f"clock must be host or device, got {clock!r}")
+            raise ParameterError(f"must be host or device, got {clock!r}", parameter="clock")
         if end_s is not None and clock != "device":
-            raise ValueError("end_s: a run ends on its own time axis only on the device clock")
+            raise ParameterError("a run ends on its own time axis only on the device clock", parameter="end_s")
         self.link = link
         self.clock, self.end_s = clock, end_s
         self.window_ms, self.range = int(window_ms), int(range_)

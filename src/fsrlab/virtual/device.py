@@ -64,6 +64,7 @@ from fsrlab.acquisition.protocol import (
     mask_channels,
     parse_command,
 )
+from fsrlab.errors import ParameterError
 from fsrlab.hardware import F_CPU
 from fsrlab.physics.sensor import A201_AREA_M2
 from fsrlab.virtual.meter import MeterState, measure
@@ -107,11 +108,11 @@ class Faults:
         for name in ("corrupt", "drop", "garbage"):
             v = getattr(self, name)
             if not 0.0 <= v <= 1.0:
-                raise ValueError(f"{name} must be in 0..1, got {v!r}")
+                raise ParameterError(f"must be in 0..1, got {v!r}", parameter=name)
         for name in ("reset_after", "unplug_after"):
             v = getattr(self, name)
             if v is not None and v < 0:
-                raise ValueError(f"{name} must be >= 0 frames, got {v!r}")
+                raise ParameterError(f"must be >= 0 frames, got {v!r}", parameter=name)
 
 
 @dataclass
@@ -185,18 +186,19 @@ class VirtualDevice:
                  adc_noise_v: float = 2e-3, faults: Faults | None = None, seed: int | None = None,
                  load_cell: LoadCellModel | None = LoadCellModel(), speed: str = "realtime") -> None:
         if speed not in SPEEDS:
-            raise ValueError(f"speed must be one of {', '.join(SPEEDS)}, got {speed!r}")
+            raise ParameterError(f"must be one of {', '.join(SPEEDS)}, got {speed!r}", parameter="speed")
         self.speed = speed
         self._sim_s = 0.0  # the device's clock with speed="max" [s]
         for name, v in (("frequency_noise", frequency_noise), ("jitter_s", jitter_s), ("adc_noise_v", adc_noise_v)):
             if not v >= 0:
-                raise ValueError(f"{name} must be >= 0, got {v!r}")
+                raise ParameterError(f"must be >= 0, got {v!r}", parameter=name)
         self.source = source if source is not None else PhysicsSource()
         self.frequency_noise, self.jitter_s, self.adc_noise_v = frequency_noise, jitter_s, adc_noise_v
         self.faults = faults or Faults()
         self._rng = np.random.default_rng(seed)
         if load_cell is not None and not isinstance(load_cell, LoadCellModel):
-            raise ValueError(f"load_cell must be a LoadCellModel or None, got {type(load_cell).__name__}")
+            raise ParameterError(f"must be a LoadCellModel or None, got {type(load_cell).__name__}",
+                                 parameter="load_cell")
         self.load_cell = load_cell
         self._cell_rng = np.random.default_rng(None if seed is None else [seed, 711])
         self._master: int | None = None
