@@ -73,6 +73,18 @@ COMMANDS = {
     "firmware": ("firmware", "The meter's firmware shipped in the package: its image (hex), its sketch, flashing an "
                              "Uno."),
 }
+# The panels ``fsrlab --help`` lists the commands in, in their order (typer's ``rich_help_panel``): every command of
+# the table is in exactly one (tests/cli/test_help_panels.py). A command registered outside the table is listed
+# last, under "Commands".
+PANELS = {
+    "Measure": ("acquire", "live", "measure", "weights", "loadcell"),
+    "Analyse": ("hysteresis", "repeatability", "iso376", "creep", "report", "crosstalk"),
+    "Calibrate": ("calibrate", "calibrate-channels", "apply", "import"),
+    "Bench and twin": ("bench", "twin", "virtual-device", "demo"),
+    "The paper": ("paper", "physics", "oscillator", "decode", "design"),
+    "Setup": ("doctor", "ports", "firmware"),
+}
+PANEL_OF = {name: panel for panel, names in PANELS.items() for name in names}
 # Command groups (``fsrlab firmware hex``): the list shows their summary cut to the line, as click does for a
 # command without a short help.
 COMMAND_GROUPS = frozenset({"firmware"})
@@ -110,6 +122,8 @@ def _build(name: str):
         info = _registration(name)
     if info is None:
         return None
+    if getattr(info, "rich_help_panel", None) is None:
+        info.rich_help_panel = PANEL_OF.get(name)
     if isinstance(info, typer.models.TyperInfo):
         return typer.main.get_group_from_info(info, pretty_exceptions_short=app.pretty_exceptions_short,
                                               suggest_commands=app.suggest_commands,
@@ -178,14 +192,29 @@ class _LazyGroup(typer.core.TyperGroup):
             self._stubs[name] = (typer.core.TyperCommand(name, help=summary, rich_markup_mode=self.rich_markup_mode)
                                  if name in COMMAND_GROUPS else
                                  typer.core.TyperCommand(name, short_help=summary, rich_markup_mode=self.rich_markup_mode))
+            self._stubs[name].rich_help_panel = PANEL_OF.get(name)
         return self._stubs[name]
 
     def format_commands(self, ctx, formatter) -> None:
+        """List the commands in their panels (:data:`PANELS`), each a section as click writes "Commands"."""
         self._summaries_only = True  # the list shows every command: from the table, importing no topic module
         try:
-            super().format_commands(ctx, formatter)
+            commands = [(name, self.get_command(ctx, name)) for name in self.list_commands(ctx)]
+            commands = [(name, cmd) for name, cmd in commands if cmd is not None and not cmd.hidden]
         finally:
             self._summaries_only = False
+        if not commands:
+            return
+        limit = formatter.width - 6 - max(len(name) for name, _ in commands)
+        rank = {name: i for i, name in enumerate(name for names in PANELS.values() for name in names)}
+        sections: dict[str, list] = {panel: [] for panel in PANELS}
+        for name, cmd in sorted(commands, key=lambda item: rank.get(item[0], len(rank))):
+            panel = getattr(cmd, "rich_help_panel", None) or PANEL_OF.get(name) or "Commands"
+            sections.setdefault(panel, []).append((name, cmd.get_short_help_str(limit)))
+        for panel, rows in sections.items():
+            if rows:
+                with formatter.section(panel):
+                    formatter.write_dl(rows)
 
 
 app = typer.Typer(
