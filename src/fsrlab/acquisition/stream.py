@@ -297,6 +297,33 @@ class WindowStream:
         ------
         (Frame, Measurement, dict)
         """
+        batch = self._read()
+        restart = False
+        for frame in batch:
+            if self.complete:
+                return  # the device clock reached the run's end: the windows after it are not part of it
+            if frame.reset:
+                restart = True
+                self._anchor_ms = None
+                self._scan_last = None
+            if frame.kind != "M":
+                continue
+            m = Measurement.from_frame(frame)
+            self.run_s = self._window_time(m)
+            row = window_row(m, self.run_s, self.has_ref, self.loadcell, self.area_m2,
+                             self.reference(frame) if self.reference is not None else None)
+            if self.scan is not None:
+                row["channel"], row["scan"] = m.channel, self._unwrap_scan(m.scan)
+            if self.has_ref and m.ref_ok != self._cell_ok:
+                self._load_cell_changed(m.ref_ok, row["time_s"])
+            yield frame, m, row
+        if restart:
+            self.configure()
+            if self.on_reset is not None:
+                self.on_reset()
+
+    def _read(self) -> list[Frame]:
+        """The frames the link has now; a silence longer than the stall time opens a gap, a frame closes it."""
         now = time.monotonic()
         batch = self.link.read_frames()
         if batch:
@@ -314,42 +341,29 @@ class WindowStream:
                 self.on_gap(now)
             self._event(f"no frame from the device for {now - self.silent_since:.1f} s "
                         f"(since {self.silent_since - self.t_start:.1f} s into the run)")
-        restart = False
-        for frame in batch:
-            if self.complete:
-                return  # the device clock reached the run's end: the windows after it are not part of it
-            if frame.reset:
-                restart = True
-                self._anchor_ms = None
-                self._scan_last = None
-            if frame.kind != "M":
-                continue
-            m = Measurement.from_frame(frame)
-            if self._anchor_ms is None:
-                self._anchor_ms = (m.t_ms - m.window_ms) % UINT32_MODULO
-                if not self.written:
-                    self._offset_s = 0.0
-                elif self.clock == "device":
-                    self._offset_s = self.run_s
-                else:
-                    self._offset_s = max(time.monotonic() - self.t_start - m.window_ms / 1000.0, 0.0)
-            self.run_s = self._offset_s + ((m.t_ms - self._anchor_ms) % UINT32_MODULO) / 1000.0
-            row = window_row(m, self.run_s, self.has_ref, self.loadcell, self.area_m2,
-                             self.reference(frame) if self.reference is not None else None)
-            if self.scan is not None:
-                row["channel"], row["scan"] = m.channel, self._unwrap_scan(m.scan)
-            if self.has_ref and m.ref_ok != self._cell_ok:
-                if m.ref_ok == 0:
-                    self._event(f"no load cell: the meter reports no HX711 (ref_ok 0) from {row['time_s']:.1f} s "
-                                "into the run; reference_raw and force_n stay empty")
-                elif self._cell_ok == 0:
-                    self._event(f"load cell answering again from {row['time_s']:.1f} s into the run")
-                self._cell_ok = m.ref_ok
-            yield frame, m, row
-        if restart:
-            self.configure()
-            if self.on_reset is not None:
-                self.on_reset()
+        return batch
+
+    def _window_time(self, m: Measurement) -> float:
+        """The window's ``time_s`` on the stream's axis: the device's ``t_ms`` since START; after a reset it
+        continues from the last window (device clock) or from the host's time since START (host clock). [s]"""
+        if self._anchor_ms is None:
+            self._anchor_ms = (m.t_ms - m.window_ms) % UINT32_MODULO
+            if not self.written:
+                self._offset_s = 0.0
+            elif self.clock == "device":
+                self._offset_s = self.run_s
+            else:
+                self._offset_s = max(time.monotonic() - self.t_start - m.window_ms / 1000.0, 0.0)
+        return self._offset_s + ((m.t_ms - self._anchor_ms) % UINT32_MODULO) / 1000.0
+
+    def _load_cell_changed(self, ref_ok: int, time_s: float) -> None:
+        """Say when the meter's HX711 stops answering (``ref_ok`` 0) and when it answers again."""
+        if ref_ok == 0:
+            self._event(f"no load cell: the meter reports no HX711 (ref_ok 0) from {time_s:.1f} s "
+                        "into the run; reference_raw and force_n stay empty")
+        elif self._cell_ok == 0:
+            self._event(f"load cell answering again from {time_s:.1f} s into the run")
+        self._cell_ok = ref_ok
 
     def _unwrap_scan(self, scan: int | None) -> int:
         """The run's scan number: the device's counts on (mod 65536), a restart of it (reset) moves on by one."""

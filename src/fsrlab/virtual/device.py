@@ -504,50 +504,64 @@ class VirtualDevice:
             self.unplug()
 
     def _loop(self, deadline: float | None = None) -> None:
+        """The device's thread: measure the windows as they end and answer the host's commands."""
         try:
             while not self._stop.is_set():
                 if deadline is not None and time.monotonic() >= deadline:
                     return
-                st = self._st
-                now = self._now()
-                wait = 0.05
-                if st.started:
-                    t_end = st.window_start + st.current_ms / 1000.0
-                    if self.speed == "max":
-                        t_end = round(t_end * 1000.0) / 1000.0  # whole ms, as the firmware's clock: no drift
-                        if self._unread() <= self.MAX_UNREAD:
-                            # The clock moves to the window's end first: a mass placed while this window is
-                            # measured (time_since_start) counts from its end, as in real time.
-                            self._sim_s = now = max(now, t_end)
-                            wait = 0.0  # commands first (non-blocking), then this window
-                        else:
-                            wait = 0.0005  # the host is reading: look again soon
-                    if now >= t_end:
-                        self._measure(t_end)
-                        st = self._st
-                        if st.started:
-                            self._next_reading(t_end)
-                        if self.speed != "max":
-                            continue
-                    wait = min(wait, max(t_end - now, 0.0))
-                master = self._master
-                if master is None:
+                wait = self._measure_due()
+                if wait is None:
+                    continue
+                if not self._read_commands(wait):
                     return
-                try:
-                    ready, _, _ = select.select([master], [], [], max(wait, 0.0))
-                except (OSError, ValueError):
-                    return
-                if ready:
-                    try:
-                        data = os.read(master, 1024)
-                    except BlockingIOError:
-                        continue
-                    except OSError:
-                        return
-                    self._feed_commands(data)
         except KeyboardInterrupt:
             return
         except Exception as exc:  # noqa: BLE001 - any failure ends the device, as a pulled cable; see failure
             self.error = exc
             self._stop.set()
             self._close_fds()
+
+    def _measure_due(self) -> float | None:
+        """Send the window that has ended, if one has; return how long to wait for a command [s], or None to
+        look again at once (real time: right after a window)."""
+        st = self._st
+        now = self._now()
+        wait = 0.05
+        if not st.started:
+            return wait
+        t_end = st.window_start + st.current_ms / 1000.0
+        if self.speed == "max":
+            t_end = round(t_end * 1000.0) / 1000.0  # whole ms, as the firmware's clock: no drift
+            if self._unread() <= self.MAX_UNREAD:
+                # The clock moves to the window's end first: a mass placed while this window is
+                # measured (time_since_start) counts from its end, as in real time.
+                self._sim_s = now = max(now, t_end)
+                wait = 0.0  # commands first (non-blocking), then this window
+            else:
+                wait = 0.0005  # the host is reading: look again soon
+        if now >= t_end:
+            self._measure(t_end)
+            if self._st.started:
+                self._next_reading(t_end)
+            if self.speed != "max":
+                return None
+        return min(wait, max(t_end - now, 0.0))
+
+    def _read_commands(self, wait: float) -> bool:
+        """Wait up to ``wait`` seconds for the host's bytes and act on them; False once the pty is gone. [s]"""
+        master = self._master
+        if master is None:
+            return False
+        try:
+            ready, _, _ = select.select([master], [], [], max(wait, 0.0))
+        except (OSError, ValueError):
+            return False
+        if ready:
+            try:
+                data = os.read(master, 1024)
+            except BlockingIOError:
+                return True
+            except OSError:
+                return False
+            self._feed_commands(data)
+        return True
