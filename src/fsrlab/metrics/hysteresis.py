@@ -140,7 +140,7 @@ def hysteresis_error(stress_load_pa, q_load, stress_unload_pa, q_unload) -> Hyst
     Eq. (13): ``HE = 100 % |Q_u(σd) − Q_l(σd)| / |Q(σf)|``. The two branches rarely share their
     stresses, so each branch is sorted by stress (readings at a repeated stress are averaged) and
     interpolated piecewise-linearly onto the union of both branches' stresses inside the range they
-    share; σd is the grid stress with the largest |Q_u − Q_l|. Q(σf) is the loading branch at its
+    share; σd is the grid stress with the largest ``|Q_u − Q_l|``. Q(σf) is the loading branch at its
     largest stress (both branches meet there in the model; a measured reading at the peak belongs to
     loading).
 

@@ -104,7 +104,7 @@ def synthetic_run(cycles: int = 3, peak_pa: float = 50e3, points_per_ramp: int =
     circuit : LM555Circuit
         The 555 readout (its R_FSR taken at Vcc/2, the middle of the capacitor's swing).
     opamp : OpAmpReadout
-        The traditional readout (its R_FSR taken at :attr:`~OpAmpReadout.fsr_voltage_v`, |Vcc|).
+        The traditional readout (its R_FSR taken at :attr:`~OpAmpReadout.fsr_voltage_v`, ``|Vcc|``).
     sensor : VirtualFSR, optional
         The sensor (default ``VirtualFSR()``).
     seed : int
