@@ -101,16 +101,17 @@ def test_cli_calibrates_several_runs_leaving_one_out(runs, tmp_path):
 
 
 def test_cli_says_whether_the_relative_uncertainty_was_measured_or_assumed(runs, monkeypatch):
-    """One run cannot show how the gain moves between recordings: the table says the term is assumed; with
-    several runs it names the held-out runs' gain spread (the term is the larger of it and the assumed)."""
+    """One run shows how the gain moves between its held-out blocks only: the table names the blocks' spread and
+    asks for more runs; with several runs it names the held-out runs' gain spread (the term is the larger of
+    it and the assumed floor)."""
     monkeypatch.setenv("COLUMNS", "300")  # the table's cells on one line each
     one = " ".join(run_cli(["calibrate", runs["hand"], "--x", "reading", "--reference", "force_n"])[1].split())
     code, stdout, err = run_cli(["calibrate", runs["hand"], runs["hand2"], runs["motor"], "--x", "reading",
                                  "--reference", "force_n"])
     assert code == 0, err
     several = " ".join(stdout.split())
-    assert "(assumed: one run;" in one and "assumed: one run" not in several
-    assert "the held-out runs' gain" in several
+    assert "held-out blocks' gain" in one and "calibrate from two or more runs" in one
+    assert "held-out runs' gain" in several and "blocks'" not in several
 
 
 def test_the_relative_term_between_runs_can_be_given(runs, cal, tmp_path, monkeypatch):
@@ -132,7 +133,7 @@ def test_the_relative_term_between_runs_can_be_given(runs, cal, tmp_path, monkey
     code, stdout, err = run_cli(["calibrate", runs["hand"], "--x", "reading", "--reference", "force_n",
                                  "--between-runs", "30%", "-o", out])
     assert code == 0, err
-    assert "30 (given by --between-runs; one run)" in " ".join(stdout.split())
+    assert "30 (the floor given by --between-runs; the held-out blocks' gains spread only" in " ".join(stdout.split())
     assert load_calibration(out).model.uncertainty.relative == pytest.approx(0.30)
     for bad in ("150%", "30", "-5%"):
         code, _, err = run_cli(["calibrate", runs["hand"], "--x", "reading", "--between-runs", bad])

@@ -262,3 +262,24 @@ def test_a_memory_that_fails_in_one_held_out_block_is_not_kept(seed):
     assert memory["gain"] > MEMORY_Z * memory["se"] and min(by_part[:-1]) > 0 > by_part[-1]
     assert not memory["kept"] and "higher in 1 held-out part" in memory["why"]
     assert sel.heldout_rmse == sel.heldout_rmse_plain
+
+
+def test_one_recording_measures_the_gain_spread_of_its_held_out_blocks():
+    """Property: with one recording the relative term between recordings is at least the RMS gain error of its
+    held-out blocks. Triangles through a power law, the sensor's sensitivity tripling over the run (each later
+    block reads higher than the earlier ones predict; measured spread 0.20 on three seeds): the spread exceeds the assumed 15 % and becomes
+    the term; the same run without the drift keeps the assumed floor."""
+    from fsrlab.calibration.uncertainty import REPEATABILITY
+
+    rng = np.random.default_rng(5)
+    t = np.arange(4000) * 0.05
+    force = 10 * np.abs(((t / 20) % 2) - 1)  # 40 s triangles up to 10 N
+    for drift, above in ((2.0, True), (0.0, False)):
+        gain = 1 + drift * t / t[-1]
+        x = (gain * force) ** 0.7 + rng.normal(0, 0.01, t.size)
+        cal, sel = calibrate_recordings([Recording(t, x, force)], compensate=False)
+        assert sel.gain_spread is not None
+        if above:
+            assert sel.gain_spread > REPEATABILITY and cal.uncertainty.relative == sel.gain_spread
+        else:
+            assert sel.gain_spread < 0.05 and cal.uncertainty.relative == REPEATABILITY

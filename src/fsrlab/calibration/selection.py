@@ -156,7 +156,8 @@ class Selection:
         Held-out RMSE of the calibration chosen and of it without memory (its static curve, with the
         delay or lag kept). [unit of the reference]
     gain_spread : float or None
-        RMS relative gain error of the held-out recordings (two or more recordings). [1]
+        RMS relative gain error of the held-out recordings, or of the held-out blocks of one recording
+        (None in a file written before blocks were counted). [1]
     readout : dict
         The readout variables: ``variables`` (tried), ``used`` (by the static estimate: its curve's, or
         those of the curves averaged) and ``why`` (the physics of the readout,
@@ -423,7 +424,8 @@ def _mix(parts: list[Part], mixed: list, sign: int, adc) -> tuple:
 
 
 def _gain_spread(splits, static: _Choice, ch: _Choice, alpha: float, sign: int, adc, mixed=()) -> float:
-    """RMS relative gain error of the held-out recordings (least-squares gain of reference on estimate)."""
+    """RMS relative gain error of the held-out recordings or blocks (least-squares gain of reference on
+    estimate, over each part's rows above 5 % of full scale)."""
     g = []
     for fit_parts, test_parts in splits:
         cal = _fit(fit_parts, ch, sign, adc)
@@ -723,9 +725,10 @@ def _final(search: _Search, static_cur: _Choice, mem: _Choice | None, alpha: flo
     cal.delay_s = delay_s
     cal.mix = _mix(whole, mixed, sign, adc)
     rel = REPEATABILITY if between_runs is None else between_runs
-    if len(recs) >= 2:
-        sel.gain_spread = _gain_spread(splits, static_cur, cur, alpha, sign, adc, mixed)
-        rel = max(rel, sel.gain_spread)
+    # the gains of the held-out recordings, or of the held-out blocks of one: a block is a short recording
+    # of its own, and a gain that moves within one recording moves at least as much to the next
+    sel.gain_spread = _gain_spread(splits, static_cur, cur, alpha, sign, adc, mixed)
+    rel = max(rel, sel.gain_spread)
     cal.uncertainty = LevelUncertainty.fit(err, est, dirs, relative=rel)
     if cal.has_memory:
         e0, _, est0, parts0 = plain

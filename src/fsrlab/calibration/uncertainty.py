@@ -20,8 +20,8 @@ __all__ = ["COVERAGE", "REPEATABILITY", "LevelUncertainty"]
 COVERAGE = 0.95
 #: Relative standard uncertainty of an estimate from one recording to the next (the sensor re-seated,
 #: another loading rate, another creep state), added in quadrature: the held-out blocks of a single
-#: recording cannot show it, and two or three recordings show it poorly, so the larger of this and the
-#: spread of the held-out recordings' gains is used. FSR makers state ±2–2.5 % single-part
+#: recording show it in part, and two or three recordings show it poorly, so the larger of this and the
+#: spread of the held-out recordings' (or blocks') gains is used. FSR makers state ±2–2.5 % single-part
 #: repeatability and ±6 % part to part; on the real recordings of docs/calibration.md the gain of the
 #: reference on the estimate moved by 0.81–1.23 from the training recordings to the test ones (RMS
 #: 13 %), and 0.10 left 4 of 9 pairs below 90 % coverage. Over all 42 ordered pairs of the seven

@@ -283,11 +283,12 @@ def _calibration_table(cal, run_files: list[Path], unit: str | None, between_run
         table.add_row("readout variable", f"{', '.join(sel.readout.get('used', []))} ({sel.readout.get('why', '')})")
     rel, spread = cal.model.uncertainty.relative, sel.gain_spread
     floor = "the floor given by --between-runs" if between_runs is not None else "the assumed floor"
+    parts = "runs'" if len(run_files) > 1 else "blocks'"
     table.add_row("relative uncertainty between runs (%)", f"{100 * rel:.3g} " + (
-        ("(given by --between-runs; one run)" if between_runs is not None else
-         "(assumed: one run; calibrate from two or more to measure it)") if spread is None else
-        "(the held-out runs' gain spread)" if spread >= rel else
-        f"({floor}; the held-out runs' gains spread only {100 * spread:.2g} %)"))
+        ("(given by --between-runs)" if between_runs is not None else "(assumed)") if spread is None else
+        f"(the held-out {parts} gain spread)" if spread >= rel else
+        f"({floor}; the held-out {parts} gains spread only {100 * spread:.2g} %"
+        + ("; calibrate from two or more runs to see what changes between them)" if len(run_files) == 1 else ")")))
     scores = {c["name"]: c["heldout_rmse"] for c in sel.candidates}
     first = sel.steps[0]
     table.add_row(f"static curve: {first['chosen']}", f"chosen of {first['tried']}, held-out RMSE "
