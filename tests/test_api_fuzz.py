@@ -354,6 +354,7 @@ OVERRIDES: dict[str, dict[str, Callable[[], object]]] = {
     "fsrlab.physics.params.check_int": {"name": lambda: "r_ohm", "value": lambda: 1},
     "fsrlab.physics.params.float_array": {"name": lambda: "r_ohm", "value": lambda: 1.0},
     "fsrlab.circuits.checks.check_supply": {"diode": lambda: True},
+    "fsrlab.circuits.checks.check_fraction": {"name": lambda: "upper_fraction", "value": lambda: 0.5},
     "fsrlab.circuits.checks.check_lm555": {"c_off_farad": lambda: 0.0, "diode": lambda: True,
                                            "diode_drop_v": lambda: 0.6, "vcc_v": lambda: 5.0},
     "fsrlab.circuits.spice.edges_from_waveform": {"t_s": lambda: np.linspace(0, 1e-3, 11)},
@@ -617,6 +618,7 @@ ALIASES = {
     ("fsrlab.physics.params.check_between", "value"): "r_ohm",
     ("fsrlab.physics.params.check_int", "value"): "r_ohm",
     ("fsrlab.physics.params.float_array", "value"): "r_ohm",
+    ("fsrlab.circuits.checks.check_fraction", "value"): "upper_fraction",
 }
 """(callable, parameter) -> the name its errors carry instead: the field name the caller passes as ``name``."""
 """(callable, parameter) cases known to fail, each with the module that owns the fix."""

@@ -13,10 +13,11 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from fsrlab.circuits.lm555 import astable, sensitivity
 from fsrlab.circuits.decode import decode
-from fsrlab.hardware import TICK_S as TIMER_TICK_S
+from fsrlab.circuits.lm555 import astable, sensitivity
 from fsrlab.circuits.transient import simulate
+from fsrlab.errors import ParameterError
+from fsrlab.hardware import TICK_S as TIMER_TICK_S
 
 
 @given(n=st.floats(4.05, 2000), c=st.floats(100e-12, 5e-9), coff=st.sampled_from([0.0, 470e-12]),
@@ -48,7 +49,7 @@ def test_impossible_pairs_raise_clear_errors():
     with pytest.raises(ValueError, match=r"duty_cycle: 0\.6 cannot come from this circuit.*0\.666667"):
         decode(10e3, 0.6, 10e3)
     # A frequency so high that C < C_off.
-    with pytest.raises(ValueError, match="less than c_off_farad"):
+    with pytest.raises(ParameterError, match="more than the whole timing capacitance"):
         decode(1e6, 0.5, 10e3, c_off_farad=1e-9, diode=True)
     with pytest.raises(ValueError, match="duty_cycle"):
         decode(1e3, 1.2, 10e3)

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from fsrlab.circuits.decomposition import frequency_decomposition
+from fsrlab.errors import ParameterError
 
 
 def eq35(r, rf, c):
@@ -44,5 +45,6 @@ def test_a_purely_capacitive_path_is_all_capacitive(diode):
 
 
 def test_paths_must_match():
-    with pytest.raises(ValueError, match="same length"):
+    with pytest.raises(ParameterError, match="r_fsr_ohm's length") as info:
         frequency_decomposition(10e3, [1e6, 2e6], [1e-9], diode=True)
+    assert info.value.parameter == "c_fsr_farad"

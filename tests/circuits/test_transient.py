@@ -15,6 +15,7 @@ from scipy.integrate import solve_ivp
 
 from fsrlab.circuits.lm555 import astable
 from fsrlab.circuits.transient import simulate
+from fsrlab.errors import ParameterError
 
 
 @pytest.mark.parametrize("kw", [
@@ -58,8 +59,8 @@ def test_waveform_stays_between_thresholds_and_hits_them():
     # Output is high exactly while the capacitor charges (voltage rising).
     dv = np.diff(sim.v_cap_v)
     same = sim.output_high[1:] == sim.output_high[:-1]
-    assert np.all((dv[same & sim.output_high[1:]] >= 0))
-    assert np.all((dv[same & ~sim.output_high[1:]] <= 0))
+    assert np.all(dv[same & sim.output_high[1:]] >= 0)
+    assert np.all(dv[same & ~sim.output_high[1:]] <= 0)
 
 
 def test_no_oscillation_gives_no_edges():
@@ -145,11 +146,13 @@ def test_capacitance_step_conserves_charge_or_voltage():
 
 
 def test_validation():
-    with pytest.raises(ValueError, match="periods, t_stop_s"):
+    with pytest.raises(ParameterError, match="exactly one of periods and t_stop_s") as info:
         simulate(10e3, 200e3, 1e-9)
-    with pytest.raises(ValueError, match="time_s"):
+    assert info.value.parameter == "periods"
+    with pytest.raises(ParameterError, match="time_s") as info:
         simulate(10e3, [1e5, 2e5], 1e-9, periods=3)
-    with pytest.raises(ValueError, match="capacitance_step"):
+    assert info.value.parameter == "r_fsr_ohm"
+    with pytest.raises(ParameterError, match="capacitance_step"):
         simulate(10e3, 200e3, 1e-9, periods=3, capacitance_step="x")
 
 

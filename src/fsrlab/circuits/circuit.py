@@ -21,9 +21,12 @@ Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, §5 (Figs. 9b
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import MISSING, asdict, dataclass, fields, replace
 
 from fsrlab.circuits.checks import check_lm555
+from fsrlab.errors import ParameterError
+from fsrlab.physics.params import float_array
 
 __all__ = ["LM555Circuit", "OpAmpReadout", "readout_from_metadata", "PAPER_CIRCUIT", "PAPER_OPAMP"]
 
@@ -31,14 +34,14 @@ __all__ = ["LM555Circuit", "OpAmpReadout", "readout_from_metadata", "PAPER_CIRCU
 
 def _from_dict(cls, d: dict, kind: str):
     if not isinstance(d, dict):
-        raise ValueError(f"circuit: expected a mapping of {kind} parts, got {type(d).__name__}")
+        raise ParameterError(f"expected a mapping of {kind} parts, got {type(d).__name__}", parameter="circuit")
     names = {f.name for f in fields(cls)}
     unknown = sorted(set(d) - names - {"topology"})
     if unknown:
-        raise ValueError(f"circuit: unknown {kind} part(s) {', '.join(unknown)} (known: {', '.join(sorted(names))})")
+        raise ParameterError(f"unknown {kind} part(s) {', '.join(unknown)} (known: {', '.join(sorted(names))})", parameter="circuit")
     missing = [f.name for f in fields(cls) if f.default is MISSING and f.name not in d]
     if missing:
-        raise ValueError(f"circuit: the {kind} part(s) {', '.join(missing)} must be given")
+        raise ParameterError(f"the {kind} part(s) {', '.join(missing)} must be given", parameter="circuit")
     return cls(**{k: v for k, v in d.items() if k in names})
 
 
@@ -84,13 +87,13 @@ class LM555Circuit:
             v = getattr(self, f.name)
             if f.name == "diode":
                 if not (isinstance(v, bool) or type(v).__name__ == "bool_"):  # Python's or numpy's
-                    raise ValueError(f"diode: must be true or false, got {v!r}")
+                    raise ParameterError(f"must be true or false, got {v!r}", parameter="diode")
                 object.__setattr__(self, "diode", bool(v))
             else:
                 try:
                     object.__setattr__(self, f.name, float(v))
                 except (TypeError, ValueError):
-                    raise ValueError(f"{f.name}: must be a number, got {v!r}") from None
+                    raise ParameterError(f"must be a number, got {v!r}", parameter=f.name) from None
         check_lm555(self.r_ohm, self.c_off_farad, self.diode, self.diode_drop_v, self.vcc_v,
                     self.lower_fraction, self.upper_fraction, self.discharge_ohm)
 
@@ -112,9 +115,9 @@ class LM555Circuit:
         """
         vcc = float(parts.get("vcc_v", 5.0))
         if not (math.isfinite(vcc) and vcc > 0):
-            raise ValueError(f"vcc_v: must be a finite supply voltage > 0 V, got {vcc!r}")
+            raise ParameterError(f"must be a finite supply voltage > 0 V, got {vcc!r}", parameter="vcc_v")
         if not (0 < control_v < vcc):
-            raise ValueError(f"control_v: must be between 0 and vcc_v = {vcc:g} V, got {control_v!r}")
+            raise ParameterError(f"must be between 0 and vcc_v = {vcc:g} V, got {control_v!r}", parameter="control_v")
         upper = control_v / vcc
         return cls(**{**parts, "lower_fraction": upper / 2, "upper_fraction": upper})
 
@@ -228,11 +231,11 @@ class OpAmpReadout:
             try:
                 object.__setattr__(self, name, float(getattr(self, name)))
             except (TypeError, ValueError):
-                raise ValueError(f"{name}: must be a number, got {getattr(self, name)!r}") from None
+                raise ParameterError(f"must be a number, got {getattr(self, name)!r}", parameter=name) from None
         if not (math.isfinite(self.r_f_ohm) and self.r_f_ohm > 0):
-            raise ValueError(f"r_f_ohm: must be finite and > 0 Ω, got {self.r_f_ohm!r}")
+            raise ParameterError(f"must be finite and > 0 Ω, got {self.r_f_ohm!r}", parameter="r_f_ohm")
         if not (math.isfinite(self.vcc_v) and self.vcc_v != 0):
-            raise ValueError(f"vcc_v: must be a finite non-zero voltage, got {self.vcc_v!r}")
+            raise ParameterError(f"must be a finite non-zero voltage, got {self.vcc_v!r}", parameter="vcc_v")
 
     @property
     def fsr_voltage_v(self) -> float:
@@ -247,9 +250,8 @@ class OpAmpReadout:
 
     def conductance_s(self, v_out_v):
         """FSR conductance from the output voltage, ``G = −V_out/(R_F·Vcc)`` (eq. 38 inverted). [S]"""
-        import numpy as np
 
-        v = np.asarray(v_out_v, dtype=float)
+        v = float_array("v_out_v", v_out_v)
         g = -v / (self.r_f_ohm * self.vcc_v)
         return g[()] if g.ndim == 0 else g
 
@@ -281,9 +283,13 @@ def readout_from_metadata(metadata: dict) -> tuple[LM555Circuit | None, OpAmpRea
 
     Raises
     ------
-    ValueError
-        A part out of range or unknown (the message names it).
+    ParameterError
+        A part out of range or unknown (its ``parameter`` names it).
+    TypeError
+        ``metadata`` is not a mapping.
     """
+    if metadata is not None and not isinstance(metadata, Mapping):
+        raise TypeError(f"metadata: must be a mapping (a run's sidecar), got {type(metadata).__name__}")
     raw = dict((metadata or {}).get("circuit") or {})
     opamp = (metadata or {}).get("opamp")
     legacy = raw.pop("traditional", None)

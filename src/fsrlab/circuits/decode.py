@@ -19,7 +19,9 @@ import numpy as np
 from fsrlab.circuits.checks import check_lm555
 from fsrlab.circuits.lm555 import NoOscillationError, minimum_n_ratio
 from fsrlab.circuits.phases import timing_per_rc
+from fsrlab.errors import ParameterError
 from fsrlab.hardware import TICK_S
+from fsrlab.physics.params import check_at_least, float_array
 
 __all__ = ["DecodeResult", "decode"]
 
@@ -106,6 +108,14 @@ def _invert(f, dc, r, c_off, diode, diode_drop_v, vcc_v, lo, hi, rd_rel=0.0):
     return n, c_total, float(g0 / (1.0 + g0))
 
 
+def _broadcast(f, dc, n_per):
+    try:
+        return np.broadcast_arrays(f, dc, n_per)
+    except ValueError:
+        raise ParameterError(f"shape {dc.shape} does not broadcast with frequency_hz's {f.shape} (and periods' "
+                             f"{n_per.shape})", parameter="duty_cycle") from None
+
+
 def decode(frequency_hz, duty_cycle, r_ohm: float, c_off_farad: float = 0.0, diode: bool = False,
            diode_drop_v: float = 0.0, vcc_v: float = 5.0, lower_fraction: float = 1 / 3,
            upper_fraction: float = 2 / 3, periods=1, timer_resolution_s: float = TICK_S,
@@ -141,7 +151,7 @@ def decode(frequency_hz, duty_cycle, r_ohm: float, c_off_farad: float = 0.0, dio
 
     Raises
     ------
-    ValueError
+    ParameterError
         A parameter out of range, or an (f, DC) pair the circuit cannot produce: a duty cycle at or
         below the circuit's infimum (2/3 without the diode for default thresholds, see
         :func:`duty_cycle_limits`), or a frequency so high that C = C_FSR + C_off would be smaller
@@ -161,39 +171,38 @@ def decode(frequency_hz, duty_cycle, r_ohm: float, c_off_farad: float = 0.0, dio
     stated σ for R = 10 kΩ, R_FSR = 200 kΩ, C = 1 nF, 4 periods), so the stated σ is conservative.
     """
     check_lm555(r_ohm, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, discharge_ohm)
-    if not (math.isfinite(timer_resolution_s) and timer_resolution_s >= 0):
-        raise ValueError(f"timer_resolution_s: must be >= 0 s, got {timer_resolution_s!r}")
-    f = np.asarray(frequency_hz, dtype=float)
-    dc = np.asarray(duty_cycle, dtype=float)
-    n_per = np.asarray(periods, dtype=float)
+    check_at_least("timer_resolution_s", timer_resolution_s, 0.0, "s")
+    f = float_array("frequency_hz", frequency_hz)
+    dc = float_array("duty_cycle", duty_cycle)
+    n_per = float_array("periods", periods)
     if np.any(~np.isfinite(f)) or np.any(f <= 0):
-        raise ValueError(f"frequency_hz: must be finite and > 0 Hz, got {frequency_hz!r}")
+        raise ParameterError(f"must be finite and > 0 Hz, got {frequency_hz!r}", parameter="frequency_hz")
     if np.any(~np.isfinite(dc)) or np.any(dc <= 0) or np.any(dc >= 1):
-        raise ValueError(f"duty_cycle: must be in (0, 1), got {duty_cycle!r}")
+        raise ParameterError(f"must be in (0, 1), got {duty_cycle!r}", parameter="duty_cycle")
     if np.any(~np.isfinite(n_per)) or np.any(n_per < 1):
-        raise ValueError(f"periods: must be >= 1, got {periods!r}")
+        raise ParameterError(f"must be >= 1, got {periods!r}", parameter="periods")
     if math.isinf(minimum_n_ratio(diode_drop_v, vcc_v, upper_fraction)):
         raise NoOscillationError.for_diode_drop(diode_drop_v, vcc_v, upper_fraction)
-    f, dc, n_per = np.broadcast_arrays(f, dc, n_per)
-    if not (math.isfinite(discharge_ohm) and discharge_ohm >= 0):
-        raise ValueError(f"discharge_ohm: must be finite and >= 0 Ω, got {discharge_ohm!r}")
+    f, dc, n_per = _broadcast(f, dc, n_per)
+    check_at_least("discharge_ohm", discharge_ohm, 0.0, "Ω")
     args = (r_ohm, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, discharge_ohm / r_ohm)
     n, c_total, dc_min = _invert(f, dc, *args)
     bad = np.isnan(n)
     if check and np.any(bad):
         i = np.argwhere(bad)[0]
-        raise ValueError(
-            f"duty_cycle: {float(dc[tuple(i)]):.6g} cannot come from this circuit "
+        raise ParameterError(
+            f"{float(dc[tuple(i)]):.6g} cannot come from this circuit "
             f"({'with' if diode else 'without'} diode its duty cycle is always above {dc_min:.6g}, reached only "
-            f"as R_FSR → ∞){'' if bad.size == 1 else f' (element {i.tolist()})'}")
+            f"as R_FSR → ∞){'' if bad.size == 1 else f' (element {i.tolist()})'}", parameter="duty_cycle")
     c_fsr = c_total - c_off_farad
     # Rounding of the bisection can leave -1e-16-level negatives when C_FSR is truly 0.
     neg = c_fsr < -1e-12 * c_total
     if check and np.any(neg):
         i = tuple(np.argwhere(neg)[0])
-        raise ValueError(
-            f"frequency_hz: {float(f[i]):.6g} Hz with duty cycle {float(dc[i]):.6g} needs C = {float(c_total[i]):.4g} F, "
-            f"less than c_off_farad = {c_off_farad:.4g} F (C_FSR would be negative)")
+        raise ParameterError(
+            f"{c_off_farad:.4g} F is more than the whole timing capacitance C = {float(c_total[i]):.4g} F that "
+            f"{float(f[i]):.6g} Hz at duty cycle {float(dc[i]):.6g} needs (C_FSR would be negative)",
+            parameter="c_off_farad")
     c_fsr = np.where(neg | bad, np.nan, np.maximum(c_fsr, 0.0))
     r_fsr = np.where(neg | bad, np.nan, n * r_ohm)
 

@@ -20,6 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsrlab.circuits.lm555 import astable
+from fsrlab.errors import ParameterError
+from fsrlab.physics.params import float_array
 
 __all__ = ["FrequencyDecomposition", "frequency_decomposition"]
 
@@ -70,7 +72,7 @@ def frequency_decomposition(r_ohm: float, r_fsr_ohm, c_fsr_farad, diode: bool, c
 
     Raises
     ------
-    ValueError
+    ParameterError
         If the paths are not 1-D of the same length ≥ 1, or as :func:`fsrlab.circuits.lm555.astable`
         (e.g. the circuit does not oscillate somewhere on the path).
 
@@ -80,10 +82,13 @@ def frequency_decomposition(r_ohm: float, r_fsr_ohm, c_fsr_farad, diode: bool, c
     :func:`fsrlab.circuits.lm555.astable`. The parts do not add up to the whole: f is not linear in
     R_FSR and C_FSR.
     """
-    rf = np.asarray(r_fsr_ohm, dtype=float)
-    cf = np.asarray(c_fsr_farad, dtype=float)
-    if rf.ndim != 1 or rf.shape != cf.shape or rf.size == 0:
-        raise ValueError(f"r_fsr_ohm and c_fsr_farad must be 1-D paths of the same length, got {rf.shape} and {cf.shape}")
+    rf = float_array("r_fsr_ohm", r_fsr_ohm)
+    cf = float_array("c_fsr_farad", c_fsr_farad)
+    if rf.ndim != 1 or rf.size == 0:
+        raise ParameterError(f"must be a 1-D path of at least one value, got shape {rf.shape}", parameter="r_fsr_ohm")
+    if cf.shape != rf.shape:
+        raise ParameterError(f"must be a path of r_fsr_ohm's length ({rf.size}), got shape {cf.shape}",
+                             parameter="c_fsr_farad")
     return FrequencyDecomposition(
         frequency_hz=astable(r_ohm, rf, cf, c_off_farad, diode=diode).frequency_hz,
         c_only_hz=astable(r_ohm, rf[0], cf, c_off_farad, diode=diode).frequency_hz,

@@ -14,7 +14,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsrlab.circuits.lm555 import astable, minimum_n_ratio, sensitivity
+from fsrlab.errors import ParameterError
 from fsrlab.hardware import CAPTURE_MAX_HZ, TICK_S
+from fsrlab.physics.params import check_at_least, check_positive, float_array, plain
 
 __all__ = ["E12", "DesignResult", "design"]
 
@@ -129,7 +131,7 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
 
     Raises
     ------
-    ValueError
+    ParameterError
         Bad ranges, a band that lies wholly above ``max_frequency_hz``, or no E12 pair (R in 100 Ω–10 MΩ, C_off 0 or 1 pF–10 µF) satisfies the band and
         margin; the message says what limits it.
 
@@ -146,18 +148,15 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
                                                                 max_frequency_hz)
     capped = fhi > limit
     fhi = min(fhi, limit)
-    if variant not in ("auto", "diode", "no-diode"):
-        raise ValueError(f"variant: must be 'auto', 'diode' or 'no-diode', got {variant!r}")
-    if not (0 <= min_margin < math.inf):
-        raise ValueError(f"min_margin: must be finite and >= 0, got {min_margin!r}")
-    if not (0 < window_s < math.inf):
-        raise ValueError(f"window_s: must be finite and > 0 s, got {window_s!r}")
-    if not (0 < vcc_v < math.inf):
-        raise ValueError(f"vcc_v: must be finite and > 0 V, got {vcc_v!r}")
-    if not (0 <= diode_drop_v < math.inf):
-        raise ValueError(f"diode_drop_v: must be finite and >= 0 V, got {diode_drop_v!r}")
+    if not isinstance(variant, str) or variant not in ("auto", "diode", "no-diode"):
+        raise ParameterError(f"must be 'auto', 'diode' or 'no-diode', got {variant!r}", parameter="variant")
+    check_at_least("min_margin", min_margin, 0.0)
+    check_positive("window_s", window_s, "s")
+    check_positive("vcc_v", vcc_v, "V")
+    check_at_least("diode_drop_v", diode_drop_v, 0.0, "V")
+    check_at_least("timer_resolution_s", timer_resolution_s, 0.0, "s")
     if diode_drop_v > 0 and variant == "no-diode":
-        raise ValueError("diode_drop_v: a forward drop needs the diode variant")
+        raise ParameterError("a forward drop needs the diode variant", parameter="diode_drop_v")
     variants = {"auto": (False, True), "diode": (True,), "no-diode": (False,)}[variant]
 
     rf = np.geomspace(rlo, rhi, 24) if rhi > rlo else np.array([rlo])
@@ -173,7 +172,8 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
             best_per_variant[diode] = best
     if not best_per_variant:
         cap = f" (its top lowered to max_frequency_hz = {limit:g} Hz)" if capped else ""
-        raise ValueError(f"band_hz: no design keeps the sensor inside the band{cap}: " + "; ".join(reasons))
+        raise ParameterError(f"no design keeps the sensor inside the band{cap}: " + "; ".join(reasons),
+                             parameter="band_hz")
     chosen = max(best_per_variant.values(), key=lambda d: (d["merit"], d["margin"]))
     q = timer_resolution_s
 
@@ -192,23 +192,31 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
                         max_frequency_hz=limit)
 
 
+def _pair(name: str, value) -> tuple[float, float]:
+    """A (low, high) pair of numbers, or an error naming ``name``."""
+    x = float_array(name, value)
+    if x.shape != (2,):
+        raise ParameterError(f"must be a (low, high) pair, got {plain(value)}", parameter=name)
+    return float(x[0]), float(x[1])
+
+
 def _checked_ranges(r_fsr_range_ohm, c_fsr_range_farad, band_hz, max_frequency_hz):
     """The sensor's R and C ranges, the band and the counter's limit, checked; ``(r, c, band, limit)``."""
-    rlo, rhi = (float(v) for v in r_fsr_range_ohm)
-    clo, chi = (float(v) for v in c_fsr_range_farad)
-    flo, fhi = (float(v) for v in band_hz)
+    rlo, rhi = _pair("r_fsr_range_ohm", r_fsr_range_ohm)
+    clo, chi = _pair("c_fsr_range_farad", c_fsr_range_farad)
+    flo, fhi = _pair("band_hz", band_hz)
     if not (0 < rlo <= rhi and math.isfinite(rhi)):
-        raise ValueError(f"r_fsr_range_ohm: need 0 < min <= max < inf, got {r_fsr_range_ohm!r}")
+        raise ParameterError(f"need 0 < min <= max < inf, got {r_fsr_range_ohm!r}", parameter="r_fsr_range_ohm")
     if not (0 < clo <= chi and math.isfinite(chi)):
-        raise ValueError(f"c_fsr_range_farad: need 0 < min <= max < inf, got {c_fsr_range_farad!r}")
+        raise ParameterError(f"need 0 < min <= max < inf, got {c_fsr_range_farad!r}", parameter="c_fsr_range_farad")
     if not (0 < flo < fhi and math.isfinite(fhi)):
-        raise ValueError(f"band_hz: need 0 < low < high < inf, got {band_hz!r}")
+        raise ParameterError(f"need 0 < low < high < inf, got {band_hz!r}", parameter="band_hz")
+    if max_frequency_hz is not None:
+        check_at_least("max_frequency_hz", max_frequency_hz, 0.0, "Hz", strict=True)
     limit = math.inf if max_frequency_hz is None else float(max_frequency_hz)
-    if not limit > 0:
-        raise ValueError(f"max_frequency_hz: must be > 0 Hz, got {max_frequency_hz!r}")
     if flo >= limit:
-        raise ValueError(f"band_hz: {flo:g} … {fhi:g} Hz is beyond what the counter captures: every edge only "
-                         f"up to max_frequency_hz = {limit:g} Hz")
+        raise ParameterError(f"{flo:g} … {fhi:g} Hz is beyond what the counter captures: every edge only "
+                             f"up to max_frequency_hz = {limit:g} Hz", parameter="band_hz")
     return (rlo, rhi), (clo, chi), (flo, fhi), limit
 
 

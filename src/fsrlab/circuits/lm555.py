@@ -44,9 +44,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsrlab.circuits.checks import check_fractions, check_lm555, check_supply
+from fsrlab.circuits.checks import (
+    broadcast,
+    check_drop,
+    check_fraction,
+    check_fractions,
+    check_lm555,
+    check_r_fsr,
+    check_supply,
+    check_vcc,
+)
 from fsrlab.circuits.phases import thevenin, timing_per_rc
-from fsrlab.errors import FsrlabError
+from fsrlab.errors import FsrlabError, ParameterError
+from fsrlab.physics.params import check_positive, float_array
 
 __all__ = [
     "NoOscillationError",
@@ -175,6 +185,10 @@ class AstableResult:
                          ax=ax, xlabel=xlabel)
 
 
+def _is_number(x) -> bool:
+    return isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool) and math.isfinite(x)
+
+
 def thresholds_from_control(control_v: float, vcc_v: float = 5.0) -> tuple[float, float]:
     """Threshold fractions when the control pin (5) is driven to ``control_v``.
 
@@ -191,10 +205,9 @@ def thresholds_from_control(control_v: float, vcc_v: float = 5.0) -> tuple[float
         The threshold comparator trips at ``control_v`` and the trigger comparator at half of it
         (the LM555's internal divider), as fractions of Vcc. [1]
     """
-    if not (np.isfinite(vcc_v) and vcc_v > 0):
-        raise ValueError(f"vcc_v: must be a finite supply voltage > 0 V, got {vcc_v!r}")
-    if not (0 < control_v < vcc_v):
-        raise ValueError(f"control_v: must be between 0 and vcc_v = {vcc_v:g} V, got {control_v!r}")
+    check_vcc(vcc_v)
+    if not (_is_number(control_v) and 0 < control_v < vcc_v):
+        raise ParameterError(f"must be between 0 and vcc_v = {vcc_v:g} V, got {control_v!r}", parameter="control_v")
     upper = control_v / vcc_v
     return upper / 2, upper
 
@@ -222,8 +235,9 @@ def minimum_n_ratio(diode_drop_v: float = 0.0, vcc_v: float = 5.0, upper_fractio
     The charge target ``(Vcc − V_D)·N/(N + 2)`` must exceed ``u·Vcc``. With ``V_D = 0`` and
     ``u = 2/3`` this is the paper's eq. (30), ``R < R_FSR/4`` (N > 4).
     """
-    if not (0.0 < upper_fraction < 1.0):
-        raise ValueError(f"upper_fraction: must be in (0, 1), got {upper_fraction!r}")
+    check_drop(diode_drop_v)
+    check_vcc(vcc_v)
+    check_fraction("upper_fraction", upper_fraction)
     headroom = vcc_v - diode_drop_v - upper_fraction * vcc_v
     if headroom <= 0:
         return math.inf
@@ -313,7 +327,9 @@ def oscillation_margin(r_ohm, r_fsr_ohm, diode_drop_v: float = 0.0, vcc_v: float
     float or ndarray
         ``N/N_min − 1``; ``-1`` when the diode drop leaves no headroom at all. [1]
     """
-    n = np.asarray(r_fsr_ohm, dtype=float) / np.asarray(r_ohm, dtype=float)
+    check_positive("r_ohm", r_ohm, "Ω")
+    check_r_fsr(r_fsr_ohm)
+    n = float_array("r_fsr_ohm", r_fsr_ohm) / float_array("r_ohm", r_ohm)
     n_min = minimum_n_ratio(diode_drop_v, vcc_v, upper_fraction)
     out = np.full(np.shape(n), -1.0) if math.isinf(n_min) else n / n_min - 1.0
     return out[()] if np.ndim(out) == 0 else out
@@ -360,8 +376,10 @@ def astable(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad=0.0, diode: bool = False,
 
     Raises
     ------
-    ValueError
-        A parameter out of range (the message names it).
+    ParameterError
+        A parameter out of range (its ``parameter`` names it).
+    TypeError
+        A part that is not a number (the message names it).
     NoOscillationError
         ``check=True`` and the circuit does not oscillate for some element: the message names the
         condition (charge target below the upper threshold, diode drop too large, or no discharge
@@ -392,19 +410,19 @@ def astable(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad=0.0, diode: bool = False,
     Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901.
     """
     check_lm555(r_ohm, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, discharge_ohm)
-    r = np.asarray(r_ohm, dtype=float)
-    rf = np.asarray(r_fsr_ohm, dtype=float)
-    cf = np.asarray(c_fsr_farad, dtype=float)
-    co = np.asarray(c_off_farad, dtype=float)
-    rd = np.asarray(discharge_ohm, dtype=float)
+    r = float_array("r_ohm", r_ohm)
+    rf = float_array("r_fsr_ohm", r_fsr_ohm)
+    cf = float_array("c_fsr_farad", c_fsr_farad)
+    co = float_array("c_off_farad", c_off_farad)
+    rd = float_array("discharge_ohm", discharge_ohm)
     if np.any(np.isnan(rf)) or np.any(rf <= 0):
-        raise ValueError(f"r_fsr_ohm: must be > 0 Ω (inf allowed), got {r_fsr_ohm!r}")
+        raise ParameterError(f"must be > 0 Ω (inf allowed), got {r_fsr_ohm!r}", parameter="r_fsr_ohm")
     if np.any(~np.isfinite(cf)) or np.any(cf < 0):
-        raise ValueError(f"c_fsr_farad: must be finite and >= 0 F, got {c_fsr_farad!r}")
+        raise ParameterError(f"must be finite and >= 0 F, got {c_fsr_farad!r}", parameter="c_fsr_farad")
     c = cf + co
     if np.any(c <= 0):
-        raise ValueError("c_fsr_farad + c_off_farad: the timing capacitance must be > 0 F")
-    r, rf, c, rd = np.broadcast_arrays(r, rf, c, rd)
+        raise ParameterError("the timing capacitance c_fsr_farad + c_off_farad must be > 0 F", parameter="c_fsr_farad")
+    r, rf, c, rd = broadcast(("r_ohm", r), ("r_fsr_ohm", rf), ("c_fsr_farad", c), ("discharge_ohm", rd))
     n = rf / r
     n_min = minimum_n_ratio(diode_drop_v, vcc_v, upper_fraction)
     th_rc, tl_rc = timing_per_rc(n, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, rd / r)
@@ -510,9 +528,9 @@ def sensitivity(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad=0.0, diode: bool = Fa
     """
     res = astable(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction,
                   upper_fraction, check=check, discharge_ohm=discharge_ohm)
-    x = np.asarray(r_fsr_ohm, dtype=float)
-    cf = np.asarray(c_fsr_farad, dtype=float)
-    c = cf + np.asarray(c_off_farad, dtype=float)
+    x = float_array("r_fsr_ohm", r_fsr_ohm)
+    cf = float_array("c_fsr_farad", c_fsr_farad)
+    c = cf + float_array("c_off_farad", c_off_farad)
     th, tl = np.asarray(res.tau_high_s), np.asarray(res.tau_low_s)
     charge, discharge = thevenin(r_ohm, x, diode, diode_drop_v, vcc_v, discharge_ohm)
     v_lo, v_hi = lower_fraction * vcc_v, upper_fraction * vcc_v

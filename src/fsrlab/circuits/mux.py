@@ -31,6 +31,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from fsrlab.errors import ParameterError
+from fsrlab.physics.params import check_at_least, check_finite, float_array
 
 __all__ = ["Multiplexer", "CD74HC4051", "mux_parts", "disconnected_voltage", "shared_voltage"]
 
@@ -92,8 +93,10 @@ def mux_parts(r_fsr_ohm, c_fsr_farad, mux: Multiplexer = CD74HC4051):
     (r_ohm, c_farad) : ndarrays
         ``R_FSR + R_on`` [Ω] and ``C_FSR + C_node`` [F] (lumped, see the module's notes).
     """
-    r = np.asarray(r_fsr_ohm, dtype=float) + mux.r_on_ohm
-    c = np.asarray(c_fsr_farad, dtype=float) + mux.c_node_farad
+    if not isinstance(mux, Multiplexer):
+        raise TypeError(f"mux: must be a Multiplexer, got {type(mux).__name__}")
+    r = float_array("r_fsr_ohm", r_fsr_ohm) + mux.r_on_ohm
+    c = float_array("c_fsr_farad", c_fsr_farad) + mux.c_node_farad
     return r, c
 
 
@@ -114,10 +117,10 @@ def disconnected_voltage(v0_v, off_s, r_fsr_ohm, c_fsr_farad):
     ndarray
         ``v0 · exp(−t / (R_FSR·C_FSR))``. [V]
     """
-    tau = np.asarray(r_fsr_ohm, dtype=float) * np.asarray(c_fsr_farad, dtype=float)
+    tau = float_array("r_fsr_ohm", r_fsr_ohm) * float_array("c_fsr_farad", c_fsr_farad)
     with np.errstate(divide="ignore", invalid="ignore"):
-        x = np.where(tau > 0, np.asarray(off_s, dtype=float) / tau, np.inf)
-    return np.asarray(v0_v, dtype=float) * np.exp(-x)
+        x = np.where(tau > 0, float_array("off_s", off_s) / tau, np.inf)
+    return float_array("v0_v", v0_v) * np.exp(-x)
 
 
 def shared_voltage(v_node_v, c_node_farad, v_fsr_v, c_fsr_farad):
@@ -139,7 +142,11 @@ def shared_voltage(v_node_v, c_node_farad, v_fsr_v, c_fsr_farad):
     float
         ``(C_node·V_node + C_FSR·V_FSR) / (C_node + C_FSR)``. [V]
     """
+    check_finite("v_node_v", v_node_v)
+    check_at_least("c_node_farad", c_node_farad, 0.0, "F")
+    check_finite("v_fsr_v", v_fsr_v)
+    check_at_least("c_fsr_farad", c_fsr_farad, 0.0, "F")
     total = c_node_farad + c_fsr_farad
-    if not total > 0:
+    if not np.all(total > 0):
         raise ParameterError("c_node_farad + c_fsr_farad must be > 0 F", parameter="c_fsr_farad")
     return float((c_node_farad * v_node_v + c_fsr_farad * v_fsr_v) / total)

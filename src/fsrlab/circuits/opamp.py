@@ -21,6 +21,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fsrlab.errors import ParameterError
+from fsrlab.physics.params import check_between, check_finite, check_positive, float_array, plain
+
 __all__ = ["ReadoutResult", "inverting_amplifier", "voltage_divider", "voltage_coefficient"]
 
 
@@ -74,14 +77,14 @@ def inverting_amplifier(r_fsr_ohm, r_f_ohm: float, vcc_v: float,
         ``sensitivity_supply = 1 − β`` (a supply change also moves R_FSR). Op-amp saturation and
         offset are not modelled.
     """
-    r = np.asarray(r_fsr_ohm, dtype=float)
+    r = float_array("r_fsr_ohm", r_fsr_ohm)
     if np.any(~(r > 0)):
-        raise ValueError(f"r_fsr_ohm: must be > 0 Ω, got {r_fsr_ohm!r}")
-    if not r_f_ohm > 0:
-        raise ValueError(f"r_f_ohm: must be > 0 Ω, got {r_f_ohm!r}")
-    if not (np.isfinite(vcc_v) and vcc_v != 0):
-        raise ValueError(f"vcc_v: must be a finite non-zero voltage, got {vcc_v!r}")
-    beta = np.asarray(voltage_coefficient, dtype=float)
+        raise ParameterError(f"must be > 0 Ω, got {r_fsr_ohm!r}", parameter="r_fsr_ohm")
+    check_positive("r_f_ohm", r_f_ohm, "Ω")
+    check_finite("vcc_v", vcc_v)
+    if np.ndim(vcc_v) or vcc_v == 0:
+        raise ParameterError(f"must be a finite non-zero voltage, got {plain(vcc_v)}", parameter="vcc_v")
+    beta = float_array("voltage_coefficient", voltage_coefficient)
     v_out = -(r_f_ohm / r) * vcc_v  # Eq. (38)
     shape = np.broadcast(v_out, beta).shape
     return ReadoutResult(v_out_v=_out(np.broadcast_to(v_out, shape)),
@@ -119,18 +122,17 @@ def voltage_divider(r_fsr_ohm, r_m_ohm: float, vcc_v: float = 5.0, voltage_coeff
 
     With β < 0 (tunnelling), the feedback shrinks the resistive sensitivity.
     """
-    r = np.asarray(r_fsr_ohm, dtype=float)
+    r = float_array("r_fsr_ohm", r_fsr_ohm)
     if np.any(~(r > 0)):
-        raise ValueError(f"r_fsr_ohm: must be > 0 Ω, got {r_fsr_ohm!r}")
-    if not r_m_ohm > 0:
-        raise ValueError(f"r_m_ohm: must be > 0 Ω, got {r_m_ohm!r}")
-    if not (np.isfinite(vcc_v) and vcc_v > 0):
-        raise ValueError(f"vcc_v: must be finite and > 0 V, got {vcc_v!r}")
-    beta = np.asarray(voltage_coefficient, dtype=float)
+        raise ParameterError(f"must be > 0 Ω, got {r_fsr_ohm!r}", parameter="r_fsr_ohm")
+    check_positive("r_m_ohm", r_m_ohm, "Ω")
+    check_positive("vcc_v", vcc_v, "V")
+    beta = float_array("voltage_coefficient", voltage_coefficient)
     p = r / (r_m_ohm + r)
     loop = 1.0 - beta * (1.0 - p)
     if np.any(loop <= 0):
-        raise ValueError("voltage_coefficient: β·R_M/(R_M + R_FSR) must stay below 1 (else the operating point is unstable)")
+        raise ParameterError("β·R_M/(R_M + R_FSR) must stay below 1 (else the operating point is unstable)",
+                             parameter="voltage_coefficient")
     return ReadoutResult(v_out_v=_out(vcc_v * (1.0 - p) + 0 * beta), v_fsr_v=_out(vcc_v * p + 0 * beta),
                          sensitivity_r=_out(-p / loop), sensitivity_supply=_out(1.0 - p * beta / loop))
 
@@ -159,13 +161,14 @@ def voltage_coefficient(u_v, s_m, phi0_j: float | None = None, rel_step: float =
     from fsrlab.physics.params import PAPER
 
     phi0 = PAPER.phi0_j if phi0_j is None else phi0_j
-    u = np.asarray(u_v, dtype=float)
+    u = float_array("u_v", u_v)
     if np.any(~(u > 0)):
-        raise ValueError(f"u_v: must be > 0 V, got {u_v!r}")
+        raise ParameterError(f"must be > 0 V, got {u_v!r}", parameter="u_v")
+    check_between("rel_step", rel_step, 0.0, 0.5, lower_open=True)
     _, regime = resistance_per_area(u, s_m, phi0, return_regime=True)
     regime = np.asarray(regime)
-    out = np.empty(np.broadcast(u, np.asarray(s_m, dtype=float)).shape)
-    uu, ss = np.broadcast_arrays(u, np.asarray(s_m, dtype=float))
+    out = np.empty(np.broadcast(u, float_array("s_m", s_m)).shape)
+    uu, ss = np.broadcast_arrays(u, float_array("s_m", s_m))
     rr = np.broadcast_to(regime, out.shape)
     for eq in np.unique(rr):
         m = rr == eq

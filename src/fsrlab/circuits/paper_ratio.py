@@ -24,6 +24,8 @@ import numpy as np
 
 from fsrlab.circuits.lm555 import tau_ratio
 from fsrlab.circuits.spice import simulate_spice_many, start_spice_many
+from fsrlab.errors import ParameterError
+from fsrlab.physics.params import check_finite, check_positive, float_array, plain
 
 __all__ = [
     "tau_ratio_eq32_as_printed",
@@ -63,7 +65,7 @@ def tau_ratio_eq32_as_printed(n_ratio):
     the same extra factor N as eq. (37). Its minimum over N > 4 is the paper's 24.37
     (:func:`minimum_eq32_as_printed`; docs/errata.md, O1).
     """
-    n = np.asarray(n_ratio, dtype=float)
+    n = float_array("n_ratio", n_ratio)
     with np.errstate(invalid="ignore", divide="ignore"):
         out = np.log((2 - 2 * n) / (4 - n)) * 2 * n * (n + 1) / (math.log(2) * (n + 2))  # Eq. (32) as printed
     return out[()] if out.ndim == 0 else out
@@ -88,7 +90,7 @@ def tau_ratio_eq37_as_printed(n_ratio):
     ``2·ln((2N − 2)/(N − 4))/(ln 2·(N + 2))``; the printed form tends to 2 as N → ∞, the
     corrected one to 0 (docs/errata.md, O2).
     """
-    n = np.asarray(n_ratio, dtype=float)
+    n = float_array("n_ratio", n_ratio)
     with np.errstate(invalid="ignore", divide="ignore"):
         out = np.log((2 - 2 * n) / (4 - n)) * 2 * n / (math.log(2) * (n + 2))  # Eq. (37) as printed
     return out[()] if out.ndim == 0 else out
@@ -116,7 +118,7 @@ def tau_ratio_times_n(n_ratio, diode: bool = False):
     eq. (37) as printed: both printed ratios are the circuit's times N, as if τL had been divided by
     N (R_FSR replaced by R in the numerators of eqs. 26 and 34).
     """
-    n = np.asarray(n_ratio, dtype=float)
+    n = float_array("n_ratio", n_ratio)
     return n * tau_ratio(n, diode=diode)
 
 
@@ -163,7 +165,7 @@ def minimum_eq32_as_printed(bounds: tuple[float, float] = (4.2, 20.0), xatol: fl
 
     Raises
     ------
-    ValueError
+    ParameterError
         If the bounds are not 4 < low < high.
 
     Notes
@@ -172,9 +174,12 @@ def minimum_eq32_as_printed(bounds: tuple[float, float] = (4.2, 20.0), xatol: fl
     (the printed 24.37 is this truncated; 24.3796/25.3796 = 0.9606). The circuit's ratio, eqs. (23)
     and (26), has no minimum for N > 4: it falls monotonically toward 2 (docs/errata.md, O1).
     """
-    lo, hi = bounds
-    if not 4.0 < lo < hi:
-        raise ValueError(f"bounds must satisfy 4 < low < high (the circuit oscillates for N > 4), got {bounds!r}")
+    b = float_array("bounds", bounds)
+    if b.shape != (2,) or not (4.0 < b[0] < b[1] < np.inf):
+        raise ParameterError(f"must be a pair 4 < low < high < inf (the circuit oscillates for N > 4), got {plain(bounds)}",
+                             parameter="bounds")
+    lo, hi = float(b[0]), float(b[1])
+    check_positive("xatol", xatol)
     from scipy.optimize import minimize_scalar  # here: importing the module (the report's ngspice start) stays light
 
     res = minimize_scalar(lambda x: float(tau_ratio_eq32_as_printed(x)), bounds=(lo, hi), method="bounded",
@@ -197,7 +202,7 @@ def n_where_ratio_equals(value: float) -> float:
 
     Raises
     ------
-    ValueError
+    ParameterError
         If ``value`` is outside that range.
 
     Notes
@@ -207,8 +212,10 @@ def n_where_ratio_equals(value: float) -> float:
     ratio falls below ``value``.
     """
     lo = 4.0 + 1e-9
-    if not 2.0 < value <= float(tau_ratio(lo)):
-        raise ValueError(f"value must be in (2, {float(tau_ratio(lo)):.4g}] (τH/τL for N > 4 + 1e-9), got {value!r}")
+    check_finite("value", value)
+    if np.ndim(value) or not 2.0 < value <= float(tau_ratio(lo)):
+        raise ParameterError(f"must be in (2, {float(tau_ratio(lo)):.4g}] (τH/τL for N > 4 + 1e-9), got {plain(value)}",
+                             parameter="value")
     hi = 5.0
     while tau_ratio(hi) > value:
         hi = 4.0 + 2.0 * (hi - 4.0)
@@ -278,12 +285,12 @@ def tau_ratio_table(n_ratio: Sequence[float]) -> TauRatioTable:
 
     Raises
     ------
-    ValueError
+    ParameterError
         If an N is not > 4 (the circuit would not oscillate, eq. 30).
     """
-    n = np.array(n_ratio, dtype=float)
-    if n.ndim != 1 or not np.all(n > 4):
-        raise ValueError(f"n_ratio must be a sequence of values > 4 (eq. 30), got {n_ratio!r}")
+    n = np.array(float_array("n_ratio", n_ratio))
+    if n.ndim != 1 or not np.all(n > 4) or not np.all(np.isfinite(n)):
+        raise ParameterError(f"must be a sequence of finite values > 4 (eq. 30), got {plain(n_ratio)}", parameter="n_ratio")
     return TauRatioTable(n_ratio=tuple(n_ratio), no_diode=tau_ratio(n), diode=tau_ratio(n, diode=True),
                          eq37_as_printed=tau_ratio_eq37_as_printed(n), eq32_as_printed=tau_ratio_eq32_as_printed(n))
 

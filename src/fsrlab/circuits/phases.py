@@ -21,7 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsrlab.circuits.checks import check_fractions, check_lm555, check_supply
+from fsrlab.circuits.checks import broadcast, check_fractions, check_lm555, check_r_fsr, check_supply
+from fsrlab.physics.params import check_at_least, float_array
 
 __all__ = ["Thevenin", "thevenin", "timing_per_rc"]
 
@@ -110,8 +111,10 @@ def thevenin(r_ohm, r_fsr_ohm, diode: bool = False, diode_drop_v: float = 0.0, v
 
     Raises
     ------
-    ValueError
-        A parameter out of range (the message names it).
+    ParameterError
+        A parameter out of range (its ``parameter`` names it).
+    TypeError
+        A part that is not a number (the message names it).
 
     Notes
     -----
@@ -127,12 +130,11 @@ def thevenin(r_ohm, r_fsr_ohm, diode: bool = False, diode_drop_v: float = 0.0, v
     ``r_fsr_ohm = N`` they come out in units of R (as :func:`timing_per_rc` uses them).
     """
     check_lm555(r_ohm, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, discharge_ohm)
-    r = np.asarray(r_ohm, dtype=float)
-    x = np.asarray(r_fsr_ohm, dtype=float)
-    if np.any(x <= 0):
-        raise ValueError(f"r_fsr_ohm: must be > 0 Ω (inf allowed), got {r_fsr_ohm!r}")
-    rd = np.asarray(discharge_ohm, dtype=float)
-    shape = np.broadcast_shapes(r.shape, x.shape, rd.shape)
+    r = float_array("r_ohm", r_ohm)
+    check_r_fsr(r_fsr_ohm)
+    x = float_array("r_fsr_ohm", r_fsr_ohm)
+    rd = float_array("discharge_ohm", discharge_ohm)
+    shape = broadcast(("r_ohm", r), ("r_fsr_ohm", x), ("discharge_ohm", rd))[0].shape
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         phases = _phases(r, x, diode, diode_drop_v, vcc_v, rd)
     charge, discharge = (Thevenin(*(_out(a, shape) for a in phase)) for phase in phases)
@@ -177,10 +179,9 @@ def timing_per_rc(n_ratio, diode: bool = False, diode_drop_v: float = 0.0, vcc_v
     """
     check_fractions(lower_fraction, upper_fraction)
     check_supply(diode, diode_drop_v, vcc_v)
-    rd = discharge_ratio if isinstance(discharge_ratio, float) else np.asarray(discharge_ratio, dtype=float)
-    if not np.all(np.isfinite(rd) & (rd >= 0)):
-        raise ValueError(f"discharge_ratio: must be finite and >= 0, got {discharge_ratio!r}")
-    n = np.asarray(n_ratio, dtype=float)
+    check_at_least("discharge_ratio", discharge_ratio, 0.0)
+    rd = discharge_ratio if isinstance(discharge_ratio, float) else float_array("discharge_ratio", discharge_ratio)
+    n = float_array("n_ratio", n_ratio)
     v_lo, v_hi = lower_fraction * vcc_v, upper_fraction * vcc_v
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         n = np.where(n > 0, n, np.nan)  # N ≤ 0 is no circuit: NaN, like N ≤ N_min

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from fsrlab.errors import ParameterError
+
 __all__ = ["plot_twin"]
 
 
@@ -35,7 +37,7 @@ def plot_twin(x, left, right, ax=None, xlabel: str | None = None):
 
     Raises
     ------
-    ValueError
+    ParameterError
         ``x`` or a quantity is not 1-D, or their lengths differ.
     """
     import matplotlib.pyplot as plt
@@ -43,7 +45,7 @@ def plot_twin(x, left, right, ax=None, xlabel: str | None = None):
 
     xs = np.atleast_1d(np.asarray(x, dtype=float))
     if xs.ndim != 1:
-        raise ValueError(f"x: needs one value per point (1-D), got shape {xs.shape}")
+        raise ParameterError(f"needs one value per point (1-D), got shape {xs.shape}", parameter="x")
     if ax is None:
         _, ax = plt.subplots(layout="constrained")
     axes = (ax, ax.twinx())
@@ -51,7 +53,7 @@ def plot_twin(x, left, right, ax=None, xlabel: str | None = None):
     for axis, (y, std, label, unit), color in zip(axes, (left, right), ("C0", "C1"), strict=True):
         ys = np.atleast_1d(np.asarray(y, dtype=float))
         if ys.shape != xs.shape:
-            raise ValueError(f"{label}: needs one value per x ({xs.size}), got shape {ys.shape}")
+            raise ParameterError(f"needs one value per x ({xs.size}), got shape {ys.shape}", parameter=label)
         (line,) = axis.plot(xs, ys, color=color, marker="o" if xs.size == 1 else None, label=label)
         handles.append(line)
         if std is not None:

@@ -42,9 +42,11 @@ from pathlib import Path
 
 import numpy as np
 
-from fsrlab.circuits.checks import check_lm555
+from fsrlab.circuits.checks import check_lm555, check_r_fsr
 from fsrlab.circuits.lm555 import astable
 from fsrlab.circuits.phases import timing_per_rc
+from fsrlab.errors import ParameterError
+from fsrlab.physics.params import check_at_least, check_finite, check_int, check_positive, float_array, plain
 
 __all__ = ["SUBCKT_555", "SpiceResult", "netlist", "read_raw", "run_ngspice", "simulate_spice", "simulate_spice_many",
            "start_spice_many", "SpiceBatch", "ngspice_available",
@@ -150,16 +152,23 @@ def netlist(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: flo
 
     Raises
     ------
-    ValueError
-        A part out of range (the message names it).
+    ParameterError
+        A part out of range (its ``parameter`` names it).
+    TypeError
+        A part that is not a number (the message names it).
     """
     check_lm555(r_ohm, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, discharge_ohm)
-    if time_s is None and (np.ndim(r_fsr_ohm) or not r_fsr_ohm > 0):
-        raise ValueError(f"r_fsr_ohm: must be a single value > 0 Ω (inf allowed) without time_s, got {r_fsr_ohm!r}")
-    if not (np.ndim(c_fsr_farad) == 0 and math.isfinite(c_fsr_farad) and c_fsr_farad >= 0):
-        raise ValueError(f"c_fsr_farad: must be a single finite value >= 0 F, got {c_fsr_farad!r}")
+    check_r_fsr(r_fsr_ohm)
+    if time_s is None and np.ndim(r_fsr_ohm):
+        raise ParameterError(f"must be a single value > 0 Ω (inf allowed) without time_s, got {plain(r_fsr_ohm)}",
+                             parameter="r_fsr_ohm")
+    check_at_least("c_fsr_farad", c_fsr_farad, 0.0, "F")
+    if np.ndim(c_fsr_farad):
+        raise ParameterError(f"must be a single finite value >= 0 F, got {plain(c_fsr_farad)}", parameter="c_fsr_farad")
+    check_positive("t_stop_s", t_stop_s, "s")
+    check_positive("t_max_step_s", t_max_step_s, "s")
     if not c_fsr_farad + c_off_farad > 0:
-        raise ValueError("c_fsr_farad + c_off_farad: the timing capacitance must be > 0 F")
+        raise ParameterError("the timing capacitance c_fsr_farad + c_off_farad must be > 0 F", parameter="c_fsr_farad")
     v_lo, v_hi = lower_fraction * vcc_v, upper_fraction * vcc_v
     lines = [
         "* fsrlab: LM555 astable with the FSR as timing element (Matute et al. 2018, Figs. 9b/13/16)",
@@ -177,12 +186,13 @@ def netlist(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: flo
     else:
         lines.append(f"RB dis thr {r_ohm:.15g}")
     if time_s is not None:
-        t = np.asarray(time_s, dtype=float)
-        rs = np.broadcast_to(np.asarray(r_fsr_ohm, dtype=float), t.shape)
+        t = float_array("time_s", time_s)
+        rs = np.broadcast_to(float_array("r_fsr_ohm", r_fsr_ohm), t.shape)
         if t.ndim != 1 or t.size < 2 or t[0] != 0 or np.any(np.diff(t) <= 0) or not np.all(np.isfinite(rs)):
-            raise ValueError("time_s: need strictly increasing sample times from 0 and finite r_fsr_ohm values")
+            raise ParameterError("need strictly increasing sample times from 0 and finite r_fsr_ohm values",
+                                 parameter="time_s")
         if np.any(rs <= 0):
-            raise ValueError("r_fsr_ohm: every sample must be > 0 Ω")
+            raise ParameterError("every sample must be > 0 Ω", parameter="r_fsr_ohm")
         # Zero-order hold as in fsrlab.circuits.transient: each value holds until 1e-9 of a step before the next.
         eps = 1e-9 * float(np.min(np.diff(t)))
         pts = []
@@ -233,6 +243,9 @@ def read_raw(data: bytes) -> np.ndarray:
     RuntimeError
         When the header is not one of a real-valued binary plot or the data are cut short.
     """
+    if not isinstance(data, (bytes, bytearray, memoryview)):
+        raise TypeError(f"data: must be the raw file's bytes, got {type(data).__name__}")
+    data = bytes(data)
     marker = data.find(b"Binary:\n")
     if marker < 0:
         raise RuntimeError("ngspice raw file: no 'Binary:' section (not a binary raw file)")
@@ -336,6 +349,16 @@ def run_ngspice(text: str, output_file: str = "fsrlab_out.raw", timeout_s: float
     return _NgspiceRun(text, output_file).result(timeout_s)
 
 
+def _waveform(t_s, name: str, v):
+    """A sampled waveform's times and values: two 1-D arrays of one length, or an error naming the culprit."""
+    t, v = float_array("t_s", t_s), float_array(name, v)
+    if t.ndim != 1:
+        raise ParameterError(f"must be one-dimensional, got shape {t.shape}", parameter="t_s")
+    if v.shape != t.shape:
+        raise ParameterError(f"must have the shape of t_s {t.shape}, got {v.shape}", parameter=name)
+    return t, v
+
+
 def level_crossings(t_s, v_v, level_v: float, rising: bool) -> np.ndarray:
     """Times a sampled waveform crosses a level, by linear interpolation between samples.
 
@@ -355,7 +378,10 @@ def level_crossings(t_s, v_v, level_v: float, rising: bool) -> np.ndarray:
     ndarray
         Crossing times. [s]
     """
-    t, v = np.asarray(t_s, dtype=float), np.asarray(v_v, dtype=float)
+    t, v = _waveform(t_s, "v_v", v_v)
+    check_finite("level_v", level_v)
+    if np.ndim(level_v):
+        raise ParameterError(f"must be a single level, got {plain(level_v)}", parameter="level_v")
     s = v - level_v
     idx = np.nonzero((s[:-1] < 0) & (s[1:] >= 0))[0] if rising else np.nonzero((s[:-1] > 0) & (s[1:] <= 0))[0]
     return t[idx] - s[idx] * (t[idx + 1] - t[idx]) / (s[idx + 1] - s[idx])
@@ -379,8 +405,9 @@ def edges_from_waveform(t_s, v_out_v, vcc_v: float = 5.0, skip_periods: int = 2)
         Edge arrays in [s], mean frequency [Hz] and duty cycle [1] over the complete periods
         (NaN when fewer than one complete period remains).
     """
-    t = np.asarray(t_s, dtype=float)
-    v = np.asarray(v_out_v, dtype=float)
+    t, v = _waveform(t_s, "v_out_v", v_out_v)
+    check_positive("vcc_v", vcc_v, "V")
+    skip_periods = check_int("skip_periods", skip_periods, 0)
     rising = level_crossings(t, v, vcc_v / 2, True)[skip_periods:]
     falling = level_crossings(t, v, vcc_v / 2, False)
     if rising.size < 2:
@@ -411,8 +438,10 @@ def _plan(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: float
           skip_periods: int = 2, steps_per_phase: int = 50, timeout_s: float = 300.0,
           discharge_ohm: float = 1e-3) -> _Plan:
     """The netlist of :func:`simulate_spice`'s run (its parameters checked) and what measures it."""
-    if int(periods) < 1 or int(skip_periods) < 0 or int(steps_per_phase) < 10:
-        raise ValueError("periods >= 1, skip_periods >= 0 and steps_per_phase >= 10 are required")
+    check_int("periods", periods, 1)
+    check_int("skip_periods", skip_periods, 0)
+    check_int("steps_per_phase", steps_per_phase, 10)
+    check_positive("timeout_s", timeout_s, "s")
     est = astable(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction,
                   upper_fraction, check=False)
     period = float(est.period_s)

@@ -30,6 +30,8 @@ import numpy as np
 
 from fsrlab.circuits.checks import check_lm555
 from fsrlab.circuits.phases import thevenin
+from fsrlab.errors import ParameterError
+from fsrlab.physics.params import check_finite, check_int, check_positive, float_array
 
 __all__ = ["TransientResult", "simulate"]
 
@@ -106,11 +108,11 @@ class TransientResult:
 
 
 def _as_series(name, value, n):
-    a = np.asarray(value, dtype=float)
+    a = float_array(name, value)
     if a.ndim == 0:
         return np.full(n, float(a))
     if a.shape != (n,):
-        raise ValueError(f"{name}: must be a scalar or have the shape of time_s ({n},), got {a.shape}")
+        raise ParameterError(f"must be a scalar or have the shape of time_s ({n},), got {a.shape}", parameter=name)
     return a
 
 
@@ -170,7 +172,7 @@ def simulate(r_ohm: float, r_fsr_ohm, c_fsr_farad, c_off_farad: float = 0.0, dio
 
     Raises
     ------
-    ValueError
+    ParameterError
         Parameters out of range, or neither/both of ``periods`` and a stop time for constant parts.
 
     Notes
@@ -192,12 +194,11 @@ def simulate(r_ohm: float, r_fsr_ohm, c_fsr_farad, c_off_farad: float = 0.0, dio
     may fall on either side of it.
     """
     check_lm555(r_ohm, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, discharge_ohm)
-    if capacitance_step not in ("charge", "voltage"):
-        raise ValueError(f"capacitance_step: must be 'charge' or 'voltage', got {capacitance_step!r}")
-    if method not in ("auto", "events"):
-        raise ValueError(f"method: must be 'auto' or 'events', got {method!r}")
-    if int(points_per_segment) < 2:
-        raise ValueError(f"points_per_segment: must be >= 2, got {points_per_segment!r}")
+    if not isinstance(capacitance_step, str) or capacitance_step not in ("charge", "voltage"):
+        raise ParameterError(f"must be 'charge' or 'voltage', got {capacitance_step!r}", parameter="capacitance_step")
+    if not isinstance(method, str) or method not in ("auto", "events"):
+        raise ParameterError(f"must be 'auto' or 'events', got {method!r}", parameter="method")
+    points_per_segment = check_int("points_per_segment", points_per_segment, 2)
     times, rf, cap = _sampled_parts(r_fsr_ohm, c_fsr_farad, c_off_farad, periods, t_stop_s, time_s)
     loop = _EventLoop(r_ohm, rf, cap, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction,
                       discharge_ohm, capacitance_step, int(points_per_segment) if waveform else 0)
@@ -207,9 +208,8 @@ def simulate(r_ohm: float, r_fsr_ohm, c_fsr_farad, c_off_farad: float = 0.0, dio
         v, high = loop.v_lo, True
         loop.rising.append(t)
     else:
+        check_finite("v_initial_v", v_initial_v)
         v = float(v_initial_v)
-        if not math.isfinite(v):
-            raise ValueError(f"v_initial_v: must be finite, got {v_initial_v!r}")
         high = v < loop.v_hi
     if method == "auto" and time_s is None and not waveform:
         fast = _steady_edges(loop, times, t, v, high, max_rising)
@@ -233,35 +233,39 @@ def _sampled_parts(r_fsr_ohm, c_fsr_farad, c_off_farad, periods, t_stop_s, time_
     """The sample times and the FSR's resistance and timing capacitance at each, checked. [s, Ω, F]"""
     if time_s is None:
         if np.ndim(r_fsr_ohm) or np.ndim(c_fsr_farad):
-            raise ValueError("time_s: part values given as arrays need their sample times time_s")
+            raise ParameterError("an array of values needs its sample times time_s",
+                                 parameter="r_fsr_ohm" if np.ndim(r_fsr_ohm) else "c_fsr_farad")
         if (periods is None) == (t_stop_s is None):
-            raise ValueError("periods, t_stop_s: give exactly one of them for constant parts")
-        if periods is not None and int(periods) < 1:
-            raise ValueError(f"periods: must be >= 1, got {periods!r}")
+            raise ParameterError("give exactly one of periods and t_stop_s for constant parts",
+                                 parameter="periods" if periods is None else "t_stop_s")
+        if periods is not None:
+            check_int("periods", periods, 1)
+        else:
+            check_positive("t_stop_s", t_stop_s, "s")
         times = np.array([0.0, math.inf if t_stop_s is None else float(t_stop_s)])
-        if not times[1] > 0:
-            raise ValueError(f"t_stop_s: must be > 0 s, got {t_stop_s!r}")
-        rf = np.full(2, float(r_fsr_ohm))
-        cf = np.full(2, float(c_fsr_farad))
+        rf = np.full(2, float(float_array("r_fsr_ohm", r_fsr_ohm)))
+        cf = np.full(2, float(float_array("c_fsr_farad", c_fsr_farad)))
     else:
-        times = np.asarray(time_s, dtype=float)
+        times = float_array("time_s", time_s)
         if times.ndim != 1 or times.size < 2 or not np.all(np.isfinite(times)) or np.any(np.diff(times) <= 0):
-            raise ValueError("time_s: must be a 1-D array of at least 2 finite, strictly increasing times")
+            raise ParameterError("must be a 1-D array of at least 2 finite, strictly increasing times",
+                                 parameter="time_s")
         rf = _as_series("r_fsr_ohm", r_fsr_ohm, times.size)
         cf = _as_series("c_fsr_farad", c_fsr_farad, times.size)
         if t_stop_s is not None:
-            if not t_stop_s > times[0]:
-                raise ValueError("t_stop_s: must be after time_s[0]")
+            check_finite("t_stop_s", t_stop_s)
+            if np.ndim(t_stop_s) or not t_stop_s > times[0]:
+                raise ParameterError("must be after time_s[0]", parameter="t_stop_s")
             keep = times < t_stop_s
             times = np.append(times[keep], float(t_stop_s))
             rf, cf = np.append(rf[keep], rf[keep][-1]), np.append(cf[keep], cf[keep][-1])
     if np.any(np.isnan(rf)) or np.any(rf <= 0):
-        raise ValueError("r_fsr_ohm: must be > 0 Ω (inf allowed)")
+        raise ParameterError("must be > 0 Ω (inf allowed)", parameter="r_fsr_ohm")
     if np.any(~np.isfinite(cf)) or np.any(cf < 0):
-        raise ValueError("c_fsr_farad: must be finite and >= 0 F")
+        raise ParameterError("must be finite and >= 0 F", parameter="c_fsr_farad")
     cap = cf + c_off_farad
     if np.any(cap <= 0):
-        raise ValueError("c_fsr_farad + c_off_farad: the timing capacitance must be > 0 F")
+        raise ParameterError("the timing capacitance c_fsr_farad + c_off_farad must be > 0 F", parameter="c_fsr_farad")
     return times, rf, cap
 
 
