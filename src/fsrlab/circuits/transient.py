@@ -323,10 +323,26 @@ class _EventLoop:
         self.t_end_s, self.v_end_v, self.high_end = t, v, high
         return t, v, high
 
+    def _phase(self, v, high, segment):
+        """The RC segment the capacitor follows from ``v``: ``(v_inf, tau, target, edge, dt)``, where ``dt``
+        is the time to reach ``target`` (``inf`` when it never does) and ``edge`` whether the output
+        switches there."""
+        charge_vinf, charge_tau, dis_vinf, dis_tau, leak_tau = segment
+        if not high:
+            vinf, tau, target, edge = dis_vinf, dis_tau, self.v_lo, True
+        elif self.diode and v > self.vs:
+            # D1 reverse biased: C decays through R_FSR until it reaches Vcc − V_D.
+            vinf, tau, target, edge = 0.0, leak_tau, self.vs, False
+        else:
+            vinf, tau, target, edge = charge_vinf, charge_tau, self.v_hi, True
+        if math.isinf(tau):
+            return vinf, tau, target, edge, math.inf
+        ratio = (target - vinf) / (v - vinf) if v != vinf else -1.0
+        return vinf, tau, target, edge, (tau * math.log(1.0 / ratio) if 0.0 < ratio <= 1.0 else math.inf)
+
     def _interval(self, t, v, high, t_end, segment, max_rising):
         """Edges within one sample interval up to ``t_end``; returns ``(t, v, high, done)``."""
-        charge_vinf, charge_tau, dis_vinf, dis_tau, leak_tau = segment
-        v_lo, v_hi, vs, diode = self.v_lo, self.v_hi, self.vs, self.diode
+        v_lo, v_hi = self.v_lo, self.v_hi
         rising, falling, waveform = self.rising, self.falling, self.npts > 0
         while True:
             # A step of C (or the start) may already sit beyond a threshold: switch now.
@@ -338,19 +354,7 @@ class _EventLoop:
                 high = True
                 if max_rising is not None and len(rising) >= max_rising:
                     return t, v, high, True
-            if high:
-                if diode and v > vs:
-                    # D1 reverse biased: C decays through R_FSR until it reaches Vcc − V_D.
-                    vinf, tau, target, edge = 0.0, leak_tau, vs, False
-                else:
-                    vinf, tau, target, edge = charge_vinf, charge_tau, v_hi, True
-            else:
-                vinf, tau, target, edge = dis_vinf, dis_tau, v_lo, True
-            if math.isinf(tau):
-                dt = math.inf
-            else:
-                ratio = (target - vinf) / (v - vinf) if v != vinf else -1.0
-                dt = tau * math.log(1.0 / ratio) if 0.0 < ratio <= 1.0 else math.inf
+            vinf, tau, target, edge, dt = self._phase(v, high, segment)
             if t + dt < t_end:
                 if waveform:
                     self.record(t, dt, v, vinf, tau, high)
