@@ -27,6 +27,7 @@ from fsrlab.errors import FsrlabError as FsrlabError
 from fsrlab.errors import ParameterError as ParameterError
 from fsrlab.errors import ProvenanceError as ProvenanceError
 
+#: The installed fsrlab's version (PEP 440), as `fsrlab --version` prints it.
 __version__ = "0.1.0"
 
 # Public name -> (module, attribute). The modules are imported on first use.
