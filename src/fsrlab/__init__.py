@@ -67,7 +67,7 @@ _LAZY = {
     "calibrate": ("fsrlab.calibration.runs", "calibrate_runs"),
     "apply": ("fsrlab.calibration.apply", "apply_calibration"),
     "check_readout": ("fsrlab.calibration.apply", "check_readout"),
-    "agreement": ("fsrlab.calibration.agreement", "agreement"),
+    "agreement": ("fsrlab.metrics.agreement", "agreement"),
     # reports
     "measure_run": ("fsrlab.bench.measurement", "measure_run"),
     "report": ("fsrlab.reports.run_report", "write_run_report"),

@@ -242,7 +242,7 @@ class RunReport:
         Eq. (13) of the calibrated (compensated) estimate.
     agreement : Agreement or None
         A given calibration's estimate against the run's own reference
-        (:func:`fsrlab.calibration.agreement.agreement`); None for a run calibrated on itself or without
+        (:func:`fsrlab.metrics.agreement.agreement`); None for a run calibrated on itself or without
         its reference.
     curves : dict
         ``reference``, ``estimate``, ``direction`` arrays for plots (estimate only with a calibration).
@@ -598,6 +598,6 @@ def _calibrated(rep: RunReport, run, calibration, calibrate: bool) -> None:
     rep.curves["estimate_uncertainty"] = est[unc] if unc in est else None
     rep.curves["time"] = est["time_s"] if "time_s" in est else None
     if calibration is not None and cal.y_name in est:  # a validation run: how the calibration holds on it
-        from fsrlab.calibration.agreement import agreement
+        from fsrlab.metrics.agreement import agreement
 
         rep.agreement = agreement(est[cal.y_name], est[col], est[unc] if unc in est else None)

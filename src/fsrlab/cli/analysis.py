@@ -372,7 +372,7 @@ def apply_cmd(
     estimate_col = f"{cal.y_name}_estimate"
     agreed = None
     if cal.y_name in est:  # a validation run: the estimate against the reference recorded with it
-        from fsrlab.calibration.agreement import agreement
+        from fsrlab.metrics.agreement import agreement
 
         uncertainty_col = f"{cal.y_name}_uncertainty"
         agreed = agreement(est[cal.y_name], est[estimate_col], est[uncertainty_col] if uncertainty_col in est else None)

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from clirun import run_cli
-from fsrlab.calibration.agreement import COVERAGE_AIM, LOADED, agreement
+from fsrlab.metrics.agreement import COVERAGE_AIM, LOADED, agreement
 from fsrlab.io.runformat import load_run
 from fsrlab.io.runwriter import write_run
 
