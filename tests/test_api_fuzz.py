@@ -76,6 +76,7 @@ EXCLUDED_MODULES = {
     "fsrlab.circuits.plotting": "draws figures (matplotlib), no computation",
 }
 EXCLUDED = {
+    "fsrlab.circuits.circuit.LM555Circuit.with_control": "its parts are **parts (LM555Circuit's own, fuzzed there)",
     "fsrlab.calibration.result.Calibration": "built by calibrate() from a fitted model (covered through calibrate)",
     "fsrlab.calibration.selection.Selection": "calibrate()'s record of its choices, built by it",
     "fsrlab.calibration.selection.calibrate_recordings": "calibrate()'s engine on prepared recordings",
@@ -170,7 +171,39 @@ def _callables() -> dict[str, Callable]:
     for module_name in _modules():
         for qualname, obj in _public(importlib.import_module(module_name)):
             found.setdefault(qualname, obj)
+    for qualname in METHODS:
+        module, cls, method = qualname.rsplit(".", 2)
+        found[qualname] = getattr(getattr(importlib.import_module(module), cls), method)
     return {k: v for k, v in found.items() if not _excluded(k)}
+
+
+def _lm555():
+    return fsrlab.PAPER_CIRCUIT
+
+
+METHODS: dict[str, Callable[[], object]] = {
+    "fsrlab.physics.sensor.VirtualFSR.respond": lambda: fsrlab.VirtualFSR(),
+    "fsrlab.physics.sensor.VirtualFSR.force_to_stress": lambda: fsrlab.VirtualFSR(),
+    "fsrlab.physics.paper_sensor.PaperFSR.respond": lambda: fsrlab.paper_sensor(1),
+    "fsrlab.physics.paper_sensor.PaperFSR.respond_many": lambda: fsrlab.paper_sensor(1),
+    "fsrlab.physics.paper_sensor.PaperFSR.film_resistance": lambda: fsrlab.paper_sensor(1),
+    "fsrlab.physics.paper_sensor.PaperFSR.force_to_stress": lambda: fsrlab.paper_sensor(1),
+    "fsrlab.physics.paper_sensor.PaperFSR.placement": lambda: fsrlab.paper_sensor(1),
+    "fsrlab.circuits.circuit.LM555Circuit.astable": _lm555,
+    "fsrlab.circuits.circuit.LM555Circuit.sensitivity": _lm555,
+    "fsrlab.circuits.circuit.LM555Circuit.decode": _lm555,
+    "fsrlab.circuits.circuit.LM555Circuit.on_range": _lm555,
+    "fsrlab.circuits.circuit.LM555Circuit.with_control": _lm555,
+    "fsrlab.circuits.circuit.LM555Circuit.from_dict": _lm555,
+    "fsrlab.circuits.circuit.OpAmpReadout.output_v": lambda: fsrlab.PAPER_OPAMP,
+    "fsrlab.circuits.circuit.OpAmpReadout.conductance_s": lambda: fsrlab.PAPER_OPAMP,
+    "fsrlab.circuits.circuit.OpAmpReadout.from_dict": lambda: fsrlab.PAPER_OPAMP,
+    "fsrlab.circuits.mux.Multiplexer.timing_circuit": lambda: importlib.import_module("fsrlab.circuits.mux").CD74HC4051,
+    "fsrlab.calibration.result.Calibration.estimate": lambda: _cal(),
+    "fsrlab.calibration.result.Calibration.readout": lambda: _cal(),
+    "fsrlab.calibration.result.Calibration.estimator": lambda: _cal(),
+}
+"""Methods of the classes a user holds, each with the instance it is called on (built in the test's directory)."""
 
 
 # ------------------------------------------------------------------------------------------------
@@ -375,7 +408,7 @@ OVERRIDES: dict[str, dict[str, Callable[[], object]]] = {
     "fsrlab.acquisition.loadcell.tare_from_readings": {"counts": lambda: 100.0 + np.arange(10.0)},
     "fsrlab.metrics.hysteresis.hysteresis_error_curves": {"q_load": lambda: (lambda s: 1.0 + s / 1e5),
                                                           "q_unload": lambda: (lambda s: 1.1 + s / 1e5)},
-    "fsrlab.calibration.agreement.agreement": {"estimate": lambda: np.array(STRESS) * 1.01},
+    "fsrlab.metrics.agreement.agreement": {"estimate": lambda: np.array(STRESS) * 1.01},
     "fsrlab.calibration.delay.delayed": {"t": lambda: np.arange(7.0), "delay_s": lambda: 0.1},
     "fsrlab.calibration.monotone.readout_variable": {"name": lambda: "readout", "sign": lambda: 1},
     "fsrlab.calibration.curves.curve_template": {"family": lambda: "polynomial", "size": lambda: 3,
@@ -394,6 +427,17 @@ OVERRIDES: dict[str, dict[str, Callable[[], object]]] = {
                                                "what": lambda: "run sidecar"},
     "fsrlab.io.runcells.parse_cells": {"path": lambda: Path("bench.csv"), "body": lambda: ["0,1000"],
                                        "header": lambda: ["time_s", "frequency_hz"]},
+    "fsrlab.physics.paper_sensor.PaperFSR.respond_many": {"requests": lambda: [{"stress_pa": STRESS}]},
+    "fsrlab.physics.paper_sensor.PaperFSR.film_resistance": {"u_v": lambda: 1.0, "s_m": lambda: 4e-9,
+                                                             "area_m2": lambda: 1e-6},
+    "fsrlab.physics.sensor.VirtualFSR.force_to_stress": {"force_n": lambda: 10.0},
+    "fsrlab.physics.paper_sensor.PaperFSR.force_to_stress": {"force_n": lambda: 10.0},
+    "fsrlab.circuits.circuit.LM555Circuit.on_range": {"range_": lambda: 0},
+    "fsrlab.circuits.circuit.LM555Circuit.from_dict": {"d": lambda: fsrlab.PAPER_CIRCUIT.to_dict()},
+    "fsrlab.circuits.circuit.LM555Circuit.decode": {"duty_cycle": lambda: 0.55},
+    "fsrlab.circuits.circuit.OpAmpReadout.from_dict": {"d": lambda: fsrlab.PAPER_OPAMP.to_dict()},
+    "fsrlab.circuits.circuit.OpAmpReadout.conductance_s": {"v_out_v": lambda: 1.0},
+    "fsrlab.circuits.mux.Multiplexer.timing_circuit": {"circuit": lambda: fsrlab.PAPER_CIRCUIT},
     "fsrlab.acquisition.protocol.parse_channels": {"text": lambda: "0,1"},
     "fsrlab.acquisition.protocol.encode_command": {"name": lambda: "WINDOW", "value": lambda: 100},
     "fsrlab.acquisition.protocol.parse_command": {"line": lambda: b"WINDOW 100\n"},
@@ -619,6 +663,9 @@ ALIASES = {
     ("fsrlab.physics.params.check_int", "value"): "r_ohm",
     ("fsrlab.physics.params.float_array", "value"): "r_ohm",
     ("fsrlab.circuits.checks.check_fraction", "value"): "upper_fraction",
+    # A circuit's parts as a mapping: its errors name the sidecar's and the calibration file's key, circuit.
+    ("fsrlab.circuits.circuit.LM555Circuit.from_dict", "d"): "circuit",
+    ("fsrlab.circuits.circuit.OpAmpReadout.from_dict", "d"): "circuit",
 }
 """(callable, parameter) -> the name its errors carry instead: the field name the caller passes as ``name``."""
 """(callable, parameter) cases known to fail, each with the module that owns the fix."""
@@ -639,6 +686,8 @@ def workdir(tmp_path, monkeypatch):
 def test_a_wrong_argument_is_named(workdir, qualname, parameter):
     fn = CALLABLES[qualname]
     params = _signature(fn)
+    if qualname in METHODS:
+        fn = getattr(METHODS[qualname](), qualname.rpartition(".")[2])
     target = next(p for p in params if p.name == parameter)
     try:
         base = {p.name: _valid(qualname, p) for p in params

@@ -80,6 +80,9 @@ class NoOscillationError(FsrlabError, ValueError):
         One line: which condition failed and by how much.
     condition, shortfall
         See Attributes.
+    parameter : str, optional
+        The part to change (``r_fsr_ohm``, ``diode_drop_v``, ``discharge_ohm``); the message then reads
+        ``"<parameter>: no oscillation: ..."``.
 
     Attributes
     ----------
@@ -91,8 +94,8 @@ class NoOscillationError(FsrlabError, ValueError):
         Relative amount by which the condition is missed (e.g. ``1 − N/N_min``). [1]
     """
 
-    def __init__(self, message: str, condition: str, shortfall: float):
-        super().__init__(message)
+    def __init__(self, message: str, condition: str, shortfall: float, parameter: str | None = None):
+        super().__init__(message, parameter)
         self.condition = condition
         self.shortfall = shortfall
 
@@ -120,7 +123,7 @@ class NoOscillationError(FsrlabError, ValueError):
         return cls(f"no oscillation: the diode drop {diode_drop_v:.4g} V leaves Vcc − V_D = "
                    f"{vcc_v - diode_drop_v:.4g} V, not above the upper threshold {upper_fraction * vcc_v:.4g} V; "
                    f"the drop must stay below {(1 - upper_fraction) * vcc_v:.4g} V{where}", "diode_drop",
-                   diode_drop_v / ((1 - upper_fraction) * vcc_v) - 1.0)
+                   diode_drop_v / ((1 - upper_fraction) * vcc_v) - 1.0, "diode_drop_v")
 
 
 @dataclass(frozen=True)
@@ -463,14 +466,14 @@ def _raise_no_oscillation(n, n_min, ok_charge, ok_discharge, diode_drop_v, vcc_v
         raise NoOscillationError(
             f"no oscillation: the charge target stays below the upper threshold {upper_fraction * vcc_v:.4g} V; "
             f"N = R_FSR/R = {worst:.4g} must exceed {n_min:.4g} (short by {100 * short:.3g} %; "
-            f"make R < R_FSR/{n_min:.4g}){where}", "charge", short)
+            f"make R < R_FSR/{n_min:.4g}){where}", "charge", short, "r_fsr_ohm")
     if diode:
         raise NoOscillationError(
             f"no oscillation: with the diode C can discharge only through R_FSR, which is infinite{where}",
-            "discharge", math.inf)
+            "discharge", math.inf, "r_fsr_ohm")
     raise NoOscillationError(
         f"no oscillation: the discharge transistor's resistance holds the capacitor above the lower threshold "
-        f"{lower_fraction * vcc_v:.4g} V{where}", "discharge", math.nan)
+        f"{lower_fraction * vcc_v:.4g} V{where}", "discharge", math.nan, "discharge_ohm")
 
 
 # --------------------------------------------------------------------------------------------------

@@ -63,7 +63,21 @@ class Multiplexer:
             raise ParameterError(f"must be an integer 1..8, got {self.channels!r}", parameter="channels")
 
     def timing_circuit(self, circuit):
-        """The 555 circuit whose charging resistance includes the switch: ``R + R_on``."""
+        """The 555 circuit whose charging resistance includes the switch: ``R + R_on``.
+
+        Parameters
+        ----------
+        circuit : LM555Circuit
+            The circuit the switch feeds.
+
+        Returns
+        -------
+        LM555Circuit
+        """
+        from fsrlab.circuits.circuit import LM555Circuit
+
+        if not isinstance(circuit, LM555Circuit):
+            raise TypeError(f"circuit: must be an LM555Circuit, got {type(circuit).__name__}")
         return circuit.replace(r_ohm=circuit.r_ohm + self.r_on_ohm)
 
     def to_dict(self) -> dict:

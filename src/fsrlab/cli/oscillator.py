@@ -52,7 +52,7 @@ def _model_errors(diode: bool = False) -> Iterator[None]:
             yield
         except NoOscillationError as exc:
             blame = "--rfsr" if exc.condition == "discharge" and diode else _NO_OSCILLATION.get(exc.condition)
-            fail(str(exc), blame)
+            fail(exc.reason, blame)
 
 
 _LABELS = {"frequency_hz": "f", "duty_cycle": "duty cycle", "tau_high_s": "τH", "tau_low_s": "τL", "n_ratio": "N",

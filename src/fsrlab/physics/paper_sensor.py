@@ -23,6 +23,7 @@ Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, Fig. 3, §6.
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -263,6 +264,17 @@ def conductive_area(x_pa, area_m2: float, fraction_0: float, growth_pa: float, e
     return float(a) if np.ndim(a) == 0 else a
 
 
+def _factor(name: str, value, shape: tuple, positive: bool = False) -> np.ndarray:
+    """A placement factor of :meth:`PaperFSR.respond`: finite, ≥ 0 (> 0 when ``positive``), one value or one
+    per stress sample."""
+    x = float_array(name, value)
+    check_at_least(name, x, 0.0, strict=positive)
+    if x.ndim and x.shape != shape:
+        raise ParameterError(f"must be one value or one per stress sample {shape}, got shape {x.shape}",
+                             parameter=name)
+    return x
+
+
 @dataclass
 class PaperResponse(SensorResponse):
     """:class:`~fsrlab.physics.sensor.SensorResponse` plus the extension's internal state.
@@ -407,8 +419,10 @@ class PaperFSR:
             :meth:`respond` checks the separation once and calls this in its root finder's loop.
         """
         n = self.layers
-        return n * np.asarray(resistance_per_area(np.asarray(u_v, dtype=float) / n, s_m, self.phi0_j,
-                                                  validate=validate)) / area_m2
+        u = float_array("u_v", u_v)
+        if validate:
+            check_positive("area_m2", area_m2, "m²")
+        return n * np.asarray(resistance_per_area(u / n, s_m, self.phi0_j, validate=validate)) / area_m2
 
     def respond(self, stress_pa, voltage_v: float = 2.5, time_s=None, stress_factor=1.0,
                 contact_factor=1.0, area_factor=1.0) -> PaperResponse:
@@ -453,6 +467,11 @@ class PaperFSR:
             (:func:`series_contact`) goes element by element, so solving the requests together only
             shares its bisection steps (the readouts' two voltages, a placement's perturbations).
         """
+        if isinstance(requests, (str, bytes)) or not isinstance(requests, Iterable):
+            raise TypeError(f"requests: must be an iterable of dicts (respond's arguments), got {type(requests).__name__}")
+        requests = list(requests)
+        if not all(isinstance(req, Mapping) for req in requests):
+            raise TypeError("requests: every request must be a dict of respond's arguments")
         states = [self._state(**req) for req in requests]
         if not states:
             return []
@@ -472,7 +491,7 @@ class PaperFSR:
         check_positive("voltage_v", voltage_v, "V")
         sigma = float_array("stress_pa", stress_pa).ravel()
         check_at_least("stress_pa", sigma, 0.0, "Pa")
-        eff = sigma * float_array("stress_factor", stress_factor)
+        eff = sigma * _factor("stress_factor", stress_factor, sigma.shape)
         if time_s is not None:
             eff = eff * creep_factor(hold_time(time_s, sigma), self.creep_beta, self.creep_tau_s)
         if eff.size and eff.max() >= self.modulus_pa:
@@ -480,9 +499,11 @@ class PaperFSR:
         hist = separation_history(eff, s0_m=self.s0_m, modulus_pa=self.modulus_pa, k=self.k)  # Eqs. (1), (9)
         s = hist.separation_m
         area = conductive_area(memory_stress(eff, self.area_k), self.area_m2, self.area_fraction_0,
-                               self.area_growth_pa, self.area_exponent) * np.asarray(area_factor, dtype=float)
+                               self.area_growth_pa, self.area_exponent) * _factor("area_factor", area_factor,
+                                                                                  eff.shape, positive=True)
         area = np.broadcast_to(area, eff.shape)
-        rc = contact_resistance(eff, self.contact_ohm, self.contact_stress_pa) * np.asarray(contact_factor, dtype=float)
+        rc = contact_resistance(eff, self.contact_ohm, self.contact_stress_pa) * _factor("contact_factor",
+                                                                                        contact_factor, eff.shape)
         rc = np.broadcast_to(rc, eff.shape)
         return {"sigma": sigma, "eff": eff, "hist": hist, "s": s, "area": area, "rc": rc,
                 "v": np.full(eff.shape, float(voltage_v))}
@@ -497,7 +518,7 @@ class PaperFSR:
 
     def force_to_stress(self, force_n):
         """Stress σ = F / A_FSR for force ``force_n`` [N]; returns [Pa]."""
-        return np.asarray(force_n, dtype=float) / self.area_m2
+        return float_array("force_n", force_n) / self.area_m2
 
     @property
     def load_area_m2(self) -> float:
@@ -527,6 +548,9 @@ class PaperFSR:
         paths it closes. The area enters R_FSR and C_FSR alike, so it cancels in the 555's R·C and
         stays whole in the op-amp's conductance (as the area's hysteresis does, Table 3).
         """
+        if not isinstance(rng, np.random.Generator):
+            raise TypeError(f"rng: must be a numpy.random.Generator (numpy.random.default_rng(seed)), "
+                            f"got {type(rng).__name__}")
         z = rng.standard_normal(3)
         return {"stress_factor": 1.0 + self.placement_stress_sd * float(z[0]),
                 "contact_factor": float(np.exp(self.placement_contact_sd * z[1])),

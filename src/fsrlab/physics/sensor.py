@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsrlab.physics.electrical import capacitance, resistance_per_area
-from fsrlab.physics.params import PAPER, check_at_least, check_between, check_positive
+from fsrlab.physics.params import PAPER, check_at_least, check_between, check_positive, float_array
 from fsrlab.physics.separation import separation_history
 
 __all__ = ["VirtualFSR", "SensorResponse", "A201_AREA_M2"]
@@ -146,4 +146,4 @@ class VirtualFSR:
 
     def force_to_stress(self, force_n):
         """Stress σ = F / A_FSR for force ``force_n`` [N]; returns [Pa]."""
-        return np.asarray(force_n, dtype=float) / self.area_m2
+        return float_array("force_n", force_n) / self.area_m2
