@@ -60,6 +60,11 @@ def parse_eng(text: str | float | int, name: str | None = "value") -> float:
         If the text is not a finite number in engineering notation; its ``parameter`` is ``name``.
     TypeError
         If ``text`` is neither a number nor a str.
+
+    Examples
+    --------
+    >>> parse_eng("4k7"), parse_eng("10k"), parse_eng("1M")
+    (4700.0, 10000.0, 1000000.0)
     """
     if isinstance(text, Real) and not isinstance(text, bool):
         value = float(text)

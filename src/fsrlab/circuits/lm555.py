@@ -411,6 +411,19 @@ def astable(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad=0.0, diode: bool = False,
     References
     ----------
     Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901.
+
+    Examples
+    --------
+    The paper's circuit (R = 10 kΩ, ideal D1) with R_FSR = 200 kΩ and C_FSR = 1 nF:
+
+    >>> r = astable(10e3, 200e3, 1e-9, diode=True)
+    >>> print(f"{r.frequency_hz:.1f} Hz, duty cycle {r.duty_cycle:.4f}")
+    6478.5 Hz, duty cycle 0.1019
+
+    Without D1 and with R_FSR → ∞, the classic ``f = 1/(3 ln 2·R·C)`` (48089.8 Hz here):
+
+    >>> print(f"{astable(10e3, 1e12, 1e-9).frequency_hz:.1f} Hz")
+    48089.8 Hz
     """
     check_lm555(r_ohm, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, discharge_ohm)
     r = float_array("r_ohm", r_ohm)
