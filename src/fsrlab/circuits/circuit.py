@@ -24,11 +24,13 @@ import math
 from collections.abc import Mapping
 from dataclasses import MISSING, asdict, dataclass, fields, replace
 
+import numpy as np
+
 from fsrlab.circuits.checks import check_lm555
 from fsrlab.errors import ParameterError
 from fsrlab.physics.params import float_array
 
-__all__ = ["LM555Circuit", "OpAmpReadout", "readout_from_metadata", "PAPER_CIRCUIT", "PAPER_OPAMP"]
+__all__ = ["LM555Circuit", "OpAmpReadout", "readout_from_metadata", "decode_capacitance", "PAPER_CIRCUIT", "PAPER_OPAMP"]
 
 
 
@@ -309,3 +311,52 @@ PAPER_CIRCUIT = LM555Circuit(r_ohm=10e3, c_off_farad=0.0, diode=True, diode_drop
 
 #: The traditional readout of the paper's Fig. 18 and eq. (38): R_F = 20 kΩ, the FSR driven from −5 V.
 PAPER_OPAMP = OpAmpReadout(r_f_ohm=20e3, vcc_v=-5.0)
+
+
+def decode_capacitance(frequency_hz, duty_cycle, circuit: LM555Circuit | None = None, range_=None) -> np.ndarray:
+    """C_FSR of every reading, decoded from frequency and duty cycle (physics-informed calibration variable).
+
+    Parameters
+    ----------
+    frequency_hz, duty_cycle : array_like
+        555 readings (NaN where missing).
+    circuit : LM555Circuit, optional
+        The circuit (default :data:`fsrlab.circuits.circuit.PAPER_CIRCUIT`).
+    range_ : array_like, optional
+        The run's ``range`` column: 1 where C_off was switched in, 0 where it was out
+        (:meth:`LM555Circuit.on_range`). Without it, the circuit's C_off applies to every reading.
+
+    Returns
+    -------
+    ndarray
+        C_FSR [F] by :meth:`LM555Circuit.decode`; NaN where a reading or its range is missing, or
+        the reading is impossible for the circuit (e.g. one noisy duty cycle outside the reachable
+        range), so that one bad window does not stop a whole run.
+
+    Raises
+    ------
+    ParameterError
+        A range other than 0 or 1, or columns of different lengths.
+    """
+    if circuit is None:
+        circuit = PAPER_CIRCUIT
+    f = np.asarray(frequency_hz, dtype=float)
+    d = np.asarray(duty_cycle, dtype=float)
+    if f.shape != d.shape:
+        raise ParameterError("must have one value per frequency_hz reading", parameter="duty_cycle")
+    ok = np.isfinite(f) & np.isfinite(d)
+    if range_ is None:
+        states = [(circuit, ok)]
+    else:
+        r = np.asarray(range_, dtype=float)
+        if r.shape != f.shape:
+            raise ParameterError("must have one value per reading", parameter="range_")
+        bad = np.isfinite(r) & ~np.isin(r, (0.0, 1.0))
+        if bad.any():
+            raise ParameterError(f"must be 0 (C_off out) or 1 (C_off in), got {r[bad][0]:g}", parameter="range_")
+        states = [(circuit.on_range(0), ok & (r == 0)), (circuit.on_range(1), ok & (r == 1))]
+    out = np.full(f.shape, np.nan)
+    for circ, m in states:
+        if m.any():
+            out[m] = np.asarray(circ.decode(f[m], d[m], check=False).c_fsr_farad, dtype=float)
+    return out

@@ -16,9 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from fsrlab.calibration.readout import decode_capacitance
 from fsrlab.calibration.runs import calibrate_runs
-from fsrlab.circuits.circuit import readout_from_metadata
+from fsrlab.circuits.circuit import decode_capacitance, readout_from_metadata
 from fsrlab.io.runformat import Run
 from fsrlab.metrics.cycles import run_hysteresis
 from fsrlab.metrics.repeatability import (
