@@ -6,7 +6,7 @@ STAMP  := $(VENV)/.installed-stamp
 REPORT ?= report
 DEMO   ?= demo
 
-.PHONY: venv sysdeps demo lint test bench firmware clean live-screenshot
+.PHONY: venv sysdeps demo lint test bench firmware clean live-screenshot docs
 
 venv: $(STAMP)
 
@@ -39,6 +39,19 @@ test: venv lint sysdeps firmware
 bench: venv sysdeps firmware
 	$(BIN)/python -m pip install -q -e '.[dev,bench]'
 	$(BIN)/python benchmarks/run.py
+
+# The manual (Sphinx: user guide, CLI and API reference, the gallery of examples/plot_*.py) into docs/_build/html,
+# every warning an error. The pages Sphinx generates (API, CLI, gallery) are made again each time.
+DOCS_STAMP := $(VENV)/.docs-stamp
+
+$(DOCS_STAMP): $(STAMP)
+	$(BIN)/python -m pip install -q -e '.[dev,docs]'
+	touch $(DOCS_STAMP)
+
+docs: $(DOCS_STAMP)
+	rm -rf docs/generated docs/auto_examples
+	$(BIN)/sphinx-build -W --keep-going -q -b html docs docs/_build/html
+	@echo "docs/_build/html/index.html"
 
 # docs/live.png: the live page on the virtual bench, as a real headless Chromium renders it.
 live-screenshot: venv sysdeps

@@ -1,7 +1,7 @@
 """Numbers the README, the docs and the help state, checked against what the code does now.
 
 References: the live page's update periods (fsrlab.live.page.UPDATE_S, PLOT_S; docs/live.md measured
-them); the README's transcript of a faulty virtual link (README "Recording"); the calibration shipped
+them); the transcript of a faulty virtual link (docs/hardware.md "Recording readings"); the calibration shipped
 in examples/ (examples/README.md: fitted on a synthetic run from 0 to 50 kPa) and the virtual meter's
 default profile (a 0 → 50 kPa → 0 triangle of 4 s, the --peak and --period defaults).
 """
@@ -30,10 +30,10 @@ def test_live_help_and_docs_state_the_pages_update_periods():
     assert f"update every {numbers} (`live.page.UPDATE_S`), the plots every {plots}" in docs
 
 
-def test_the_readme_transcript_of_a_faulty_link_is_what_acquire_prints(tmp_path, monkeypatch):
+def test_the_documented_transcript_of_a_faulty_link_is_what_acquire_prints(tmp_path, monkeypatch):
     # The same words, and the same counts within one: in real time the device may send one frame more while it
     # is being stopped (a corrupt line more or less), and the last window may or may not make it.
-    readme = (ROOT / "README.md").read_text().splitlines()
+    readme = (ROOT / "docs" / "hardware.md").read_text().splitlines()
     command = next(i for i, ln in enumerate(readme) if ln.startswith("$ fsrlab acquire --virtual")
                    and "--corrupt" in ln and "--overwrite" in ln)
     shown = readme[command + 1]
