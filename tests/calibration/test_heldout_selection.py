@@ -283,3 +283,19 @@ def test_one_recording_measures_the_gain_spread_of_its_held_out_blocks():
             assert sel.gain_spread > REPEATABILITY and cal.uncertainty.relative == sel.gain_spread
         else:
             assert sel.gain_spread < 0.05 and cal.uncertainty.relative == REPEATABILITY
+
+
+def test_a_held_out_block_whose_estimate_collapses_counts_as_a_whole_gain_error(tmp_path):
+    """Property: a held-out block read far outside what the earlier blocks calibrated (its estimate near zero:
+    a least-squares gain of about -76 on a real Velostat run) counts as a relative gain error of 1, not 77,
+    so the relative term stays within what a calibration file holds and the saved file loads."""
+    from fsrlab.calibration.model import HeldoutCalibration
+
+    rng = np.random.default_rng(2)
+    t = np.arange(3000) * 0.05
+    force = 20 * np.abs(((t / 15) % 2) - 1) + 1
+    x = force ** 0.8 + rng.normal(0, 0.01, t.size)
+    x[2400:] = x[:2400].min() * 0.5  # the last block reads below every earlier reading: its estimate collapses
+    cal, sel = calibrate_recordings([Recording(t, x, force)], compensate=False)
+    assert 0.5 < sel.gain_spread <= 1.0 and cal.uncertainty.relative == sel.gain_spread
+    assert HeldoutCalibration.from_dict(cal.to_dict()).uncertainty.relative == cal.uncertainty.relative

@@ -425,7 +425,9 @@ def _mix(parts: list[Part], mixed: list, sign: int, adc) -> tuple:
 
 def _gain_spread(splits, static: _Choice, ch: _Choice, alpha: float, sign: int, adc, mixed=()) -> float:
     """RMS relative gain error of the held-out recordings or blocks (least-squares gain of reference on
-    estimate, over each part's rows above 5 % of full scale)."""
+    estimate, over each part's rows above 5 % of full scale), each part's at most 1: an estimate whose gain
+    is off by the whole reading (near zero, or of the wrong sign, where the readout left the calibrated
+    range) tells nothing more, and the relative term then says the estimate is as uncertain as itself."""
     g = []
     for fit_parts, test_parts in splits:
         cal = _fit(fit_parts, ch, sign, adc)
@@ -438,7 +440,7 @@ def _gain_spread(splits, static: _Choice, ch: _Choice, alpha: float, sign: int, 
             k = p.rows & np.isfinite(y) & (y > 0.05 * cal.full_scale)
             if k.sum() >= 10 and np.sum(e[k] ** 2) > 0:
                 g.append(float(np.sum(e[k] * y[k]) / np.sum(e[k] ** 2)))
-    return float(np.sqrt(np.mean((np.asarray(g) - 1.0) ** 2))) if g else 0.0
+    return float(np.sqrt(np.mean(np.minimum(np.abs(np.asarray(g) - 1.0), 1.0) ** 2))) if g else 0.0
 
 
 def _held_out(splits, ch: _Choice, sign: int, adc, cache: _Cache):
