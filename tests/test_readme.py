@@ -16,6 +16,7 @@ import sys
 from pathlib import Path
 
 import pytest
+
 from clirun import run_cli
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -10,7 +10,6 @@ from __future__ import annotations
 import importlib
 
 from clirun import run_cli
-
 from fsrlab.cli import COMMAND_MODULES, app
 
 
