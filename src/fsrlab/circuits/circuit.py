@@ -23,12 +23,14 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import MISSING, asdict, dataclass, fields, replace
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from fsrlab.circuits.checks import check_lm555
 from fsrlab.errors import ParameterError
 from fsrlab.physics.params import float_array
+
+if TYPE_CHECKING:  # numpy is imported where it is used: the paper's circuit is built without it (start-up)
+    import numpy as np
 
 __all__ = ["LM555Circuit", "OpAmpReadout", "readout_from_metadata", "decode_capacitance", "PAPER_CIRCUIT", "PAPER_OPAMP"]
 
@@ -337,18 +339,24 @@ def decode_capacitance(frequency_hz, duty_cycle, circuit: LM555Circuit | None = 
     ------
     ParameterError
         A range other than 0 or 1, or columns of different lengths.
+    TypeError
+        A column that is not numbers, or a circuit that is not an :class:`LM555Circuit`.
     """
+    import numpy as np
+
     if circuit is None:
         circuit = PAPER_CIRCUIT
-    f = np.asarray(frequency_hz, dtype=float)
-    d = np.asarray(duty_cycle, dtype=float)
+    if not isinstance(circuit, LM555Circuit):
+        raise TypeError(f"circuit: must be an LM555Circuit, got {type(circuit).__name__}")
+    f = float_array("frequency_hz", frequency_hz)
+    d = float_array("duty_cycle", duty_cycle)
     if f.shape != d.shape:
         raise ParameterError("must have one value per frequency_hz reading", parameter="duty_cycle")
     ok = np.isfinite(f) & np.isfinite(d)
     if range_ is None:
         states = [(circuit, ok)]
     else:
-        r = np.asarray(range_, dtype=float)
+        r = float_array("range_", range_)
         if r.shape != f.shape:
             raise ParameterError("must have one value per reading", parameter="range_")
         bad = np.isfinite(r) & ~np.isin(r, (0.0, 1.0))
