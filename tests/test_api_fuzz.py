@@ -49,6 +49,9 @@ from fsrlab.errors import FsrlabError
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
 CALL_SECONDS = 10.0
+WARNING_FREE = ("fsrlab.physics.", "fsrlab.circuits.", "fsrlab.units.")
+"""Modules whose calls must also let out no RuntimeWarning (numpy's overflow, invalid value): an accepted value
+gives its result or its error quietly. Other layers join as they are made to."""
 """A call that takes longer is a failure (a loop that does not end on a bad value)."""
 
 # ------------------------------------------------------------------------------------------------
@@ -597,23 +600,27 @@ def _alarm(signum, frame):
 
 
 def _call(fn: Callable, kwargs: dict):
-    """Call ``fn(**kwargs)`` (iterating a returned generator): (value, None) or (None, exception)."""
+    """Call ``fn(**kwargs)`` (iterating a returned generator): ``(value, exception, warnings)``.
+
+    ``warnings`` are the texts of the RuntimeWarnings (numpy's overflow, invalid value, ...) the call let out.
+    """
     previous = signal.signal(signal.SIGALRM, _alarm)
     signal.setitimer(signal.ITIMER_REAL, CALL_SECONDS)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
             value = fn(**kwargs)
             if isinstance(value, types.GeneratorType):
                 value = list(value)
-        return value, None
-    except CallTimeout as exc:
-        return None, exc
-    except Exception as exc:  # noqa: BLE001 -- judged below
-        return None, exc
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, previous)
+            value, exc = value, None
+        except CallTimeout as timeout:
+            value, exc = None, timeout
+        except Exception as error:  # noqa: BLE001 -- judged below
+            value, exc = None, error
+        finally:
+            signal.setitimer(signal.ITIMER_REAL, 0)
+            signal.signal(signal.SIGALRM, previous)
+    return value, exc, [str(w.message) for w in caught if issubclass(w.category, RuntimeWarning)]
 
 
 def verdict(exc: BaseException | None, parameter: str) -> str | None:
@@ -721,13 +728,15 @@ def test_a_wrong_argument_is_named(workdir, qualname, parameter):
             full[parameter] = _valid(qualname, target)
         except LookupError:
             pytest.skip(f"{qualname}: no valid value known for {parameter!r}")
-    _, exc = _call(fn, full)
+    _, exc, _ = _call(fn, full)
     if exc is not None:
         pytest.skip(f"{qualname}: the valid call raises {type(exc).__name__}: {str(exc)[:120]}")
     failures = []
     for label, value in bad_values(target):
-        _, exc = _call(fn, {**base, parameter: value})
+        _, exc, warned = _call(fn, {**base, parameter: value})
         why = verdict(exc, ALIASES.get((qualname, parameter), parameter))
+        if not why and warned and qualname.startswith(WARNING_FREE):
+            why = f"a RuntimeWarning let out: {warned[0][:120]}"
         if why:
             failures.append(f"  {qualname}({parameter}={label}): {why}")
     assert not failures, f"{qualname}: {len(failures)} wrong value(s) of {parameter!r} not named:\n" + "\n".join(

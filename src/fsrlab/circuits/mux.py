@@ -131,9 +131,12 @@ def disconnected_voltage(v0_v, off_s, r_fsr_ohm, c_fsr_farad):
     ndarray
         ``v0 · exp(−t / (R_FSR·C_FSR))``. [V]
     """
+    off = float_array("off_s", off_s)
+    if np.any(np.isnan(off) | (off < 0)):
+        raise ParameterError(f"must be >= 0 s, got {off_s!r}", parameter="off_s")
     tau = float_array("r_fsr_ohm", r_fsr_ohm) * float_array("c_fsr_farad", c_fsr_farad)
     with np.errstate(divide="ignore", invalid="ignore"):
-        x = np.where(tau > 0, float_array("off_s", off_s) / tau, np.inf)
+        x = np.where(tau > 0, off / tau, np.inf)
     return float_array("v0_v", v0_v) * np.exp(-x)
 
 

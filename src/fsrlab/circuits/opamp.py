@@ -85,6 +85,7 @@ def inverting_amplifier(r_fsr_ohm, r_f_ohm: float, vcc_v: float,
     if np.ndim(vcc_v) or vcc_v == 0:
         raise ParameterError(f"must be a finite non-zero voltage, got {plain(vcc_v)}", parameter="vcc_v")
     beta = float_array("voltage_coefficient", voltage_coefficient)
+    check_finite("voltage_coefficient", beta)
     v_out = -(r_f_ohm / r) * vcc_v  # Eq. (38)
     shape = np.broadcast(v_out, beta).shape
     return ReadoutResult(v_out_v=_out(np.broadcast_to(v_out, shape)),
@@ -99,7 +100,7 @@ def voltage_divider(r_fsr_ohm, r_m_ohm: float, vcc_v: float = 5.0, voltage_coeff
     Parameters
     ----------
     r_fsr_ohm : float or array_like
-        FSR resistance at its operating voltage (> 0). [Ω]
+        FSR resistance at its operating voltage (> 0; ``inf``: an open FSR, no output). [Ω]
     r_m_ohm : float
         Measuring resistor. [Ω]
     vcc_v : float
@@ -128,7 +129,8 @@ def voltage_divider(r_fsr_ohm, r_m_ohm: float, vcc_v: float = 5.0, voltage_coeff
     check_positive("r_m_ohm", r_m_ohm, "Ω")
     check_positive("vcc_v", vcc_v, "V")
     beta = float_array("voltage_coefficient", voltage_coefficient)
-    p = r / (r_m_ohm + r)
+    check_finite("voltage_coefficient", beta)
+    p = 1.0 / (1.0 + r_m_ohm / r)  # R_FSR/(R_M + R_FSR), 1 for an open FSR (inf)
     loop = 1.0 - beta * (1.0 - p)
     if np.any(loop <= 0):
         raise ParameterError("β·R_M/(R_M + R_FSR) must stay below 1 (else the operating point is unstable)",
