@@ -165,6 +165,49 @@ def acquire(
     from fsrlab.acquisition.recorder import record, result_dict
     from fsrlab.acquisition.serial_link import SerialLink
 
+    window_ms = _checked_options(port, virtual, speed, duration, window, stall, range_, baud, corrupt, drop,
+                                 hx711_rate)
+    scan, map_entries = scan_options(channels, dwell, settle, channel_map)
+    circuits = meter.sidecar(range_, "--virtual" if virtual else None)
+    sensor_meta, area_m2 = sensor_area(sensor, area)
+    cal = loadcell_option(loadcell)
+    check_out(out, overwrite, inputs=[loadcell])
+    device = None
+    metadata: dict = {**circuits, **({"sensor": sensor_meta} if sensor_meta else {})}
+    reference = health = None
+    if virtual:
+        device, source = _virtual_meter(meter, profile, peak, period, seed, corrupt, drop, not no_loadcell, hx711_rate,
+                                        area_m2, speed, scan)
+        if cal is None and device.load_cell is not None:
+            cal = device.load_cell.calibration()
+        port = device.open()
+        metadata = _virtual_metadata(source, sensor_meta, profile, peak, period, device.load_cell is not None)
+        area_m2 = source.sensor.area_m2
+        reference, health = _virtual_hooks(device)
+    try:
+        with SerialLink(port, baud=baud) as link, sigterm_as_interrupt(), \
+                LiveView(not quiet, f"fsrlab acquire {link.port} -> {out}") as view:
+            result = record(link, out, duration, window_ms=window_ms, range_=range_, metadata=metadata,
+                            reference=reference, on_status=view.update, on_event=view.notice, stall_s=stall,
+                            health=health, overwrite=overwrite, loadcell=cal, area_m2=area_m2,
+                            clock="device" if speed == "max" else "host", scan=scan, channels_meta=map_entries)
+    finally:
+        if device is not None:
+            device.close()
+    if json_out:
+        emit_json(result_dict(result))
+    else:
+        _print_summary(out, result, scan, cal)
+        if not virtual and not result.failed and (note := meter.warning(out)):
+            warn([note])
+    if result.failed:
+        print(f"fsrlab: {plain_numbers(result.message)}", file=sys.stderr)
+        raise typer.Exit(1)
+
+
+def _checked_options(port, virtual: bool, speed: str, duration: float, window: float, stall: float | None, range_: int,
+                     baud: int, corrupt: float, drop: float, hx711_rate: int) -> int:
+    """acquire's options checked before anything is opened; the window in whole milliseconds. [ms]"""
     if virtual == (port is not None):
         fail("give exactly one of --port PORT|auto and --virtual", "--port")
     check_speed(speed, virtual)
@@ -181,67 +224,55 @@ def acquire(
         if not 0 <= v <= 1:
             fail(f"must be in 0..1, got {v:g}", name)
     check_rate(hx711_rate)
-    scan, map_entries = scan_options(channels, dwell, settle, channel_map)
-    circuits = meter.sidecar(range_, "--virtual" if virtual else None)
-    sensor_meta, area_m2 = sensor_area(sensor, area)
-    cal = loadcell_option(loadcell)
-    check_out(out, overwrite, inputs=[loadcell])
-    device = None
-    metadata: dict = {**circuits, **({"sensor": sensor_meta} if sensor_meta else {})}
-    reference = health = None
-    if virtual:
-        c_off = meter.virtual_c_off_farad
-        check_virtual(profile, peak, period, c_off, corrupt, drop, seed)
-        device, source = make_virtual_device(profile, peak, period, c_off, seed, corrupt, drop, not no_loadcell,
-                                             hx711_rate, area_m2, speed=speed)
-        if scan is not None:
-            from fsrlab.virtual.device import VirtualDevice
+    return window_ms
 
-            source = mux_source(max(scan.channels) + 1, profile, peak, period, c_off, area_m2=area_m2)
-            device = VirtualDevice(source, faults=device.faults, seed=seed, load_cell=device.load_cell, speed=speed)
-        if cal is None and device.load_cell is not None:
-            cal = device.load_cell.calibration()
-        port = device.open()
-        virtual_meta = source.metadata()
-        if sensor_meta:
-            virtual_meta["sensor"] = {**sensor_meta, "virtual_model": virtual_meta["sensor"]["model"]}
-        metadata = {"origin": "fsrlab acquire --virtual (VirtualFSR -> LM555 astable and op-amp -> meter model "
-                              "fsrlab.virtual.meter -> emulated firmware over a pty)",
-                    **virtual_meta,
-                    "notes": f"virtual stress profile {profile}, peak {peak:g} Pa, period {period:g} s; "
-                             "stress_pa is the applied (reference) stress, force_n the emulated load cell's "
-                             "reading" + ("" if device.load_cell else " (no HX711 emulated: empty)")}
-        area_m2 = source.sensor.area_m2
-        reference = lambda frame: device.reference(frame.seq)  # noqa: E731
-        health = lambda: device.failure  # noqa: E731
-    try:
-        with SerialLink(port, baud=baud) as link, sigterm_as_interrupt(), \
-                LiveView(not quiet, f"fsrlab acquire {link.port} -> {out}") as view:
-            result = record(link, out, duration, window_ms=window_ms, range_=range_, metadata=metadata,
-                            reference=reference, on_status=view.update, on_event=view.notice, stall_s=stall,
-                            health=health, overwrite=overwrite, loadcell=cal, area_m2=area_m2,
-                            clock="device" if speed == "max" else "host", scan=scan, channels_meta=map_entries)
-    finally:
-        if device is not None:
-            device.close()
-    if json_out:
-        emit_json(result_dict(result))
-    else:
-        typer.echo(f"{out}: {result.frames} {'windows' if scan is None else f'readings of {len(scan.channels)} channels'}, "
-                   f"{result.dropped} dropped, {result.duration_s:.1f} s "
-                   f"({result.stats.bad_frames} corrupt lines, {result.stats.resets} device resets, "
-                   f"{len(result.gaps)} gaps)"
-                   + (f"; {result.no_reference} windows without a load-cell reading" if result.reference else ""))
-        if result.reference and cal is None and not result.failed:
-            # the HX711's counts are in reference_raw, but nothing turns them into newtons (a failed recording
-            # says only why it failed: one line)
-            print(f"fsrlab: warning: {out}: force_n is empty in every row: no --loadcell calibration was given "
-                  "(the HX711's counts are in reference_raw; fsrlab loadcell tare/scale makes one)", file=sys.stderr)
-        if not virtual and not result.failed and (note := meter.warning(out)):
-            warn([note])
-    if result.failed:
-        print(f"fsrlab: {plain_numbers(result.message)}", file=sys.stderr)
-        raise typer.Exit(1)
+
+def _virtual_meter(meter: MeterCircuit, profile: str, peak: float, period: float, seed, corrupt: float, drop: float,
+                   with_loadcell: bool, hx711_rate: int, area_m2: float | None, speed: str, scan):
+    """acquire --virtual's device (not yet opened) and its source: one sensor, or a bench of them for --channels."""
+    c_off = meter.virtual_c_off_farad
+    check_virtual(profile, peak, period, c_off, corrupt, drop, seed)
+    device, source = make_virtual_device(profile, peak, period, c_off, seed, corrupt, drop, with_loadcell,
+                                         hx711_rate, area_m2, speed=speed)
+    if scan is not None:
+        from fsrlab.virtual.device import VirtualDevice
+
+        source = mux_source(max(scan.channels) + 1, profile, peak, period, c_off, area_m2=area_m2)
+        device = VirtualDevice(source, faults=device.faults, seed=seed, load_cell=device.load_cell, speed=speed)
+    return device, source
+
+
+def _virtual_metadata(source, sensor_meta: dict | None, profile: str, peak: float, period: float,
+                      with_loadcell: bool) -> dict:
+    """The sidecar's content for a virtual recording: where its numbers come from, and the sensor given."""
+    virtual_meta = source.metadata()
+    if sensor_meta:
+        virtual_meta["sensor"] = {**sensor_meta, "virtual_model": virtual_meta["sensor"]["model"]}
+    return {"origin": "fsrlab acquire --virtual (VirtualFSR -> LM555 astable and op-amp -> meter model "
+                      "fsrlab.virtual.meter -> emulated firmware over a pty)",
+            **virtual_meta,
+            "notes": f"virtual stress profile {profile}, peak {peak:g} Pa, period {period:g} s; "
+                     "stress_pa is the applied (reference) stress, force_n the emulated load cell's "
+                     "reading" + ("" if with_loadcell else " (no HX711 emulated: empty)")}
+
+
+def _virtual_hooks(device):
+    """``record``'s ``reference`` (the stress the virtual device applied in a frame's window) and ``health``."""
+    return (lambda frame: device.reference(frame.seq)), (lambda: device.failure)
+
+
+def _print_summary(out: Path, result, scan, cal) -> None:
+    """The recording in one line; a warning when the load cell's counts were recorded without a calibration."""
+    typer.echo(f"{out}: {result.frames} {'windows' if scan is None else f'readings of {len(scan.channels)} channels'}, "
+               f"{result.dropped} dropped, {result.duration_s:.1f} s "
+               f"({result.stats.bad_frames} corrupt lines, {result.stats.resets} device resets, "
+               f"{len(result.gaps)} gaps)"
+               + (f"; {result.no_reference} windows without a load-cell reading" if result.reference else ""))
+    if result.reference and cal is None and not result.failed:
+        # the HX711's counts are in reference_raw, but nothing turns them into newtons (a failed recording
+        # says only why it failed: one line)
+        print(f"fsrlab: warning: {out}: force_n is empty in every row: no --loadcell calibration was given "
+              "(the HX711's counts are in reference_raw; fsrlab loadcell tare/scale makes one)", file=sys.stderr)
 
 
 @app.command("virtual-device")

@@ -65,20 +65,7 @@ def creep_cmd(
     """
     from fsrlab.metrics.creep import REFERENCES, creep_of_run
 
-    if not 0 < band < 0.5:
-        fail(f"must be a fraction of full scale in (0, 50 %), got {100 * band:g} %", "--band")
-    if not min_hold > 0:
-        fail(f"must be > 0 s, got {min_hold:g} s", "--min-hold")
-    if settle is None:
-        settle = min(0.5, min_hold / 5)
-    if not 0 <= settle < min_hold:
-        fail(f"must be >= 0 s and shorter than --min-hold ({min_hold:g} s), got {settle:g} s", "--settle")
-    if reference is not None and reference not in REFERENCES:
-        fail(f"must be force_n or stress_pa, got {reference!r}", "--reference")
-    if plot is not None:
-        if plot.suffix.lower() not in _PLOT_SUFFIXES:
-            fail(f"must end in .png, .svg or .pdf, got '{plot}'", "--plot")
-        checked(plot, "--plot", overwrite=overwrite, inputs=[run_file])
+    settle = _checked_options(band, min_hold, settle, reference, plot, overwrite, run_file)
     warnings: list[str] = []
     run = load_run_warned(run_file, skip_bad_rows, warnings)
     if x not in run:
@@ -97,6 +84,33 @@ def creep_cmd(
         emit_json({**res.to_dict(), **(skipped_json(run) if skip_bad_rows else {}),
                    **({"plot": str(plot)} if plot is not None else {})})
         return
+    _print_holds(res, x, run_file, plot)
+
+
+def _checked_options(band: float, min_hold: float, settle: float | None, reference: str | None, plot: Path | None,
+                     overwrite: bool, run_file: Path) -> float:
+    """creep's options checked before the run is read; the settling time (its default filled in). [s]"""
+    from fsrlab.metrics.creep import REFERENCES
+
+    if not 0 < band < 0.5:
+        fail(f"must be a fraction of full scale in (0, 50 %), got {100 * band:g} %", "--band")
+    if not min_hold > 0:
+        fail(f"must be > 0 s, got {min_hold:g} s", "--min-hold")
+    if settle is None:
+        settle = min(0.5, min_hold / 5)
+    if not 0 <= settle < min_hold:
+        fail(f"must be >= 0 s and shorter than --min-hold ({min_hold:g} s), got {settle:g} s", "--settle")
+    if reference is not None and reference not in REFERENCES:
+        fail(f"must be force_n or stress_pa, got {reference!r}", "--reference")
+    if plot is not None:
+        if plot.suffix.lower() not in _PLOT_SUFFIXES:
+            fail(f"must end in .png, .svg or .pdf, got '{plot}'", "--plot")
+        checked(plot, "--plot", overwrite=overwrite, inputs=[run_file])
+    return settle
+
+
+def _print_holds(res, x: str, run_file: Path, plot: Path | None) -> None:
+    """The holds as a table, the settings below it and why a drift or τ was not determined."""
     from rich.console import Console
     from rich.table import Table
 

@@ -31,7 +31,7 @@ from fsrlab.cli.options import (
     warn,
     window_ms_option,
 )
-from fsrlab.errors import FsrlabError
+from fsrlab.errors import FsrlabError, ParameterError
 from fsrlab.io.jsonable import to_jsonable
 from fsrlab.units import STANDARD_GRAVITY
 
@@ -108,30 +108,14 @@ def live(
       fsrlab live --virtual --host 0.0.0.0 --http-port 8080
     """
 
-    if virtual == (port is not None):
-        fail("give exactly one of --port PORT|auto and --virtual", "--port")
-    window_ms = window_ms_option(window)
-    if range_ not in (0, 1):
-        fail(f"must be 0 or 1, got {range_}", "--range")
-    if not 0 <= http_port <= 65535:
-        fail(f"must be 0..65535, got {http_port}", "--http-port")
-    if duration is not None and not duration > 0:
-        fail(f"must be > 0 s, got {duration:g} s", "--duration")
-    from fsrlab.live.hosts import check_bind_host
-
-    try:
-        host = check_bind_host(host)
-    except ValueError as exc:
-        fail(str(exc).split(": ", 1)[1], "--host")
+    window_ms, host = _checked_options(port, virtual, window, range_, http_port, duration, host)
     if out is not None:
         _check_new_run(out, [cal, loadcell])
     circuits = meter.sidecar(None, "--virtual" if virtual else None)  # the page may switch to either range
     sensor_meta, area_m2 = sensor_area(sensor, area)
     lc = loadcell_option(loadcell)
     calibration = load_frame_calibration(cal, "live") if cal is not None else None
-    from fsrlab.acquisition.serial_link import SerialLink
     from fsrlab.live.page import Controller, make_document
-    from fsrlab.live.server import start_server
     from fsrlab.live.session import LiveSession
 
     device, reference, health = None, None, None
@@ -144,13 +128,8 @@ def live(
             lc = device.load_cell.calibration()
         area_m2 = source.sensor.area_m2
         metadata = {"origin": "fsrlab live --virtual", **source.metadata(), **metadata}
-        if steps is None:
-            reference = lambda frame: device.reference(frame.seq)  # noqa: E731
-        health = lambda: device.failure  # noqa: E731
-    weights = None if steps is None else {"steps": steps, "place": place, "x": "frequency_hz",
-                                          "gravity_m_s2": STANDARD_GRAVITY,
-                                          "metadata": {"weights": {"masses_kg": [s.mass_kg for s in steps],
-                                                                   "repeat": repeat, "unload": unload}}}
+        reference, health = _virtual_hooks(device, steps is None)
+    weights = None if steps is None else _weights_plan(steps, place, repeat, unload)
     estimator = None
     if calibration is not None:
         refuse_other_meter(calibration, metadata, range_)  # before the device is opened
@@ -160,32 +139,80 @@ def live(
         port = device.open()
     elif (cal is not None or out is not None) and (note := meter.warning(out, cal)):
         warn([note])
+    link = _open_link(port, device)
+    session = LiveSession(link, window_ms=window_ms, range_=range_, reference=reference, loadcell=lc, area_m2=area_m2,
+                          estimator=estimator, health=health, metadata=metadata, weights=weights)
+    session.start()
+    controller = Controller(out)
+    srv = _start_server(lambda doc: make_document(doc, session, controller, "force", "N", 1.0), host, http_port,
+                        (session, link, device))
+    _serve(srv, session, link, device, json_out, open_browser, duration)
+    if json_out:
+        _json_line({"frames": session.status.frames, "recorded": session.status.recorded, "state": session.status.state})
+    else:
+        typer.echo(f"fsrlab live: {session.status.frames} windows shown; {session.status.state}: {session.status.message}")
+
+
+def _checked_options(port, virtual: bool, window: float, range_: int, http_port: int, duration: float | None,
+                     host: str) -> tuple[int, str]:
+    """live's options checked before anything is opened: the window in whole milliseconds and the interface."""
+    from fsrlab.live.hosts import check_bind_host
+
+    if virtual == (port is not None):
+        fail("give exactly one of --port PORT|auto and --virtual", "--port")
+    window_ms = window_ms_option(window)
+    if range_ not in (0, 1):
+        fail(f"must be 0 or 1, got {range_}", "--range")
+    if not 0 <= http_port <= 65535:
+        fail(f"must be 0..65535, got {http_port}", "--http-port")
+    if duration is not None and not duration > 0:
+        fail(f"must be > 0 s, got {duration:g} s", "--duration")
     try:
-        link = SerialLink(port)
+        host = check_bind_host(host)
+    except ParameterError as exc:
+        fail(exc.reason, "--host")
+    return window_ms, host
+
+
+def _virtual_hooks(device, applied_stress: bool):
+    """The session's ``reference`` (the stress the virtual device applied in a frame's window; None for a bench
+    that places masses, whose reference is the load cell's) and ``health``."""
+    reference = (lambda frame: device.reference(frame.seq)) if applied_stress else None
+    return reference, (lambda: device.failure)
+
+
+def _weights_plan(steps, place, repeat: int, unload: bool) -> dict:
+    """The session's guided known-weight calibration: the placements, who places them and the sidecar's plan."""
+    return {"steps": steps, "place": place, "x": "frequency_hz", "gravity_m_s2": STANDARD_GRAVITY,
+            "metadata": {"weights": {"masses_kg": [s.mass_kg for s in steps], "repeat": repeat, "unload": unload}}}
+
+
+def _open_link(port: str, device):
+    """The serial link to the meter, or one line naming --port (the virtual device closed again)."""
+    from fsrlab.acquisition.serial_link import SerialLink
+
+    try:
+        return SerialLink(port)
     except Exception as exc:  # noqa: BLE001 - one line: the port could not be opened
         if device is not None:
             device.close()
         if isinstance(exc, FsrlabError) and exc.parameter == "port":  # e.g. --port auto and no board: as acquire says it
             fail(exc.reason, "--port")
         fail(f"cannot open {port}: {exc}", "--port")
-    session = LiveSession(link, window_ms=window_ms, range_=range_, reference=reference, loadcell=lc, area_m2=area_m2,
-                          estimator=estimator, health=health, metadata=metadata, weights=weights)
-    session.start()
-    controller = Controller(out)
+
+
+def _start_server(make_doc, host: str, http_port: int, opened: tuple):
+    """The page's server on ``host``:``http_port``; if it cannot start, what is open (session, link, device) is
+    closed and one line names the option at fault."""
+    from fsrlab.live.server import start_server
+
     try:
-        srv = start_server(lambda doc: make_document(doc, session, controller, "force", "N", 1.0),
-                           host=host, port=http_port)
+        return start_server(make_doc, host=host, port=http_port)
     except OSError as exc:
-        session.close()
-        link.close()
-        if device is not None:
-            device.close()
+        for thing in opened:
+            if thing is not None:
+                thing.close()
         fail(f"cannot serve on {host}:{http_port}: {exc.strerror or exc}", "--host" if host != "127.0.0.1" else "--http-port")
-    _serve(srv, session, link, device, json_out, open_browser, duration)
-    if json_out:
-        _json_line({"frames": session.status.frames, "recorded": session.status.recorded, "state": session.status.state})
-    else:
-        typer.echo(f"fsrlab live: {session.status.frames} windows shown; {session.status.state}: {session.status.message}")
 
 
 def _guided_steps(masses: str, repeat: int, unload: bool, out: Path | None):

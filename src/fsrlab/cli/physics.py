@@ -57,10 +57,7 @@ def physics(
       fsrlab physics
       fsrlab physics --u 2V --u 5V --sigma-f 200kPa --json
     """
-    from fsrlab.metrics.hysteresis import hysteresis_error_curves, model_cycle_errors
-    from fsrlab.physics.electrical import capacitance_per_area
-    from fsrlab.physics.separation import separation_loading, separation_unloading
-    from fsrlab.physics.tunneling import tunneling_regime
+    from fsrlab.physics.separation import separation_loading
 
     if not phi0 > 0:
         fail(f"must be > 0 eV, got {phi0:g}", "--phi0")
@@ -81,28 +78,7 @@ def physics(
         # The film is thinnest at σf (eq. 3); thicker films keep J valid to higher voltages.
         s_min = separation_loading(p.sigma_f_pa, p.s0_m, p.modulus_pa)
         u_max = _voltage_limit(s_min, p.phi0_j)
-        rows, c_only = [], None
-        for v in u:
-            if not v >= u_max:  # below the limit, or the limit unknown: try, and keep only finite values
-                try:
-                    r = model_cycle_errors(v, p)
-                except (ValueError, RuntimeError, OverflowError):  # "All-NaN slice": no J anywhere
-                    r = None
-                if r is not None and _finite_percent(r.resistance) and _finite_percent(r.capacitance):
-                    rows.append((v, r.regime, r.resistance, r.capacitance, None))
-                    continue
-            if c_only is None:  # C_A does not depend on u: the same eq. (13) on eq. (15) alone
-                c_only = hysteresis_error_curves(
-                    lambda x: capacitance_per_area(separation_loading(x, p.s0_m, p.modulus_pa), p.eps_r),
-                    lambda x: capacitance_per_area(separation_unloading(x, p.sigma_f_pa, p.s0_m, p.modulus_pa, p.k), p.eps_r),
-                    p.sigma_f_pa)
-                if not _finite_percent(c_only):
-                    fail(f"C_A has no finite hysteresis error for these parameters (film {p.s0_m:g} m at zero "
-                         f"stress, {s_min:g} m at σf)", "--s0/--modulus/--sigma-f/--eps-r")
-            regime = tunneling_regime(v, p.phi0_j)
-            why = _WHY.get(regime, f"eq. ({regime}) gives no current density") if v >= u_max else _NOT_FINITE
-            rows.append((v, regime, None, c_only, why))
-    out_of_range = [(v, why) for v, _, res, _, why in rows if res is None]
+        rows = _rows(u, p, s_min, u_max)
     if json_out:
         emit_json({"parameters": p.as_dict(), "min_separation_m": s_min, "resistance_u_max_v": u_max, "rows": [
             {"u_v": v, "tunneling_equation": regime, "resistance_valid": res is not None,
@@ -111,6 +87,44 @@ def physics(
              "capacitance_per_area_percent": cap.percent, "capacitance_stress_at_max_pa": cap.stress_at_max_pa}
             for v, regime, res, cap, _ in rows]})
         return
+    _print_table(rows, sigma_f, u_max, s_min)
+
+
+def _rows(u: list[float], p, s_min: float, u_max: float) -> list[tuple]:
+    """Per voltage: (u, the tunnelling equation, R_A's hysteresis error or None, C_A's, why there is no R_A).
+    R_A is tried below the voltage limit (or where the limit is unknown) and kept only where finite."""
+    from fsrlab.metrics.hysteresis import hysteresis_error_curves, model_cycle_errors
+    from fsrlab.physics.electrical import capacitance_per_area
+    from fsrlab.physics.separation import separation_loading, separation_unloading
+    from fsrlab.physics.tunneling import tunneling_regime
+
+    rows, c_only = [], None
+    for v in u:
+        if not v >= u_max:  # below the limit, or the limit unknown: try, and keep only finite values
+            try:
+                r = model_cycle_errors(v, p)
+            except (ValueError, RuntimeError, OverflowError):  # "All-NaN slice": no J anywhere
+                r = None
+            if r is not None and _finite_percent(r.resistance) and _finite_percent(r.capacitance):
+                rows.append((v, r.regime, r.resistance, r.capacitance, None))
+                continue
+        if c_only is None:  # C_A does not depend on u: the same eq. (13) on eq. (15) alone
+            c_only = hysteresis_error_curves(
+                lambda x: capacitance_per_area(separation_loading(x, p.s0_m, p.modulus_pa), p.eps_r),
+                lambda x: capacitance_per_area(separation_unloading(x, p.sigma_f_pa, p.s0_m, p.modulus_pa, p.k), p.eps_r),
+                p.sigma_f_pa)
+            if not _finite_percent(c_only):
+                fail(f"C_A has no finite hysteresis error for these parameters (film {p.s0_m:g} m at zero "
+                     f"stress, {s_min:g} m at σf)", "--s0/--modulus/--sigma-f/--eps-r")
+        regime = tunneling_regime(v, p.phi0_j)
+        why = _WHY.get(regime, f"eq. ({regime}) gives no current density") if v >= u_max else _NOT_FINITE
+        rows.append((v, regime, None, c_only, why))
+    return rows
+
+
+def _print_table(rows: list[tuple], sigma_f: float, u_max: float, s_min: float) -> None:
+    """The rows as a table, the voltage range of R_A and why a voltage has no R_A."""
+    out_of_range = [(v, why) for v, _, res, _, why in rows if res is None]
     from rich.console import Console
     from rich.table import Table
 

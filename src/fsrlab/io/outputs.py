@@ -195,22 +195,35 @@ def check_output(path, option: str, *, overwrite: bool = False, inputs: Iterable
     if kind not in ("file", "run", "dir"):
         raise ParameterError(f"must be file, run or dir, got {kind!r}", parameter="kind")
     target = output_path(path, option)
-    protected = protected_paths(inputs)
     if kind == "dir":
-        for parent in (target, *target.parents):
-            if parent.exists() and not parent.is_dir():
-                raise OutputError(option, f"{parent} is a file, not a directory")
-        clash = _input_clash(target, protected)
-        if clash is None:
-            clash = next((c for n in names if (c := _input_clash(target / n, protected)) is not None), None)
-        if clash is not None:
-            raise OutputError(option, f"it would replace {clash}; choose another directory")
-        if target.is_dir() and not overwrite and any(os.scandir(target)):
-            raise OutputError(option, f"{target} exists and is not empty; {_overwrite_hint(option)} to replace the "
-                                      "files written in it, or choose a new directory")
-        return target
+        _check_directory(target, option, overwrite, protected_paths(inputs), names)
+    else:
+        refuse_inputs(target, option, inputs, kind)
+        _check_file(target, option, overwrite, kind)
+    return target
+
+
+def _check_directory(target: Path, option: str, overwrite: bool, protected: list[tuple[Path, str]],
+                     names: Iterable[str]) -> None:
+    """A directory the command fills: not a file, not an input nor holding one where the command writes, and
+    empty unless ``overwrite``."""
+    for parent in (target, *target.parents):
+        if parent.exists() and not parent.is_dir():
+            raise OutputError(option, f"{parent} is a file, not a directory")
+    clash = _input_clash(target, protected)
+    if clash is None:
+        clash = next((c for n in names if (c := _input_clash(target / n, protected)) is not None), None)
+    if clash is not None:
+        raise OutputError(option, f"it would replace {clash}; choose another directory")
+    if target.is_dir() and not overwrite and any(os.scandir(target)):
+        raise OutputError(option, f"{target} exists and is not empty; {_overwrite_hint(option)} to replace the "
+                                  "files written in it, or choose a new directory")
+
+
+def _check_file(target: Path, option: str, overwrite: bool, kind: str) -> None:
+    """One file, or a run's CSV and sidecar: named as such, not a directory, in a writable directory, and new
+    unless ``overwrite``."""
     files = run_files(target) if kind == "run" else (target,)
-    refuse_inputs(target, option, inputs, kind)
     if kind == "run" and target.name.lower().endswith(".meta.json"):
         raise OutputError(option, f"{target} is named like a run's sidecar; give the run's CSV file, e.g. "
                                   f"{target.with_name(target.name[:-len('.meta.json')] + '-2.csv')}")
@@ -230,7 +243,6 @@ def check_output(path, option: str, *, overwrite: bool = False, inputs: Iterable
         for f in files:
             if os.path.lexists(f):
                 raise OutputError(option, f"{f} exists; {_overwrite_hint(option)} to replace it")
-    return target
 
 
 def refuse_inputs(path, option: str, inputs: Iterable, kind: str = "file") -> None:
