@@ -74,7 +74,7 @@ from fsrlab.calibration.scoring import (
     readout_variables,
     scheme_name,
 )
-from fsrlab.calibration.uncertainty import REPEATABILITY, LevelUncertainty
+from fsrlab.calibration.uncertainty import RELATIVE_MAX, REPEATABILITY, LevelUncertainty
 
 __all__ = ["STATIC_CANDIDATES", "MIX_SE", "RIDGES", "HeldoutCalibration", "LevelUncertainty", "Selection",
            "calibrate_recordings"]
@@ -425,9 +425,10 @@ def _mix(parts: list[Part], mixed: list, sign: int, adc) -> tuple:
 
 def _gain_spread(splits, static: _Choice, ch: _Choice, alpha: float, sign: int, adc, mixed=()) -> float:
     """RMS relative gain error of the held-out recordings or blocks (least-squares gain of reference on
-    estimate, over each part's rows above 5 % of full scale), each part's at most 1: an estimate whose gain
-    is off by the whole reading (near zero, or of the wrong sign, where the readout left the calibrated
-    range) tells nothing more, and the relative term then says the estimate is as uncertain as itself."""
+    estimate, over each part's rows above 5 % of full scale), each part's at most :data:`RELATIVE_MAX`: a
+    Velostat film read at 1 N drifted to gains of 4 to 7 between the blocks of one run, which the term must
+    show, while an estimate that collapsed (near zero, or of the wrong sign, where the readout left the
+    calibrated range: a gain of -76 on a real run) is no measurement at all and counts as the largest."""
     g = []
     for fit_parts, test_parts in splits:
         cal = _fit(fit_parts, ch, sign, adc)
@@ -440,7 +441,8 @@ def _gain_spread(splits, static: _Choice, ch: _Choice, alpha: float, sign: int, 
             k = p.rows & np.isfinite(y) & (y > 0.05 * cal.full_scale)
             if k.sum() >= 10 and np.sum(e[k] ** 2) > 0:
                 g.append(float(np.sum(e[k] * y[k]) / np.sum(e[k] ** 2)))
-    return float(np.sqrt(np.mean(np.minimum(np.abs(np.asarray(g) - 1.0), 1.0) ** 2))) if g else 0.0
+    rel = np.where(np.asarray(g) > 0, np.abs(np.asarray(g) - 1.0), RELATIVE_MAX) if g else np.zeros(1)
+    return float(np.sqrt(np.mean(np.minimum(rel, RELATIVE_MAX) ** 2)))
 
 
 def _held_out(splits, ch: _Choice, sign: int, adc, cache: _Cache):

@@ -14,7 +14,7 @@ import numpy as np
 
 from fsrlab.errors import FileFormatError
 
-__all__ = ["COVERAGE", "REPEATABILITY", "LevelUncertainty"]
+__all__ = ["COVERAGE", "REPEATABILITY", "RELATIVE_MAX", "LevelUncertainty"]
 
 #: Quantile of the held-out |error| that ±2u covers in each level and direction cell. [1]
 COVERAGE = 0.95
@@ -30,6 +30,9 @@ COVERAGE = 0.95
 #: taxel under silicone from 68 % to 98 % coverage, but leave a session reading 20–35 % lower at 79 %
 #: and Velostat calibrated at 40 N and read at 10 N at 75 %, and widen every band by up to two thirds. [1]
 REPEATABILITY = 0.15
+#: Largest relative term a calibration holds: an estimate uncertain by nine times itself is no longer a
+#: measurement of the reference, only a sign that the calibration does not hold. [1]
+RELATIVE_MAX = 9.0
 
 
 @dataclass
@@ -95,6 +98,7 @@ class LevelUncertainty:
         t = np.asarray(d["u_by_direction"], dtype=float)
         e = np.asarray(d["level_edges"], dtype=float)
         rel = float(d.get("relative", 0.0))
-        if t.ndim != 2 or t.shape != (e.size + 1, 3) or np.any(t < 0) or not 0 <= rel < 10:
-            raise FileFormatError("uncertainty: one row of 3 non-negative values per level bin, relative in [0, 10)")
+        if t.ndim != 2 or t.shape != (e.size + 1, 3) or np.any(t < 0) or not 0 <= rel <= RELATIVE_MAX:
+            raise FileFormatError("uncertainty: one row of 3 non-negative values per level bin, relative in "
+                                  f"[0, {RELATIVE_MAX:g}]")
         return cls(e, t, float(d["pooled"]), rel)
