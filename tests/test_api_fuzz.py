@@ -49,9 +49,11 @@ from fsrlab.errors import FsrlabError
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
 CALL_SECONDS = 10.0
-WARNING_FREE = ("fsrlab.physics.", "fsrlab.circuits.", "fsrlab.units.")
-"""Modules whose calls must also let out no RuntimeWarning (numpy's overflow, invalid value): an accepted value
-gives its result or its error quietly. Other layers join as they are made to."""
+STRICT = ("fsrlab.physics.", "fsrlab.circuits.", "fsrlab.units.")
+"""Modules held to more: a number parameter is also given an empty array and an array of two where one value may be
+expected (:func:`bad_values`), and a call must let out no RuntimeWarning (numpy's overflow, invalid value): an
+accepted value gives its result or its error quietly. Other layers join as they are made to."""
+
 """A call that takes longer is a failure (a loop that does not end on a bad value)."""
 
 # ------------------------------------------------------------------------------------------------
@@ -566,8 +568,8 @@ def _kind(param: inspect.Parameter) -> str:
     return "other"
 
 
-def bad_values(param: inspect.Parameter) -> list[tuple[str, object]]:
-    """The wrong values tried for one parameter, each with the label a failure shows."""
+def bad_values(param: inspect.Parameter, strict: bool = False) -> list[tuple[str, object]]:
+    """The wrong values tried for one parameter, each with the label a failure shows (more when ``strict``)."""
     kind = _kind(param)
     required = param.default is inspect.Parameter.empty
     values: list[tuple[str, object]] = [("str 'abc'", "abc"), ("dict {}", {})]
@@ -576,6 +578,8 @@ def bad_values(param: inspect.Parameter) -> list[tuple[str, object]]:
     if kind == "number":
         values += [("-1.0", -1.0), ("0.0", 0.0), ("nan", math.nan), ("inf", math.inf), ("-inf", -math.inf),
                    ("[nan, 1]", np.array([math.nan, 1.0])), ("'10%'", "10%")]
+        if strict:
+            values += [("empty array", np.array([])), ("array [1, 2]", np.array([1.0, 2.0]))]
     elif kind == "path":
         values += [(f"missing file {MISSING!r}", MISSING), ("a directory 'adir'", "adir"), ("empty ''", ""),
                    ("int 5", 5)]
@@ -732,10 +736,10 @@ def test_a_wrong_argument_is_named(workdir, qualname, parameter):
     if exc is not None:
         pytest.skip(f"{qualname}: the valid call raises {type(exc).__name__}: {str(exc)[:120]}")
     failures = []
-    for label, value in bad_values(target):
+    for label, value in bad_values(target, strict=qualname.startswith(STRICT)):
         _, exc, warned = _call(fn, {**base, parameter: value})
         why = verdict(exc, ALIASES.get((qualname, parameter), parameter))
-        if not why and warned and qualname.startswith(WARNING_FREE):
+        if not why and warned and qualname.startswith(STRICT):
             why = f"a RuntimeWarning let out: {warned[0][:120]}"
         if why:
             failures.append(f"  {qualname}({parameter}={label}): {why}")

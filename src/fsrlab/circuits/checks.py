@@ -14,7 +14,8 @@ import sys
 from fsrlab.errors import ParameterError
 
 __all__ = ["check_lm555", "check_fractions", "check_fraction", "check_supply", "check_vcc", "check_drop", "check_r_fsr",
-           "broadcast", "VCC_MAX_V"]
+           "broadcast", "check_single",
+           "VCC_MAX_V"]
 
 def check_fractions(lower_fraction: float, upper_fraction: float) -> None:
     """Raise :class:`~fsrlab.errors.ParameterError` unless ``0 < lower_fraction < upper_fraction < 1``.
@@ -177,6 +178,21 @@ def check_lm555(r_ohm, c_off_farad, diode: bool, diode_drop_v: float, vcc_v: flo
             raise ParameterError(f"must be finite and >= 0 {unit}, got {value!r}", parameter=name)
     if not _all(r_ohm, lambda v: v > 0):
         raise ParameterError(f"must be finite and > 0 Ω, got {r_ohm!r}", parameter="r_ohm")
+
+
+def check_single(*named) -> None:
+    """Raise :class:`~fsrlab.errors.ParameterError` naming the first of ``(name, value)`` that is an array.
+
+    Parameters
+    ----------
+    *named : (str, object)
+        Parameters of a model of one circuit (a transient, a netlist, a decoding), which take one value each.
+    """
+    for name, value in named:
+        shape = getattr(value, "shape", ())
+        if shape or isinstance(value, (list, tuple)):
+            raise ParameterError(f"must be a single value (one circuit), got {type(value).__name__} of shape "
+                                 f"{shape or (len(value),)}", parameter=name)
 
 
 def broadcast(*named):

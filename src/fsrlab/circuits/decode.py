@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsrlab.circuits.checks import check_lm555
+from fsrlab.circuits.checks import check_lm555, check_single
 from fsrlab.circuits.lm555 import NoOscillationError, minimum_n_ratio
 from fsrlab.circuits.phases import timing_per_rc
 from fsrlab.errors import ParameterError
@@ -170,8 +170,9 @@ def decode(frequency_hz, duty_cycle, r_ohm: float, c_off_farad: float = 0.0, dio
     to one clock phase and spread less (a Monte-Carlo with one random phase per window gave 0.6× the
     stated σ for R = 10 kΩ, R_FSR = 200 kΩ, C = 1 nF, 4 periods), so the stated σ is conservative.
     """
+    check_single(("r_ohm", r_ohm), ("c_off_farad", c_off_farad), ("discharge_ohm", discharge_ohm))
     check_lm555(r_ohm, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, discharge_ohm)
-    check_at_least("timer_resolution_s", timer_resolution_s, 0.0, "s")
+    check_at_least("timer_resolution_s", timer_resolution_s, 0.0, "s", scalar=True)
     f = float_array("frequency_hz", frequency_hz)
     dc = float_array("duty_cycle", duty_cycle)
     n_per = float_array("periods", periods)

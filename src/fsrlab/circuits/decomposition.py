@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fsrlab.circuits.checks import check_single
 from fsrlab.circuits.lm555 import astable
 from fsrlab.errors import ParameterError
 from fsrlab.physics.params import float_array
@@ -82,6 +83,7 @@ def frequency_decomposition(r_ohm: float, r_fsr_ohm, c_fsr_farad, diode: bool, c
     :func:`fsrlab.circuits.lm555.astable`. The parts do not add up to the whole: f is not linear in
     R_FSR and C_FSR.
     """
+    check_single(("r_ohm", r_ohm), ("c_off_farad", c_off_farad))
     rf = float_array("r_fsr_ohm", r_fsr_ohm)
     cf = float_array("c_fsr_farad", c_fsr_farad)
     if rf.ndim != 1 or rf.size == 0:

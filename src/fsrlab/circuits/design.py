@@ -150,11 +150,11 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
     fhi = min(fhi, limit)
     if not isinstance(variant, str) or variant not in ("auto", "diode", "no-diode"):
         raise ParameterError(f"must be 'auto', 'diode' or 'no-diode', got {variant!r}", parameter="variant")
-    check_at_least("min_margin", min_margin, 0.0)
-    check_positive("window_s", window_s, "s")
-    check_positive("vcc_v", vcc_v, "V")
-    check_at_least("diode_drop_v", diode_drop_v, 0.0, "V")
-    check_at_least("timer_resolution_s", timer_resolution_s, 0.0, "s")
+    check_at_least("min_margin", min_margin, 0.0, scalar=True)
+    check_positive("window_s", window_s, "s", scalar=True)
+    check_positive("vcc_v", vcc_v, "V", scalar=True)
+    check_at_least("diode_drop_v", diode_drop_v, 0.0, "V", scalar=True)
+    check_at_least("timer_resolution_s", timer_resolution_s, 0.0, "s", scalar=True)
     if diode_drop_v > 0 and variant == "no-diode":
         raise ParameterError("a forward drop needs the diode variant", parameter="diode_drop_v")
     variants = {"auto": (False, True), "diode": (True,), "no-diode": (False,)}[variant]
@@ -172,8 +172,8 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
             best_per_variant[diode] = best
     if not best_per_variant:
         cap = f" (its top lowered to max_frequency_hz = {limit:g} Hz)" if capped else ""
-        raise ParameterError(f"no design keeps the sensor inside the band{cap}: " + "; ".join(reasons),
-                             parameter="band_hz")
+        raise ParameterError(f"no design keeps the sensor (r_fsr_range_ohm {rlo:g} … {rhi:g} Ω, c_fsr_range_farad "
+                             f"{clo:g} … {chi:g} F) inside the band{cap}: " + "; ".join(reasons), parameter="band_hz")
     chosen = max(best_per_variant.values(), key=lambda d: (d["merit"], d["margin"]))
     q = timer_resolution_s
 
@@ -212,7 +212,7 @@ def _checked_ranges(r_fsr_range_ohm, c_fsr_range_farad, band_hz, max_frequency_h
     if not (0 < flo < fhi and math.isfinite(fhi)):
         raise ParameterError(f"need 0 < low < high < inf, got {band_hz!r}", parameter="band_hz")
     if max_frequency_hz is not None:
-        check_at_least("max_frequency_hz", max_frequency_hz, 0.0, "Hz", strict=True)
+        check_at_least("max_frequency_hz", max_frequency_hz, 0.0, "Hz", strict=True, scalar=True)
     limit = math.inf if max_frequency_hz is None else float(max_frequency_hz)
     if flo >= limit:
         raise ParameterError(f"{flo:g} … {fhi:g} Hz is beyond what the counter captures: every edge only "

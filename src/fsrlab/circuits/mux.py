@@ -159,10 +159,10 @@ def shared_voltage(v_node_v, c_node_farad, v_fsr_v, c_fsr_farad):
     float
         ``(C_node·V_node + C_FSR·V_FSR) / (C_node + C_FSR)``. [V]
     """
-    check_finite("v_node_v", v_node_v)
-    check_at_least("c_node_farad", c_node_farad, 0.0, "F")
-    check_finite("v_fsr_v", v_fsr_v)
-    check_at_least("c_fsr_farad", c_fsr_farad, 0.0, "F")
+    check_finite("v_node_v", v_node_v, scalar=True)
+    check_at_least("c_node_farad", c_node_farad, 0.0, "F", scalar=True)
+    check_finite("v_fsr_v", v_fsr_v, scalar=True)
+    check_at_least("c_fsr_farad", c_fsr_farad, 0.0, "F", scalar=True)
     total = c_node_farad + c_fsr_farad
     if not np.all(total > 0):
         raise ParameterError("c_node_farad + c_fsr_farad must be > 0 F", parameter="c_fsr_farad")

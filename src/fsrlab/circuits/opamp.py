@@ -157,16 +157,18 @@ def voltage_coefficient(u_v, s_m, phi0_j: float | None = None, rel_step: float =
     -------
     float or ndarray
         β (negative). The equation of J is held fixed across the difference (the paper's eqs. 10–12
-        do not join continuously, see SPEC §2), so β is that regime's local slope. [1]
+        do not join continuously, see SPEC §2), so β is that regime's local slope. NaN where the
+        current underflows at both voltages of the difference (separations far beyond nanometres). [1]
     """
     from fsrlab.physics.electrical import resistance_per_area
     from fsrlab.physics.params import PAPER
 
     phi0 = PAPER.phi0_j if phi0_j is None else phi0_j
+    check_positive("phi0_j", phi0, "J", scalar=True)
     u = float_array("u_v", u_v)
     if np.any(~(u > 0)):
         raise ParameterError(f"must be > 0 V, got {u_v!r}", parameter="u_v")
-    check_between("rel_step", rel_step, 0.0, 0.5, lower_open=True)
+    check_between("rel_step", rel_step, 0.0, 0.5, lower_open=True, scalar=True)
     _, regime = resistance_per_area(u, s_m, phi0, return_regime=True)
     regime = np.asarray(regime)
     out = np.empty(np.broadcast(u, float_array("s_m", s_m)).shape)
@@ -176,5 +178,6 @@ def voltage_coefficient(u_v, s_m, phi0_j: float | None = None, rel_step: float =
         m = rr == eq
         hi = resistance_per_area(uu[m] * (1 + rel_step), ss[m], phi0, regime=int(eq))
         lo = resistance_per_area(uu[m] * (1 - rel_step), ss[m], phi0, regime=int(eq))
-        out[m] = (np.log(hi) - np.log(lo)) / (np.log1p(rel_step) - np.log1p(-rel_step))
+        with np.errstate(invalid="ignore", divide="ignore"):  # no current at both voltages: NaN, as documented
+            out[m] = (np.log(hi) - np.log(lo)) / (np.log1p(rel_step) - np.log1p(-rel_step))
     return _out(out)

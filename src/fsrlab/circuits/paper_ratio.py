@@ -179,7 +179,7 @@ def minimum_eq32_as_printed(bounds: tuple[float, float] = (4.2, 20.0), xatol: fl
         raise ParameterError(f"must be a pair 4 < low < high < inf (the circuit oscillates for N > 4), got {plain(bounds)}",
                              parameter="bounds")
     lo, hi = float(b[0]), float(b[1])
-    check_positive("xatol", xatol)
+    check_positive("xatol", xatol, scalar=True)
     from scipy.optimize import minimize_scalar  # here: importing the module (the report's ngspice start) stays light
 
     res = minimize_scalar(lambda x: float(tau_ratio_eq32_as_printed(x)), bounds=(lo, hi), method="bounded",

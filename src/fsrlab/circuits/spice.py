@@ -42,7 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fsrlab.circuits.checks import check_lm555, check_r_fsr
+from fsrlab.circuits.checks import check_lm555, check_r_fsr, check_single
 from fsrlab.circuits.lm555 import astable
 from fsrlab.circuits.phases import timing_per_rc
 from fsrlab.errors import ParameterError
@@ -157,6 +157,8 @@ def netlist(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: flo
     TypeError
         A part that is not a number (the message names it).
     """
+    check_single(("r_ohm", r_ohm), ("c_off_farad", c_off_farad), ("discharge_ohm", discharge_ohm),
+                 ("t_stop_s", t_stop_s), ("t_max_step_s", t_max_step_s))
     check_lm555(r_ohm, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, discharge_ohm)
     check_r_fsr(r_fsr_ohm)
     if time_s is None and np.ndim(r_fsr_ohm):
@@ -406,7 +408,7 @@ def edges_from_waveform(t_s, v_out_v, vcc_v: float = 5.0, skip_periods: int = 2)
         (NaN when fewer than one complete period remains).
     """
     t, v = _waveform(t_s, "v_out_v", v_out_v)
-    check_positive("vcc_v", vcc_v, "V")
+    check_positive("vcc_v", vcc_v, "V", scalar=True)
     skip_periods = check_int("skip_periods", skip_periods, 0)
     rising = level_crossings(t, v, vcc_v / 2, True)[skip_periods:]
     falling = level_crossings(t, v, vcc_v / 2, False)

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsrlab.circuits.checks import check_lm555
+from fsrlab.circuits.checks import check_lm555, check_single
 from fsrlab.circuits.phases import thevenin
 from fsrlab.errors import ParameterError
 from fsrlab.physics.params import check_finite, check_int, check_positive, float_array
@@ -193,6 +193,8 @@ def simulate(r_ohm: float, r_fsr_ohm, c_fsr_farad, c_off_farad: float = 0.0, dio
     that sum (≈ 3e-11 relative after 10^6 periods); an edge within that rounding of ``t_stop_s``
     may fall on either side of it.
     """
+    check_single(("r_ohm", r_ohm), ("c_off_farad", c_off_farad), ("discharge_ohm", discharge_ohm),
+                 ("v_initial_v", v_initial_v))
     check_lm555(r_ohm, c_off_farad, diode, diode_drop_v, vcc_v, lower_fraction, upper_fraction, discharge_ohm)
     if not isinstance(capacitance_step, str) or capacitance_step not in ("charge", "voltage"):
         raise ParameterError(f"must be 'charge' or 'voltage', got {capacitance_step!r}", parameter="capacitance_step")

@@ -95,7 +95,7 @@ def capacitance_per_area(s_m, eps_r: float = PAPER.eps_r):
     ----------
     Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901.
     """
-    check_positive("eps_r", eps_r)
+    check_positive("eps_r", eps_r, scalar=True)
     check_positive("s_m", s_m, "m")
     c = eps_r * epsilon_0 / np.asarray(s_m, dtype=float)  # Eq. (15)
     return float(c) if c.ndim == 0 else c

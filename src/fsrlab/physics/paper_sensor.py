@@ -75,8 +75,8 @@ def contact_resistance(stress_pa, r_c0_ohm: float, sigma_c_pa: float):
     contact resistance that falls as the asperities flatten (``∝ 1/(1 + σ/σ_c)``) is the usual
     first-order form for FSR electrode contacts.
     """
-    check_at_least("r_c0_ohm", r_c0_ohm, 0.0, "Ω")
-    check_positive("sigma_c_pa", sigma_c_pa, "Pa")
+    check_at_least("r_c0_ohm", r_c0_ohm, 0.0, "Ω", scalar=True)
+    check_positive("sigma_c_pa", sigma_c_pa, "Pa", scalar=True)
     r = r_c0_ohm * sigma_c_pa / (sigma_c_pa + float_array("stress_pa", stress_pa))
     return float(r) if np.ndim(r) == 0 else r
 
@@ -196,8 +196,8 @@ def creep_factor(hold_s, beta: float, tau_s: float):
     β·ln 10 per decade for t ≫ τ, the form fsrlab's creep analysis fits
     (:mod:`fsrlab.metrics.creep`, log drift).
     """
-    check_at_least("beta", beta, 0.0)
-    check_positive("tau_s", tau_s, "s")
+    check_at_least("beta", beta, 0.0, scalar=True)
+    check_positive("tau_s", tau_s, "s", scalar=True)
     t = float_array("hold_s", hold_s)
     if np.any(t < 0):
         raise ParameterError("must be >= 0 s", parameter="hold_s")
@@ -224,7 +224,7 @@ def hold_time(time_s, stress_pa, tolerance_pa: float = 1.0):
     """
     t = float_array("time_s", time_s).ravel()
     s = float_array("stress_pa", stress_pa).ravel()
-    check_at_least("tolerance_pa", tolerance_pa, 0.0, "Pa")
+    check_at_least("tolerance_pa", tolerance_pa, 0.0, "Pa", scalar=True)
     if t.shape != s.shape:
         raise ParameterError(f"must have time_s's length ({t.size}), got {s.size}", parameter="stress_pa")
     check_finite("time_s", t)
@@ -256,10 +256,10 @@ def conductive_area(x_pa, area_m2: float, fraction_0: float, growth_pa: float, e
     float or ndarray
         ``A(x) = A_FSR·a0·(1 + x/σ_a)^p``, capped at A_FSR. [m²]
     """
-    check_positive("area_m2", area_m2, "m²")
-    check_positive("growth_pa", growth_pa, "Pa")
-    check_between("fraction_0", fraction_0, 0.0, 1.0, lower_open=True)
-    check_finite("exponent", exponent)
+    check_positive("area_m2", area_m2, "m²", scalar=True)
+    check_positive("growth_pa", growth_pa, "Pa", scalar=True)
+    check_between("fraction_0", fraction_0, 0.0, 1.0, lower_open=True, scalar=True)
+    check_finite("exponent", exponent, scalar=True)
     a = np.minimum(area_m2 * fraction_0 * (1.0 + float_array("x_pa", x_pa) / growth_pa) ** exponent, area_m2)
     return float(a) if np.ndim(a) == 0 else a
 
@@ -391,13 +391,13 @@ class PaperFSR:
     def __post_init__(self) -> None:
         for name in ("area_m2", "s0_m", "modulus_pa", "phi0_j", "eps_r", "layers", "area_fraction_0",
                      "area_growth_pa", "area_exponent", "dielectric_ratio", "contact_stress_pa", "creep_tau_s"):
-            check_positive(name, getattr(self, name))
+            check_positive(name, getattr(self, name), scalar=True)
         for name in ("parasitic_farad", "contact_ohm", "creep_beta", "placement_stress_sd", "placement_contact_sd",
                      "placement_area_sd"):
-            check_at_least(name, getattr(self, name), 0.0)
+            check_at_least(name, getattr(self, name), 0.0, scalar=True)
         for name in ("k", "area_k"):
-            check_at_least(name, getattr(self, name), 1.0)
-        check_between("area_fraction_0", self.area_fraction_0, 0.0, 1.0, lower_open=True)
+            check_at_least(name, getattr(self, name), 1.0, scalar=True)
+        check_between("area_fraction_0", self.area_fraction_0, 0.0, 1.0, lower_open=True, scalar=True)
 
     def replace(self, **changes) -> PaperFSR:
         """A copy with some parameters changed (validated again)."""
@@ -488,7 +488,7 @@ class PaperFSR:
     def _state(self, stress_pa, voltage_v: float = 2.5, time_s=None, stress_factor=1.0, contact_factor=1.0,
                area_factor=1.0) -> dict:
         """:meth:`respond` up to the contact solve: the checked inputs, separation, area and contact."""
-        check_positive("voltage_v", voltage_v, "V")
+        check_positive("voltage_v", voltage_v, "V", scalar=True)
         sigma = float_array("stress_pa", stress_pa).ravel()
         check_at_least("stress_pa", sigma, 0.0, "Pa")
         eff = sigma * _factor("stress_factor", stress_factor, sigma.shape)

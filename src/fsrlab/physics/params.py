@@ -76,7 +76,7 @@ def plain(value) -> str:
     return f"{value!r}"[:80]
 
 
-def check_finite(name: str, value) -> None:
+def check_finite(name: str, value, scalar: bool = False) -> None:
     """Raise :class:`~fsrlab.errors.ParameterError` naming ``name`` unless every element of ``value`` is finite.
 
     Parameters
@@ -85,15 +85,19 @@ def check_finite(name: str, value) -> None:
         Parameter name for the message and the error's ``parameter``.
     value : float or array_like
         The value to check.
+    scalar : bool
+        Require a single number (an array, even of one element, is refused).
 
     Raises
     ------
     TypeError
         If ``value`` is not a number or an array of numbers (the message names ``name``).
     ParameterError
-        If an element is nan or ±inf.
+        If an element is nan or ±inf, or ``scalar`` and ``value`` is an array.
     """
     x = _numbers(name, value)
+    if scalar and not isinstance(x, float) and x.ndim:
+        raise ParameterError(f"must be a single number, got an array of shape {x.shape}", parameter=name)
     if isinstance(x, float):
         finite = math.isfinite(x)
     else:
@@ -104,7 +108,7 @@ def check_finite(name: str, value) -> None:
         raise ParameterError(f"must be finite, got {plain(value)}", parameter=name)
 
 
-def check_positive(name: str, value, unit: str = "") -> None:
+def check_positive(name: str, value, unit: str = "", scalar: bool = False) -> None:
     """Raise :class:`~fsrlab.errors.ParameterError` naming ``name`` unless ``value`` is finite and > 0 (every element).
 
     Parameters
@@ -115,18 +119,20 @@ def check_positive(name: str, value, unit: str = "") -> None:
         The value to check.
     unit : str
         Unit shown in the message.
+    scalar : bool
+        Require a single number.
 
     Raises
     ------
     TypeError
         If ``value`` is not a number or an array of numbers (the message names ``name``).
     ParameterError
-        If an element is not finite or not > 0.
+        If an element is not finite or not > 0, or ``scalar`` and ``value`` is an array.
     """
-    check_at_least(name, value, 0.0, unit, strict=True)
+    check_at_least(name, value, 0.0, unit, strict=True, scalar=scalar)
 
 
-def check_at_least(name: str, value, lower: float, unit: str = "", strict: bool = False) -> None:
+def check_at_least(name: str, value, lower: float, unit: str = "", strict: bool = False, scalar: bool = False) -> None:
     """Raise :class:`~fsrlab.errors.ParameterError` naming ``name`` unless ``value`` is finite and ≥ ``lower``.
 
     Parameters
@@ -141,15 +147,17 @@ def check_at_least(name: str, value, lower: float, unit: str = "", strict: bool 
         Unit shown in the message.
     strict : bool
         Require ``value > lower`` instead.
+    scalar : bool
+        Require a single number.
 
     Raises
     ------
     TypeError
         If ``value`` is not a number or an array of numbers (the message names ``name``).
     ParameterError
-        If an element is not finite or below the bound.
+        If an element is not finite or below the bound, or ``scalar`` and ``value`` is an array.
     """
-    check_finite(name, value)
+    check_finite(name, value, scalar)
     x = _numbers(name, value)
     if isinstance(x, float):
         ok = x > lower if strict else x >= lower
@@ -163,7 +171,7 @@ def check_at_least(name: str, value, lower: float, unit: str = "", strict: bool 
 
 
 def check_between(name: str, value, lower: float, upper: float, unit: str = "", *, lower_open: bool = False,
-                  upper_open: bool = False) -> None:
+                  upper_open: bool = False, scalar: bool = False) -> None:
     """Raise :class:`~fsrlab.errors.ParameterError` naming ``name`` unless ``value`` is finite and within bounds.
 
     Parameters
@@ -178,15 +186,17 @@ def check_between(name: str, value, lower: float, upper: float, unit: str = "", 
         Unit shown in the message.
     lower_open, upper_open : bool
         Exclude the bound.
+    scalar : bool
+        Require a single number.
 
     Raises
     ------
     TypeError
         If ``value`` is not a number or an array of numbers (the message names ``name``).
     ParameterError
-        If an element is not finite or outside the bounds.
+        If an element is not finite or outside the bounds, or ``scalar`` and ``value`` is an array.
     """
-    check_finite(name, value)
+    check_finite(name, value, scalar)
     import numpy as np
 
     x = np.asarray(_numbers(name, value))
@@ -260,13 +270,13 @@ class PaperParameters:
     k: float = 2.0
 
     def __post_init__(self) -> None:
-        check_positive("s0_m", self.s0_m, "m")
-        check_positive("sigma_f_pa", self.sigma_f_pa, "Pa")
-        check_positive("modulus_pa", self.modulus_pa, "Pa")
-        check_positive("u_v", self.u_v, "V")
-        check_positive("phi0_j", self.phi0_j, "J")
-        check_positive("eps_r", self.eps_r)
-        check_at_least("k", self.k, 1.0)
+        check_positive("s0_m", self.s0_m, "m", scalar=True)
+        check_positive("sigma_f_pa", self.sigma_f_pa, "Pa", scalar=True)
+        check_positive("modulus_pa", self.modulus_pa, "Pa", scalar=True)
+        check_positive("u_v", self.u_v, "V", scalar=True)
+        check_positive("phi0_j", self.phi0_j, "J", scalar=True)
+        check_positive("eps_r", self.eps_r, scalar=True)
+        check_at_least("k", self.k, 1.0, scalar=True)
         if not self.modulus_pa > self.sigma_f_pa:
             raise ParameterError(f"must be > sigma_f_pa ({self.sigma_f_pa:g} Pa), got {self.modulus_pa:g}",
                                  parameter="modulus_pa")

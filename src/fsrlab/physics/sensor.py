@@ -111,10 +111,10 @@ class VirtualFSR:
         for name in ("area_m2", "s0_m", "modulus_pa", "phi0_j", "eps_r", "layers",
                      "dielectric_fraction_0", "dielectric_half_pa", "conductive_fraction_0",
                      "conductive_growth_pa"):
-            check_positive(name, getattr(self, name))
-        check_at_least("k", self.k, 1.0)
+            check_positive(name, getattr(self, name), scalar=True)
+        check_at_least("k", self.k, 1.0, scalar=True)
         for name in ("dielectric_fraction_0", "conductive_fraction_0"):
-            check_between(name, getattr(self, name), 0.0, 1.0, lower_open=True)
+            check_between(name, getattr(self, name), 0.0, 1.0, lower_open=True, scalar=True)
 
     def respond(self, stress_pa, voltage_v: float = 2.5) -> SensorResponse:
         """Electrical response along a stress history.
@@ -131,7 +131,7 @@ class VirtualFSR:
         -------
         SensorResponse
         """
-        check_positive("voltage_v", voltage_v, "V")
+        check_positive("voltage_v", voltage_v, "V", scalar=True)
         hist = separation_history(stress_pa, s0_m=self.s0_m, modulus_pa=self.modulus_pa, k=self.k)
         sigma = hist.stress_pa
         s = hist.separation_m

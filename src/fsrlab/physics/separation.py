@@ -26,13 +26,13 @@ __all__ = [
 
 
 def _check_material(s0_m: float, modulus_pa: float) -> None:
-    check_positive("s0_m", s0_m, "m")
-    check_positive("modulus_pa", modulus_pa, "Pa")
+    check_positive("s0_m", s0_m, "m", scalar=True)
+    check_positive("modulus_pa", modulus_pa, "Pa", scalar=True)
 
 
 def _check_cycle(sigma_f_pa: float, modulus_pa: float, k: float) -> None:
-    check_positive("sigma_f_pa", sigma_f_pa, "Pa")
-    check_at_least("k", k, 1.0)
+    check_positive("sigma_f_pa", sigma_f_pa, "Pa", scalar=True)
+    check_at_least("k", k, 1.0, scalar=True)
     if not np.all(np.asarray(modulus_pa) > sigma_f_pa):
         raise ParameterError(f"must be > sigma_f_pa ({plain(sigma_f_pa)} Pa), got {plain(modulus_pa)}",
                              parameter="modulus_pa")
@@ -206,7 +206,7 @@ def separation_history(
     Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901.
     """
     _check_material(s0_m, modulus_pa)
-    check_at_least("k", k, 1.0)
+    check_at_least("k", k, 1.0, scalar=True)
     stress = float_array("stress_pa", stress_pa).ravel()
     check_finite("stress_pa", stress)
     if stress.size and (stress.min() < 0 or stress.max() >= modulus_pa):

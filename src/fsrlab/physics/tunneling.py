@@ -28,7 +28,7 @@ SMALL_U_FRACTION = 0.01
 
 
 def _check_small_u(small_u_fraction: float) -> None:
-    check_finite("small_u_fraction", small_u_fraction)
+    check_finite("small_u_fraction", small_u_fraction, scalar=True)
     if not 0 <= small_u_fraction < 1:
         raise ParameterError(f"must be in [0, 1), got {small_u_fraction!r}", parameter="small_u_fraction")
 
@@ -59,7 +59,7 @@ def tunneling_regime(u_v, phi0_j: float = PAPER.phi0_j, small_u_fraction: float 
     s_f = 4.117 nm, and 3/2 only in the thick-barrier limit c → ∞. At u = φ0/e eq. (12) is about
     twice eq. (11) (2.15× at s0, 2.06× at s_f).
     """
-    check_positive("phi0_j", phi0_j, "J")
+    check_positive("phi0_j", phi0_j, "J", scalar=True)
     _check_small_u(small_u_fraction)
     regime = _regime(float_array("u_v", u_v), phi0_j, small_u_fraction)
     return regime if regime.ndim else int(regime)
@@ -174,7 +174,7 @@ def current_density(
     Simmons, J. Appl. Phys. 34, 1793 (1963), doi:10.1063/1.1702682.
     """
     if validate:
-        check_positive("phi0_j", phi0_j, "J")
+        check_positive("phi0_j", phi0_j, "J", scalar=True)
         check_positive("u_v", u_v, "V")
         check_positive("s_m", s_m, "m")
     u_in, s_in = float_array("u_v", u_v), float_array("s_m", s_m)
@@ -257,7 +257,7 @@ def voltage_limit(s_m, phi0_j: float = PAPER.phi0_j, small_u_fraction: float = S
     Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901, eqs. (10)–(12).
     Simmons, J. Appl. Phys. 34, 1793 (1963), doi:10.1063/1.1702682.
     """
-    check_positive("phi0_j", phi0_j, "J")
+    check_positive("phi0_j", phi0_j, "J", scalar=True)
     check_positive("s_m", s_m, "m")
     _check_small_u(small_u_fraction)
     root = math.sqrt(2 * m_e * phi0_j)
