@@ -1,10 +1,14 @@
 """A fuzzer of the Python API: every public function and class called with wrong arguments.
 
-For each public callable of the library's modules (and every name of ``fsrlab.__all__``) and each of its
-parameters, the call is made with that one argument wrong and every other one valid (taken from
-:data:`VALID`, or left at its default). Wrong means a wrong type (a ``str`` where a number, an array, a run or
-a calibration is expected; a ``dict``; ``None`` where the parameter is required), a bad path (a missing file,
-a directory, an empty name) and an out-of-range number (negative, zero, nan, ±inf).
+For each public callable of the library's modules (and every name of ``fsrlab.__all__``, and the methods of
+:data:`METHODS`) and each of its parameters, the call is made with that one argument wrong and every other one
+valid (:data:`OVERRIDES` for that callable, else :data:`VALID` by the parameter's name, or left at its default),
+in a directory holding a copy of ``examples/``. Wrong means a wrong type (a ``str`` where a number, an array, a
+run or a calibration is expected; a ``dict``; ``None`` where the parameter is required), a bad path (a missing
+file, a directory, an empty name) and an out-of-range number (negative, zero, nan, ±inf, ``'10%'``); the
+modules of :data:`STRICT` also get arrays where one number is expected and must let out no RuntimeWarning.
+What is not fuzzed says why (:data:`EXCLUDED_MODULES`, :data:`EXCLUDED`, :data:`NOT_FUZZED`); a case known to
+fail names the module that owns its fix (:data:`XFAIL`, strict).
 
 Accepted outcomes (the contract of ``fsrlab/errors.py`` and docs/architecture.md "Validate in the library"):
 
@@ -20,7 +24,8 @@ Anything else fails: AttributeError, KeyError, IndexError, ZeroDivisionError, nu
 
 Reference: the property above (an error's parameter is the argument that was wrong), checked on fixed,
 deterministic inputs; no randomness. One test per (callable, parameter): its id reads
-``module.name-parameter`` and a failure lists every bad value with the exception it gave.
+``module.name-parameter`` and a failure lists every bad value with the exception it gave. A test is skipped,
+saying so, when no valid call is known (no value for a required parameter, or the valid call itself fails).
 
 Run on its own: ``pytest tests/test_api_fuzz.py -q``.
 """
@@ -49,12 +54,11 @@ from fsrlab.errors import FsrlabError
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
 CALL_SECONDS = 10.0
+"""A call that takes longer is a failure (a loop that does not end on a bad value)."""
 STRICT = ("fsrlab.physics.", "fsrlab.circuits.", "fsrlab.units.")
 """Modules held to more: a number parameter is also given an empty array and an array of two where one value may be
 expected (:func:`bad_values`), and a call must let out no RuntimeWarning (numpy's overflow, invalid value): an
 accepted value gives its result or its error quietly. Other layers join as they are made to."""
-
-"""A call that takes longer is a failure (a loop that does not end on a bad value)."""
 
 # ------------------------------------------------------------------------------------------------
 # What is fuzzed and what is not
@@ -225,11 +229,6 @@ def _run():
 @cache
 def _sensor():
     return fsrlab.VirtualFSR()
-
-
-@cache
-def _synthetic():
-    return fsrlab.synthetic_run(cycles=2, points_per_ramp=20, seed=1)
 
 
 def _cal():
