@@ -95,3 +95,28 @@ def test_parse_quantity_refuses_non_finite_values(quantity, text):
 def test_unknown_quantity_is_named():
     with pytest.raises(ValueError, match="quantity"):
         parse_quantity("1", "mass")
+
+
+@pytest.mark.parametrize("text", [None, {}, [1, 2], b"10k"])
+def test_a_value_that_is_neither_number_nor_text_is_a_type_error_naming_the_field(text):
+    with pytest.raises(TypeError, match=r"^r_ohm: must be a number or a str"):
+        parse_quantity(text, "resistance", name="r_ohm")
+    with pytest.raises(TypeError, match=r"^value: must be a number or a str"):
+        parse_eng(text)
+
+
+def test_a_parse_error_carries_the_field_as_its_parameter():
+    from fsrlab.errors import ParameterError
+
+    with pytest.raises(ParameterError) as info:
+        parse_quantity("10kF", "resistance", name="r_ohm")
+    assert info.value.parameter == "r_ohm" and str(info.value).startswith("r_ohm: '10kF' is a capacitance")
+    with pytest.raises(ParameterError) as info:
+        parse_quantity("1", "mass")
+    assert info.value.parameter == "quantity"
+
+
+@pytest.mark.parametrize("digits, error", [(0, ValueError), (2.5, TypeError), ("3", TypeError)])
+def test_format_eng_checks_its_digits(digits, error):
+    with pytest.raises(error, match="digits"):
+        format_eng(4.7e-9, "F", digits=digits)
