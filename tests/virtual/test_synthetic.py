@@ -79,3 +79,31 @@ def test_same_seed_same_run_and_noise_options():
 def test_bad_arguments_name_themselves(kw, name):
     with pytest.raises(ValueError, match=name):
         synthetic_run(cycles=1, points_per_ramp=5, **kw)
+
+
+def test_a_synthetic_run_is_a_run_and_calibrates_as_its_file_does(tmp_path):
+    """One run type: the synthetic run is an ``fl.Run``; ``fl.calibrate`` takes it in memory and gives the
+    numbers it gives for the same run written and loaded back (reference: the run file)."""
+    import fsrlab as fl
+
+    run = fl.synthetic_run(cycles=2, points_per_ramp=30, seed=3)
+    assert isinstance(run, fl.Run)
+    cal = fl.calibrate(run)
+    assert isinstance(cal, fl.Calibration)
+    loaded = load_run(run.write(tmp_path / "r.csv"))
+    assert "c_fsr_farad" not in loaded and "c_fsr_farad" in run  # the truth stays in memory
+    from_file = fl.calibrate(loaded)
+    est = cal.estimate(loaded).columns
+    est_file = from_file.estimate(loaded).columns
+    key = next(k for k in est if k.endswith("_estimate"))
+    assert np.array_equal(est[key], est_file[key], equal_nan=True)
+    assert np.isfinite(est[key]).sum() > run.n_rows // 2
+
+
+def test_a_runs_repr_is_a_summary():
+    """A run's repr names it, its rows and its columns, not its numbers (property: its length does not grow
+    with the rows)."""
+    short = repr(synthetic_run(cycles=1, points_per_ramp=5))
+    long = repr(synthetic_run(cycles=20, points_per_ramp=200))
+    assert short.startswith("SyntheticRun('synthetic.csv', 11 rows, columns time_s, stress_pa")
+    assert "8001 rows" in long and len(long) == len(short) + 2

@@ -35,7 +35,7 @@ from fsrlab.io.schema import (
     sidecar_path,
     where,
 )
-from fsrlab.io.shown import shown_list
+from fsrlab.io.shown import shown, shown_list
 
 __all__ = [
     "read_table",
@@ -101,6 +101,12 @@ class Run:
 
     def __contains__(self, name: str) -> bool:
         return name in self.columns
+
+    def __repr__(self) -> str:
+        """A summary: the file, the rows and the columns (not the numbers)."""
+        notes = ", an incomplete last line dropped" if self.truncated else ""
+        notes += f", {len(self.skipped)} bad rows skipped" if self.skipped else ""
+        return f"{type(self).__name__}({shown(str(self.path))}, {self.n_rows} rows, columns {_names(list(self.columns))}{notes})"
 
     def require(self, *names: str) -> None:
         """Raise :class:`RunFormatError` naming the first of ``names`` the run lacks."""

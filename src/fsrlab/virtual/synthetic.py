@@ -15,11 +15,12 @@ the 10-bit A0 reading.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from fsrlab.circuits.circuit import PAPER_CIRCUIT, PAPER_OPAMP, LM555Circuit, OpAmpReadout
+from fsrlab.io.runformat import Run
 
 __all__ = ["triangle_stress", "SyntheticRun", "synthetic_run"]
 
@@ -57,27 +58,44 @@ def triangle_stress(cycles: int = 3, peak_pa: float = 50e3, points_per_ramp: int
     return np.concatenate([np.tile(one, cycles), [start_pa]])
 
 
-@dataclass
-class SyntheticRun:
-    """A synthetic run: columns of the run format and its sidecar metadata.
+class SyntheticRun(Run):
+    """A synthetic run: a :class:`~fsrlab.io.runformat.Run` (in memory: its ``path``, ``synthetic.csv``, only
+    names it) whose columns also hold the noiseless truth, left out when it is written.
 
     Parameters
     ----------
+    path : Path
+        The name the run goes by until it is written.
     columns : dict of str to ndarray
         ``time_s``, ``stress_pa``, ``frequency_hz``, ``duty_cycle``, ``voltage_v``, ``periods``,
-        ``cycle``, ``direction`` and the noiseless truth ``c_fsr_farad``, ``r_fsr_ohm``.
+        ``cycle``, ``direction`` and the noiseless truth ``c_fsr_farad``, ``r_fsr_ohm`` (:data:`TRUTH`).
     metadata : dict
         Sidecar content (circuit, sensor, origin with every setting).
+    truncated, skipped
+        As a loaded run's: False and none (nothing was read from a file).
     """
 
-    columns: dict
-    metadata: dict
+    TRUTH = ("c_fsr_farad", "r_fsr_ohm")
+    """The truth columns: the sensor's C_FSR [F] and R_FSR [Ω] behind each reading, without noise."""
 
     def write(self, path, include_truth: bool = False):
-        """Write the run (see :func:`fsrlab.io.runwriter.write_run`); the truth columns only if asked."""
+        """Write the run (see :func:`fsrlab.io.runwriter.write_run`); the truth columns only if asked.
+
+        Parameters
+        ----------
+        path : str or path-like
+            The run's CSV (its sidecar is written beside it).
+        include_truth : bool
+            Also write :data:`TRUTH`.
+
+        Returns
+        -------
+        Path
+            The CSV written.
+        """
         from fsrlab.io.runwriter import write_run
 
-        cols = {k: v for k, v in self.columns.items() if include_truth or k not in ("c_fsr_farad", "r_fsr_ohm")}
+        cols = {k: v for k, v in self.columns.items() if include_truth or k not in self.TRUTH}
         return write_run(path, cols, self.metadata)
 
 
@@ -117,6 +135,7 @@ def synthetic_run(cycles: int = 3, peak_pa: float = 50e3, points_per_ramp: int =
     Returns
     -------
     SyntheticRun
+        A :class:`~fsrlab.io.runformat.Run` (``fl.calibrate`` and every function taking a run take it).
         Columns ``time_s`` (start of each window), ``stress_pa``, ``frequency_hz``, ``duty_cycle``,
         ``voltage_v``, ``periods``, ``cycle`` (:func:`fsrlab.physics.history.cycle_numbers`),
         ``direction`` and the truth; metadata with ``circuit`` and ``opamp`` (their ``to_dict``).
@@ -176,4 +195,4 @@ def synthetic_run(cycles: int = 3, peak_pa: float = 50e3, points_per_ramp: int =
                    "VirtualFSR -> LM555 astable and op-amp (eq. 38) -> fsrlab.virtual.meter"),
         "notes": "synthetic data, not a measurement",
     }
-    return SyntheticRun(columns=cols, metadata=meta)
+    return SyntheticRun(path=Path("synthetic.csv"), columns=cols, metadata=meta)
