@@ -32,6 +32,7 @@ from __future__ import annotations
 import datetime as _dt
 import json
 import math
+import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -40,6 +41,7 @@ import numpy as np
 
 from fsrlab.acquisition.protocol import HX711_MAX, HX711_MIN
 from fsrlab.errors import FsrlabError, ParameterError
+from fsrlab.physics.params import check_at_least, check_between, check_finite, check_int, check_positive, float_array
 from fsrlab.units import STANDARD_GRAVITY
 
 __all__ = ["HX711_RATES", "STANDARD_GRAVITY", "TARE_STABILITY", "LoadCellModel", "WindowReference",
@@ -100,20 +102,16 @@ class LoadCellModel:
     phase_s: float = 0.0037
 
     def __post_init__(self) -> None:
-        if self.rate_sps not in HX711_RATES:
-            raise ParameterError(f"must be 10 or 80 samples/s, got {self.rate_sps!r}", parameter="rate_sps")
-        if not (math.isfinite(self.scale_counts_per_n) and self.scale_counts_per_n > 0):
-            raise ParameterError(f"must be > 0 count/N, got {self.scale_counts_per_n!r}",
-                                 parameter="scale_counts_per_n")
-        if not (math.isfinite(self.noise_counts) and self.noise_counts >= 0):
-            raise ParameterError(f"must be >= 0 count, got {self.noise_counts!r}", parameter="noise_counts")
-        if not (math.isfinite(self.capacity_n) and self.capacity_n > 0):
-            raise ParameterError(f"must be > 0 N, got {self.capacity_n!r}", parameter="capacity_n")
-        for name in ("offset_counts", "drift_counts_per_s"):
-            if not math.isfinite(getattr(self, name)):
-                raise ParameterError(f"must be finite, got {getattr(self, name)!r}", parameter=name)
-        if not 0 <= self.phase_s < 1.0 / self.rate_sps:
-            raise ParameterError(f"must be in [0, {1.0 / self.rate_sps:g}) s, got {self.phase_s!r}", parameter="phase_s")
+        rate = self.rate_sps
+        if isinstance(rate, bool) or not isinstance(rate, (int, float, np.integer, np.floating)) \
+                or rate not in HX711_RATES:
+            raise ParameterError(f"must be 10 or 80 samples/s, got {rate!r}", parameter="rate_sps")
+        check_positive("scale_counts_per_n", self.scale_counts_per_n, "count/N", scalar=True)
+        check_at_least("noise_counts", self.noise_counts, 0.0, "count", scalar=True)
+        check_positive("capacity_n", self.capacity_n, "N", scalar=True)
+        check_finite("offset_counts", self.offset_counts, scalar=True)
+        check_finite("drift_counts_per_s", self.drift_counts_per_s, scalar=True)
+        check_between("phase_s", self.phase_s, 0.0, 1.0 / rate, "s", upper_open=True, scalar=True)
 
     @property
     def period_s(self) -> float:
@@ -207,6 +205,15 @@ def window_reference(model: LoadCellModel | None, force_at: Callable[[np.ndarray
     """
     if model is None:
         return WindowReference(0, 0, 0)
+    if not isinstance(model, LoadCellModel):
+        raise ParameterError(f"must be a LoadCellModel or None, got {type(model).__name__}", parameter="model")
+    if not callable(force_at):
+        raise ParameterError(f"must be a function of time, got {type(force_at).__name__}", parameter="force_at")
+    check_finite("t0_s", t0_s, scalar=True)
+    check_finite("t1_s", t1_s, scalar=True)
+    if rng is not None and not isinstance(rng, np.random.Generator):
+        raise ParameterError(f"must be a numpy.random.Generator or None, got {type(rng).__name__}", parameter="rng")
+    substeps = check_int("substeps", substeps, 1)
     times = model.conversion_times(t0_s, t1_s)
     if times.size == 0:  # a slow HX711 between conversions: it still answers (ref_ok 1)
         return WindowReference(1, 0, 0)
@@ -235,8 +242,20 @@ def raw_to_force(raw, offset_counts: float, scale_counts_per_n: float):
     float or ndarray
         [N]; NaN where ``raw`` is NaN.
     """
-    force = (np.asarray(raw, dtype=float) - offset_counts) / scale_counts_per_n
+    check_finite("offset_counts", offset_counts, scalar=True)
+    check_positive("scale_counts_per_n", scale_counts_per_n, "count/N", scalar=True)
+    force = (float_array("raw", raw) - offset_counts) / scale_counts_per_n
     return float(force) if force.ndim == 0 else force
+
+
+def _readings(counts) -> np.ndarray:
+    """The finite conversions of ``counts`` (None and NaN entries left out); one error naming ``counts`` for
+    anything but a sequence of numbers. [count]"""
+    if counts is None or isinstance(counts, (str, bytes, dict)) or np.ndim(counts) != 1:
+        raise ParameterError(f"must be a sequence of HX711 conversions, got {type(counts).__name__}",
+                             parameter="counts")
+    c = float_array("counts", [math.nan if x is None else x for x in counts])
+    return c[np.isfinite(c)]
 
 
 def _stats(counts: Sequence[float]) -> tuple[float, float, int]:
@@ -349,14 +368,23 @@ def load_loadcell(path) -> LoadCellCalibration:
 
     Raises
     ------
+    TypeError, ParameterError
+        ``path`` is not a file name, or is empty.
     LoadCellError
-        One line naming the file and the key for anything that is not a load-cell calibration.
+        One line naming the file and the key for anything that is not a load-cell calibration; a directory or a
+        missing file with ``parameter`` ``"path"``.
     OSError
         The file cannot be read.
     """
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"path: must be a file name, got {type(path).__name__}")
+    if not os.fspath(path).strip():
+        raise ParameterError("is empty; give the load-cell calibration's file", parameter="path")
     p = Path(path)
     if p.is_dir():
-        raise LoadCellError(f"{p}: is a directory, not a load-cell calibration file")
+        raise LoadCellError(f"{p}: is a directory, not a load-cell calibration file", parameter="path")
+    if not p.exists():
+        raise LoadCellError(f"{p}: no such file; write one with fsrlab loadcell tare", parameter="path")
     try:
         d = json.loads(p.read_text(encoding="utf-8"), parse_constant=lambda c: math.nan)
     except UnicodeDecodeError:
@@ -406,7 +434,9 @@ def tare_from_readings(counts: Sequence[float], capacity_n: float | None = None,
     LoadCellError
         Too few conversions or an unstable reading (the message says which and by how much).
     """
-    c = np.asarray([x for x in counts if x is not None and math.isfinite(x)], dtype=float)
+    c = _readings(counts)
+    if capacity_n is not None:
+        check_positive("capacity_n", capacity_n, "N", scalar=True)
     span = capacity_n * scale_hint_counts_per_n if capacity_n and scale_hint_counts_per_n else None
     why = _stability(c, span)
     if why:
@@ -446,11 +476,11 @@ def scale_from_readings(cal: LoadCellCalibration, counts: Sequence[float], mass_
     LoadCellError
         No conversions, an unstable reading, or a reading not above the tare.
     """
-    if not (math.isfinite(mass_kg) and mass_kg > 0):
-        raise LoadCellError(f"mass must be > 0 kg, got {mass_kg!r}")
-    if not (math.isfinite(gravity_m_s2) and gravity_m_s2 > 0):
-        raise LoadCellError(f"gravity must be > 0 m/s², got {gravity_m_s2!r}")
-    c = np.asarray([x for x in counts if x is not None and math.isfinite(x)], dtype=float)
+    if not isinstance(cal, LoadCellCalibration):
+        raise ParameterError(f"must be a LoadCellCalibration (a tare), got {type(cal).__name__}", parameter="cal")
+    check_positive("mass_kg", mass_kg, "kg", scalar=True)
+    check_positive("gravity_m_s2", gravity_m_s2, "m/s²", scalar=True)
+    c = _readings(counts)
     force = mass_kg * gravity_m_s2
     estimate = (float(np.mean(c)) - cal.offset_counts) / force if c.size else 0.0
     why = _stability(c, abs(estimate) * cal.capacity_n if cal.capacity_n else None)

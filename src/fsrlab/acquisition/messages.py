@@ -35,7 +35,17 @@ def decode_sums(periods, sum_period_ticks, sum_high_ticks):
     """
     import numpy as np
 
-    n, p, h = (np.asarray(x, dtype=float) for x in (periods, sum_period_ticks, sum_high_ticks))
+    from fsrlab.physics.params import float_array
+
+    n, p, h = (float_array(name, x) for name, x in
+               (("periods", periods), ("sum_period_ticks", sum_period_ticks), ("sum_high_ticks", sum_high_ticks)))
+    try:
+        n, p, h = np.broadcast_arrays(n, p, h)
+    except ValueError:
+        from fsrlab.errors import ParameterError
+
+        raise ParameterError(f"must have the shape of periods {n.shape} and sum_period_ticks {p.shape}, got {h.shape}",
+                             parameter="sum_high_ticks") from None
     with np.errstate(invalid="ignore", divide="ignore"):
         f = np.where(n > 0, n * F_CPU / p, math.nan)
         duty = np.where(n > 0, h / p, math.nan)

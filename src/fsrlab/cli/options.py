@@ -279,7 +279,7 @@ def loadcell_option(path: Path | None, option: str = "--loadcell", scaled: bool 
     try:
         cal = load_loadcell(path)
     except (LoadCellError, OSError) as exc:
-        fail(str(exc), option)
+        fail(getattr(exc, "reason", None) or str(exc), option)  # the file's error, without the parameter's name
     if scaled and not cal.scaled:
         fail(f"{path} has a tare but no scale factor: run fsrlab loadcell scale --mass 500g --cal {path}", option)
     return cal

@@ -66,6 +66,7 @@ from fsrlab.acquisition.protocol import (
 )
 from fsrlab.errors import ParameterError
 from fsrlab.hardware import F_CPU
+from fsrlab.physics.params import check_at_least, check_between, check_int
 from fsrlab.physics.sensor import A201_AREA_M2
 from fsrlab.virtual.meter import MeterState, measure
 from fsrlab.virtual.sources import PhysicsSource, Signal, SignalSource
@@ -106,13 +107,10 @@ class Faults:
 
     def __post_init__(self) -> None:
         for name in ("corrupt", "drop", "garbage"):
-            v = getattr(self, name)
-            if not 0.0 <= v <= 1.0:
-                raise ParameterError(f"must be in 0..1, got {v!r}", parameter=name)
+            check_between(name, getattr(self, name), 0.0, 1.0, scalar=True)
         for name in ("reset_after", "unplug_after"):
-            v = getattr(self, name)
-            if v is not None and v < 0:
-                raise ParameterError(f"must be >= 0 frames, got {v!r}", parameter=name)
+            if getattr(self, name) is not None:
+                check_int(name, getattr(self, name), 0)
 
 
 @dataclass
@@ -185,16 +183,17 @@ class VirtualDevice:
     def __init__(self, source: SignalSource | None = None, frequency_noise: float = 1e-3, jitter_s: float = 20e-9,
                  adc_noise_v: float = 2e-3, faults: Faults | None = None, seed: int | None = None,
                  load_cell: LoadCellModel | None = LoadCellModel(), speed: str = "realtime") -> None:
-        if speed not in SPEEDS:
+        if not isinstance(speed, str) or speed not in SPEEDS:
             raise ParameterError(f"must be one of {', '.join(SPEEDS)}, got {speed!r}", parameter="speed")
         self.speed = speed
         self._sim_s = 0.0  # the device's clock with speed="max" [s]
         for name, v in (("frequency_noise", frequency_noise), ("jitter_s", jitter_s), ("adc_noise_v", adc_noise_v)):
-            if not v >= 0:
-                raise ParameterError(f"must be >= 0, got {v!r}", parameter=name)
+            check_at_least(name, v, 0.0, scalar=True)
         self.source = source if source is not None else PhysicsSource()
         self.frequency_noise, self.jitter_s, self.adc_noise_v = frequency_noise, jitter_s, adc_noise_v
         self.faults = faults or Faults()
+        if seed is not None:
+            check_int("seed", seed, 0)
         self._rng = np.random.default_rng(seed)
         if load_cell is not None and not isinstance(load_cell, LoadCellModel):
             raise ParameterError(f"must be a LoadCellModel or None, got {type(load_cell).__name__}",
