@@ -19,8 +19,9 @@ Accepted outcomes (the contract of ``fsrlab/errors.py`` and docs/architecture.md
   model).
 
 Anything else fails: AttributeError, KeyError, IndexError, ZeroDivisionError, numpy and scipy errors, a bare
-``ValueError``, an ``OSError``, an error naming another parameter or none, or a call taking over
-:data:`CALL_SECONDS`.
+``ValueError``, an ``OSError``, an error naming another parameter or none, a call taking over
+:data:`CALL_SECONDS`, and a call that changes or removes a file that was there (the inputs' SHA-256 before and
+after: a wrong argument never replaces an input, its sidecar or an existing output).
 
 Reference: the property above (an error's parameter is the argument that was wrong), checked on fixed,
 deterministic inputs; no randomness. One test per (callable, parameter): its id reads
@@ -33,6 +34,7 @@ Run on its own: ``pytest tests/test_api_fuzz.py -q``.
 from __future__ import annotations
 
 import enum
+import hashlib
 import importlib
 import inspect
 import math
@@ -425,6 +427,9 @@ OVERRIDES: dict[str, dict[str, Callable[[], object]]] = {
     "fsrlab.io.outputs.check_output": {"path": lambda: "out.csv", "option": lambda: "out"},
     "fsrlab.io.outputs.refuse_inputs": {"path": lambda: "out.csv", "option": lambda: "out",
                                         "inputs": lambda: ["bench.csv"]},
+    "fsrlab.io.outputs.write_text_atomic": {"path": lambda: "new.txt"},
+    "fsrlab.io.outputs.write_bytes_atomic": {"path": lambda: "new.bin"},
+    "fsrlab.io.outputs.atomic_run": {"path": lambda: "new.csv"},
     "fsrlab.io.outputs.same_file": {"a": lambda: "bench.csv", "b": lambda: "other.csv"},
     "fsrlab.io.runformat.read_json_document": {"path": lambda: Path("bench.meta.json"),
                                                "format_name": lambda: "fsrlab-run", "version": lambda: 1,
@@ -581,7 +586,8 @@ def bad_values(param: inspect.Parameter, strict: bool = False) -> list[tuple[str
             values += [("empty array", np.array([])), ("array [1, 2]", np.array([1.0, 2.0]))]
     elif kind == "path":
         values += [(f"missing file {MISSING!r}", MISSING), ("a directory 'adir'", "adir"), ("empty ''", ""),
-                   ("int 5", 5)]
+                   ("int 5", 5), ("an existing run 'other.csv'", "other.csv"),
+                   ("a run's sidecar 'other.meta.json'", "other.meta.json")]
     elif kind == "object":
         values += [(f"missing path {MISSING!r}", MISSING), ("int 5", 5), ("a directory 'adir'", Path("adir"))]
     elif kind == "other":
@@ -676,6 +682,13 @@ def _cases():
 
 
 XFAIL: dict[tuple[str, str], str] = {}
+REPLACES = {
+    "fsrlab.io.outputs.write_text_atomic": "the atomic write itself: its callers' output policy chose the path",
+    "fsrlab.io.outputs.write_bytes_atomic": "the atomic write itself: its callers' output policy chose the path",
+    "fsrlab.io.outputs.replace_run": "renames a run into place: its callers' output policy chose the path",
+    "fsrlab.io.calibration_file.write_calibration_document": "the file's writer under save_calibration's policy",
+}
+"""Writers whose job is to replace their target (the output policy is their callers'): not held to the file hashes."""
 NOT_FUZZED = {
     ("fsrlab.physics.params.check_at_least", "lower"): "a bound the library's own code passes",
     ("fsrlab.physics.params.check_between", "lower"): "a bound the library's own code passes",
@@ -699,6 +712,11 @@ ALIASES = {
 }
 """(callable, parameter) -> the name its errors carry instead: the field name the caller passes as ``name``."""
 """(callable, parameter) cases known to fail, each with the module that owns the fix."""
+
+
+def _hashes(directory: Path) -> dict[str, str]:
+    """SHA-256 of every file in ``directory`` (the examples' copies and what the calls wrote), by name."""
+    return {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in directory.iterdir() if p.is_file()}
 
 
 @pytest.fixture
@@ -731,15 +749,24 @@ def test_a_wrong_argument_is_named(workdir, qualname, parameter):
             full[parameter] = _valid(qualname, target)
         except LookupError:
             pytest.skip(f"{qualname}: no valid value known for {parameter!r}")
+    before = _hashes(workdir)
     _, exc, _ = _call(fn, full)
     if exc is not None:
         pytest.skip(f"{qualname}: the valid call raises {type(exc).__name__}: {str(exc)[:120]}")
+    # Watched: the files that were there and the valid call left alone (what it wrote or moved is its business).
+    after_valid = _hashes(workdir)
+    before = {name: digest for name, digest in before.items() if after_valid.get(name) == digest}
     failures = []
     for label, value in bad_values(target, strict=qualname.startswith(STRICT)):
         _, exc, warned = _call(fn, {**base, parameter: value})
         why = verdict(exc, ALIASES.get((qualname, parameter), parameter))
         if not why and warned and qualname.startswith(STRICT):
             why = f"a RuntimeWarning let out: {warned[0][:120]}"
+        after = _hashes(workdir)
+        touched = sorted(name for name, digest in before.items() if after.get(name) != digest)
+        if touched and qualname not in REPLACES:  # a wrong argument never changes or removes a file that was there
+            why = f"{why + '; ' if why else ''}changed or removed {', '.join(touched)}"
+            before = {name: digest for name, digest in before.items() if name not in touched}
         if why:
             failures.append(f"  {qualname}({parameter}={label}): {why}")
     assert not failures, f"{qualname}: {len(failures)} wrong value(s) of {parameter!r} not named:\n" + "\n".join(
