@@ -780,3 +780,16 @@ def test_the_fuzzer_covers_the_public_api():
     for layer in ("physics", "circuits", "metrics", "io", "virtual", "calibration", "bench", "acquisition"):
         assert any(q.startswith(f"fsrlab.{layer}.") for q in CALLABLES), layer
     assert "fsrlab.units.parse_eng" in CALLABLES
+
+
+def test_the_verdict_accepts_only_an_error_naming_the_parameter():
+    from fsrlab.errors import FileFormatError, ParameterError
+
+    assert verdict(None, "r_ohm") is None
+    assert verdict(ParameterError("must be > 0 Ω", parameter="r_ohm"), "r_ohm") is None
+    assert verdict(FileFormatError("bench.csv: not a run (r_ohm missing)"), "r_ohm") is None  # named in the text
+    assert verdict(TypeError("r_ohm: must be a number, got str"), "r_ohm") is None
+    for wrong in (ParameterError("must be > 0", parameter="c_fsr_farad"), TypeError("must be real number, not str"),
+                  ValueError("r_ohm: must be > 0"), KeyError("r_ohm"), AttributeError("'str' has no attribute 'x'"),
+                  ZeroDivisionError("division by zero"), FileNotFoundError("r_ohm"), CallTimeout()):
+        assert verdict(wrong, "r_ohm") is not None, repr(wrong)
