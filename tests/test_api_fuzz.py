@@ -632,10 +632,13 @@ def _call(fn: Callable, kwargs: dict):
     return value, exc, [str(w.message) for w in caught if issubclass(w.category, RuntimeWarning)]
 
 
-def verdict(exc: BaseException | None, parameter: str) -> str | None:
-    """None when the outcome is accepted, else why not."""
+def verdict(exc: BaseException | None, parameter: str | tuple[str, ...]) -> str | None:
+    """None when the outcome is accepted, else why not (``parameter``: the name, or the names, it may carry)."""
     if exc is None:
         return None
+    if isinstance(parameter, tuple):
+        whys = [verdict(exc, name) for name in parameter]
+        return None if None in whys else whys[0]
     text = str(exc)
     if isinstance(exc, CallTimeout):
         return f"took over {CALL_SECONDS:g} s"
@@ -709,6 +712,9 @@ ALIASES = {
     # A circuit's parts as a mapping: its errors name the sidecar's and the calibration file's key, circuit.
     ("fsrlab.circuits.circuit.LM555Circuit.from_dict", "d"): "circuit",
     ("fsrlab.circuits.circuit.OpAmpReadout.from_dict", "d"): "circuit",
+    # The sensor's (low, high) ranges: a legitimate range the band cannot hold is the band's error.
+    ("fsrlab.circuits.design.design", "r_fsr_range_ohm"): ("r_fsr_range_ohm", "band_hz"),
+    ("fsrlab.circuits.design.design", "c_fsr_range_farad"): ("c_fsr_range_farad", "band_hz"),
 }
 """(callable, parameter) -> the name its errors carry instead: the field name the caller passes as ``name``."""
 """(callable, parameter) cases known to fail, each with the module that owns the fix."""

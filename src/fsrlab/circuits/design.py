@@ -172,8 +172,8 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
             best_per_variant[diode] = best
     if not best_per_variant:
         cap = f" (its top lowered to max_frequency_hz = {limit:g} Hz)" if capped else ""
-        raise ParameterError(f"no design keeps the sensor (r_fsr_range_ohm {rlo:g} … {rhi:g} Ω, c_fsr_range_farad "
-                             f"{clo:g} … {chi:g} F) inside the band{cap}: " + "; ".join(reasons), parameter="band_hz")
+        raise ParameterError(f"no design keeps the sensor (R_FSR {rlo:g} … {rhi:g} Ω, C_FSR {clo:g} … {chi:g} F) "
+                             f"inside the band{cap}: " + "; ".join(reasons), parameter="band_hz")
     chosen = max(best_per_variant.values(), key=lambda d: (d["merit"], d["margin"]))
     q = timer_resolution_s
 
