@@ -716,7 +716,7 @@ ALIASES = {
     ("fsrlab.circuits.design.design", "r_fsr_range_ohm"): ("r_fsr_range_ohm", "band_hz"),
     ("fsrlab.circuits.design.design", "c_fsr_range_farad"): ("c_fsr_range_farad", "band_hz"),
 }
-"""(callable, parameter) -> the name its errors carry instead: the field name the caller passes as ``name``."""
+"""(callable, parameter) -> the name (or names) its errors may carry instead, each with why."""
 """(callable, parameter) cases known to fail, each with the module that owns the fix."""
 
 

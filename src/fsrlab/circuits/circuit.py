@@ -121,7 +121,7 @@ class LM555Circuit:
         if not (math.isfinite(vcc) and vcc > 0):
             raise ParameterError(f"must be a finite supply voltage > 0 V, got {vcc!r}", parameter="vcc_v")
         if not (0 < control_v < vcc):
-            raise ParameterError(f"must be between 0 and vcc_v = {vcc:g} V, got {control_v!r}", parameter="control_v")
+            raise ParameterError(f"must be between 0 and Vcc = {vcc:g} V, got {control_v!r}", parameter="control_v")
         upper = control_v / vcc
         return cls(**{**parts, "lower_fraction": upper / 2, "upper_fraction": upper})
 

@@ -210,7 +210,7 @@ def thresholds_from_control(control_v: float, vcc_v: float = 5.0) -> tuple[float
     """
     check_vcc(vcc_v)
     if not (_is_number(control_v) and 0 < control_v < vcc_v):
-        raise ParameterError(f"must be between 0 and vcc_v = {vcc_v:g} V, got {control_v!r}", parameter="control_v")
+        raise ParameterError(f"must be between 0 and Vcc = {vcc_v:g} V, got {control_v!r}", parameter="control_v")
     upper = control_v / vcc_v
     return upper / 2, upper
 
@@ -437,7 +437,7 @@ def astable(r_ohm, r_fsr_ohm, c_fsr_farad, c_off_farad=0.0, diode: bool = False,
         raise ParameterError(f"must be finite and >= 0 F, got {c_fsr_farad!r}", parameter="c_fsr_farad")
     c = cf + co
     if np.any(c <= 0):
-        raise ParameterError("the timing capacitance c_fsr_farad + c_off_farad must be > 0 F", parameter="c_fsr_farad")
+        raise ParameterError("the timing capacitance C_FSR + C_off must be > 0 F", parameter="c_fsr_farad")
     r, rf, c, rd = broadcast(("r_ohm", r), ("r_fsr_ohm", rf), ("c_fsr_farad", c), ("discharge_ohm", rd))
     n = rf / r
     n_min = minimum_n_ratio(diode_drop_v, vcc_v, upper_fraction)

@@ -170,7 +170,7 @@ def netlist(r_ohm: float, r_fsr_ohm: float, c_fsr_farad: float, c_off_farad: flo
     check_positive("t_stop_s", t_stop_s, "s")
     check_positive("t_max_step_s", t_max_step_s, "s")
     if not c_fsr_farad + c_off_farad > 0:
-        raise ParameterError("the timing capacitance c_fsr_farad + c_off_farad must be > 0 F", parameter="c_fsr_farad")
+        raise ParameterError("the timing capacitance C_FSR + C_off must be > 0 F", parameter="c_fsr_farad")
     v_lo, v_hi = lower_fraction * vcc_v, upper_fraction * vcc_v
     lines = [
         "* fsrlab: LM555 astable with the FSR as timing element (Matute et al. 2018, Figs. 9b/13/16)",

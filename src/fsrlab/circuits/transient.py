@@ -267,7 +267,7 @@ def _sampled_parts(r_fsr_ohm, c_fsr_farad, c_off_farad, periods, t_stop_s, time_
         raise ParameterError("must be finite and >= 0 F", parameter="c_fsr_farad")
     cap = cf + c_off_farad
     if np.any(cap <= 0):
-        raise ParameterError("the timing capacitance c_fsr_farad + c_off_farad must be > 0 F", parameter="c_fsr_farad")
+        raise ParameterError("the timing capacitance C_FSR + C_off must be > 0 F", parameter="c_fsr_farad")
     return times, rf, cap
 
 
