@@ -73,10 +73,7 @@ EXCLUDED_MODULES = {
     "fsrlab.calibration.scoring": "calibrate()'s held-out scoring of prepared recordings (covered through calibrate)",
     "fsrlab.acquisition.serial_link": "opens serial ports",
     "fsrlab.acquisition.ports": "lists and probes the host's serial ports",
-    "fsrlab.acquisition.recorder": "record() drives a serial link; its pure helpers are covered by stream",
-    "fsrlab.acquisition.stream": "WindowStream and configure() drive a serial link",
     "fsrlab.acquisition.loadcell_reading": "reads a load cell through a serial link",
-    "fsrlab.acquisition.firmware": "runs avrdude and writes the sketch (covered by tests/cli/test_fuzz.py)",
     "fsrlab.virtual.twin.build": "compiles the simavr harness",
     "fsrlab.virtual.twin.process": "starts the simavr twin process",
     "fsrlab.virtual.twin.twin": "starts the simavr twin process",
@@ -87,6 +84,10 @@ EXCLUDED_MODULES = {
     "fsrlab.circuits.plotting": "draws figures (matplotlib), no computation",
 }
 EXCLUDED = {
+    "fsrlab.acquisition.recorder.record": "records from a serial link",
+    "fsrlab.acquisition.stream.WindowStream": "reads windows from a serial link",
+    "fsrlab.acquisition.stream.configure": "configures the meter on a serial link",
+    "fsrlab.acquisition.firmware.flash": "runs avrdude on a serial port",
     "fsrlab.circuits.circuit.LM555Circuit.with_control": "its parts are **parts (LM555Circuit's own, fuzzed there)",
     "fsrlab.calibration.result.Calibration": "built by calibrate() from a fitted model (covered through calibrate)",
     "fsrlab.calibration.selection.Selection": "calibrate()'s record of its choices, built by it",
@@ -447,6 +448,10 @@ OVERRIDES: dict[str, dict[str, Callable[[], object]]] = {
     "fsrlab.circuits.circuit.OpAmpReadout.from_dict": {"d": lambda: fsrlab.PAPER_OPAMP.to_dict()},
     "fsrlab.circuits.circuit.OpAmpReadout.conductance_s": {"v_out_v": lambda: 1.0},
     "fsrlab.circuits.mux.Multiplexer.timing_circuit": {"circuit": lambda: fsrlab.PAPER_CIRCUIT},
+    "fsrlab.acquisition.firmware.avrdude_command": {"port": lambda: "/dev/ttyACM0"},
+    "fsrlab.acquisition.firmware.check_intel_hex": {"path": lambda: str(
+        importlib.import_module("fsrlab.acquisition.firmware").hex_path())},
+    "fsrlab.acquisition.firmware.write_sketch": {"directory": lambda: "sketch"},
     "fsrlab.acquisition.protocol.parse_channels": {"text": lambda: "0,1"},
     "fsrlab.acquisition.protocol.encode_command": {"name": lambda: "WINDOW", "value": lambda: 100},
     "fsrlab.acquisition.protocol.parse_command": {"line": lambda: b"WINDOW 100\n"},
