@@ -448,6 +448,10 @@ OVERRIDES: dict[str, dict[str, Callable[[], object]]] = {
     "fsrlab.circuits.circuit.OpAmpReadout.from_dict": {"d": lambda: fsrlab.PAPER_OPAMP.to_dict()},
     "fsrlab.circuits.circuit.OpAmpReadout.conductance_s": {"v_out_v": lambda: 1.0},
     "fsrlab.circuits.mux.Multiplexer.timing_circuit": {"circuit": lambda: fsrlab.PAPER_CIRCUIT},
+    "fsrlab.bench.measurement.placement_means": {"run": lambda: _weights_run()},
+    "fsrlab.bench.measurement.placements_repeatability": {"placements": lambda: _placements(),
+                                                          "quantity": lambda: "frequency_hz"},
+    "fsrlab.bench.measurement.iso376_of_placements": {"placements": lambda: _placements()},
     "fsrlab.acquisition.firmware.avrdude_command": {"port": lambda: "/dev/ttyACM0"},
     "fsrlab.acquisition.firmware.check_intel_hex": {"path": lambda: str(
         importlib.import_module("fsrlab.acquisition.firmware").hex_path())},
@@ -515,6 +519,24 @@ def _loadcell_cal():
     from fsrlab.acquisition.loadcell import LoadCellCalibration
 
     return LoadCellCalibration(offset_counts=100.0, scale_counts_per_n=10.0)
+
+
+def _weights_run():
+    """A small dead-weight run (three placement cycles 0 → 100 g → 200 g → 100 g → 0), written here."""
+    loads = [0.0, 100.0, 200.0, 100.0, 0.0] * 3
+    rows = [(k, g, 1.0 if k % 5 < 3 else -1.0, k // 5) for k, g in enumerate(loads) for _ in range(4)]
+    step, load, direction, cycle = (np.array(c, dtype=float) for c in zip(*rows, strict=True))
+    freq = 1000.0 + 20.0 * load + np.arange(step.size) % 4
+    columns = {"time_s": 0.1 * np.arange(step.size), "frequency_hz": freq, "duty_cycle": np.full(step.size, 0.6),
+               "step": step, "load": load, "direction": direction, "cycle": cycle,
+               "force_nominal_n": load * 9.80665e-3}
+    if not Path("weights.csv").exists():
+        fsrlab.write_run("weights.csv", columns)
+    return fsrlab.load_run("weights.csv")
+
+
+def _placements():
+    return importlib.import_module("fsrlab.bench.measurement").placement_means(_weights_run())
 
 
 def _table4():
