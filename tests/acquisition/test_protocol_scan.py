@@ -46,10 +46,13 @@ def test_bad_mask(mask):
 
 
 @pytest.mark.parametrize("name, value", [("SCAN", 0), ("SCAN", 256), ("DWELL", 0), ("DWELL", 60001),
-                                         ("SETTLE", 101), ("SETTLE", None)])
+                                         ("SETTLE", 101), ("SETTLE", None), ("DWELL", 2.5), ("SCAN", "3"),
+                                         ("SETTLE", float("nan"))])
 def test_bad_scan_commands_are_refused_before_sending(name, value):
-    with pytest.raises(ValueError, match=name):
+    # Reference: the ranges docs/protocol.md gives (SCAN 1..255, DWELL 1..60000 ms, SETTLE 0..100).
+    with pytest.raises(ParameterError, match=name) as err:
         P.encode_command(name, value)
+    assert err.value.parameter == "value"
 
 
 @pytest.mark.parametrize("line, token", [(b"SCAN 0\n", "SCAN"), (b"DWELL 0\n", "DWELL"), (b"SETTLE 101\n", "SETTLE"),

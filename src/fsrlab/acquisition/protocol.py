@@ -19,9 +19,10 @@ References
 from __future__ import annotations
 
 import binascii
+import numbers
 from dataclasses import dataclass, field
 
-from fsrlab.errors import FsrlabError
+from fsrlab.errors import FsrlabError, ParameterError
 from fsrlab.hardware import ADC_BITS, ADC_COUNTS, ADC_V_PER_COUNT, ADC_VREF_V, CAPTURE_MAX_HZ, F_CPU, TICK_S
 
 __all__ = [
@@ -187,16 +188,16 @@ def encode_frame(kind: str, seq: int, fields=()) -> bytes:
 
     Raises
     ------
-    ValueError
+    ParameterError
         When ``kind``, ``seq`` or a field is not allowed, or the frame would be too long.
     """
     if kind not in FRAME_TYPES:
-        raise ValueError(f"kind must be one of {sorted(FRAME_TYPES)}, got {kind!r}")
+        raise ParameterError(f"must be one of {sorted(FRAME_TYPES)}, got {kind!r}", parameter="kind")
     if isinstance(seq, bool) or not isinstance(seq, int) or not 0 <= seq < SEQ_MODULO:
-        raise ValueError(f"seq must be an integer in 0..65535, got {seq!r}")
+        raise ParameterError(f"must be an integer in 0..65535, got {seq!r}", parameter="seq")
     lo, hi = FRAME_TYPES[kind]
     if not lo <= len(fields) <= hi:
-        raise ValueError(f"fields: a {kind} frame has {lo}..{hi} fields after SEQ, got {len(fields)}")
+        raise ParameterError(f"a {kind} frame has {lo}..{hi} fields after SEQ, got {len(fields)}", parameter="fields")
     signed = kind == "M" and len(fields) >= M_FIELDS_V2  # ref_mean (field 11) has a sign
     parts = [kind, str(seq)]
     for k, value in enumerate(fields):
@@ -204,17 +205,18 @@ def encode_frame(kind: str, seq: int, fields=()) -> bytes:
             value = int(value)
         if isinstance(value, int):
             if value < 0 and not (signed and k == M_FIELDS_V2 - 1):
-                raise ValueError(f"fields must be non-negative integers or tokens, got {value}")
+                raise ParameterError(f"must be non-negative integers or tokens, got {value}", parameter="fields")
             parts.append(str(value))
         else:
             token = str(value)
             if not token or not token.isascii() or not token.isprintable() or any(c in token for c in ",*$"):
-                raise ValueError(f"fields: token {token!r} must be non-empty printable ASCII without ',', '*', '$'")
+                raise ParameterError(f"token {token!r} must be non-empty printable ASCII without ',', '*', '$'",
+                                     parameter="fields")
             parts.append(token)
     payload = ",".join(parts).encode("ascii")
     line = b"$" + payload + b"*%04X\r\n" % crc16(payload)
     if len(line) > MAX_LINE:
-        raise ValueError(f"fields: frame is {len(line)} bytes, the maximum line length is {MAX_LINE}")
+        raise ParameterError(f"frame is {len(line)} bytes, the maximum line length is {MAX_LINE}", parameter="fields")
     return line
 
 
@@ -247,10 +249,10 @@ def max_frame_rate(baud: float, frame_bytes: int | None = None, bits_per_byte: i
         Frames per second. [1/s]
     """
     if not baud > 0:
-        raise ValueError(f"baud must be > 0, got {baud}")
+        raise ParameterError(f"must be > 0, got {baud}", parameter="baud")
     n = min_frame_length() if frame_bytes is None else int(frame_bytes)
     if n <= 0:
-        raise ValueError(f"frame_bytes must be > 0, got {frame_bytes}")
+        raise ParameterError(f"must be > 0, got {frame_bytes}", parameter="frame_bytes")
     return baud / bits_per_byte / n
 
 
@@ -532,19 +534,20 @@ def encode_command(name: str, value: int | None = None) -> bytes:
 
     Raises
     ------
-    ValueError
+    ParameterError
         When the command is unknown or the value is missing, superfluous or out of range.
     """
     key = str(name).upper()
     if key not in COMMANDS:
-        raise ValueError(f"name must be one of {', '.join(COMMANDS)}, got {name!r}")
+        raise ParameterError(f"must be one of {', '.join(COMMANDS)}, got {name!r}", parameter="name")
     allowed = COMMANDS[key]
     if allowed is None:
         if value is not None:
-            raise ValueError(f"value: {key} takes no value, got {value!r}")
+            raise ParameterError(f"{key} takes no value, got {value!r}", parameter="value")
         return key.encode("ascii") + b"\n"
-    if value is None or isinstance(value, bool) or int(value) != value or not allowed[0] <= value <= allowed[1]:
-        raise ValueError(f"value: {key} needs an integer in {allowed[0]}..{allowed[1]}, got {value!r}")
+    if not isinstance(value, numbers.Real) or isinstance(value, bool) or not allowed[0] <= value <= allowed[1] \
+            or value != int(value):
+        raise ParameterError(f"{key} needs an integer in {allowed[0]}..{allowed[1]}, got {value!r}", parameter="value")
     return f"{key} {int(value)}\n".encode("ascii")
 
 
@@ -616,8 +619,6 @@ def channel_mask(channels) -> int:
     ParameterError
         An empty set, a repeated channel or one outside 0..7 (``parameter="channels"``).
     """
-    from fsrlab.errors import ParameterError
-
     chans = list(channels)
     if not chans:
         raise ParameterError("at least one channel is needed", parameter="channels")
@@ -647,8 +648,6 @@ def mask_channels(mask: int) -> tuple[int, ...]:
     -------
     tuple of int
     """
-    from fsrlab.errors import ParameterError
-
     if isinstance(mask, bool) or not isinstance(mask, int) or not 1 <= mask <= SCAN_MASK_MAX:
         raise ParameterError(f"a channel mask is an integer 1..{SCAN_MASK_MAX}, got {mask!r}", parameter="mask")
     return tuple(k for k in range(CHANNELS) if mask >> k & 1)
@@ -672,8 +671,6 @@ def parse_channels(text: str) -> tuple[int, ...]:
     ParameterError
         Anything else, a repeated channel or one outside 0..7 (``parameter="channels"``).
     """
-    from fsrlab.errors import ParameterError
-
     chans: list[int] = []
     for part in str(text).replace(" ", "").split(","):
         lo, sep, hi = part.partition("-")
