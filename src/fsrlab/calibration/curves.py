@@ -34,6 +34,7 @@ from fsrlab.calibration.monotone import (
     readout_variable,
 )
 from fsrlab.errors import FileFormatError, ParameterError
+from fsrlab.physics.params import check_at_least, check_finite, check_int, float_array
 
 __all__ = ["FAMILIES", "PolynomialCurve", "SplineCurve", "curve_template", "static_system", "fit_static",
            "curve_from_dict"]
@@ -230,9 +231,18 @@ def curve_template(x, family: str, size: int, variable: str, sign: int, adc: flo
     variable, sign, adc
         See :func:`fsrlab.calibration.monotone.readout_variable`.
     """
-    x = np.asarray(x, dtype=float)
+    x = float_array("x", x)
+    if x.ndim != 1 or x.size < 2 or not np.all(np.isfinite(x)):
+        raise ParameterError(f"must be two or more finite readings, got {x.size if x.ndim == 1 else x.shape}",
+                             parameter="x")
+    check_int("size", size, lower=0 if family == "spline" else 1)
+    if family not in FAMILIES:
+        raise ParameterError(f"must be one of {', '.join(FAMILIES)}, got {family!r}", parameter="family")
+    try:
+        v = readout_variable(x, variable, sign, adc)
+    except ParameterError as exc:  # its name is this function's variable
+        raise ParameterError(exc.reason, parameter="variable" if exc.parameter == "name" else exc.parameter) from None
     rng = (float(x.min()), float(x.max()))
-    v = readout_variable(x, variable, sign, adc)
     lo, hi = float(v.min()), float(v.max())
     if family == "piecewise":
         knots = knots_for(v, size)
@@ -278,7 +288,13 @@ def fit_static(x, y, family: str, size: int, variable: str, sign: int, adc: floa
     lam : float
         Ridge weight on the change of slope between segments or basis functions, relative to the number of readings. [1]
     """
-    return static_system(x, y, family, size, variable, sign, adc).solve(lam)[0]
+    template = curve_template(x, family, size, variable, sign, adc)  # checks x and the curve's arguments
+    y = float_array("y", y)
+    if y.shape != np.shape(x):
+        raise ParameterError(f"must have one value per reading, got shape {y.shape}", parameter="y")
+    check_finite("y", y)
+    check_at_least("lam", lam, 0.0, scalar=True)
+    return curve_system(template, x, y).solve(lam)[0]
 
 
 def curve_from_dict(d: dict) -> StaticCurve:
@@ -289,11 +305,13 @@ def curve_from_dict(d: dict) -> StaticCurve:
     d : dict
         The curve's file form.
     """
+    if not isinstance(d, dict):
+        raise TypeError(f"d: must be a curve's file form (a dict), got {type(d).__name__}")
     family = d.get("family", "piecewise")
-    if family == "polynomial":
-        return PolynomialCurve.from_dict(d)
-    if family == "spline":
-        return SplineCurve.from_dict(d)
-    if family == "piecewise":
-        return MonotoneCurve.from_dict(d)
+    kinds = {"polynomial": PolynomialCurve, "spline": SplineCurve, "piecewise": MonotoneCurve}
+    if family in kinds:
+        try:
+            return kinds[family].from_dict(d)
+        except (KeyError, TypeError) as exc:  # a field missing, or not a number
+            raise FileFormatError(f"a static curve's file form without a valid {exc}", parameter="d") from None
     raise FileFormatError(f"static curve: family must be one of {', '.join(FAMILIES)}, got {family!r}")

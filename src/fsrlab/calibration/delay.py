@@ -18,6 +18,9 @@ from collections import deque
 
 import numpy as np
 
+from fsrlab.errors import ParameterError
+from fsrlab.physics.params import check_at_least, check_finite, check_positive, float_array
+
 __all__ = ["DELAY_ROWS", "DELAY_MAX_S", "delay_trials", "delayed", "DelayLine"]
 
 #: Delays of the reference tried first by the held-out calibration, in readings of the calibration data:
@@ -41,11 +44,15 @@ def delay_trials(row_s: float, best: float | None = None) -> list[float]:
     best : float, optional
         One of the delays tried first, the one to refine around. [1]
     """
+    check_positive("row_s", row_s, "s", scalar=True)
+    check_finite("row_s", row_s, scalar=True)
     grid = list(DELAY_ROWS)
-    while grid and row_s > 0 and grid[-1] * row_s < DELAY_MAX_S:
+    while grid and grid[-1] * row_s < DELAY_MAX_S:
         grid.append(2.0 * grid[-1])
     if best is None:
         return grid
+    if isinstance(best, bool) or not isinstance(best, (int, float, np.number)) or best not in grid:
+        raise ParameterError(f"must be one of the delays tried first, {grid}, got {best!r}", parameter="best")
     i = grid.index(best)
     finer = {round(4.0 * (best + (n - best) * f)) / 4.0 for n in grid[max(i - 1, 0):i + 2] if n != best
              for f in (0.25, 0.5, 0.75)}
@@ -68,10 +75,16 @@ def delayed(t, x, delay_s: float) -> np.ndarray:
     delay_s : float
         The delay (>= 0). [s]
     """
-    x = np.asarray(x, dtype=float)
+    x = float_array("x", x)
+    if x.ndim != 1:
+        raise ParameterError(f"must be a sequence of readings, got shape {x.shape}", parameter="x")
+    check_at_least("delay_s", delay_s, 0.0, "s", scalar=True)
+    check_finite("delay_s", delay_s, scalar=True)
     if not delay_s > 0 or x.size == 0:
         return x
-    t = np.asarray(t, dtype=float)
+    t = float_array("t", t)
+    if t.shape != x.shape:
+        raise ParameterError(f"must have one time per reading ({x.shape}), got shape {t.shape}", parameter="t")
     back = np.flatnonzero(np.diff(t) < 0) + 1  # where the time goes back: each stretch on its own
     if back.size:
         return np.concatenate([delayed(tt, xx, delay_s) for tt, xx in zip(np.split(t, back), np.split(x, back), strict=True)])

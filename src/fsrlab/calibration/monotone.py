@@ -32,6 +32,7 @@ from functools import cached_property
 import numpy as np
 
 from fsrlab.errors import FileFormatError, ParameterError
+from fsrlab.physics.params import check_positive, float_array
 
 __all__ = ["VARIABLES", "TOP_SLOPE_SPAN", "adc_full_scale", "readout_variable", "StaticCurve", "MonotoneCurve",
            "bounded_solve", "CurveSystem", "curve_system"]
@@ -56,11 +57,17 @@ def adc_full_scale(x) -> float | None:
     x : array_like
         Readings (NaN ignored).
     """
-    x = np.asarray(x, dtype=float)
+    x = float_array("x", x)
     x = x[np.isfinite(x)]
     if x.size == 0 or x.min() < 0 or not np.all(x == np.round(x)):
         return None
     return next((a for a in _ADC if x.max() <= a), None)
+
+
+def check_sign(sign) -> None:
+    """Raise an error naming ``sign`` unless it is +1 or −1 (whether the readout rises with force)."""
+    if isinstance(sign, bool) or not isinstance(sign, (int, float, np.number)) or sign not in (1, -1):
+        raise ParameterError(f"must be 1 (the readout rises with force) or -1, got {sign!r}", parameter="sign")
 
 
 def readout_variable(x, name: str, sign: int, adc: float | None) -> np.ndarray:
@@ -80,7 +87,10 @@ def readout_variable(x, name: str, sign: int, adc: float | None) -> np.ndarray:
         Full scale of the readout: an ADC's largest count, or a divider's supply for its voltage. [unit
         of the readout]
     """
-    x = np.asarray(x, dtype=float)
+    x = float_array("x", x)
+    check_sign(sign)
+    if adc is not None and adc is not False:  # None (or False): no full scale
+        check_positive("adc", adc, scalar=True)
     if name == "readout":
         return sign * x
     if name == "conductance" and adc:
@@ -93,7 +103,7 @@ def readout_variable(x, name: str, sign: int, adc: float | None) -> np.ndarray:
         return -sign / np.maximum(x, np.finfo(float).tiny)
 
     raise ParameterError(f"must be one of {', '.join(VARIABLES)} (conductance only for ADC counts), got {name!r}",
-                         parameter="variable")
+                         parameter="name")
 
 
 def _basis(v: np.ndarray, knots: np.ndarray, extra: int = 0) -> np.ndarray:

@@ -26,6 +26,9 @@ import math
 
 import numpy as np
 
+from fsrlab.errors import ParameterError
+from fsrlab.physics.params import check_between, float_array
+
 __all__ = ["PLAY_THRESHOLDS", "CREEP_TIME_CONSTANTS_S", "CREEP_START", "DIRECTION_THRESHOLD", "memory_features",
            "directions", "MemoryState"]
 
@@ -112,6 +115,23 @@ def _steps(t: np.ndarray) -> np.ndarray:
     return np.where(np.isfinite(dt) & (dt > 0), dt, med)
 
 
+def _series(name: str, value) -> np.ndarray:
+    """``value`` as a one-dimensional float array, or an error naming ``name``."""
+    v = float_array(name, value)
+    if v.ndim != 1:
+        raise ParameterError(f"must be a sequence of numbers in time order, got shape {v.shape}", parameter=name)
+    return v
+
+
+def _constants(name: str, value, upper: float = math.inf) -> tuple:
+    """``value`` as a tuple of numbers above zero (below ``upper``), or an error naming ``name``."""
+    v = float_array(name, value)
+    if v.ndim != 1 or not np.all(np.isfinite(v)) or np.any(v <= 0) or np.any(v >= upper):
+        raise ParameterError(f"must be a sequence of numbers above 0{f' and below {upper:g}' if upper < math.inf else ''}"
+                             f", got {value!r}", parameter=name)
+    return tuple(v.tolist())
+
+
 def memory_features(u, t, thresholds=PLAY_THRESHOLDS, time_constants=CREEP_TIME_CONSTANTS_S,
                     scaled: bool = False, creep_start: float = 1.0) -> np.ndarray:
     """Hysteresis and creep features of a level sequence, in time order.
@@ -140,8 +160,9 @@ def memory_features(u, t, thresholds=PLAY_THRESHOLDS, time_constants=CREEP_TIME_
     ndarray, shape (n, len(thresholds) + len(time_constants))
         ``p_r − u`` for each threshold, then ``u − ū_τ`` for each time constant. [1]
     """
-    u = np.asarray(u, dtype=float)
-    t = np.asarray(t, dtype=float)
+    u, t = _series("u", u), _series("t", t)
+    thresholds, time_constants = _constants("thresholds", thresholds, 1.0), _constants("time_constants", time_constants)
+    check_between("creep_start", creep_start, 0.0, 1.0, scalar=True)
     out = np.full((u.size, len(thresholds) + len(time_constants)), np.nan)
     rows = np.flatnonzero(np.isfinite(u))
     if rows.size == 0:
@@ -165,7 +186,7 @@ def directions(u) -> np.ndarray:
     u : array_like
         Level, a fraction of full scale, in time order (NaN: missing). [1]
     """
-    u = np.asarray(u, dtype=float)
+    u = _series("u", u)
     d = np.zeros(u.size, dtype=int)
     rows = np.flatnonzero(np.isfinite(u))
     if rows.size < 2:

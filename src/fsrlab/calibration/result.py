@@ -38,7 +38,7 @@ from fsrlab.calibration.selection import Selection
 from fsrlab.circuits.circuit import LM555Circuit
 from fsrlab.errors import FileFormatError, ParameterError
 from fsrlab.io.calibration_file import CALIBRATION_FORMAT, CALIBRATION_VERSION
-from fsrlab.io.runformat import Run, RunFormatError
+from fsrlab.io.runformat import Run, RunFormatError, load_run
 
 __all__ = ["METHOD", "MARGIN", "Calibration", "Estimator", "as_margin", "require_calibration"]
 
@@ -232,6 +232,7 @@ class Calibration:
     def readout(self, run: Run, circuit: LM555Circuit | None = None) -> np.ndarray:
         """The calibration's readout of a run: its column, or C_FSR decoded through ``circuit`` (default:
         the calibration's, else the run's). [unit of x]"""
+        run = _as_run(run)
         if self.x_name not in run and self.x_name != C_FSR:
             raise RunFormatError(f"{run.path}: column {self.x_name!r} (the calibration's readout) missing "
                                  f"(columns: {', '.join(run.columns)})")
@@ -266,6 +267,9 @@ class Calibration:
             ``missing``, ``no_readout``, ``not_decodable``, ``beyond_margin``, ``below_activation``).
         """
         margin = as_margin(margin)
+        run = _as_run(run)
+        if forced is not None and (isinstance(forced, str) or not all(isinstance(f, str) for f in _items(forced))):
+            raise TypeError(f"forced: must be a list of provenance differences (str), got {forced!r}")
         x = self.readout(run, circuit)
         t = np.asarray(run["time_s"], dtype=float) if "time_s" in run else np.arange(x.size) * self.model.row_s
         model = self.model if compensation else self.model.without_memory()
@@ -355,6 +359,26 @@ def _counts(run: Run, x_name: str, estimate, given, inside, kept, raw) -> dict:
             "below_activation": int(below.sum())}
 
 
+def _as_run(run) -> Run:
+    """``run`` as a Run: a Run as it is, a path loaded; anything else a TypeError naming ``run``."""
+    if isinstance(run, Run):
+        return run
+    if isinstance(run, (str, Path)):
+        try:
+            return load_run(run)
+        except (OSError, FileFormatError) as exc:
+            raise ParameterError(str(exc), parameter="run") from None
+    raise TypeError(f"run: must be a run (fsrlab.load_run) or its path, got {type(run).__name__}")
+
+
+def _items(value) -> list:
+    """The items of ``value`` (an iterable), or [value] when it is not one."""
+    try:
+        return list(value)
+    except TypeError:
+        return [value]
+
+
 class Estimator:
     """The estimates of :meth:`Calibration.estimate`, one reading at a time (``fsrlab measure``, ``fsrlab live``).
 
@@ -375,6 +399,9 @@ class Estimator:
     """
 
     def __init__(self, cal: Calibration, margin: float | None = None, compensation: bool = True):
+        if not isinstance(cal, Calibration):
+            raise TypeError(f"cal: must be a Calibration (fsrlab.calibrate, fsrlab.load_calibration), got "
+                            f"{type(cal).__name__}")
         margin = as_margin(margin)
         self.cal = cal
         self.model = cal.model if compensation else cal.model.without_memory()

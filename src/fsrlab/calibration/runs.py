@@ -57,8 +57,8 @@ def _divider_rail(run: Run, x: str) -> float | None:
 
 
 def _as_runs(runs) -> list[Run]:
-    """``runs`` as a list of loaded runs: a Run, a synthetic run, a path, or a sequence of them."""
-    if isinstance(runs, (Run, str, Path)) or hasattr(runs, "metadata"):
+    """``runs`` as a list of loaded runs: a Run (a synthetic run is one), a path, or a sequence of them."""
+    if isinstance(runs, (Run, str, Path)):
         runs = [runs]
     try:
         runs = list(runs)
@@ -70,10 +70,10 @@ def _as_runs(runs) -> list[Run]:
     out = []
     for r in runs:
         if isinstance(r, (str, Path)):
-            r = load_run(r)
-        elif not isinstance(r, Run) and isinstance(getattr(r, "columns", None), dict):  # a synthetic run
-            r = Run(path=Path(str(r.metadata.get("origin", "synthetic"))), columns=dict(r.columns),
-                    metadata=dict(r.metadata))
+            try:
+                r = load_run(r)
+            except OSError as exc:  # no such file, a directory, no permission
+                raise ParameterError(f"{r}: {exc.strerror or exc}", parameter="runs") from None
         if not isinstance(r, Run):
             raise ParameterError(f"must be runs (fsrlab.load_run) or their paths, got {type(r).__name__}",
                                  parameter="runs")
@@ -128,7 +128,7 @@ def _check(runs: list[Run], x, reference, compensate, rail, between_runs) -> str
 
 def _lag_rows(lag, runs: list[Run]) -> int | str:
     """``lag`` [s] (or "auto") in whole rows of the first run's median time step (rows without ``time_s``)."""
-    if lag == "auto":
+    if isinstance(lag, str) and lag == "auto":
         return "auto"
     if isinstance(lag, bool) or not isinstance(lag, (int, float, np.integer, np.floating)) or not math.isfinite(lag):
         raise ParameterError(f"must be \"auto\" or a finite lag in seconds such as 0.02, got {lag!r}", parameter="lag")
