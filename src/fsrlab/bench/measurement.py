@@ -22,6 +22,7 @@ Each part that the data do not allow is None with a one-line reason.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -109,10 +110,10 @@ def hysteresis_of_run(run, quantity: str = "frequency_hz", threshold: float = 0.
     import dataclasses
     import re
 
-    from fsrlab.io.runformat import Run, RunFormatError, load_run
+    from fsrlab.io.runformat import RunFormatError, as_run
     from fsrlab.metrics.cycles import run_hysteresis
 
-    run = run if isinstance(run, Run) else load_run(run)
+    run = as_run(run)
     stress, ref_name, ref_unit = run_reference(run, reference)
     if quantity in ("stress_pa", "force_n"):
         raise ParameterError(f"{quantity} is a reference column (the {ref_name} the branches follow, or it "
@@ -507,9 +508,9 @@ def measure_run(run, placements=None, weights_run=None, calibration=None, calibr
     RunFormatError, ValueError
         An unreadable run, placements file or calibration (the message names the file).
     """
-    from fsrlab.io.runformat import load_run
+    from fsrlab.io.runformat import as_run, input_file
 
-    run = run if hasattr(run, "n_rows") else load_run(run)
+    run = as_run(run)
     y, y_name, y_unit = run_reference(run)
     t = run["time_s"] if "time_s" in run else None
     rep = RunReport(path=Path(run.path), rows=run.n_rows,
@@ -521,13 +522,13 @@ def measure_run(run, placements=None, weights_run=None, calibration=None, calibr
     wr = run if "step" in run and "load" in run else weights_run
     means = None
     if wr is not None:
-        wr = wr if hasattr(wr, "n_rows") else load_run(wr)
+        wr = as_run(wr, "weights_run")
         means = placement_means(wr)
         rep.repeatability_source = f"dead-weight placements of {Path(wr.path).name}"
     elif placements is not None:
         from fsrlab.io.tables import load_grouped_csv
 
-        loads, sensors, readings = load_grouped_csv(placements)
+        loads, sensors, readings = load_grouped_csv(input_file(placements, "placements"))
         from fsrlab.io.tables import read_table
 
         ix, rows, _ = read_table(placements, ("load", "reading"), hint="header load,sensor,reading needed")
@@ -572,8 +573,19 @@ def _calibrated(rep: RunReport, run, calibration, calibrate: bool) -> None:
     cal, source = None, ""
     if calibration is not None:
         from fsrlab.calibration.document import load_calibration
+        from fsrlab.calibration.result import Calibration
+        from fsrlab.errors import FsrlabError
 
-        cal = calibration if hasattr(calibration, "x_name") else load_calibration(calibration)
+        if isinstance(calibration, Calibration):
+            cal = calibration
+        elif isinstance(calibration, (str, os.PathLike)):
+            try:
+                cal = load_calibration(calibration)
+            except FsrlabError as exc:  # the file is this function's calibration
+                raise type(exc)(exc.reason, parameter="calibration") from None
+        else:
+            raise TypeError(f"calibration: must be a Calibration or a calibration file's path, got "
+                            f"{type(calibration).__name__}")
         source = f"given ({Path(cal.path).name})" if getattr(cal, "path", None) else "given"
     elif calibrate:
         try:

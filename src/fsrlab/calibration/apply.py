@@ -18,14 +18,13 @@ in the format of docs/data-format.md)::
 from __future__ import annotations
 
 import os
-from pathlib import Path
 
 from fsrlab.calibration.provenance import RecordedWith, mismatches
-from fsrlab.calibration.readout import C_FSR, _as_run, run_recorded_with
-from fsrlab.calibration.result import Calibration, as_margin
+from fsrlab.calibration.readout import C_FSR, run_recorded_with
+from fsrlab.calibration.result import Calibration, as_margin, require_calibration
 from fsrlab.circuits.circuit import LM555Circuit
-from fsrlab.errors import ParameterError, ProvenanceError
-from fsrlab.io.runformat import Run
+from fsrlab.errors import FsrlabError, ParameterError, ProvenanceError
+from fsrlab.io.runformat import Run, as_run
 
 __all__ = ["readout_differences", "check_readout", "apply_calibration"]
 
@@ -85,6 +84,8 @@ def check_readout(cal: Calibration, run: Run, circuit: LM555Circuit | None = Non
         :func:`fsrlab.calibration.provenance.mismatches`); empty when nothing known differs or when
         the calibration does not record what it was recorded with (``cal.recorded_with`` None).
     """
+    require_calibration(cal, "cal")
+    run = as_run(run)
     return readout_differences(cal, run_recorded_with(run), f"{run.path} was recorded with", circuit)
 
 
@@ -129,12 +130,15 @@ def apply_calibration(cal, run, compensation: bool = True, circuit: LM555Circuit
     if isinstance(cal, (str, os.PathLike)):
         from fsrlab.calibration.document import load_calibration
 
-        cal = load_calibration(Path(cal))
+        try:
+            cal = load_calibration(cal)
+        except FsrlabError as exc:  # the file is this function's cal
+            raise type(exc)(exc.reason, parameter="cal") from None
     if not isinstance(cal, Calibration):
         raise ParameterError(f"must be a Calibration (fsrlab.calibrate, fsrlab.load_calibration) or the path of a "
                              f"calibration file, got {type(cal).__name__}", parameter="cal")
     margin = as_margin(margin)
-    run = _as_run(run)
+    run = as_run(run)
     cal.readout(run, circuit)  # a run without the readout is refused before the provenance is compared
     differences = check_readout(cal, run, circuit)
     if differences and not force:

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from fsrlab.calibration.result import Calibration, require_calibration
-from fsrlab.errors import ParameterError
+from fsrlab.errors import FileFormatError, ParameterError
 from fsrlab.io.calibration_file import CALIBRATION_FORMAT, read_calibration_document, write_calibration_document
 
 __all__ = ["CALIBRATION_FORMAT", "save_calibration", "load_calibration"]
@@ -68,6 +68,14 @@ def save_calibration(cal: Calibration, path: str | os.PathLike, overwrite: bool 
         raise ParameterError(f"must be True or False, got {overwrite!r}", parameter="overwrite")
     if isinstance(inputs, (str, os.PathLike)):
         inputs = [inputs]
+    try:
+        inputs = list(inputs)
+    except TypeError:
+        raise TypeError(f"inputs: must be paths (an iterable of str or path-like), got {type(inputs).__name__}") from None
+    if not all(isinstance(i, (str, os.PathLike)) for i in inputs):
+        raise TypeError(f"inputs: must be paths (str or path-like), got {inputs!r}")
+    if not isinstance(path, (str, os.PathLike)) or isinstance(path, bool):
+        raise TypeError(f"path: must be a file's path (str or path-like), got {type(path).__name__}")
     target = check_output(path, "path", overwrite=overwrite, inputs=[*inputs, *cal.sources])
     return write_calibration_document(cal.to_dict(), target)
 
@@ -87,21 +95,23 @@ def load_calibration(path: str | os.PathLike) -> Calibration:
 
     Raises
     ------
-    ValueError
-        One line naming the file and what is wrong, also when its curve does not give finite values
-        over its own readout range (a damaged file).
+    fsrlab.errors.FileFormatError
+        One line naming the file and what is wrong (its parameter ``path``), also when its curve does not
+        give finite values over its own readout range (a damaged file); a ParameterError or TypeError for
+        a path that is no file.
     """
+    d = read_calibration_document(path)
     p = Path(path)
-    d = read_calibration_document(p)
     try:
         cal = Calibration.from_dict(d, p)
     except (KeyError, TypeError, ValueError, IndexError, AttributeError) as exc:  # a value of another type too
-        raise ValueError(f"{p}: calibration file incomplete or malformed ({type(exc).__name__}: {exc})") from None
+        raise FileFormatError(f"{p}: calibration file incomplete or malformed ({type(exc).__name__}: {exc})",
+                              parameter="path") from None
     lo, hi = cal.x_range
     with np.errstate(all="ignore"):
         values = cal.model.curve_estimate(np.linspace(lo, hi, 65)) if np.isfinite(lo) and np.isfinite(hi) \
             else np.array([np.nan])
     if not np.all(np.isfinite(values)) or np.max(np.abs(values)) > _MAX_ESTIMATE:
-        raise ValueError(f"{p}: the calibration's curve does not give finite values of {cal.y_name} over its own "
-                         f"readout range {lo:.6g} … {hi:.6g} (values changed or damaged)")
+        raise FileFormatError(f"{p}: the calibration's curve does not give finite values of {cal.y_name} over its "
+                              f"own readout range {lo:.6g} … {hi:.6g} (values changed or damaged)", parameter="path")
     return cal

@@ -32,7 +32,8 @@ def is_legacy(d: dict) -> bool:
     d : dict
         A calibration file's content.
     """
-    return d.get("version") == 1 and "chebyshev_coefficients" in d and d.get("method") != "held-out"
+    return isinstance(d, dict) and d.get("version") == 1 and "chebyshev_coefficients" in d and \
+        d.get("method") != "held-out"
 
 
 def _chebyshev(p: dict):

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout, readout_from_metadata
+from fsrlab.physics.params import float_array
 
 __all__ = ["RecordedWith", "recorded_with", "mismatches", "describe_range"]
 
@@ -97,7 +98,7 @@ def recorded_with(metadata: dict, range_column=None, used=None) -> RecordedWith:
     circuit, opamp = readout_from_metadata(metadata)
     ranges = None
     if range_column is not None:
-        r = np.asarray(range_column, dtype=float)
+        r = float_array("range_column", range_column)
         if used is not None:
             r = r[np.asarray(used, dtype=bool)]
         ranges = tuple(int(v) for v in np.unique(r[np.isfinite(r)]))
@@ -116,6 +117,9 @@ def describe_range(ranges: tuple[int, ...]) -> str:
     -------
     str
     """
+    if isinstance(ranges, (str, bytes)) or not hasattr(ranges, "__len__") or \
+            not all(isinstance(r, (int, np.integer)) and not isinstance(r, bool) for r in ranges):
+        raise TypeError(f"ranges: must be a tuple of range values (0, 1), got {ranges!r}")
     if not ranges:
         return "no range"
     if len(ranges) == 1:

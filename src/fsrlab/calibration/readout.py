@@ -15,16 +15,14 @@ import numpy as np
 
 from fsrlab.calibration.provenance import recorded_with
 from fsrlab.circuits.circuit import LM555Circuit, decode_capacitance, readout_from_metadata
-from fsrlab.io.runformat import Run, RunFormatError, load_run
+from fsrlab.errors import ParameterError
+from fsrlab.io.runformat import Run, RunFormatError, as_run
+from fsrlab.physics.params import float_array
 
 __all__ = ["C_FSR", "run_circuit", "run_readout", "reference_reversed", "run_recorded_with"]
 
 #: The decoded-capacitance variable of the physics-informed calibration. [F]
 C_FSR = "c_fsr_farad"
-
-
-def _as_run(run) -> Run:
-    return run if isinstance(run, Run) else load_run(run)
 
 
 def run_circuit(run: Run, circuit: LM555Circuit | None = None) -> LM555Circuit:
@@ -43,7 +41,10 @@ def run_circuit(run: Run, circuit: LM555Circuit | None = None) -> LM555Circuit:
         ``circuit``, else the sidecar's (:func:`fsrlab.circuits.circuit.readout_from_metadata`),
         else :data:`fsrlab.circuits.circuit.PAPER_CIRCUIT` (R = 10 kΩ, ideal D1, no C_off).
     """
+    run = as_run(run)
     if circuit is not None:
+        if not isinstance(circuit, LM555Circuit):
+            raise TypeError(f"circuit: must be an LM555Circuit, got {type(circuit).__name__}")
         return circuit
     found, _ = readout_from_metadata(run.metadata)
     if found is not None:
@@ -79,6 +80,11 @@ def run_readout(run: Run, x: str, circuit: LM555Circuit | None = None) -> tuple[
     RunFormatError
         A column the run lacks.
     """
+    run = as_run(run)
+    if not isinstance(x, str):
+        raise TypeError(f"x: must be the name of a column, got {type(x).__name__}")
+    if x != C_FSR and x not in run:
+        raise ParameterError(f"{run.path} has no column {x!r} (columns: {', '.join(run.columns)})", parameter="x")
     if x == C_FSR and x not in run:
         run.require("frequency_hz", "duty_cycle")
         circ = run_circuit(run, circuit)
@@ -99,7 +105,7 @@ def reference_reversed(y) -> str | None:
     y : array_like
         The reference's values (NaN ignored). [N or Pa]
     """
-    y = np.asarray(y, dtype=float)
+    y = float_array("y", y)
     y = y[np.isfinite(y)]
     if y.size == 0:
         return None
@@ -125,6 +131,7 @@ def run_recorded_with(run: Run, used=None):
     RecordedWith
         See :func:`fsrlab.calibration.provenance.recorded_with`.
     """
+    run = as_run(run)
     try:
         return recorded_with(run.metadata, run.columns.get("range"), used)
     except ValueError as exc:

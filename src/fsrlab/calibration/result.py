@@ -38,7 +38,7 @@ from fsrlab.calibration.selection import Selection
 from fsrlab.circuits.circuit import LM555Circuit
 from fsrlab.errors import FileFormatError, ParameterError
 from fsrlab.io.calibration_file import CALIBRATION_FORMAT, CALIBRATION_VERSION
-from fsrlab.io.runformat import Run, RunFormatError, load_run
+from fsrlab.io.runformat import Run, RunFormatError, as_run
 
 __all__ = ["METHOD", "MARGIN", "Calibration", "Estimator", "as_margin", "require_calibration"]
 
@@ -232,7 +232,7 @@ class Calibration:
     def readout(self, run: Run, circuit: LM555Circuit | None = None) -> np.ndarray:
         """The calibration's readout of a run: its column, or C_FSR decoded through ``circuit`` (default:
         the calibration's, else the run's). [unit of x]"""
-        run = _as_run(run)
+        run = as_run(run)
         if self.x_name not in run and self.x_name != C_FSR:
             raise RunFormatError(f"{run.path}: column {self.x_name!r} (the calibration's readout) missing "
                                  f"(columns: {', '.join(run.columns)})")
@@ -267,7 +267,7 @@ class Calibration:
             ``missing``, ``no_readout``, ``not_decodable``, ``beyond_margin``, ``below_activation``).
         """
         margin = as_margin(margin)
-        run = _as_run(run)
+        run = as_run(run)
         if forced is not None and (isinstance(forced, str) or not all(isinstance(f, str) for f in _items(forced))):
             raise TypeError(f"forced: must be a list of provenance differences (str), got {forced!r}")
         x = self.readout(run, circuit)
@@ -357,18 +357,6 @@ def _counts(run: Run, x_name: str, estimate, given, inside, kept, raw) -> dict:
             "missing": int((~np.isfinite(estimate)).sum()), "no_readout": int((~given & ~not_decodable).sum()),
             "not_decodable": int(not_decodable.sum()), "beyond_margin": int((given & ~kept).sum()),
             "below_activation": int(below.sum())}
-
-
-def _as_run(run) -> Run:
-    """``run`` as a Run: a Run as it is, a path loaded; anything else a TypeError naming ``run``."""
-    if isinstance(run, Run):
-        return run
-    if isinstance(run, (str, Path)):
-        try:
-            return load_run(run)
-        except (OSError, FileFormatError) as exc:
-            raise ParameterError(str(exc), parameter="run") from None
-    raise TypeError(f"run: must be a run (fsrlab.load_run) or its path, got {type(run).__name__}")
 
 
 def _items(value) -> list:

@@ -28,7 +28,7 @@ from fsrlab.calibration.result import METHOD, Calibration
 from fsrlab.calibration.scoring import Recording
 from fsrlab.calibration.selection import calibrate_recordings
 from fsrlab.errors import ParameterError
-from fsrlab.io.runformat import KNOWN_COLUMNS, Run, load_run
+from fsrlab.io.runformat import KNOWN_COLUMNS, Run, as_run
 
 __all__ = ["METHOD", "MIN_READINGS", "REFERENCES", "calibrate_runs"]
 
@@ -70,10 +70,7 @@ def _as_runs(runs) -> list[Run]:
     out = []
     for r in runs:
         if isinstance(r, (str, Path)):
-            try:
-                r = load_run(r)
-            except OSError as exc:  # no such file, a directory, no permission
-                raise ParameterError(f"{r}: {exc.strerror or exc}", parameter="runs") from None
+            r = as_run(r, "runs")
         if not isinstance(r, Run):
             raise ParameterError(f"must be runs (fsrlab.load_run) or their paths, got {type(r).__name__}",
                                  parameter="runs")

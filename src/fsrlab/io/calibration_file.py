@@ -12,8 +12,9 @@ import json
 import os
 from pathlib import Path
 
+from fsrlab.errors import FileFormatError, ParameterError
 from fsrlab.io.outputs import write_text_atomic
-from fsrlab.io.runformat import read_json_document
+from fsrlab.io.runformat import input_file, read_json_document
 
 __all__ = ["CALIBRATION_FORMAT", "CALIBRATION_VERSION", "CALIBRATION_VERSIONS_READ", "read_calibration_document", "write_calibration_document"]
 
@@ -38,8 +39,18 @@ def write_calibration_document(doc: dict, path: str | os.PathLike) -> Path:
     -------
     Path
     """
+    if not isinstance(doc, dict):
+        raise TypeError(f"doc: must be a calibration document (a dict), got {type(doc).__name__}")
+    if not isinstance(path, (str, os.PathLike)) or isinstance(path, bool) or not str(path):
+        raise TypeError(f"path: must be a file's path (str or path-like), got {path!r}")
+    if Path(path).is_dir():
+        raise ParameterError(f"{path} is a directory, not a file", parameter="path")
+    try:
+        text = json.dumps(doc, indent=2, allow_nan=False) + "\n"
+    except (TypeError, ValueError) as exc:  # a value JSON cannot hold
+        raise ParameterError(f"not a JSON document ({exc})", parameter="doc") from None
     # Through a temporary file and a rename: an interrupted write leaves the old file or none.
-    return write_text_atomic(path, json.dumps(doc, indent=2, allow_nan=False) + "\n")
+    return write_text_atomic(path, text)
 
 
 def read_calibration_document(path: str | os.PathLike) -> dict:
@@ -55,14 +66,19 @@ def read_calibration_document(path: str | os.PathLike) -> dict:
 
     Raises
     ------
-    ValueError
+    fsrlab.errors.FileFormatError
         One line naming the file and what is wrong (a version other than those of
-        :data:`CALIBRATION_VERSIONS_READ` too).
+        :data:`CALIBRATION_VERSIONS_READ` too), its parameter ``path``; a ParameterError or TypeError for a
+        path that is no file.
     """
-    path = Path(path)
+    path = input_file(path, "path")
+
+    def refused(message: str) -> FileFormatError:
+        return FileFormatError(message, parameter="path")
+
     try:
-        return read_json_document(path, CALIBRATION_FORMAT, CALIBRATION_VERSION, "calibration")
-    except ValueError as exc:
+        return read_json_document(path, CALIBRATION_FORMAT, CALIBRATION_VERSION, "calibration", refused)
+    except FileFormatError as exc:
         if "version 1 not supported" not in str(exc):
             raise
-    return read_json_document(path, CALIBRATION_FORMAT, 1, "calibration")
+    return read_json_document(path, CALIBRATION_FORMAT, 1, "calibration", refused)

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fsrlab.errors import FileFormatError
+from fsrlab.errors import FileFormatError, ParameterError
 from fsrlab.io.csvtext import LongCellError, csv_cells, csv_rows
 from fsrlab.io.schema import (
     CSV_SHA256,
@@ -47,6 +47,8 @@ __all__ = [
     "RunFormatError",
     "Run",
     "load_run",
+    "input_file",
+    "as_run",
     "sidecar_path",
     "check_columns",
     "read_json_document",
@@ -388,3 +390,73 @@ def _file_rows(n_file_rows: int, skipped: Sequence) -> np.ndarray:
     if skipped:
         rows = np.setdiff1d(rows, [b.row for b in skipped])
     return rows
+
+
+def input_file(path, parameter: str = "path") -> Path:
+    """``path`` as the Path of an existing file to read, or one error naming ``parameter``.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file.
+    parameter : str
+        The caller's name for it, in the error.
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    TypeError
+        If ``path`` is not a str or path-like (the message names ``parameter``).
+    fsrlab.errors.ParameterError
+        If it is empty, missing or a directory.
+    """
+    if not isinstance(path, (str, os.PathLike)) or isinstance(path, bool):
+        raise TypeError(f"{parameter}: must be a file's path (str or path-like), got {type(path).__name__}")
+    p = Path(path)
+    if not str(path):
+        raise ParameterError("must name a file, got an empty path", parameter=parameter)
+    if p.is_dir():
+        raise ParameterError(f"{p} is a directory, not a file", parameter=parameter)
+    if not p.exists():
+        raise ParameterError(f"{p}: no such file", parameter=parameter)
+    return p
+
+
+def as_run(run, parameter: str = "run") -> Run:
+    """``run`` as a :class:`Run`: a Run as it is, a path read by :func:`load_run`; one error naming ``parameter``.
+
+    Parameters
+    ----------
+    run : Run, str or path-like
+        A run, or its CSV file.
+    parameter : str
+        The caller's name for it, in the error.
+
+    Returns
+    -------
+    Run
+
+    Raises
+    ------
+    TypeError
+        If ``run`` is neither a Run nor a path (the message names ``parameter``).
+    fsrlab.errors.ParameterError
+        If the path is empty, missing, a directory or unreadable.
+    RunFormatError
+        If the file is not a valid run (naming ``parameter``, the file, the row and the column).
+    """
+    if isinstance(run, Run):
+        return run
+    if not isinstance(run, (str, os.PathLike)) or isinstance(run, bool):
+        raise TypeError(f"{parameter}: must be a run (fsrlab.load_run) or its path, got {type(run).__name__}")
+    p = input_file(run, parameter)
+    try:
+        return load_run(p)
+    except OSError as exc:
+        raise ParameterError(f"{p}: {exc.strerror or exc}", parameter=parameter) from None
+    except RunFormatError as exc:
+        raise RunFormatError(exc.reason, parameter=parameter) from None
+
