@@ -20,6 +20,7 @@ from numpy.polynomial import chebyshev
 
 from fsrlab.calibration.operators import MemoryState, directions, memory_features
 from fsrlab.calibration.uncertainty import LevelUncertainty
+from fsrlab.errors import FileFormatError
 
 __all__ = ["is_legacy", "LegacyModel", "LegacyStepper"]
 
@@ -41,7 +42,7 @@ def _chebyshev(p: dict):
     center = float(p.get("center", p.get("x_center")))
     half = float(p.get("half_width", p.get("x_half_width")))
     if coef.ndim != 1 or coef.size < 1 or not np.all(np.isfinite(coef)) or not (math.isfinite(center) and half > 0):
-        raise ValueError("chebyshev_coefficients must be finite numbers, x_half_width > 0")
+        raise FileFormatError("chebyshev_coefficients must be finite numbers, x_half_width > 0")
     return lambda u: chebyshev.chebval((np.asarray(u, dtype=float) - center) / half, coef)
 
 
@@ -52,7 +53,7 @@ def _variable(fam: dict):
         topo, r, vcc = str(tr["topology"]), float(tr.get("r_ohm", math.nan)), float(tr.get("vcc_v", math.nan))
         full = float(tr.get("counts_full_scale", 0.0))
         if topo not in ("divider", "opamp-inverting", "capacitance"):
-            raise ValueError(f"conductance topology {topo!r} unknown")
+            raise FileFormatError(f"conductance topology {topo!r} unknown")
 
         def conductance(x):
             x = np.asarray(x, dtype=float) * (vcc / full if full > 0 else 1.0)
@@ -72,7 +73,7 @@ def _static(d: dict):
     if fam is None:
         return _chebyshev(d), f"polynomial-{len(d['chebyshev_coefficients']) - 1}"
     if fam["family"] not in ("polynomial", "conductance-polynomial", "conductance-power", "power"):
-        raise ValueError(f"model family {fam['family']!r} unknown")
+        raise FileFormatError(f"model family {fam['family']!r} unknown")
     var, p = _variable(fam), fam["params"]
     if "chebyshev_coefficients" in p:
         poly = _chebyshev(p)
@@ -113,13 +114,13 @@ class LegacyModel:
             self.thresholds = tuple(float(v) for v in mem["thresholds"])
             self.time_constants = tuple(float(v) for v in mem["time_constants_s"])
             if self.coef.size != self.degree + 1 + 2 * len(self.thresholds) + 2 * len(self.time_constants):
-                raise ValueError("memory coefficients: wrong number")
+                raise FileFormatError("memory coefficients: wrong number")
             self.full_scale, self.row_s = float(mem["full_scale"]), float(mem["row_s"])
         else:
             self.thresholds, self.time_constants = (), ()
             self.full_scale, self.row_s = float(d.get("full_scale") or 1.0), 1.0
         if not (self.full_scale > 0 and self.row_s > 0):
-            raise ValueError("memory: full_scale and row_s must be > 0")
+            raise FileFormatError("memory: full_scale and row_s must be > 0")
         has = mem is not None or (d.get("memory") is None and d.get("compensation") is None)
         table = d.get("uncertainty") if has else (d.get("uncertainty_plain") or d.get("uncertainty"))
         self.uncertainty = None if table is None else _uncertainty(table)
@@ -220,5 +221,5 @@ def _uncertainty(table: dict) -> LevelUncertainty:
     edges = np.asarray(table["level_edges"], dtype=float)
     sigma = np.asarray(table["sigma"], dtype=float)
     if sigma.ndim != 2 or sigma.shape != (edges.size + 1, 3) or np.any(sigma < 0):
-        raise ValueError("uncertainty: sigma must be (level bins) x 3 numbers >= 0")
+        raise FileFormatError("uncertainty: sigma must be (level bins) x 3 numbers >= 0")
     return LevelUncertainty(edges, sigma, float(sigma.min()), 0.0)

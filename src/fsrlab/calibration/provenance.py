@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout, readout_from_metadata
+from fsrlab.errors import FileFormatError
 from fsrlab.physics.params import float_array
 
 __all__ = ["RecordedWith", "recorded_with", "mismatches", "describe_range"]
@@ -70,10 +71,10 @@ class RecordedWith:
     def from_dict(cls, d: dict) -> RecordedWith:
         """Inverse of :meth:`to_dict`."""
         if not isinstance(d, dict):
-            raise ValueError(f"recorded_with: expected a mapping, got {type(d).__name__}")
+            raise FileFormatError(f"recorded_with: expected a mapping, got {type(d).__name__}")
         ranges = d.get("range")
         if ranges is not None and not (isinstance(ranges, list) and set(ranges) <= {0, 1}):
-            raise ValueError(f"recorded_with.range: must be a list of 0 and 1, got {ranges!r}")
+            raise FileFormatError(f"recorded_with.range: must be a list of 0 and 1, got {ranges!r}")
         return cls(None if d.get("circuit") is None else LM555Circuit.from_dict(d["circuit"]),
                    None if d.get("opamp") is None else OpAmpReadout.from_dict(d["opamp"]),
                    None if ranges is None else tuple(sorted(int(r) for r in ranges)))
