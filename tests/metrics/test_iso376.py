@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from fsrlab.errors import ParameterError
 from fsrlab.metrics.iso376 import CLASS_LIMITS, CalibrationSeries, class_reached, iso376
 
 F = np.linspace(1e3, 10e3, 10)  # ten forces 10 %..100 % of 10 kN
@@ -75,7 +76,7 @@ def test_class_table_edges():
         for name, value in lim.items():
             assert class_reached(name, value) == cls
     assert class_reached("b", 0.41) == "none"
-    with pytest.raises(ValueError, match="name must be"):
+    with pytest.raises(ParameterError, match="name: must be"):
         class_reached("q", 1.0)
 
 

@@ -44,7 +44,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from fsrlab.errors import ParameterError
 from fsrlab.metrics.holds import Hold, find_holds
+from fsrlab.physics.params import check_between, check_positive, float_array
 
 __all__ = ["Hold", "find_holds", "LogDrift", "log_drift", "FirstOrder", "first_order_fit", "HoldCreep",
            "RunCreep", "creep", "creep_of_run", "REFERENCES"]
@@ -84,6 +86,17 @@ class LogDrift:
     note: str = ""
 
 
+def _series(elapsed_s, readout, time_name: str = "elapsed_s", readout_name: str = "readout"):
+    """Times and readings as 1-D float arrays of one shape; an error naming the argument that is not."""
+    s = float_array(time_name, elapsed_s)
+    r = float_array(readout_name, readout)
+    if s.ndim != 1:
+        raise ParameterError(f"must be a 1-D array of times, got shape {s.shape}", parameter=time_name)
+    if r.shape != s.shape:
+        raise ParameterError(f"must have the shape of {time_name} {s.shape}, got {r.shape}", parameter=readout_name)
+    return s, r
+
+
 def log_drift(elapsed_s, readout) -> LogDrift:
     """Fit r = a + b·log10(elapsed) by least squares; drift per decade of time b, and 100·b/|a| in %.
 
@@ -99,8 +112,7 @@ def log_drift(elapsed_s, readout) -> LogDrift:
     LogDrift
         NaN numbers and a note when fewer than 3 readings, or a single distinct time, remain.
     """
-    s = np.asarray(elapsed_s, dtype=float)
-    r = np.asarray(readout, dtype=float)
+    s, r = _series(elapsed_s, readout)
     keep = np.isfinite(s) & np.isfinite(r) & (s > 0)
     s, r = s[keep], r[keep]
     nan = float("nan")
@@ -203,8 +215,9 @@ def first_order_fit(elapsed_s, readout, hold_s: float | None = None) -> FirstOrd
     τ is "not determined" when the best τ exceeds ``hold_s``, is shorter than the readings'
     spacing, or \\|Δ\\| is within three standard errors of zero.
     """
-    s = np.asarray(elapsed_s, dtype=float)
-    r = np.asarray(readout, dtype=float)
+    s, r = _series(elapsed_s, readout)
+    if hold_s is not None:
+        check_positive("hold_s", hold_s, "s", scalar=True)
     keep = np.isfinite(s) & np.isfinite(r)
     s, r = s[keep], r[keep]
     nan = float("nan")
@@ -452,31 +465,28 @@ def creep(time_s, readout, reference, band: float = 0.02, min_hold_s: float = 5.
 
     Raises
     ------
-    ValueError
+    fsrlab.errors.ParameterError
         A parameter out of range; a readout without readings; no loaded hold (the message says how
-        many holds were found and why none counts).
+        many holds were found and why none counts), naming the parameter.
+    TypeError
+        An array that is not numbers.
     """
-    t = np.asarray(time_s, dtype=float)
-    xr = np.asarray(readout, dtype=float)
-    if xr.shape != t.shape:
-        raise ValueError(f"readout must have the shape of time_s, got {xr.shape} and {t.shape}")
-    if not (np.isfinite(min_hold_s) and min_hold_s > 0):
-        raise ValueError(f"min_hold_s must be > 0 s, got {min_hold_s!r}")
+    t, xr = _series(time_s, readout, "time_s", "readout")
+    _, ref = _series(t, reference, "time_s", "reference")
+    check_positive("min_hold_s", min_hold_s, "s", scalar=True)
     if settle_s is None:
         settle_s = min(0.5, min_hold_s / 5)
-    if not (np.isfinite(settle_s) and 0 <= settle_s < min_hold_s):
-        raise ValueError(f"settle_s must be in [0, min_hold_s = {min_hold_s!r} s), got {settle_s!r}")
+    check_between("settle_s", settle_s, 0.0, min_hold_s, "s (min_hold_s)", upper_open=True, scalar=True)
     if not np.isfinite(xr).any():
-        raise ValueError(f"{x}: no readings (every cell is empty)")
-    holds = find_holds(t, reference, band=band, min_hold_s=min_hold_s)
-    ref = np.asarray(reference, dtype=float)
+        raise ParameterError(f"{x}: no readings (every cell is empty)", parameter="readout")
+    holds = find_holds(t, ref, band=band, min_hold_s=min_hold_s)
     fs = float(np.nanmax(np.abs(ref)))
     loaded = [h for h in holds if abs(h.level) > band * fs]
     if not loaded:
         why = (f"{len(holds)} hold(s), all unloaded (the band holds zero)" if holds else
                f"the reference never stays within ±{100 * band:g} % of full scale ({fs:.6g} {reference_unit}) "
                f"for {min_hold_s:g} s")
-        raise ValueError(f"{reference_name}: no loaded hold found: {why}")
+        raise ParameterError(f"{reference_name}: no loaded hold found: {why}", parameter="reference")
     res = RunCreep(holds=[], x=x, x_unit=x_unit, reference=reference_name, reference_unit=reference_unit,
                    full_scale=fs, band=band, min_hold_s=min_hold_s, settle_s=settle_s,
                    unloaded=len(holds) - len(loaded))
@@ -515,30 +525,41 @@ def creep_of_run(run, x: str = "frequency_hz", reference: str | None = None, ban
 
     Raises
     ------
-    ValueError
+    fsrlab.errors.ParameterError
         A missing column (named with the file), and what :func:`creep` raises.
+    TypeError
+        ``run`` neither a run nor its path, ``x`` not a column name.
     """
+    from fsrlab.io.runformat import as_run
+
+    run = as_run(run)
+    if not isinstance(x, str):
+        raise TypeError(f"x: must be a column's name (str), got {type(x).__name__}")
     if reference is None:
         reference = next((c for c in REFERENCES if c in run), None)
         if reference is None:
-            raise ValueError(f"{run.path}: no reference column (force_n or stress_pa): creep needs a held load")
+            raise ParameterError(f"{run.path}: no reference column (force_n or stress_pa): creep needs a held load",
+                                 parameter="run")
     elif reference not in REFERENCES:
-        raise ValueError(f"reference must be one of {', '.join(REFERENCES)}, got {reference!r}")
-    for name, what in (("time_s", "the time of each reading"), (reference, "the reference"), (x, "the readout")):
+        raise ParameterError(f"must be one of {', '.join(REFERENCES)}, got {reference!r}", parameter="reference")
+    for name, what, parameter in (("time_s", "the time of each reading", "run"), (reference, "the reference", "reference"),
+                                  (x, "the readout", "x")):
         if name not in run:
-            raise ValueError(f"{run.path}: column {name!r} missing ({what}; columns: {', '.join(run.columns)})")
+            raise ParameterError(f"{run.path}: column {name!r} missing ({what}; columns: {', '.join(run.columns)})",
+                                 parameter=parameter)
     if x in ("time_s", reference):
-        raise ValueError(f"x must be a readout column, not {x!r}")
+        raise ParameterError(f"must be a readout column, not {x!r}", parameter="x")
     if not np.isfinite(run[x]).any():
-        raise ValueError(f"{run.path}: column {x!r} has no readings (every cell is empty)")
+        raise ParameterError(f"{run.path}: column {x!r} has no readings (every cell is empty)", parameter="x")
     if not np.isfinite(run[reference]).any():
-        raise ValueError(f"{run.path}: column {reference!r} has no readings (every cell is empty)")
+        raise ParameterError(f"{run.path}: column {reference!r} has no readings (every cell is empty)",
+                             parameter="reference")
     units = run.units
     try:
         return creep(run["time_s"], run[x], run[reference], band=band, min_hold_s=min_hold_s, settle_s=settle_s,
                      x=x, x_unit=units.get(x, ""), reference_name=reference,
                      reference_unit=units.get(reference, ""))
-    except ValueError as exc:
-        if str(exc).startswith(f"{reference}: "):
-            raise ValueError(f"{run.path}: {exc}") from None
+    except ParameterError as exc:
+        if exc.parameter == "reference" and exc.reason.startswith(f"{reference}: "):
+            raise ParameterError(f"{run.path}: {exc.reason}", parameter="reference") from None
         raise

@@ -26,7 +26,9 @@ from typing import Any
 
 import numpy as np
 
+from fsrlab.errors import ParameterError
 from fsrlab.physics.history import branch_directions, cycle_numbers
+from fsrlab.physics.params import check_finite, float_array
 
 __all__ = [
     "Cycle",
@@ -61,6 +63,16 @@ class Cycle:
         return np.unique(np.concatenate([self.load_index, self.unload_index]))
 
 
+def _column(name: str, value, n: int | None = None) -> np.ndarray:
+    """``value`` as a 1-D float array (of ``n`` values when given); an error naming ``name`` when it is not."""
+    x = float_array(name, value)
+    if x.ndim != 1:
+        raise ParameterError(f"must be a 1-D array, got shape {x.shape}", parameter=name)
+    if n is not None and x.size != n:
+        raise ParameterError(f"must have the same length as stress_pa ({n}), got {x.size}", parameter=name)
+    return x
+
+
 def readout_directions(x, sign: float = 1.0, threshold: float = 0.05) -> np.ndarray:
     """Label readings +1 (loading) / -1 (unloading) from a readout sequence alone, gaps included.
 
@@ -80,7 +92,10 @@ def readout_directions(x, sign: float = 1.0, threshold: float = 0.05) -> np.ndar
         +1 or -1 for every reading: :func:`branch_directions` of ``sign * x`` over the valid
         readings, where a sequence that never moves beyond the threshold counts as loading.
     """
-    x = np.asarray(x, dtype=float)
+    x = _column("x", x)
+    check_finite("sign", sign, scalar=True)
+    if sign == 0:
+        raise ParameterError("must be non-zero (+1: the readout rises with the load, -1: it falls)", parameter="sign")
     ok = np.flatnonzero(np.isfinite(x))
     lab = np.ones(x.size, dtype=int)
     if ok.size == 0:
@@ -122,23 +137,17 @@ def row_directions(stress_pa, direction=None, cycle=None, threshold: float = 0.0
     ValueError
         A column of the wrong length, or a direction other than -1, 0, +1.
     """
-    x = np.asarray(stress_pa, dtype=float)
-    if x.ndim != 1:
-        raise ValueError("stress_pa must be 1-D")
+    x = _column("stress_pa", stress_pa)
     n = x.size
     if direction is not None:
-        dirn = np.asarray(direction, dtype=float)
-        if dirn.shape != (n,):
-            raise ValueError("direction must have the same length as stress_pa")
+        dirn = _column("direction", direction, n)
         dirn = np.nan_to_num(dirn, nan=0.0)
         if not np.all(np.isin(dirn, (-1, 0, 1))):
-            raise ValueError("direction must hold -1 (unloading), 0 (hold) or +1 (loading)")
+            raise ParameterError("must hold -1 (unloading), 0 (hold) or +1 (loading)", parameter="direction")
         return dirn.astype(int)
     ok = np.isfinite(x)
     if cycle is not None:
-        cyc = np.asarray(cycle, dtype=float)
-        if cyc.shape != (n,):
-            raise ValueError("cycle must have the same length as stress_pa")
+        cyc = _column("cycle", cycle, n)
         groups = [np.flatnonzero(ok & (cyc == v)) for v in dict.fromkeys(cyc[~np.isnan(cyc)].tolist())]
     else:
         groups = [np.flatnonzero(ok)]
@@ -168,10 +177,7 @@ def row_cycles(stress_pa, direction=None, cycle=None, threshold: float = 0.05) -
         :func:`row_directions`.
     """
     if cycle is not None:
-        cyc = np.asarray(cycle, dtype=float)
-        if cyc.shape != np.shape(stress_pa):
-            raise ValueError("cycle must have the same length as stress_pa")
-        return cyc
+        return _column("cycle", cycle, _column("stress_pa", stress_pa).size)
     return cycle_numbers(row_directions(stress_pa, direction, None, threshold)).astype(float)
 
 
@@ -239,10 +245,10 @@ def split_cycles(stress_pa, direction=None, cycle=None, threshold: float = 0.05)
         Complete cycles only (a loading branch followed by an unloading branch), in time order.
         A run that starts while unloading or ends while loading has that part left out.
     """
-    x = np.asarray(stress_pa, dtype=float)
+    x = _column("stress_pa", stress_pa)
     labels = row_directions(x, direction, cycle, threshold)
     if cycle is not None:
-        cyc = np.asarray(cycle, dtype=float)
+        cyc = _column("cycle", cycle, x.size)
         out = []
         for value in dict.fromkeys(cyc[~np.isnan(cyc)].tolist()):
             rows = np.flatnonzero(cyc == value)
@@ -301,7 +307,7 @@ class RunHysteresis:
         from fsrlab.metrics.hysteresis import _draw_branches
 
         if self.overall is None or self.overall.stress_pa is None:
-            raise ValueError("this result holds no branches to plot")
+            raise ParameterError("this result holds no branches to plot (no cycle was found)")
         if ax is None:
             import matplotlib.pyplot as plt
 
@@ -358,7 +364,7 @@ def mean_branches(stress_pa, q, cycles: list[Cycle], points: int = 201):
             lo, hi = max(lo, xs.min()), min(hi, xs.max())
         prepared.append(br)
     if not prepared or not hi > lo:
-        raise ValueError("cycles: the branches share no stress range")
+        raise ParameterError("the branches share no stress range", parameter="cycles")
     grid = np.linspace(lo, hi, points)
     ql = np.mean([np.interp(grid, *b[0]) for b in prepared], axis=0)
     qu = np.mean([np.interp(grid, *b[1]) for b in prepared], axis=0)
@@ -398,20 +404,21 @@ def run_hysteresis(stress_pa, q, direction=None, cycle=None, threshold: float = 
     """
     from fsrlab.metrics.hysteresis import check_response, hysteresis_error
 
-    x = np.asarray(stress_pa, dtype=float)
-    y = np.asarray(q, dtype=float)
-    if y.shape != x.shape:
-        raise ValueError("q must have the same length as stress_pa")
+    x = _column("stress_pa", stress_pa)
+    y = _column("q", q, x.size)
+    direction = None if direction is None else _column("direction", direction, x.size)
+    cycle = None if cycle is None else _column("cycle", cycle, x.size)
     # Readings without a reference stress (empty cells) take no part.
     keep = np.isfinite(x)
     if not keep.all():
         x, y = x[keep], y[keep]
-        direction = None if direction is None else np.asarray(direction, dtype=float)[keep]
-        cycle = None if cycle is None else np.asarray(cycle, dtype=float)[keep]
+        direction = None if direction is None else direction[keep]
+        cycle = None if cycle is None else cycle[keep]
     cycles = split_cycles(x, direction, cycle, threshold)
     if not cycles:
-        raise ValueError("the run holds no complete loading-unloading cycle (need the stress to rise and fall "
-                         "back by more than the threshold, or a direction column with +1 then -1)")
+        raise ParameterError("the run holds no complete loading-unloading cycle (need the stress to rise and fall "
+                             "back by more than the threshold, or a direction column with +1 then -1)",
+                             parameter="stress_pa")
     check_response(x, y, name)
     results = []
     for c in cycles:

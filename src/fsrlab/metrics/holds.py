@@ -15,6 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fsrlab.errors import ParameterError
+from fsrlab.physics.params import check_between, check_positive, float_array
+
 __all__ = ["Hold", "find_holds"]
 
 _SMOOTH = 5  # readings in the running median of the reference
@@ -84,9 +87,11 @@ def find_holds(time_s, reference, band: float = 0.02, min_hold_s: float = 5.0,
 
     Raises
     ------
-    ValueError
+    fsrlab.errors.ParameterError
         A parameter out of range, arrays of different shapes, a reference without any reading or
-        that is zero throughout.
+        that is zero throughout (naming the parameter).
+    TypeError
+        An argument that is not numbers.
 
     Notes
     -----
@@ -95,22 +100,22 @@ def find_holds(time_s, reference, band: float = 0.02, min_hold_s: float = 5.0,
     stretch's mid-range) and lasts at least ``min_hold_s``. Stretches are grown left to right, each
     as long as it can be, so a hold is never split while its reference stays in one band.
     """
-    t = np.asarray(time_s, dtype=float)
-    ref = np.asarray(reference, dtype=float)
-    if t.ndim != 1 or t.shape != ref.shape:
-        raise ValueError(f"time_s and reference must be 1-D arrays of the same length, got {t.shape} and {ref.shape}")
-    if not (np.isfinite(band) and 0 < band < 0.5):
-        raise ValueError(f"band must be a fraction of full scale in (0, 0.5), got {band!r}")
-    if not (np.isfinite(min_hold_s) and min_hold_s > 0):
-        raise ValueError(f"min_hold_s must be > 0 s, got {min_hold_s!r}")
+    t = float_array("time_s", time_s)
+    ref = float_array("reference", reference)
+    if t.ndim != 1:
+        raise ParameterError(f"must be a 1-D array, got shape {t.shape}", parameter="time_s")
+    if t.shape != ref.shape:
+        raise ParameterError(f"must have the shape of time_s {t.shape}, got {ref.shape}", parameter="reference")
+    check_between("band", band, 0.0, 0.5, "of full scale", lower_open=True, upper_open=True, scalar=True)
+    check_positive("min_hold_s", min_hold_s, "s", scalar=True)
     rows = np.flatnonzero(np.isfinite(ref) & np.isfinite(t))
     if rows.size == 0:
-        raise ValueError("reference: no readings (every cell is empty)")
+        raise ParameterError("no readings (every cell is empty)", parameter="reference")
     if full_scale is None:
         full_scale = float(np.max(np.abs(ref[rows])))
-    if not (np.isfinite(full_scale) and full_scale > 0):
-        raise ValueError(f"reference: full scale must be > 0 (a reference that is zero throughout holds no load), "
-                         f"got {full_scale!r}")
+        if full_scale == 0:
+            raise ParameterError("zero throughout: a reference that is zero holds no load", parameter="reference")
+    check_positive("full_scale", full_scale, scalar=True)
     width = 2 * band * full_scale
     smooth = _running_median(ref[rows], _SMOOTH).tolist()
     times = t[rows].tolist()

@@ -17,8 +17,9 @@ import numpy as np
 from scipy.constants import e, epsilon_0, h, m_e
 from scipy.optimize import minimize_scalar
 
+from fsrlab.errors import ParameterError
 from fsrlab.physics.electrical import capacitance_per_area, resistance_per_area
-from fsrlab.physics.params import PAPER, PaperParameters, check_positive
+from fsrlab.physics.params import PAPER, PaperParameters, check_between, check_int, check_positive, float_array
 from fsrlab.physics.separation import _loading, _unloading, separation_loading, separation_unloading
 from fsrlab.physics.tunneling import _eq12
 
@@ -82,7 +83,7 @@ class HysteresisResult:
             segment from the loading to the unloading branch).
         """
         if self.stress_pa is None:
-            raise ValueError("this result holds no branches to plot")
+            raise ParameterError("this result holds no branches to plot (no cycle was found)")
         if ax is None:
             import matplotlib.pyplot as plt
 
@@ -104,20 +105,23 @@ def _draw_branches(ax, res: HysteresisResult, label: str = "Q", **style) -> None
     ax.legend()
 
 
-def _branch(stress, q, name: str) -> tuple[np.ndarray, np.ndarray]:
-    x = np.asarray(stress, dtype=float).ravel()
-    y = np.asarray(q, dtype=float).ravel()
-    if x.shape != y.shape:
-        raise ValueError(f"{name}: stress and quantity must have the same length, got {x.size} and {y.size}")
+def _branch(stress, q, stress_name: str, q_name: str) -> tuple[np.ndarray, np.ndarray]:
+    """One branch sorted by stress, repeated stresses averaged; errors name the argument at fault."""
+    x = float_array(stress_name, stress).ravel()
+    y = float_array(q_name, q).ravel()
     if x.size < 2:
-        raise ValueError(f"{name}: needs at least 2 samples, got {x.size}")
-    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
-        raise ValueError(f"{name}: stress and quantity must be finite")
+        raise ParameterError(f"needs at least 2 samples, got {x.size}", parameter=stress_name)
+    if x.shape != y.shape:
+        raise ParameterError(f"must have the same length as {stress_name} ({x.size}), got {y.size}", parameter=q_name)
+    if not np.all(np.isfinite(x)):
+        raise ParameterError("must be finite", parameter=stress_name)
+    if not np.all(np.isfinite(y)):
+        raise ParameterError("must be finite", parameter=q_name)
     # Sort by stress and average repeated stresses so that interpolation is well defined.
     xs, inverse = np.unique(x, return_inverse=True)
     ys = np.bincount(inverse, weights=y) / np.bincount(inverse)
     if xs.size < 2:
-        raise ValueError(f"{name}: needs at least 2 distinct stresses")
+        raise ParameterError("needs at least 2 distinct stresses", parameter=stress_name)
     return xs, ys
 
 
@@ -148,19 +152,19 @@ def hysteresis_error(stress_load_pa, q_load, stress_unload_pa, q_unload) -> Hyst
     ----------
     Matute et al., J. Sensors 2018, 6561901, doi:10.1155/2018/6561901.
     """
-    xl, yl = _branch(stress_load_pa, q_load, "loading branch")
-    xu, yu = _branch(stress_unload_pa, q_unload, "unloading branch")
+    xl, yl = _branch(stress_load_pa, q_load, "stress_load_pa", "q_load")
+    xu, yu = _branch(stress_unload_pa, q_unload, "stress_unload_pa", "q_unload")
     lo, hi = max(xl[0], xu[0]), min(xl[-1], xu[-1])
     if not hi > lo:
-        raise ValueError(f"the branches share no stress range (loading {xl[0]:g}–{xl[-1]:g} Pa, "
-                         f"unloading {xu[0]:g}–{xu[-1]:g} Pa)")
+        raise ParameterError(f"the branches share no stress range (loading {xl[0]:g}–{xl[-1]:g} Pa, "
+                             f"unloading {xu[0]:g}–{xu[-1]:g} Pa)", parameter="stress_unload_pa")
     grid = np.union1d(xl[(xl >= lo) & (xl <= hi)], xu[(xu >= lo) & (xu <= hi)])
     q_l, q_u = np.interp(grid, xl, yl), np.interp(grid, xu, yu)
     diff = q_u - q_l
     i = int(np.argmax(np.abs(diff)))
     full = abs(float(yl[-1]))
     if full == 0:
-        raise ValueError("q_load is 0 at the largest stress: eq. (13) needs Q(σf) ≠ 0")
+        raise ParameterError("is 0 at the largest stress: eq. (13) needs Q(σf) ≠ 0", parameter="q_load")
     return HysteresisResult(
         percent=100 * abs(float(diff[i])) / full,  # Eq. (13); Python floats: a tiny Q(σf) gives inf, no warning
         stress_at_max_pa=float(grid[i]),
@@ -174,7 +178,7 @@ def hysteresis_error(stress_load_pa, q_load, stress_unload_pa, q_unload) -> Hyst
 
 
 def check_response(stress_pa, q, name: str = "the readout", fraction: float = 0.2) -> None:
-    """Raise ValueError when a readout does not respond to the stress (a dead or disconnected sensor).
+    """Raise ParameterError when a readout does not respond to the stress (a dead or disconnected sensor).
 
     Parameters
     ----------
@@ -183,12 +187,12 @@ def check_response(stress_pa, q, name: str = "the readout", fraction: float = 0.
     name : str
         The readout's name, for the message.
     fraction : float
-        Share of the stress range at each end whose readings are compared. [1]
+        Share of the stress range at each end whose readings are compared, in (0, 0.5]. [1]
 
     Raises
     ------
-    ValueError
-        The readout does not respond: the difference Δ between its medians over the lowest and
+    fsrlab.errors.ParameterError
+        (parameter ``q``) The readout does not respond: the difference Δ between its medians over the lowest and
         over the highest ``fraction`` of the stress range is not larger than its resolution (the
         smallest difference between two of its readings) or not larger than
         ``5 s √(1/n_low + 1/n_high)``, where ``s`` is its scatter within those two ends (1.4826 ×
@@ -202,16 +206,21 @@ def check_response(stress_pa, q, name: str = "the readout", fraction: float = 0.
     taken for noise (its Δ is most of its full scale). Pure noise of a few hundred readings passes
     with a probability of about 0.1 % (Δ beyond 4 standard errors of a difference of medians).
     """
-    x = np.asarray(stress_pa, dtype=float)
-    y = np.asarray(q, dtype=float)
+    x = float_array("stress_pa", stress_pa)
+    y = float_array("q", q)
+    if x.ndim != 1:
+        raise ParameterError(f"must be a 1-D array, got shape {x.shape}", parameter="stress_pa")
+    if y.shape != x.shape:
+        raise ParameterError(f"must have the shape of stress_pa {x.shape}, got {y.shape}", parameter="q")
+    check_between("fraction", fraction, 0.0, 0.5, lower_open=True, scalar=True)
     ok = np.isfinite(x) & np.isfinite(y)
     x, y = x[ok], y[ok]
     if y.size < 2:
-        raise ValueError(f"{name}: fewer than 2 readings with a reference stress")
+        raise ParameterError(f"{name}: fewer than 2 readings with a reference stress", parameter="q")
     values = np.unique(y)
     if values.size == 1:
-        raise ValueError(f"{name} does not respond to the stress: it reads {values[0]:g} throughout "
-                         f"({y.size} readings); a dead or disconnected sensor?")
+        raise ParameterError(f"{name} does not respond to the stress: it reads {values[0]:g} throughout "
+                             f"({y.size} readings); a dead or disconnected sensor?", parameter="q")
     resolution = float(np.min(np.diff(values)))
     lo, hi = float(x.min()), float(x.max())
     low, high = y[x <= lo + fraction * (hi - lo)], y[x >= hi - fraction * (hi - lo)]
@@ -219,9 +228,9 @@ def check_response(stress_pa, q, name: str = "the readout", fraction: float = 0.
     dev = np.concatenate([np.abs(low - ml), np.abs(high - mh)])
     limit = max(resolution, 5 * 1.4826 * float(np.median(dev)) * np.sqrt(1 / low.size + 1 / high.size))
     if not abs(mh - ml) > limit:
-        raise ValueError(f"{name} does not respond to the stress: its median changes by {mh - ml:.4g} from the lowest "
-                         f"to the highest {fraction:.0%} of the stress range, not more than its resolution and noise "
-                         f"({limit:.4g}); a dead or disconnected sensor?")
+        raise ParameterError(f"{name} does not respond to the stress: its median changes by {mh - ml:.4g} from the "
+                             f"lowest to the highest {fraction:.0%} of the stress range, not more than its resolution "
+                             f"and noise ({limit:.4g}); a dead or disconnected sensor?", parameter="q")
 
 
 def hysteresis_error_curves(
@@ -244,9 +253,11 @@ def hysteresis_error_curves(
     -------
     HysteresisResult
     """
-    check_positive("sigma_f_pa", sigma_f_pa, "Pa")
-    if n < 3:
-        raise ValueError(f"n must be >= 3, got {n!r}")
+    check_positive("sigma_f_pa", sigma_f_pa, "Pa", scalar=True)
+    n = check_int("n", n, 3)
+    for name, f in (("q_load", q_load), ("q_unload", q_unload)):
+        if not callable(f):
+            raise TypeError(f"{name}: must be a function of stress (a callable), got {type(f).__name__}")
     x = np.linspace(0.0, sigma_f_pa, n)
     return _curves_on_grid(x, q_load(x), q_unload(x), q_load, q_unload, refine)
 
@@ -318,6 +329,9 @@ def model_cycle_errors(u_v: float, params: PaperParameters = PAPER, n: int = 400
     thresholds select, C_A by eq. (15), HE by eq. (13).
     """
     check_positive("u_v", u_v, "V")
+    if not isinstance(params, PaperParameters):
+        raise TypeError(f"params: must be a PaperParameters (fsrlab.physics.params.PAPER), got {type(params).__name__}")
+    n = check_int("n", n, 3)
     p = params
 
     def s_l(x):
@@ -327,8 +341,6 @@ def model_cycle_errors(u_v: float, params: PaperParameters = PAPER, n: int = 400
         return separation_unloading(x, p.sigma_f_pa, p.s0_m, p.modulus_pa, p.k)
 
     _, regime = resistance_per_area(u_v, p.s0_m, p.phi0_j, return_regime=True)
-    if n < 3:
-        raise ValueError(f"n must be >= 3, got {n!r}")
     x = np.linspace(0.0, p.sigma_f_pa, n)
     if regime == 12:
         return _model_cycle_errors_eq12(float(u_v), p, x)
@@ -508,5 +520,7 @@ def _model_cycle_errors_eq12_exact(u: float, p: PaperParameters, x: np.ndarray) 
             track("r", a, rl[chunk], ru[chunk], work)
             track("c", a, cl[chunk], cu[chunk], work)
     if best["r"][1] is None or best["c"][1] is None:
-        raise ValueError("All-NaN slice encountered")  # np.nanargmax's error, as on the public path
+        # np.nanargmax's words, as on the public path
+        raise ParameterError(f"the model gives no finite R_A or C_A on the cycle at {u:g} V (All-NaN slice "
+                             "encountered: eq. (12) fails on every separation)", parameter="u_v")
     return _errors_from_curves(u, p, x, rl, ru, cl, cu, best["r"][1], best["c"][1])

@@ -53,7 +53,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from fsrlab.errors import ParameterError
 from fsrlab.io.tables import CalibrationSeries
+from fsrlab.physics.params import float_array
 
 __all__ = ["CLASS_LIMITS", "CalibrationSeries", "ISO376Result", "iso376", "class_reached"]
 
@@ -129,10 +131,14 @@ def class_reached(name: str, value_percent: float) -> str:
     str
         ``"00"``, ``"0.5"``, ``"1"``, ``"2"``, or ``"none"`` beyond class 2.
     """
-    if name not in CLASS_LIMITS["00"]:
-        raise ValueError(f"name must be one of {sorted(CLASS_LIMITS['00'])}, got {name!r}")
+    if not isinstance(name, str) or name not in CLASS_LIMITS["00"]:
+        raise ParameterError(f"must be one of {sorted(CLASS_LIMITS['00'])}, got {name!r}", parameter="name")
+    value = float_array("value_percent", value_percent)
+    if value.ndim:
+        raise ParameterError(f"must be a single number, got an array of shape {value.shape}",
+                             parameter="value_percent")
     for cls, lim in CLASS_LIMITS.items():
-        if abs(value_percent) <= lim[name] + 1e-12:
+        if abs(value) <= lim[name] + 1e-12:
             return cls
     return "none"
 
@@ -161,9 +167,11 @@ def iso376(forces_n, series: Sequence[CalibrationSeries], creep_readings: tuple[
 
     Raises
     ------
-    ValueError
+    fsrlab.errors.ParameterError
         Forces not increasing and positive, a series of the wrong length, a bad degree, creep
-        readings that are not finite.
+        readings that are not finite (naming the parameter).
+    TypeError
+        Forces or creep readings that are not numbers, series that are not CalibrationSeries.
 
     Notes
     -----
@@ -176,21 +184,25 @@ def iso376(forces_n, series: Sequence[CalibrationSeries], creep_readings: tuple[
 
 
 def _iso376(forces_n, series, creep_readings, interpolation_degree) -> ISO376Result:
-    F = np.asarray(forces_n, dtype=float)
+    F = float_array("forces_n", forces_n)
+    if isinstance(series, (str, bytes, CalibrationSeries)) or not isinstance(series, Sequence) or \
+            not all(isinstance(s, CalibrationSeries) for s in series):
+        raise TypeError(f"series: must be a sequence of CalibrationSeries (fsrlab.io.tables), got {series!r:.80}")
     if F.ndim != 1 or F.size < 2 or not np.all(np.isfinite(F)) or np.any(F <= 0) or np.any(np.diff(F) <= 0):
-        raise ValueError("forces_n must be at least 2 positive, strictly increasing forces [N]")
-    if interpolation_degree not in (1, 2, 3):
-        raise ValueError(f"interpolation_degree must be 1, 2 or 3 (ISO 376), got {interpolation_degree!r}")
+        raise ParameterError("must be at least 2 positive, strictly increasing forces [N]", parameter="forces_n")
+    if not isinstance(interpolation_degree, (int, np.integer)) or isinstance(interpolation_degree, bool) or \
+            interpolation_degree not in (1, 2, 3):
+        raise ParameterError(f"must be 1, 2 or 3 (ISO 376), got {interpolation_degree!r}", parameter="interpolation_degree")
     if not series:
-        raise ValueError("series: at least one calibration series is needed")
+        raise ParameterError("at least one calibration series is needed", parameter="series")
     inc, dec = _deflections(F, series)
     missing: dict[str, str] = {}
     notes: list[str] = []
     x_n = float(np.mean([x[-1] for x in inc]))
     if not np.isfinite(x_n):
-        raise ValueError("series: the readings at the largest force must be finite")
+        raise ParameterError("the readings at the largest force must be finite", parameter="series")
     if x_n == 0:
-        raise ValueError("series: zero deflection at the largest force")
+        raise ParameterError("zero deflection at the largest force", parameter="series")
     b_prime, b, xr = _repeatability(series, inc, missing, notes)
     fc = _interpolation_error(F, xr, interpolation_degree, missing)
     f0 = _zero_error(series, x_n, missing)
@@ -207,13 +219,14 @@ def _deflections(F: np.ndarray, series) -> tuple[list, list]:
     for k, s in enumerate(series):
         x = np.asarray(s.increasing, dtype=float)
         if x.shape != F.shape:
-            raise ValueError(f"series[{k}].increasing: {x.size} readings for {F.size} forces")
+            raise ParameterError(f"series[{k}].increasing: {x.size} readings for {F.size} forces", parameter="series")
         z = 0.0 if s.zero_before is None else float(s.zero_before)
         inc.append(x - z)
         if s.decreasing is not None:
             d = np.asarray(s.decreasing, dtype=float)
             if d.shape != F.shape:
-                raise ValueError(f"series[{k}].decreasing: {d.size} readings for {F.size} forces")
+                raise ParameterError(f"series[{k}].decreasing: {d.size} readings for {F.size} forces",
+                                     parameter="series")
             dec.append((k, d - z))
     return inc, dec
 
@@ -282,11 +295,14 @@ def _creep_error(creep_readings, x_n: float, missing: dict):
     if creep_readings is None:
         missing["c"] = "readings 30 s and 300 s after applying the largest force"
         return None
-    i30, i300 = (float(v_) for v_ in creep_readings)
+    readings = float_array("creep_readings", creep_readings)
+    if readings.shape != (2,):
+        raise ParameterError(f"must be two readings I30,I300, got {creep_readings!r:.80}", parameter="creep_readings")
+    i30, i300 = (float(v_) for v_ in readings)
     c = 100 * abs(i300 - i30) / abs(x_n)
     if not np.isfinite(c):
-        raise ValueError(f"creep_readings: must be two finite readings I30,I300 with a finite difference, "
-                         f"got {i30:g}, {i300:g}")
+        raise ParameterError(f"must be two finite readings I30,I300 with a finite difference, "
+                             f"got {i30:g}, {i300:g}", parameter="creep_readings")
     return c
 
 

@@ -22,6 +22,9 @@ from typing import Any
 
 import numpy as np
 
+from fsrlab.errors import ParameterError
+from fsrlab.physics.params import float_array
+
 __all__ = [
     "RepeatabilityResult",
     "PRINTED_ROUNDING_PERCENT",
@@ -69,8 +72,8 @@ class RepeatabilityResult:
 
 
 def _check_ddof(ddof: int) -> int:
-    if ddof not in (0, 1):
-        raise ValueError(f"ddof must be 0 (divisor n, eq. 39 as printed) or 1 (divisor n - 1), got {ddof!r}")
+    if isinstance(ddof, bool) or not isinstance(ddof, (int, np.integer)) or ddof not in (0, 1):
+        raise ParameterError(f"must be 0 (divisor n, eq. 39 as printed) or 1 (divisor n - 1), got {ddof!r}", parameter="ddof")
     return int(ddof)
 
 
@@ -118,14 +121,14 @@ def repeatability(readings, ddof: int = 1) -> RepeatabilityResult:
     RE1 21.52 %, RE2 9.07 %
     """
     ddof = _check_ddof(ddof)
-    x = np.asarray(readings, dtype=float)
+    x = float_array("readings", readings)
     if x.ndim == 0 or x.shape[-1] < 2:
-        raise ValueError("readings must hold at least 2 repeated readings along the last axis")
+        raise ParameterError("must hold at least 2 repeated readings along the last axis", parameter="readings")
     if not np.all(np.isfinite(x)):
-        raise ValueError("readings must be finite numbers")
+        raise ParameterError("must be finite numbers", parameter="readings")
     mean = x.mean(axis=-1)
     if np.any(mean == 0):
-        raise ValueError("readings: a set has zero mean; RE1 and RE2 are relative to the mean")
+        raise ParameterError("a set has zero mean; RE1 and RE2 are relative to the mean", parameter="readings")
     std = x.std(axis=-1, ddof=ddof)
     re1 = 100.0 * (x.max(axis=-1) - x.min(axis=-1)) / np.abs(mean)  # Eq. (39), RE1
     re2 = 100.0 * std / np.abs(mean)  # Eq. (39), RE2
@@ -233,10 +236,15 @@ def recompute_printed_table(printed: Mapping) -> PrintedTableCheck:
     the paper's "Average errors". Printed values are integers, so a recomputed one matches when it
     lies within 0.5 of it (docs/errata.md, M1).
     """
+    if not isinstance(printed, Mapping):
+        raise TypeError(f"printed: must be a mapping of load label to a printed table, got {type(printed).__name__}")
     rows, means = [], []
     for load, t in printed.items():
         if not isinstance(t, Mapping):
             continue
+        missing = [k for k in ("readings", "RE1_percent", "RE2_percent", "mean_RE1", "mean_RE2") if k not in t]
+        if missing:
+            raise ParameterError(f"table {load!r} lacks {', '.join(missing)}", parameter="printed")
         r1 = repeatability(t["readings"], ddof=1)
         r0 = repeatability(t["readings"], ddof=0)
         for i, readings in enumerate(t["readings"]):
@@ -286,6 +294,9 @@ def ddof_finding(tables: Sequence[PrintedTableCheck]) -> DdofFinding:
     -------
     DdofFinding
     """
+    if isinstance(tables, (str, bytes)) or not isinstance(tables, Sequence) or \
+            not all(isinstance(t, PrintedTableCheck) for t in tables):
+        raise TypeError(f"tables: must be a sequence of PrintedTableCheck (recompute_printed_table), got {tables!r:.80}")
     entries = [r for t in tables for r in t.rows + t.means]
     return DdofFinding(rows=len(entries), re2_match_n_minus_1=sum(r.re2_n_minus_1_match for r in entries),
                        re2_match_n=sum(r.re2_n_match for r in entries), re1_match=sum(r.re1_match for r in entries))
@@ -348,15 +359,23 @@ def force_repeatability(readings: Mapping, forces: Mapping, ddof: int = 1) -> Fo
     mean readings: ``ln(X̄_2/X̄_1)/ln(F_2/F_1)``. A two-point estimate, an approximation; an extension
     beyond the paper, which compares RE in percent of each readout (docs/errata.md, M2).
     """
-    if len(readings) != 2 or set(readings) != set(forces):
-        raise ValueError(f"readings and forces must have the same two load labels, got {list(readings)} "
-                         f"and {list(forces)}")
+    for name, value in (("readings", readings), ("forces", forces)):
+        if not isinstance(value, Mapping):
+            raise TypeError(f"{name}: must be a mapping of two load labels, got {type(value).__name__}")
+    if len(readings) != 2:
+        raise ParameterError(f"must hold two loads, got {list(readings)}", parameter="readings")
+    for load, force in forces.items():
+        if isinstance(force, bool) or not isinstance(force, (int, float, np.number)):
+            raise TypeError(f"forces: the load of {load!r} must be a number, got {type(force).__name__}")
+    if set(readings) != set(forces):
+        raise ParameterError(f"must have the same two load labels as readings, got {list(forces)} "
+                             f"and {list(readings)}", parameter="forces")
     lo, hi = sorted(readings, key=lambda k: forces[k])
     if not 0 < forces[lo] < forces[hi]:
-        raise ValueError(f"forces must be two different positive loads, got {dict(forces)!r}")
+        raise ParameterError(f"must be two different positive loads, got {dict(forces)!r}", parameter="forces")
     r = {load: repeatability(readings[load], ddof=ddof) for load in (lo, hi)}
     if np.shape(r[lo].mean) != np.shape(r[hi].mean):
-        raise ValueError("readings: both loads must hold the same sensors")
+        raise ParameterError("both loads must hold the same sensors", parameter="readings")
     e = np.log(r[hi].mean / r[lo].mean) / np.log(forces[hi] / forces[lo])  # d ln X / d ln F
     return ForceRepeatability(elasticity=e, re2_readout_percent={load: r[load].re2_percent for load in (lo, hi)})
 
@@ -457,21 +476,26 @@ def grouped_repeatability(load: Sequence, sensor: Sequence, reading, ddof: int =
         If the three sequences differ in length, or a group has fewer than 2 readings.
     """
     ddof = _check_ddof(ddof)
-    x = np.asarray(reading, dtype=float)
+    x = float_array("reading", reading)
+    if x.ndim != 1:
+        raise ParameterError(f"must be a 1-D array, got shape {x.shape}", parameter="reading")
+    for name, labels in (("load", load), ("sensor", sensor)):
+        if isinstance(labels, (str, bytes, dict)) or not isinstance(labels, Sequence | np.ndarray):
+            raise TypeError(f"{name}: must be a sequence of labels, one per reading, got {type(labels).__name__}")
+        if len(labels) != x.size:
+            raise ParameterError(f"must hold one label per reading ({x.size}), got {len(labels)}", parameter=name)
     load, sensor = list(load), list(sensor)
-    if not (len(load) == len(sensor) == x.shape[0]) or x.ndim != 1:
-        raise ValueError("load, sensor and reading must be 1-D and of the same length")
     order: dict[tuple, list[int]] = {}
     for i, key in enumerate(zip(load, sensor, strict=True)):
         order.setdefault(key, []).append(i)
     groups = []
     for (ld, sn), idx in order.items():
         if len(idx) < 2:
-            raise ValueError(f"reading: group load={ld!r} sensor={sn!r} has {len(idx)} reading; at least 2 are needed")
+            raise ParameterError(f"group load={ld!r} sensor={sn!r} has {len(idx)} reading; at least 2 are needed", parameter="reading")
         try:
             r = repeatability(x[idx], ddof=ddof)
         except ValueError as exc:  # the group it is about, not only "a set"
-            raise ValueError(f"reading: group load={ld!r} sensor={sn!r}: {str(exc).split(': ', 1)[-1]}") from None
+            raise ParameterError(f"group load={ld!r} sensor={sn!r}: {str(exc).split(': ', 1)[-1]}", parameter="reading") from None
         groups.append(GroupRepeatability(ld, sn, float(r.re1_percent), float(r.re2_percent), float(r.mean), len(idx)))
     means = []
     for ld in dict.fromkeys(g.load for g in groups):
