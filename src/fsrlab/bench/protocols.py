@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from fsrlab.bench.weights import Step, plan_steps
+from fsrlab.errors import ParameterError
 from fsrlab.units import STANDARD_GRAVITY
 
 __all__ = ["PROTOCOLS", "DEVICES", "SPEEDS", "VIRTUAL_SENSORS", "virtual_sensor", "SpringPlan", "WeightsPlan", "CreepPlan", "twin_status", "open_bench",
@@ -68,11 +69,11 @@ class SpringPlan:
 
     def __post_init__(self) -> None:
         if not (isinstance(self.cycles, int) and 1 <= self.cycles <= 100000):
-            raise ValueError(f"cycles must be an integer from 1 to 100000, got {self.cycles!r}")
+            raise ParameterError(f"must be an integer from 1 to 100000, got {self.cycles!r}", parameter="cycles")
         if not (math.isfinite(self.period_s) and self.period_s > 0):
-            raise ValueError(f"period_s must be > 0 s, got {self.period_s!r}")
+            raise ParameterError(f"must be > 0 s, got {self.period_s!r}", parameter="period_s")
         if not (math.isfinite(self.peak_pa) and self.peak_pa > self.base_pa >= 0):
-            raise ValueError(f"peak_pa must exceed base_pa >= 0 Pa, got {self.peak_pa!r} and {self.base_pa!r}")
+            raise ParameterError(f"must exceed base_pa >= 0 Pa, got {self.peak_pa!r} and {self.base_pa!r}", parameter="peak_pa")
 
     @property
     def duration_s(self) -> float:
@@ -129,9 +130,9 @@ class WeightsPlan:
         m = tuple(float(x) for x in self.masses_kg)
         object.__setattr__(self, "masses_kg", m)
         if not m or not all(math.isfinite(x) and x > 0 for x in m):
-            raise ValueError(f"masses_kg must be finite masses > 0 kg, got {self.masses_kg!r}")
+            raise ParameterError(f"must be finite masses > 0 kg, got {self.masses_kg!r}", parameter="masses_kg")
         if not (isinstance(self.repeat, int) and 1 <= self.repeat <= 1000):
-            raise ValueError(f"repeat must be an integer from 1 to 1000, got {self.repeat!r}")
+            raise ParameterError(f"must be an integer from 1 to 1000, got {self.repeat!r}", parameter="repeat")
         plan_steps((0.0,) + m, self.repeat, True)  # increasing masses, or the ValueError naming them
 
     def steps(self) -> list[Step]:
@@ -167,13 +168,13 @@ class CreepPlan:
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.mass_kg) and self.mass_kg > 0):
-            raise ValueError(f"mass_kg must be > 0 kg, got {self.mass_kg!r}")
+            raise ParameterError(f"must be > 0 kg, got {self.mass_kg!r}", parameter="mass_kg")
         if not (math.isfinite(self.hold_s) and self.hold_s > 0):
-            raise ValueError(f"hold_s must be > 0 s, got {self.hold_s!r}")
+            raise ParameterError(f"must be > 0 s, got {self.hold_s!r}", parameter="hold_s")
         for name in ("before_s", "after_s"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
-                raise ValueError(f"{name} must be >= 0 s, got {v!r}")
+                raise ParameterError(f"must be >= 0 s, got {v!r}", parameter=name)
 
     @property
     def duration_s(self) -> float:
@@ -203,12 +204,12 @@ VIRTUAL_SENSORS = ("virtual-fsr", "paper-a201-1", "paper-a201-2", "paper-a201-3"
 (:data:`fsrlab.physics.presets.SENSOR_PRESETS`) gives the virtual FSR that preset's area."""
 
 
-def virtual_sensor(name):
+def virtual_sensor(sensor):
     """The virtual bench's sensor by name.
 
     Parameters
     ----------
-    name : str or object
+    sensor : str or object
         ``virtual-fsr`` (:class:`~fsrlab.physics.sensor.VirtualFSR`, FlexiForce A201-like),
         ``paper-a201-1`` .. ``paper-a201-4`` (:func:`fsrlab.physics.paper_sensor.paper_sensor`, the
         sensors fitted to the paper's §6), another sensor preset's name (the virtual FSR with that
@@ -221,16 +222,21 @@ def virtual_sensor(name):
 
     Raises
     ------
-    ValueError
-        An unknown name.
+    fsrlab.errors.ParameterError
+        An unknown name (parameter ``sensor``).
+    TypeError
+        An object that is not a sensor model.
     """
     from fsrlab.physics.paper_sensor import PAPER_SENSOR_NAMES, paper_sensor
     from fsrlab.physics.presets import SENSOR_PRESETS
     from fsrlab.physics.sensor import VirtualFSR
 
-    if not isinstance(name, str):
-        return name, type(name).__name__
-    key = name.strip().lower()
+    if not isinstance(sensor, str):
+        from fsrlab.virtual.arguments import check_sensor
+
+        check_sensor("sensor", sensor)
+        return sensor, type(sensor).__name__
+    key = sensor.strip().lower()
 
     if key in PAPER_SENSOR_NAMES:
         return paper_sensor(key), f"{key} (fitted paper sensor, fsrlab.physics.paper_sensor)"
@@ -239,7 +245,8 @@ def virtual_sensor(name):
     if key in SENSOR_PRESETS:
         area = SENSOR_PRESETS[key].area_m2
         return VirtualFSR(area_m2=area), f"VirtualFSR on the area of {key} ({area * 1e6:.1f} mm²)"
-    raise ValueError(f"sensor: must be virtual-fsr or one of {', '.join(SENSOR_PRESETS)}, got {name!r}")
+    raise ParameterError(f"must be virtual-fsr or one of {', '.join(SENSOR_PRESETS)}, got {sensor!r}",
+                         parameter="sensor")
 
 
 def twin_status() -> tuple[bool, str]:
@@ -288,7 +295,7 @@ def open_bench(device: str, source, seed: int | None = None, speed: str = "realt
         An unknown device or speed, or the twin is not available (the message says why).
     """
     if speed not in SPEEDS:
-        raise ValueError(f"speed must be one of {', '.join(SPEEDS)}, got {speed!r}")
+        raise ParameterError(f"must be one of {', '.join(SPEEDS)}, got {speed!r}", parameter="speed")
     if device == "virtual":
         from fsrlab.virtual.device import VirtualDevice
 
@@ -296,13 +303,13 @@ def open_bench(device: str, source, seed: int | None = None, speed: str = "realt
     if device == "twin":
         ok, reason = twin_status()
         if not ok:
-            raise ValueError(f"--twin: {reason}")
+            raise ParameterError(f"the twin: {reason}", parameter="device")
         from fsrlab.acquisition.loadcell import LoadCellModel
         from fsrlab.virtual.twin import Twin
 
         # The load cell the Python virtual device emulates by default, on the twin's HX711 model.
         return Twin(source=source, speed=speed, seed=0 if seed is None else seed, loadcell=LoadCellModel())
-    raise ValueError(f"device must be virtual or twin, got {device!r}")
+    raise ParameterError(f"must be virtual or twin, got {device!r}", parameter="device")
 
 
 @dataclass
@@ -439,13 +446,13 @@ def run_protocol(plan, out, device: str = "virtual", port: str | None = None, se
 
 def _check_device(device: str, port: str | None, speed: str) -> None:
     if device not in DEVICES:
-        raise ValueError(f"device must be one of {', '.join(DEVICES)}, got {device!r}")
+        raise ParameterError(f"must be one of {', '.join(DEVICES)}, got {device!r}", parameter="device")
     if device == "port" and not port:
-        raise ValueError("port: a serial port is needed for device='port'")
+        raise ParameterError("a serial port is needed for device='port'", parameter="port")
     if speed not in SPEEDS:
-        raise ValueError(f"speed must be one of {', '.join(SPEEDS)}, got {speed!r}")
+        raise ParameterError(f"must be one of {', '.join(SPEEDS)}, got {speed!r}", parameter="speed")
     if device == "port" and speed != "realtime":
-        raise ValueError("speed: hardware runs in real time; speed='max' is for a virtual bench")
+        raise ParameterError("hardware runs in real time; speed='max' is for a virtual bench", parameter="speed")
 
 
 class _DeviceClock:
@@ -498,7 +505,7 @@ def _plan_hooks(plan, virtual, sensor, seed, clock: _DeviceClock, say, answer, s
     elif isinstance(plan, CreepPlan):
         hooks = _creep_hooks(plan, virtual, sensor, seed, clock, say, gravity_m_s2)
     else:
-        raise ValueError(f"plan must be a SpringPlan, WeightsPlan or CreepPlan, got {type(plan).__name__}")
+        raise ParameterError(f"must be a SpringPlan, WeightsPlan or CreepPlan, got {type(plan).__name__}", parameter="plan")
     if hooks.on_row is not None:
         hook = hooks.on_row
 

@@ -14,6 +14,9 @@ from collections.abc import Sequence
 import numpy as np
 
 from fsrlab.circuits.circuit import PAPER_OPAMP, LM555Circuit, OpAmpReadout
+from fsrlab.errors import ParameterError
+from fsrlab.physics.params import check_int, check_positive, float_array
+from fsrlab.virtual.arguments import check_sensor, random_generator
 
 __all__ = ["BenchSource"]
 
@@ -58,19 +61,25 @@ class BenchSource:
         from fsrlab.physics.sensor import VirtualFSR
         from fsrlab.virtual.sources import VIRTUAL_CIRCUIT
 
-        f = np.asarray(forces_n, dtype=float)
+        f = float_array("forces_n", forces_n)
         if f.ndim != 1 or f.size == 0 or not np.all(np.isfinite(f)) or np.any(f < 0):
-            raise ValueError("forces_n must be a non-empty sequence of finite forces >= 0 N")
-        if not ramp_s > 0 or ramp_points < 2:
-            raise ValueError(f"ramp_s must be > 0 s and ramp_points >= 2, got {ramp_s!r}, {ramp_points!r}")
+            raise ParameterError("must be a non-empty sequence of finite forces >= 0 N", parameter="forces_n")
+        check_positive("ramp_s", ramp_s, "s", scalar=True)
+        ramp_points = check_int("ramp_points", ramp_points, 2)
+        if sensor is not None:
+            check_sensor("sensor", sensor)
+        for name, obj, cls in (("circuit", circuit, LM555Circuit), ("opamp", opamp, OpAmpReadout)):
+            if obj is not None and not isinstance(obj, cls):
+                raise TypeError(f"{name}: must be an {cls.__name__}, got {type(obj).__name__}")
+        if opamp is None:
+            raise TypeError("opamp: must be an OpAmpReadout, got None")
         self.sensor = sensor if sensor is not None else VirtualFSR()
         self.circuit = circuit if circuit is not None else VIRTUAL_CIRCUIT
         self.opamp = opamp
         self.forces_n, self.ramp_s, self._n = f, float(ramp_s), int(ramp_points)
         if load_area_m2 is None:
             load_area_m2 = getattr(self.sensor, "load_area_m2", self.sensor.area_m2)
-        if not (np.isfinite(load_area_m2) and load_area_m2 > 0):
-            raise ValueError(f"load_area_m2 must be > 0 m², got {load_area_m2!r}")
+        check_positive("load_area_m2", load_area_m2, "m²", scalar=True)
         self.load_area_m2 = float(load_area_m2)
         stress = f / self.load_area_m2
         hist = [np.array([stress[0]])] + [np.linspace(stress[k - 1], stress[k], self._n + 1)[1:]
@@ -90,7 +99,7 @@ class BenchSource:
         placement k's factors hold on its ramp and while it rests."""
         if not hasattr(self.sensor, "placement"):
             return {}
-        rng = np.random.default_rng(seed)
+        rng = random_generator("seed", seed)
         draws = [self.sensor.placement(rng) for _ in range(placements)]
         owner = np.concatenate([[0]] + [np.full(self._n, k) for k in range(1, placements)])
         return {key: np.asarray([d[key] for d in draws], dtype=float)[owner] for key in draws[0]}
@@ -110,7 +119,7 @@ class BenchSource:
     def place(self, step: int, t_s: float) -> None:
         """Begin placement ``step`` (0-based, in the planned order) at time ``t_s`` since START [s]."""
         if not 0 <= step < self.forces_n.size:
-            raise ValueError(f"step must be in 0..{self.forces_n.size - 1}, got {step!r}")
+            raise ParameterError(f"must be in 0..{self.forces_n.size - 1}, got {step!r}", parameter="step")
         if step > 0:
             self._placed[step] = max(float(t_s), self._placed[step - 1])
 

@@ -31,7 +31,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from fsrlab.errors import ParameterError
+from fsrlab.physics.params import check_at_least, check_between, check_finite, check_int, check_positive
 from fsrlab.units import STANDARD_GRAVITY
+from fsrlab.virtual.arguments import random_generator
 
 __all__ = ["HandLoadedRun", "hand_loaded_force", "motor_cycle_force", "fsr_bench_run"]
 
@@ -92,6 +95,10 @@ def hand_loaded_force(duration_s: float, peak_n: float, rng: np.random.Generator
     ndarray
         Force ≥ 0 every millisecond. [N]
     """
+    check_positive("duration_s", duration_s, "s", scalar=True)
+    check_positive("peak_n", peak_n, "N", scalar=True)
+    if not isinstance(rng, np.random.Generator):
+        raise TypeError(f"rng: must be a numpy random Generator, got {type(rng).__name__}")
     n = int(round(duration_s / _DT))
     points = [0.0]
     times = [0.0]
@@ -142,6 +149,9 @@ def motor_cycle_force(ramp_s: float, peak_n: float, cycles: int = 1) -> np.ndarr
     ndarray
         Force every millisecond. [N]
     """
+    check_positive("ramp_s", ramp_s, "s", scalar=True)
+    check_positive("peak_n", peak_n, "N", scalar=True)
+    cycles = check_int("cycles", cycles, 1)
     m = int(round(ramp_s / _DT))
     up = np.linspace(0.0, peak_n, m, endpoint=False)
     rest = np.zeros(int(round(1.0 / _DT)))
@@ -214,8 +224,20 @@ def fsr_bench_run(kind: str = "hand", seed: int = 0, duration_s: float = 60.0, p
     HandLoadedRun
     """
     if kind not in ("hand", "motor"):
-        raise ValueError(f"kind must be 'hand' or 'motor', got {kind!r}")
-    rng = np.random.default_rng(seed)
+        raise ParameterError(f"must be 'hand' or 'motor', got {kind!r}", parameter="kind")
+    for name, value, unit in (("duration_s", duration_s, "s"), ("peak_n", peak_n, "N"), ("ramp_s", ramp_s, "s"),
+                              ("r_m_ohm", r_m_ohm, "Ω"), ("vcc_v", vcc_v, "V")):
+        check_positive(name, value, unit, scalar=True)
+    check_between("row_s", row_s, 2 * _DT, duration_s if kind == "hand" else 2 * ramp_s, "s", scalar=True)
+    if reference_sps is not None:
+        check_between("reference_sps", reference_sps, 0.0, 1 / _DT, "1/s", lower_open=True, scalar=True)
+    for name, value in (("hysteresis", hysteresis), ("activation", activation)):
+        check_between(name, value, 0.0, 1.0, upper_open=True, scalar=True)
+    for name, value in (("creep", creep), ("adc_noise_lsb", adc_noise_lsb), ("reference_noise", reference_noise)):
+        check_at_least(name, value, 0.0, scalar=True)
+    if offset_g is not None:
+        check_finite("offset_g", offset_g, scalar=True)
+    rng = random_generator("seed", seed)
     force = hand_loaded_force(duration_s, peak_n, rng) if kind == "hand" else motor_cycle_force(ramp_s, peak_n)
     n = force.size
     t = np.arange(n) * _DT

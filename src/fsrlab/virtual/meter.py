@@ -33,7 +33,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsrlab.acquisition.messages import decode_sums
+from fsrlab.errors import ParameterError
 from fsrlab.hardware import ADC_COUNTS, ADC_V_PER_COUNT, TICK_S
+from fsrlab.physics.params import check_at_least, check_finite, float_array
+from fsrlab.virtual.arguments import random_generator
 
 __all__ = ["NOISE_DRAWS", "MeterState", "MeterReadings", "adc_code", "measure"]
 
@@ -67,9 +70,9 @@ def adc_code(voltage_v):
     with the Uno's AVcc reference of 5 V; the code's voltage is ``code · Vref/1024``, ½ LSB below the
     middle of the interval it stands for.
     """
-    v = np.asarray(voltage_v, dtype=float)
+    v = float_array("voltage_v", voltage_v)
     if np.any(np.isnan(v)):
-        raise ValueError(f"voltage_v: must not be NaN, got {voltage_v!r}")
+        raise ParameterError(f"must not be NaN, got {voltage_v!r}", parameter="voltage_v")
     code = np.clip(np.floor(v / ADC_V_PER_COUNT), 0, ADC_COUNTS - 1).astype(np.int64)
     return int(code) if code.ndim == 0 else code
 
@@ -146,8 +149,7 @@ class MeterReadings:
 
 def _nonnegative(**values) -> None:
     for name, v in values.items():
-        if not (np.isfinite(v) and v >= 0):
-            raise ValueError(f"{name}: must be finite and >= 0, got {v!r}")
+        check_at_least(name, v, 0.0, scalar=True)
 
 
 def measure(frequency_hz, duty_cycle, voltage_v, window_s, state: MeterState | None = None,
@@ -197,17 +199,26 @@ def measure(frequency_hz, duty_cycle, voltage_v, window_s, state: MeterState | N
     :func:`adc_code` of the voltage plus noise. The frequency noise moves the phase too, so the
     periods a window counts follow the noisy frequency.
     """
-    f, duty, volts, w = (np.atleast_1d(np.asarray(x, dtype=float))
-                         for x in (frequency_hz, duty_cycle, voltage_v, window_s))
-    f, duty, volts, w = np.broadcast_arrays(f, duty, volts, w)
+    named = {"frequency_hz": frequency_hz, "duty_cycle": duty_cycle, "voltage_v": voltage_v, "window_s": window_s}
+    arrays = {name: np.atleast_1d(float_array(name, x)) for name, x in named.items()}
+    shape = arrays["frequency_hz"].shape
+    for name, a in arrays.items():
+        try:
+            shape = np.broadcast_shapes(shape, a.shape)
+        except ValueError:
+            raise ParameterError(f"must have the shape of frequency_hz {arrays['frequency_hz'].shape} or be one "
+                                 f"number, got {a.shape}", parameter=name) from None
+    f, duty, volts, w = np.broadcast_arrays(*arrays.values())
     if f.ndim != 1:
-        raise ValueError(f"frequency_hz, duty_cycle, voltage_v, window_s: need one dimension, got shape {f.shape}")
+        raise ParameterError(f"frequency_hz, duty_cycle, voltage_v, window_s: need one dimension, got shape {f.shape}",
+                             parameter="frequency_hz")
     if np.any(~(w > 0)) or np.any(~np.isfinite(w)):
-        raise ValueError(f"window_s: must be finite and > 0 s, got {window_s!r}")
+        raise ParameterError(f"must be finite and > 0 s, got {window_s!r}", parameter="window_s")
     _nonnegative(frequency_noise=frequency_noise, jitter_s=jitter_s, adc_noise_v=adc_noise_v)
-    if not np.isfinite(start_s):
-        raise ValueError(f"start_s: must be finite, got {start_s!r}")
-    rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    check_finite("start_s", start_s, scalar=True)
+    if state is not None and not isinstance(state, MeterState):
+        raise TypeError(f"state: must be a MeterState (the one measure returned), got {type(state).__name__}")
+    rng = random_generator("rng", rng)
     n = f.size
     z = rng.standard_normal((NOISE_DRAWS, n))
     state = state if state is not None else MeterState.started(rng)

@@ -22,7 +22,10 @@ from typing import Protocol
 import numpy as np
 
 from fsrlab.circuits.circuit import PAPER_CIRCUIT, PAPER_OPAMP, LM555Circuit, OpAmpReadout
+from fsrlab.errors import ParameterError
+from fsrlab.physics.params import check_at_least, check_positive
 from fsrlab.physics.sensor import A201_AREA_M2
+from fsrlab.virtual.arguments import check_sensor
 
 __all__ = ["Signal", "SignalSource", "ConstantSource", "StressProfile", "PhysicsSource", "MuxSource",
            "sensor_metadata", "PROFILE_KINDS", "VIRTUAL_CIRCUIT"]
@@ -123,11 +126,12 @@ class StressProfile:
 
     def __post_init__(self) -> None:
         if self.kind not in PROFILE_KINDS:
-            raise ValueError(f"profile kind must be one of {', '.join(PROFILE_KINDS)}, got {self.kind!r}")
-        if not self.period_s > 0:
-            raise ValueError(f"period_s must be > 0 s, got {self.period_s!r}")
+            raise ParameterError(f"must be one of {', '.join(PROFILE_KINDS)}, got {self.kind!r}", parameter="kind")
+        check_positive("period_s", self.period_s, "s", scalar=True)
+        check_at_least("base_pa", self.base_pa, 0.0, "Pa", scalar=True)
+        check_positive("peak_pa", self.peak_pa, "Pa", scalar=True)
         if not self.peak_pa > self.base_pa >= 0:
-            raise ValueError(f"peak_pa must exceed base_pa >= 0 Pa, got {self.peak_pa!r} and {self.base_pa!r}")
+            raise ParameterError(f"must exceed base_pa >= 0 Pa, got {self.peak_pa!r} and {self.base_pa!r}", parameter="peak_pa")
 
     def stress(self, t_s) -> np.ndarray:
         """Stress at time ``t_s`` [s] since START; returns [Pa], same shape."""
@@ -163,6 +167,7 @@ def sensor_metadata(sensor) -> dict:
         ``model`` (class and module; the VirtualFSR is FlexiForce A201-like), ``name`` (when the
         sensor has one, e.g. ``paper-a201-1``) and ``area_m2`` [m²].
     """
+    check_sensor("sensor", sensor)
     cls = type(sensor)
     model = f"{cls.__name__} ({cls.__module__})"
     if cls.__name__ == "VirtualFSR":
@@ -202,13 +207,19 @@ class PhysicsSource:
 
     def __init__(self, profile: StressProfile | None = None, sensor=None, circuit: LM555Circuit = VIRTUAL_CIRCUIT,
                  opamp: OpAmpReadout = PAPER_OPAMP, dt_s: float = 0.005, mux=None) -> None:
+        from fsrlab.circuits.mux import Multiplexer
         from fsrlab.physics.sensor import VirtualFSR
 
-        if not dt_s > 0:
-            raise ValueError(f"dt_s must be > 0, got {dt_s!r}")
+        check_positive("dt_s", dt_s, "s", scalar=True)
         for name, obj, cls in (("circuit", circuit, LM555Circuit), ("opamp", opamp, OpAmpReadout)):
             if not isinstance(obj, cls):
-                raise ValueError(f"{name} must be an {cls.__name__}, got {type(obj).__name__}")
+                raise TypeError(f"{name}: must be an {cls.__name__}, got {type(obj).__name__}")
+        if profile is not None and not isinstance(profile, StressProfile):
+            raise TypeError(f"profile: must be a StressProfile, got {type(profile).__name__}")
+        if sensor is not None:
+            check_sensor("sensor", sensor)
+        if mux is not None and not isinstance(mux, Multiplexer):
+            raise TypeError(f"mux: must be a Multiplexer (fsrlab.circuits.mux), got {type(mux).__name__}")
         self.profile = profile or StressProfile()
         self.sensor = sensor if sensor is not None else VirtualFSR()
         self.mux = mux
@@ -306,7 +317,14 @@ class MuxSource:
     def __init__(self, sources, reference_channel: int = 0) -> None:
         from fsrlab.errors import ParameterError
 
+        if isinstance(sources, (str, bytes)) or not hasattr(sources, "__iter__"):
+            raise TypeError(f"sources: must be a sequence of PhysicsSource or None, one per channel, got "
+                            f"{type(sources).__name__}")
         self.sources = tuple(sources)
+        if not all(s is None or isinstance(s, PhysicsSource) for s in self.sources):
+            raise TypeError("sources: each channel must be a PhysicsSource or None")
+        if isinstance(reference_channel, bool) or not isinstance(reference_channel, int):
+            raise TypeError(f"reference_channel: must be an int, got {type(reference_channel).__name__}")
         if not 1 <= len(self.sources) <= 8:
             raise ParameterError(f"1..8 channels, got {len(self.sources)}", parameter="sources")
         live = [s for s in self.sources if s is not None]

@@ -20,7 +20,10 @@ from pathlib import Path
 import numpy as np
 
 from fsrlab.circuits.circuit import PAPER_CIRCUIT, PAPER_OPAMP, LM555Circuit, OpAmpReadout
+from fsrlab.errors import ParameterError
 from fsrlab.io.runformat import Run
+from fsrlab.physics.params import check_at_least, check_int, check_positive, float_array
+from fsrlab.virtual.arguments import check_sensor, random_generator
 
 __all__ = ["triangle_stress", "SyntheticRun", "synthetic_run"]
 
@@ -47,12 +50,13 @@ def triangle_stress(cycles: int = 3, peak_pa: float = 50e3, points_per_ramp: int
     ndarray
         Stress sequence. [Pa]
     """
-    if cycles < 1:
-        raise ValueError(f"cycles must be >= 1, got {cycles!r}")
-    if points_per_ramp < 2:
-        raise ValueError(f"points_per_ramp must be >= 2, got {points_per_ramp!r}")
+    cycles = check_int("cycles", cycles, 1)
+    points_per_ramp = check_int("points_per_ramp", points_per_ramp, 2)
+    dwell_points = check_int("dwell_points", dwell_points, 0)
+    check_at_least("start_pa", start_pa, 0.0, "Pa", scalar=True)
+    check_positive("peak_pa", peak_pa, "Pa", scalar=True)
     if not peak_pa > start_pa >= 0:
-        raise ValueError(f"peak_pa must exceed start_pa >= 0 Pa, got {peak_pa!r}, {start_pa!r}")
+        raise ParameterError(f"must exceed start_pa >= 0 Pa, got {peak_pa!r}, {start_pa!r}", parameter="peak_pa")
     up = np.linspace(start_pa, peak_pa, points_per_ramp + 1)
     one = np.concatenate([up[:-1], np.full(dwell_points, peak_pa), up[::-1][:-1]])
     return np.concatenate([np.tile(one, cycles), [start_pa]])
@@ -144,19 +148,22 @@ def synthetic_run(cycles: int = 3, peak_pa: float = 50e3, points_per_ramp: int =
     from fsrlab.physics.sensor import VirtualFSR
     from fsrlab.virtual.meter import measure
 
-    if not (np.isfinite(window_s) and window_s > 0):
-        raise ValueError(f"window_s must be > 0, got {window_s!r}")
+    check_positive("window_s", window_s, "s", scalar=True)
     for name, v in (("frequency_noise", frequency_noise), ("stress_noise_pa", stress_noise_pa),
                     ("voltage_noise_v", voltage_noise_v), ("jitter_s", jitter_s)):
-        if not v >= 0:
-            raise ValueError(f"{name} must be >= 0, got {v!r}")
+        check_at_least(name, v, 0.0, scalar=True)
     for name, obj, cls in (("circuit", circuit, LM555Circuit), ("opamp", opamp, OpAmpReadout)):
         if not isinstance(obj, cls):
-            raise ValueError(f"{name} must be an {cls.__name__}, got {type(obj).__name__}")
-    rng = np.random.default_rng(seed)
+            raise ParameterError(f"must be an {cls.__name__}, got {type(obj).__name__}", parameter=name)
+    rng = random_generator("seed", seed)
+    if sensor is not None:
+        check_sensor("sensor", sensor)
     fsr = sensor if sensor is not None else VirtualFSR()
-    stress = (triangle_stress(cycles, peak_pa, points_per_ramp, dwell_points) if stress_pa is None
-              else np.asarray(stress_pa, dtype=float))
+    stress = triangle_stress(cycles, peak_pa, points_per_ramp, dwell_points) if stress_pa is None \
+        else float_array("stress_pa", stress_pa)
+    if stress.ndim != 1 or stress.size < 2:
+        raise ParameterError(f"must be a 1-D array of at least 2 stresses, got shape {stress.shape}",
+                             parameter="stress_pa")
     n = stress.size
     resp = fsr.respond(stress, voltage_v=circuit.fsr_voltage_v)
     osc = circuit.astable(resp.r_fsr_ohm, resp.c_fsr_farad)

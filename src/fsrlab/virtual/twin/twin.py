@@ -33,6 +33,7 @@ import threading
 import tty
 from collections import deque
 
+from fsrlab.errors import ParameterError
 from fsrlab.virtual.twin.process import F_CPU_HZ, elf_path, harness_path, pack_records, twin_available
 
 __all__ = ["Twin", "SPEEDS"]
@@ -76,13 +77,13 @@ class Twin:
         from fsrlab.virtual.sources import PhysicsSource
 
         if speed not in SPEEDS:
-            raise ValueError(f"speed must be one of {', '.join(SPEEDS)}, got {speed!r}")
+            raise ParameterError(f"must be one of {', '.join(SPEEDS)}, got {speed!r}", parameter="speed")
         if source is not None and not all(hasattr(source, a) for a in ("parts", "dt_s", "force_n", "circuit",
                                                                           "metadata")):
-            raise ValueError(f"source must be a PhysicsSource or BenchSource (parts, dt_s, force_n, circuit, "
-                             f"metadata), got {type(source).__name__}")
+            raise ParameterError(f"must be a PhysicsSource or BenchSource (parts, dt_s, force_n, circuit, "
+                             f"metadata), got {type(source).__name__}", parameter="source")
         if loadcell is not None and not isinstance(loadcell, LoadCellModel):
-            raise ValueError(f"loadcell must be a LoadCellModel or None, got {type(loadcell).__name__}")
+            raise ParameterError(f"must be a LoadCellModel or None, got {type(loadcell).__name__}", parameter="loadcell")
         self.source = source if source is not None else PhysicsSource()
         self.speed, self.seed, self.loadcell = speed, int(seed), loadcell
         self.port: str | None = None
