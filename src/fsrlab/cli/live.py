@@ -85,6 +85,7 @@ def live(
     masses: str = typer.Option(None, "--masses", metavar="MASSES", help="Offer the guided known-weight calibration on the page with these masses, increasing, comma-separated [kg]: 0,100g,200g,400g (g, kg or mg; 0 needs no unit). With --virtual a virtual bench places each mass when the page says Placed."),
     repeat: int = typer.Option(1, "--repeat", help="Guided calibration: cycles of placements [1], e.g. 3."),
     unload: bool = typer.Option(False, "--unload", help="Guided calibration: also unload in reverse (for hysteresis)."),
+    channels: str = typer.Option(None, "--channels", metavar="LIST", help="Scan these multiplexer channels (a protocol-3 meter, docs/multiplexing.md): 0-7, 0,2,5; the page shows a sensor map, every channel's frequency and its link health. With --virtual: channel k under the profile at peak x (k+1)/(highest channel+1)."),
     unplug_after: int = typer.Option(None, "--unplug-after", help="Virtual device (tests): pull the cable after this many windows [1]."),
     json_out: bool = typer.Option(False, "--json", help='Print JSON lines: {"url", "token"} when the page is up, {"frames", "recorded", "state"} at the end.'),
     meter: MeterCircuit = MeterCircuit(),
@@ -109,6 +110,11 @@ def live(
     """
 
     window_ms, host = _checked_options(port, virtual, window, range_, http_port, duration, host)
+    from fsrlab.cli.acquisition import scan_options
+
+    scan, _ = scan_options(channels, None, None)
+    if scan is not None and masses is not None:
+        fail("the guided calibration reads one sensor: leave out --channels or --masses", "--channels")
     if out is not None:
         _check_new_run(out, [cal, loadcell])
     circuits = meter.sidecar(None, "--virtual" if virtual else None)  # the page may switch to either range
@@ -124,6 +130,8 @@ def live(
     place = None
     if virtual:
         device, source, place = _virtual_meter(profile, peak, period, meter, seed, steps, area_m2, unplug_after)
+        if scan is not None:
+            device, source = _virtual_bench_of_sensors(device, scan, profile, peak, period, meter, seed, area_m2)
         if lc is None:
             lc = device.load_cell.calibration()
         area_m2 = source.sensor.area_m2
@@ -141,7 +149,7 @@ def live(
         warn([note])
     link = _open_link(port, device)
     session = LiveSession(link, window_ms=window_ms, range_=range_, reference=reference, loadcell=lc, area_m2=area_m2,
-                          estimator=estimator, health=health, metadata=metadata, weights=weights)
+                          estimator=estimator, health=health, metadata=metadata, weights=weights, scan=scan)
     session.start()
     controller = Controller(out)
     srv = _start_server(lambda doc: make_document(doc, session, controller, "force", "N", 1.0), host, http_port,
@@ -251,6 +259,16 @@ def _virtual_meter(profile: str, peak: float, period: float, meter: MeterCircuit
 
         device.faults = Faults(unplug_after=unplug_after)
     return device, source, place
+
+
+def _virtual_bench_of_sensors(device, scan, profile: str, peak: float, period: float, meter: MeterCircuit, seed,
+                              area_m2):
+    """``--virtual --channels``: the device with a sensor per channel behind the multiplexer, as acquire's."""
+    from fsrlab.cli.acquisition import mux_source
+    from fsrlab.virtual.device import VirtualDevice
+
+    source = mux_source(max(scan.channels) + 1, profile, peak, period, meter.virtual_c_off_farad, area_m2=area_m2)
+    return VirtualDevice(source, faults=device.faults, seed=seed, load_cell=device.load_cell), source
 
 
 def _serve(srv, session, link, device, json_out: bool, open_browser: bool, duration: float | None) -> None:

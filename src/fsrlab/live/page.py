@@ -2,17 +2,22 @@
 
 Time series of frequency, duty cycle, op-amp voltage and the reference (with the calibrated estimate
 and its band when a calibration is given), the loading/unloading loop (readout against reference),
-a status line, the latest window in numbers, and the controls. Each tab shows the latest window in numbers every
-:data:`UPDATE_S` and streams the windows it has not plotted yet every :data:`PLOT_S`
-(``ColumnDataSource.stream`` with a rollover, so memory stays bounded); one tab at a time controls the device and the recording, the others watch.
+a status line, the latest window in numbers, and the controls. With a scan of several sensors the time
+series are small multiples, one per channel, under a sensor map coloured by each channel's latest
+frequency (or estimated force) with its link health (:mod:`fsrlab.live.page_channels`). Each tab shows
+the latest window in numbers every :data:`UPDATE_S` and streams the windows it has not plotted yet every
+:data:`PLOT_S` (``ColumnDataSource.stream`` with a rollover, so memory stays bounded; the sensor map is one
+``patch`` at that rate at most); one tab at a time controls the device and the recording, the others watch.
 """
 
 from __future__ import annotations
 
-import math
 import threading
 import time
 from pathlib import Path
+
+from fsrlab.live.page_text import fmt as _fmt
+from fsrlab.live.page_text import html_text as _html
 
 __all__ = ["UPDATE_S", "PLOT_S", "STATUS_S", "POINTS", "Controller", "make_document"]
 
@@ -71,20 +76,6 @@ class Controller:
                 return path
 
 
-def _fmt(v, spec: str) -> str:
-    return "—" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, spec)
-
-
-def _html(text) -> str:
-    """A text the page shows inside its HTML (messages, file names, the device, the event log): control
-    characters as their escapes (:func:`fsrlab.io.shown.printable`, the one rendering boundary), then ``&``,
-    ``<`` and ``>`` as entities, so that neither a terminal escape nor markup in a file name acts on the page."""
-    import html
-
-    from fsrlab.io.shown import printable
-
-    return html.escape(printable(str(text)), quote=False)
-
 
 def make_document(doc, session, controller: Controller, reference_label: str = "reference",
                   reference_unit: str = "", reference_scale: float = 1.0, title: str = "fsrlab live") -> None:
@@ -105,140 +96,226 @@ def make_document(doc, session, controller: Controller, reference_label: str = "
     title : str
         Page title.
     """
-    from bokeh.layouts import column, row
-    from bokeh.models import Band, Button, ColumnDataSource, Div, RadioButtonGroup, Select
-    from bokeh.plotting import figure
+    from bokeh.layouts import column
+    from bokeh.models import Div
 
-    empty = {c: [] for c in ("time_s", "seq", "frequency_khz", "duty_pct", "voltage_v", "reference", "estimate",
-                             "lower", "upper")}
-    src = ColumnDataSource(dict(empty), name="windows")
-    ts = dict(height=170, sizing_mode="stretch_width", tools="pan,wheel_zoom,box_zoom,reset,save",
-              x_axis_label="time (s)")
-    f_fig = figure(y_axis_label="frequency (kHz)", name="frequency_plot", **ts)
-    f_fig.line("time_s", "frequency_khz", source=src, color="#1f77b4")
-    d_fig = figure(y_axis_label="duty cycle (%)", x_range=f_fig.x_range, **ts)
-    d_fig.line("time_s", "duty_pct", source=src, color="#ff7f0e")
-    v_fig = figure(y_axis_label="op-amp V0 (V)", x_range=f_fig.x_range, **ts)
-    v_fig.line("time_s", "voltage_v", source=src, color="#2ca02c")
-    unit = f" ({reference_unit})" if reference_unit else ""
-    r_fig = figure(y_axis_label=f"{reference_label}{unit}", x_range=f_fig.x_range, **ts)
-    r_fig.line("time_s", "reference", source=src, color="black", legend_label="reference")
-    if session.estimator is not None:
-        r_fig.add_layout(Band(base="time_s", lower="lower", upper="upper", source=src, fill_alpha=0.25,
-                              fill_color="#d62728"))
-        r_fig.line("time_s", "estimate", source=src, color="#d62728", legend_label="estimate ± u")
-    r_fig.legend.location = "top_left"
-    loop = figure(height=360, width=420, x_axis_label=f"{reference_label}{unit}", name="loop_plot",
-                  y_axis_label="estimate" + unit if session.estimator is not None else "frequency (kHz)",
-                  title="loading / unloading loop")
-    loop.scatter("reference", "estimate" if session.estimator is not None else "frequency_khz", source=src,
-                 size=3, alpha=0.6)
+    if session.scan is None:
+        plots = WindowPlots(session, reference_label, reference_unit, reference_scale)
+    else:
+        from fsrlab.live.page_channels import ChannelPlots
 
-    # Fixed heights: a new text then repaints the line without laying the page out again.
-    status = Div(text="connecting…", name="status", sizing_mode="stretch_width", height=22)
-    latest = Div(text="", name="latest", sizing_mode="stretch_width", height=22)
-    events = Div(text="", name="events", sizing_mode="stretch_width", height=100)
-    controls = controller.claim(doc)
-    record = Button(label="Start recording", button_type="success", name="record",
-                    disabled=not controls or controller.out is None)
-    tare = Button(label="Tare load cell", name="tare", disabled=not controls or session.loadcell is None)
-    tare.on_click(lambda: session.command("tare"))
-    guided = session.weights is not None and controller.out is not None
-    start_w = Button(label="Start guided calibration", name="weights", disabled=not (controls and guided))
-    placed = Button(label="Placed", button_type="primary", name="placed", disabled=not (controls and guided))
-    skip = Button(label="Skip step", name="skip", disabled=not (controls and guided))
-    prompt = Div(text="" if guided else "guided known weights: start fsrlab live with --masses and --out",
-                 name="prompt", sizing_mode="stretch_width", height=22)
-
-    def on_weights():
-        path = controller.next_path("-weights")
-        if path is not None:
-            session.command("weights", str(path))
-
-    start_w.on_click(on_weights)
-    placed.on_click(lambda: session.command("answer", "ok"))
-    skip.on_click(lambda: session.command("answer", "skip"))
-    rng = RadioButtonGroup(labels=["range 0 (C_off out)", "range 1 (C_off in)"], active=session.status.range,
-                           name="range", disabled=not controls)
-    window = Select(title="window (ms)", value=str(session.status.window_ms), options=list(WINDOWS_MS),
-                    name="window", disabled=not controls)
-    role = Div(text=("view only: another tab controls the meter" if not controls else
-                     "this tab controls the meter" + ("" if controller.out is not None else
-                                                      " (recording off: start fsrlab live with --out RUN.csv)")),
-               name="role")
-
-    def on_record():
-        if session.status.recording:
-            session.command("stop_recording")
-        else:
-            path = controller.next_path()
-            if path is not None:
-                session.command("record", str(path))
-
-    record.on_click(on_record)
-    rng.on_change("active", lambda attr, old, new: session.command("range", int(new)))
-    window.on_change("value", lambda attr, old, new: session.command("window", int(new)))
-
-    state = {"cursor": 0, "status_at": 0.0, "plot_at": 0.0}
-    pending = {c: [] for c in empty}
-
-    def update():
-        cursor, cols = session.since(state["cursor"])
-        state["cursor"] = cursor
-        n = len(cols["seq"])
-        if n:
-            k = reference_scale
-            est, unc = [k * e for e in cols["estimate"]], [k * u for u in cols["uncertainty"]]
-            ref = [k * r for r in cols["reference"]]
-            new = {"time_s": cols["time_s"], "seq": cols["seq"],
-                   "frequency_khz": [f / 1e3 for f in cols["frequency_hz"]],
-                   "duty_pct": [100 * d for d in cols["duty_cycle"]], "voltage_v": cols["voltage_v"],
-                   "reference": ref, "estimate": est,
-                   "lower": [e - u for e, u in zip(est, unc, strict=True)], "upper": [e + u for e, u in zip(est, unc, strict=True)]}
-            for key, values in new.items():
-                pending[key].extend(values)
-            i = n - 1
-            latest.text = (f"<span id='latest-seq'>{cols['seq'][i]}</span> · f = "
-                           f"<span id='latest-frequency'>{_fmt(cols['frequency_hz'][i], '.2f')}</span> Hz · duty = "
-                           f"<span id='latest-duty'>{_fmt(cols['duty_cycle'][i], '.6f')}</span> · V0 = "
-                           f"<span id='latest-voltage'>{_fmt(cols['voltage_v'][i], '.4f')}</span> V · "
-                           f"{reference_label} = <span id='latest-reference'>{_fmt(ref[i], '.6g')}</span> {reference_unit}"
-                           + (f" · estimate = <span id='latest-estimate'>{_fmt(est[i], '.6g')}</span> ± {_fmt(unc[i], '.2g')}"
-                              if session.estimator is not None else ""))
-        now = time.monotonic()
-        if pending["seq"] and now - state["plot_at"] >= PLOT_S:  # the plots redraw at most every PLOT_S
-            state["plot_at"] = now
-            src.stream({c: list(v) for c, v in pending.items()}, rollover=POINTS)
-            for v in pending.values():
-                v.clear()
-        if now - state["status_at"] < STATUS_S:
-            return
-        state["status_at"] = now
-        st = session.status
-        text = (f"<b>{_html(st.state)}</b> {_html(st.message)} · {_html(st.device)} · "
-                       f"<span id='fps'>{st.frames_per_s:.1f}</span> frames/s · frames {st.frames} · "
-                       f"dropped <span id='dropped'>{st.dropped}</span> · corrupt {st.corrupt} · missed edges "
-                       f"{st.missed} · stalls {st.stalls} · range {st.range} · window {st.window_ms} ms"
-                       + (f" · <b>recording</b> <span id='recording'>{_html(st.recording)}</span> ({st.recorded} rows)"
-                          if st.recording else ""))
-        if text != status.text:
-            status.text = text
-        said = (f"<b>{_html(st.weights)}</b>: " if st.weights else "") + f"<span id='prompt'>{_html(st.prompt)}</span>" \
-            if (st.prompt or st.weights) else prompt.text
-        if said != prompt.text:
-            prompt.text = said
-        label = "Stop recording" if st.recording else "Start recording"
-        if label != record.label:
-            record.label = label
-            record.button_type = "danger" if st.recording else "success"
-        log = "<br>".join(_html(e) for e in st.events[-5:])
-        if log != events.text:
-            events.text = log
-
+        plots = ChannelPlots(session)
+    panel = ControlPanel(doc, session, controller)
+    update = Updater(session, plots, panel, reference_label, reference_unit, reference_scale)
     doc.add_periodic_callback(update, int(UPDATE_S * 1000))
     doc.on_session_destroyed(lambda ctx: controller.release(doc))
     doc.title = title
-    doc.add_root(column(Div(text=f"<h2 style='margin:4px 0'>{_html(title)}</h2>"), status, latest,
-                        row(record, tare, rng, window, role), row(start_w, placed, skip, prompt, sizing_mode="stretch_width"), row(column(f_fig, d_fig, v_fig, r_fig, sizing_mode="stretch_width"),
-                                                              loop, sizing_mode="stretch_width"),
-                        events, sizing_mode="stretch_width"))
+    doc.add_root(column(Div(text=f"<h2 style='margin:4px 0'>{_html(title)}</h2>"), panel.status, update.latest,
+                        *panel.rows, plots.layout, panel.events, sizing_mode="stretch_width"))
+
+
+class WindowPlots:
+    """One sensor's time series (frequency, duty cycle, op-amp voltage, reference with the estimate and its band)
+    and the loading/unloading loop, on one ``ColumnDataSource`` named ``windows``.
+
+    Parameters
+    ----------
+    session : LiveSession
+    reference_label, reference_unit : str
+        How the reference is named.
+    reference_scale : float
+        Shown = SI value × this. [1]
+    """
+
+    COLUMNS = ("time_s", "seq", "frequency_khz", "duty_pct", "voltage_v", "reference", "estimate", "lower", "upper")
+
+    def __init__(self, session, reference_label: str, reference_unit: str, reference_scale: float) -> None:
+        from bokeh.layouts import column, row
+        from bokeh.models import Band, ColumnDataSource
+        from bokeh.plotting import figure
+
+        self.scale = reference_scale
+        self.source = src = ColumnDataSource({c: [] for c in self.COLUMNS}, name="windows")
+        self.pending = {c: [] for c in self.COLUMNS}
+        ts = dict(height=170, sizing_mode="stretch_width", tools="pan,wheel_zoom,box_zoom,reset,save",
+                  x_axis_label="time (s)")
+        f_fig = figure(y_axis_label="frequency (kHz)", name="frequency_plot", **ts)
+        f_fig.line("time_s", "frequency_khz", source=src, color="#1f77b4")
+        d_fig = figure(y_axis_label="duty cycle (%)", x_range=f_fig.x_range, **ts)
+        d_fig.line("time_s", "duty_pct", source=src, color="#ff7f0e")
+        v_fig = figure(y_axis_label="op-amp V0 (V)", x_range=f_fig.x_range, **ts)
+        v_fig.line("time_s", "voltage_v", source=src, color="#2ca02c")
+        unit = f" ({reference_unit})" if reference_unit else ""
+        r_fig = figure(y_axis_label=f"{reference_label}{unit}", x_range=f_fig.x_range, **ts)
+        r_fig.line("time_s", "reference", source=src, color="black", legend_label="reference")
+        estimated = session.estimator is not None
+        if estimated:
+            r_fig.add_layout(Band(base="time_s", lower="lower", upper="upper", source=src, fill_alpha=0.25,
+                                  fill_color="#d62728"))
+            r_fig.line("time_s", "estimate", source=src, color="#d62728", legend_label="estimate ± u")
+        r_fig.legend.location = "top_left"
+        loop = figure(height=360, width=420, x_axis_label=f"{reference_label}{unit}", name="loop_plot",
+                      y_axis_label="estimate" + unit if estimated else "frequency (kHz)",
+                      title="loading / unloading loop")
+        loop.scatter("reference", "estimate" if estimated else "frequency_khz", source=src, size=3, alpha=0.6)
+        self.layout = row(column(f_fig, d_fig, v_fig, r_fig, sizing_mode="stretch_width"), loop,
+                          sizing_mode="stretch_width")
+
+    def add(self, cols: dict) -> None:
+        """Queue the session's new windows (:meth:`LiveSession.since`'s columns) for the next :meth:`flush`."""
+        k = self.scale
+        est, unc = [k * e for e in cols["estimate"]], [k * u for u in cols["uncertainty"]]
+        new = {"time_s": cols["time_s"], "seq": cols["seq"],
+               "frequency_khz": [f / 1e3 for f in cols["frequency_hz"]],
+               "duty_pct": [100 * d for d in cols["duty_cycle"]], "voltage_v": cols["voltage_v"],
+               "reference": [k * r for r in cols["reference"]], "estimate": est,
+               "lower": [e - u for e, u in zip(est, unc, strict=True)],
+               "upper": [e + u for e, u in zip(est, unc, strict=True)]}
+        for key, values in new.items():
+            self.pending[key].extend(values)
+
+    def refresh(self) -> None:
+        """Nothing beside the plots to refresh (the status line says the link's health)."""
+
+    def flush(self) -> None:
+        """Stream the queued windows to the page (one message), the oldest rolling over past :data:`POINTS`."""
+        if self.pending["seq"]:
+            self.source.stream({c: list(v) for c, v in self.pending.items()}, rollover=POINTS)
+            for v in self.pending.values():
+                v.clear()
+
+
+class ControlPanel:
+    """The status, prompt and event lines and the controls (recording, tare, range, window, guided weights).
+
+    Parameters
+    ----------
+    doc : bokeh.document.Document
+        The tab (it asks the controller whether it controls).
+    session : LiveSession
+    controller : Controller
+    """
+
+    def __init__(self, doc, session, controller: Controller) -> None:
+        from bokeh.layouts import row
+        from bokeh.models import Button, Div, RadioButtonGroup, Select
+
+        self.session, self.controller = session, controller
+        # Fixed heights: a new text then repaints the line without laying the page out again.
+        self.status = Div(text="connecting…", name="status", sizing_mode="stretch_width", height=22)
+        self.events = Div(text="", name="events", sizing_mode="stretch_width", height=100)
+        controls = controller.claim(doc)
+        self.record = Button(label="Start recording", button_type="success", name="record",
+                             disabled=not controls or controller.out is None)
+        self.record.on_click(self._on_record)
+        tare = Button(label="Tare load cell", name="tare", disabled=not controls or session.loadcell is None)
+        tare.on_click(lambda: session.command("tare"))
+        guided = session.weights is not None and controller.out is not None
+        start_w = Button(label="Start guided calibration", name="weights", disabled=not (controls and guided))
+        placed = Button(label="Placed", button_type="primary", name="placed", disabled=not (controls and guided))
+        skip = Button(label="Skip step", name="skip", disabled=not (controls and guided))
+        self.prompt = Div(text="" if guided else "guided known weights: start fsrlab live with --masses and --out",
+                          name="prompt", sizing_mode="stretch_width", height=22)
+        start_w.on_click(self._on_weights)
+        placed.on_click(lambda: session.command("answer", "ok"))
+        skip.on_click(lambda: session.command("answer", "skip"))
+        rng = RadioButtonGroup(labels=["range 0 (C_off out)", "range 1 (C_off in)"], active=session.status.range,
+                               name="range", disabled=not controls)
+        window = Select(title="window (ms)", value=str(session.status.window_ms), options=list(WINDOWS_MS),
+                        name="window", disabled=not controls)
+        rng.on_change("active", lambda attr, old, new: session.command("range", int(new)))
+        window.on_change("value", lambda attr, old, new: session.command("window", int(new)))
+        recording_off = "" if controller.out is not None else " (recording off: start fsrlab live with --out RUN.csv)"
+        role = Div(text=("view only: another tab controls the meter" if not controls else
+                         "this tab controls the meter" + recording_off), name="role")
+        self.rows = [row(self.record, tare, rng, window, role),
+                     row(start_w, placed, skip, self.prompt, sizing_mode="stretch_width")]
+
+    def _on_record(self) -> None:
+        if self.session.status.recording:
+            self.session.command("stop_recording")
+        elif (path := self.controller.next_path()) is not None:
+            self.session.command("record", str(path))
+
+    def _on_weights(self) -> None:
+        path = self.controller.next_path("-weights")
+        if path is not None:
+            self.session.command("weights", str(path))
+
+    def refresh(self) -> None:
+        """Show the session's status, prompt, recording state and last events (only what changed is sent)."""
+        st = self.session.status
+        text = (f"<b>{_html(st.state)}</b> {_html(st.message)} · {_html(st.device)} · "
+                f"<span id='fps'>{st.frames_per_s:.1f}</span> frames/s · frames {st.frames} · "
+                f"dropped <span id='dropped'>{st.dropped}</span> · corrupt {st.corrupt} · missed edges "
+                f"{st.missed} · stalls {st.stalls} · range {st.range} · window {st.window_ms} ms"
+                + (f" · <b>recording</b> <span id='recording'>{_html(st.recording)}</span> ({st.recorded} rows)"
+                   if st.recording else ""))
+        if text != self.status.text:
+            self.status.text = text
+        said = (f"<b>{_html(st.weights)}</b>: " if st.weights else "") + f"<span id='prompt'>{_html(st.prompt)}</span>" \
+            if (st.prompt or st.weights) else self.prompt.text
+        if said != self.prompt.text:
+            self.prompt.text = said
+        label = "Stop recording" if st.recording else "Start recording"
+        if label != self.record.label:
+            self.record.label = label
+            self.record.button_type = "danger" if st.recording else "success"
+        log = "<br>".join(_html(e) for e in st.events[-5:])
+        if log != self.events.text:
+            self.events.text = log
+
+
+class Updater:
+    """The page's periodic callback: the latest window in numbers every call (:data:`UPDATE_S`), the plots at
+    most every :data:`PLOT_S`, the status lines at most every :data:`STATUS_S`.
+
+    Parameters
+    ----------
+    session : LiveSession
+    plots : WindowPlots or ChannelPlots
+        What :meth:`add` and :meth:`flush` feed.
+    panel : ControlPanel
+    reference_label, reference_unit : str
+    reference_scale : float
+        Shown = SI value × this. [1]
+    """
+
+    def __init__(self, session, plots, panel: ControlPanel, reference_label: str, reference_unit: str,
+                 reference_scale: float) -> None:
+        from bokeh.models import Div
+
+        self.session, self.plots, self.panel = session, plots, panel
+        self.label, self.unit, self.scale = reference_label, reference_unit, reference_scale
+        self.latest = Div(text="", name="latest", sizing_mode="stretch_width", height=22)
+        self.cursor, self.plot_at, self.status_at = 0, 0.0, 0.0
+
+    def __call__(self) -> None:
+        self.cursor, cols = self.session.since(self.cursor)
+        if cols["seq"]:
+            self.plots.add(cols)
+            self.latest.text = self.latest_text(cols, len(cols["seq"]) - 1)
+        now = time.monotonic()
+        if now - self.plot_at >= PLOT_S:  # the plots redraw at most every PLOT_S
+            self.plot_at = now
+            self.plots.flush()
+        if now - self.status_at >= STATUS_S:
+            self.status_at = now
+            self.panel.refresh()
+            self.plots.refresh()
+
+    def latest_text(self, cols: dict, i: int) -> str:
+        """The line that shows window ``i`` of ``cols`` in numbers (each number in a span with an id)."""
+        k = self.scale
+        channel = (f"channel <span id='latest-channel'>{cols['channel'][i]}</span> · "
+                   if "channel" in cols else "")
+        text = (f"<span id='latest-seq'>{cols['seq'][i]}</span> · {channel}f = "
+                f"<span id='latest-frequency'>{_fmt(cols['frequency_hz'][i], '.2f')}</span> Hz · duty = "
+                f"<span id='latest-duty'>{_fmt(cols['duty_cycle'][i], '.6f')}</span> · V0 = "
+                f"<span id='latest-voltage'>{_fmt(cols['voltage_v'][i], '.4f')}</span> V · "
+                f"{self.label} = <span id='latest-reference'>{_fmt(k * cols['reference'][i], '.6g')}</span> "
+                f"{self.unit}")
+        if self.session.estimator is not None:
+            text += (f" · estimate = <span id='latest-estimate'>{_fmt(k * cols['estimate'][i], '.6g')}</span> ± "
+                     f"{_fmt(k * cols['uncertainty'][i], '.2g')}")
+        return text
