@@ -15,7 +15,7 @@ from collections.abc import MutableMapping
 import typer
 
 from fsrlab import __version__
-from fsrlab.errors import FsrlabError
+from fsrlab.errors import FileFormatError, FsrlabError
 
 #: The option of each library parameter an error can name (:attr:`fsrlab.errors.FsrlabError.parameter`).
 PARAMETER_OPTIONS = {"port": "--port"}
@@ -374,6 +374,8 @@ def _run(command, args: list[str]) -> int:
         option = _option_of(exc.parameter, args) if isinstance(exc, FsrlabError) and exc.parameter else None
         if option is not None:
             message = f"Invalid value for {option}: {exc.reason}"
+        elif isinstance(exc, FileFormatError):  # its reason names the file: the Python parameter's name is noise
+            message = exc.reason
         print(f"fsrlab: error: {_one_line(message)}", file=sys.stderr)
         code = 2
     return code

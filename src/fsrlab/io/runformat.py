@@ -193,8 +193,7 @@ def _default_metadata(columns: list[str]) -> dict:
             "origin": "", "notes": "", "complete": None, "rows": None}
 
 
-def read_json_document(path: Path, format_name: str, version: int, what: str,
-                       error: type[ValueError] = ValueError) -> dict:
+def read_json_document(path: Path, format_name: str, version: int, what: str, error=None) -> dict:
     """Read a JSON file of fsrlab's (a sidecar, a calibration) and check its ``format`` and ``version``.
 
     Parameters
@@ -207,13 +206,22 @@ def read_json_document(path: Path, format_name: str, version: int, what: str,
         The version this fsrlab reads.
     what : str
         What the file is, for the messages (``"sidecar"``, ``"calibration"``).
-    error : type
-        Exception raised, with one line naming the file and what is wrong.
+    error : callable, optional
+        Makes the exception raised from one line naming the file and what is wrong (default a
+        :class:`~fsrlab.errors.FileFormatError` naming ``path``).
 
     Returns
     -------
     dict
     """
+    path = input_file(path, "path")
+    if not isinstance(format_name, str):
+        raise TypeError(f"format_name: must be a str, got {type(format_name).__name__}")
+    if isinstance(version, bool) or not isinstance(version, int):
+        raise TypeError(f"version: must be an int, got {type(version).__name__}")
+    if error is None:
+        def error(message: str) -> FileFormatError:
+            return FileFormatError(message, parameter="path")
     try:
         d = json.loads(path.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
@@ -274,21 +282,24 @@ def read_table(path: str | os.PathLike, required: Sequence[str], hint: str = "")
 
     Raises
     ------
-    ValueError
-        One line naming the file for an empty file or a missing column.
+    fsrlab.errors.FileFormatError
+        One line naming the file for an empty file or a missing column (parameter ``path``).
     """
-    p = Path(path)
+    p = input_file(path, "path")
+    if not isinstance(required, (list, tuple)) or not all(isinstance(c, str) for c in required):
+        raise TypeError(f"required: must be a sequence of column names (str), got {required!r:.80}")
     with open(p, newline="", encoding="utf-8-sig") as fh:
         try:
             table = list(csv_rows(fh))
         except LongCellError as exc:
-            raise FileFormatError(f"{p}: line {exc.line}: {exc}") from None
+            raise FileFormatError(f"{p}: line {exc.line}: {exc}", parameter="path") from None
     if not table:
-        raise FileFormatError(f"{p}: empty file" + (f" ({hint})" if hint else ""))
+        raise FileFormatError(f"{p}: empty file" + (f" ({hint})" if hint else ""), parameter="path")
     header = [h.strip() for h in table[0]]
     for col in required:
         if col not in header:
-            raise FileFormatError(f"{p}: column {col!r} missing (columns: {_names(header)})")
+            raise FileFormatError(f"{p}: column {col!r} missing (required; columns: {_names(header)})",
+                                  parameter="path")
     rows = [(k, row) for k, row in enumerate(table[1:], start=1) if any(c.strip() for c in row)]
     return {c: i for i, c in enumerate(header)}, rows, p
 
@@ -321,6 +332,10 @@ def load_run(path: str | os.PathLike, require: Sequence[str] = (), skip_bad_rows
         :data:`fsrlab.io.runcells.COLUMN_LIMITS`), an empty ``time_s`` cell, ``time_s`` going
         backwards; or a bad sidecar, or one written with another CSV (its ``"csv_sha256"``: a replacement
         by :func:`~fsrlab.io.runwriter.write_run` interrupted between its two renames).
+    fsrlab.errors.ParameterError
+        A path that is empty, missing or a directory (parameter ``path``).
+    TypeError
+        A path or a ``require`` of the wrong type.
     OSError
         If the file cannot be read.
 
@@ -330,9 +345,21 @@ def load_run(path: str | os.PathLike, require: Sequence[str] = (), skip_bad_rows
     the run was not closed (``"complete": false``) that line is dropped and ``Run.truncated`` is
     set. Without a sidecar (a hand-made file) it is kept if it parses.
     """
-    p = Path(path)
+    p = input_file(path, "path")
     if isinstance(require, str):  # one column's name, not its letters
         require = (require,)
+    if not isinstance(require, (list, tuple)) or not all(isinstance(c, str) for c in require):
+        raise TypeError(f"require: must be a column's name or a sequence of them (str), got {require!r:.80}")
+    try:
+        return _read_run(p, require, skip_bad_rows)
+    except RunFormatError as exc:  # the file is this function's path
+        if exc.parameter is not None:
+            raise
+        raise RunFormatError(exc.reason, parameter="path") from None
+
+
+def _read_run(p: Path, require: Sequence[str], skip_bad_rows: bool) -> Run:
+    """:func:`load_run` on a checked path: its errors name the file, the row and the column."""
     with open(p, "rb") as fh:
         raw = fh.read()
     try:
@@ -364,7 +391,7 @@ def load_run(path: str | os.PathLike, require: Sequence[str] = (), skip_bad_rows
         raise RunFormatError(f"{p}: row 0 (line 1, header): {exc}") from None
     for name in require:
         if name not in header:
-            raise RunFormatError(f"{p}: column {name!r} missing (columns: {_names(header)})")
+            raise RunFormatError(f"{p}: column {name!r} missing (required; columns: {_names(header)})")
     from fsrlab.io.runcells import parse_cells
 
     data, skipped = parse_cells(p, lines[1:], header, skip_bad_rows)
@@ -419,9 +446,9 @@ def input_file(path, parameter: str = "path") -> Path:
     if not str(path):
         raise ParameterError("must name a file, got an empty path", parameter=parameter)
     if p.is_dir():
-        raise ParameterError(f"{p} is a directory, not a file", parameter=parameter)
+        raise ParameterError(f"'{p}' is a directory, not a file", parameter=parameter)
     if not p.exists():
-        raise ParameterError(f"{p}: no such file", parameter=parameter)
+        raise ParameterError(f"'{p}': no such file", parameter=parameter)
     return p
 
 

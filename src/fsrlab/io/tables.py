@@ -133,55 +133,71 @@ def load_iso376_csv(path) -> tuple[np.ndarray, list[CalibrationSeries]]:
     ix, rows, p = read_table(path, ("series", "rotation_deg", "force_n", "reading"))
     data: dict[str, dict] = {}
     for k, row in rows:
-        vals = {}
-        for col in ("rotation_deg", "force_n", "reading", "direction"):
-            if col not in ix:
-                continue
-            cell = row[ix[col]].strip() if ix[col] < len(row) else ""
-            if not cell and col == "direction":
-                vals[col] = 1.0
-                continue
-            if not cell:
-                raise FileFormatError(f"{where(p, k, col)}: empty cell")
-            try:
-                vals[col] = number_cell(cell)
-            except ValueError:
-                raise FileFormatError(f"{where(p, k, col)}: non-numeric cell {shown(cell)}") from None
-            _check_number(p, k, col, vals[col], cell, 0.0 if col == "force_n" else -OTHER_LIMIT)
-        d = vals.get("direction", 1.0)
-        if d not in (1.0, -1.0):
-            raise FileFormatError(f"{where(p, k, 'direction')}: must be +1 or -1, got {d:g}")
+        vals = _iso376_numbers(p, k, row, ix)
         label = row[ix["series"]].strip() if ix["series"] < len(row) else ""
         if not label:
             raise FileFormatError(f"{where(p, k, 'series')}: empty cell")
-        s = data.setdefault(label, {"rot": vals["rotation_deg"], "inc": {}, "dec": {}, "z0": None, "z1": None})
-        if vals["rotation_deg"] != s["rot"]:
-            raise FileFormatError(f"{where(p, k, 'rotation_deg')}: series {label!r} was at {s['rot']:g}°, not {vals['rotation_deg']:g}°")
-        if vals["force_n"] == 0:
-            key = "z0" if d > 0 else "z1"
-            if s[key] is not None:
-                raise FileFormatError(f"{where(p, k, 'force_n')}: series {label!r} already has its zero reading "
-                                 f"{'before' if d > 0 else 'after'} the forces")
-            s[key] = vals["reading"]
-        else:
-            branch = s["inc" if d > 0 else "dec"]
-            if vals["force_n"] in branch:
-                raise FileFormatError(f"{where(p, k, 'force_n')}: series {label!r} already has a reading at "
-                                 f"{vals['force_n']:g} N ({'increasing' if d > 0 else 'decreasing'})")
-            branch[vals["force_n"]] = vals["reading"]
+        _iso376_place(p, k, data, label, vals)
+    return _iso376_series(p, data)
+
+
+def _iso376_numbers(p, k: int, row: list, ix: dict) -> dict:
+    """The numbers of one row of an ISO 376 table (``direction`` +1 when empty), each checked."""
+    vals = {}
+    for col in ("rotation_deg", "force_n", "reading", "direction"):
+        if col not in ix:
+            continue
+        cell = row[ix[col]].strip() if ix[col] < len(row) else ""
+        if not cell and col == "direction":
+            vals[col] = 1.0
+            continue
+        if not cell:
+            raise FileFormatError(f"{where(p, k, col)}: empty cell")
+        try:
+            vals[col] = number_cell(cell)
+        except ValueError:
+            raise FileFormatError(f"{where(p, k, col)}: non-numeric cell {shown(cell)}") from None
+        _check_number(p, k, col, vals[col], cell, 0.0 if col == "force_n" else -OTHER_LIMIT)
+    if vals.get("direction", 1.0) not in (1.0, -1.0):
+        raise FileFormatError(f"{where(p, k, 'direction')}: must be +1 or -1, got {vals['direction']:g}")
+    return vals
+
+
+def _iso376_place(p, k: int, data: dict, label: str, vals: dict) -> None:
+    """One reading into its series of ``data``: its zero before or after, or its increasing or decreasing force."""
+    d = vals.get("direction", 1.0)
+    s = data.setdefault(label, {"rot": vals["rotation_deg"], "inc": {}, "dec": {}, "z0": None, "z1": None})
+    if vals["rotation_deg"] != s["rot"]:
+        raise FileFormatError(f"{where(p, k, 'rotation_deg')}: series {label!r} was at {s['rot']:g}°, "
+                              f"not {vals['rotation_deg']:g}°")
+    if vals["force_n"] == 0:
+        key = "z0" if d > 0 else "z1"
+        if s[key] is not None:
+            raise FileFormatError(f"{where(p, k, 'force_n')}: series {label!r} already has its zero reading "
+                                  f"{'before' if d > 0 else 'after'} the forces")
+        s[key] = vals["reading"]
+        return
+    branch = s["inc" if d > 0 else "dec"]
+    if vals["force_n"] in branch:
+        raise FileFormatError(f"{where(p, k, 'force_n')}: series {label!r} already has a reading at "
+                              f"{vals['force_n']:g} N ({'increasing' if d > 0 else 'decreasing'})")
+    branch[vals["force_n"]] = vals["reading"]
+
+
+def _iso376_series(p, data: dict) -> tuple[np.ndarray, list[CalibrationSeries]]:
+    """The forces of the first series and every series at them (all must share them)."""
     if not data:
         raise FileFormatError(f"{p}: no readings")
     first = next(iter(data.values()))
     forces = np.array(sorted(first["inc"]))
     if forces.size < 2:
         raise FileFormatError(f"{p}: series {next(iter(data))!r} has {forces.size} increasing force(s) above 0 N; "
-                         "ISO 376 needs at least 2 (8 or more, spread over 20–100 % of the range)")
+                              "ISO 376 needs at least 2 (8 or more, spread over 20–100 % of the range)")
     series = []
     for label, s in data.items():
         if sorted(s["inc"]) != forces.tolist():
-            raise FileFormatError(f"{p}: series {label!r} has increasing forces {sorted(s['inc'])}, not those of the first series {forces.tolist()}")
-        dec = None
-        if s["dec"]:
-            dec = [s["dec"].get(f, np.nan) for f in forces]
+            raise FileFormatError(f"{p}: series {label!r} has increasing forces {sorted(s['inc'])}, not those of "
+                                  f"the first series {forces.tolist()}")
+        dec = [s["dec"].get(f, np.nan) for f in forces] if s["dec"] else None
         series.append(CalibrationSeries(s["rot"], [s["inc"][f] for f in forces], dec, s["z0"], s["z1"]))
     return forces, series
