@@ -17,6 +17,8 @@ from simrun import Segment
 
 F_HZ, DUTY = 5000.0, 0.25
 PORTD = 0x2B  # data-space address of PORTD
+PORTB = 0x25  # data-space address of PORTB (D9, the multiplexer's inhibit, is PB1)
+DDRB = 0x24  # its direction register
 
 
 def _scan(fw, settle: int, time_s: float = 0.12):
@@ -75,6 +77,25 @@ def test_a_mask_of_one_is_the_single_channel_meter_on_that_channel(fw):
     assert [m.scan for m in ms] == list(range(len(ms)))
     assert all(b.t_ms - a.t_ms == 20 for a, b in zip(ms, ms[1:]))  # contiguous windows, no settling
     assert (r.peeks[PORTD][0] >> 5) & 7 == 2
+
+
+@pytest.mark.parametrize("stop_s", [0.100, 0.1033, 0.1071])
+def test_a_sparse_mask_is_scanned_in_channel_order_with_its_select_lines(fw, stop_s):
+    # SCAN 165 = 0b10100101: channels 0, 2, 5, 7, in increasing order, the scan number counting whole passes;
+    # inhibit (D9 = PB1) low, enabled. The select lines hold the channel being read when the simulation stops:
+    # the one after the last reading received (or the one after that, its frame still on the wire). Three stop
+    # times land in different readings.
+    order = (0, 2, 5, 7)
+    cmds = [(0.005, "SCAN 165"), (0.006, "DWELL 3"), (0.01, "START")]
+    r = fw.run([Segment(0.0, F_HZ, DUTY)], cmds, time_s=stop_s, peeks=[PORTD, PORTB, DDRB])
+    ms = r.measurements()
+    assert len(ms) >= 8
+    assert [m.channel for m in ms] == [order[k % 4] for k in range(len(ms))]
+    assert [m.scan for m in ms] == [k // 4 for k in range(len(ms))]
+    assert all(m.missed == 0 and m.periods > 0 for m in ms)
+    last = order.index(ms[-1].channel)
+    assert (r.peeks[PORTD][0] >> 5) & 7 in (order[(last + 1) % 4], order[(last + 2) % 4])
+    assert r.peeks[PORTB][0] & 0b10 == 0 and r.peeks[DDRB][0] & 0b10  # an output, driven low
 
 
 @pytest.mark.parametrize("line", ["SCAN 0", "SCAN 256", "SCAN", "SCAN 1 2", "DWELL 0", "DWELL 60001", "SETTLE 101",
