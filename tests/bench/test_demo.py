@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from clirun import run_cli
@@ -31,7 +32,7 @@ def test_demo_runs_the_chain_and_links_both_reports(tmp_path):
     assert "measurement/index.html" in page and "Python virtual device" in page
     # Step by step, numbered, each with its time.
     numbered = [ln for ln in lines if ln.startswith("[")]
-    assert [ln.split("]")[0] for ln in numbered] == [f"[{k}/6" for k in range(1, 7)]
+    assert [ln.split("]")[0] for ln in numbered] == [f"[{k}/7" for k in range(1, 8)]
     assert "Python virtual device" in numbered[0]
     saved = json.loads((tmp_path / "demo" / "measurement" / "report.json").read_text())
     he = {h["quantity"]: h["hysteresis_error_percent"] for h in saved["hysteresis"]}
@@ -44,6 +45,23 @@ def test_demo_runs_the_chain_and_links_both_reports(tmp_path):
     for name in ("calibration-run.csv", "test-run.csv"):
         run = load_run(res.files[name])
         assert run.n_rows == 150 and run.metadata["acquisition"]["run_s"] == 3.0, name
+    # Several sensors: 8 channels from one scan, each calibrated, and the 8×8 cross-talk matrix. References: the
+    # issue's rate (20 readings/s per channel at the default dwell), the physics (channel k at 50 kPa·(k+1)/8: an
+    # FSR's frequency rises with its stress, paper §5 Fig. 19a), the matrix's definition (diagonal 1) and
+    # the run file the step wrote.
+    assert "several sensors on one meter" in numbered[5]
+    ch = res.numbers["channels"]
+    assert [c["sensor_id"] for c in ch["sensors"]] == [f"fsr{k}" for k in range(8)]
+    assert all(c["readings_per_s"] >= 20 for c in ch["sensors"])
+    peaks = [c["peak_hz"] for c in ch["sensors"]]
+    assert all(a < b for a, b in zip(peaks, peaks[1:], strict=False))
+    multi = load_run(res.files["multi-channel run"])
+    assert max(multi["frequency_hz"][multi["channel"] == 7]) == peaks[7]
+    assert sorted(json.loads(res.files["per-channel calibration"].read_text())["sensors"]) == \
+        [f"fsr{k}" for k in range(8)]
+    matrix = np.asarray(ch["crosstalk"]["matrix"])
+    assert matrix.shape == (8, 8) and np.allclose(np.diag(matrix), 1.0)
+    assert "Several sensors on one meter" in page
 
 
 def test_demo_sensor_is_chosen_in_one_place():
@@ -109,7 +127,8 @@ def test_demo_command_prints_steps_and_ends_with_the_index(tmp_path):
     assert [s["step"] for s in info["steps"]][:3] == ["spring runs", "dead weights", "calibration"]
     assert info["total_s"] == pytest.approx(sum(s["seconds"] for s in info["steps"]))
     assert info["numbers"]["calibration"]["reference"] == "force_n"  # the emulated load cell
-    assert err.splitlines()[0].startswith("fsrlab demo: [1/6]")
+    assert err.splitlines()[0].startswith("fsrlab demo: [1/7]")
+    assert [s["step"] for s in info["steps"]][-2:] == ["several sensors", "index"]
 
 
 def test_an_interrupted_demo_leaves_the_old_runs_whole(tmp_path, monkeypatch):
@@ -162,7 +181,7 @@ def test_demo_draws_the_reproduction_report_while_the_dead_weights_are_recorded(
     assert len(started) == 1 and (tmp_path / "demo" / "paper" / "paper.json").is_file()
     assert "paper/index.html" in res.index.read_text()
     numbered = [ln for ln in lines if ln.startswith("[")]
-    assert [ln.split("]")[0] for ln in numbered] == [f"[{k}/7" for k in range(1, 8)]
+    assert [ln.split("]")[0] for ln in numbered] == [f"[{k}/8" for k in range(1, 9)]
     assert "drawn while the dead weights were recorded" in numbered[5]
 
     import fsrlab.reports.run_report as run_report

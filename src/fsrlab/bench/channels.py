@@ -23,7 +23,8 @@ import numpy as np
 
 from fsrlab.errors import ParameterError
 
-__all__ = ["channel_runs", "ChannelCalibrations", "calibrate_channels", "Crosstalk", "crosstalk", "virtual_meter", "twin_meter"]
+__all__ = ["channel_runs", "ChannelCalibrations", "calibrate_channels", "Crosstalk", "crosstalk", "virtual_meter", "twin_meter",
+           "SeveralSensors", "several_sensors"]
 
 
 def channel_runs(run) -> dict[int, object]:
@@ -317,3 +318,89 @@ def twin_meter(source):
                 raise RuntimeError(twin.failure)
 
     return opened()
+
+
+@dataclass(frozen=True)
+class SeveralSensors:
+    """What :func:`several_sensors` did: a multi-channel run, its per-channel calibration and the cross-talk.
+
+    Attributes
+    ----------
+    run : Path
+        The long-format run (one row per channel reading).
+    calibration : Path
+        Every channel's calibration, keyed by sensor id (:meth:`ChannelCalibrations.save`).
+    calibrations : ChannelCalibrations
+    crosstalk : Crosstalk
+    readings_per_s : ndarray, shape (n,)
+        Each channel's readings per second of the device's clock. [1/s]
+    peak_hz : ndarray, shape (n,)
+        Each channel's highest frequency in the run. [Hz]
+    """
+
+    run: Path
+    calibration: Path
+    calibrations: ChannelCalibrations
+    crosstalk: Crosstalk
+    readings_per_s: np.ndarray
+    peak_hz: np.ndarray
+
+
+def several_sensors(out, channels: int = 8, duration_s: float = 2.0, peak_pa: float = 50e3, period_s: float = 1.0,
+                    crosstalk_s: float = 0.3, overwrite: bool = False) -> SeveralSensors:
+    """Several sensors on one meter, end to end on the Python virtual device at ``speed="max"``: record a scan,
+    calibrate every channel from it, and run the cross-talk check.
+
+    Channel k is under a triangle of ``peak_pa`` · (k + 1)/``channels``
+    (:meth:`~fsrlab.virtual.sources.MuxSource.scaled`); the run's reference is the stress the device applied
+    in each reading (``stress_pa``).
+
+    Parameters
+    ----------
+    out : path-like
+        Directory (created) for ``channels-run.csv`` (and its sidecar) and ``channels-calibration.json``.
+    channels : int
+        Sensors, 1..8, on channels 0..channels−1. [1]
+    duration_s : float
+        The run's length on the device's clock. [s]
+    peak_pa : float
+        The last channel's peak stress. [Pa]
+    period_s : float
+        Period of the triangle. [s]
+    crosstalk_s : float
+        Simulated time per cross-talk recording (one unloaded, one per channel). [s]
+    overwrite : bool
+        Replace the run and the calibration when they exist.
+
+    Returns
+    -------
+    SeveralSensors
+    """
+    from fsrlab.acquisition.recorder import Scan, record
+    from fsrlab.acquisition.serial_link import SerialLink
+    from fsrlab.io.runformat import load_run
+    from fsrlab.virtual.device import VirtualDevice
+    from fsrlab.virtual.sources import MuxSource, StressProfile
+
+    if isinstance(channels, bool) or not isinstance(channels, int) or not 1 <= channels <= 8:
+        raise ParameterError(f"must be an integer 1..8, got {channels!r}", parameter="channels")
+    if not (isinstance(duration_s, int | float) and math.isfinite(duration_s) and duration_s > 0):
+        raise ParameterError(f"must be > 0 s, got {duration_s!r}", parameter="duration_s")
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    path, cal_path = out / "channels-run.csv", out / "channels-calibration.json"
+    source = MuxSource.scaled(channels, StressProfile("triangle", peak_pa=peak_pa, period_s=period_s))
+    scan = Scan(tuple(range(channels)))
+    with VirtualDevice(source, seed=0, speed="max") as dev, SerialLink(dev.port) as link:
+        result = record(link, path, duration_s, scan=scan, clock="device", metadata=source.metadata(),
+                        reference=lambda f: dev.reference(f.seq), overwrite=overwrite)
+    if result.failed:
+        raise RuntimeError(f"the multi-channel recording failed: {result.message}")
+    cals = calibrate_channels(path)
+    cals.save(cal_path, overwrite=overwrite, inputs=(path,))
+    run = load_run(path)
+    ch, f = np.asarray(run.columns["channel"], dtype=int), np.asarray(run.columns["frequency_hz"])
+    rates = np.array([np.sum(ch == k) / duration_s for k in scan.channels])
+    peaks = np.array([np.nanmax(f[ch == k]) for k in scan.channels])
+    talk = crosstalk(virtual_meter, scan.channels, peak_pa, crosstalk_s)
+    return SeveralSensors(path, cal_path, cals, talk, rates, peaks)

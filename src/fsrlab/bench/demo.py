@@ -1,7 +1,7 @@
 """The demo's measurement chain on a virtual bench (``make demo`` / ``fsrlab demo``; the reports: :mod:`fsrlab.reports.demo`).
 
 :func:`run_chain` does what a user of fsrlab does with a sensor, with no hardware (steps 1 to 4;
-:func:`fsrlab.reports.demo.run_demo` then writes the reports, steps 5 to 7):
+:func:`fsrlab.reports.demo.run_demo` then writes the reports and runs several sensors, steps 5 to 8):
 
 1. chooses the bench: the digital twin (the firmware in simavr) when
    :func:`~fsrlab.bench.protocols.twin_status` says it can run, else the Python virtual
@@ -18,7 +18,9 @@
 5. writes the measurement report of the test run (:func:`fsrlab.reports.run_report.write_run_report`)
    with the dead-weight run's placements;
 6. writes the reproduction report (:func:`fsrlab.reports.paper.write_report`);
-7. writes ``index.html`` linking both.
+7. scans 8 sensors behind the multiplexer, calibrates each from the one run and checks the cross-talk
+   (:func:`fsrlab.bench.channels.several_sensors`);
+8. writes ``index.html`` linking both reports.
 
 The sensor is chosen in one place, :func:`demo_sensor`.
 """

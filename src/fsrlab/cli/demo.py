@@ -29,7 +29,8 @@ def demo(
     Spring cycles (a calibration run and a test run) and dead-weight re-placements on the digital
     twin when it can run, else on the Python virtual device (it says which); a calibration with the
     causal hysteresis compensation; the estimate of the test run; the measurement report of the test
-    run (HE of f and V0, RE1/RE2, ISO 376, calibration); the reproduction report; an index.html
+    run (HE of f and V0, RE1/RE2, ISO 376, calibration); the reproduction report; eight sensors on
+    one meter (a scan of 2 s, calibrated per channel, and the cross-talk matrix); an index.html
     linking both. The virtual bench runs faster than real time (--speed max; --speed realtime records
     as hardware would, one run after the other). Prints each step as it goes, then the path of
     index.html.

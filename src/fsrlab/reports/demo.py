@@ -7,7 +7,9 @@ dead-weight runs, the calibrations, the compensated estimate of the test run), t
    with the dead-weight run's placements;
 6. writes the reproduction report (:func:`fsrlab.reports.paper.write_report`), in a process of its own
    started as soon as the spring runs are in: it draws while the dead weights are recorded;
-7. writes ``index.html`` linking both.
+7. runs several sensors on one meter (:func:`fsrlab.bench.channels.several_sensors`): 8 channels scanned
+   on the Python virtual device, calibrated per channel from the one run, and the cross-talk matrix;
+8. writes ``index.html`` linking both reports, with the multi-sensor numbers.
 """
 
 from __future__ import annotations
@@ -66,7 +68,7 @@ def run_demo(out="demo", settings: DemoSettings = DemoSettings(), sensor=None, d
         started.append((start_report(Path(out) / "paper", nice=10, overwrite=True), time.monotonic()))
 
     try:
-        return _run_demo(run_chain(out, settings, sensor, device, 7 if paper else 6, say,
+        return _run_demo(run_chain(out, settings, sensor, device, 8 if paper else 7, say,
                                    start_paper if paper else None), settings, paper, started)
     except BaseException:
         for report, _ in started:  # a failed chain: no report left running on its own
@@ -75,7 +77,7 @@ def run_demo(out="demo", settings: DemoSettings = DemoSettings(), sensor=None, d
 
 
 def _run_demo(chain, s: DemoSettings, paper: bool, started: list) -> DemoResult:
-    """Steps 5 to 7 of :func:`run_demo` after the chain."""
+    """Steps 5 to 8 of :func:`run_demo` after the chain."""
     result, cal, sensor_text = chain.result, chain.calibration, chain.sensor_text
     step, done = chain.steps.step, chain.steps.done
     out = result.index.parent
@@ -104,11 +106,57 @@ def _run_demo(chain, s: DemoSettings, paper: bool, started: list) -> DemoResult:
         result.files["reproduction report"] = pr.index
         done("reproduction report", t0, f"{len(pr.sections)} sections, {time.monotonic() - since:.1f} s since it started")
 
-    # 7. The index.
+    # 7. Several sensors on one meter.
+    _several_sensors(out, result, step, done)
+
+    # 8. The index.
     t0 = step("index")
     _write_index(result, sensor_text, s)
     done("index", t0, str(result.index))
     return result
+
+
+def _several_sensors(out: Path, result: DemoResult, step, done) -> None:
+    """The multi-sensor step: 8 sensors behind the multiplexer, recorded, calibrated per channel, cross-talk."""
+    from fsrlab.bench.channels import several_sensors
+
+    t0 = step("several sensors on one meter: 8 channels scanned (Python virtual device, CD74HC4051), "
+              "each calibrated from the one run, then the cross-talk check")
+    ss = several_sensors(out / "channels", overwrite=True)
+    result.files["multi-channel run"] = ss.run
+    result.files["per-channel calibration"] = ss.calibration
+    cals = ss.calibrations
+    result.numbers["channels"] = {
+        "sensors": [{"sensor_id": sid, "channel": cals.channels[sid], "readings_per_s": float(rate),
+                     "peak_hz": float(peak), "model": c.model_name, "heldout_rmse": c.selection.heldout_rmse,
+                     "unit": c.y_unit}
+                    for (sid, c), rate, peak in zip(cals.by_sensor.items(), ss.readings_per_s, ss.peak_hz, strict=True)],
+        "crosstalk": ss.crosstalk.to_dict()}
+    done("several sensors", t0, f"{len(cals.by_sensor)} channels, {ss.readings_per_s.min():.0f} readings/s each or "
+         f"more, peaks {ss.peak_hz[0]:.0f}–{ss.peak_hz[-1]:.0f} Hz; cross-talk worst {ss.crosstalk.worst:.1e}")
+
+
+def _channels_html(ch: dict | None) -> str:
+    """The index page's multi-sensor section: each channel's rate, peak and calibration, the cross-talk matrix."""
+    if not ch:
+        return ""
+    rows = "".join(f"<tr><td>{html.escape(c['sensor_id'])}</td><td>{c['channel']}</td><td>{c['readings_per_s']:.1f}</td>"
+                   f"<td>{c['peak_hz']:.0f}</td><td>{html.escape(c['model'])}</td><td>{_num(c['heldout_rmse'])} "
+                   f"{html.escape(c['unit'])}</td></tr>" for c in ch["sensors"])
+    ct = ch["crosstalk"]
+    head = "".join(f"<th>{k}</th>" for k in ct["channels"])
+    matrix = "".join(f"<tr><th>{j}</th>" + "".join(f"<td>{v:.1e}</td>" for v in row) + "</tr>"
+                     for j, row in zip(ct["channels"], ct["matrix"], strict=True))
+    return f"""<h2>Several sensors on one meter</h2>
+<p>Eight sensors behind a CD74HC4051 on the one 555 (docs/multiplexing.md), channel k under a triangle to
+50 kPa · (k + 1)/8, scanned for 2 s of the device's clock; each channel calibrated from that one run
+(fsrlab calibrate-channels), all in one file keyed by sensor id.</p>
+<table><tr><th>sensor</th><th>channel</th><th>readings/s</th><th>peak f [Hz]</th><th>calibration</th>
+<th>held-out RMSE</th></tr>{rows}</table>
+<p>Cross-talk (fsrlab crosstalk): row j is channel j under 50 kPa, the others unloaded; each entry is a
+channel's frequency change over channel j's own. Worst off-diagonal: {ct['worst']:.1e}.</p>
+<table><tr><th>loaded ↓ read →</th>{head}</tr>{matrix}</table>
+"""
 
 
 def _num(v) -> str:
@@ -163,6 +211,7 @@ spring cycles 0 → {s.peak_pa / 1e3:g} kPa → 0 ({s.cycles} × {s.period_s:g} 
 <p>{_cal_text('Calibration (spring run)', n.get('calibration'))}; {_cal_text('known-weight calibration',
 n.get('known_weight_calibration'))}.</p>
 <p>ISO 376 class: {html.escape(str(n.get('iso376_class')))} (the measurement report says what is missing).</p>
+{_channels_html(n.get('channels'))}
 <h2>Steps</h2><ol>{steps}</ol><h2>Files</h2><ul>{files}</ul></body></html>
 """
     from fsrlab.io.outputs import write_text_atomic
