@@ -126,7 +126,7 @@ def hysteresis_of_run(run, quantity: str = "frequency_hz", threshold: float = 0.
     except RunFormatError:
         raise
     except ValueError as exc:
-        raise ValueError(f"{run.path}: {in_unit(str(exc))}") from None
+        raise ParameterError(f"{run.path}: {in_unit(getattr(exc, 'reason', str(exc)))}", parameter="run") from None
     return res if ref_unit == "Pa" else dataclasses.replace(res, method=in_unit(res.method))
 
 
@@ -334,7 +334,8 @@ def placement_means(run, readouts=("frequency_hz", "voltage_v")) -> list[dict]:
     """
     for col in ("step", "load", "direction", "cycle"):
         if col not in run:
-            raise ValueError(f"{run.path}: no {col} column: not a dead-weight run (fsrlab bench weights)")
+            raise ParameterError(f"{run.path}: no {col} column: not a dead-weight run (fsrlab bench weights)",
+                                 parameter="run")
     step = run["step"]
     out = []
     for s in np.unique(step[np.isfinite(step)]):
@@ -538,7 +539,7 @@ def measure_run(run, placements=None, weights_run=None, calibration=None, calibr
         try:
             load_g = [float(str(ld).lower().removesuffix("g")) for ld in loads]  # 200 or "200g"
         except ValueError:
-            raise ValueError(f"{placements}: load: the mass in g (200 or 200g), got {loads[0]!r}") from None
+            raise ParameterError(f"load: the mass in g (200 or 200g), got {loads[0]!r}", parameter=placements) from None
         means = [{"load_g": ld, "sensor": sn, "direction": d, "cycle": 0, "frequency_hz": float(v)}
                  for ld, sn, d, v in zip(load_g, sensors, direction, readings, strict=True)]
         rep.repeatability_source = f"placements file {Path(placements).name} (reading: frequency)"

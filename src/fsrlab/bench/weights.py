@@ -150,7 +150,7 @@ class WeightsProcedure:
             raise ParameterError(f"must be >= 2, got {settle_windows}", parameter="settle_windows")
         for name, v in (("max_drift", max_drift), ("timeout_s", timeout_s), ("hold_s", hold_s)):
             if not (math.isfinite(v) and v > 0):
-                raise ValueError(f"{name} must be > 0, got {v!r}")
+                raise ParameterError(f"must be > 0, got {v!r}", parameter=name)
         self.steps, self.announce, self.confirmed = steps, announce, confirmed
         self.place, self.stop = place, stop
         self.x, self.g, self.use_loadcell, self.area_m2 = x, gravity_m_s2, use_loadcell, area_m2

@@ -31,6 +31,7 @@ from fsrlab.cli.options import (
     skipped_json,
     warn,
 )
+from fsrlab.errors import ParameterError
 from fsrlab.units import STANDARD_GRAVITY
 
 
@@ -115,7 +116,7 @@ def repeatability(
     try:
         res = grouped_repeatability(loads, sensors, readings, ddof=ddof)
     except ValueError as exc:  # a group's problem, said with the file it is in
-        raise ValueError(f"{file}: {exc}") from None
+        raise ParameterError(f"{exc}", parameter=file) from None
     if json_out:
         emit_json(res.to_dict())
         return
@@ -140,8 +141,8 @@ def _reference_option(run_file: Path, run, reference: str | None) -> None:
     if reference is not None and reference not in ("force_n", "stress_pa"):
         fail(f"must be force_n or stress_pa, got {reference!r}", "--reference")
     if reference is None and "force_n" not in run and "stress_pa" not in run:
-        raise ValueError(f"{run_file}: no reference: column 'force_n' [N] or 'stress_pa' [Pa] missing (columns: "
-                         f"{', '.join(run.columns)})")
+        raise ParameterError(f"no reference: column 'force_n' [N] or 'stress_pa' [Pa] missing (columns: "
+                         f"{', '.join(run.columns)})", parameter=run_file)
     if reference == "force_n" and "force_n" not in run:
         missing_column(run_file, run, "force_n", " (the reference)", "--reference")
     if reference == "stress_pa" and "stress_pa" not in run and "force_n" not in run:
@@ -341,13 +342,16 @@ def apply_cmd(
     """
     from fsrlab.calibration.apply import apply_calibration, check_readout
     from fsrlab.calibration.document import load_calibration
-    from fsrlab.errors import ProvenanceError
+    from fsrlab.errors import FsrlabError, ProvenanceError
     from fsrlab.io.runwriter import write_run
 
     if margin is not None and not (math.isfinite(margin) and margin >= 0):
         fail(f"must be a fraction >= 0 of the calibrated span, got {margin:g}", "--margin")
     with reading_file(cal_file):
-        cal = load_calibration(cal_file)
+        try:
+            cal = load_calibration(cal_file)
+        except FsrlabError as exc:  # the file's fault: named as the argument CAL.json
+            fail(exc.reason, "CAL.json")
     warnings: list[str] = []
     run = load_run_warned(run_file, skip_bad_rows, warnings)
     if cal.x_name not in run and cal.x_name != "c_fsr_farad":

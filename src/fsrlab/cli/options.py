@@ -461,7 +461,7 @@ def load_frame_calibration(cal: Path, command: str):
     try:
         calibration = load_calibration(cal)
     except (ValueError, OSError) as exc:
-        fail(str(exc), "--cal")
+        fail(getattr(exc, "reason", str(exc)), "--cal")
     if calibration.x_name not in ("frequency_hz", "duty_cycle", "voltage_v"):
         fail(f"{cal} calibrates {calibration.x_name}; fsrlab {command} reads frequency_hz, duty_cycle or voltage_v",
              "--cal")

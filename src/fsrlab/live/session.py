@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from fsrlab.acquisition.stream import WindowStream
+from fsrlab.errors import ParameterError
 
 __all__ = ["LiveSession", "LiveStatus", "COLUMNS", "TARE_S"]
 
@@ -190,7 +191,7 @@ class LiveSession:
         ``stop_recording``, ``tare`` (the load cell's offset from the next :data:`TARE_S` of conversions),
         ``weights`` (start the guided calibration into a path) or ``answer`` (``ok``: the mass is placed; ``skip``)."""
         if name not in ("range", "window", "record", "stop_recording", "tare", "weights", "answer"):
-            raise ValueError(f"name: unknown live command {name!r}")
+            raise ParameterError(f"unknown live command {name!r}", parameter="name")
         self._commands.put((name, value))
 
     # ---------------------------------------------------------------- thread

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsrlab.circuits.circuit import PAPER_CIRCUIT, PAPER_OPAMP
+from fsrlab.errors import ParameterError
 from fsrlab.paper.experiment import MASSES_KG
 from fsrlab.units import STANDARD_GRAVITY
 
@@ -111,7 +112,7 @@ def held_out_fit(start: str = "neutral", max_nfev: int = 400) -> HeldOut:
     from fsrlab.reference import paper_values
 
     if start not in ("neutral", "stored"):
-        raise ValueError(f"start must be 'neutral' or 'stored', got {start!r}")
+        raise ParameterError(f"must be 'neutral' or 'stored', got {start!r}", parameter="start")
     stored = paper_sensors()
     weights = {k: w for k, w in FIT_WEIGHTS.items() if k not in HELD_OUT_KEYS}
     mean = {n: float(np.exp(np.mean([np.log(getattr(s, n)) for s in stored]))) for n in FIT_PARAMETERS}
@@ -160,7 +161,7 @@ def cross_readout_spreads(a: np.ndarray, printed: np.ndarray, labels: list, fit_
     from fsrlab.paper.preset_fit import SPREAD_FIT_PARAMETERS, SPREADS
 
     if fit_on not in ("table4", "table5"):
-        raise ValueError(f"fit_on must be 'table4' or 'table5', got {fit_on!r}")
+        raise ParameterError(f"must be 'table4' or 'table5', got {fit_on!r}", parameter="fit_on")
     use = [i for i, lab in enumerate(labels) if lab.startswith(fit_on)]
     lo = np.log([SPREAD_FIT_PARAMETERS[n][0] for n in SPREADS])
     hi = np.log([SPREAD_FIT_PARAMETERS[n][1] for n in SPREADS])

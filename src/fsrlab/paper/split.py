@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from fsrlab.errors import ParameterError
+
 __all__ = ["TOLERANCES", "within_tolerance", "targets", "predictions", "range_to_sd_ratio", "trivial_baseline"]
 
 #: Tolerance of each kind of prediction (docs/experiment.md, "Targets and predictions"):
@@ -43,7 +45,7 @@ def within_tolerance(kind: str, printed: float, predicted: float) -> bool:
     bool
     """
     if kind not in TOLERANCES:
-        raise ValueError(f"kind must be one of {sorted(TOLERANCES)}, got {kind!r}")
+        raise ParameterError(f"must be one of {sorted(TOLERANCES)}, got {kind!r}", parameter="kind")
     if not np.isfinite(predicted):
         return False
     tol = TOLERANCES[kind]
@@ -190,7 +192,7 @@ def range_to_sd_ratio(n: int = 5) -> float:
     from scipy.stats import norm
 
     if int(n) != n or n < 2:
-        raise ValueError(f"n: must be an integer >= 2, got {n!r}")
+        raise ParameterError(f"must be an integer >= 2, got {n!r}", parameter="n")
     d2 = quad(lambda x: 1.0 - norm.cdf(x) ** n - norm.sf(x) ** n, -np.inf, np.inf)[0]
     c4 = np.sqrt(2.0 / (n - 1)) * np.exp(gammaln(n / 2) - gammaln((n - 1) / 2))
     return float(d2 / c4)

@@ -27,6 +27,7 @@ import numpy as np
 from scipy.constants import e, electron_volt, h, m_e
 from scipy.optimize import brentq, minimize_scalar
 
+from fsrlab.errors import ParameterError
 from fsrlab.metrics.hysteresis import model_cycle_errors
 from fsrlab.physics.params import PAPER, PaperParameters, check_positive
 from fsrlab.physics.separation import separation_loading
@@ -166,11 +167,11 @@ def fit_barrier_height(target_percent: Sequence[float], u_v: Sequence[float] = (
     """
     target = np.asarray(target_percent, dtype=float)
     if target.shape != (len(u_v),):
-        raise ValueError(f"target_percent must have one value per voltage ({len(u_v)}), got {target.shape}")
+        raise ParameterError(f"must have one value per voltage ({len(u_v)}), got {target.shape}", parameter="target_percent")
     lo, hi = bounds_ev
     check_positive("bounds_ev", lo, "eV")
     if not hi > lo:
-        raise ValueError(f"bounds_ev must be (low, high) with high > low, got {bounds_ev!r}")
+        raise ParameterError(f"must be (low, high) with high > low, got {bounds_ev!r}", parameter="bounds_ev")
 
     def cost(phi0_ev: float) -> float:
         he = cycle_error_table(u_v, _with_phi0(params, phi0_ev)).resistance_percent
