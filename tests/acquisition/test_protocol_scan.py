@@ -36,7 +36,7 @@ def test_parse_channels(text, channels):
 def test_bad_channels_name_the_parameter(text):
     with pytest.raises(ParameterError) as err:
         P.parse_channels(text)
-    assert err.value.parameter == "channels"
+    assert err.value.parameter == "text"
 
 
 @pytest.mark.parametrize("mask", [0, 256, -1, True, 1.0])

@@ -19,6 +19,7 @@ References
 from __future__ import annotations
 
 import binascii
+import math
 import numbers
 from dataclasses import dataclass, field
 
@@ -128,13 +129,15 @@ def crc16(payload: bytes) -> int:
     Parameters
     ----------
     payload : bytes
-        The bytes strictly between ``$`` and ``*``.
+        The bytes strictly between ``$`` and ``*`` (bytes, bytearray or memoryview).
 
     Returns
     -------
     int
         The checksum, 0..65535 (``crc16(b"123456789") == 0x29B1``, the catalogue check value).
     """
+    if not isinstance(payload, bytes | bytearray | memoryview):
+        raise ParameterError(f"must be bytes, got {type(payload).__name__}", parameter="payload")
     return binascii.crc_hqx(payload, 0xFFFF)
 
 
@@ -191,8 +194,7 @@ def encode_frame(kind: str, seq: int, fields=()) -> bytes:
     ParameterError
         When ``kind``, ``seq`` or a field is not allowed, or the frame would be too long.
     """
-    if kind not in FRAME_TYPES:
-        raise ParameterError(f"must be one of {sorted(FRAME_TYPES)}, got {kind!r}", parameter="kind")
+    _check_frame_args(kind, fields)
     if isinstance(seq, bool) or not isinstance(seq, int) or not 0 <= seq < SEQ_MODULO:
         raise ParameterError(f"must be an integer in 0..65535, got {seq!r}", parameter="seq")
     lo, hi = FRAME_TYPES[kind]
@@ -248,11 +250,13 @@ def max_frame_rate(baud: float, frame_bytes: int | None = None, bits_per_byte: i
     float
         Frames per second. [1/s]
     """
-    if not baud > 0:
-        raise ParameterError(f"must be > 0, got {baud}", parameter="baud")
+    for name, value in (("baud", baud), ("bits_per_byte", bits_per_byte)):
+        if isinstance(value, bool) or not isinstance(value, numbers.Real) or not 0 < value < math.inf:
+            raise ParameterError(f"must be a number > 0, got {value!r}", parameter=name)
+    if frame_bytes is not None and (isinstance(frame_bytes, bool) or not isinstance(frame_bytes, numbers.Integral)
+                                    or frame_bytes <= 0):
+        raise ParameterError(f"must be a whole number of bytes > 0, got {frame_bytes!r}", parameter="frame_bytes")
     n = min_frame_length() if frame_bytes is None else int(frame_bytes)
-    if n <= 0:
-        raise ParameterError(f"must be > 0, got {frame_bytes}", parameter="frame_bytes")
     return baud / bits_per_byte / n
 
 
@@ -277,6 +281,14 @@ def _int24(text: str) -> int:
     return value
 
 
+def _check_frame_args(kind, fields) -> None:
+    """A known frame type and a tuple (or list) of fields, or a ParameterError naming the one at fault."""
+    if not isinstance(kind, str) or kind not in FRAME_TYPES:
+        raise ParameterError(f"must be one of {sorted(FRAME_TYPES)}, got {kind!r}", parameter="kind")
+    if not isinstance(fields, tuple | list):
+        raise ParameterError(f"must be a tuple of fields, got {type(fields).__name__}", parameter="fields")
+
+
 def check_fields(kind: str, fields: tuple[str, ...]) -> None:
     """Raise ProtocolError when the fields of a known frame type are not valid protocol (v1, v2 or v3).
 
@@ -287,6 +299,7 @@ def check_fields(kind: str, fields: tuple[str, ...]) -> None:
     fields : tuple of str
         The fields after ``SEQ``.
     """
+    _check_frame_args(kind, fields)
     lo, hi = FRAME_TYPES[kind]
     if not lo <= len(fields) <= hi:
         raise ProtocolError(f"{kind} frame with {len(fields)} fields")
@@ -571,6 +584,8 @@ def parse_command(line: bytes) -> tuple[str, int | None]:
         With ``code`` 1 (unknown command), 2 (bad or missing value) or 3 (line longer than
         :data:`MAX_COMMAND` bytes) and the ``token`` the device reports in ``$ERR``.
     """
+    if not isinstance(line, bytes | bytearray | memoryview):
+        raise ParameterError(f"must be bytes, got {type(line).__name__}", parameter="line")
     raw = bytes(line)
     if raw.endswith(b"\n"):
         raw = raw[:-1]
@@ -619,6 +634,9 @@ def channel_mask(channels) -> int:
     ParameterError
         An empty set, a repeated channel or one outside 0..7 (``parameter="channels"``).
     """
+    if isinstance(channels, str | bytes) or not hasattr(channels, "__iter__"):
+        raise ParameterError(f"must be a sequence of channel numbers 0..{CHANNELS - 1}, got {channels!r}",
+                             parameter="channels")
     chans = list(channels)
     if not chans:
         raise ParameterError("at least one channel is needed", parameter="channels")
@@ -669,10 +687,19 @@ def parse_channels(text: str) -> tuple[int, ...]:
     Raises
     ------
     ParameterError
-        Anything else, a repeated channel or one outside 0..7 (``parameter="channels"``).
+        Anything else, a repeated channel or one outside 0..7 (``parameter="text"``).
     """
+    if not isinstance(text, str):
+        raise ParameterError(f"must be a text such as 0-7 or 0,2,5, got {text!r}", parameter="text")
+    try:
+        return _parse_channels(text)
+    except ParameterError as err:
+        raise ParameterError(err.reason, parameter="text") from None
+
+
+def _parse_channels(text: str) -> tuple[int, ...]:
     chans: list[int] = []
-    for part in str(text).replace(" ", "").split(","):
+    for part in text.replace(" ", "").split(","):
         lo, sep, hi = part.partition("-")
         if not lo.isdigit() or (sep and not hi.isdigit()) or not lo.isascii() or not hi.isascii():
             raise ParameterError(f"{text!r} is not a list of channels 0..{CHANNELS - 1} such as 0-7 or 0,2,5",
