@@ -66,8 +66,9 @@ def run_reference(run, reference: str | None = None) -> tuple[np.ndarray, str, s
     RunFormatError
         The run has no such reference.
     """
-    from fsrlab.io.runformat import RunFormatError
+    from fsrlab.io.runformat import RunFormatError, as_run
 
+    run = as_run(run)
     if reference not in (None, "force_n", "stress_pa"):
         raise ParameterError(f"must be force_n or stress_pa, got {reference!r}", parameter="reference")
     if reference is None:
@@ -118,6 +119,11 @@ def hysteresis_of_run(run, quantity: str = "frequency_hz", threshold: float = 0.
     if quantity in ("stress_pa", "force_n"):
         raise ParameterError(f"{quantity} is a reference column (the {ref_name} the branches follow, or it "
                              "divided by the area); give a readout such as frequency_hz", parameter="quantity")
+    if not isinstance(quantity, str):
+        raise TypeError(f"quantity: must be a column's name, got {type(quantity).__name__}")
+    if quantity not in run:
+        raise ParameterError(f"{run.path} has no column {quantity!r} (columns: {', '.join(run.columns)})",
+                             parameter="quantity")
     q = run[quantity]
     # eq. (13)'s functions speak of stresses [Pa]; on a force reference their levels are newtons.
     in_unit = (lambda text: text) if ref_unit == "Pa" else (lambda text: re.sub(r"(\d) Pa\b", r"\1 " + ref_unit, text))
@@ -332,6 +338,12 @@ def placement_means(run, readouts=("frequency_hz", "voltage_v")) -> list[dict]:
     ValueError
         The run has no ``step`` and ``load`` columns.
     """
+    from fsrlab.io.runformat import as_run
+
+    run = as_run(run)
+    if isinstance(readouts, str) or not isinstance(readouts, (list, tuple)) or \
+            not all(isinstance(q, str) for q in readouts):
+        raise TypeError(f"readouts: must be a sequence of column names, got {readouts!r:.80}")
     for col in ("step", "load", "direction", "cycle"):
         if col not in run:
             raise ParameterError(f"{run.path}: no {col} column: not a dead-weight run (fsrlab bench weights)",
@@ -347,6 +359,19 @@ def placement_means(run, readouts=("frequency_hz", "voltage_v")) -> list[dict]:
             d[q] = float(np.nanmean(run[q][k])) if q in run and np.isfinite(run[q][k]).any() else math.nan
         out.append(d)
     return out
+
+
+def _check_placements(placements, quantity, keys=("load_g", "direction")) -> None:
+    """A TypeError or ParameterError naming the argument unless ``placements`` are placement rows, ``quantity`` a name."""
+    if not isinstance(quantity, str):
+        raise TypeError(f"quantity: must be a readout's name, got {type(quantity).__name__}")
+    if not isinstance(placements, (list, tuple)) or not all(isinstance(p, dict) for p in placements):
+        raise TypeError(f"placements: must be a list of placement rows (dicts, placement_means), got "
+                        f"{type(placements).__name__}")
+    for p in placements:
+        missing = [k for k in keys if k not in p]
+        if missing:
+            raise ParameterError(f"a row lacks {', '.join(missing)} (rows of placement_means)", parameter="placements")
 
 
 def placements_repeatability(placements: list[dict], quantity: str) -> list[PlacementRepeatability]:
@@ -373,6 +398,7 @@ def placements_repeatability(placements: list[dict], quantity: str) -> list[Plac
     """
     from fsrlab.metrics.repeatability import repeatability
 
+    _check_placements(placements, quantity)
     groups: dict[tuple, list[float]] = {}
     for p in placements:
         v = p.get(quantity, math.nan)
@@ -414,6 +440,9 @@ def iso376_of_placements(placements: list[dict], quantity: str = "frequency_hz")
     """
     from fsrlab.metrics.iso376 import CalibrationSeries, iso376
 
+    _check_placements(placements, quantity, ("load_g", "direction", "cycle", "force_n"))
+    if not any(quantity in p for p in placements):
+        raise ParameterError(f"no placement has a reading of {quantity!r}", parameter="quantity")
     loads = sorted({p["load_g"] for p in placements if p["load_g"] > 0})
     if len(loads) < 2:
         return None, f"ISO 376 needs at least 2 forces > 0; the placements have {len(loads)}"

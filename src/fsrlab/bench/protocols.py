@@ -30,6 +30,7 @@ from pathlib import Path
 
 from fsrlab.bench.weights import Step, plan_steps
 from fsrlab.errors import ParameterError
+from fsrlab.physics.params import check_at_least, check_positive, float_array
 from fsrlab.units import STANDARD_GRAVITY
 
 __all__ = ["PROTOCOLS", "DEVICES", "SPEEDS", "VIRTUAL_SENSORS", "virtual_sensor", "SpringPlan", "WeightsPlan", "CreepPlan", "twin_status", "open_bench",
@@ -70,8 +71,9 @@ class SpringPlan:
     def __post_init__(self) -> None:
         if not (isinstance(self.cycles, int) and 1 <= self.cycles <= 100000):
             raise ParameterError(f"must be an integer from 1 to 100000, got {self.cycles!r}", parameter="cycles")
-        if not (math.isfinite(self.period_s) and self.period_s > 0):
-            raise ParameterError(f"must be > 0 s, got {self.period_s!r}", parameter="period_s")
+        check_positive("period_s", self.period_s, "s", scalar=True)
+        check_at_least("base_pa", self.base_pa, 0.0, "Pa", scalar=True)
+        check_positive("peak_pa", self.peak_pa, "Pa", scalar=True)
         if not (math.isfinite(self.peak_pa) and self.peak_pa > self.base_pa >= 0):
             raise ParameterError(f"must exceed base_pa >= 0 Pa, got {self.peak_pa!r} and {self.base_pa!r}", parameter="peak_pa")
 
@@ -127,6 +129,8 @@ class WeightsPlan:
     repeat: int = 5
 
     def __post_init__(self) -> None:
+        if isinstance(self.masses_kg, (str, bytes, int, float)) or float_array("masses_kg", self.masses_kg).ndim != 1:
+            raise TypeError(f"masses_kg: must be a sequence of masses [kg], got {self.masses_kg!r:.80}")
         m = tuple(float(x) for x in self.masses_kg)
         object.__setattr__(self, "masses_kg", m)
         if not m or not all(math.isfinite(x) and x > 0 for x in m):
@@ -167,14 +171,10 @@ class CreepPlan:
     after_s: float = 5.0
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.mass_kg) and self.mass_kg > 0):
-            raise ParameterError(f"must be > 0 kg, got {self.mass_kg!r}", parameter="mass_kg")
-        if not (math.isfinite(self.hold_s) and self.hold_s > 0):
-            raise ParameterError(f"must be > 0 s, got {self.hold_s!r}", parameter="hold_s")
+        check_positive("mass_kg", self.mass_kg, "kg", scalar=True)
+        check_positive("hold_s", self.hold_s, "s", scalar=True)
         for name in ("before_s", "after_s"):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v >= 0):
-                raise ParameterError(f"must be >= 0 s, got {v!r}", parameter=name)
+            check_at_least(name, getattr(self, name), 0.0, "s", scalar=True)
 
     @property
     def duration_s(self) -> float:

@@ -33,6 +33,7 @@ import numpy as np
 
 from fsrlab.acquisition.loadcell import STANDARD_GRAVITY
 from fsrlab.errors import ParameterError
+from fsrlab.physics.params import check_int, float_array
 
 __all__ = ["STABILITY", "Step", "plan_steps", "WeightsProcedure", "READOUTS", "placements_table"]
 
@@ -87,16 +88,17 @@ def plan_steps(masses_kg: Sequence[float], repeat: int = 1, unload: bool = False
     ValueError
         Masses not increasing, negative, fewer than two, or ``repeat`` < 1.
     """
-    m = [float(x) for x in masses_kg]
+    m = list(float_array("masses_kg", masses_kg).ravel()) if not isinstance(masses_kg, (int, float)) else None
+    if m is None or np.ndim(masses_kg) != 1:
+        raise TypeError(f"masses_kg: must be a sequence of masses [kg], got {masses_kg!r:.80}")
     if len(m) < 2:
-        raise ParameterError(f"at least two are needed (e.g. 0,100g), got {len(m)}", parameter="masses")
-    for a, b in zip(m, m[1:], strict=False):
+        raise ParameterError(f"at least two are needed (e.g. 0,100g), got {len(m)}", parameter="masses_kg")
+    for a, b in zip(m, m[1:], strict=False):  # consecutive pairs: the second list is one shorter
         if not b > a:
-            raise ParameterError(f"must increase, got {b * 1e3:g} g after {a * 1e3:g} g", parameter="masses")
+            raise ParameterError(f"must increase, got {b * 1e3:g} g after {a * 1e3:g} g", parameter="masses_kg")
     if m[0] < 0 or not all(math.isfinite(x) for x in m):
-        raise ParameterError("must be finite and >= 0 kg", parameter="masses")
-    if repeat < 1:
-        raise ParameterError(f"must be >= 1, got {repeat}", parameter="repeat")
+        raise ParameterError("must be finite and >= 0 kg", parameter="masses_kg")
+    repeat = check_int("repeat", repeat, 1)
     steps: list[Step] = []
     for cycle in range(repeat):
         for mass in m:

@@ -18,7 +18,7 @@ from fsrlab import __version__
 from fsrlab.errors import FileFormatError, FsrlabError
 
 #: The option of each library parameter an error can name (:attr:`fsrlab.errors.FsrlabError.parameter`).
-PARAMETER_OPTIONS = {"port": "--port"}
+PARAMETER_OPTIONS = {"port": "--port", "masses_kg": "--masses"}
 
 # Every command ``fsrlab --help`` lists, in its order: the topic module that adds it to ``app`` and its
 # summary (the first paragraph of its help). The listing is built from this table, so ``fsrlab --help``
