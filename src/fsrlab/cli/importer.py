@@ -62,6 +62,7 @@ def import_cmd(
       fsrlab import examples/foreign_fsr.csv -o run.csv
       fsrlab import examples/foreign_fsr.csv --reference examples/foreign_loadcell.csv --time time_ms --force force_N -o run.csv --json
     """
+    from fsrlab.errors import FileFormatError, ParameterError
     from fsrlab.io.foreign import ForeignFormatError, import_foreign, write_imported
 
     inputs = [sensor] + ([reference] if reference is not None else [])
@@ -85,12 +86,12 @@ def import_cmd(
                                   skip_lines=skip_lines)
     except ForeignFormatError as exc:  # a file's problem: file, line, column, and the option that settles it
         hint = f" ({_ROLE_OPTIONS[exc.role]})" if exc.role in _ROLE_OPTIONS else ""
-        raise ValueError(f"{exc}{hint}") from None
+        raise FileFormatError(f"{exc.reason}{hint}") from None
     except ValueError as exc:  # a parameter's problem: its option's name
         with option_names(_PARAMETERS):
             raise exc from None
     except OSError as exc:
-        raise ValueError(f"cannot read '{exc.filename or sensor}': {exc.strerror or exc}") from None
+        raise ParameterError(f"cannot read '{exc.filename or sensor}': {exc.strerror or exc}") from None
     with option_names(_PARAMETERS):
         write_imported(imported, output, overwrite=overwrite)  # an OSError names the run or its sidecar
     summary = {"output": str(output), "rows": imported.rows, "matched": imported.matched,

@@ -42,6 +42,7 @@ from typing import Any
 
 import typer
 
+from fsrlab.errors import ParameterError
 from fsrlab.io.jsonable import to_jsonable
 from fsrlab.units import format_eng, parse_eng, parse_quantity
 
@@ -214,7 +215,7 @@ def option_names(mapping: dict[str, str]) -> Iterator[None]:
             raise typer.BadParameter(lead.group(2), param_hint=lead.group(1)) from None
         # No option leads the message: one line as it is ("fsrlab: error: ..."), not click's bare
         # "Invalid value: ...", which reads as if an option had been named.
-        raise ValueError(message) from None
+        raise ParameterError(message) from None
 
 
 # ------------------------------------------------------------------ pieces the commands share
@@ -414,9 +415,9 @@ def reading_file(path: Path) -> Iterator[None]:
     try:
         yield
     except IsADirectoryError:
-        raise ValueError(f"'{path}' is a directory, not a file") from None
+        raise ParameterError(f"'{path}' is a directory, not a file") from None
     except OSError as exc:
-        raise ValueError(f"cannot read '{path}': {exc.strerror or exc}") from None
+        raise ParameterError(f"cannot read '{path}': {exc.strerror or exc}") from None
 
 
 def load_run_warned(path: Path, skip_bad_rows: bool, warnings: list[str]):

@@ -382,9 +382,15 @@ def interpolate_reference(t: np.ndarray, t_ref: np.ndarray, values: np.ndarray) 
         Same shape as ``t``: NaN outside ``[t_ref[0], t_ref[-1]]`` (no extrapolation) and between
         two samples of which one is missing; at a reference sample's own time, its value.
     """
-    t = np.asarray(t, dtype=float)
-    t_ref = np.asarray(t_ref, dtype=float)
-    values = np.asarray(values, dtype=float)
+    from fsrlab.physics.params import float_array
+
+    t = float_array("t", t)
+    t_ref = float_array("t_ref", t_ref)
+    values = float_array("values", values)
+    if t_ref.ndim != 1:
+        raise ParameterError(f"must be a 1-D array of times, got shape {t_ref.shape}", parameter="t_ref")
+    if values.shape != t_ref.shape:
+        raise ParameterError(f"must have the shape of t_ref {t_ref.shape}, got {values.shape}", parameter="values")
     out = np.full(t.shape, np.nan)
     if t_ref.size == 0:
         return out
@@ -536,6 +542,11 @@ def import_foreign(sensor: str | os.PathLike, reference: str | os.PathLike | Non
         :class:`ForeignFormatError` for a file's problem (file, line, column), and for a unit its header
         states that is not one of the role's.
     """
+    from fsrlab.io.runformat import input_file
+
+    input_file(sensor, "sensor")
+    if reference is not None:
+        input_file(reference, "reference")
     units = {"time_unit": (time_unit, "time"), "reference_time_unit": (reference_time_unit, "time"),
              "reading_unit": (reading_unit, "reading"), "force_unit": (force_unit, "force")}
     time_unit, reference_time_unit, reading_unit, force_unit = (_unit(v, t, k) for k, (v, t) in units.items())
@@ -553,8 +564,8 @@ def import_foreign(sensor: str | os.PathLike, reference: str | os.PathLike | Non
                              "logged in", parameter="reference")
     notes: list[str] = []
     mapping: dict[str, dict] = {}
-    sens = read_table(sensor, header, skip_lines)
-    ref = read_table(reference, header, skip_lines) if reference is not None else None
+    sens = _read(sensor, "sensor", header, skip_lines)
+    ref = _read(reference, "reference", header, skip_lines) if reference is not None else None
     # A rate given means the rows are evenly spaced: no time column is looked for.
     roles = (("time",) if time is not None or rate_hz is None else ()) + (("force",) if ref is None else ()) + ("reading",)
     chosen = _choose(sens, roles, {"time": time, "reading": reading, "force": force if ref is None else None})
@@ -588,6 +599,16 @@ def import_foreign(sensor: str | os.PathLike, reference: str | os.PathLike | Non
     return Imported(columns=columns, units=out_units, mapping=mapping, sources=sources, rows=sens.n_rows,
                     matched=matched, rate_hz=rate_hz if rate_hz is not None else _median_rate(t),
                     offset_s=float(offset_s), notes=notes)
+
+
+def _read(path, parameter: str, header, skip_lines) -> Table:
+    """:func:`read_table`, its file's errors naming ``parameter`` (sensor or reference)."""
+    try:
+        return read_table(path, header, skip_lines)
+    except ForeignFormatError as exc:
+        if exc.parameter not in (None, "path"):
+            raise
+        raise ForeignFormatError(exc.reason, exc.role, parameter) from None
 
 
 def _number(value, parameter: str) -> float:
@@ -669,6 +690,8 @@ def write_imported(imported: Imported, path: str | os.PathLike, overwrite: bool 
     """
     from fsrlab.io.runwriter import write_run
 
+    if not isinstance(imported, Imported):
+        raise TypeError(f"imported: must be an Imported (import_foreign), got {type(imported).__name__}")
     return write_run(path, imported.columns, imported.metadata, overwrite=overwrite,
                      inputs=[source["file"] for source in imported.sources])
 

@@ -46,10 +46,12 @@ class ForeignFormatError(FileFormatError):
         The mapping the user can give to settle it (``"time"``, ``"reading"``, ``"force"``,
         ``"reference_time"``, ``"offset"``), when the problem is which column is which or how two
         files line up.
+    parameter : str, optional
+        The parameter whose file it is (``sensor`` or ``reference``), as for :class:`~fsrlab.errors.FsrlabError`.
     """
 
-    def __init__(self, message: str, role: str | None = None):
-        super().__init__(message)
+    def __init__(self, message: str, role: str | None = None, parameter: str | None = None):
+        super().__init__(message, parameter)
         self.role = role
 
 
@@ -65,6 +67,8 @@ def is_number(cell: str) -> bool:
     -------
     bool
     """
+    if not isinstance(cell, str):
+        raise TypeError(f"cell: must be a str, got {type(cell).__name__}")
     return bool(_NUMBER.match(cell) or _COMMA_NUMBER.match(cell) or _NOT_FINITE.match(cell))
 
 
@@ -351,10 +355,18 @@ def read_table(path: str | os.PathLike, header: bool | None = None, skip_lines: 
     ------
     ForeignFormatError
         An empty file (no data rows), a file that is not text, duplicate header names.
+    fsrlab.errors.ParameterError
+        A path that is empty, missing or a directory, a negative ``skip_lines``.
     OSError
         The file cannot be read.
     """
-    p = Path(path)
+    from fsrlab.io.runformat import input_file
+
+    p = input_file(path, "path")
+    if header is not None and not isinstance(header, bool):
+        raise TypeError(f"header: must be True, False or None, got {type(header).__name__}")
+    if isinstance(skip_lines, bool) or not isinstance(skip_lines, int):
+        raise TypeError(f"skip_lines: must be an int, got {type(skip_lines).__name__}")
     if skip_lines < 0:
         raise ParameterError(f"must be >= 0, got {skip_lines}", parameter="skip_lines")
     text, encoding, digest = _decode(p)

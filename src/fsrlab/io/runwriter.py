@@ -180,6 +180,8 @@ class RunWriter:
         if metadata is not None and not isinstance(metadata, Mapping):
             raise TypeError(f"metadata: must be a mapping (a dict of the sidecar's content), got "
                             f"{type(metadata).__name__}")
+        if not isinstance(overwrite, bool):
+            raise TypeError(f"overwrite: must be True or False, got {type(overwrite).__name__}")
         from fsrlab.io.outputs import output_path
 
         self.path = output_path(path, "path")
@@ -355,8 +357,16 @@ def write_run(path: str | os.PathLike, columns: Mapping[str, Any], metadata: Map
     """
     from fsrlab.io.outputs import output_path, refuse_inputs
 
+    if not isinstance(overwrite, bool):
+        raise TypeError(f"overwrite: must be True or False, got {type(overwrite).__name__}")
+    if not isinstance(columns, Mapping):
+        raise TypeError(f"columns: must be a mapping of column name to values, got {type(columns).__name__}")
+    if metadata is not None and not isinstance(metadata, Mapping):
+        raise TypeError(f"metadata: must be a mapping (a dict of the sidecar's content), got "
+                        f"{type(metadata).__name__}")
     path = output_path(path, "path")
     refuse_inputs(path, "path", inputs, kind="run")
+    check_columns(list(columns))
     names = list(columns)
     arrays = [np.asarray(columns[c]) for c in names]
     n = {a.shape for a in arrays}

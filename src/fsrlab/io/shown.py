@@ -13,6 +13,8 @@ import re
 import unicodedata
 from collections.abc import Iterable
 
+from fsrlab.errors import ParameterError
+
 __all__ = ["shown", "shown_list", "printable", "number_cell", "NUMBER"]
 
 # ASCII digits, an optional sign, point and exponent; nan and inf in any case (checked later by value).
@@ -58,12 +60,25 @@ def printable(text: str, keep: str = "\n\t") -> str:
     -------
     str
     """
+    if not isinstance(text, str):
+        raise TypeError(f"text: must be a str, got {type(text).__name__}")
+    if not isinstance(keep, str):
+        raise TypeError(f"keep: must be a str of the characters kept, got {type(keep).__name__}")
     if text.isascii():
         if keep == "\n\t" and _ASCII_CONTROL.search(text) is None:
             return text
         return "".join(ch if ch in keep or not (ch < " " or ch == "\x7f") else _code(ch) for ch in text)
     return "".join(ch if ch in keep or unicodedata.category(ch) not in _CONTROL_CATEGORIES else _code(ch)
                    for ch in text)
+
+
+def _limit(name: str, value) -> int:
+    """A length limit: an int >= 1, or a TypeError or ParameterError naming it."""
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise TypeError(f"{name}: must be an int, got {type(value).__name__}")
+    if value < 1:
+        raise ParameterError(f"must be >= 1, got {value}", parameter=name)
+    return value
 
 
 def shown(text, limit: int = 60) -> str:
@@ -81,6 +96,7 @@ def shown(text, limit: int = 60) -> str:
     str
         ``'name'``, or ``'first characters…' (12345 characters)`` when cut.
     """
+    limit = _limit("limit", limit)
     s = str(text)
     if len(s) <= limit:
         return f"'{_escape(s)}'"
@@ -104,6 +120,9 @@ def shown_list(items: Iterable, limit: int = 200, item_limit: int = 40) -> str:
     str
         ``"time_s, frequency_hz, … and 9998 more"``.
     """
+    if isinstance(items, (str, bytes)) or not isinstance(items, Iterable):
+        raise TypeError(f"items: must be an iterable of names, got {type(items).__name__}")
+    limit, item_limit = _limit("limit", limit), _limit("item_limit", item_limit)
     names = list(items)
     parts: list[str] = []
     size = 0
@@ -131,9 +150,11 @@ def number_cell(cell: str) -> float:
 
     Raises
     ------
-    ValueError
-        The cell is not written as a plain number.
+    fsrlab.errors.ParameterError
+        The cell is not written as a plain number (a ValueError: callers catch it as one).
     """
+    if not isinstance(cell, str):
+        raise TypeError(f"cell: must be a str, got {type(cell).__name__}")
     if not NUMBER.match(cell):
-        raise ValueError(f"not a plain number: {cell!r}")
+        raise ParameterError(f"not a plain number: {cell!r}", parameter="cell")
     return float(cell)
