@@ -16,6 +16,7 @@ import sys
 
 import pytest
 
+from fsrlab.errors import ParameterError
 from fsrlab.io.runformat import RunFormatError, load_run, sidecar_path
 from fsrlab.io.runwriter import RunWriter, write_run
 
@@ -63,10 +64,10 @@ def test_errors_name_the_users_files_not_a_temporary(tmp_path):
         RunWriter(tmp_path / "y.csv", ["time_s"])
     assert str(tmp_path / "y.meta.json") in str(info.value) and ".tmp" not in str(info.value)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["y.meta.json"]  # no temporary left behind
-    (tmp_path / "z.csv").mkdir()  # a directory where the CSV goes: no orphan sidecar either
-    with pytest.raises(OSError) as info:
+    (tmp_path / "z.csv").mkdir()  # a directory where the CSV goes: refused before anything is written
+    with pytest.raises(ParameterError) as info:
         RunWriter(tmp_path / "z.csv", ["time_s"])
-    assert str(tmp_path / "z.csv") in str(info.value)
+    assert str(tmp_path / "z.csv") in str(info.value) and info.value.parameter == "path"
     assert not sidecar_path(tmp_path / "z.csv").exists()
 
 

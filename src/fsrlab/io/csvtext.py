@@ -42,6 +42,8 @@ def long_cell_text(reason: str = "field larger than field limit") -> str:
     -------
     str
     """
+    if not isinstance(reason, str):
+        raise TypeError(f"reason: must be a str, got {type(reason).__name__}")
     if "field limit" in reason:
         return (f"a cell longer than {csv.field_size_limit()} characters (the CSV reader's limit); no cell of a run "
                 "or table is that long: is this the right file?")
@@ -67,6 +69,8 @@ def csv_cells(line: str, delimiter: str = ",") -> list[str]:
     LongCellError
         A cell longer than the CSV reader's limit (``line`` is 1).
     """
+    if not isinstance(line, str):
+        raise TypeError(f"line: must be a str, got {type(line).__name__}")
     try:
         return next(csv.reader([line], delimiter=delimiter), [])
     except csv.Error as exc:
@@ -92,6 +96,8 @@ def csv_rows(lines: Iterable[str], delimiter: str = ",") -> Iterator[list[str]]:
     LongCellError
         A cell longer than the CSV reader's limit, with the 1-based line where the reader stopped.
     """
+    if isinstance(lines, (str, bytes)) or not isinstance(lines, Iterable):
+        raise TypeError(f"lines: must be an iterable of lines (or an open file), got {type(lines).__name__}")
     reader = csv.reader(lines, delimiter=delimiter)
     while True:
         try:

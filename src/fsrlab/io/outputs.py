@@ -61,6 +61,30 @@ class OutputError(ParameterError):
         return self.args[0]
 
 
+def _path_of(name: str, value) -> Path:
+    """``value`` as a Path, or a TypeError (no path) or ParameterError (an empty one) naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, (str, os.PathLike)):
+        raise TypeError(f"{name}: must be a path (str or path-like), got {type(value).__name__}")
+    if not os.fspath(value):
+        raise ParameterError("must name a file, got an empty path", parameter=name)
+    return Path(value)
+
+
+def _file_path(name: str, value) -> Path:
+    """:func:`_path_of`, and a ParameterError naming ``name`` when it is a directory (a file is written there)."""
+    p = _path_of(name, value)
+    if p.is_dir():
+        raise ParameterError(f"'{p}' is a directory, not a file", parameter=name)
+    return p
+
+
+def _iterable(name: str, value) -> list:
+    """``value``'s items, or a TypeError naming ``name`` when it is not an iterable (a str is one path, not many)."""
+    if isinstance(value, (str, bytes, os.PathLike)) or not isinstance(value, Iterable):
+        raise TypeError(f"{name}: must be an iterable of paths, got {type(value).__name__}")
+    return list(value)
+
+
 def _overwrite_hint(option: str) -> str:
     """How the caller asks for a replacement: ``--overwrite`` on the command line, ``overwrite=True`` in Python."""
     return "pass --overwrite" if not option or option.startswith("-") or not option.isidentifier() else \
@@ -83,6 +107,8 @@ def output_path(text, option: str = "--out") -> Path:
     -------
     Path
     """
+    if isinstance(text, bool) or not isinstance(text, (str, os.PathLike)):
+        raise TypeError(f"{option}: must be a path (str or path-like), got {type(text).__name__}")
     raw = os.fspath(text) if not isinstance(text, str) else text
     if not raw.strip():
         raise OutputError(option, "is empty; give a file or directory name (an unset shell variable gives an "
@@ -108,7 +134,7 @@ def run_files(path) -> tuple[Path, Path]:
     -------
     (Path, Path)
     """
-    p = Path(path)
+    p = _path_of("path", path)
     return p, _sidecar(p)
 
 
@@ -126,7 +152,7 @@ def protected_paths(inputs: Iterable) -> list[tuple[Path, str]]:
         Each protected file and what it is ("the input X", "the sidecar of the input X").
     """
     out: list[tuple[Path, str]] = []
-    for item in inputs:
+    for item in _iterable("inputs", inputs):
         if item is None or not os.fspath(item).strip():
             continue
         p = Path(item)
@@ -264,7 +290,7 @@ def refuse_inputs(path, option: str, inputs: Iterable, kind: str = "file") -> No
     ------
     OutputError
     """
-    target = Path(path)
+    target = _path_of(option, path)
     protected = protected_paths(inputs)
     for f in run_files(target) if kind == "run" else (target,):
         clash = _input_clash(f, protected)
@@ -292,7 +318,7 @@ def atomic_path(path) -> Iterator[Path]:
     Path
         Where to write.
     """
-    final = Path(path)
+    final = _file_path("path", path)
     # Not mkstemp: its file is 0600, and the rename would give the output those permissions.
     tmp = final.with_name(f".{final.name}.{os.getpid()}-{secrets.token_hex(4)}.partial{final.suffix}")
     try:
@@ -320,6 +346,8 @@ def write_text_atomic(path, text: str) -> Path:
     -------
     Path
     """
+    if not isinstance(text, str):
+        raise TypeError(f"text: must be a str, got {type(text).__name__}")
     with atomic_path(path) as tmp:
         tmp.write_text(text, encoding="utf-8")
     return Path(path)
@@ -337,6 +365,8 @@ def write_bytes_atomic(path, data: bytes) -> Path:
     -------
     Path
     """
+    if not isinstance(data, (bytes, bytearray, memoryview)):
+        raise TypeError(f"data: must be bytes, got {type(data).__name__}")
     with atomic_path(path) as tmp:
         tmp.write_bytes(data)
     return Path(path)
@@ -359,7 +389,7 @@ def atomic_run(path) -> Iterator[Path]:
     Path
         The temporary CSV to write the run to (its sidecar beside it).
     """
-    final = Path(path)
+    final = _path_of("path", path)
     tmp = final.with_name(f".{final.stem}.{os.getpid()}-{secrets.token_hex(4)}.partial.csv")
     try:
         yield tmp
@@ -391,7 +421,11 @@ def replace_run(src, dst) -> None:
     """
     from fsrlab.io.schema import CSV_SHA256
 
+    for name, value in (("src", src), ("dst", dst)):
+        _path_of(name, value)
     csv, meta = run_files(src)
+    if not (csv.is_file() and meta.is_file()):
+        raise ParameterError(f"'{csv}' and its sidecar '{meta.name}' must both exist (a complete run)", parameter="src")
     with open(csv, "rb") as fh:
         digest = hashlib.file_digest(fh, "sha256").hexdigest()
     doc = {**json.loads(meta.read_text(encoding="utf-8")), CSV_SHA256: digest}

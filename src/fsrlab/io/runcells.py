@@ -223,6 +223,11 @@ def parse_cells(path: Path, body: list[str], header: Sequence[str],
         text, a value outside :data:`COLUMN_LIMITS` (|x| > :data:`OTHER_LIMIT` in other columns),
         an empty ``time_s``.
     """
+    if not isinstance(body, list) or not all(isinstance(line, str) for line in body):
+        raise TypeError(f"body: must be a list of lines (str), got {type(body).__name__}")
+    if isinstance(header, (str, bytes)) or not isinstance(header, Sequence) or \
+            not all(isinstance(h, str) for h in header):
+        raise TypeError(f"header: must be a sequence of column names (str), got {type(header).__name__}")
     header = list(header)
     checks: list = []
     data = _parse_fast(body, len(header))

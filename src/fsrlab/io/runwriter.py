@@ -185,6 +185,8 @@ class RunWriter:
         from fsrlab.io.outputs import output_path
 
         self.path = output_path(path, "path")
+        if self.path.is_dir():
+            raise ParameterError(f"'{self.path}' is a directory, not a run's file", parameter="path")
         self.columns = check_columns(columns)
         self._set = set(self.columns)
         self.metadata = _build_metadata(self.columns, metadata)
@@ -365,6 +367,8 @@ def write_run(path: str | os.PathLike, columns: Mapping[str, Any], metadata: Map
         raise TypeError(f"metadata: must be a mapping (a dict of the sidecar's content), got "
                         f"{type(metadata).__name__}")
     path = output_path(path, "path")
+    if path.is_dir():
+        raise ParameterError(f"'{path}' is a directory, not a run's file", parameter="path")
     refuse_inputs(path, "path", inputs, kind="run")
     check_columns(list(columns))
     names = list(columns)

@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import os
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
+from numbers import Integral
 from pathlib import Path
 
 from fsrlab.errors import FileFormatError, ParameterError
@@ -74,6 +75,8 @@ def check_columns(columns: Sequence[str]) -> list[str]:
     -------
     list of str
     """
+    if isinstance(columns, (str, bytes)) or not isinstance(columns, Iterable):
+        raise TypeError(f"columns: must be a sequence of column names, got {type(columns).__name__}")
     cols = [str(c) for c in columns]
     if not cols:
         raise ParameterError("must name at least one column", parameter="columns")
@@ -99,6 +102,10 @@ def sidecar_path(path: str | os.PathLike) -> Path:
     -------
     Path
     """
+    if isinstance(path, bool) or not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"path: must be a path (str or path-like), got {type(path).__name__}")
+    if not os.fspath(path):
+        raise ParameterError("must name a run's file, got an empty path", parameter="path")
     p = Path(path)
     return p.with_name((p.name[:-4] if p.name.lower().endswith(".csv") else p.name) + ".meta.json")
 
@@ -119,5 +126,7 @@ def where(path: Path, row: int, column: str | None) -> str:
     -------
     str
     """
+    if isinstance(row, bool) or not isinstance(row, Integral):
+        raise TypeError(f"row: must be an int, got {type(row).__name__}")
     col = f", column {column!r}" if column is not None else ""
     return f"{path}: row {row} (line {row + 1}){col}"
