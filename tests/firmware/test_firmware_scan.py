@@ -75,7 +75,7 @@ def test_a_mask_of_one_is_the_single_channel_meter_on_that_channel(fw):
     assert len(ms) >= 5
     assert all(m.channel == 2 and m.window_ms == 20 for m in ms)
     assert [m.scan for m in ms] == list(range(len(ms)))
-    assert all(b.t_ms - a.t_ms == 20 for a, b in zip(ms, ms[1:]))  # contiguous windows, no settling
+    assert all(b.t_ms - a.t_ms == 20 for a, b in zip(ms, ms[1:], strict=False))  # contiguous windows, no settling
     assert (r.peeks[PORTD][0] >> 5) & 7 == 2
 
 
