@@ -36,3 +36,10 @@ def test_several_sensors_names_the_parameter(tmp_path, kwargs, parameter):
     with pytest.raises(ParameterError) as err:
         several_sensors(tmp_path, **kwargs)
     assert err.value.parameter == parameter
+
+
+def test_live_refuses_one_sensors_calibration_for_channels(tmp_path):
+    cal = tmp_path / "cal.json"
+    cal.write_text("{}")
+    code, out, err = run_cli(["live", "--virtual", "--channels", "0-3", "--cal", cal, "--http-port", "0"])
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "--cal" in err, err

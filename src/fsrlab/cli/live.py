@@ -115,6 +115,9 @@ def live(
     scan, _ = scan_options(channels, None, None)
     if scan is not None and masses is not None:
         fail("the guided calibration reads one sensor: leave out --channels or --masses", "--channels")
+    if scan is not None and cal is not None:
+        fail("a calibration file holds one sensor's calibration; the page shows the channels' frequencies "
+             "(apply per-channel calibrations to the run: fsrlab calibrate-channels)", "--cal")
     if out is not None:
         _check_new_run(out, [cal, loadcell])
     circuits = meter.sidecar(None, "--virtual" if virtual else None)  # the page may switch to either range
