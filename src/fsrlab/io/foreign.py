@@ -685,8 +685,8 @@ def write_imported(imported: Imported, path: str | os.PathLike, overwrite: bool 
     OutputError
         An empty ``path``, or a run or sidecar that would replace a source file or its sidecar (the output
         policy, :mod:`fsrlab.io.outputs`; ``.parameter`` is ``"path"``).
-    FileExistsError
-        The run exists and ``overwrite`` is False.
+    fsrlab.io.outputs.OutputExistsError
+        The run exists and ``overwrite`` is False (a FileExistsError and a ParameterError naming ``path``).
     """
     from fsrlab.io.runwriter import write_run
 

@@ -33,7 +33,7 @@ from pathlib import Path
 
 from fsrlab.errors import ParameterError
 
-__all__ = ["OutputError", "output_path", "check_output", "refuse_inputs", "protected_paths", "same_file", "atomic_path",
+__all__ = ["OutputError", "OutputExistsError", "output_path", "check_output", "refuse_inputs", "protected_paths", "same_file", "atomic_path",
            "write_text_atomic", "write_bytes_atomic", "atomic_run", "replace_run", "run_files"]
 
 
@@ -59,6 +59,16 @@ class OutputError(ParameterError):
 
     def __str__(self) -> str:
         return self.args[0]
+
+
+class OutputExistsError(OutputError, FileExistsError):
+    """An existing output that is replaced only with ``overwrite=True``; a :class:`FileExistsError` too.
+
+    Parameters
+    ----------
+    option, message
+        As for :class:`OutputError`.
+    """
 
 
 def _path_of(name: str, value) -> Path:

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from fsrlab.errors import ParameterError
-from fsrlab.io.outputs import atomic_run
+from fsrlab.io.outputs import OutputExistsError, atomic_run
 from fsrlab.io.schema import CSV_SHA256, FORMAT, KNOWN_COLUMNS, VERSION, check_columns, sidecar_path
 
 __all__ = ["RunWriter", "write_run"]
@@ -160,12 +160,13 @@ class RunWriter:
         ``{"model": "FlexiForce A201-1", "area_m2": 7.1e-5}``), ``origin``, ``notes``; other keys are kept.
     overwrite : bool
         Replace an existing run. With False (the default), an existing CSV or sidecar raises
-        ``FileExistsError`` naming it, and nothing is written.
+        :class:`~fsrlab.io.outputs.OutputExistsError` (a ``FileExistsError``) naming it, and nothing is written.
 
     Raises
     ------
-    FileExistsError
-        ``overwrite=False`` and the CSV or its sidecar exists.
+    fsrlab.io.outputs.OutputExistsError
+        ``overwrite=False`` and the CSV or its sidecar exists (a FileExistsError and a ParameterError naming
+        ``path``).
     OSError
         The files cannot be written; the message names the CSV or the sidecar, never a temporary file.
 
@@ -196,7 +197,8 @@ class RunWriter:
         if not overwrite:
             for existing in (self.path, self.meta_path):
                 if os.path.lexists(existing):
-                    raise FileExistsError(f"{existing} exists; a run is replaced only when asked to")
+                    raise OutputExistsError("path", f"{existing} exists; a run is replaced only when asked to "
+                                            "(overwrite=True)")
         existed = os.path.lexists(self.path)
         try:  # opened without truncating: a CSV that cannot be written leaves the old run as it was
             fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | (0 if overwrite else os.O_EXCL), 0o666)
@@ -351,8 +353,8 @@ def write_run(path: str | os.PathLike, columns: Mapping[str, Any], metadata: Map
 
     Raises
     ------
-    FileExistsError
-        The run exists and ``overwrite`` is False.
+    fsrlab.io.outputs.OutputExistsError
+        The run exists and ``overwrite`` is False (a FileExistsError and a ParameterError naming ``path``).
     OutputError
         An empty ``path``, or one that is an input or an input's sidecar (the output policy,
         :func:`fsrlab.io.outputs.check_output`); ``.parameter`` is ``"path"``.
@@ -379,7 +381,8 @@ def write_run(path: str | os.PathLike, columns: Mapping[str, Any], metadata: Map
     if not overwrite:
         for existing in (path, sidecar_path(path)):
             if os.path.lexists(existing):
-                raise FileExistsError(f"{existing} exists; a run is replaced only when asked to")
+                raise OutputExistsError("path", f"{existing} exists; a run is replaced only when asked to "
+                                            "(overwrite=True)")
     try:
         with atomic_run(path) as tmp:
             with RunWriter(tmp, names, metadata, overwrite=True) as w:
