@@ -23,10 +23,9 @@ from fsrlab.physics.params import check_at_least, check_finite, check_positive, 
 
 __all__ = ["DELAY_ROWS", "DELAY_MAX_S", "delay_trials", "delayed", "DelayLine"]
 
-#: Delays of the reference tried first by the held-out calibration, in readings of the calibration data:
-#: fractions of one, as a load-cell amplifier's conversion window gives, then longer ones, as a reference
-#: logged by another device and joined by its time stamps, or filtered, gives; then doubling up to
-#: :data:`DELAY_MAX_S`, and finer steps around the best (:func:`delay_trials`). [1]
+#: Delays of the reference tried first, in readings: fractions of one (a load-cell amplifier's conversion
+#: window), then longer (a reference logged by another device, or filtered); then doubling up to
+#: :data:`DELAY_MAX_S`, with finer steps around the best (:func:`delay_trials`). [1]
 DELAY_ROWS = (0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0)
 #: The delays tried go on doubling beyond :data:`DELAY_ROWS` until they reach this much time. [s]
 DELAY_MAX_S = 0.5

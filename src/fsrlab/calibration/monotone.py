@@ -1,26 +1,15 @@
 """A monotone static calibration curve that extrapolates sanely.
 
 **Extension beyond the paper.** The force of an FSR rises with its conductance, so the curve from
-readout to force is monotone; a polynomial fitted to it is not, and between and beyond the
-readings it can bend back or shoot off. Here the curve is piecewise linear in a readout variable
-``v`` with knots at quantiles of the calibration readings and non-negative slopes (a bounded
-least-squares fit, with a ridge term on the change of slope between segments):
-
-* ``v`` is the readout itself (oriented so that it rises with force), or, for ``analogRead``
-  counts of a divider (integers within 0..1023 or 0..4095), the divider's conductance ratio
-  ``c/(A − c)`` (the FSR on the supply side: counts rise with force) or ``(A − c)/c`` (the FSR on
-  the ground side, a pull-up: counts fall as force rises, as with Velostat), proportional to the
-  FSR's conductance, which follows a power law of force; or, for readings all above zero, its
-  logarithm ``sign·ln x``: a power law ``F = a·x^b`` (a resistance-like reading of a film that
-  falls as ~1/F) bends over decades of ``x``; in ``ln x`` its bend is spread evenly, so a few
-  segments follow it where segments in ``x`` leave its steep end to one straight piece; or, for
-  a resistance (readings above zero that fall as force rises), its reciprocal ``−sign/x``: the
-  conductance, in which an FSR's force is close to a power law of exponent near one;
-* below the calibrated readings the curve is flat (an FSR below its activation force reads as no
-  load); above them it continues linearly **per unit of readout** (not of ``v``: a conductance that
-  grows without bound as the reading nears its rail is not followed), with the curve's mean slope
-  over the top half of the readings' range (:data:`TOP_SLOPE_SPAN`) -- not its last segment's, which
-  rests on the fewest readings and is steepest where a divider nears its rail.
+readout to force is monotone; a polynomial fitted to it is not, and between and beyond the readings it
+can bend back or shoot off. Here the curve is piecewise linear in a readout variable ``v``
+(:func:`readout_variable`: the readout oriented to rise with force, a divider's conductance ratio, a
+resistance's reciprocal, or the logarithm, in which a power law's bend is spread evenly over decades)
+with knots at quantiles of the calibration readings and non-negative slopes (bounded least squares, a
+ridge term on the change of slope between segments). Below the calibrated readings the curve is flat (an
+FSR below its activation force reads as no load); above them it continues linearly **per unit of
+readout** (a conductance that grows without bound near a divider's rail is not followed), with the mean
+slope over the top half of the readings' range (:data:`TOP_SLOPE_SPAN`), not its last segment's.
 """
 
 from __future__ import annotations
@@ -40,10 +29,7 @@ __all__ = ["VARIABLES", "TOP_SLOPE_SPAN", "adc_full_scale", "readout_variable", 
 #: The readout variables a curve can be fitted in. [1]
 VARIABLES = ("readout", "conductance", "reciprocal", "log")
 #: Beyond the top of its readings a curve continues with its mean slope over this top fraction of the
-#: readings' range (per unit of readout). On the 39 real train → test pairs of docs/calibration.md,
-#: against the last segment's slope: 0.962× → 0.950× the oracle polynomial (the 18 pairs added last
-#: 1.055× → 1.027×, the worst 1.94× → 1.42×); the top quarter 0.957×, the whole range 0.964×, flat
-#: 0.968×. [1]
+#: readings' range, per unit of readout (docs/calibration.md). [1]
 TOP_SLOPE_SPAN = 0.5
 #: ADC full scales recognised in integer readings (10, 12, 16 bits). [1]
 _ADC = (1023.0, 4095.0, 65535.0)

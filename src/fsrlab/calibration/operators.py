@@ -34,20 +34,12 @@ __all__ = ["PLAY_THRESHOLDS", "CREEP_TIME_CONSTANTS_S", "CREEP_START", "DIRECTIO
 
 #: Play-operator thresholds, fractions of full scale. [1]
 PLAY_THRESHOLDS = (0.02, 0.05, 0.1, 0.2, 0.4)
-#: Time constants of the creep features, two per decade from 0.5 s to 32 s. Not longer: a calibration
-#: is made from recordings of a few minutes, and an average of a longer time constant, started at the
-#: first reading, is still climbing from it at their end -- its term follows the time since the start,
-#: a trend another recording does not share (docs/calibration.md: 128 s took a real pair from 1.13× to
-#: 1.51× the oracle polynomial). [s]
+#: Time constants of the creep features, two per decade from 0.5 s to 32 s; not longer, for recordings of
+#: a few minutes (docs/calibration.md, "Why the constants are what they are"). [s]
 CREEP_TIME_CONSTANTS_S = (0.5, 2.0, 8.0, 32.0)
-#: The creep averages of a calibration at a recording's first reading, a fraction of its level. What came
-#: before a recording that starts under load is unknown: held there for ever (1), or just loaded from
-#: rest (0, as the play operators start), or anything between; the middle halves the worst case. Measured,
-#: compensated/plain on generator recordings that start at a peak and only unload (4, 15 and 60 s ramps of
-#: :mod:`fsrlab.virtual.handloaded`), calibrated on four hand-loaded runs / on one triangle, and a real
-#: insole staircase calibrated on its loading half, applied to its unloading half, against the oracle
-#: polynomial: at 1, 0.66–1.25 / 2.27–2.59 and 0.99×; at 0, 0.39–1.17 / 1.76–1.81 and 1.27×; at 0.5,
-#: 0.30–0.90 / 0.67–0.87 and 1.00×. Recordings that start at rest do not depend on it. [1]
+#: The creep averages of a calibration at a recording's first reading, a fraction of its level: what came
+#: before a recording that starts under load is unknown -- held for ever (1) or just loaded (0) -- and the
+#: middle halves the worst case (docs/calibration.md). Recordings that start at rest do not depend on it. [1]
 CREEP_START = 0.5
 #: Threshold of the play operator that tells the direction (loading, unloading, still). [1]
 DIRECTION_THRESHOLD = 0.01

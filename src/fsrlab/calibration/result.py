@@ -268,7 +268,7 @@ class Calibration:
         """
         margin = as_margin(margin)
         run = as_run(run)
-        if forced is not None and (isinstance(forced, str) or not all(isinstance(f, str) for f in _items(forced))):
+        if forced is not None and not (isinstance(forced, (list, tuple)) and all(isinstance(f, str) for f in forced)):
             raise TypeError(f"forced: must be a list of provenance differences (str), got {forced!r}")
         x = self.readout(run, circuit)
         t = np.asarray(run["time_s"], dtype=float) if "time_s" in run else np.arange(x.size) * self.model.row_s
@@ -357,14 +357,6 @@ def _counts(run: Run, x_name: str, estimate, given, inside, kept, raw) -> dict:
             "missing": int((~np.isfinite(estimate)).sum()), "no_readout": int((~given & ~not_decodable).sum()),
             "not_decodable": int(not_decodable.sum()), "beyond_margin": int((given & ~kept).sum()),
             "below_activation": int(below.sum())}
-
-
-def _items(value) -> list:
-    """The items of ``value`` (an iterable), or [value] when it is not one."""
-    try:
-        return list(value)
-    except TypeError:
-        return [value]
 
 
 class Estimator:

@@ -5,10 +5,9 @@ cannot see what changes from one recording to the next -- the loading rate, the 
 creep state -- and flatters every added complexity. Here a choice is scored where it will be used:
 
 * with two or more recordings, **leave one recording out**: fit on the others, score on it;
-* within a single recording, **forward chaining**: cut it into :data:`BLOCKS` contiguous blocks
-  (holding equal numbers of rows with both the readout and the reference),
-  fit on the first k and score on block k + 1 (k = 2..BLOCKS−1), so the score is always on later
-  readings than the fit.
+* within a single recording, **forward chaining**: cut it into :data:`BLOCKS` contiguous blocks (equal
+  numbers of rows with both readout and reference), fit on the first k and score on block k + 1
+  (k = 2..BLOCKS−1), so the score is always on later readings than the fit.
 
 The memory of a model (play operators, creep averages) runs over the whole recording it is scored
 on -- it depends on the readout alone, not on the reference -- and only the rows of the held-out
@@ -152,8 +151,7 @@ def paired_gain(err_simple: np.ndarray, err_complex: np.ndarray, chunks: np.ndar
 
 
 #: Rank correlation of readout and reference below which :func:`orientation` also tries the reference
-#: shifted (of the real recordings of docs/calibration.md, three Velostat runs agree at 0.35–0.53 in
-#: their own rows -- a film pressed to 1 N, another indenter -- and keep their sign; the others above 0.68). [1]
+#: shifted (docs/calibration.md). [1]
 ALIGNED = 0.6
 
 
@@ -250,16 +248,11 @@ def readout_variables(recs: list[Recording], sign: int, rail: float | None, unit
                       asked=None) -> tuple[tuple, str]:
     """The readout variables a static curve is tried in, and why (the physics of the readout).
 
-    * a resistance (``unit`` one of :data:`RESISTANCE_UNITS`, or a column named ``*_ohm``): its
-      conductance ``1/R`` (``reciprocal``) and its logarithm, not the ohms themselves;
-    * divider counts, or a voltage with its rail: the readout, the divider's conductance ratio and the
-      logarithm (``conductance``);
-    * a reading without a unit that is above zero, spans more than a decade (:data:`DECADE`) and falls
-      as the force rises looks like a resistance logged without its unit: its reciprocal is tried too;
-    * anything else (a frequency, a capacitance, a voltage): the readout and its logarithm;
-
-    the logarithm and the reciprocal only for readings all above zero. Every variable is scored held out
-    like every other choice.
+    A resistance (``unit`` in :data:`RESISTANCE_UNITS`, a column ``*_ohm``) in its conductance ``1/R`` and
+    logarithm; divider counts or a voltage with its rail also in the divider's conductance ratio; a reading
+    without a unit that is above zero, spans more than :data:`DECADE` and falls as the force rises (a
+    resistance logged without its unit) also in its reciprocal; anything else as it is and in its
+    logarithm (log and reciprocal only for readings above zero). Each is scored held out.
 
     Parameters
     ----------

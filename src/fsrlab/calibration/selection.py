@@ -5,46 +5,30 @@ readout, reference) and returns a :class:`HeldoutCalibration`. Every choice is s
 :mod:`fsrlab.calibration.scoring` (other recordings, or later blocks of one) and taken in order of
 complexity:
 
-1. **static curve**: piecewise linear (:mod:`fsrlab.calibration.monotone`), polynomials of degree 2 to
-   5 and monotone cubic splines (:mod:`fsrlab.calibration.curves`), simplest first
-   (:data:`STATIC_CANDIDATES`), in the readout variables its physics names
-   (:func:`fsrlab.calibration.scoring.readout_variables`: the readout, the divider's conductance ratio,
-   a resistance's conductance 1/R, the logarithm). A polynomial that falls somewhere over the calibrated
-   readings is not tried. The memory is fitted around the simplest curve that cannot fall (piecewise or
-   spline) within one standard error of the best held-out error; the static estimate is the **mean of the candidates
-   within** :data:`MIX_SE` **standard error** (model averaging: which of several curves that score
-   alike holds on the next recording is left to chance by picking one);
-2. **delay** of the reference (:mod:`fsrlab.calibration.delay`, its ``delay_trials``): the estimate
-   made from the readout 0.25 to 16 readings (doubling on to 0.5 s) earlier, as when a
-   load-cell amplifier hands its conversion over late or a reference is logged by another device;
-   still an estimate of the reference as recorded, and causal. Judged with the static curve: a delay
-   corrects estimates that run ahead of the reference; an FSR's loop leaves them behind, so its
-   hysteresis is not taken for a delay;
-3. **lag**, only when asked (``lag="auto"``): a shift of whole rows, judged with a hysteresis model (a
-   shift narrows a loop). By default none: the estimate is of the reference as recorded;
-4. **memory**: hysteresis (play operators, :mod:`fsrlab.calibration.operators`, on the level
-   ``u = (static(x) − rest)/FS``, the load above the curve's rest value, additive or growing with the
-   level) and creep (exponential averages, 0.5 s to 32 s), alone and together
-   (:data:`MEMORY_VARIANTS`), weights of one sign per kind, every ridge weight; each fitted to what the
-   static curve leaves (the curve held) and with the curve refitted, which is taken only when it wins
-   over the best held trial by more than one standard error and :data:`MIN_GAIN` (a refitted curve
-   trades its offset against the slow creep terms). The best trial's correction enters with the weight
-   in [0, 1] that minimises the held-out error of the blend (stacking: D. H. Wolpert, *Neural Networks*
-   5, 241, 1992; L. Breiman, *Machine Learning* 24, 49, 1996).
+1. **static curve**: piecewise linear (:mod:`fsrlab.calibration.monotone`), polynomials of degree 2 to 5
+   and monotone cubic splines (:mod:`fsrlab.calibration.curves`), simplest first (:data:`STATIC_CANDIDATES`),
+   in the readout variables its physics names (:func:`fsrlab.calibration.scoring.readout_variables`); a
+   polynomial that falls over the calibrated readings is not tried. The memory is fitted around the
+   simplest curve that cannot fall within one standard error of the best; the static estimate is the
+   **mean of the candidates within** :data:`MIX_SE` **standard error** (model averaging);
+2. **delay** of the reference (:mod:`fsrlab.calibration.delay`): the estimate made from the readout a
+   fraction of a reading to 0.5 s earlier, judged with the static curve (an FSR's loop leaves estimates
+   behind, so its hysteresis is not taken for a delay);
+3. **lag**, only when asked (``lag="auto"``): a shift of whole rows, judged with a hysteresis model;
+4. **memory**: hysteresis (play operators) and creep (exponential averages) on the level, alone and
+   together (:data:`MEMORY_VARIANTS`), every ridge weight (:data:`RIDGES`), weights of one sign per kind,
+   fitted to what the static curve leaves or with the curve refitted (taken only when that wins by more
+   than one standard error and :data:`MIN_GAIN`); the best trial's correction enters with the weight in
+   [0, 1] that minimises the held-out error of the blend (stacking: D. H. Wolpert, *Neural Networks* 5,
+   241, 1992; L. Breiman, *Machine Learning* 24, 49, 1996).
 
-Steps 2 to 4 are kept only when they **win**: the delay and the lag by a held-out mean squared error
-lower by more than one standard error (paired over chunks) and by at least :data:`MIN_GAIN` of the
-simpler calibration's, lower in most held-out recordings or blocks and higher in none; the memory by
-more than :data:`MEMORY_Z` standard errors (one-sided 95 %: it is the best of many trials) and
-:data:`MIN_GAIN`, and higher in no held-out recording or block at all, as for the other steps: a part's
-own standard error is large (eight chunks), so a loss it cannot call significant can still be the
-recording the memory fails on -- on the real pairs of docs/calibration.md the held-out blocks the memory
-made worse within that error foretold its losses on the next recording. Otherwise the simpler calibration is kept and the
-:class:`Selection` says why. What each rule did on real recordings: docs/calibration.md.
-
-The memory is fed with every reading, in time order; what an estimate reports (margin, range) does
-not change it. The uncertainty (:class:`LevelUncertainty`) comes from the held-out errors of the
-chosen model, by level and direction, with a relative term for what changes between recordings.
+Steps 2 to 4 are kept only when they **win**: the delay and the lag by a held-out MSE lower by more
+than one standard error (paired over chunks) and :data:`MIN_GAIN`, lower in most held-out parts and
+higher in none; the memory by more than :data:`MEMORY_Z` standard errors (it is the best of many
+trials) and :data:`MIN_GAIN`, and higher in no held-out part at all. Otherwise the simpler calibration
+is kept and the :class:`Selection` says why. What each rule did on real recordings: docs/calibration.md.
+The uncertainty (:class:`LevelUncertainty`) comes from the held-out errors of the chosen model, by
+level and direction, with a relative term for what changes between recordings.
 """
 
 from __future__ import annotations
@@ -100,15 +84,7 @@ STATIC_CANDIDATES = tuple(sorted(((v, f, k) for f, sizes in FAMILY_SIZES.items()
                                                 _VARIABLE_ORDER.index(c[0]))))
 #: Static candidates whose held-out error is within this many standard errors of the best are averaged
 #: (equal weights) into the static estimate: the candidates the one-standard-error rule cannot tell
-#: apart, instead of the simplest of them alone. On the 39 real train → test pairs of
-#: docs/calibration.md the calibration went from 0.99× to 0.97× the oracle polynomial (the 21 pairs it
-#: was developed on 0.906× → 0.893×, the 18 added later 1.09× → 1.07×), and the static estimate alone on
-#: a power-law film generator (tests/calibration/test_log_readout.py, eight seeds) from 0.52 to 0.50 N.
-#: Within two standard errors did better on the real pairs (0.967×) but averaged a two-segment line
-#: into a power law on the generator (0.52 → 0.67 N, one seed 0.43 → 2.81 N). Those numbers are of the
-#: piecewise curves alone; with the smooth families among the candidates, on the hand-loaded generator
-#: (tests/calibration/test_static_mix.py, ten seeds) the mean is 1.002× (hand) and 0.993× (motor) the
-#: simplest curve's error, and 0.986× and 0.989× the piecewise curves' mean. [1]
+#: apart, instead of the simplest of them alone (docs/calibration.md). [1]
 MIX_SE = 1.0
 #: Ridge weights tried for the memory terms (relative to the number of readings). [1]
 RIDGES = (1e-3, 1e-2, 1e-1, 1.0)
@@ -116,20 +92,16 @@ RIDGES = (1e-3, 1e-2, 1e-1, 1.0)
 #: (5 %: 2.5 % of its RMSE): a smaller gain held out within one run is not worth terms another recording
 #: may not share. [1]
 MIN_GAIN = 0.05
-#: Standard errors by which a memory's held-out gain must exceed zero to be kept: one-sided 95 % (the normal quantile 1.645), not one standard
-#: error (84 %) as for the simpler steps -- the memory is the best of the :data:`MEMORY_VARIANTS` ×
-#: :data:`RIDGES` trials, curve held and refitted, with its weight fitted on the same held-out errors, so
-#: its held-out gain is an optimistic estimate. [1]
+#: Standard errors by which a memory's held-out gain must exceed zero to be kept: one-sided 95 %, not one
+#: standard error as for the simpler steps -- the best of the :data:`MEMORY_VARIANTS` × :data:`RIDGES`
+#: trials, weighted on the same held-out errors, has an optimistic held-out gain. [1]
 MEMORY_Z = 1.645
 #: The memory models tried, each with every ridge weight: (play thresholds, creep time constants,
 #: growing with the level). [1]
 MEMORY_VARIANTS = ((PLAY_THRESHOLDS, (), False), (PLAY_THRESHOLDS, (), True), ((), CREEP_TIME_CONSTANTS_S, False),
                    (PLAY_THRESHOLDS, CREEP_TIME_CONSTANTS_S, False), (PLAY_THRESHOLDS, CREEP_TIME_CONSTANTS_S, True))
-#: Signs the weights of the play-operator and the creep features may take. A piezoresistive film
-#: conducts more on unloading than on loading at the same force (its estimate is lowered while
-#: ``p − u > 0``), and its reading creeps up under a held load (the estimate is raised just after a
-#: change, ``u − ū > 0``, relative to later). A fit of the opposite sign describes something else --
-#: most often a reference that lags the readout. [1]
+#: Signs tried for the weights of the play-operator and of the creep features: one sign for all the weights
+#: of a kind (a film's loop and creep have one direction, a capacitive film's another). [1]
 HYSTERESIS_SIGNS = (1, -1)
 CREEP_SIGNS = (1, -1)
 #: Ridge weight of the hysteresis model the lag is judged with. [1]
@@ -174,9 +146,7 @@ class Selection:
     readout: dict = field(default_factory=dict)  # {"variables", "used", "why"}
 
     def to_dict(self) -> dict:
-        return {"scheme": self.scheme, "candidates": self.candidates, "steps": self.steps, "lag_rows": self.lag_rows,
-                "heldout_rmse": self.heldout_rmse, "heldout_rmse_plain": self.heldout_rmse_plain,
-                "gain_spread": self.gain_spread, "readout": self.readout}
+        return dict(self.__dict__)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -225,14 +195,10 @@ class _Cache:
         self.systems: dict = {}
 
     def static(self, key, make):
-        if key not in self.statics:
-            self.statics[key] = make()
-        return self.statics[key]
+        return self.statics[key] if key in self.statics else self.statics.setdefault(key, make())
 
     def system(self, key, make):
-        if key not in self.systems:
-            self.systems[key] = make()
-        return self.systems[key]
+        return self.systems[key] if key in self.systems else self.systems.setdefault(key, make())
 
     def _full(self, key, rec: Recording, level):
         if key not in self.features:

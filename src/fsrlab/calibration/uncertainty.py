@@ -18,17 +18,9 @@ __all__ = ["COVERAGE", "REPEATABILITY", "RELATIVE_MAX", "LevelUncertainty"]
 
 #: Quantile of the held-out |error| that ±2u covers in each level and direction cell. [1]
 COVERAGE = 0.95
-#: Relative standard uncertainty of an estimate from one recording to the next (the sensor re-seated,
-#: another loading rate, another creep state), added in quadrature: the held-out blocks of a single
-#: recording show it in part, and two or three recordings show it poorly, so the larger of this and the
-#: spread of the held-out recordings' (or blocks') gains is used. FSR makers state ±2–2.5 % single-part
-#: repeatability and ±6 % part to part; on the real recordings of docs/calibration.md the gain of the
-#: reference on the estimate moved by 0.81–1.23 from the training recordings to the test ones (RMS
-#: 13 %), and 0.10 left 4 of 9 pairs below 90 % coverage. Over all 42 ordered pairs of the seven
-#: hand and servo recordings of one FSR divider there, a plain curve of one recording read the other
-#: with gains 0.78–1.28 (5–95 %; RMS |ln g| 0.165), which ±2u = ±30 % covers. 0.25 would bring the
-#: taxel under silicone from 68 % to 98 % coverage, but leave a session reading 20–35 % lower at 79 %
-#: and Velostat calibrated at 40 N and read at 10 N at 75 %, and widen every band by up to two thirds. [1]
+#: Relative standard uncertainty of an estimate from one recording to the next (the sensor re-seated, another
+#: loading rate or creep state), added in quadrature; the larger of this and the held-out recordings' (or
+#: blocks') gain spread is used, which a few recordings show poorly (docs/calibration.md). [1]
 REPEATABILITY = 0.15
 #: Largest relative term a calibration holds: an estimate uncertain by nine times itself is no longer a
 #: measurement of the reference, only a sign that the calibration does not hold. [1]
