@@ -271,7 +271,7 @@ def test_python_api(tmp_path):
         import_foreign(sensor, reading="nope")
     # One of fsrlab's file errors, still a ValueError; the role names the mapping that settles it.
     assert isinstance(info.value, FileFormatError) and isinstance(info.value, ValueError)
-    assert info.value.role == "reading" and info.value.parameter is None
+    assert info.value.role == "reading" and info.value.parameter == "reading"  # the column the call named
 
 
 # ------------------------------------------------------------------------------------------------

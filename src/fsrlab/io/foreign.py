@@ -568,13 +568,18 @@ def import_foreign(sensor: str | os.PathLike, reference: str | os.PathLike | Non
     ref = _read(reference, "reference", header, skip_lines) if reference is not None else None
     # A rate given means the rows are evenly spaced: no time column is looked for.
     roles = (("time",) if time is not None or rate_hz is None else ()) + (("force",) if ref is None else ()) + ("reading",)
-    chosen = _choose(sens, roles, {"time": time, "reading": reading, "force": force if ref is None else None})
+    given = {"time": time, "reading": reading, "force": force if ref is None else None}
+    try:
+        chosen = _choose(sens, roles, given)
+    except ForeignFormatError as exc:  # the column the call named, else the file
+        raise _named(exc, exc.role if given.get(exc.role) is not None else "sensor") from None
     if "reading" not in chosen:
         raise ForeignFormatError(f"{sens.path}: no readout column found ({_header_text(sens)}); say which column is "
-                                 "the reading", role="reading")
+                                 "the reading", role="reading", parameter="sensor")
     if ref is not None and "time" not in chosen and rate_hz is None:
         raise ForeignFormatError(f"{sens.path}: no time column found ({_header_text(sens)}); two files are aligned "
-                                 "on their times: say which column is the time, or give the sample rate", role="time")
+                                 "on their times: say which column is the time, or give the sample rate", role="time",
+                                 parameter="sensor")
     sens.prefetch(j for j, _ in chosen.values())  # one pass of numpy's parser for the columns used
     t = _time_of(sens, "time", chosen, time_unit, rate_hz, notes, mapping)
     columns: dict[str, np.ndarray] = {}
@@ -590,8 +595,12 @@ def import_foreign(sensor: str | os.PathLike, reference: str | os.PathLike | Non
         if "force" in chosen:
             columns["force_n"] = _force(sens, chosen["force"], force_unit, notes, mapping)
     else:
-        columns["force_n"] = _reference_force(ref, sens, t, reference_time, reference_time_unit, reference_rate_hz,
-                                              force, force_unit, offset_s, notes, mapping)
+        try:
+            columns["force_n"] = _reference_force(ref, sens, t, reference_time, reference_time_unit,
+                                                  reference_rate_hz, force, force_unit, offset_s, notes, mapping)
+        except ForeignFormatError as exc:  # the column the call named, else the file
+            named = {"reference_time": reference_time, "force": force}
+            raise _named(exc, exc.role if named.get(exc.role) is not None else "reference") from None
         matched = int(np.isfinite(columns["force_n"]).sum())
     if "force_n" in columns:
         out_units["force_n"] = "N"
@@ -599,6 +608,11 @@ def import_foreign(sensor: str | os.PathLike, reference: str | os.PathLike | Non
     return Imported(columns=columns, units=out_units, mapping=mapping, sources=sources, rows=sens.n_rows,
                     matched=matched, rate_hz=rate_hz if rate_hz is not None else _median_rate(t),
                     offset_s=float(offset_s), notes=notes)
+
+
+def _named(exc: ForeignFormatError, parameter: str) -> ForeignFormatError:
+    """``exc`` naming ``parameter`` (the file it is about) when it names none."""
+    return exc if exc.parameter is not None else ForeignFormatError(exc.reason, exc.role, parameter)
 
 
 def _read(path, parameter: str, header, skip_lines) -> Table:
