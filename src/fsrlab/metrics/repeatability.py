@@ -491,11 +491,12 @@ def grouped_repeatability(load: Sequence, sensor: Sequence, reading, ddof: int =
     groups = []
     for (ld, sn), idx in order.items():
         if len(idx) < 2:
-            raise ParameterError(f"group load={ld!r} sensor={sn!r} has {len(idx)} reading; at least 2 are needed", parameter="reading")
+            raise ParameterError(f"group load={ld!r} sensor={sn!r} has {len(idx)} reading; at least 2 are needed",
+                                 parameter="reading")
         try:
             r = repeatability(x[idx], ddof=ddof)
-        except ValueError as exc:  # the group it is about, not only "a set"
-            raise ParameterError(f"group load={ld!r} sensor={sn!r}: {str(exc).split(': ', 1)[-1]}", parameter="reading") from None
+        except ParameterError as exc:  # the group it is about, not only "a set"
+            raise ParameterError(f"group load={ld!r} sensor={sn!r}: {exc.reason}", parameter="reading") from None
         groups.append(GroupRepeatability(ld, sn, float(r.re1_percent), float(r.re2_percent), float(r.mean), len(idx)))
     means = []
     for ld in dict.fromkeys(g.load for g in groups):
