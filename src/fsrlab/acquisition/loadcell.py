@@ -490,7 +490,8 @@ def scale_from_readings(cal: LoadCellCalibration, counts: Sequence[float], mass_
     delta = mean - cal.offset_counts
     tare_noise = float(cal.tare.get("noise_counts") or 0.0) if isinstance(cal.tare, dict) else 0.0
     if not abs(delta) > 5 * max(sd, tare_noise, 1.0):
-        raise LoadCellError(f"scale refused: the reading with {mass_kg * 1e3:g} g is {delta:+.0f} counts from the tare, "
+        raise LoadCellError(f"scale refused: the reading with {mass_kg * 1e3:g} g is {delta:+.0f} counts from the "
+                "tare, "
                             f"within the noise ({max(sd, tare_noise):.0f} counts): is the mass on the cell?")
     if delta < 0:
         raise LoadCellError(f"scale refused: the reading fell by {-delta:.0f} counts with the mass on: the cell is "

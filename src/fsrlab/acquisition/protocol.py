@@ -6,7 +6,8 @@ lines (``WINDOW 100\\n``). ``docs/protocol.md`` is the normative description; th
 one implementation on the host (the firmware in ``firmware/`` and the virtual device match it).
 
 The frames' meaning in physical units (:class:`~fsrlab.acquisition.messages.Measurement` and the
-other messages) is :mod:`fsrlab.acquisition.messages`. Everything here works on bytes and returns values: the transport (:mod:`fsrlab.acquisition.serial_link`)
+other messages) is :mod:`fsrlab.acquisition.messages`. Everything here works on bytes and returns values: the transport
+(:mod:`fsrlab.acquisition.serial_link`)
 only moves bytes, as in pyserial's ``serial.threaded`` framing classes.
 
 References

@@ -213,7 +213,8 @@ class SplineCurve(StaticCurve):
         breaks = np.asarray(d["breaks"], dtype=float)
         if (breaks.ndim != 1 or breaks.size < 2 or np.any(np.diff(breaks) <= 0)
                 or coef.size != breaks.size + SPLINE_DEGREE - 1 or np.any(coef[1:] < 0)):
-            raise FileFormatError("spline curve: breaks must increase, one coefficient per basis function, the rises >= 0")
+            raise FileFormatError("spline curve: breaks must increase, one coefficient per basis function, the rises "
+                    ">= 0")
         return cls(variable, sign, adc, breaks, coef, rng)
 
 

@@ -71,7 +71,8 @@ def save_calibration(cal: Calibration, path: str | os.PathLike, overwrite: bool 
     try:
         inputs = list(inputs)
     except TypeError:
-        raise TypeError(f"inputs: must be paths (an iterable of str or path-like), got {type(inputs).__name__}") from None
+        raise TypeError("inputs: must be paths (an iterable of str or path-like), got "
+                f"{type(inputs).__name__}") from None
     if not all(isinstance(i, (str, os.PathLike)) for i in inputs):
         raise TypeError(f"inputs: must be paths (str or path-like), got {inputs!r}")
     if not isinstance(path, (str, os.PathLike)) or isinstance(path, bool):

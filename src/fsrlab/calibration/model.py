@@ -177,7 +177,8 @@ class HeldoutCalibration:
         if rng is not None:
             rng = np.asarray(rng, dtype=float)
             if rng.shape != (2, len(thr)) or not np.all(np.isfinite(rng)) or np.any(rng[0] > rng[1]):
-                raise FileFormatError("hysteresis_range: two rows (least, largest) of one finite value per play threshold, "
+                raise FileFormatError("hysteresis_range: two rows (least, largest) of one finite value per play "
+                        "threshold, "
                                  "least ≤ largest")
         unc, plain = d.get("uncertainty"), d.get("uncertainty_plain")
         start = float(d.get("creep_start", 1.0))

@@ -357,7 +357,8 @@ class MonotoneCurve(StaticCurve):
         variable, sign, adc, coef, rng = common_fields(d, "monotone curve")
         knots = np.asarray(d["knots"], dtype=float)
         if knots.size < 2 or coef.size != knots.size or np.any(np.diff(knots) <= 0) or np.any(coef[1:] < 0):
-            raise FileFormatError("monotone curve: knots must increase, one coefficient per segment plus the intercept, "
+            raise FileFormatError("monotone curve: knots must increase, one coefficient per segment plus the "
+                    "intercept, "
                              "the segments' coefficients >= 0")
         return cls(variable, sign, adc, knots, coef, rng)
 
@@ -417,7 +418,8 @@ class CurveSystem:
               extra_signs: np.ndarray | None = None) -> tuple[StaticCurve, np.ndarray, float]:
         """The curve, the extra columns' weights and the residual sum of squares: ``lam`` the ridge weight
         on the curve's change of slope, ``extra_lower``, ``extra_lam`` the extra columns' lower bounds and
-        ridge weight (relative to the number of readings); ``extra_signs``: the extra columns multiplied by these signs first (the weights returned are of the
+        ridge weight (relative to the number of readings); ``extra_signs``: the extra columns multiplied by these signs
+        first (the weights returned are of the
         columns as given)."""
         k = self.curve.coef.size
         m = self.extra

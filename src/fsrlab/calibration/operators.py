@@ -119,7 +119,8 @@ def _constants(name: str, value, upper: float = math.inf) -> tuple:
     """``value`` as a tuple of numbers above zero (below ``upper``), or an error naming ``name``."""
     v = float_array(name, value)
     if v.ndim != 1 or not np.all(np.isfinite(v)) or np.any(v <= 0) or np.any(v >= upper):
-        raise ParameterError(f"must be a sequence of numbers above 0{f' and below {upper:g}' if upper < math.inf else ''}"
+        raise ParameterError("must be a sequence of numbers above "
+                f"0{f' and below {upper:g}' if upper < math.inf else ''}"
                              f", got {value!r}", parameter=name)
     return tuple(v.tolist())
 

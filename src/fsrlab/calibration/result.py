@@ -291,7 +291,8 @@ class Calibration:
         meta["units"] = dict(run.units, **{ycol: self.y_unit, ucol: self.y_unit, "in_range": "1"})
         meta["calibration"] = {**({} if self.path is None else {"file": str(self.path)}), "x": self.x_name,
                                "reference": self.y_name, "model": _model_name(model),
-                               "method": "cross-validated (an earlier fsrlab's file, read-only)" if self.read_only else METHOD, "lag_s": self.lag_s,
+                               "method": "cross-validated (an earlier fsrlab's file, "
+                                       "read-only)" if self.read_only else METHOD, "lag_s": self.lag_s,
                                "created": self.created, "readout_range": [lo, hi],
                                "margin": margin if math.isfinite(margin) else None,
                                "counts": _counts(run, self.x_name, columns[ycol], given, inside, kept, est)}

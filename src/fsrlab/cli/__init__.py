@@ -238,7 +238,8 @@ def _version(value: bool) -> None:
 
 @app.callback()
 def _root(
-    version: bool = typer.Option(False, "--version", callback=_version, is_eager=True, help="Print the version and exit."),
+    version: bool = typer.Option(False, "--version", callback=_version, is_eager=True, help="Print the version and "
+            "exit."),
 ) -> None:
     """Force sensing with FSRs read through their piezocapacitance (Matute et al. 2018)."""
 

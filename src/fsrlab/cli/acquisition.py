@@ -51,7 +51,8 @@ from fsrlab.cli.options import (
 )
 
 CHANNELS_HELP = ("Multiplexer channels to scan (a protocol-3 meter with a CD74HC4051, docs/multiplexing.md): 0-7, "
-                 "0,2,5, 1-3,6. The run is then one row per channel reading (time_s, channel, scan, frequency_hz, ...). "
+                 "0,2,5, 1-3,6. The run is then one row per channel reading (time_s, channel, scan, frequency_hz, "
+                 "...). "
                  "With --virtual: a bench of sensors, channel k under the profile at peak x (k+1)/(highest channel+1).")
 DWELL_HELP = "Counting time per channel in a scan [s], 1ms to 60s in whole milliseconds (default 3ms)."
 SETTLE_HELP = "Periods discarded after the first edge that follows a switch of channel [1], 0..100 (default 2)."
@@ -116,14 +117,22 @@ def mux_source(channels: int, profile: str, peak: float, period: float, c_off: f
 @app.command("acquire")
 @meter_circuit_options(virtual_c_off=True)
 def acquire(
-    port: str = typer.Option(None, "--port", help="Serial port (/dev/ttyACM0, COM3, a pty) or 'auto' to find an Uno by USB id."),
-    virtual: bool = typer.Option(False, "--virtual", help="Record from a virtual device (pty, physics and 555 models) instead of hardware."),
+    port: str = typer.Option(None, "--port", help="Serial port (/dev/ttyACM0, COM3, a pty) or 'auto' to find an Uno by "
+            "USB id."),
+    virtual: bool = typer.Option(False, "--virtual", help="Record from a virtual device (pty, physics and 555 models) "
+            "instead of hardware."),
     speed: str = typer.Option("realtime", "--speed", help=SPEED_HELP),
-    duration: float = typer.Option("60s", "--duration", parser=seconds, metavar="TIME", help="Recording time [s]: 90, 90s, 1.5min, 2h, 500ms (a bare m is refused: minutes or milliseconds?)."),
-    out: Path = typer.Option(Path("run.csv"), "--out", "-o", parser=out_path, help="Run file (CSV + NAME.meta.json sidecar, docs/data-format.md)."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing run file and its sidecar; without it an existing one stops the command before the device is touched."),
-    window: float = typer.Option("100ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], 10ms to 60s in whole milliseconds (the meter counts ms): 20ms, 100ms, 0.25, 1s."),
-    stall: float = typer.Option(None, "--stall", parser=seconds, metavar="TIME", help="No frame for this long [s] is reported as a gap (default: 5 windows, at least 2s); a device still silent at the end fails the run (exit 1)."),
+    duration: float = typer.Option("60s", "--duration", parser=seconds, metavar="TIME", help="Recording time [s]: 90, "
+            "90s, 1.5min, 2h, 500ms (a bare m is refused: minutes or milliseconds?)."),
+    out: Path = typer.Option(Path("run.csv"), "--out", "-o", parser=out_path, help="Run file (CSV + NAME.meta.json "
+            "sidecar, docs/data-format.md)."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing run file and its sidecar; without "
+            "it an existing one stops the command before the device is touched."),
+    window: float = typer.Option("100ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], "
+            "10ms to 60s in whole milliseconds (the meter counts ms): 20ms, 100ms, 0.25, 1s."),
+    stall: float = typer.Option(None, "--stall", parser=seconds, metavar="TIME", help="No frame for this long [s] is "
+            "reported as a gap (default: 5 windows, at least 2s); a device still silent at the end fails the run (exit "
+            "1)."),
     range_: int = typer.Option(0, "--range", help="C_off range switch [1]: 0 (off) or 1 (C_off connected)."),
     baud: int = typer.Option(115200, "--baud", help="Line rate [bit/s]; protocol v1: 115200."),
     profile: str = typer.Option("triangle", "--profile", help=PROFILE_HELP),
@@ -138,11 +147,15 @@ def acquire(
     no_loadcell: bool = typer.Option(False, "--no-loadcell", help=NO_LOADCELL_HELP),
     hx711_rate: int = typer.Option(80, "--hx711-rate", help=RATE_HELP),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No live display (notices of gaps still go to stderr)."),
-    json_out: bool = typer.Option(False, "--json", help='Print {"frames", "dropped", "duration_s", "file"} as JSON, "no_reference" (windows without a load-cell conversion) for a protocol-2 device, and "run_s" (the run\'s length on the device\'s clock) with --speed max.'),
+    json_out: bool = typer.Option(False, "--json", help='Print {"frames", "dropped", "duration_s", "file"} as JSON, '
+            '"no_reference" (windows without a load-cell conversion) for a protocol-2 device, and "run_s" (the run\'s '
+            'length on the device\'s clock) with --speed max.'),
     channels: str = typer.Option(None, "--channels", metavar="LIST", help=CHANNELS_HELP),
     dwell: float = typer.Option(None, "--dwell", parser=seconds, metavar="TIME", help=DWELL_HELP),
     settle: int = typer.Option(None, "--settle", help=SETTLE_HELP),
-    channel_map: Path = typer.Option(None, "--channel-map", metavar="MAP.json", help="The sensors' ids and positions for the sidecar: a JSON list of {\"channel\", \"sensor_id\", \"x_m\", \"y_m\"} [m] (default fsr<k>, no position)."),
+    channel_map: Path = typer.Option(None, "--channel-map", metavar="MAP.json", help="The sensors' ids and positions "
+            "for the sidecar: a JSON list of {\"channel\", \"sensor_id\", \"x_m\", \"y_m\"} [m] (default fsr<k>, no "
+            "position)."),
     meter: MeterCircuit = MeterCircuit(),
 ) -> None:
     """Record measurement windows (frequency, duty cycle, A0 voltage) from an fsrlab meter into a run file.
@@ -277,7 +290,8 @@ def _print_summary(out: Path, result, scan, cal) -> None:
 
 @app.command("virtual-device")
 def virtual_device(
-    duration: float = typer.Option(None, "--duration", parser=seconds, metavar="TIME", help="Run this long [s]: 90, 90s, 1.5min, 2h (default: until Ctrl-C)."),
+    duration: float = typer.Option(None, "--duration", parser=seconds, metavar="TIME", help="Run this long [s]: 90, "
+            "90s, 1.5min, 2h (default: until Ctrl-C)."),
     profile: str = typer.Option("triangle", "--profile", help=PROFILE_HELP),
     peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS", help=PEAK_HELP),
     period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help=PERIOD_HELP),
@@ -285,8 +299,10 @@ def virtual_device(
     seed: int = typer.Option(None, "--seed", help=SEED_HELP),
     corrupt: float = typer.Option("0", "--corrupt", parser=fraction, metavar="FRACTION", help=CORRUPT_HELP),
     drop: float = typer.Option("0", "--drop", parser=fraction, metavar="FRACTION", help=DROP_HELP),
-    channels: int = typer.Option(None, "--channels", metavar="N", help="Sensors behind a multiplexer, 1..8 [1]: channel k under the profile at peak x (k+1)/N (scan them with acquire --channels)."),
-    json_out: bool = typer.Option(False, "--json", help='Print {"port": PATH} as JSON (one line) instead of the bare path.'),
+    channels: int = typer.Option(None, "--channels", metavar="N", help="Sensors behind a multiplexer, 1..8 [1]: "
+            "channel k under the profile at peak x (k+1)/N (scan them with acquire --channels)."),
+    json_out: bool = typer.Option(False, "--json", help='Print {"port": PATH} as JSON (one line) instead of the bare '
+            'path.'),
 ) -> None:
     """Emulate an fsrlab meter on a pseudo-terminal; prints its path (open it with --port PATH or any serial tool).
 

@@ -1,7 +1,8 @@
 """``fsrlab hysteresis``, ``repeatability``, ``calibrate``, ``apply``, ``iso376``: what a user does with recorded runs.
 
 Thin commands: they parse options and render; runs are calibrated by
-:func:`fsrlab.calibration.runs.calibrate_runs` and converted by :func:`fsrlab.calibration.apply.apply_calibration`; files follow docs/data-format.md. Warnings (an incomplete run,
+:func:`fsrlab.calibration.runs.calibrate_runs` and converted by :func:`fsrlab.calibration.apply.apply_calibration`;
+files follow docs/data-format.md. Warnings (an incomplete run,
 skipped rows, an unchecked calibration) go to stderr, each once, when the command has a result;
 a command that fails prints its one error line only.
 """
@@ -37,11 +38,16 @@ from fsrlab.units import STANDARD_GRAVITY
 
 @app.command("hysteresis")
 def hysteresis(
-    run_file: Path = typer.Argument(..., metavar="RUN.csv", help="A run (docs/data-format.md) with stress_pa [Pa] (or force_n [N] and the sensor area) and the quantity."),
-    quantity: str = typer.Option("frequency_hz", "--quantity", "-q", help="Column whose hysteresis is measured: frequency_hz [Hz], duty_cycle [1], voltage_v [V], stress_pa_estimate [Pa], ..."),
-    threshold: float = typer.Option(0.05, "--threshold", parser=fraction, help="Stress reversal threshold [1, a fraction of the stress span], 0.05 or 5%; used without a direction column."),
-    reference: str = typer.Option(None, "--reference", help="Reference the branches follow: force_n [N] (no sensor area needed) or stress_pa [Pa] (default: stress_pa if the run has it, else force_n)."),
-    unit: str = typer.Option(None, "--unit", help="Display unit of the reference level at the largest difference [N, g, Pa or kPa] (default kPa for stress, N for force); --json stays SI."),
+    run_file: Path = typer.Argument(..., metavar="RUN.csv", help="A run (docs/data-format.md) with stress_pa [Pa] (or "
+            "force_n [N] and the sensor area) and the quantity."),
+    quantity: str = typer.Option("frequency_hz", "--quantity", "-q", help="Column whose hysteresis is measured: "
+            "frequency_hz [Hz], duty_cycle [1], voltage_v [V], stress_pa_estimate [Pa], ..."),
+    threshold: float = typer.Option(0.05, "--threshold", parser=fraction, help="Stress reversal threshold [1, a "
+            "fraction of the stress span], 0.05 or 5%; used without a direction column."),
+    reference: str = typer.Option(None, "--reference", help="Reference the branches follow: force_n [N] (no sensor "
+            "area needed) or stress_pa [Pa] (default: stress_pa if the run has it, else force_n)."),
+    unit: str = typer.Option(None, "--unit", help="Display unit of the reference level at the largest difference [N, "
+            "g, Pa or kPa] (default kPa for stress, N for force); --json stays SI."),
     skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=SKIP_HELP),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
@@ -94,8 +100,10 @@ def hysteresis(
 
 @app.command("repeatability")
 def repeatability(
-    file: Path = typer.Argument(..., metavar="FILE.csv", help="CSV with columns load,sensor,reading (one row per reading; the readings in one unit, any)."),
-    ddof: int = typer.Option(1, "--ddof", help="Divisor of RE2's standard deviation [1]: 1 for n − 1 (the sample std; reproduces the paper's Tables 4 and 5), 0 for n as printed in eq. (39)."),
+    file: Path = typer.Argument(..., metavar="FILE.csv", help="CSV with columns load,sensor,reading (one row per "
+            "reading; the readings in one unit, any)."),
+    ddof: int = typer.Option(1, "--ddof", help="Divisor of RE2's standard deviation [1]: 1 for n − 1 (the sample std; "
+            "reproduces the paper's Tables 4 and 5), 0 for n as printed in eq. (39)."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Repeatability errors RE1 and RE2 (eq. 39) per load and sensor, and their means per load.
@@ -164,18 +172,39 @@ def _unit_option(unit: str | None, reference: str) -> tuple[str, float]:
 
 @app.command("calibrate")
 def calibrate_cmd(
-    runs: list[Path] = typer.Argument(..., metavar="RUN.csv [RUN2.csv ...]", help="One or more runs of the same sensor and readout, each with the reference force_n [N] or stress_pa [Pa] and the readout; time_s [s] optional (row order otherwise)."),
-    x: str = typer.Option("frequency_hz", "--x", help="Readout to calibrate: any numeric column, e.g. frequency_hz [Hz], duty_cycle [1], voltage_v [V], reading [counts] (a run from fsrlab import), or c_fsr_farad [F]: C_FSR decoded from frequency_hz and duty_cycle through the circuit of the run's sidecar."),
-    reference: str = typer.Option(None, "--reference", help="Reference column: force_n [N] (no sensor area needed) or stress_pa [Pa] (default: stress_pa if the run has it, else force_n)."),
-    compensate: bool = typer.Option(False, "--compensate", help="Also try the causal hysteresis and creep compensation (play operators with memory, exponential averages; extension beyond the paper): fitted to what the static curve leaves unless refitting the curve with it wins held out, its correction weighted by the held-out error, kept only when it lowers that error by more than 1.645 standard errors and 5 % of the MSE, and in every held-out part."),
-    unit: str = typer.Option(None, "--unit", help="Display unit of the errors in the table [N, g, Pa or kPa] (default: the reference's, N or Pa); --json and the file stay SI."),
-    lag: str = typer.Option("0", "--lag", help="Lag of the readout behind the reference [s] (rows without time_s), e.g. 0.02, 0 or auto (a shift of whole rows searched, kept only when it wins held out). Default 0: the estimate is of the reference as recorded, and a delay of the reference is tried."),
-    rail: float = typer.Option(None, "--rail", parser=eng, help="Full scale of a divider's readout [unit of the readout], e.g. 5 for a voltage read across a divider on 5 V, 3.3 on 3.3 V: the FSR's conductance ratio V/(rail − V) is then tried as the curve's variable (default: the run's sidecar, or the ADC's full scale for integer counts). Every reading must lie below it."),
-    between_runs: float = typer.Option(None, "--between-runs", parser=fraction, help="Relative standard uncertainty between recordings [1, a fraction], e.g. 0.2 or 20%: the floor of the uncertainty's term for what changes from one recording to the next (default 15%; the held-out runs' gain spread when larger). From the setup: 1–8% for a film pressed by a robot, about 20% for an FSR placed by hand from one session to the next (docs/calibration.md)."),
+    runs: list[Path] = typer.Argument(..., metavar="RUN.csv [RUN2.csv ...]", help="One or more runs of the same sensor "
+            "and readout, each with the reference force_n [N] or stress_pa [Pa] and the readout; time_s [s] optional "
+            "(row order otherwise)."),
+    x: str = typer.Option("frequency_hz", "--x", help="Readout to calibrate: any numeric column, e.g. frequency_hz "
+            "[Hz], duty_cycle [1], voltage_v [V], reading [counts] (a run from fsrlab import), or c_fsr_farad [F]: "
+            "C_FSR decoded from frequency_hz and duty_cycle through the circuit of the run's sidecar."),
+    reference: str = typer.Option(None, "--reference", help="Reference column: force_n [N] (no sensor area needed) or "
+            "stress_pa [Pa] (default: stress_pa if the run has it, else force_n)."),
+    compensate: bool = typer.Option(False, "--compensate", help="Also try the causal hysteresis and creep compensation "
+            "(play operators with memory, exponential averages; extension beyond the paper): fitted to what the static "
+            "curve leaves unless refitting the curve with it wins held out, its correction weighted by the held-out "
+            "error, kept only when it lowers that error by more than 1.645 standard errors and 5 % of the MSE, and in "
+            "every held-out part."),
+    unit: str = typer.Option(None, "--unit", help="Display unit of the errors in the table [N, g, Pa or kPa] (default: "
+            "the reference's, N or Pa); --json and the file stay SI."),
+    lag: str = typer.Option("0", "--lag", help="Lag of the readout behind the reference [s] (rows without time_s), "
+            "e.g. 0.02, 0 or auto (a shift of whole rows searched, kept only when it wins held out). Default 0: the "
+            "estimate is of the reference as recorded, and a delay of the reference is tried."),
+    rail: float = typer.Option(None, "--rail", parser=eng, help="Full scale of a divider's readout [unit of the "
+            "readout], e.g. 5 for a voltage read across a divider on 5 V, 3.3 on 3.3 V: the FSR's conductance ratio "
+            "V/(rail − V) is then tried as the curve's variable (default: the run's sidecar, or the ADC's full scale "
+            "for integer counts). Every reading must lie below it."),
+    between_runs: float = typer.Option(None, "--between-runs", parser=fraction, help="Relative standard uncertainty "
+            "between recordings [1, a fraction], e.g. 0.2 or 20%: the floor of the uncertainty's term for what changes "
+            "from one recording to the next (default 15%; the held-out runs' gain spread when larger). From the setup: "
+            "1–8% for a film pressed by a robot, about 20% for an FSR placed by hand from one session to the next "
+            "(docs/calibration.md)."),
     skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=SKIP_HELP),
-    output: Path = typer.Option(None, "--output", "-o", parser=out_path, help="Write the calibration to this JSON file."),
+    output: Path = typer.Option(None, "--output", "-o", parser=out_path, help="Write the calibration to this JSON "
+            "file."),
     overwrite: bool = typer.Option(False, "--overwrite", help=OVERWRITE_HELP),
-    json_out: bool = typer.Option(False, "--json", help="Print JSON: model, how choices were scored and each step's result, held-out RMSE [reference unit and % FS], lag_s and delay_s [s], candidates, ..."),
+    json_out: bool = typer.Option(False, "--json", help="Print JSON: model, how choices were scored and each step's "
+            "result, held-out RMSE [reference unit and % FS], lag_s and delay_s [s], candidates, ..."),
 ) -> None:
     """Calibrate readout → force or stress, every choice scored where it will be used.
 
@@ -314,13 +343,22 @@ def _calibration_table(cal, run_files: list[Path], unit: str | None, between_run
 def apply_cmd(
     cal_file: Path = typer.Argument(..., metavar="CAL.json", help="A calibration written by fsrlab calibrate -o."),
     run_file: Path = typer.Argument(..., metavar="RUN.csv", help="The run to convert."),
-    output: Path = typer.Option(..., "--output", "-o", parser=out_path, help="Output run: the input columns plus <reference>_estimate and <reference>_uncertainty [N or Pa] and in_range [1]."),
-    no_compensation: bool = typer.Option(False, "--no-compensation", help="Use the plain model even if the calibration holds a compensation."),
-    margin: float = typer.Option(None, "--margin", parser=fraction, help="How far beyond the calibrated readout range an estimate is still written [1, a fraction of the range's span], e.g. 0.1 or 10%; beyond it the estimate is left empty (default: every reading). The memory takes every reading whatever the margin, so no estimate inside the range changes with it; every reading outside the range has in_range = 0."),
-    force: bool = typer.Option(False, "--force", help="Apply even to a run recorded with another circuit or range than the calibration."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing output run and its sidecar; without it an existing one stops the command. An input (or its sidecar) is never replaced."),
+    output: Path = typer.Option(..., "--output", "-o", parser=out_path, help="Output run: the input columns plus "
+            "<reference>_estimate and <reference>_uncertainty [N or Pa] and in_range [1]."),
+    no_compensation: bool = typer.Option(False, "--no-compensation", help="Use the plain model even if the calibration "
+            "holds a compensation."),
+    margin: float = typer.Option(None, "--margin", parser=fraction, help="How far beyond the calibrated readout range "
+            "an estimate is still written [1, a fraction of the range's span], e.g. 0.1 or 10%; beyond it the estimate "
+            "is left empty (default: every reading). The memory takes every reading whatever the margin, so no "
+            "estimate inside the range changes with it; every reading outside the range has in_range = 0."),
+    force: bool = typer.Option(False, "--force", help="Apply even to a run recorded with another circuit or range than "
+            "the calibration."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing output run and its sidecar; without "
+            "it an existing one stops the command. An input (or its sidecar) is never replaced."),
     skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=SKIP_HELP + " Skipped rows are not written."),
-    json_out: bool = typer.Option(False, "--json", help="Print JSON: rows written, estimated, missing (with the reasons), in and out of the readout range; when the run has the reference, its agreement with the estimate."),
+    json_out: bool = typer.Option(False, "--json", help="Print JSON: rows written, estimated, missing (with the "
+            "reasons), in and out of the readout range; when the run has the reference, its agreement with the "
+            "estimate."),
 ) -> None:
     """Apply a calibration to a run: adds <reference>_estimate, <reference>_uncertainty and in_range.
 
@@ -400,7 +438,8 @@ def apply_cmd(
     if n["extrapolated"] or n["beyond_margin"]:
         beyond = ("" if info["margin"] is None else f", {n['beyond_margin']} beyond the {100 * info['margin']:g} % "
                   "margin left empty")
-        lines.append(f"  outside the calibrated readout range {lo:.6g} … {hi:.6g}{' ' + cal.x_unit if cal.x_unit else ''}: "
+        lines.append(f"  outside the calibrated readout range {lo:.6g} … "
+                f"{hi:.6g}{' ' + cal.x_unit if cal.x_unit else ''}: "
                      f"{n['extrapolated']} extrapolated (in_range = 0){beyond}")
     if n["below_activation"]:
         lines.append(f"  below activation (readout at its floor, no estimate): {n['below_activation']} rows")
@@ -418,8 +457,10 @@ def apply_cmd(
 
 @app.command("iso376")
 def iso376_cmd(
-    file: Path = typer.Argument(..., metavar="FILE.csv", help="Long CSV: series,rotation_deg [°],force_n [N],reading[,direction]; force_n = 0 rows are zero readings."),
-    creep: str = typer.Option(None, "--creep", help="Readings 30 s and 300 s after applying the largest force [unit of the readings], as 'I30,I300', e.g. 8396.6,8404.8."),
+    file: Path = typer.Argument(..., metavar="FILE.csv", help="Long CSV: series,rotation_deg [°],force_n "
+            "[N],reading[,direction]; force_n = 0 rows are zero readings."),
+    creep: str = typer.Option(None, "--creep", help="Readings 30 s and 300 s after applying the largest force [unit of "
+            "the readings], as 'I30,I300', e.g. 8396.6,8404.8."),
     degree: int = typer.Option(3, "--degree", help="Degree 1..3 [1] of the interpolation equation for fc."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
@@ -468,6 +509,7 @@ def iso376_cmd(
     console.print(table)
     console.print(f"instrument class: {res.instrument_class}")
     for name, why in res.missing.items():
-        console.print(f"{name.replace('_prime', chr(39))}: needs {why}" + (" (--creep)" if name == "c" else ""), style="dim")
+        console.print(f"{name.replace('_prime', chr(39))}: needs "
+                f"{why}" + (" (--creep)" if name == "c" else ""), style="dim")
     for note in res.notes:
         console.print(note, style="dim")

@@ -38,27 +38,49 @@ _PROTOCOLS = ("spring", "weights", "creep")
 @app.command("bench")
 @meter_circuit_options()
 def bench(
-    protocol: str = typer.Argument(..., metavar="PROTOCOL", help="spring (cycles 0 → peak → 0), weights (dead-weight re-placements, Tables 4/5) or creep (a held mass)."),
-    virtual: bool = typer.Option(False, "--virtual", help="Run on the Python virtual device (a model of the meter on a pty); unattended."),
-    twin: bool = typer.Option(False, "--twin", help="Run on the digital twin (the firmware in simavr on a pty); unattended."),
-    speed: str = typer.Option("realtime", "--speed", help="With --virtual or --twin: realtime (as hardware, for watching) or max (as fast as this computer runs the bench; the run's times stay the simulated clock)."),
-    port: str = typer.Option(None, "--port", help="Serial port of a real meter (/dev/ttyACM0, COM3, a pty) or 'auto': you are prompted for each step."),
-    out: Path = typer.Option(None, "--out", "-o", parser=out_path, help="Run file (CSV + NAME.meta.json sidecar; weights: NAME.placements.csv beside it) [default: PROTOCOL.csv]."),
-    sensor: str = typer.Option(None, "--sensor", help="Sensor: a preset for its sensing area (flexiforce-a201, interlink-402; the virtual FSR gets that area), or with --virtual/--twin a virtual sensor: virtual-fsr (default), paper-a201-1 .. paper-a201-4 (the sensors fitted to the paper's §6; with --port only their area)."),
-    peak: float = typer.Option("10k", "--peak", parser=pascals, metavar="STRESS", help="spring: peak stress [Pa]: 10k, 10kPa, 0.05MPa (the paper's bench: 10 kPa)."),
-    period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="spring: duration of one cycle [s]: 4s, 500ms, 1min."),
+    protocol: str = typer.Argument(..., metavar="PROTOCOL", help="spring (cycles 0 → peak → 0), weights (dead-weight "
+            "re-placements, Tables 4/5) or creep (a held mass)."),
+    virtual: bool = typer.Option(False, "--virtual", help="Run on the Python virtual device (a model of the meter on a "
+            "pty); unattended."),
+    twin: bool = typer.Option(False, "--twin", help="Run on the digital twin (the firmware in simavr on a pty); "
+            "unattended."),
+    speed: str = typer.Option("realtime", "--speed", help="With --virtual or --twin: realtime (as hardware, for "
+            "watching) or max (as fast as this computer runs the bench; the run's times stay the simulated clock)."),
+    port: str = typer.Option(None, "--port", help="Serial port of a real meter (/dev/ttyACM0, COM3, a pty) or 'auto': "
+            "you are prompted for each step."),
+    out: Path = typer.Option(None, "--out", "-o", parser=out_path, help="Run file (CSV + NAME.meta.json sidecar; "
+            "weights: NAME.placements.csv beside it) [default: PROTOCOL.csv]."),
+    sensor: str = typer.Option(None, "--sensor", help="Sensor: a preset for its sensing area (flexiforce-a201, "
+            "interlink-402; the virtual FSR gets that area), or with --virtual/--twin a virtual sensor: virtual-fsr "
+            "(default), paper-a201-1 .. paper-a201-4 (the sensors fitted to the paper's §6; with --port only their "
+            "area)."),
+    peak: float = typer.Option("10k", "--peak", parser=pascals, metavar="STRESS", help="spring: peak stress [Pa]: 10k, "
+            "10kPa, 0.05MPa (the paper's bench: 10 kPa)."),
+    period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="spring: duration of one cycle "
+            "[s]: 4s, 500ms, 1min."),
     cycles: int = typer.Option(3, "--cycles", help="spring: loading-unloading cycles [1]: 3, 10."),
-    masses_opt: str = typer.Option("200g,400g", "--masses", metavar="MASSES", help="weights: masses placed, increasing, comma-separated [kg]: 200g,400g (g, kg or mg); the plan is 0 → each → back to 0, per cycle."),
-    repeat: int = typer.Option(5, "--repeat", help="weights: how often each mass is placed again [1]: 5 as in Tables 4 and 5."),
-    mass: float = typer.Option("200g", "--mass", parser=masses, metavar="MASS", help="creep: the mass held [kg]: 200g, 0.5kg."),
-    hold: float = typer.Option("60s", "--hold", parser=seconds, metavar="TIME", help="creep: how long the mass stays on [s]: 60s, 5min (recorded with up to 2 s unloaded before and 5 s after)."),
-    settle_hold: float = typer.Option("1s", "--settle-hold", parser=seconds, metavar="TIME", help="weights: steady time recorded per placement [s]: 1s, 200ms."),
-    window: float = typer.Option("20ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], whole ms: 20ms, 100ms."),
+    masses_opt: str = typer.Option("200g,400g", "--masses", metavar="MASSES", help="weights: masses placed, "
+            "increasing, comma-separated [kg]: 200g,400g (g, kg or mg); the plan is 0 → each → back to 0, per cycle."),
+    repeat: int = typer.Option(5, "--repeat", help="weights: how often each mass is placed again [1]: 5 as in Tables 4 "
+            "and 5."),
+    mass: float = typer.Option("200g", "--mass", parser=masses, metavar="MASS", help="creep: the mass held [kg]: 200g, "
+            "0.5kg."),
+    hold: float = typer.Option("60s", "--hold", parser=seconds, metavar="TIME", help="creep: how long the mass stays "
+            "on [s]: 60s, 5min (recorded with up to 2 s unloaded before and 5 s after)."),
+    settle_hold: float = typer.Option("1s", "--settle-hold", parser=seconds, metavar="TIME", help="weights: steady "
+            "time recorded per placement [s]: 1s, 200ms."),
+    window: float = typer.Option("20ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], "
+            "whole ms: 20ms, 100ms."),
     seed: int = typer.Option(None, "--seed", help="Random seed of the virtual meter's noise (an integer)."),
-    loadcell: Path = typer.Option(None, "--loadcell", metavar="LC.json", help="Load-cell calibration JSON (fsrlab loadcell tare/scale) [counts → N]; a virtual meter uses its own."),
-    report: Path = typer.Option(None, "--report", metavar="DIR", parser=out_path, help="Also write the measurement report of the run (index.html) into this directory."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing run and its sidecar (weights: and its placements file), and write the --report into a directory that is not empty. An input is never replaced."),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="Virtual bench: do not print its steps (prompts for a person are always shown)."),
+    loadcell: Path = typer.Option(None, "--loadcell", metavar="LC.json", help="Load-cell calibration JSON (fsrlab "
+            "loadcell tare/scale) [counts → N]; a virtual meter uses its own."),
+    report: Path = typer.Option(None, "--report", metavar="DIR", parser=out_path, help="Also write the measurement "
+            "report of the run (index.html) into this directory."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing run and its sidecar (weights: and "
+            "its placements file), and write the --report into a directory that is not empty. An input is never "
+            "replaced."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Virtual bench: do not print its steps (prompts for a "
+            "person are always shown)."),
     json_out: bool = typer.Option(False, "--json", help='Print {"file", "frames", "dropped", "duration_s", "protocol", "device", "placements", "report"} as JSON.'),
     meter: MeterCircuit = MeterCircuit(),
 ) -> None:

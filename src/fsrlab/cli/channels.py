@@ -13,11 +13,14 @@ from fsrlab.cli.outputs import checked
 
 @app.command("calibrate-channels")
 def calibrate_channels_cmd(
-    run: Path = typer.Argument(..., metavar="RUN.csv", help="A multi-channel run (acquire --channels): one row per channel reading."),
+    run: Path = typer.Argument(..., metavar="RUN.csv", help="A multi-channel run (acquire --channels): one row per "
+            "channel reading."),
     out: Path = typer.Option(..., "--out", "-o", help="The calibrations, one JSON file keyed by sensor id."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing --out."),
-    reference: str = typer.Option(None, "--reference", help="Reference column: stress_pa [Pa] or force_n [N] (default: stress_pa when the run has it)."),
-    json_out: bool = typer.Option(False, "--json", help='Print {"sensors": {id: {"channel", "model", "r2"}}, "file"} as JSON.'),
+    reference: str = typer.Option(None, "--reference", help="Reference column: stress_pa [Pa] or force_n [N] (default: "
+            "stress_pa when the run has it)."),
+    json_out: bool = typer.Option(False, "--json", help='Print {"sensors": {id: {"channel", "model", "r2"}}, "file"} '
+            'as JSON.'),
 ) -> None:
     """Calibrate every channel of a multi-channel run from one command; one file keyed by sensor id.
 
@@ -54,10 +57,13 @@ def calibrate_channels_cmd(
 
 @app.command("crosstalk")
 def crosstalk_cmd(
-    twin: bool = typer.Option(False, "--twin", help="Run the check on the digital twin (the real firmware in simavr) instead of the Python virtual device."),
+    twin: bool = typer.Option(False, "--twin", help="Run the check on the digital twin (the real firmware in simavr) "
+            "instead of the Python virtual device."),
     channels: str = typer.Option("0-7", "--channels", metavar="LIST", help="Channels: 0-7, 0,2,5."),
-    load: float = typer.Option("50k", "--load", parser=pascals, metavar="STRESS", help="Stress on the loaded channel [Pa]: 50k, 20kPa."),
-    duration: float = typer.Option("0.5s", "--duration", parser=seconds, metavar="TIME", help="Simulated time per recording [s] (one unloaded, one per channel)."),
+    load: float = typer.Option("50k", "--load", parser=pascals, metavar="STRESS", help="Stress on the loaded channel "
+            "[Pa]: 50k, 20kPa."),
+    duration: float = typer.Option("0.5s", "--duration", parser=seconds, metavar="TIME", help="Simulated time per "
+            "recording [s] (one unloaded, one per channel)."),
     json_out: bool = typer.Option(False, "--json", help='Print {"channels", "baseline_hz", "loaded_hz", "matrix", "worst"} as JSON.'),
 ) -> None:
     """Cross-talk check: load one channel at a time, read all of them; prints the channels × channels matrix.

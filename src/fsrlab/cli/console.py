@@ -96,7 +96,8 @@ class LiveView:
         from rich.table import Table
 
         table = Table(title=self.title, show_header=True, header_style="bold")
-        for col in ("time (s)", "frames", "frames/s", "frequency (Hz)", "duty cycle (%)", "dropped", "corrupt", "resets"):
+        for col in ("time (s)", "frames", "frames/s", "frequency (Hz)", "duty cycle "
+                "(%)", "dropped", "corrupt", "resets"):
             table.add_column(col, justify="right")
         if st is not None:
             table.add_row(f"{st.elapsed_s:.1f}", str(st.frames), f"{st.frames_per_s:.1f}", fmt_value(st.frequency_hz, ".1f"),

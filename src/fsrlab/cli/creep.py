@@ -37,14 +37,23 @@ def _number(value: float, fmt: str) -> str:
 
 @app.command("creep")
 def creep_cmd(
-    run_file: Path = typer.Argument(..., metavar="RUN.csv", help="A run (docs/data-format.md) with time_s [s], the reference force_n [N] or stress_pa [Pa], and the readout."),
-    x: str = typer.Option("frequency_hz", "--x", help="Readout column whose drift is measured [its unit]: frequency_hz [Hz], duty_cycle [1], voltage_v [V], or any numeric column."),
-    reference: str = typer.Option(None, "--reference", help="Reference column the holds are found on [N or Pa]: force_n or stress_pa (default: force_n if the run has it, else stress_pa)."),
-    min_hold: float = typer.Option(5.0, "--min-hold", parser=seconds, help="Shortest hold reported [s], e.g. 5s, 500ms, 2min."),
-    band: float = typer.Option(0.02, "--band", parser=fraction, help="Half-width of the hold band [1, a fraction of full scale = the largest |reference|], 0.02 or 2%; in (0, 50 %)."),
-    settle: float = typer.Option(None, "--settle", parser=seconds, help="Time after each hold's start left out of the fits, while the load settles [s], e.g. 0.5s; shorter than --min-hold (default: 0.5 s, at most a fifth of --min-hold)."),
-    plot: Path = typer.Option(None, "--plot", metavar="FILE.png", parser=out_path, help="Also draw the readout against log time per hold into this figure [.png, .svg or .pdf]."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing --plot file. An input is never replaced."),
+    run_file: Path = typer.Argument(..., metavar="RUN.csv", help="A run (docs/data-format.md) with time_s [s], the "
+            "reference force_n [N] or stress_pa [Pa], and the readout."),
+    x: str = typer.Option("frequency_hz", "--x", help="Readout column whose drift is measured [its unit]: frequency_hz "
+            "[Hz], duty_cycle [1], voltage_v [V], or any numeric column."),
+    reference: str = typer.Option(None, "--reference", help="Reference column the holds are found on [N or Pa]: "
+            "force_n or stress_pa (default: force_n if the run has it, else stress_pa)."),
+    min_hold: float = typer.Option(5.0, "--min-hold", parser=seconds, help="Shortest hold reported [s], e.g. 5s, "
+            "500ms, 2min."),
+    band: float = typer.Option(0.02, "--band", parser=fraction, help="Half-width of the hold band [1, a fraction of "
+            "full scale = the largest |reference|], 0.02 or 2%; in (0, 50 %)."),
+    settle: float = typer.Option(None, "--settle", parser=seconds, help="Time after each hold's start left out of the "
+            "fits, while the load settles [s], e.g. 0.5s; shorter than --min-hold (default: 0.5 s, at most a fifth of "
+            "--min-hold)."),
+    plot: Path = typer.Option(None, "--plot", metavar="FILE.png", parser=out_path, help="Also draw the readout against "
+            "log time per hold into this figure [.png, .svg or .pdf]."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing --plot file. An input is never "
+            "replaced."),
     skip_bad_rows: bool = typer.Option(False, "--skip-bad-rows", help=SKIP_HELP),
     json_out: bool = typer.Option(False, "--json", help="Print JSON (units in the keys; null where not determined)."),
 ) -> None:
@@ -130,7 +139,8 @@ def _print_holds(res, x: str, run_file: Path, plot: Path | None) -> None:
                       _number(h.drift_percent_per_decade, "+.3f"), tau, _number(h.total_drift_percent, "+.3f"))
     console = Console()
     console.print(table)
-    console.print(f"band ±{100 * res.band:g} % of full scale ({res.full_scale:.4g} {ru}), holds ≥ {res.min_hold_s:g} s, "
+    console.print(f"band ±{100 * res.band:g} % of full scale ({res.full_scale:.4g} {ru}), holds ≥ {res.min_hold_s:g} "
+            "s, "
                   f"first {res.settle_s:g} s of each left out; drift in % of the reading at t0 + 1 s"
                   + (f"; {res.unloaded} unloaded hold(s) left out" if res.unloaded else ""), style="dim")
     for note in notes:

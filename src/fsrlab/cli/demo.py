@@ -13,13 +13,19 @@ from fsrlab.cli.options import OVERWRITE_DIR_HELP, checked, emit_json, fail, out
 
 @app.command("demo")
 def demo(
-    out: Path = typer.Option(Path("demo"), "--out", "-o", parser=out_path, help="Directory for the runs, the calibration, both reports and index.html; created if missing."),
+    out: Path = typer.Option(Path("demo"), "--out", "-o", parser=out_path, help="Directory for the runs, the "
+            "calibration, both reports and index.html; created if missing."),
     overwrite: bool = typer.Option(False, "--overwrite", help=OVERWRITE_DIR_HELP),
-    device: str = typer.Option("auto", "--device", help="The virtual bench: auto (the digital twin when it can run, else the Python virtual device), twin or virtual."),
-    sensor: str = typer.Option(None, "--sensor", help="The virtual sensor: paper-a201-1 (default) .. paper-a201-4 (fitted to the paper's §6) or virtual-fsr."),
+    device: str = typer.Option("auto", "--device", help="The virtual bench: auto (the digital twin when it can run, "
+            "else the Python virtual device), twin or virtual."),
+    sensor: str = typer.Option(None, "--sensor", help="The virtual sensor: paper-a201-1 (default) .. paper-a201-4 "
+            "(fitted to the paper's §6) or virtual-fsr."),
     cycles: int = typer.Option(4, "--cycles", help="Spring cycles per run [1]: 4."),
-    period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="Duration of one spring cycle [s]: 4s, 2s."),
-    speed: str = typer.Option("max", "--speed", help="The virtual bench's pace: max (as fast as this computer runs it, the three runs at once; the runs' times stay the simulated clock) or realtime (as hardware, one run after the other)."),
+    period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="Duration of one spring cycle "
+            "[s]: 4s, 2s."),
+    speed: str = typer.Option("max", "--speed", help="The virtual bench's pace: max (as fast as this computer runs it, "
+            "the three runs at once; the runs' times stay the simulated clock) or realtime (as hardware, one run after "
+            "the other)."),
     repeat: int = typer.Option(5, "--repeat", help="Placements of each dead weight [1]: 5 as in Tables 4 and 5."),
     no_paper: bool = typer.Option(False, "--no-paper", help="Leave out the reproduction report (fsrlab paper)."),
     json_out: bool = typer.Option(False, "--json", help='Print {"index", "device", "total_s", "steps", "files", "numbers"} as JSON (HE and RE in %, times in s).'),

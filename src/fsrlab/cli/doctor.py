@@ -10,9 +10,11 @@ from fsrlab.cli.options import emit_json
 
 @app.command("doctor")
 def doctor(
-    port: list[str] = typer.Option(None, "--port", help="Ask the device on this port ID (repeatable; default: every port with an Uno's USB id). Opening an Uno's port restarts it."),
+    port: list[str] = typer.Option(None, "--port", help="Ask the device on this port ID (repeatable; default: every "
+            "port with an Uno's USB id). Opening an Uno's port restarts it."),
     no_probe: bool = typer.Option(False, "--no-probe", help="Open no serial port (boards are not asked)."),
-    json_out: bool = typer.Option(False, "--json", help="Print the checks and boards as JSON: {checks: [{name, found, detail, enables, install}], boards: [...]}."),
+    json_out: bool = typer.Option(False, "--json", help="Print the checks and boards as JSON: "
+            "{checks: [{name, found, detail, enables, install}], boards: [...]}."),
 ) -> None:
     """Say what this machine has for fsrlab and what each thing enables, with install commands.
 

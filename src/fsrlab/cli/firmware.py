@@ -46,8 +46,10 @@ def hex_(
 
 @firmware_app.command("sketch")
 def sketch(
-    directory: str = typer.Argument(..., metavar="DIR", help="Folder that gets the sketch folder fsrlab_meter/ (created when missing, in an existing folder), e.g. your Arduino sketchbook."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace the sketch's files if they exist there (otherwise nothing is written)."),
+    directory: str = typer.Argument(..., metavar="DIR", help="Folder that gets the sketch folder fsrlab_meter/ "
+            "(created when missing, in an existing folder), e.g. your Arduino sketchbook."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace the sketch's files if they exist there "
+            "(otherwise nothing is written)."),
 ) -> None:
     """Write the firmware's sketch for the Arduino IDE into DIR/fsrlab_meter/; prints the .ino's path.
 
@@ -75,9 +77,12 @@ def sketch(
 
 @firmware_app.command("flash")
 def flash(
-    port: str = typer.Option(..., "--port", help="Serial port of the Uno (/dev/ttyACM0, COM3) or 'auto' (the one Uno by USB id)."),
-    hex_file: Path = typer.Option(None, "--hex", metavar="FILE", help="Another Intel hex image to write (default: the shipped one)."),
-    check_timeout: float = typer.Option("5s", "--check-timeout", parser=seconds, metavar="TIME", help="How long the board may take to answer ID after the upload [s]: 5, 5s, 500ms (> 0)."),
+    port: str = typer.Option(..., "--port", help="Serial port of the Uno (/dev/ttyACM0, COM3) or 'auto' (the one Uno "
+            "by USB id)."),
+    hex_file: Path = typer.Option(None, "--hex", metavar="FILE", help="Another Intel hex image to write (default: the "
+            "shipped one)."),
+    check_timeout: float = typer.Option("5s", "--check-timeout", parser=seconds, metavar="TIME", help="How long the "
+            "board may take to answer ID after the upload [s]: 5, 5s, 500ms (> 0)."),
     json_out: bool = typer.Option(False, "--json", help="Print the port, image and the board's identity as JSON."),
 ) -> None:
     """Write the firmware to an Uno through its bootloader (avrdude), then check it answers ID.

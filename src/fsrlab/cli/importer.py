@@ -27,24 +27,43 @@ _PARAMETERS = {"time_unit": "--time-unit", "reference_time_unit": "--reference-t
 
 @app.command("import")
 def import_cmd(
-    sensor: Path = typer.Argument(..., metavar="SENSOR.csv", help="The foreign CSV with the sensor's readout (and the force, without --reference)."),
-    reference: Path = typer.Option(None, "--reference", metavar="REF.csv", help="A second foreign CSV with the reference force (another logger), aligned on the time stamps."),
-    output: Path = typer.Option(..., "--output", "-o", metavar="RUN.csv", parser=out_path, help="The run to write: time_s [s], reading [its unit], force_n [N], and its sidecar RUN.meta.json."),
-    time: str = typer.Option(None, "--time", metavar="COL", help="Time column of SENSOR.csv [header name or 1-based number], e.g. time_ms or 1 (default: found from the header)."),
-    time_unit: str = typer.Option(None, "--time-unit", help="Unit of the time column [s, ms, us, min or h] (default: what its header says, else s; a unit it says that is none of these is refused)."),
-    rate: float = typer.Option(None, "--rate", parser=hertz, help="Sample rate of SENSOR.csv when it has no time column [Hz], e.g. 100 or 1k: row k at k/rate."),
-    reading: str = typer.Option(None, "--reading", metavar="COL", help="Readout column [header name or 1-based number] (default: found from the header: fsr, analog, adc, reading, ...); kept as 'reading'."),
-    reading_unit: str = typer.Option(None, "--reading-unit", help="Unit of the readout, kept as it is [counts, V, mV, ohm or kohm] (default: what its header says, else counts)."),
-    force: str = typer.Option(None, "--force", metavar="COL", help="Force column [header name or 1-based number], in REF.csv when given (default: found from the header: force, load, N, g, ...)."),
-    force_unit: str = typer.Option(None, "--force-unit", help="Unit of the force column [N, kN, mN, g, kg, lbf or ozf; also gf, kgf, lb, oz], converted to force_n [N] with g0 = 9.80665 m/s² (default: what its header says, else N; a unit it says that is none of these is refused)."),
-    reference_time: str = typer.Option(None, "--reference-time", metavar="COL", help="Time column of REF.csv [header name or 1-based number] (default: found from the header)."),
-    reference_time_unit: str = typer.Option(None, "--reference-time-unit", help="Unit of REF.csv's time column [s, ms, us, min or h] (default: what its header says, else s)."),
-    reference_rate: float = typer.Option(None, "--reference-rate", parser=hertz, help="Sample rate of REF.csv when it has no time column [Hz]."),
-    offset: float = typer.Option(0.0, "--offset-s", parser=seconds, help="Added to REF.csv's times before the alignment [s], e.g. -0.25 or 250ms."),
-    header: bool = typer.Option(None, "--header/--no-header", help="Whether the first line (after comments) is a header (default: when a cell of it is not a number)."),
-    skip_lines: int = typer.Option(0, "--skip-lines", help="Lines to leave out at the top of each file, e.g. a logger's preamble [lines]."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing output run and its sidecar (never an input file)."),
-    json_out: bool = typer.Option(False, "--json", help="Print JSON: rows, matched, columns, units, the mapping chosen, how each file was read."),
+    sensor: Path = typer.Argument(..., metavar="SENSOR.csv", help="The foreign CSV with the sensor's readout (and the "
+            "force, without --reference)."),
+    reference: Path = typer.Option(None, "--reference", metavar="REF.csv", help="A second foreign CSV with the "
+            "reference force (another logger), aligned on the time stamps."),
+    output: Path = typer.Option(..., "--output", "-o", metavar="RUN.csv", parser=out_path, help="The run to write: "
+            "time_s [s], reading [its unit], force_n [N], and its sidecar RUN.meta.json."),
+    time: str = typer.Option(None, "--time", metavar="COL", help="Time column of SENSOR.csv [header name or 1-based "
+            "number], e.g. time_ms or 1 (default: found from the header)."),
+    time_unit: str = typer.Option(None, "--time-unit", help="Unit of the time column [s, ms, us, min or h] (default: "
+            "what its header says, else s; a unit it says that is none of these is refused)."),
+    rate: float = typer.Option(None, "--rate", parser=hertz, help="Sample rate of SENSOR.csv when it has no time "
+            "column [Hz], e.g. 100 or 1k: row k at k/rate."),
+    reading: str = typer.Option(None, "--reading", metavar="COL", help="Readout column [header name or 1-based number] "
+            "(default: found from the header: fsr, analog, adc, reading, ...); kept as 'reading'."),
+    reading_unit: str = typer.Option(None, "--reading-unit", help="Unit of the readout, kept as it is [counts, V, mV, "
+            "ohm or kohm] (default: what its header says, else counts)."),
+    force: str = typer.Option(None, "--force", metavar="COL", help="Force column [header name or 1-based number], in "
+            "REF.csv when given (default: found from the header: force, load, N, g, ...)."),
+    force_unit: str = typer.Option(None, "--force-unit", help="Unit of the force column [N, kN, mN, g, kg, lbf or ozf; "
+            "also gf, kgf, lb, oz], converted to force_n [N] with g0 = 9.80665 m/s² (default: what its header says, "
+            "else N; a unit it says that is none of these is refused)."),
+    reference_time: str = typer.Option(None, "--reference-time", metavar="COL", help="Time column of REF.csv [header "
+            "name or 1-based number] (default: found from the header)."),
+    reference_time_unit: str = typer.Option(None, "--reference-time-unit", help="Unit of REF.csv's time column [s, ms, "
+            "us, min or h] (default: what its header says, else s)."),
+    reference_rate: float = typer.Option(None, "--reference-rate", parser=hertz, help="Sample rate of REF.csv when it "
+            "has no time column [Hz]."),
+    offset: float = typer.Option(0.0, "--offset-s", parser=seconds, help="Added to REF.csv's times before the "
+            "alignment [s], e.g. -0.25 or 250ms."),
+    header: bool = typer.Option(None, "--header/--no-header", help="Whether the first line (after comments) is a "
+            "header (default: when a cell of it is not a number)."),
+    skip_lines: int = typer.Option(0, "--skip-lines", help="Lines to leave out at the top of each file, e.g. a "
+            "logger's preamble [lines]."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing output run and its sidecar (never "
+            "an input file)."),
+    json_out: bool = typer.Option(False, "--json", help="Print JSON: rows, matched, columns, units, the mapping "
+            "chosen, how each file was read."),
 ) -> None:
     """Import a foreign CSV (your own sketch, a data logger, a spreadsheet) as a run.
 
@@ -60,7 +79,8 @@ def import_cmd(
 
     \b
       fsrlab import examples/foreign_fsr.csv -o run.csv
-      fsrlab import examples/foreign_fsr.csv --reference examples/foreign_loadcell.csv --time time_ms --force force_N -o run.csv --json
+      fsrlab import examples/foreign_fsr.csv --reference examples/foreign_loadcell.csv --time time_ms --force force_N -o
+      run.csv --json
     """
     from fsrlab.errors import FileFormatError, ParameterError
     from fsrlab.io.foreign import ForeignFormatError, import_foreign, write_imported

@@ -66,28 +66,44 @@ def _json_line(obj) -> None:
 @meter_circuit_options(virtual_c_off=True)
 def live(
     port: str = typer.Option(None, "--port", help="Serial port of the meter (/dev/ttyACM0, COM3, a pty) or 'auto'."),
-    virtual: bool = typer.Option(False, "--virtual", help="Show a virtual device (pty, physics and 555 models) instead of hardware."),
-    out: Path = typer.Option(None, "--out", "-o", parser=out_path, help="Run file for the page's 'Start recording' (CSV + sidecar); later recordings get -2, -3, ...; never replaced. Without it recording is off."),
-    cal: Path = typer.Option(None, "--cal", help="Calibration JSON (fsrlab calibrate -o): the page also shows the estimate and its uncertainty."),
-    host: str = typer.Option("127.0.0.1", "--host", help="Interface to serve on: 127.0.0.1 (this computer only) or e.g. 0.0.0.0; any other than 127.0.0.1 needs the random token printed with the URL."),
-    http_port: int = typer.Option(5006, "--http-port", help="TCP port of the page [1], 1..65535, or 0 for any free one."),
+    virtual: bool = typer.Option(False, "--virtual", help="Show a virtual device (pty, physics and 555 models) instead "
+            "of hardware."),
+    out: Path = typer.Option(None, "--out", "-o", parser=out_path, help="Run file for the page's 'Start recording' "
+            "(CSV + sidecar); later recordings get -2, -3, ...; never replaced. Without it recording is off."),
+    cal: Path = typer.Option(None, "--cal", help="Calibration JSON (fsrlab calibrate -o): the page also shows the "
+            "estimate and its uncertainty."),
+    host: str = typer.Option("127.0.0.1", "--host", help="Interface to serve on: 127.0.0.1 (this computer only) or "
+            "e.g. 0.0.0.0; any other than 127.0.0.1 needs the random token printed with the URL."),
+    http_port: int = typer.Option(5006, "--http-port", help="TCP port of the page [1], 1..65535, or 0 for any free "
+            "one."),
     open_browser: bool = typer.Option(False, "--open", help="Open the page in the default browser."),
-    window: float = typer.Option("100ms", "--window", parser=seconds, metavar="TIME", help="Measurement window at the start [s], 10ms to 60s: 20ms, 100ms, 1s."),
+    window: float = typer.Option("100ms", "--window", parser=seconds, metavar="TIME", help="Measurement window at the "
+            "start [s], 10ms to 60s: 20ms, 100ms, 1s."),
     range_: int = typer.Option(0, "--range", help="C_off range switch at the start: 0 (off) or 1 (C_off connected)."),
-    duration: float = typer.Option(None, "--duration", parser=seconds, metavar="TIME", help="Serve this long [s], then stop (default: until Ctrl-C): 10s, 2min."),
+    duration: float = typer.Option(None, "--duration", parser=seconds, metavar="TIME", help="Serve this long [s], then "
+            "stop (default: until Ctrl-C): 10s, 2min."),
     profile: str = typer.Option("triangle", "--profile", help="Virtual device: stress profile (triangle, sine, ...)."),
-    peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS", help="Virtual device: peak stress [Pa], e.g. 50k."),
-    period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="Virtual device: period of the profile [s], e.g. 4s."),
+    peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS", help="Virtual device: peak stress "
+            "[Pa], e.g. 50k."),
+    period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="Virtual device: period of the "
+            "profile [s], e.g. 4s."),
     seed: int = typer.Option(None, "--seed", help="Virtual device: random seed [1] (default: a fresh one)."),
     loadcell: Path = typer.Option(None, "--loadcell", help=LOADCELL_HELP),
     sensor: str = typer.Option(None, "--sensor", help=SENSOR_HELP),
     area: float = typer.Option(None, "--area", parser=areas, metavar="AREA", help=AREA_HELP),
-    masses: str = typer.Option(None, "--masses", metavar="MASSES", help="Offer the guided known-weight calibration on the page with these masses, increasing, comma-separated [kg]: 0,100g,200g,400g (g, kg or mg; 0 needs no unit). With --virtual a virtual bench places each mass when the page says Placed."),
+    masses: str = typer.Option(None, "--masses", metavar="MASSES", help="Offer the guided known-weight calibration on "
+            "the page with these masses, increasing, comma-separated [kg]: 0,100g,200g,400g (g, kg or mg; 0 needs no "
+            "unit). With --virtual a virtual bench places each mass when the page says Placed."),
     repeat: int = typer.Option(1, "--repeat", help="Guided calibration: cycles of placements [1], e.g. 3."),
     unload: bool = typer.Option(False, "--unload", help="Guided calibration: also unload in reverse (for hysteresis)."),
-    channels: str = typer.Option(None, "--channels", metavar="LIST", help="Scan these multiplexer channels (a protocol-3 meter, docs/multiplexing.md): 0-7, 0,2,5; the page shows a sensor map, every channel's frequency and its link health. With --virtual: channel k under the profile at peak x (k+1)/(highest channel+1)."),
-    unplug_after: int = typer.Option(None, "--unplug-after", help="Virtual device (tests): pull the cable after this many windows [1]."),
-    json_out: bool = typer.Option(False, "--json", help='Print JSON lines: {"url", "token"} when the page is up, {"frames", "recorded", "state"} at the end.'),
+    channels: str = typer.Option(None, "--channels", metavar="LIST", help="Scan these multiplexer channels (a "
+            "protocol-3 meter, docs/multiplexing.md): 0-7, 0,2,5; the page shows a sensor map, every channel's "
+            "frequency and its link health. With --virtual: channel k under the profile at peak x (k+1)/(highest "
+            "channel+1)."),
+    unplug_after: int = typer.Option(None, "--unplug-after", help="Virtual device (tests): pull the cable after this "
+            "many windows [1]."),
+    json_out: bool = typer.Option(False, "--json", help='Print JSON lines: {"url", "token"} when the page is up, '
+            '{"frames", "recorded", "state"} at the end.'),
     meter: MeterCircuit = MeterCircuit(),
 ) -> None:
     """Serve the meter's front panel: frequency, duty cycle, op-amp voltage and the reference live, the
@@ -161,7 +177,8 @@ def live(
     if json_out:
         _json_line({"frames": session.status.frames, "recorded": session.status.recorded, "state": session.status.state})
     else:
-        typer.echo(f"fsrlab live: {session.status.frames} windows shown; {session.status.state}: {session.status.message}")
+        typer.echo(f"fsrlab live: {session.status.frames} windows shown; {session.status.state}: "
+                f"{session.status.message}")
 
 
 def _checked_options(port, virtual: bool, window: float, range_: int, http_port: int, duration: float | None,
@@ -223,7 +240,8 @@ def _start_server(make_doc, host: str, http_port: int, opened: tuple):
         for thing in opened:
             if thing is not None:
                 thing.close()
-        fail(f"cannot serve on {host}:{http_port}: {exc.strerror or exc}", "--host" if host != "127.0.0.1" else "--http-port")
+        fail(f"cannot serve on {host}:{http_port}: "
+             f"{exc.strerror or exc}", "--host" if host != "127.0.0.1" else "--http-port")
 
 
 def _guided_steps(masses: str, repeat: int, unload: bool, out: Path | None):

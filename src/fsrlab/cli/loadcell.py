@@ -30,18 +30,30 @@ def loadcell(
     action: str = typer.Argument(..., metavar="ACTION", help="tare: read the unloaded cell, write its offset to -o; "
                                  "scale: read it with --mass on, add the scale factor to --cal."),
     port: str = typer.Option(None, "--port", help="Serial port of the meter (/dev/ttyACM0, COM3, a pty) or 'auto'."),
-    virtual: bool = typer.Option(False, "--virtual", help="Use a virtual meter with its emulated load cell; the virtual bench places the mass itself."),
-    out: Path = typer.Option(None, "--out", "-o", metavar="LC.json", parser=out_path, help="tare: the load-cell calibration file to write (LC.json); scale: write the tare with its scale factor here instead of adding it to --cal."),
-    cal: Path = typer.Option(None, "--cal", metavar="LC.json", help="scale: the tare's calibration file (LC.json); the scale factor is added to it (or written to -o)."),
-    mass: float = typer.Option(None, "--mass", parser=masses, metavar="MASS", help="scale: the known mass on the cell [kg]: 500g, 0.5kg, 250mg."),
+    virtual: bool = typer.Option(False, "--virtual", help="Use a virtual meter with its emulated load cell; the "
+            "virtual bench places the mass itself."),
+    out: Path = typer.Option(None, "--out", "-o", metavar="LC.json", parser=out_path, help="tare: the load-cell "
+            "calibration file to write (LC.json); scale: write the tare with its scale factor here instead of adding "
+            "it to --cal."),
+    cal: Path = typer.Option(None, "--cal", metavar="LC.json", help="scale: the tare's calibration file (LC.json); the "
+            "scale factor is added to it (or written to -o)."),
+    mass: float = typer.Option(None, "--mass", parser=masses, metavar="MASS", help="scale: the known mass on the cell "
+            "[kg]: 500g, 0.5kg, 250mg."),
     gravity: float = typer.Option("9.80665", "--gravity", parser=gravity_value, metavar="ACCELERATION", help=GRAVITY_HELP),
-    capacity: float = typer.Option(None, "--capacity", parser=masses, metavar="MASS", help="tare: the cell's rated capacity [kg], stored (a scale mass below 5 % of it warns): 5kg, 1kg, 500g."),
-    duration: float = typer.Option("3s", "--duration", parser=seconds, metavar="TIME", help="Reading time [s]: 3s, 5, 1.5s."),
-    window: float = typer.Option("100ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], whole ms: 100ms, 0.5s."),
-    hx711_rate: int = typer.Option(80, "--hx711-rate", help="Virtual load cell: HX711 output data rate [samples/s]: 10 or 80."),
+    capacity: float = typer.Option(None, "--capacity", parser=masses, metavar="MASS", help="tare: the cell's rated "
+            "capacity [kg], stored (a scale mass below 5 % of it warns): 5kg, 1kg, 500g."),
+    duration: float = typer.Option("3s", "--duration", parser=seconds, metavar="TIME", help="Reading time [s]: 3s, 5, "
+            "1.5s."),
+    window: float = typer.Option("100ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], "
+            "whole ms: 100ms, 0.5s."),
+    hx711_rate: int = typer.Option(80, "--hx711-rate", help="Virtual load cell: HX711 output data rate [samples/s]: 10 "
+            "or 80."),
     seed: int = typer.Option(None, "--seed", help="Random seed of the virtual meter's noise (an integer)."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing -o file; without it an existing one stops the command before the meter is read. The --cal file is never replaced by -o (scale without -o adds the factor to it)."),
-    json_out: bool = typer.Option(False, "--json", help="Print the calibration written (offset_counts [count], scale_counts_per_n [count/N], noise) as JSON."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing -o file; without it an existing one "
+            "stops the command before the meter is read. The --cal file is never replaced by -o (scale without -o adds "
+            "the factor to it)."),
+    json_out: bool = typer.Option(False, "--json", help="Print the calibration written (offset_counts [count], "
+            "scale_counts_per_n [count/N], noise) as JSON."),
 ) -> None:
     """Calibrate the load cell: tare (offset, nothing on the cell), then scale (counts per newton from a known mass).
 

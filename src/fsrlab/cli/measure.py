@@ -98,13 +98,17 @@ class _Live(LiveView):
 @app.command("measure")
 @meter_circuit_options(virtual_c_off=True)
 def measure(
-    cal: Path = typer.Option(..., "--cal", metavar="CAL.json", help="Calibration JSON from fsrlab calibrate -o (readout -> stress_pa [Pa] or force_n [N])."),
+    cal: Path = typer.Option(..., "--cal", metavar="CAL.json", help="Calibration JSON from fsrlab calibrate -o "
+            "(readout -> stress_pa [Pa] or force_n [N])."),
     port: str = typer.Option(None, "--port", help="Serial port of the meter (/dev/ttyACM0, COM3, a pty) or 'auto'."),
     virtual: bool = typer.Option(False, "--virtual", help="Measure a virtual meter (its sensor follows --profile)."),
-    out: Path = typer.Option(Path("measure.csv"), "--out", "-o", parser=out_path, help="Run file with the estimate (CSV + NAME.meta.json)."),
+    out: Path = typer.Option(Path("measure.csv"), "--out", "-o", parser=out_path, help="Run file with the estimate "
+            "(CSV + NAME.meta.json)."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing run and its sidecar."),
-    duration: float = typer.Option(None, "--duration", parser=seconds, metavar="TIME", help="Measure this long [s]: 10s, 1.5min (default: until Ctrl-C)."),
-    window: float = typer.Option("100ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], whole ms: 100ms, 0.25."),
+    duration: float = typer.Option(None, "--duration", parser=seconds, metavar="TIME", help="Measure this long [s]: "
+            "10s, 1.5min (default: until Ctrl-C)."),
+    window: float = typer.Option("100ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], "
+            "whole ms: 100ms, 0.25."),
     sensor: str = typer.Option(None, "--sensor", help=SENSOR_HELP),
     area: float = typer.Option(None, "--area", parser=areas, metavar="AREA", help=AREA_HELP),
     loadcell: Path = typer.Option(None, "--loadcell", metavar="LC.json", help=LOADCELL_HELP),

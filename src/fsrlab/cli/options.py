@@ -82,8 +82,10 @@ hertz = _parser("hertz", "frequency", "Frequency [Hz]: 6478.5, 6.4785k, 6.4785kH
 pascals = _parser("pascals", "stress", "Stress [Pa]: 322k, 322kPa, 4.73MPa; another quantity's unit is refused.")
 metres = _parser("metres", "length", "Length [m]: 4.418n, 4.418nm; 5m is refused (5 m or 5 mm?).")
 electronvolts = _parser("electronvolts", "energy", "Energy in electronvolts [eV]: 0.223, 0.223eV, 223meV.")
-seconds = _parser("seconds", "duration", "Duration [s]: 90, 90s, 1.5min, 2h, 500ms, 250us; 1m is refused (minutes or milli?).")
-fraction = _parser("fraction", "fraction", "Fraction: 0.1 or 10%; a value above 1 without % is refused, never read as percent.")
+seconds = _parser("seconds", "duration", "Duration [s]: 90, 90s, 1.5min, 2h, 500ms, 250us; 1m is refused (minutes or "
+        "milli?).")
+fraction = _parser("fraction", "fraction", "Fraction: 0.1 or 10%; a value above 1 without % is refused, never read as "
+        "percent.")
 number = _parser("number", "number", "A plain finite number (2, 7.5, 1e3), without unit letters or prefixes.")
 
 _MEASURE = re.compile(r"^([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*([A-Za-zµ²0-9]*)$")
@@ -235,7 +237,8 @@ LOADCELL_HELP = ("Load-cell calibration JSON (fsrlab loadcell tare/scale): HX711
 NO_LOADCELL_HELP = "Virtual device: emulate a meter without an HX711 (ref_ok 0: reference columns empty)."
 RATE_HELP = "Virtual device: the HX711's output data rate [samples/s]: 10 or 80."
 SPEED_HELP = ("With --virtual: realtime (one window per window length of wall time, as hardware) or max (as fast as "
-              "this computer runs the device; the recording time and the run's times are then the device's simulated clock).")
+              "this computer runs the device; the recording time and the run's times are then the device's simulated "
+              "clock).")
 
 
 def sensor_area(sensor: str | None, area: float | None) -> tuple[dict | None, float | None]:
@@ -491,13 +494,20 @@ def refuse_other_meter(cal, metadata: dict, range_: int) -> None:
 # The options that describe a meter on --port: parameter, option, typer.Option's other arguments (--c-off's help
 # is the command's: see meter_circuit_options).
 _METER_OPTIONS = (
-    ("r", "--r", {"parser": ohms, "metavar": "RESISTANCE", "help": "--port: the meter's 555 R = R_A = R_B [Ω], e.g. 10k or 4k7; recorded in the sidecar with --c-off, --diode and --vcc, so that a calibration of another circuit is refused (without it the run records none and nothing can be checked)."}),
+    ("r", "--r", {"parser": ohms, "metavar": "RESISTANCE", "help": "--port: the meter's 555 R = R_A = R_B [Ω], e.g. "
+            "10k or 4k7; recorded in the sidecar with --c-off, --diode and --vcc, so that a calibration of another "
+            "circuit is refused (without it the run records none and nothing can be checked)."}),
     ("c_off", "--c-off", {"parser": farads, "metavar": "CAPACITANCE"}),
-    ("diode", "--diode", {"help": "--port: the meter's 555 has D1 in series with R_B (the paper's Fig. 16); with --r."}),
-    ("diode_drop", "--diode-drop", {"parser": volts, "metavar": "VOLTAGE", "help": "--port: D1's forward drop [V], e.g. 0.6 (implies --diode; default 0: ideal); with --r."}),
-    ("vcc", "--vcc", {"parser": volts, "metavar": "VOLTAGE", "help": "--port: the 555's supply [V], e.g. 5 or 3.3V (default 5); with --r."}),
-    ("r_f", "--r-f", {"parser": ohms, "metavar": "RESISTANCE", "help": "--port: the op-amp readout's feedback resistor R_F [Ω] (eq. 38), e.g. 20k; recorded with --drive, for calibrations on voltage_v."}),
-    ("drive", "--drive", {"parser": volts, "metavar": "VOLTAGE", "help": "--port: the voltage driving the FSR at the op-amp's input [V] (default -5, the paper's); with --r-f."}),
+    ("diode", "--diode", {"help": "--port: the meter's 555 has D1 in series with R_B (the paper's Fig. 16); with "
+            "--r."}),
+    ("diode_drop", "--diode-drop", {"parser": volts, "metavar": "VOLTAGE", "help": "--port: D1's forward drop [V], "
+            "e.g. 0.6 (implies --diode; default 0: ideal); with --r."}),
+    ("vcc", "--vcc", {"parser": volts, "metavar": "VOLTAGE", "help": "--port: the 555's supply [V], e.g. 5 or 3.3V "
+            "(default 5); with --r."}),
+    ("r_f", "--r-f", {"parser": ohms, "metavar": "RESISTANCE", "help": "--port: the op-amp readout's feedback resistor "
+            "R_F [Ω] (eq. 38), e.g. 20k; recorded with --drive, for calibrations on voltage_v."}),
+    ("drive", "--drive", {"parser": volts, "metavar": "VOLTAGE", "help": "--port: the voltage driving the FSR at the "
+            "op-amp's input [V] (default -5, the paper's); with --r-f."}),
 )
 # The circuits' parameter names as options, for their messages.
 _CIRCUIT_NAMES = {"r_ohm": "--r", "c_off_farad": "--c-off", "diode_drop_v": "--diode-drop", "vcc_v": "--vcc"}
@@ -585,7 +595,8 @@ def meter_circuit_options(virtual_c_off: bool = False) -> Callable:
     Use under ``@app.command``; ``virtual_c_off``: the command's virtual meter takes --c-off too (its C_off).
     """
     c_off_help = C_OFF_HELP[:-1] + (" (virtual: default 1n; --port: the meter's" if virtual_c_off else
-                                    " (--port: the meter's") + ", recorded with --r; needed with --r where range 1 is used)."
+                                    " (--port: the "
+                                    "meter's") + ", recorded with --r; needed with --r where range 1 is used)."
 
     def decorate(command: Callable) -> Callable:
         signature = inspect.signature(command)

@@ -81,11 +81,15 @@ def oscillator(
     cfsr: float = typer.Option(..., "--cfsr", parser=farads, help="FSR capacitance C_FSR [F], e.g. 1n."),
     coff: float = typer.Option(0.0, "--coff", parser=farads, help="Offset capacitor C_off in parallel [F], e.g. 470p."),
     diode: bool = typer.Option(False, "--diode", help="Ideal diode D1 in series with R_B (paper Fig. 13)."),
-    diode_drop: float = typer.Option(None, "--diode-drop", parser=volts, help="D1 with this forward drop [V], e.g. 0.6 (implies --diode)."),
+    diode_drop: float = typer.Option(None, "--diode-drop", parser=volts, help="D1 with this forward drop [V], e.g. 0.6 "
+            "(implies --diode)."),
     vcc: float = typer.Option(5.0, "--vcc", parser=volts, help="Supply [V]."),
-    vctrl: float = typer.Option(None, "--vctrl", parser=volts, help="Control-pin voltage [V] (thresholds at Vctrl and Vctrl/2; default: open pin, 2/3·Vcc)."),
-    rdis: float = typer.Option(0.0, "--rdis", parser=ohms, help="Discharge-transistor on-resistance [Ω] (default 0: ideal, as in the paper)."),
-    spice: bool = typer.Option(False, "--spice", help="Also simulate the circuit in ngspice and show its frequency and duty cycle."),
+    vctrl: float = typer.Option(None, "--vctrl", parser=volts, help="Control-pin voltage [V] (thresholds at Vctrl and "
+            "Vctrl/2; default: open pin, 2/3·Vcc)."),
+    rdis: float = typer.Option(0.0, "--rdis", parser=ohms, help="Discharge-transistor on-resistance [Ω] (default 0: "
+            "ideal, as in the paper)."),
+    spice: bool = typer.Option(False, "--spice", help="Also simulate the circuit in ngspice and show its frequency and "
+            "duty cycle."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Frequency, duty cycle and sensitivities of the LM555 astable with the FSR as timing element.
@@ -135,7 +139,8 @@ def oscillator(
         f"  duty cycle       {100 * out['duty_cycle']:.4g} %",
         f"  τH (output high) {format_eng(out['tau_high_s'], 's')}",
         f"  τL (output low)  {format_eng(out['tau_low_s'], 's')}",
-        f"  N = R_FSR/R      {out['n_ratio']:.4g} (oscillates for N > {n_min:.4g}; margin {100 * (out['n_ratio'] / n_min - 1):.3g} %)",
+        f"  N = R_FSR/R      {out['n_ratio']:.4g} (oscillates for N > {n_min:.4g}; margin "
+        f"{100 * (out['n_ratio'] / n_min - 1):.3g} %)",
         f"  ∂ln f/∂ln C_FSR  {out['sensitivity_c']:+.4f}",
         f"  ∂ln f/∂ln R_FSR  {out['sensitivity_r']:+.4f}",
     ]
@@ -149,15 +154,19 @@ def oscillator(
 @app.command("decode")
 def decode_cmd(
     r: float = typer.Option(..., "--r", parser=ohms, help="R_A = R_B = R of the circuit [Ω], e.g. 10k."),
-    frequency: float = typer.Option(..., "--frequency", parser=hertz, help="Measured frequency [Hz], e.g. 6478.5 or 6.4785k."),
-    duty: float = typer.Option(..., "--duty", parser=fraction, help="Measured duty cycle, the output-high fraction [1], e.g. 0.10189 or 10.189%."),
+    frequency: float = typer.Option(..., "--frequency", parser=hertz, help="Measured frequency [Hz], e.g. 6478.5 or "
+            "6.4785k."),
+    duty: float = typer.Option(..., "--duty", parser=fraction, help="Measured duty cycle, the output-high fraction "
+            "[1], e.g. 0.10189 or 10.189%."),
     coff: float = typer.Option(0.0, "--coff", parser=farads, help="Offset capacitor C_off [F], e.g. 470p."),
     diode: bool = typer.Option(False, "--diode", help="The circuit has the ideal diode D1."),
-    diode_drop: float = typer.Option(None, "--diode-drop", parser=volts, help="D1 with this forward drop [V] (implies --diode)."),
+    diode_drop: float = typer.Option(None, "--diode-drop", parser=volts, help="D1 with this forward drop [V] (implies "
+            "--diode)."),
     vcc: float = typer.Option(5.0, "--vcc", parser=volts, help="Supply [V]."),
     vctrl: float = typer.Option(None, "--vctrl", parser=volts, help="Control-pin voltage [V] (default: open pin)."),
     rdis: float = typer.Option(0.0, "--rdis", parser=ohms, help="Discharge-transistor on-resistance [Ω] (default 0)."),
-    periods: int = typer.Option(1, "--periods", help="Periods averaged into the measurement [1], e.g. 100 (for the uncertainty)."),
+    periods: int = typer.Option(1, "--periods", help="Periods averaged into the measurement [1], e.g. 100 (for the "
+            "uncertainty)."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Recover R_FSR and C_FSR from a measured frequency and duty cycle (uncertainty: 62.5 ns timer ticks).
@@ -187,21 +196,26 @@ def decode_cmd(
 
 @app.command("design")
 def design_cmd(
-    rfsr_min: float = typer.Option(..., "--rfsr-min", parser=ohms, help="Smallest R_FSR of the sensor (full load) [Ω], e.g. 100k."),
+    rfsr_min: float = typer.Option(..., "--rfsr-min", parser=ohms, help="Smallest R_FSR of the sensor (full load) [Ω], "
+            "e.g. 100k."),
     rfsr_max: float = typer.Option(..., "--rfsr-max", parser=ohms, help="Largest R_FSR (no load) [Ω], e.g. 2M."),
     cfsr_min: float = typer.Option(..., "--cfsr-min", parser=farads, help="Smallest C_FSR [F], e.g. 0.5n."),
     cfsr_max: float = typer.Option(..., "--cfsr-max", parser=farads, help="Largest C_FSR [F], e.g. 1.5n."),
     fmin: float = typer.Option(..., "--fmin", parser=hertz, help="Lowest wanted frequency [Hz], e.g. 1k."),
     fmax: float = typer.Option(..., "--fmax", parser=hertz, help="Highest wanted frequency [Hz], e.g. 20k."),
     variant: str = typer.Option("auto", "--variant", help="Circuit variant: auto (the better one), diode or no-diode."),
-    diode_drop: float = typer.Option(0.0, "--diode-drop", parser=volts, help="Forward drop of D1 in the diode variant [V], e.g. 0.6."),
+    diode_drop: float = typer.Option(0.0, "--diode-drop", parser=volts, help="Forward drop of D1 in the diode variant "
+            "[V], e.g. 0.6."),
     vcc: float = typer.Option(5.0, "--vcc", parser=volts, help="Supply [V]."),
-    margin: float = typer.Option(0.25, "--margin", parser=fraction, help="Required oscillation margin N/N_min − 1 at the smallest R_FSR [1], e.g. 0.25 or 25%."),
-    window: float = typer.Option(0.1, "--window", parser=seconds, help="Measurement window for the stated resolution [s], e.g. 100ms or 0.1."),
+    margin: float = typer.Option(0.25, "--margin", parser=fraction, help="Required oscillation margin N/N_min − 1 at "
+            "the smallest R_FSR [1], e.g. 0.25 or 25%."),
+    window: float = typer.Option(0.1, "--window", parser=seconds, help="Measurement window for the stated resolution "
+            "[s], e.g. 100ms or 0.1."),
     max_frequency: float = typer.Option(
         CAPTURE_MAX_HZ, "--max-frequency", parser=hertz,
         help=f"Highest frequency the counter captures every edge of [Hz]; the band's top is lowered to it "
-             f"(default: the fsrlab meter, {CAPTURE_MAX_HZ / 1e3:g}k, measured in simavr). For another counter, e.g. 2M."),
+             f"(default: the fsrlab meter, {CAPTURE_MAX_HZ / 1e3:g}k, measured in simavr). For another counter, e.g. "
+             "2M."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Propose R, C_off and the variant for a sensor's R_FSR/C_FSR ranges and a wanted frequency band.
@@ -220,8 +234,10 @@ def design_cmd(
         fail(f"must be > 0 Hz, got {max_frequency:g}", "--max-frequency")
     if fmin >= max_frequency:
         meter = max_frequency == CAPTURE_MAX_HZ
-        who, why = ("the fsrlab meter", "its firmware's limit, measured in simavr") if meter else ("the counter", "--max-frequency")
-        fail(f"{format_eng(fmin, 'Hz')} … {format_eng(fmax, 'Hz')} is beyond what {who} captures: every edge only up to "
+        who, why = ("the fsrlab meter", "its firmware's limit, measured in "
+                "simavr") if meter else ("the counter", "--max-frequency")
+        fail(f"{format_eng(fmin, 'Hz')} … {format_eng(fmax, 'Hz')} is beyond what {who} captures: every edge only up "
+             "to "
              f"{format_eng(max_frequency, 'Hz')} ({why}); lower the band, or give --max-frequency for another counter",
              "--fmin/--fmax")
     with _model_errors():
@@ -250,7 +266,8 @@ def design_cmd(
         f"(band ends); {format_eng(d.range_resolution_single_hz[0], 'Hz')} at {format_eng(f0, 'Hz')}, "
         f"{format_eng(d.range_resolution_single_hz[1], 'Hz')} at {format_eng(f1, 'Hz')} (sensor range)",
         f"                   {format_eng(d.window_s, 's')} window: {format_eng(d.resolution_window_hz[0], 'Hz')}, "
-        f"{format_eng(d.resolution_window_hz[1], 'Hz')} (band ends); {format_eng(d.range_resolution_window_hz[0], 'Hz')}, "
+        f"{format_eng(d.resolution_window_hz[1], 'Hz')} (band ends); "
+        f"{format_eng(d.range_resolution_window_hz[0], 'Hz')}, "
         f"{format_eng(d.range_resolution_window_hz[1], 'Hz')} (sensor range)",
     ]
     for a in others:

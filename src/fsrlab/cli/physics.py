@@ -37,12 +37,18 @@ def _finite_percent(result) -> bool:
 
 @app.command("physics")
 def physics(
-    u: list[float] = typer.Option([3.0, 2.0, 1.0], "--u", parser=volts, help="Voltage across the composite [V], e.g. 2 or 2V; repeat for several (default: Table 2's 3, 2, 1)."),
-    s0: float = typer.Option(PAPER.s0_m, "--s0", parser=metres, help="Separation at zero stress s0 [m], e.g. 4.418n or 4.418nm."),
-    modulus: float = typer.Option(PAPER.modulus_pa, "--modulus", parser=pascals, help="Material stiffness M [Pa], e.g. 4.73M or 4.73MPa."),
-    sigma_f: float = typer.Option(PAPER.sigma_f_pa, "--sigma-f", parser=pascals, help="Final stress σf [Pa], e.g. 322k or 322kPa."),
-    k: float = typer.Option(PAPER.k, "--k", parser=number, help="Unloading exponent k ≥ 1 [1] (not printed by the paper; 2 reproduces Table 2's C_A)."),
-    phi0: float = typer.Option(PAPER.phi0_j / electron_volt, "--phi0", parser=electronvolts, help="Barrier height φ0 [eV], e.g. 0.223 or 223meV."),
+    u: list[float] = typer.Option([3.0, 2.0, 1.0], "--u", parser=volts, help="Voltage across the composite [V], e.g. 2 "
+            "or 2V; repeat for several (default: Table 2's 3, 2, 1)."),
+    s0: float = typer.Option(PAPER.s0_m, "--s0", parser=metres, help="Separation at zero stress s0 [m], e.g. 4.418n or "
+            "4.418nm."),
+    modulus: float = typer.Option(PAPER.modulus_pa, "--modulus", parser=pascals, help="Material stiffness M [Pa], e.g. "
+            "4.73M or 4.73MPa."),
+    sigma_f: float = typer.Option(PAPER.sigma_f_pa, "--sigma-f", parser=pascals, help="Final stress σf [Pa], e.g. 322k "
+            "or 322kPa."),
+    k: float = typer.Option(PAPER.k, "--k", parser=number, help="Unloading exponent k ≥ 1 [1] (not printed by the "
+            "paper; 2 reproduces Table 2's C_A)."),
+    phi0: float = typer.Option(PAPER.phi0_j / electron_volt, "--phi0", parser=electronvolts, help="Barrier height φ0 "
+            "[eV], e.g. 0.223 or 223meV."),
     eps_r: float = typer.Option(PAPER.eps_r, "--eps-r", parser=number, help="Relative permittivity ε_r [1], e.g. 7."),
     json_out: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:

@@ -10,7 +10,8 @@ from fsrlab.cli.options import emit_json
 
 @app.command("ports")
 def ports(
-    json_out: bool = typer.Option(False, "--json", help="Print the ports as JSON: device, usb_id, board, description, manufacturer, serial_number, and auto (the pick of --port auto or null)."),
+    json_out: bool = typer.Option(False, "--json", help="Print the ports as JSON: device, usb_id, board, description, "
+            "manufacturer, serial_number, and auto (the pick of --port auto or null)."),
 ) -> None:
     """List the serial ports with what is known about each, and what --port auto picks.
 

@@ -12,7 +12,8 @@ from fsrlab.cli.options import OVERWRITE_DIR_HELP, checked, emit_json, fail, out
 
 @app.command("paper")
 def paper(
-    out: Path = typer.Option(Path("report"), "--out", "-o", parser=out_path, help="Directory for index.html, paper.json and the PNG figures; created if missing."),
+    out: Path = typer.Option(Path("report"), "--out", "-o", parser=out_path, help="Directory for index.html, "
+            "paper.json and the PNG figures; created if missing."),
     overwrite: bool = typer.Option(False, "--overwrite", help=OVERWRITE_DIR_HELP),
     json_out: bool = typer.Option(False, "--json", help="Print the paths written as JSON instead of a summary."),
 ) -> None:

@@ -17,14 +17,22 @@ def _existing(path: Path | None, option: str) -> None:
 
 @app.command("report")
 def report(
-    run: Path = typer.Argument(..., metavar="RUN.csv", help="The recorded run (fsrlab bench, acquire, weights, measure)."),
-    out: Path = typer.Option(..., "--out", "-o", parser=out_path, help="Directory for index.html, report.json and the PNGs; created if missing."),
+    run: Path = typer.Argument(..., metavar="RUN.csv", help="The recorded run (fsrlab bench, acquire, weights, "
+            "measure)."),
+    out: Path = typer.Option(..., "--out", "-o", parser=out_path, help="Directory for index.html, report.json and the "
+            "PNGs; created if missing."),
     overwrite: bool = typer.Option(False, "--overwrite", help=OVERWRITE_DIR_HELP),
-    weights_run: Path = typer.Option(None, "--weights", metavar="WEIGHTS.csv", help="A dead-weight run (fsrlab bench weights) for RE1/RE2 of f and V0 and ISO 376 (default: the run itself when it is one)."),
-    placements: Path = typer.Option(None, "--placements", metavar="P.csv", help="A placements CSV (load [g], sensor, reading [Hz]; NAME.placements.csv of fsrlab bench weights, or a table like Table 4) for RE1/RE2 of the frequency per load and sensor, without a weights run."),
-    cal: Path = typer.Option(None, "--cal", metavar="CAL.json", help="Calibration JSON (fsrlab calibrate) applied to the run; default: the run calibrated on itself."),
-    no_calibration: bool = typer.Option(False, "--no-calibration", help="Leave the calibration part out (no --cal, no self-calibration)."),
-    json_out: bool = typer.Option(False, "--json", help="Print the report's numbers (report.json, with HE in %, RE in %, ISO 376 in %) as JSON."),
+    weights_run: Path = typer.Option(None, "--weights", metavar="WEIGHTS.csv", help="A dead-weight run (fsrlab bench "
+            "weights) for RE1/RE2 of f and V0 and ISO 376 (default: the run itself when it is one)."),
+    placements: Path = typer.Option(None, "--placements", metavar="P.csv", help="A placements CSV (load [g], sensor, "
+            "reading [Hz]; NAME.placements.csv of fsrlab bench weights, or a table like Table 4) for RE1/RE2 of the "
+            "frequency per load and sensor, without a weights run."),
+    cal: Path = typer.Option(None, "--cal", metavar="CAL.json", help="Calibration JSON (fsrlab calibrate) applied to "
+            "the run; default: the run calibrated on itself."),
+    no_calibration: bool = typer.Option(False, "--no-calibration", help="Leave the calibration part out (no --cal, no "
+            "self-calibration)."),
+    json_out: bool = typer.Option(False, "--json", help="Print the report's numbers (report.json, with HE in %, RE in "
+            "%, ISO 376 in %) as JSON."),
 ) -> None:
     """Measurement report of a recorded run: HE of f and V0 side by side, RE1/RE2, ISO 376, calibration.
 
@@ -38,7 +46,8 @@ def report(
 
     \b
       fsrlab report examples/bench.csv --out report-run
-      fsrlab report examples/other.csv --cal examples/calibration.json --placements examples/repeatability.csv --out report-other --json
+      fsrlab report examples/other.csv --cal examples/calibration.json --placements examples/repeatability.csv --out
+      report-other --json
     """
     from fsrlab.reports.run_report import write_run_report
 

@@ -33,15 +33,23 @@ def twin(
     profile: str = typer.Option("triangle", "--profile", help=PROFILE_HELP),
     peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS", help=PEAK_HELP),
     period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help=PERIOD_HELP),
-    sensor: str = typer.Option(None, "--sensor", help=SENSOR_HELP[:-1] + "; the model stays VirtualFSR, with that area. Or a virtual sensor: virtual-fsr (default), paper-a201-1 .. paper-a201-4 (fitted to the paper's §6, valid to about 10 kPa: use --peak 10k)."),
+    sensor: str = typer.Option(None, "--sensor", help=SENSOR_HELP[:-1] + "; the model stays VirtualFSR, with that "
+            "area. Or a virtual sensor: virtual-fsr (default), paper-a201-1 .. paper-a201-4 (fitted to the paper's §6, "
+            "valid to about 10 kPa: use --peak 10k)."),
     c_off: float = typer.Option("1n", "--c-off", parser=farads, metavar="CAPACITANCE", help=C_OFF_HELP),
-    speed: str = typer.Option("realtime", "--speed", help="Pacing of simulated time: realtime (the wall clock) or max (as fast as simavr goes)."),
-    duration: float = typer.Option(None, "--duration", parser=seconds, metavar="TIME", help="Run this long [s] of wall time: 90, 90s, 1.5min, 2h (default: until Ctrl-C)."),
+    speed: str = typer.Option("realtime", "--speed", help="Pacing of simulated time: realtime (the wall clock) or max "
+            "(as fast as simavr goes)."),
+    duration: float = typer.Option(None, "--duration", parser=seconds, metavar="TIME", help="Run this long [s] of wall "
+            "time: 90, 90s, 1.5min, 2h (default: until Ctrl-C)."),
     seed: int = typer.Option(0, "--seed", help="Random seed of the load cell's noise (an integer)."),
-    no_loadcell: bool = typer.Option(False, "--no-loadcell", help="No HX711 on D2/D3 (ref_ok 0: reference columns empty)."),
+    no_loadcell: bool = typer.Option(False, "--no-loadcell", help="No HX711 on D2/D3 (ref_ok 0: reference columns "
+            "empty)."),
     hx711_rate: int = typer.Option(80, "--hx711-rate", help=RATE_HELP.replace("Virtual device: t", "T")),
-    channels: int = typer.Option(None, "--channels", metavar="N", help="Sensors behind a CD74HC4051 multiplexer on the timing node, 1..8 [1]: channel k under the profile at peak x (k+1)/N; the firmware's select lines D5..D7 pick the one the 555 sees (scan them with acquire --channels)."),
-    json_out: bool = typer.Option(False, "--json", help='Print {"port": PATH} as JSON (one line) instead of the bare path.'),
+    channels: int = typer.Option(None, "--channels", metavar="N", help="Sensors behind a CD74HC4051 multiplexer on the "
+            "timing node, 1..8 [1]: channel k under the profile at peak x (k+1)/N; the firmware's select lines D5..D7 "
+            "pick the one the 555 sees (scan them with acquire --channels)."),
+    json_out: bool = typer.Option(False, "--json", help='Print {"port": PATH} as JSON (one line) instead of the bare '
+            'path.'),
 ) -> None:
     """Run the digital twin: the meter's real firmware in simavr on a pty; prints its path first.
 

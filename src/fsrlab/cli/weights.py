@@ -40,25 +40,38 @@ from fsrlab.io.outputs import write_text_atomic
 @app.command("weights")
 @meter_circuit_options()
 def weights(
-    masses: str = typer.Option(..., "--masses", metavar="MASSES", help="Masses to place, increasing, comma-separated [kg]: 0,50g,100g,200g,500g (g, kg or mg; 0 needs no unit)."),
+    masses: str = typer.Option(..., "--masses", metavar="MASSES", help="Masses to place, increasing, comma-separated "
+            "[kg]: 0,50g,100g,200g,500g (g, kg or mg; 0 needs no unit)."),
     port: str = typer.Option(None, "--port", help="Serial port of the meter (/dev/ttyACM0, COM3, a pty) or 'auto'."),
-    virtual: bool = typer.Option(False, "--virtual", help="A virtual meter and a virtual bench that places the masses itself (runs unattended)."),
-    out: Path = typer.Option(Path("weights.csv"), "--out", "-o", parser=out_path, help="Run file (CSV + NAME.meta.json sidecar; NAME.placements.csv beside it)."),
-    repeat: int = typer.Option(1, "--repeat", help="Cycles of placements [1], for repeatability (RE1, RE2 as in Tables 4 and 5): 1, 3, 5."),
-    unload: bool = typer.Option(False, "--unload", help="After the largest mass, unload in reverse (direction -1), for hysteresis."),
-    loadcell: Path = typer.Option(None, "--loadcell", metavar="LC.json", help="Load-cell calibration JSON: force_n is then the load cell's reading, force_nominal_n stays m·g."),
+    virtual: bool = typer.Option(False, "--virtual", help="A virtual meter and a virtual bench that places the masses "
+            "itself (runs unattended)."),
+    out: Path = typer.Option(Path("weights.csv"), "--out", "-o", parser=out_path, help="Run file (CSV + NAME.meta.json "
+            "sidecar; NAME.placements.csv beside it)."),
+    repeat: int = typer.Option(1, "--repeat", help="Cycles of placements [1], for repeatability (RE1, RE2 as in Tables "
+            "4 and 5): 1, 3, 5."),
+    unload: bool = typer.Option(False, "--unload", help="After the largest mass, unload in reverse (direction -1), for "
+            "hysteresis."),
+    loadcell: Path = typer.Option(None, "--loadcell", metavar="LC.json", help="Load-cell calibration JSON: force_n is "
+            "then the load cell's reading, force_nominal_n stays m·g."),
     sensor: str = typer.Option(None, "--sensor", help=SENSOR_HELP),
     area: float = typer.Option(None, "--area", parser=areas, metavar="AREA", help=AREA_HELP),
-    x: str = typer.Option("frequency_hz", "--x", help="Readout judged for stability and written as reading: frequency_hz [Hz], duty_cycle [1] or voltage_v [V]."),
-    window: float = typer.Option("100ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], whole ms: 20ms, 100ms, 0.25."),
-    settle_windows: int = typer.Option(10, "--settle-windows", help="Windows over which the readout's drift is judged [1]: 10 (at least 2)."),
-    max_drift: float = typer.Option("0.5%", "--max-drift", parser=fraction, metavar="FRACTION", help="Stable when the readout's relative drift over --settle-windows is at most this [1]: 0.5%, 0.002."),
-    timeout: float = typer.Option("30s", "--timeout", parser=seconds, metavar="TIME", help="Not stable after this long [s]: ask again (then skip the step): 30s, 1min."),
-    hold: float = typer.Option("1s", "--hold", parser=seconds, metavar="TIME", help="Steady time recorded per step [s]: 1s, 2s, 500ms."),
+    x: str = typer.Option("frequency_hz", "--x", help="Readout judged for stability and written as reading: "
+            "frequency_hz [Hz], duty_cycle [1] or voltage_v [V]."),
+    window: float = typer.Option("100ms", "--window", parser=seconds, metavar="TIME", help="Measurement window [s], "
+            "whole ms: 20ms, 100ms, 0.25."),
+    settle_windows: int = typer.Option(10, "--settle-windows", help="Windows over which the readout's drift is judged "
+            "[1]: 10 (at least 2)."),
+    max_drift: float = typer.Option("0.5%", "--max-drift", parser=fraction, metavar="FRACTION", help="Stable when the "
+            "readout's relative drift over --settle-windows is at most this [1]: 0.5%, 0.002."),
+    timeout: float = typer.Option("30s", "--timeout", parser=seconds, metavar="TIME", help="Not stable after this long "
+            "[s]: ask again (then skip the step): 30s, 1min."),
+    hold: float = typer.Option("1s", "--hold", parser=seconds, metavar="TIME", help="Steady time recorded per step "
+            "[s]: 1s, 2s, 500ms."),
     gravity: float = typer.Option("9.80665", "--gravity", parser=gravity_value, metavar="ACCELERATION", help=GRAVITY_HELP),
     seed: int = typer.Option(None, "--seed", help="Random seed of the virtual meter's noise (an integer)."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing run and its sidecar."),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="Virtual bench: do not print its steps (prompts for a person are always shown)."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Virtual bench: do not print its steps (prompts for a "
+            "person are always shown)."),
     json_out: bool = typer.Option(False, "--json", help='Print {"frames", "dropped", "duration_s", "file", "recorded", "skipped", "placements"} as JSON.'),
     meter: MeterCircuit = MeterCircuit(),
 ) -> None:
@@ -172,7 +185,8 @@ def _check_options(masses: str, masses_kg: list, repeat: int, x: str, window: fl
     if not 0 < max_drift <= 1:
         fail(f"must be in (0, 1], got {max_drift:g}", "--max-drift")
     if not timeout >= settle_windows * window_ms / 1000.0:
-        fail(f"must be at least --settle-windows windows ({settle_windows * window_ms / 1000.0:g} s), got {timeout:g} s",
+        fail(f"must be at least --settle-windows windows ({settle_windows * window_ms / 1000.0:g} s), got {timeout:g} "
+             "s",
              "--timeout")
     if not window_ms / 1000.0 <= hold <= 3600:
         fail(f"must be one window ({window_ms / 1000.0:g} s) to 1 h, got {hold:g} s", "--hold")
@@ -206,5 +220,6 @@ def _finish(summary: dict, result, out: Path, x: str, n_steps: int, force_source
         print(f"fsrlab: {plain_numbers(result.message)}", file=sys.stderr)
         raise typer.Exit(1)
     if not summary["completed"] and result.ended != "interrupted":
-        print(f"fsrlab: the plan did not finish ({result.ended}): {summary['recorded']} steps recorded", file=sys.stderr)
+        print(f"fsrlab: the plan did not finish ({result.ended}): {summary['recorded']} steps "
+              "recorded", file=sys.stderr)
         raise typer.Exit(1)

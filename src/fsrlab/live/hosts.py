@@ -62,14 +62,16 @@ def check_bind_host(host: str) -> str:
     if text.startswith("[") and text.endswith("]"):
         text = text[1:-1]
     if not text:
-        raise ParameterError("is empty; give an interface address such as 127.0.0.1 (default) or 0.0.0.0", parameter="host")
+        raise ParameterError("is empty; give an interface address such as 127.0.0.1 (default) or "
+                "0.0.0.0", parameter="host")
     try:
         ipaddress.ip_address(text)
         return text
     except ValueError:
         pass
     if not _BIND_NAME.match(text) or len(text) > 253:
-        raise ParameterError(f"{host!r} is neither an IP address nor a host name; give e.g. 127.0.0.1 or 0.0.0.0", parameter="host")
+        raise ParameterError(f"{host!r} is neither an IP address nor a host name; give e.g. 127.0.0.1 or "
+                "0.0.0.0", parameter="host")
     return text
 
 

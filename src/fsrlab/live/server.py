@@ -5,7 +5,8 @@ interface every request needs the random token printed with the URL (``?token=..
 for the page's own requests) and gets 403 without it; the websocket that carries the page's commands
 accepts only the page's own origin (Bokeh's ``allow_websocket_origin``); every request, the websocket
 included, is first checked for its Host name, token and path (:mod:`fsrlab.live.hosts`): only the page,
-BokehJS's static files, the favicon and the websocket are served. BokehJS comes from the ``bokeh`` wheel: nothing is loaded
+BokehJS's static files, the favicon and the websocket are served. BokehJS comes from the ``bokeh`` wheel: nothing is
+loaded
 from a CDN, the page works offline.
 """
 

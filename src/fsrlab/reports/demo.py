@@ -104,7 +104,8 @@ def _run_demo(chain, s: DemoSettings, paper: bool, started: list) -> DemoResult:
         report, since = started[0]
         pr = report.result()
         result.files["reproduction report"] = pr.index
-        done("reproduction report", t0, f"{len(pr.sections)} sections, {time.monotonic() - since:.1f} s since it started")
+        done("reproduction report", t0, f"{len(pr.sections)} sections, {time.monotonic() - since:.1f} s since it "
+                "started")
 
     # 7. Several sensors on one meter.
     _several_sensors(out, result, step, done)

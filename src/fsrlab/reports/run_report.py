@@ -112,7 +112,8 @@ def _estimate_time_figure(rep, outdir: Path) -> Figure | None:
     name = "estimate_time.png"
     save(fig, outdir / name)
     return Figure(name, "The estimate and its ±2u band over time", "The paper shows no estimate over time.",
-                  ("Black: the reference recorded with the run; green: the estimate" + (" with its ±2u band" if has_u else "")
+                  ("Black: the reference recorded with the run; green: the "
+                   "estimate" + (" with its ±2u band" if has_u else "")
                    + (f"; on this run's loaded rows, RMSE {_f(ag.rmse, '.4g')} {y_unit}{cover}." if ag else ".")))
 
 
@@ -199,7 +200,8 @@ def _repeatability_section(rep, paper: dict) -> Section:
             key = "table4_repeatability_capacitive_kHz" if p.quantity == "frequency_hz" else \
                 "table5_repeatability_traditional_V"
             printed = paper[key].get(f"{p.load_g:g}g")
-            rrows.append([("f [Hz]" if p.quantity == "frequency_hz" else "V0 [V]"), f"{p.load_g:g} g", str(p.sensor), p.n,
+            rrows.append([("f [Hz]" if p.quantity == "frequency_hz" else "V0 [V]"), f"{p.load_g:g} "
+                    "g", str(p.sensor), p.n,
                           _f(p.mean, ".4g"), _f(p.re1_percent, ".3f"), _f(p.re2_percent, ".3f"),
                           f"{printed['mean_RE1']:g} / {printed['mean_RE2']:g}" if printed else "—"])
         rtable = Table("RE1 and RE2 per load (eq. 39, sample standard deviation)",

@@ -26,7 +26,8 @@ def _spice_evidence(t: TauRatioTable, spice_nd: SimulatedRatios | None, spice_d:
         return _NO_SPICE, _NO_SPICE
     ev = (f" ngspice (independent transient simulation) gives τH/τL = {_at(spice_nd, 'tau_ratio', 10.0):.4f} at "
           f"N = 10 and DC = {100 * _at(spice_nd, 'duty_cycle', 1000.0):.3f} % at N = 1000, "
-          f"against {t.no_diode[t.n_ratio.index(10.0)]:.4f} and {100 * t.duty_cycle_no_diode[t.n_ratio.index(1000.0)]:.3f} % from the "
+          f"against {t.no_diode[t.n_ratio.index(10.0)]:.4f} and "
+          f"{100 * t.duty_cycle_no_diode[t.n_ratio.index(1000.0)]:.3f} % from the "
           "closed form.")
     ev_d = (f" ngspice: τH/τL = {_at(spice_d, 'tau_ratio', 10.0):.4f} at N = 10, "
             f"{_at(spice_d, 'tau_ratio', 100.0):.5f} at N = 100, DC = "

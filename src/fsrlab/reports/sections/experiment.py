@@ -145,9 +145,11 @@ def _repeat_table(exp: Experiment, printed: dict, key: str, attr: str, re_attr: 
         columns=["load", "sensor", f"mean reading paper ({unit})", f"mean reading fsrlab ({unit})", "ratio",
                  "RE1 paper (%)", "RE1 fsrlab (%)", "RE2 paper (%)", "RE2 fsrlab (%)"],
         rows=rows,
-        note=f"{status}. fsrlab: five virtual re-placements per sensor and load (fsrlab.paper.experiment.dead_weights): "
+        note=f"{status}. fsrlab: five virtual re-placements per sensor and load "
+             "(fsrlab.paper.experiment.dead_weights): "
              "each draws the placement's stress factor, contact-resistance factor and loaded-area factor (the "
-             "preset's three placement spreads, fitted to the mean RE2 of Tables 4 and 5) and a read time of 2–10 s (creep); one 100 ms meter window per reading; eq. (39) with the "
+             "preset's three placement spreads, fitted to the mean RE2 of Tables 4 and 5) and a read time of 2–10 s "
+             "(creep); one 100 ms meter window per reading; eq. (39) with the "
              f"sample standard deviation. The weight loads {DEAD_WEIGHT_AREA_M2 * 1e6:.0f} mm² (an assumption: "
              "400 g ↔ 10 kPa, see docs/experiment.md).")
     return table, data
@@ -212,7 +214,8 @@ def _erratum_x1(exp: Experiment, printed: dict) -> Erratum:
         paper=f"Figure 17: σ(f) fitted with a line (R² = {p['linear']}) and a cubic (R² = {p['cubic']}), 3–10 kHz, "
               "0–10 kPa; Table 3: HE of the frequency 14–19 %. The paper does not say which branches or which "
               "sensor were fitted.",
-        fsrlab=(f"On the virtual sensor 1 (fitted to Table 3, HE_PM {exp.he_proposed[0]:.1f} %), a single-valued σ(f) on "
+        fsrlab=(f"On the virtual sensor 1 (fitted to Table 3, HE_PM {exp.he_proposed[0]:.1f} %), a single-valued σ(f) "
+                "on "
                 f"both branches reaches R² = {f17['both']['linear']:.4f} (linear) and {f17['both']['cubic']:.4f} "
                 f"(cubic); its loading branch alone {f17['loading']['linear']:.4f} and {f17['loading']['cubic']:.4f}, "
                 f"its unloading branch {f17['unloading']['linear']:.4f} and {f17['unloading']['cubic']:.4f}, the "
@@ -238,7 +241,8 @@ def _targets_table(rows: list) -> Table:
         body.append([t["id"], t["source"], f"{t['quantity']} [{unit}]", _fmt(t["printed"] * scale),
                      ", ".join(_fmt(v * scale) for v in t["fitted"]), ", ".join(_fmt(v * scale) for v in t["residual"]),
                      "; ".join(t["tunes"])])
-    return Table(title=f"Targets: the {len(rows)} printed numbers of §6 the preset was fitted to (fitted, not predicted)",
+    return Table(title=f"Targets: the {len(rows)} printed numbers of §6 the preset was fitted to (fitted, not "
+            "predicted)",
                  columns=["id", "source", "quantity", "printed", "fitted", "residual", "sets"], rows=body,
                  note="fsrlab.paper.split.targets, from the fit's own list (fsrlab.paper.preset_fit.fit_target_list). "
                       "Fitted values: the fit's closed forms (quick_response; one per sensor using the number) and, "
@@ -374,11 +378,13 @@ def _intro(exp, tgt, pred: list, trivial: dict, misses: list[str]) -> str:
         f"Fitted, not reproduced: the preset was fitted (scripts/fit_paper_sensor.py) to {len(tgt)} printed numbers "
         "(table 'Targets'): Table 3's rows, Table 4's mean readings, Figure 19's axis ends and the mean RE2 of "
         "Tables 4 and 5. On the virtual bench (meter model included) the fitted Table 3 means are "
-        f"{exp.he_traditional.mean():.2f} % / {exp.he_proposed.mean():.2f} % (paper 23.35 % / 16.31 %): the bench keeps "
+        f"{exp.he_traditional.mean():.2f} % / {exp.he_proposed.mean():.2f} % (paper 23.35 % / 16.31 %): the bench "
+        "keeps "
         f"the fit. The other {len(pred)} printed numbers of §6 the bench produces are predictions (table "
         f"'Predictions'); {n_ok} of {len(pred)} lie within the tolerances of docs/experiment.md, all of them "
         f"repeatability numbers, whose level the fitted mean RE2 sets: a trivial predictor ({trivial['predictor']}) "
-        f"meets {trivial['within_tolerance']} of the same {trivial['n']}, the bench {trivial['bench_within_tolerance']}. "
+        f"meets {trivial['within_tolerance']} of the same {trivial['n']}, the bench "
+        f"{trivial['bench_within_tolerance']}. "
         "Without the paper's raw data fsrlab can show that a sensor model with the mechanisms §6 names can be fitted "
         "to Tables 3–4 and Figure 19's ranges and keeps Table 3's ordering; it cannot reproduce Tables 3–5 from "
         "independent measurements, and the predictions below mostly miss. A held-out fit (Table 4 left out) and the "
@@ -399,7 +405,8 @@ def _figures(exp, printed: dict, paths, f_rng, v_rng, order_f: str, order_v: str
                fsrlab=f"V0 {v_rng[0]:.3f}–{v_rng[1]:.3f} V (10-bit ADC, 4.9 mV steps; the axis ends are targets); "
                       f"{order_v}."),
         Figure(filename=p17.name, title="Figure 17: linear and cubic σ(f) on the virtual spring cycle",
-               paper=f"R² = {printed['figure17_fit_r2']['linear']} (linear), {printed['figure17_fit_r2']['cubic']} (cubic).",
+               paper=f"R² = {printed['figure17_fit_r2']['linear']} (linear), {printed['figure17_fit_r2']['cubic']} "
+                     "(cubic).",
                fsrlab=f"On both branches {exp.fig17['both']['linear']:.4f} / {exp.fig17['both']['cubic']:.4f}; on the "
                       f"branch means {exp.fig17['means']['linear']:.4f} / {exp.fig17['means']['cubic']:.4f} "
                       "(erratum X1)."),

@@ -184,7 +184,8 @@ def _table3(printed: dict, syn: _Synthetic) -> Table:
         columns=["sensor", "HE traditional (%)", "HE proposed (%)"], rows=rows,
         note="The paper's raw loading/unloading data are not published, so Table 3 cannot be recomputed; "
              f"its means are checked ({exact_mean(trad)} → {printed['traditional_mean']}, {exact_mean(prop)} → "
-             f"{printed['proposed_mean']}, exact decimal means rounded half up). The last row is fsrlab's synthetic run "
+             f"{printed['proposed_mean']}, exact decimal means rounded half up). The last row is fsrlab's synthetic "
+             "run "
              "(eq. 13 via fsrlab hysteresis on VirtualFSR data, 3 cycles 0–50 kPa): illustration only — "
              "the virtual sensor's hysteresis enters through the separation alone, so both readouts show "
              "similar HE, unlike the paper's sensors. The experiment section fits paper sensors to "
@@ -247,7 +248,8 @@ def _erratum_m1(t4: PrintedTableCheck, t5: PrintedTableCheck, found: DdofFinding
         paper="RE2 = 100 % · √(Σ(X − X̄)²/n) / X̄ (eq. 39), printed as integers in Tables 4 and 5.",
         fsrlab=(f"From the printed readings, all {found.rows} RE2 values (16 sensors, 4 means) round to the printed "
                 f"integer with the sample standard deviation (n − 1): {found.re2_match_n_minus_1}/{found.rows}. "
-                f"With divisor n as printed in eq. (39): {found.re2_match_n}/{found.rows}; misses: {'; '.join(misses)}. "
+                f"With divisor n as printed in eq. (39): {found.re2_match_n}/{found.rows}; misses: "
+                f"{'; '.join(misses)}. "
                 f"RE1 matches in {found.re1_match}/{found.rows}. fsrlab defaults to n − 1 (ddof=1) and offers n."),
         evidence="Recomputation in this section (Tables 4 and 5 below) and tests/metrics/test_repeatability.py.",
     )

@@ -156,7 +156,8 @@ def _table2(printed: dict, ours: CycleErrorTable, fit: BarrierHeightFit) -> Tabl
     for i, u in enumerate(ours.u_v):
         rows.append([f"{u} V", printed["resistance_per_area"][i], ours.resistance_percent[i],
                      fit.table.resistance_percent[i], printed["capacitance_per_area"][i], ours.capacitance_percent[i],
-                     f"{ours.resistance_stress_at_max_pa[i] / 1e3:.1f} / {ours.capacitance_stress_at_max_pa[i] / 1e3:.1f}",
+                     f"{ours.resistance_stress_at_max_pa[i] / 1e3:.1f} / "
+                     f"{ours.capacitance_stress_at_max_pa[i] / 1e3:.1f}",
                      f"eq. ({ours.tunneling_equation[i]})"])
     return Table(
         "Table 2: hysteresis error (eq. 13) of R_A and C_A over one cycle 0 → 322 kPa → 0",
@@ -261,7 +262,8 @@ def _erratum_p4(ours: CycleErrorTable, sweep: VoltageSweep, fitted: VoltageSweep
         "fitted to the printed Table 2, the statement holds at all three. Over u (extension) HE of R_A has a "
         f"minimum of {sweep.minimum_percent:.3f} % at {sweep.minimum_v:.3f} V and is below C_A for "
         f"{lo:.3f}–{hi:.3f} V ({fitted.crossings_v[0]:.3f}–{fitted.crossings_v[1]:.3f} V with φ0 = 0.2295 eV), which "
-        f"holds 2/3·Vcc = 3.33 V ({at_2_3_vcc:.2f} % at 2/3·Vcc), the largest voltage across the FSR in Figure 16. That "
+        f"holds 2/3·Vcc = 3.33 V ({at_2_3_vcc:.2f} % at 2/3·Vcc), the largest voltage across the FSR in Figure 16. "
+        "That "
         f"dip lies where eq. (12) is at the edge of its range: Simmons' high-voltage formula assumes B ≫ 1, and B = "
         f"{b3[0]:.2f}–{b3[1]:.2f} at 3 V ({bm[0]:.2f}–{bm[1]:.2f} at the minimum; s_f to s0), where the reverse term "
         f"r·exp(−B√r) is {q3[0]:.2f}–{q3[1]:.2f} of the forward exp(−B) ({qm[0]:.2f}–{qm[1]:.2f} at the minimum; "
