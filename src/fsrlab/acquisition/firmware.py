@@ -26,7 +26,8 @@ from fsrlab.acquisition.serial_link import HandshakeError, LinkError, SerialLink
 from fsrlab.errors import FsrlabError, ParameterError
 
 __all__ = ["SKETCH_NAME", "AVRDUDE_HINT", "FlashError", "ToolMissing", "FirmwareInfo", "FlashResult", "data_dir",
-           "hex_path", "sketch_files", "twin_sources", "firmware_info", "write_sketch", "check_intel_hex", "FLASH_BYTES",
+           "hex_path", "sketch_files", "twin_sources", "firmware_info", "write_sketch", "check_intel_hex",
+           "FLASH_BYTES",
            "avrdude_command", "flash"]
 
 SKETCH_NAME = "fsrlab_meter"

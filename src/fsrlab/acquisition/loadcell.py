@@ -156,7 +156,8 @@ class LoadCellModel:
             Counts, integers in HX711_MIN..HX711_MAX (the HX711 saturates there). [count]
         """
         f = np.asarray(force_n, dtype=float)
-        value = self.offset_counts + self.drift_counts_per_s * np.asarray(t_s, dtype=float) + self.scale_counts_per_n * f
+        value = self.offset_counts + self.drift_counts_per_s * np.asarray(t_s,
+                                                                          dtype=float) + self.scale_counts_per_n * f
         if rng is not None and self.noise_counts > 0:
             value = value + rng.normal(0.0, self.noise_counts, np.shape(value))
         return np.clip(np.round(value), HX711_MIN, HX711_MAX)

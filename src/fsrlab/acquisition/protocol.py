@@ -1,4 +1,5 @@
-"""Serial protocol (version 3; versions 1 and 2 still read) between the fsrlab meter (Arduino firmware) and the host: pure framing, no I/O.
+"""Serial protocol (version 3; versions 1 and 2 still read) between the fsrlab meter (Arduino firmware) and the
+host: pure framing, no I/O.
 
 The device sends one ASCII frame per line, ``$<TYPE>,<SEQ>[,<field>...]*<CRC>\\r\\n``, where CRC is
 CRC-16/CCITT-FALSE over the bytes strictly between ``$`` and ``*``; the host sends short command
@@ -30,7 +31,8 @@ from fsrlab.hardware import ADC_BITS, ADC_COUNTS, ADC_V_PER_COUNT, ADC_VREF_V, C
 __all__ = [
     "PROTOCOL_VERSION", "SUPPORTED_PROTOCOLS", "M_FIELDS_V1", "M_FIELDS_V2", "M_FIELDS_V3", "CHANNELS",
     "SCAN_MASK_MAX", "DWELL_MS_MIN", "DWELL_MS_MAX", "DWELL_MS_DEFAULT", "SETTLE_MAX", "SETTLE_DEFAULT",
-    "channel_mask", "mask_channels", "parse_channels", "HX711_MIN", "HX711_MAX", "F_CPU", "TICK_S", "ADC_BITS", "ADC_COUNTS", "ADC_VREF_V", "ADC_V_PER_COUNT", "DEFAULT_BAUD", "MAX_LINE", "MAX_COMMAND", "SEQ_MODULO",
+    "channel_mask", "mask_channels", "parse_channels", "HX711_MIN", "HX711_MAX", "F_CPU", "TICK_S", "ADC_BITS",
+    "ADC_COUNTS", "ADC_VREF_V", "ADC_V_PER_COUNT", "DEFAULT_BAUD", "MAX_LINE", "MAX_COMMAND", "SEQ_MODULO",
     "UINT32_MODULO", "CAPTURE_MAX_HZ",
     "WINDOW_MS_MIN", "WINDOW_MS_MAX", "WINDOW_MS_DEFAULT", "DEVICE_NAME", "FRAME_TYPES", "COMMANDS",
     "ERR_UNKNOWN_COMMAND", "ERR_BAD_VALUE", "ERR_LINE_TOO_LONG",

@@ -50,7 +50,8 @@ from fsrlab.acquisition.protocol import WINDOW_MS_DEFAULT, WINDOW_MS_MAX, WINDOW
 from fsrlab.acquisition.serial_link import DeviceGone, LinkError, SerialLink
 from fsrlab.acquisition.stream import CLOCKS, Gap, Scan, WindowStream, window_row
 
-__all__ = ["COLUMNS", "SCAN_COLUMNS", "REFERENCE_COLUMNS", "Scan", "channel_map", "FAILED_ENDINGS", "Gap", "RecordStatus", "RecordResult", "default_stall_s", "record",
+__all__ = ["COLUMNS", "SCAN_COLUMNS", "REFERENCE_COLUMNS", "Scan", "channel_map", "FAILED_ENDINGS", "Gap",
+           "RecordStatus", "RecordResult", "default_stall_s", "record",
            "window_row", "result_dict"]
 
 COLUMNS = ("time_s", "frequency_hz", "duty_cycle", "voltage_v", "periods", "missed", "range", "seq")
@@ -87,7 +88,8 @@ def channel_map(channels, given=None) -> list[dict]:
 
     known: dict[int, dict] = {}
     for entry in given or ():
-        if not isinstance(entry, dict) or not isinstance(entry.get("channel"), int) or isinstance(entry["channel"], bool):
+        if not isinstance(entry, dict) or not isinstance(entry.get("channel"), int) or isinstance(entry["channel"],
+                bool):
             raise ParameterError(f"every entry needs an integer 'channel', got {entry!r}",
                                  parameter="channel_map")
         unknown = set(entry) - {"channel", "sensor_id", "x_m", "y_m"}

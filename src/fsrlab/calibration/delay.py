@@ -86,7 +86,8 @@ def delayed(t, x, delay_s: float) -> np.ndarray:
         raise ParameterError(f"must have one time per reading ({x.shape}), got shape {t.shape}", parameter="t")
     back = np.flatnonzero(np.diff(t) < 0) + 1  # where the time goes back: each stretch on its own
     if back.size:
-        return np.concatenate([delayed(tt, xx, delay_s) for tt, xx in zip(np.split(t, back), np.split(x, back), strict=True)])
+        return np.concatenate([delayed(tt, xx, delay_s) for tt, xx in zip(np.split(t, back), np.split(x, back),
+                                                                          strict=True)])
     ok = np.isfinite(x) & np.isfinite(t)
     if not ok.any():
         return x

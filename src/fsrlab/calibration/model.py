@@ -185,7 +185,8 @@ class HeldoutCalibration:
         if not 0 <= start <= 1:
             raise FileFormatError(f"creep_start: must be a fraction from 0 to 1 of the first level, got {start!r}")
         return cls(curve_from_dict(d["static"]), curve_from_dict(d["curve"]), thr, tau, w, fs, row,
-                   None if unc is None else LevelUncertainty.from_dict(unc), bool(d.get("level_scaled_hysteresis", False)),
+                   None if unc is None else LevelUncertainty.from_dict(unc),
+                   bool(d.get("level_scaled_hysteresis", False)),
                    None if plain is None else LevelUncertainty.from_dict(plain), delay, rng,
                    tuple(curve_from_dict(m) for m in d.get("static_mix", ())), start)
 

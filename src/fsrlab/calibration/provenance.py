@@ -190,7 +190,8 @@ def mismatches(x: str, calibration: RecordedWith, run: RecordedWith,
                     out.append((("" if r is None else f"{describe_range((r,))}: ") + a,
                                 (f"{describe_range(calibration.ranges)}: " if calibration.ranges else "") + b))
                     break
-        elif run.ranges is not None and calibration.ranges is not None and not set(run.ranges) <= set(calibration.ranges):
+        elif (run.ranges is not None and calibration.ranges is not None
+              and not set(run.ranges) <= set(calibration.ranges)):
             out.append((describe_range(run.ranges), describe_range(calibration.ranges)))
     elif x == "voltage_v":
         if run.opamp is not None and calibration.opamp is not None and run.opamp != calibration.opamp:

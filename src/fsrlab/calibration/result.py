@@ -182,7 +182,8 @@ class Calibration:
         return {"format": CALIBRATION_FORMAT, "version": CALIBRATION_VERSION, "method": METHOD,
                 "model": self.model_name, "x": self.x_name, "y": self.y_name,
                 "units": {"x": self.x_unit, "y": self.y_unit}, "readout_range": list(self.x_range),
-                "lag_s": self.lag_s, "n": self.n, "r2": self.r2 if math.isfinite(self.r2) else None, "created": self.created, "sources": list(self.sources),
+                "lag_s": self.lag_s, "n": self.n, "r2": self.r2 if math.isfinite(self.r2) else None,
+                "created": self.created, "sources": list(self.sources),
                 "recorded_with": None if self.recorded_with is None else self.recorded_with.to_dict(),
                 "circuit": None if self.circuit is None else self.circuit.to_dict(),
                 "selection": self.selection.to_dict(), "calibration": self.model.to_dict()}
@@ -390,7 +391,8 @@ class Estimator:
         self.stepper = self.model.stepper()
         self.lo, self.hi = cal.x_range
         span = self.hi - self.lo
-        self.kept = (self.lo - margin * span, self.hi + margin * span) if math.isfinite(margin) else (-math.inf, math.inf)
+        self.kept = ((self.lo - margin * span, self.hi + margin * span) if math.isfinite(margin)
+                     else (-math.inf, math.inf))
         self._k = 0
 
     def step(self, readout: float | None, t: float | None = None) -> tuple[float | None, float | None, bool]:

@@ -115,7 +115,8 @@ def held_out_splits(recs: list[Recording]) -> list[tuple[list[Part], list[Part]]
     cut = used[np.linspace(0, used.size, BLOCKS + 1).astype(int)[1:-1]]
     edges = np.r_[0, cut, n]
     idx = np.arange(n)
-    return [([Part(rec, rec.usable & (idx < edges[k]))], [Part(rec, rec.usable & (idx >= edges[k]) & (idx < edges[k + 1]))])
+    return [([Part(rec, rec.usable & (idx < edges[k]))],
+             [Part(rec, rec.usable & (idx >= edges[k]) & (idx < edges[k + 1]))])
             for k in range(2, BLOCKS)]
 
 

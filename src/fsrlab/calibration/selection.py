@@ -79,7 +79,8 @@ def _coefficients(family: str, size: int) -> int:
 #: Static candidates, simplest first (fewest coefficients, then the piecewise curve before the polynomial
 #: before the spline, then :data:`_VARIABLE_ORDER`): (readout variable, family, size). Which variables
 #: are tried: :func:`fsrlab.calibration.scoring.readout_variables`. [1]
-STATIC_CANDIDATES = tuple(sorted(((v, f, k) for f, sizes in FAMILY_SIZES.items() for k in sizes for v in _VARIABLE_ORDER),
+STATIC_CANDIDATES = tuple(sorted(((v, f, k) for f, sizes in FAMILY_SIZES.items() for k in sizes
+                                  for v in _VARIABLE_ORDER),
                                  key=lambda c: (_coefficients(c[1], c[2]), list(FAMILY_SIZES).index(c[1]),
                                                 _VARIABLE_ORDER.index(c[0]))))
 #: Static candidates whose held-out error is within this many standard errors of the best are averaged

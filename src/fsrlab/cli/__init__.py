@@ -191,7 +191,8 @@ class _LazyGroup(typer.core.TyperGroup):
             summary = COMMANDS[name][1]
             self._stubs[name] = (typer.core.TyperCommand(name, help=summary, rich_markup_mode=self.rich_markup_mode)
                                  if name in COMMAND_GROUPS else
-                                 typer.core.TyperCommand(name, short_help=summary, rich_markup_mode=self.rich_markup_mode))
+                                 typer.core.TyperCommand(name, short_help=summary,
+                                                         rich_markup_mode=self.rich_markup_mode))
             self._stubs[name].rich_help_panel = PANEL_OF.get(name)
         return self._stubs[name]
 
@@ -303,7 +304,8 @@ def _light_coercion() -> None:
         if self._runtime_param is None:
             desc = self.type_descriptor
             plain = (desc.parameter_info.parser is not None and not (desc.is_list or desc.is_tuple)) or (
-                desc.annotation in (bool, int, float, str, Path) and not (desc.is_file or desc.is_choice or desc.is_ranged))
+                desc.annotation in (bool, int, float, str,
+                                    Path) and not (desc.is_file or desc.is_choice or desc.is_ranged))
             self._runtime_param = (Plain(parameter_info=desc.parameter_info, annotation=desc.annotation) if plain
                                    else build_runtime_param(desc))
         return self._runtime_param

@@ -59,7 +59,8 @@ SETTLE_HELP = "Periods discarded after the first edge that follows a switch of c
 
 
 def scan_options(channels: str | None, dwell: float, settle: int, channel_map: Path | None = None):
-    """The ``Scan`` and channel map of ``--channels``, ``--dwell``, ``--settle``, ``--channel-map`` (None without channels)."""
+    """The ``Scan`` and channel map of ``--channels``, ``--dwell``, ``--settle``, ``--channel-map`` (None without
+    channels)."""
     if channels is None:
         for given, name in ((dwell is not None, "--dwell"), (settle is not None, "--settle"),
                             (channel_map is not None, "--channel-map")):
@@ -97,7 +98,8 @@ def scan_options(channels: str | None, dwell: float, settle: int, channel_map: P
 
 def mux_source(channels: int, profile: str, peak: float, period: float, c_off: float, sensor_model=None,
                area_m2: float | None = None):
-    """A virtual bench of ``channels`` sensors behind a CD74HC4051, channel k under the profile at peak·(k+1)/channels."""
+    """A virtual bench of ``channels`` sensors behind a CD74HC4051, channel k under the profile at
+    peak·(k+1)/channels."""
     from fsrlab.physics.sensor import VirtualFSR
     from fsrlab.virtual.sources import VIRTUAL_CIRCUIT, MuxSource, StressProfile
 
@@ -136,11 +138,15 @@ def acquire(
     range_: int = typer.Option(0, "--range", help="C_off range switch [1]: 0 (off) or 1 (C_off connected)."),
     baud: int = typer.Option(115200, "--baud", help="Line rate [bit/s]; protocol v1: 115200."),
     profile: str = typer.Option("triangle", "--profile", help=PROFILE_HELP),
-    peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS", help="Virtual device: " + PEAK_HELP[0].lower() + PEAK_HELP[1:]),
-    period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="Virtual device: " + PERIOD_HELP[0].lower() + PERIOD_HELP[1:]),
+    peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS",
+                               help="Virtual device: " + PEAK_HELP[0].lower() + PEAK_HELP[1:]),
+    period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME",
+                                 help="Virtual device: " + PERIOD_HELP[0].lower() + PERIOD_HELP[1:]),
     seed: int = typer.Option(None, "--seed", help=SEED_HELP),
-    corrupt: float = typer.Option("0", "--corrupt", parser=fraction, metavar="FRACTION", help="Virtual device (tests): " + CORRUPT_HELP[0].lower() + CORRUPT_HELP[1:]),
-    drop: float = typer.Option("0", "--drop", parser=fraction, metavar="FRACTION", help="Virtual device (tests): " + DROP_HELP[0].lower() + DROP_HELP[1:]),
+    corrupt: float = typer.Option("0", "--corrupt", parser=fraction, metavar="FRACTION",
+                                  help="Virtual device (tests): " + CORRUPT_HELP[0].lower() + CORRUPT_HELP[1:]),
+    drop: float = typer.Option("0", "--drop", parser=fraction, metavar="FRACTION",
+                               help="Virtual device (tests): " + DROP_HELP[0].lower() + DROP_HELP[1:]),
     sensor: str = typer.Option(None, "--sensor", help=SENSOR_HELP),
     area: float = typer.Option(None, "--area", parser=areas, metavar="AREA", help=AREA_HELP),
     loadcell: Path = typer.Option(None, "--loadcell", metavar="LC.json", help=LOADCELL_HELP),

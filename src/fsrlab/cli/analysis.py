@@ -135,7 +135,8 @@ def repeatability(
     for col in ("load", "sensor", "n", "mean", "RE1 (%)", "RE2 (%)"):
         table.add_column(col, justify="right")
     for g in res.groups:
-        table.add_row(str(g.load), str(g.sensor), str(g.n), f"{g.mean:.6g}", f"{g.re1_percent:.2f}", f"{g.re2_percent:.2f}")
+        table.add_row(str(g.load), str(g.sensor), str(g.n), f"{g.mean:.6g}", f"{g.re1_percent:.2f}",
+                      f"{g.re2_percent:.2f}")
     for m in res.means:
         table.add_row(str(m.load), "mean", "", "", f"{m.re1_percent:.2f}", f"{m.re2_percent:.2f}")
     Console().print(table)
@@ -274,7 +275,8 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
     fs = cal.full_scale
     out = {"method": "held-out", "scheme": sel.scheme, "model": cal.model_name, "reference": cal.y_name,
            "unit": cal.y_unit, "runs": [str(p) for p in run_files], "lag_s": cal.lag_s, "lag_rows": sel.lag_rows,
-           "delay_s": cal.model.delay_s, "heldout_rmse": sel.heldout_rmse, "heldout_rmse_percent_fs": 100 * sel.heldout_rmse / fs,
+           "delay_s": cal.model.delay_s, "heldout_rmse": sel.heldout_rmse,
+           "heldout_rmse_percent_fs": 100 * sel.heldout_rmse / fs,
            "heldout_rmse_plain": sel.heldout_rmse_plain, "full_scale": fs, "readout_range": list(cal.x_range),
            "compensated": cal.model.has_memory, "uncertainty_relative": cal.model.uncertainty.relative,
            "gain_spread": sel.gain_spread, "readout_variables": sel.readout, "steps": sel.steps,

@@ -81,7 +81,9 @@ def bench(
             "replaced."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Virtual bench: do not print its steps (prompts for a "
             "person are always shown)."),
-    json_out: bool = typer.Option(False, "--json", help='Print {"file", "frames", "dropped", "duration_s", "protocol", "device", "placements", "report"} as JSON.'),
+    json_out: bool = typer.Option(False, "--json",
+                                  help='Print {"file", "frames", "dropped", "duration_s", "protocol", "device", '
+                                       '"placements", "report"} as JSON.'),
     meter: MeterCircuit = MeterCircuit(),
 ) -> None:
     """Run a bench protocol (spring cycles, dead-weight re-placements, a creep hold) into a run file.
@@ -212,7 +214,8 @@ def _announcer(device: str, quiet: bool):
     return announce_virtual, None
 
 
-def _finish(run, out: Path, report: Path | None, protocol: str, device: str, meter: MeterCircuit, json_out: bool) -> None:
+def _finish(run, out: Path, report: Path | None, protocol: str, device: str, meter: MeterCircuit,
+            json_out: bool) -> None:
     """The report when asked, the summary printed, and the exit code of a recording that failed or stopped short."""
     from fsrlab.acquisition.recorder import result_dict
 

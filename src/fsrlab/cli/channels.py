@@ -42,7 +42,8 @@ def calibrate_channels_cmd(
         cals = calibrate_channels(run, **({"reference": reference} if reference else {}))
         cals.save(out, overwrite=overwrite, inputs=[run])
     except FsrlabError as err:
-        fail(getattr(err, "reason", str(err)), {"reference": "--reference"}.get(getattr(err, "parameter", None), "RUN.csv"))
+        fail(getattr(err, "reason", str(err)),
+             {"reference": "--reference"}.get(getattr(err, "parameter", None), "RUN.csv"))
     summary = {sid: {"channel": cals.channels[sid], "model": getattr(cal, "model_name", None),
                      "r2": getattr(cal, "r2", None)} for sid, cal in cals.by_sensor.items()}
     if json_out:
@@ -64,7 +65,8 @@ def crosstalk_cmd(
             "[Pa]: 50k, 20kPa."),
     duration: float = typer.Option("0.5s", "--duration", parser=seconds, metavar="TIME", help="Simulated time per "
             "recording [s] (one unloaded, one per channel)."),
-    json_out: bool = typer.Option(False, "--json", help='Print {"channels", "baseline_hz", "loaded_hz", "matrix", "worst"} as JSON.'),
+    json_out: bool = typer.Option(False, "--json",
+                                  help='Print {"channels", "baseline_hz", "loaded_hz", "matrix", "worst"} as JSON.'),
 ) -> None:
     """Cross-talk check: load one channel at a time, read all of them; prints the channels × channels matrix.
 

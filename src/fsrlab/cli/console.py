@@ -100,7 +100,8 @@ class LiveView:
                 "(%)", "dropped", "corrupt", "resets"):
             table.add_column(col, justify="right")
         if st is not None:
-            table.add_row(f"{st.elapsed_s:.1f}", str(st.frames), f"{st.frames_per_s:.1f}", fmt_value(st.frequency_hz, ".1f"),
+            table.add_row(f"{st.elapsed_s:.1f}", str(st.frames), f"{st.frames_per_s:.1f}",
+                          fmt_value(st.frequency_hz, ".1f"),
                           fmt_value(st.duty_cycle * 100 if st.duty_cycle == st.duty_cycle else math.nan, ".2f"),
                           str(st.dropped), str(st.bad_frames), str(st.resets))
         return table

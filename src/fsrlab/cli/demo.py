@@ -28,7 +28,9 @@ def demo(
             "the other)."),
     repeat: int = typer.Option(5, "--repeat", help="Placements of each dead weight [1]: 5 as in Tables 4 and 5."),
     no_paper: bool = typer.Option(False, "--no-paper", help="Leave out the reproduction report (fsrlab paper)."),
-    json_out: bool = typer.Option(False, "--json", help='Print {"index", "device", "total_s", "steps", "files", "numbers"} as JSON (HE and RE in %, times in s).'),
+    json_out: bool = typer.Option(False, "--json",
+                                  help='Print {"index", "device", "total_s", "steps", "files", "numbers"} as JSON (HE '
+                                       'and RE in %, times in s).'),
 ) -> None:
     """The measurement chain on a virtual bench: record, calibrate, compensate, report; then the paper report.
 
@@ -85,7 +87,8 @@ def demo(
     def progress(line: str) -> None:
         print(f"fsrlab demo: {line}", file=sys.stderr, flush=True)
 
-    res = run_demo(out, DemoSettings(cycles=cycles, period_s=period, repeat=repeat, speed=speed), sensor=sensor, device=device,
+    res = run_demo(out, DemoSettings(cycles=cycles, period_s=period, repeat=repeat, speed=speed), sensor=sensor,
+                   device=device,
                    paper=not no_paper, progress=progress)
     if json_out:
         emit_json({"index": str(res.index), "device": res.device, "total_s": res.total_s,

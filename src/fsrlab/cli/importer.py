@@ -79,8 +79,7 @@ def import_cmd(
 
     \b
       fsrlab import examples/foreign_fsr.csv -o run.csv
-      fsrlab import examples/foreign_fsr.csv --reference examples/foreign_loadcell.csv --time time_ms --force force_N -o
-      run.csv --json
+      fsrlab import examples/foreign_fsr.csv --reference examples/foreign_loadcell.csv --time time_ms -o run.csv --json
     """
     from fsrlab.errors import FileFormatError, ParameterError
     from fsrlab.io.foreign import ForeignFormatError, import_foreign, write_imported

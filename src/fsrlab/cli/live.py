@@ -175,7 +175,8 @@ def live(
                         (session, link, device))
     _serve(srv, session, link, device, json_out, open_browser, duration)
     if json_out:
-        _json_line({"frames": session.status.frames, "recorded": session.status.recorded, "state": session.status.state})
+        _json_line({"frames": session.status.frames, "recorded": session.status.recorded,
+                    "state": session.status.state})
     else:
         typer.echo(f"fsrlab live: {session.status.frames} windows shown; {session.status.state}: "
                 f"{session.status.message}")
@@ -224,7 +225,8 @@ def _open_link(port: str, device):
     except Exception as exc:  # noqa: BLE001 - one line: the port could not be opened
         if device is not None:
             device.close()
-        if isinstance(exc, FsrlabError) and exc.parameter == "port":  # e.g. --port auto and no board: as acquire says it
+        if isinstance(exc,
+                      FsrlabError) and exc.parameter == "port":  # e.g. --port auto and no board: as acquire says it
             fail(exc.reason, "--port")
         fail(f"cannot open {port}: {exc}", "--port")
 

@@ -39,7 +39,8 @@ def loadcell(
             "scale factor is added to it (or written to -o)."),
     mass: float = typer.Option(None, "--mass", parser=masses, metavar="MASS", help="scale: the known mass on the cell "
             "[kg]: 500g, 0.5kg, 250mg."),
-    gravity: float = typer.Option("9.80665", "--gravity", parser=gravity_value, metavar="ACCELERATION", help=GRAVITY_HELP),
+    gravity: float = typer.Option("9.80665", "--gravity", parser=gravity_value, metavar="ACCELERATION",
+                                  help=GRAVITY_HELP),
     capacity: float = typer.Option(None, "--capacity", parser=masses, metavar="MASS", help="tare: the cell's rated "
             "capacity [kg], stored (a scale mass below 5 % of it warns): 5kg, 1kg, 500g."),
     duration: float = typer.Option("3s", "--duration", parser=seconds, metavar="TIME", help="Reading time [s]: 3s, 5, "

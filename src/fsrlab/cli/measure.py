@@ -113,11 +113,15 @@ def measure(
     area: float = typer.Option(None, "--area", parser=areas, metavar="AREA", help=AREA_HELP),
     loadcell: Path = typer.Option(None, "--loadcell", metavar="LC.json", help=LOADCELL_HELP),
     profile: str = typer.Option("triangle", "--profile", help=PROFILE_HELP),
-    peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS", help="Virtual device: " + PEAK_HELP[0].lower() + PEAK_HELP[1:]),
-    period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME", help="Virtual device: " + PERIOD_HELP[0].lower() + PERIOD_HELP[1:]),
+    peak: float = typer.Option("50k", "--peak", parser=pascals, metavar="STRESS",
+                               help="Virtual device: " + PEAK_HELP[0].lower() + PEAK_HELP[1:]),
+    period: float = typer.Option("4s", "--period", parser=seconds, metavar="TIME",
+                                 help="Virtual device: " + PERIOD_HELP[0].lower() + PERIOD_HELP[1:]),
     seed: int = typer.Option(None, "--seed", help="Random seed of the virtual meter's noise (an integer)."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No live display."),
-    json_out: bool = typer.Option(False, "--json", help='Print {"frames", "dropped", "duration_s", "file", "estimated", "out_of_range", "last"} as JSON (forces in N).'),
+    json_out: bool = typer.Option(False, "--json",
+                                  help='Print {"frames", "dropped", "duration_s", "file", "estimated", "out_of_range", '
+                                       '"last"} as JSON (forces in N).'),
     meter: MeterCircuit = MeterCircuit(),
 ) -> None:
     """Show the force live from a calibration (N and g; the load cell's reading beside it) and record it.
@@ -178,7 +182,8 @@ def measure(
         on_row = _RowEstimates(est, columns, to_force, live)
         try:
             with SerialLink(port) as link, sigterm_as_interrupt():
-                result = record(link, out, duration if duration is not None else 10 * 365 * 86400.0, window_ms=window_ms,
+                result = record(link, out, duration if duration is not None else 10 * 365 * 86400.0,
+                                window_ms=window_ms,
                                 metadata=metadata, on_event=live.notice,
                                 health=(lambda: device.failure) if device is not None else None, overwrite=overwrite,
                                 loadcell=lc, extra_columns=columns, on_row=on_row,

@@ -47,7 +47,8 @@ from fsrlab.io.jsonable import to_jsonable
 from fsrlab.units import format_eng, parse_eng, parse_quantity
 
 __all__ = ["eng", "ohms", "farads", "volts", "hertz", "pascals", "metres", "electronvolts", "seconds",
-           "fraction", "number", "areas", "masses", "mass_list", "emit_json", "to_jsonable", "fail", "option_names", "plain_numbers"]
+           "fraction", "number", "areas", "masses", "mass_list", "emit_json", "to_jsonable", "fail", "option_names",
+           "plain_numbers"]
 
 
 def eng(text: str | float) -> float:
@@ -323,7 +324,10 @@ def make_virtual_device(profile: str, peak: float, period: float, c_off: float, 
     from fsrlab.virtual.sources import VIRTUAL_CIRCUIT, PhysicsSource, StressProfile
 
     prof = StressProfile(kind=profile, peak_pa=peak, period_s=period)
-    sensor = sensor_model if sensor_model is not None else VirtualFSR() if area_m2 is None else VirtualFSR(area_m2=area_m2)
+    if sensor_model is not None:
+        sensor = sensor_model
+    else:
+        sensor = VirtualFSR() if area_m2 is None else VirtualFSR(area_m2=area_m2)
     cell = LoadCellModel(rate_sps=rate) if load_cell else None
     try:
         source = PhysicsSource(prof, sensor=sensor, circuit=VIRTUAL_CIRCUIT.replace(c_off_farad=c_off))
@@ -385,7 +389,8 @@ def virtual_bench(steps, seed: int | None, area_m2: float | None, gravity_m_s2: 
     return device, bench, place
 
 
-GRAVITY_HELP = "Local acceleration of gravity [m/s²], for mass -> force: 9.80665 (standard gravity g_n, the default), 9.81."
+GRAVITY_HELP = ("Local acceleration of gravity [m/s²], for mass -> force: 9.80665 (standard gravity g_n, the "
+                "default), 9.81.")
 
 
 def gravity_value(text: str | float) -> float:
@@ -602,14 +607,16 @@ def meter_circuit_options(virtual_c_off: bool = False) -> Callable:
         signature = inspect.signature(command)
         own = [p for p in signature.parameters.values() if p.name != "meter"]
         at = [p.name for p in own].index("port") + 1
-        added = [inspect.Parameter(name, inspect.Parameter.POSITIONAL_OR_KEYWORD, annotation=bool if name == "diode" else float,
+        added = [inspect.Parameter(name, inspect.Parameter.POSITIONAL_OR_KEYWORD,
+                                   annotation=bool if name == "diode" else float,
                                    default=typer.Option(False if name == "diode" else None, option,
                                                         **{"help": c_off_help, **kwargs}))
                  for name, option, kwargs in _METER_OPTIONS]
 
         @functools.wraps(command)
         def run(**kwargs):
-            meter = MeterCircuit(**{name: kwargs.pop(name) for name, _, _ in _METER_OPTIONS}, virtual_c_off=virtual_c_off)
+            parts = {name: kwargs.pop(name) for name, _, _ in _METER_OPTIONS}
+            meter = MeterCircuit(**parts, virtual_c_off=virtual_c_off)
             return command(**kwargs, meter=meter)
 
         # typer reads the options from the signature (the one given here) and their types from the annotations

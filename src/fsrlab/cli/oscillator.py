@@ -13,7 +13,8 @@ from fsrlab.cli.options import emit_json, fail, farads, fraction, hertz, ohms, o
 from fsrlab.hardware import CAPTURE_MAX_HZ
 from fsrlab.units import format_eng
 
-_NAMES = {"control_v": "--vctrl", "discharge_ohm": "--rdis", "r_ohm": "--r", "r_fsr_ohm": "--rfsr", "c_fsr_farad": "--cfsr", "c_off_farad": "--coff",
+_NAMES = {"control_v": "--vctrl", "discharge_ohm": "--rdis", "r_ohm": "--r", "r_fsr_ohm": "--rfsr",
+          "c_fsr_farad": "--cfsr", "c_off_farad": "--coff",
           "diode_drop_v": "--diode-drop", "vcc_v": "--vcc", "frequency_hz": "--frequency",
           "duty_cycle": "--duty", "periods": "--periods", "r_fsr_range_ohm": "--rfsr-min/--rfsr-max",
           "c_fsr_range_farad": "--cfsr-min/--cfsr-max", "band_hz": "--fmin/--fmax", "variant": "--variant",

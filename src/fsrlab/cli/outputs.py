@@ -8,7 +8,8 @@ from pathlib import Path
 
 import typer
 
-OVERWRITE_HELP = "Replace an existing output file; without it an existing one stops the command. An input is never replaced."
+OVERWRITE_HELP = ("Replace an existing output file; without it an existing one stops the command. An input is "
+                  "never replaced.")
 OVERWRITE_DIR_HELP = ("Write into a directory that is not empty, replacing the files this command writes there; "
                       "without it a non-empty directory stops the command. An input is never replaced.")
 

@@ -117,7 +117,8 @@ def _rows(u: list[float], p, s_min: float, u_max: float) -> list[tuple]:
         if c_only is None:  # C_A does not depend on u: the same eq. (13) on eq. (15) alone
             c_only = hysteresis_error_curves(
                 lambda x: capacitance_per_area(separation_loading(x, p.s0_m, p.modulus_pa), p.eps_r),
-                lambda x: capacitance_per_area(separation_unloading(x, p.sigma_f_pa, p.s0_m, p.modulus_pa, p.k), p.eps_r),
+                lambda x: capacitance_per_area(separation_unloading(x, p.sigma_f_pa, p.s0_m, p.modulus_pa, p.k),
+                                               p.eps_r),
                 p.sigma_f_pa)
             if not _finite_percent(c_only):
                 fail(f"C_A has no finite hysteresis error for these parameters (film {p.s0_m:g} m at zero "

@@ -46,8 +46,7 @@ def report(
 
     \b
       fsrlab report examples/bench.csv --out report-run
-      fsrlab report examples/other.csv --cal examples/calibration.json --placements examples/repeatability.csv --out
-      report-other --json
+      fsrlab report examples/other.csv --cal examples/calibration.json --placements examples/repeatability.csv --out r2
     """
     from fsrlab.reports.run_report import write_run_report
 

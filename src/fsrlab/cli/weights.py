@@ -67,12 +67,15 @@ def weights(
             "[s]: ask again (then skip the step): 30s, 1min."),
     hold: float = typer.Option("1s", "--hold", parser=seconds, metavar="TIME", help="Steady time recorded per step "
             "[s]: 1s, 2s, 500ms."),
-    gravity: float = typer.Option("9.80665", "--gravity", parser=gravity_value, metavar="ACCELERATION", help=GRAVITY_HELP),
+    gravity: float = typer.Option("9.80665", "--gravity", parser=gravity_value, metavar="ACCELERATION",
+                                  help=GRAVITY_HELP),
     seed: int = typer.Option(None, "--seed", help="Random seed of the virtual meter's noise (an integer)."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing run and its sidecar."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Virtual bench: do not print its steps (prompts for a "
             "person are always shown)."),
-    json_out: bool = typer.Option(False, "--json", help='Print {"frames", "dropped", "duration_s", "file", "recorded", "skipped", "placements"} as JSON.'),
+    json_out: bool = typer.Option(False, "--json",
+                                  help='Print {"frames", "dropped", "duration_s", "file", "recorded", "skipped", '
+                                       '"placements"} as JSON.'),
     meter: MeterCircuit = MeterCircuit(),
 ) -> None:
     """Guided known-weight calibration: place each mass, wait until the reading is stable, record it.

@@ -253,8 +253,10 @@ class ControlPanel:
                    if st.recording else ""))
         if text != self.status.text:
             self.status.text = text
-        said = (f"<b>{_html(st.weights)}</b>: " if st.weights else "") + f"<span id='prompt'>{_html(st.prompt)}</span>" \
-            if (st.prompt or st.weights) else self.prompt.text
+        said = self.prompt.text
+        if st.prompt or st.weights:
+            lead = f"<b>{_html(st.weights)}</b>: " if st.weights else ""
+            said = lead + f"<span id='prompt'>{_html(st.prompt)}</span>"
         if said != self.prompt.text:
             self.prompt.text = said
         label = "Stop recording" if st.recording else "Start recording"

@@ -318,7 +318,8 @@ class LiveSession:
         proc = WeightsProcedure(w["steps"], self._announce, self._take_answer, w.get("place"), None, x=w["x"],
                                 gravity_m_s2=w["gravity_m_s2"], use_loadcell=use_loadcell, area_m2=self.area_m2)
         columns = list(RUN_COLUMNS) + (list(REFERENCE_COLUMNS) if self._has_ref else [])
-        columns += ["step", "direction", "cycle", "force_nominal_n", "force_n"] + (["stress_pa"] if self.area_m2 else [])
+        columns += ["step", "direction", "cycle", "force_nominal_n",
+                    "force_n"] + (["stress_pa"] if self.area_m2 else [])
         columns += ["load", "sensor", "reading"]
         columns = list(dict.fromkeys(columns))
         meta = {**self.metadata, **w.get("metadata", {})}

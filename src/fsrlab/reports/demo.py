@@ -131,7 +131,8 @@ def _several_sensors(out: Path, result: DemoResult, step, done) -> None:
         "sensors": [{"sensor_id": sid, "channel": cals.channels[sid], "readings_per_s": float(rate),
                      "peak_hz": float(peak), "model": c.model_name, "heldout_rmse": c.selection.heldout_rmse,
                      "unit": c.y_unit}
-                    for (sid, c), rate, peak in zip(cals.by_sensor.items(), ss.readings_per_s, ss.peak_hz, strict=True)],
+                    for (sid, c), rate, peak in zip(cals.by_sensor.items(), ss.readings_per_s, ss.peak_hz,
+                                                    strict=True)],
         "crosstalk": ss.crosstalk.to_dict()}
     done("several sensors", t0, f"{len(cals.by_sensor)} channels, {ss.readings_per_s.min():.0f} readings/s each or "
          f"more, peaks {ss.peak_hz[0]:.0f}–{ss.peak_hz[-1]:.0f} Hz; cross-talk worst {ss.crosstalk.worst:.1e}")
@@ -141,8 +142,9 @@ def _channels_html(ch: dict | None) -> str:
     """The index page's multi-sensor section: each channel's rate, peak and calibration, the cross-talk matrix."""
     if not ch:
         return ""
-    rows = "".join(f"<tr><td>{html.escape(c['sensor_id'])}</td><td>{c['channel']}</td><td>{c['readings_per_s']:.1f}</td>"
-                   f"<td>{c['peak_hz']:.0f}</td><td>{html.escape(c['model'])}</td><td>{_num(c['heldout_rmse'])} "
+    rows = "".join(f"<tr><td>{html.escape(c['sensor_id'])}</td><td>{c['channel']}</td>"
+                   f"<td>{c['readings_per_s']:.1f}</td><td>{c['peak_hz']:.0f}</td><td>{html.escape(c['model'])}</td>"
+                   f"<td>{_num(c['heldout_rmse'])} "
                    f"{html.escape(c['unit'])}</td></tr>" for c in ch["sensors"])
     ct = ch["crosstalk"]
     head = "".join(f"<th>{k}</th>" for k in ct["channels"])

@@ -20,7 +20,8 @@ def _at(spice: SimulatedRatios, key: str, n: float) -> float:
     return getattr(spice, key)[spice.n_ratio.index(n)]
 
 
-def _spice_evidence(t: TauRatioTable, spice_nd: SimulatedRatios | None, spice_d: SimulatedRatios | None) -> tuple[str, str]:
+def _spice_evidence(t: TauRatioTable, spice_nd: SimulatedRatios | None, spice_d: SimulatedRatios | None) -> tuple[str,
+        str]:
     """Sentences quoting ngspice beside the closed forms, without and with D1."""
     if not spice_nd:
         return _NO_SPICE, _NO_SPICE

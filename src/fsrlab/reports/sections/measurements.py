@@ -1,4 +1,5 @@
-"""Report section: measurement analysis (paper §5–6): Tables 3, 4, 5 as printed, calibration, compensation, errata M1–M2.
+"""Report section: measurement analysis (paper §5–6): Tables 3, 4, 5 as printed, calibration, compensation,
+errata M1–M2.
 
 Tables 4 and 5 are recomputed by :mod:`fsrlab.metrics.repeatability` from the printed readings of
 :func:`fsrlab.reference.paper_values`; the calibration table and the compensation use a synthetic bench run
@@ -310,7 +311,8 @@ def _data(printed: dict, t4: PrintedTableCheck, t5: PrintedTableCheck, found: Dd
                                "paper": {"linear_r2": fig17["linear"], "cubic_r2": fig17["cubic"]}},
         "physics_informed_synthetic": {"cubic_r2": fits["decoded_cubic"].r2, "rmse_pa": fits["decoded_cubic"].rmse,
                                        "he_percent": syn.he_decoded},
-        "compensation_synthetic": {"he_before_percent": comp.he_before_percent, "he_after_percent": comp.he_after_percent,
+        "compensation_synthetic": {"he_before_percent": comp.he_before_percent,
+                                   "he_after_percent": comp.he_after_percent,
                                    "rmse_before_pa": comp.rmse_before_pa, "rmse_after_pa": comp.rmse_after_pa,
                                    "model": comp.model, "heldout_rmse_pa": comp.heldout_rmse_pa},
     }

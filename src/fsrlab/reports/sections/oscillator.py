@@ -210,7 +210,8 @@ def _ratio_table(t: TauRatioTable, spice_nd: SimulatedRatios | None, spice_d: Si
     for i, ni in enumerate(t.n_ratio):
         rows.append([f"{ni:g}", float(t.no_diode[i]), spice_nd.tau_ratio[i] if spice_nd else "n/a",
                      float(t.eq32_as_printed[i]),
-                     100 * float(t.duty_cycle_no_diode[i]), float(t.diode[i]), spice_d.tau_ratio[i] if spice_d else "n/a",
+                     100 * float(t.duty_cycle_no_diode[i]), float(t.diode[i]),
+                     spice_d.tau_ratio[i] if spice_d else "n/a",
                      float(t.eq37_as_printed[i]), 100 * float(t.duty_cycle_diode[i])])
     note = ("ngspice columns: transient simulation of fsrlab's behavioural-555 netlist, 5 periods after "
             "start-up, τH/τL = DC/(1 − DC) from the output edges." if spice_nd else

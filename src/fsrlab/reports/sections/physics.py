@@ -318,7 +318,8 @@ def build(outdir: Path) -> Section:
     fit = fit_barrier_height(t2["resistance_per_area"], t2["u_V"])
     sweep, fitted_sweep = voltage_sweep(), voltage_sweep(params=fit.table.params)
     sweeps = [("Table 1's φ0 = 0.223 eV", sweep), (f"φ0 = {fit.phi0_ev:.4f} eV (P1)", fitted_sweep)]
-    figures = ([_fig2a(outdir), _fig2b(outdir)] + [_fig_branches(outdir, spec, fit, axis_ranges) for spec in _BRANCH_FIGURES]
+    figures = ([_fig2a(outdir),
+                _fig2b(outdir)] + [_fig_branches(outdir, spec, fit, axis_ranges) for spec in _BRANCH_FIGURES]
                + [_fig8b(outdir), _fig_sweep(outdir, sweeps), _fig_memory(outdir)])
     errata = [_erratum_p1(t2, ours, fit), _erratum_p2(axis_ranges, fit), _ERRATUM_P3,
               _erratum_p4(ours, sweep, fitted_sweep)]
