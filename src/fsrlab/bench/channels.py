@@ -23,7 +23,8 @@ import numpy as np
 
 from fsrlab.errors import ParameterError
 
-__all__ = ["channel_runs", "ChannelCalibrations", "calibrate_channels", "Crosstalk", "crosstalk", "virtual_meter", "twin_meter",
+__all__ = ["channel_runs", "ChannelCalibrations", "calibrate_channels", "Crosstalk", "crosstalk",
+           "virtual_meter", "twin_meter",
            "SeveralSensors", "several_sensors"]
 
 

@@ -1,4 +1,5 @@
-"""The demo's measurement chain on a virtual bench (``make demo`` / ``fsrlab demo``; the reports: :mod:`fsrlab.reports.demo`).
+"""The demo's measurement chain on a virtual bench (``make demo`` / ``fsrlab demo``; the reports:
+:mod:`fsrlab.reports.demo`).
 
 :func:`run_chain` does what a user of fsrlab does with a sensor, with no hardware (steps 1 to 4;
 :func:`fsrlab.reports.demo.run_demo` then writes the reports and runs several sensors, steps 5 to 8):
@@ -297,9 +298,11 @@ def run_chain(out, settings: DemoSettings, sensor=None, device: str = "auto", to
         return f
 
     pace = "faster than real time, the three runs at once" if at_once else "in real time"
-    t0 = step(f"spring cycles on the {'digital twin (firmware in simavr)' if bench == 'twin' else 'Python virtual device'}"
+    t0 = step("spring cycles on the "
+            f"{'digital twin (firmware in simavr)' if bench == 'twin' else 'Python virtual device'}"
               f"{'' if bench == 'twin' else ' (the twin is not available: ' + reason + ')'}: sensor {sensor_text}; "
-              f"{s.cycles} cycles 0 → {s.peak_pa / 1e3:g} kPa → 0 of {s.period_s:g} s, twice (calibration run, test run); "
+              f"{s.cycles} cycles 0 → {s.peak_pa / 1e3:g} kPa → 0 of {s.period_s:g} s, "
+              "twice (calibration run, test run); "
               f"{pace}")
     staging = Path(tempfile.mkdtemp(prefix=f"{STAGING_PREFIX}{os.getpid()}-", dir=out))
     rec = _BenchRecorder(out, staging, bench, device, sensor_obj, s, result, say)
@@ -439,7 +442,8 @@ def _calibrate_and_apply(out: Path, result: DemoResult, steps: DemoSteps, say: C
         say(f"      known-weight calibration not possible: {exc}")
     for key, c in (("calibration", cal), ("known_weight_calibration", known)):
         if c is not None:
-            result.numbers[key] = {"model": c.model_name, "reference": c.y_name, "heldout_rmse": c.selection.heldout_rmse,
+            result.numbers[key] = {"model": c.model_name, "reference": c.y_name,
+                                   "heldout_rmse": c.selection.heldout_rmse,
                                    "unit": c.y_unit, "lag_s": c.lag_s, "delay_s": c.model.delay_s,
                                    "scheme": c.selection.scheme}
     done("calibration", t0, f"{cal.model_name}, held-out RMSE {cal.selection.heldout_rmse:.3g} {cal.y_unit}"

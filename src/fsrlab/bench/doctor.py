@@ -136,7 +136,8 @@ def check_tools() -> list[Check]:
                         "building the digital twin's harness on first use (fsrlab twin, bench --twin)",
                         None if cc else "sudo apt-get install gcc"))
     checks.append(Check("simavr headers", include is not None,
-                        str(include) if include else "sim_avr.h not found (/usr/include/simavr, /usr/local/include/simavr)",
+                        str(include) if include else "sim_avr.h not found (/usr/include/simavr, "
+                                "/usr/local/include/simavr)",
                         "the digital twin (fsrlab twin, bench --twin, demo with the real firmware)",
                         None if include else "sudo apt-get install simavr libsimavr-dev"))
     from fsrlab.virtual.twin import twin_available
@@ -147,13 +148,15 @@ def check_tools() -> list[Check]:
                         "fsrlab twin, bench --twin; the demo runs the real firmware instead of the Python device",
                         None if ok else f"{build.INSTALL_HINT}; in a clone: make sysdeps && make firmware"))
 
-    checks.append(_tool("avrdude", ("avrdude",), ["-?"], "fsrlab firmware flash (writing the meter's firmware to an Uno)",
+    checks.append(_tool("avrdude", ("avrdude",), ["-?"],
+                        "fsrlab firmware flash (writing the meter's firmware to an Uno)",
                         "sudo apt-get install avrdude", key="version"))
     avr_gcc = _which("avr-gcc")
 
     core = Path("/usr/share/arduino/hardware/arduino/avr/cores/arduino/Arduino.h").exists()
     checks.append(Check("AVR toolchain", bool(avr_gcc and core),
-                        f"{avr_gcc}, Arduino core {'found' if core else 'missing'}" if avr_gcc else "avr-gcc not on the PATH",
+                        f"{avr_gcc}, Arduino core "
+                        f"{'found' if core else 'missing'}" if avr_gcc else "avr-gcc not on the PATH",
                         "building the firmware from source (make firmware; the package ships the built image)",
                         None if avr_gcc and core else "sudo apt-get install gcc-avr avr-libc arduino-core-avr"))
     browser = _which("chromium", "chromium-browser", "google-chrome", "google-chrome-stable")

@@ -128,7 +128,8 @@ def hysteresis_of_run(run, quantity: str = "frequency_hz", threshold: float = 0.
     # eq. (13)'s functions speak of stresses [Pa]; on a force reference their levels are newtons.
     in_unit = (lambda text: text) if ref_unit == "Pa" else (lambda text: re.sub(r"(\d) Pa\b", r"\1 " + ref_unit, text))
     try:
-        res = run_hysteresis(stress, q, run.columns.get("direction"), run.columns.get("cycle"), threshold, name=quantity)
+        res = run_hysteresis(stress, q, run.columns.get("direction"), run.columns.get("cycle"),
+                             threshold, name=quantity)
     except RunFormatError:
         raise
     except ValueError as exc:
@@ -280,8 +281,10 @@ class RunReport:
         iso = None
         if self.iso376 is not None:
             r = self.iso376
-            iso = {"readout": self.iso376_readout, "forces_n": r.forces_n.tolist(), "instrument_class": r.instrument_class,
-                   "classes": r.classes, "worst_percent": {k: r.worst(k) for k in ("b", "b_prime", "fc", "f0", "v", "c")},
+            iso = {"readout": self.iso376_readout, "forces_n": r.forces_n.tolist(),
+                   "instrument_class": r.instrument_class,
+                   "classes": r.classes,
+                   "worst_percent": {k: r.worst(k) for k in ("b", "b_prime", "fc", "f0", "v", "c")},
                    "missing": r.missing, "notes": r.notes}
         return {"file": str(self.path), "rows": self.rows, "duration_s": self.duration_s,
                 "reference": self.reference, "reference_unit": self.reference_unit,
@@ -362,7 +365,8 @@ def placement_means(run, readouts=("frequency_hz", "voltage_v")) -> list[dict]:
 
 
 def _check_placements(placements, quantity, keys=("load_g", "direction")) -> None:
-    """A TypeError or ParameterError naming the argument unless ``placements`` are placement rows, ``quantity`` a name."""
+    """A TypeError or ParameterError naming the argument unless ``placements`` are placement rows, ``quantity``
+    a name."""
     if not isinstance(quantity, str):
         raise TypeError(f"quantity: must be a readout's name, got {type(quantity).__name__}")
     if not isinstance(placements, (list, tuple)) or not all(isinstance(p, dict) for p in placements):

@@ -33,7 +33,8 @@ from fsrlab.errors import ParameterError
 from fsrlab.physics.params import check_at_least, check_positive, float_array
 from fsrlab.units import STANDARD_GRAVITY
 
-__all__ = ["PROTOCOLS", "DEVICES", "SPEEDS", "VIRTUAL_SENSORS", "virtual_sensor", "SpringPlan", "WeightsPlan", "CreepPlan", "twin_status", "open_bench",
+__all__ = ["PROTOCOLS", "DEVICES", "SPEEDS", "VIRTUAL_SENSORS", "virtual_sensor", "SpringPlan", "WeightsPlan",
+           "CreepPlan", "twin_status", "open_bench",
            "ProtocolRun", "run_protocol"]
 
 PROTOCOLS = ("spring", "weights", "creep")
@@ -75,7 +76,8 @@ class SpringPlan:
         check_at_least("base_pa", self.base_pa, 0.0, "Pa", scalar=True)
         check_positive("peak_pa", self.peak_pa, "Pa", scalar=True)
         if not (math.isfinite(self.peak_pa) and self.peak_pa > self.base_pa >= 0):
-            raise ParameterError(f"must exceed base_pa >= 0 Pa, got {self.peak_pa!r} and {self.base_pa!r}", parameter="peak_pa")
+            raise ParameterError(f"must exceed base_pa >= 0 Pa, got {self.peak_pa!r} and {self.base_pa!r}",
+                                 parameter="peak_pa")
 
     @property
     def duration_s(self) -> float:
@@ -505,7 +507,8 @@ def _plan_hooks(plan, virtual, sensor, seed, clock: _DeviceClock, say, answer, s
     elif isinstance(plan, CreepPlan):
         hooks = _creep_hooks(plan, virtual, sensor, seed, clock, say, gravity_m_s2)
     else:
-        raise ParameterError(f"must be a SpringPlan, WeightsPlan or CreepPlan, got {type(plan).__name__}", parameter="plan")
+        raise ParameterError("must be a SpringPlan, WeightsPlan or CreepPlan, got "
+                f"{type(plan).__name__}", parameter="plan")
     if hooks.on_row is not None:
         hook = hooks.on_row
 

@@ -16,7 +16,8 @@ from fsrlab.errors import FileFormatError, ParameterError
 from fsrlab.io.outputs import write_text_atomic
 from fsrlab.io.runformat import input_file, read_json_document
 
-__all__ = ["CALIBRATION_FORMAT", "CALIBRATION_VERSION", "CALIBRATION_VERSIONS_READ", "read_calibration_document", "write_calibration_document"]
+__all__ = ["CALIBRATION_FORMAT", "CALIBRATION_VERSION", "CALIBRATION_VERSIONS_READ", "read_calibration_document",
+           "write_calibration_document"]
 
 #: Value of the calibration file's ``"format"`` key.
 CALIBRATION_FORMAT = "fsrlab-calibration"

@@ -105,14 +105,16 @@ _WORDS = {
     "time": ({"time", "timestamp", "elapsed", "millis", "micros", "datetime", "date", "clock", "ms", "us", "µs",
               "μs", "msec", "usec"}, {"s", "sec", "secs", "seconds", "t"}),
     "force": ({"force", "load", "loadcell", "weight", "mass", "reference", "ref", "hx711", "newton", "newtons",
-               "gram", "grams", "lbf", "lbs", "kgf", "gf", "kilograms", "ozf"}, {"n", "g", "kg", "mn", "lb", "f", "kn", "oz"}),
+               "gram", "grams", "lbf", "lbs", "kgf", "gf", "kilograms", "ozf"},
+               {"n", "g", "kg", "mn", "lb", "f", "kn", "oz"}),
     "reading": ({"fsr", "analog", "analogread", "adc", "reading", "raw", "sensor", "counts", "voltage", "volts",
                  "resistance", "value", "val", "velostat", "pressure", "a0", "a1", "a2", "a3", "a4", "a5", "a6", "a7"},
                 {"v", "mv", "ohm", "ohms", "kohm", "ω", "kω"}),
 }
 _INDEX_NAMES = {"n", "i", "index", "sample", "no", "nr", "row", "idx", "#", "id"}
 _UNIT_WORDS = {
-    "time": [("us", {"us", "µs", "μs", "micros", "usec", "microseconds"}), ("ms", {"ms", "millis", "msec", "milliseconds"}),
+    "time": [("us", {"us", "µs", "μs", "micros", "usec", "microseconds"}),
+             ("ms", {"ms", "millis", "msec", "milliseconds"}),
              ("s", {"s", "sec", "secs", "seconds"}), ("min", {"minutes"}), ("h", {"hours"})],
     "force": [("mN", {"mn"}), ("kN", {"kn"}), ("kg", {"kg", "kgf", "kilograms"}), ("lbf", {"lbf", "lb", "lbs"}),
               ("ozf", {"oz", "ozf"}), ("g", {"g", "gf", "gram", "grams"}), ("N", {"n", "newton", "newtons"})],
@@ -237,7 +239,8 @@ def _choose(table: Table, roles: Sequence[str], given: dict[str, str | int | Non
             j = _resolve(table, given[role], role.replace("_", " "))
             clash = next((r for r, (k, _) in out.items() if k == j), None)
             if clash:
-                raise ForeignFormatError(f"{table.path}: {table.label(j)} is given as both the {clash.replace('_', ' ')} "
+                raise ForeignFormatError(f"{table.path}: {table.label(j)} is given as both the "
+                        f"{clash.replace('_', ' ')} "
                                          f"and the {role.replace('_', ' ')}", role=role)
             out[role] = (j, "given")
     taken = {j for j, _ in out.values()}
@@ -247,7 +250,8 @@ def _choose(table: Table, roles: Sequence[str], given: dict[str, str | int | Non
         if role in out:
             continue
         kind = role.removeprefix("reference_")
-        scores = {j: _score(table, j, kind) for j in range(table.n_columns) if j not in taken and not _is_index(table, j)}
+        scores = {j: _score(table, j, kind) for j in range(table.n_columns)
+                  if j not in taken and not _is_index(table, j)}
         top = max(scores.values(), default=0)
         best = [j for j, s in scores.items() if s == top]
         if top >= 2 and len(best) == 1:
@@ -470,7 +474,8 @@ def _time_of(table: Table, role: str, chosen: dict, unit: str | None, rate_hz: f
              mapping: dict) -> np.ndarray | None:
     if role in chosen and rate_hz is not None:
         raise ParameterError(f"{table.path} has a time column ({table.label(chosen[role][0])}); give either the "
-                             "column or a rate", parameter=f"{'reference_' if role.startswith('reference') else ''}rate_hz")
+                             "column or a rate",
+                             parameter=f"{'reference_' if role.startswith('reference') else ''}rate_hz")
     if rate_hz is not None:
         mapping[role] = {"file": str(table.path), "rate_hz": rate_hz, "how": "given"}
         return np.arange(table.n_rows) / rate_hz
@@ -567,7 +572,8 @@ def import_foreign(sensor: str | os.PathLike, reference: str | os.PathLike | Non
     sens = _read(sensor, "sensor", header, skip_lines)
     ref = _read(reference, "reference", header, skip_lines) if reference is not None else None
     # A rate given means the rows are evenly spaced: no time column is looked for.
-    roles = (("time",) if time is not None or rate_hz is None else ()) + (("force",) if ref is None else ()) + ("reading",)
+    roles = ((("time",) if time is not None or rate_hz is None else ())
+             + (("force",) if ref is None else ()) + ("reading",))
     given = {"time": time, "reading": reading, "force": force if ref is None else None}
     try:
         chosen = _choose(sens, roles, given)

@@ -33,7 +33,8 @@ from pathlib import Path
 
 from fsrlab.errors import ParameterError
 
-__all__ = ["OutputError", "OutputExistsError", "output_path", "check_output", "refuse_inputs", "protected_paths", "same_file", "atomic_path",
+__all__ = ["OutputError", "OutputExistsError", "output_path", "check_output", "refuse_inputs", "protected_paths",
+           "same_file", "atomic_path",
            "write_text_atomic", "write_bytes_atomic", "atomic_run", "replace_run", "run_files"]
 
 

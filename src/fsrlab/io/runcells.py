@@ -125,7 +125,8 @@ def _parse_slow(path: Path, body: list[str], header: list[str], checks: list) ->
             report(i, 0, f"{where(path, i + 1, None)}: {exc}")
             continue
         if len(row) < ncol:
-            report(i, len(row), f"{where(path, i + 1, header[len(row)])}: missing ({len(row)} cells, the header has {ncol})")
+            report(i, len(row),
+                   f"{where(path, i + 1, header[len(row)])}: missing ({len(row)} cells, the header has {ncol})")
             continue
         if len(row) > ncol and any(c.strip() for c in row[ncol:]):
             report(i, ncol, f"{where(path, i + 1, None)}: {len(row)} cells, the header has {ncol}")

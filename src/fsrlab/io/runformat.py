@@ -108,7 +108,8 @@ class Run:
         """A summary: the file, the rows and the columns (not the numbers)."""
         notes = ", an incomplete last line dropped" if self.truncated else ""
         notes += f", {len(self.skipped)} bad rows skipped" if self.skipped else ""
-        return f"{type(self).__name__}({shown(str(self.path))}, {self.n_rows} rows, columns {_names(list(self.columns))}{notes})"
+        columns = _names(list(self.columns))
+        return f"{type(self).__name__}({shown(str(self.path))}, {self.n_rows} rows, columns {columns}{notes})"
 
     def require(self, *names: str) -> None:
         """Raise :class:`RunFormatError` naming the first of ``names`` the run lacks."""
@@ -129,7 +130,8 @@ class Run:
         if "force_n" in self.columns:
             area = (self.metadata.get("sensor") or {}).get("area_m2")
             if not area or float(area) <= 0:
-                raise RunFormatError(f"{self.path}: column 'force_n' needs sensor.area_m2 > 0 in {sidecar_path(self.path).name} to give stress")
+                raise RunFormatError(f"{self.path}: column 'force_n' needs sensor.area_m2 > 0 in "
+                        f"{sidecar_path(self.path).name} to give stress")
             return self.columns["force_n"] / float(area)
         raise RunFormatError(f"{self.path}: column 'stress_pa' missing (or 'force_n' with a sensor area)")
 
@@ -259,7 +261,8 @@ def _load_metadata(path: Path) -> dict | None:
     return meta
 
 
-def read_table(path: str | os.PathLike, required: Sequence[str], hint: str = "") -> tuple[dict[str, int], list[tuple[int, list[str]]], Path]:
+def read_table(path: str | os.PathLike, required: Sequence[str],
+               hint: str = "") -> tuple[dict[str, int], list[tuple[int, list[str]]], Path]:
     """Read a small CSV table that is not a run (grouped readings, ISO 376 series).
 
     Parameters
@@ -374,7 +377,8 @@ def _read_run(p: Path, require: Sequence[str], skip_bad_rows: bool) -> Run:
                              "two as one run")
     lines = text.splitlines()
     truncated = False
-    if lines and not text.endswith(("\n", "\r")) and meta is not None and meta.get("complete") is False and len(lines) > 1:
+    unfinished = lines and not text.endswith(("\n", "\r"))
+    if unfinished and meta is not None and meta.get("complete") is False and len(lines) > 1:
         lines = lines[:-1]
         truncated = True
     while lines and not lines[-1].strip():
@@ -404,7 +408,8 @@ def _read_run(p: Path, require: Sequence[str], skip_bad_rows: bool) -> Run:
             # this stays an error even when bad rows are skipped.
             i = back[0] + 1
             row = _file_rows(len(lines) - 1, skipped)[i]
-            raise RunFormatError(f"{where(p, row, 'time_s')}: time goes backwards ({float(t[i])!r} s after {float(t[i - 1])!r} s); "
+            raise RunFormatError(f"{where(p, row, 'time_s')}: time goes backwards ({float(t[i])!r} s after "
+                    f"{float(t[i - 1])!r} s); "
                                  "rows must be in time order")
     if meta is None:
         meta = _default_metadata(header)

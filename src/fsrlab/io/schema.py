@@ -82,7 +82,8 @@ def check_columns(columns: Sequence[str]) -> list[str]:
         raise ParameterError("must name at least one column", parameter="columns")
     for c in cols:
         if not c or c != c.strip() or any(ch in c for ch in ',"\r\n'):
-            raise ParameterError(f"invalid column name {shown(c)} (no commas, quotes, newlines or edge spaces)", parameter="columns")
+            raise ParameterError(f"invalid column name {shown(c)} (no commas, quotes, newlines or edge spaces)",
+                                 parameter="columns")
     # One count per name (linear): a header of 100,000 columns is checked in milliseconds.
     dup = sorted(c for c, n in Counter(cols).items() if n > 1)
     if dup:

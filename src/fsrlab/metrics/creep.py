@@ -14,7 +14,8 @@ readout does meanwhile:
   sampled slower than the readout) are left out of the test; the hold runs from the first to the
   last reference reading in its band, and every readout reading in that time belongs to it;
 * t0, the hold's start: its first reference reading in the band. The first ``settle_s`` after t0
-  (default 0.5 s, five 100 ms windows, at most a fifth of ``min_hold_s``) are left out of the fits: the load is still settling, and
+  (default 0.5 s, five 100 ms windows, at most a fifth of ``min_hold_s``) are left out of the fits: the load is still
+  settling, and
   with a slow reference the true start lies up to one reference interval before t0;
 * **drift per decade**: the least-squares line r(t) = a + b·log10(t − t0) through the readings of
   the hold; b [readout unit per decade], and ``100·b/|a|`` [% per decade], a = the line's value at
@@ -129,7 +130,8 @@ def log_drift(elapsed_s, readout) -> LogDrift:
     with np.errstate(divide="ignore", invalid="ignore"):
         pct = 100 * b / abs(a) if a != 0 else nan
         pct_se = 100 * b_se / abs(a) if a != 0 else nan
-    return LogDrift(a, b, b_se, float(pct), float(pct_se), int(s.size), "" if a != 0 else "the line is 0 at 1 s: no % of reading")
+    return LogDrift(a, b, b_se, float(pct), float(pct_se), int(s.size),
+                    "" if a != 0 else "the line is 0 at 1 s: no % of reading")
 
 
 @dataclass(frozen=True)
@@ -542,7 +544,8 @@ def creep_of_run(run, x: str = "frequency_hz", reference: str | None = None, ban
                                  parameter="run")
     elif reference not in REFERENCES:
         raise ParameterError(f"must be one of {', '.join(REFERENCES)}, got {reference!r}", parameter="reference")
-    for name, what, parameter in (("time_s", "the time of each reading", "run"), (reference, "the reference", "reference"),
+    for name, what, parameter in (("time_s", "the time of each reading", "run"),
+                                  (reference, "the reference", "reference"),
                                   (x, "the readout", "x")):
         if name not in run:
             raise ParameterError(f"{run.path}: column {name!r} missing ({what}; columns: {', '.join(run.columns)})",

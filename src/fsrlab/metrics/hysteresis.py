@@ -360,7 +360,8 @@ def model_cycle_errors(u_v: float, params: PaperParameters = PAPER, n: int = 400
 
     he_r = _curves_on_grid(x, resistance_per_area(u_v, sl, p.phi0_j), resistance_per_area(u_v, su, p.phi0_j),
                            r_l, r_u, refine=True)
-    he_c = _curves_on_grid(x, capacitance_per_area(sl, p.eps_r), capacitance_per_area(su, p.eps_r), c_l, c_u, refine=True)
+    he_c = _curves_on_grid(x, capacitance_per_area(sl, p.eps_r), capacitance_per_area(su, p.eps_r),
+                           c_l, c_u, refine=True)
     return CycleErrors(u_v=float(u_v), resistance=he_r, capacitance=he_c, regime=int(regime))
 
 

@@ -67,7 +67,8 @@ CLASS_LIMITS: dict[str, dict[str, float]] = {
     "2": {"b": 0.40, "b_prime": 0.20, "fc": 0.20, "f0": 0.10, "v": 0.50, "c": 0.20},
 }
 
-_NAMES = {"b": "relative reproducibility b", "b_prime": "relative repeatability b'", "fc": "relative interpolation error fc",
+_NAMES = {"b": "relative reproducibility b", "b_prime": "relative repeatability b'",
+          "fc": "relative interpolation error fc",
           "f0": "relative zero error f0", "v": "relative reversibility v", "c": "relative creep c"}
 
 
@@ -192,7 +193,8 @@ def _iso376(forces_n, series, creep_readings, interpolation_degree) -> ISO376Res
         raise ParameterError("must be at least 2 positive, strictly increasing forces [N]", parameter="forces_n")
     if not isinstance(interpolation_degree, (int, np.integer)) or isinstance(interpolation_degree, bool) or \
             interpolation_degree not in (1, 2, 3):
-        raise ParameterError(f"must be 1, 2 or 3 (ISO 376), got {interpolation_degree!r}", parameter="interpolation_degree")
+        raise ParameterError("must be 1, 2 or 3 (ISO 376), got "
+                f"{interpolation_degree!r}", parameter="interpolation_degree")
     if not series:
         raise ParameterError("at least one calibration series is needed", parameter="series")
     inc, dec = _deflections(F, series)

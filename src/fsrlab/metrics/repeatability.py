@@ -73,7 +73,8 @@ class RepeatabilityResult:
 
 def _check_ddof(ddof: int) -> int:
     if isinstance(ddof, bool) or not isinstance(ddof, (int, np.integer)) or ddof not in (0, 1):
-        raise ParameterError(f"must be 0 (divisor n, eq. 39 as printed) or 1 (divisor n - 1), got {ddof!r}", parameter="ddof")
+        raise ParameterError(f"must be 0 (divisor n, eq. 39 as printed) or 1 (divisor n - 1), got {ddof!r}",
+                             parameter="ddof")
     return int(ddof)
 
 
@@ -296,7 +297,8 @@ def ddof_finding(tables: Sequence[PrintedTableCheck]) -> DdofFinding:
     """
     if isinstance(tables, (str, bytes)) or not isinstance(tables, Sequence) or \
             not all(isinstance(t, PrintedTableCheck) for t in tables):
-        raise TypeError(f"tables: must be a sequence of PrintedTableCheck (recompute_printed_table), got {tables!r:.80}")
+        raise TypeError("tables: must be a sequence of PrintedTableCheck (recompute_printed_table), "
+                        f"got {tables!r:.80}")
     entries = [r for t in tables for r in t.rows + t.means]
     return DdofFinding(rows=len(entries), re2_match_n_minus_1=sum(r.re2_n_minus_1_match for r in entries),
                        re2_match_n=sum(r.re2_n_match for r in entries), re1_match=sum(r.re1_match for r in entries))

@@ -96,4 +96,5 @@ def fit_polynomial(x, y, degree: int) -> PolynomialFit:
     res = y - vander @ coef
     ss_res, ss_tot, fs = float(res @ res), float(((y - y.mean()) ** 2).sum()), float(y.max() - y.min())
     return PolynomialFit(coef, center, half, 1 - ss_res / ss_tot if ss_tot > 0 else float("nan"),
-                         float(np.sqrt(ss_res / y.size)), 100 * float(np.abs(res).max()) / fs if fs > 0 else float("nan"))
+                         float(np.sqrt(ss_res / y.size)),
+                         100 * float(np.abs(res).max()) / fs if fs > 0 else float("nan"))

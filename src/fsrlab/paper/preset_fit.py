@@ -462,7 +462,8 @@ def fit_placement_spread(sensors) -> tuple[dict, dict]:
     var = np.exp(2 * sol.x)
     pred = np.sqrt(a @ var)
     return {n: float(np.sqrt(v)) for n, v in zip(SPREADS, var, strict=True)}, {
-        lab: {"printed_re2": float(r), "predicted_re2": float(q)} for lab, r, q in zip(labels, printed, pred, strict=True)}
+        lab: {"printed_re2": float(r), "predicted_re2": float(q)}
+        for lab, r, q in zip(labels, printed, pred, strict=True)}
 
 
 def re2_design(sensors) -> tuple[np.ndarray, np.ndarray, list]:

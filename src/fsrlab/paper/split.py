@@ -127,7 +127,8 @@ def predictions(exp, expected_re2_per_sensor: dict | None = None) -> list:
         ``id``, ``source``, ``quantity``, ``unit``, ``kind`` (of :data:`TOLERANCES`), ``printed``,
         ``predicted``, ``residual``, ``relative_residual``, ``within_tolerance``: per sensor and
         load RE1 and RE2 of Tables 4 and 5 and their printed mean RE1 (``implied_by_target``: the
-        mean RE2 target that sets it, RE1 ≈ :func:`range_to_sd_ratio` × RE2 for five readings), Table 5's mean reading per
+        mean RE2 target that sets it, RE1 ≈ :func:`range_to_sd_ratio` × RE2 for five readings), Table 5's mean reading
+        per
         sensor, and Figure 17's R² (fitted on both branches of sensor 1's cycle: the paper does not
         say which data it fitted, erratum X1).
     """

@@ -167,7 +167,8 @@ def fit_barrier_height(target_percent: Sequence[float], u_v: Sequence[float] = (
     """
     target = np.asarray(target_percent, dtype=float)
     if target.shape != (len(u_v),):
-        raise ParameterError(f"must have one value per voltage ({len(u_v)}), got {target.shape}", parameter="target_percent")
+        raise ParameterError(f"must have one value per voltage ({len(u_v)}), got {target.shape}",
+                             parameter="target_percent")
     lo, hi = bounds_ev
     check_positive("bounds_ev", lo, "eV")
     if not hi > lo:

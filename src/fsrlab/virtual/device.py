@@ -3,7 +3,8 @@
 :class:`VirtualDevice` opens a pseudo-terminal pair (``os.openpty``, raw mode), keeps the master
 side and offers the slave's path (``/dev/pts/N``) to any program that opens serial ports. It answers
 ``ID``/``START``/``STOP``/``WINDOW``/``RANGE``/``SCAN``/``DWELL``/``SETTLE`` as docs/protocol.md prescribes
-and, while started, sends one ``M`` frame per window (per channel reading in a scan): in real time (``speed="realtime"``), or as fast as the host reads
+and, while started, sends one ``M`` frame per window (per channel reading in a scan): in real time
+(``speed="realtime"``), or as fast as the host reads
 them (``speed="max"``: the device's clock is simulated and moves one window at a time, each frame
 written once the host has read all but a few of the ones before, so nothing is lost and the
 windows' times are the same simulated time axis).

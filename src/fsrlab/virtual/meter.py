@@ -133,7 +133,8 @@ class MeterReadings:
 
     @property
     def frequency_hz(self) -> np.ndarray:
-        """Frequency as the host decodes it (:func:`~fsrlab.acquisition.messages.decode_sums`); NaN without periods. [Hz]"""
+        """Frequency as the host decodes it (:func:`~fsrlab.acquisition.messages.decode_sums`); NaN without
+        periods. [Hz]"""
         return decode_sums(self.periods, self.sum_period_ticks, self.sum_high_ticks)[0]
 
     @property

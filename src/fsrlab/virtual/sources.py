@@ -131,7 +131,8 @@ class StressProfile:
         check_at_least("base_pa", self.base_pa, 0.0, "Pa", scalar=True)
         check_positive("peak_pa", self.peak_pa, "Pa", scalar=True)
         if not self.peak_pa > self.base_pa >= 0:
-            raise ParameterError(f"must exceed base_pa >= 0 Pa, got {self.peak_pa!r} and {self.base_pa!r}", parameter="peak_pa")
+            raise ParameterError(f"must exceed base_pa >= 0 Pa, got {self.peak_pa!r} and {self.base_pa!r}",
+                                 parameter="peak_pa")
 
     def stress(self, t_s) -> np.ndarray:
         """Stress at time ``t_s`` [s] since START; returns [Pa], same shape."""

@@ -83,7 +83,8 @@ class Twin:
             raise ParameterError(f"must be a PhysicsSource or BenchSource (parts, dt_s, force_n, circuit, "
                              f"metadata), got {type(source).__name__}", parameter="source")
         if loadcell is not None and not isinstance(loadcell, LoadCellModel):
-            raise ParameterError(f"must be a LoadCellModel or None, got {type(loadcell).__name__}", parameter="loadcell")
+            raise ParameterError("must be a LoadCellModel or None, got "
+                    f"{type(loadcell).__name__}", parameter="loadcell")
         self.source = source if source is not None else PhysicsSource()
         self.speed, self.seed, self.loadcell = speed, int(seed), loadcell
         self.port: str | None = None
