@@ -32,7 +32,8 @@ from fsrlab.physics.params import float_array
 if TYPE_CHECKING:  # numpy is imported where it is used: the paper's circuit is built without it (start-up)
     import numpy as np
 
-__all__ = ["LM555Circuit", "OpAmpReadout", "readout_from_metadata", "decode_capacitance", "PAPER_CIRCUIT", "PAPER_OPAMP"]
+__all__ = ["LM555Circuit", "OpAmpReadout", "readout_from_metadata", "decode_capacitance",
+           "PAPER_CIRCUIT", "PAPER_OPAMP"]
 
 
 
@@ -42,7 +43,8 @@ def _from_dict(cls, d: dict, kind: str):
     names = {f.name for f in fields(cls)}
     unknown = sorted(set(d) - names - {"topology"})
     if unknown:
-        raise ParameterError(f"unknown {kind} part(s) {', '.join(unknown)} (known: {', '.join(sorted(names))})", parameter="circuit")
+        raise ParameterError(f"unknown {kind} part(s) {', '.join(unknown)} (known: "
+                f"{', '.join(sorted(names))})", parameter="circuit")
     missing = [f.name for f in fields(cls) if f.default is MISSING and f.name not in d]
     if missing:
         raise ParameterError(f"the {kind} part(s) {', '.join(missing)} must be given", parameter="circuit")

@@ -51,7 +51,8 @@ class FrequencyDecomposition:
                 (("frequency_hz", self.frequency_hz), ("c_only_hz", self.c_only_hz), ("r_only_hz", self.r_only_hz))}
 
 
-def frequency_decomposition(r_ohm: float, r_fsr_ohm, c_fsr_farad, diode: bool, c_off_farad: float = 0.0) -> FrequencyDecomposition:
+def frequency_decomposition(r_ohm: float, r_fsr_ohm, c_fsr_farad, diode: bool,
+                            c_off_farad: float = 0.0) -> FrequencyDecomposition:
     """Split the frequency change along a load path into its capacitive and resistive parts.
 
     Parameters

@@ -132,7 +132,8 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
     Raises
     ------
     ParameterError
-        Bad ranges, a band that lies wholly above ``max_frequency_hz``, or no E12 pair (R in 100 Ω–10 MΩ, C_off 0 or 1 pF–10 µF) satisfies the band and
+        Bad ranges, a band that lies wholly above ``max_frequency_hz``, or no E12 pair (R in 100 Ω–10 MΩ, C_off 0 or 1
+        pF–10 µF) satisfies the band and
         margin; the message says what limits it.
 
     Notes
@@ -141,7 +142,8 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
     monotone in C and the grid catches the non-monotone R_FSR dependence of the diode variant).
     Among the pairs whose frequencies all lie in the band with the required margin, the design
     maximises the smallest ``|S_C| − |S_R|`` over the range (a frequency that follows C_FSR strongly
-    and R_FSR weakly; a large C_off lowers |S_C| = C_FSR/(C_FSR + C_off)), then the margin. Resolution of an Uno (Timer1, 62.5 ns): a single
+    and R_FSR weakly; a large C_off lowers |S_C| = C_FSR/(C_FSR + C_off)), then the margin. Resolution of an Uno
+    (Timer1, 62.5 ns): a single
     period resolves ``Δf = f²·q``; a window averaging ``n`` periods resolves ``Δf = f·q/(n·T)``.
     """
     (rlo, rhi), (clo, chi), (flo, fhi), limit = _checked_ranges(r_fsr_range_ohm, c_fsr_range_farad, band_hz,
@@ -183,7 +185,8 @@ def design(r_fsr_range_ohm, c_fsr_range_farad, band_hz, variant: str = "auto", d
     def window(ends):
         # n whole periods in the window (at least one); a window too long for floor() holds "infinitely" many.
         periods = [fe * window_s for fe in ends]
-        return tuple(fe * q / ((max(math.floor(n), 1) if math.isfinite(n) else n) / fe) for fe, n in zip(ends, periods, strict=True))
+        whole = [max(math.floor(n), 1) if math.isfinite(n) else n for n in periods]
+        return tuple(fe * q / (w / fe) for fe, w in zip(ends, whole, strict=True))
 
     rng = chosen["frequency_range_hz"]
     return DesignResult(**chosen, resolution_single_hz=single((flo, fhi)), resolution_window_hz=window((flo, fhi)),

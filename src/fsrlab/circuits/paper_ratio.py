@@ -176,8 +176,8 @@ def minimum_eq32_as_printed(bounds: tuple[float, float] = (4.2, 20.0), xatol: fl
     """
     b = float_array("bounds", bounds)
     if b.shape != (2,) or not (4.0 < b[0] < b[1] < np.inf):
-        raise ParameterError(f"must be a pair 4 < low < high < inf (the circuit oscillates for N > 4), got {plain(bounds)}",
-                             parameter="bounds")
+        raise ParameterError("must be a pair 4 < low < high < inf (the circuit oscillates for N > 4), "
+                             f"got {plain(bounds)}", parameter="bounds")
     lo, hi = float(b[0]), float(b[1])
     check_positive("xatol", xatol, scalar=True)
     from scipy.optimize import minimize_scalar  # here: importing the module (the report's ngspice start) stays light
@@ -290,7 +290,8 @@ def tau_ratio_table(n_ratio: Sequence[float]) -> TauRatioTable:
     """
     n = np.array(float_array("n_ratio", n_ratio))
     if n.ndim != 1 or not np.all(n > 4) or not np.all(np.isfinite(n)):
-        raise ParameterError(f"must be a sequence of finite values > 4 (eq. 30), got {plain(n_ratio)}", parameter="n_ratio")
+        raise ParameterError(f"must be a sequence of finite values > 4 (eq. 30), got {plain(n_ratio)}",
+                             parameter="n_ratio")
     return TauRatioTable(n_ratio=tuple(n_ratio), no_diode=tau_ratio(n), diode=tau_ratio(n, diode=True),
                          eq37_as_printed=tau_ratio_eq37_as_printed(n), eq32_as_printed=tau_ratio_eq32_as_printed(n))
 

@@ -468,7 +468,8 @@ class PaperFSR:
             shares its bisection steps (the readouts' two voltages, a placement's perturbations).
         """
         if isinstance(requests, (str, bytes)) or not isinstance(requests, Iterable):
-            raise TypeError(f"requests: must be an iterable of dicts (respond's arguments), got {type(requests).__name__}")
+            raise TypeError("requests: must be an iterable of dicts (respond's arguments), got "
+                    f"{type(requests).__name__}")
         requests = list(requests)
         if not all(isinstance(req, Mapping) for req in requests):
             raise TypeError("requests: every request must be a dict of respond's arguments")
@@ -571,10 +572,26 @@ PAPER_SENSOR_COMMON: dict = {
 #: 0.083 V per film, inside eq. (11)'s range; R_C0 = 30 kΩ, σ_c = 5 kPa, p = 1), then the three shared
 #: placement spreads (fit_placement_spread). area_k (25–30) is ill-determined: the area's memory saturates.
 PAPER_SENSOR_PARAMETERS: tuple = (
-    {"layers": 60.0, "contact_ohm": 30000.0, "contact_stress_pa": 5000.0, "area_exponent": 1.0, "modulus_pa": 239433.9041489569, "k": 2.325537181206501, "area_k": 25.207601813231143, "area_fraction_0": 0.022227145154504285, "area_growth_pa": 67132.63480911237, "dielectric_ratio": 2.1498174240328027, "placement_stress_sd": 0.00010000000000000026, "placement_contact_sd": 0.05545153580258893, "placement_area_sd": 0.05389532144854428},
-    {"layers": 60.0, "contact_ohm": 30000.0, "contact_stress_pa": 5000.0, "area_exponent": 1.0, "modulus_pa": 245351.70477575826, "k": 2.2705699749860715, "area_k": 29.97499026245073, "area_fraction_0": 0.019822254443902343, "area_growth_pa": 22733.111754155692, "dielectric_ratio": 2.3133001375390885, "placement_stress_sd": 0.00010000000000000026, "placement_contact_sd": 0.05545153580258893, "placement_area_sd": 0.05389532144854428},
-    {"layers": 60.0, "contact_ohm": 30000.0, "contact_stress_pa": 5000.0, "area_exponent": 1.0, "modulus_pa": 228526.99080902553, "k": 2.2213051493357776, "area_k": 25.206811696277853, "area_fraction_0": 0.020571499387966093, "area_growth_pa": 38154.15528958332, "dielectric_ratio": 2.189306084223522, "placement_stress_sd": 0.00010000000000000026, "placement_contact_sd": 0.05545153580258893, "placement_area_sd": 0.05389532144854428},
-    {"layers": 60.0, "contact_ohm": 30000.0, "contact_stress_pa": 5000.0, "area_exponent": 1.0, "modulus_pa": 233585.99730698363, "k": 2.8660768830424055, "area_k": 29.795413587965577, "area_fraction_0": 0.018777574457736954, "area_growth_pa": 20688.28500217303, "dielectric_ratio": 2.5852426717259194, "placement_stress_sd": 0.00010000000000000026, "placement_contact_sd": 0.05545153580258893, "placement_area_sd": 0.05389532144854428},
+    {"layers": 60.0, "contact_ohm": 30000.0, "contact_stress_pa": 5000.0, "area_exponent": 1.0,
+     "modulus_pa": 239433.9041489569, "k": 2.325537181206501, "area_k": 25.207601813231143,
+     "area_fraction_0": 0.022227145154504285, "area_growth_pa": 67132.63480911237,
+     "dielectric_ratio": 2.1498174240328027, "placement_stress_sd": 0.00010000000000000026,
+     "placement_contact_sd": 0.05545153580258893, "placement_area_sd": 0.05389532144854428},
+    {"layers": 60.0, "contact_ohm": 30000.0, "contact_stress_pa": 5000.0, "area_exponent": 1.0,
+     "modulus_pa": 245351.70477575826, "k": 2.2705699749860715, "area_k": 29.97499026245073,
+     "area_fraction_0": 0.019822254443902343, "area_growth_pa": 22733.111754155692,
+     "dielectric_ratio": 2.3133001375390885, "placement_stress_sd": 0.00010000000000000026,
+     "placement_contact_sd": 0.05545153580258893, "placement_area_sd": 0.05389532144854428},
+    {"layers": 60.0, "contact_ohm": 30000.0, "contact_stress_pa": 5000.0, "area_exponent": 1.0,
+     "modulus_pa": 228526.99080902553, "k": 2.2213051493357776, "area_k": 25.206811696277853,
+     "area_fraction_0": 0.020571499387966093, "area_growth_pa": 38154.15528958332,
+     "dielectric_ratio": 2.189306084223522, "placement_stress_sd": 0.00010000000000000026,
+     "placement_contact_sd": 0.05545153580258893, "placement_area_sd": 0.05389532144854428},
+    {"layers": 60.0, "contact_ohm": 30000.0, "contact_stress_pa": 5000.0, "area_exponent": 1.0,
+     "modulus_pa": 233585.99730698363, "k": 2.8660768830424055, "area_k": 29.795413587965577,
+     "area_fraction_0": 0.018777574457736954, "area_growth_pa": 20688.28500217303,
+     "dielectric_ratio": 2.5852426717259194, "placement_stress_sd": 0.00010000000000000026,
+     "placement_contact_sd": 0.05545153580258893, "placement_area_sd": 0.05389532144854428},
 )
 
 #: Preset names, in the order of the paper's sensors 1–4 (Table 3).

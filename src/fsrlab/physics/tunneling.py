@@ -143,7 +143,8 @@ def current_density(
     small_u_fraction : float
         Threshold of u ≈ 0 for ``"auto"``, as a fraction of φ0/e. [-]
     validate : bool
-        True (default): raise :class:`~fsrlab.errors.ParameterError` unless ``u_v``, ``s_m`` and ``phi0_j`` are finite and > 0
+        True (default): raise :class:`~fsrlab.errors.ParameterError` unless ``u_v``, ``s_m`` and ``phi0_j`` are finite
+        and > 0
         (and, with ``"auto"``, ``small_u_fraction`` is in [0, 1)). False: skip those checks, for a
         caller that made them once before calling many times (a root finder's inner loop); the
         numbers are the same.
