@@ -169,8 +169,11 @@ def write_sketch(directory: str | Path, overwrite: bool = False) -> Path:
     OutputError
         ``directory`` is empty, a file, or in a folder that does not exist (``.option`` is ``"directory"``).
     """
+    from fsrlab.errors import ParameterError
     from fsrlab.io.outputs import OutputError, output_path, write_bytes_atomic
 
+    if not isinstance(overwrite, bool):
+        raise ParameterError(f"must be True or False, got {overwrite!r}", parameter="overwrite")
     base = output_path(directory, "directory")
     if base.exists() and not base.is_dir():
         raise OutputError("directory", f"{base} is a file, not a folder")
@@ -219,9 +222,10 @@ def check_intel_hex(path: str | Path) -> int:
         The file cannot be read.
     """
     from fsrlab.errors import FileFormatError
+    from fsrlab.io.runformat import input_file
     from fsrlab.io.shown import shown
 
-    p = Path(path)
+    p = input_file(path, "hex_file")
     if p.stat().st_size > 8 * FLASH_BYTES:  # 32 KiB of data is at most ~90 KB of hex text
         raise FileFormatError(f"{p}: {p.stat().st_size} bytes, more than an Intel hex image of an Uno's "
                               f"{FLASH_BYTES // 1024} KiB of flash", parameter="hex_file")
@@ -270,6 +274,8 @@ def avrdude_command(port: str, hex_file: str | Path | None = None, avrdude: str 
     avrdude : str
         The avrdude executable.
     """
+    if hex_file is not None and not isinstance(hex_file, (str, os.PathLike)):
+        raise TypeError(f"hex_file: must be a path (str or path-like), got {type(hex_file).__name__}")
     image = Path(hex_file) if hex_file is not None else hex_path()
     return [avrdude, "-c", "arduino", "-p", "atmega328p", "-b", "115200", "-P", str(port),
             "-U", f"flash:w:{image}:i"]

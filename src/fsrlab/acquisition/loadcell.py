@@ -351,7 +351,7 @@ def _number(d: dict, key: str, p: Path, positive: bool = False, optional: bool =
         return None
     if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or (positive and v <= 0):
         what = "a number > 0" if positive else "a finite number"
-        raise LoadCellError(f"{p}: '{key}' must be {what}, got {v!r}")
+        raise LoadCellError(f"{p}: '{key}' must be {what}, got {v!r}", parameter="path")
     return float(v)
 
 
@@ -389,20 +389,21 @@ def load_loadcell(path) -> LoadCellCalibration:
     try:
         d = json.loads(p.read_text(encoding="utf-8"), parse_constant=lambda c: math.nan)
     except UnicodeDecodeError:
-        raise LoadCellError(f"{p}: not a load-cell calibration (not UTF-8 text)") from None
+        raise LoadCellError(f"{p}: not a load-cell calibration (not UTF-8 text)", parameter="path") from None
     except json.JSONDecodeError as exc:
-        raise LoadCellError(f"{p}: not JSON ({exc.msg}, line {exc.lineno})") from None
+        raise LoadCellError(f"{p}: not JSON ({exc.msg}, line {exc.lineno})", parameter="path") from None
     if not isinstance(d, dict) or d.get("format") != LoadCellCalibration.FORMAT:
         raise LoadCellError(f"{p}: not a load-cell calibration (\"format\" must be \"{LoadCellCalibration.FORMAT}\"; "
-                            "write one with fsrlab loadcell tare)")
+                            "write one with fsrlab loadcell tare)", parameter="path")
     if d.get("version") != LoadCellCalibration.VERSION:
-        raise LoadCellError(f"{p}: 'version' must be {LoadCellCalibration.VERSION}, got {d.get('version')!r}")
+        raise LoadCellError(f"{p}: 'version' must be {LoadCellCalibration.VERSION}, got {d.get('version')!r}",
+                            parameter="path")
     offset = _number(d, "offset_counts", p)
     scale = _number(d, "scale_counts_per_n", p, positive=True, optional=True)
     capacity = _number(d, "capacity_n", p, positive=True, optional=True)
     for key in ("tare", "scale"):
         if d.get(key) is not None and not isinstance(d[key], dict):
-            raise LoadCellError(f"{p}: '{key}' must be an object, got {type(d[key]).__name__}")
+            raise LoadCellError(f"{p}: '{key}' must be an object, got {type(d[key]).__name__}", parameter="path")
     created = d.get("created", "")
     return LoadCellCalibration(offset, scale, capacity, created if isinstance(created, str) else "",
                                d.get("tare") or {}, d.get("scale"))
@@ -441,7 +442,7 @@ def tare_from_readings(counts: Sequence[float], capacity_n: float | None = None,
     span = capacity_n * scale_hint_counts_per_n if capacity_n and scale_hint_counts_per_n else None
     why = _stability(c, span)
     if why:
-        raise LoadCellError(f"tare refused: {why}")
+        raise LoadCellError(f"tare refused: {why}", parameter="counts")
     mean, sd, n = _stats(c)
     date = _now()
     return LoadCellCalibration(mean, None, capacity_n, date,
@@ -486,7 +487,8 @@ def scale_from_readings(cal: LoadCellCalibration, counts: Sequence[float], mass_
     estimate = (float(np.mean(c)) - cal.offset_counts) / force if c.size else 0.0
     why = _stability(c, abs(estimate) * cal.capacity_n if cal.capacity_n else None)
     if why:
-        raise LoadCellError(f"scale refused: {why.replace('unloaded', 'loaded').replace('tare again', 'try again')}")
+        raise LoadCellError(f"scale refused: {why.replace('unloaded', 'loaded').replace('tare again', 'try again')}",
+                            parameter="counts")
     mean, sd, n = _stats(c)
     delta = mean - cal.offset_counts
     tare_noise = float(cal.tare.get("noise_counts") or 0.0) if isinstance(cal.tare, dict) else 0.0

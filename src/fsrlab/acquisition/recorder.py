@@ -85,7 +85,13 @@ def channel_map(channels, given=None) -> list[dict]:
         One entry per recorded channel, in channel order.
     """
     from fsrlab.errors import ParameterError
+    from fsrlab.physics.params import check_int
 
+    if isinstance(channels, (str, bytes)) or not hasattr(channels, "__iter__"):
+        raise TypeError(f"channels: must be a sequence of channel numbers, got {type(channels).__name__}")
+    channels = [check_int("channels", k, lower=0) for k in channels]
+    if given is not None and (isinstance(given, (str, bytes, dict)) or not hasattr(given, "__iter__")):
+        raise TypeError(f"given: must be a sequence of channel entries (dicts), got {type(given).__name__}")
     known: dict[int, dict] = {}
     for entry in given or ():
         if not isinstance(entry, dict) or not isinstance(entry.get("channel"), int) or isinstance(entry["channel"],
@@ -121,6 +127,9 @@ def default_stall_s(window_ms: int) -> float:
     float
         [s]
     """
+    from fsrlab.physics.params import check_positive
+
+    check_positive("window_ms", window_ms, "ms", scalar=True)
     return max(5 * window_ms / 1000.0, 2.0)
 
 

@@ -15,7 +15,7 @@ from collections.abc import MutableMapping
 import typer
 
 from fsrlab import __version__
-from fsrlab.errors import FileFormatError, FsrlabError
+from fsrlab.errors import FsrlabError
 
 #: The option of each library parameter an error can name (:attr:`fsrlab.errors.FsrlabError.parameter`).
 PARAMETER_OPTIONS = {"port": "--port", "masses_kg": "--masses"}
@@ -377,7 +377,7 @@ def _run(command, args: list[str]) -> int:
         option = _option_of(exc.parameter, args) if isinstance(exc, FsrlabError) and exc.parameter else None
         if option is not None:
             message = f"Invalid value for {option}: {exc.reason}"
-        elif isinstance(exc, FileFormatError):  # its reason names the file: the Python parameter's name is noise
+        elif isinstance(exc, FsrlabError) and exc.parameter:  # no option of this command: the Python name is noise
             message = exc.reason
         print(f"fsrlab: error: {_one_line(message)}", file=sys.stderr)
         code = 2
