@@ -572,7 +572,8 @@ def measure_run(run, placements=None, weights_run=None, calibration=None, calibr
         try:
             load_g = [float(str(ld).lower().removesuffix("g")) for ld in loads]  # 200 or "200g"
         except ValueError:
-            raise ParameterError(f"load: the mass in g (200 or 200g), got {loads[0]!r}", parameter=placements) from None
+            raise ParameterError(f"{placements}: load: the mass in g (200 or 200g), got {loads[0]!r}",
+                                 parameter="placements") from None
         means = [{"load_g": ld, "sensor": sn, "direction": d, "cycle": 0, "frequency_hz": float(v)}
                  for ld, sn, d, v in zip(load_g, sensors, direction, readings, strict=True)]
         rep.repeatability_source = f"placements file {Path(placements).name} (reading: frequency)"

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import os
 
-from fsrlab.calibration.provenance import RecordedWith, mismatches
+from fsrlab.calibration.provenance import RecordedWith, mismatches, same_unit
 from fsrlab.calibration.readout import C_FSR, run_recorded_with
 from fsrlab.calibration.result import Calibration, as_margin, require_calibration
 from fsrlab.circuits.circuit import LM555Circuit
@@ -86,7 +86,12 @@ def check_readout(cal: Calibration, run: Run, circuit: LM555Circuit | None = Non
     """
     require_calibration(cal, "cal")
     run = as_run(run)
-    return readout_differences(cal, run_recorded_with(run), f"{run.path} was recorded with", circuit)
+    found = readout_differences(cal, run_recorded_with(run), f"{run.path} was recorded with", circuit)
+    unit = run.units.get(cal.x_name, "")
+    if cal.x_name in run and not same_unit(unit, cal.x_unit):
+        name = "the calibration" if cal.path is None else str(cal.path)
+        found.append(f"{run.path} has {cal.x_name} in {unit}, {name} in {cal.x_unit}")
+    return found
 
 
 def apply_calibration(cal, run, compensation: bool = True, circuit: LM555Circuit | None = None,

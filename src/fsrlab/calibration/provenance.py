@@ -106,6 +106,22 @@ def recorded_with(metadata: dict, range_column=None, used=None) -> RecordedWith:
     return RecordedWith(circuit, opamp, ranges)
 
 
+def same_unit(a: str, b: str) -> bool:
+    """Whether two readout units name the same unit, or either is unknown (empty): ``count`` and ``counts``,
+    ``V`` and ``v`` are one.
+
+    Parameters
+    ----------
+    a, b : str
+        The units, as run files and calibrations write them.
+    """
+    def norm(u: str) -> str:
+        u = str(u or "").strip().lower()
+        return {"counts": "count", "ohms": "ohm", "ω": "ohm", "Ω": "ohm"}.get(u, u)
+
+    return not norm(a) or not norm(b) or norm(a) == norm(b)
+
+
 def describe_range(ranges: tuple[int, ...]) -> str:
     """``"range 1 (C_off in)"``, ``"ranges 0 and 1"``: the ranges as a user reads them.
 

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fsrlab.calibration.provenance import mismatches, recorded_with
+from fsrlab.calibration.provenance import mismatches, recorded_with, same_unit
 from fsrlab.calibration.readout import C_FSR, reference_reversed, run_circuit, run_readout
 from fsrlab.calibration.result import METHOD, Calibration
 from fsrlab.calibration.scoring import Recording
@@ -197,7 +197,11 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
     circuit = run_circuit(runs[0]) if x == C_FSR and x not in runs[0] else None
     recs, xu, yu = [], "", ""
     for run in runs:
-        rec, xu, yu = _recording(run, x, ref, circuit)
+        rec, run_xu, yu = _recording(run, x, ref, circuit)
+        if not same_unit(run_xu, xu):
+            raise ParameterError(f"{run.path} has {x} in {run_xu}, {runs[0].path} in {xu}: calibrate runs of one "
+                                 "readout together", parameter="runs")
+        xu = xu or run_xu
         recs.append(rec)
         if int(rec.usable.sum()) < MIN_READINGS:
             raise ParameterError(f"{run.path}: {x} and {ref}: fewer than {MIN_READINGS} readings with both values "

@@ -50,10 +50,11 @@ def plot_twin(x, left, right, ax=None, xlabel: str | None = None):
         _, ax = plt.subplots(layout="constrained")
     axes = (ax, ax.twinx())
     handles = []
-    for axis, (y, std, label, unit), color in zip(axes, (left, right), ("C0", "C1"), strict=True):
+    for axis, (y, std, label, unit), color, side in zip(axes, (left, right), ("C0", "C1"), ("left", "right"),
+                                                        strict=True):
         ys = np.atleast_1d(np.asarray(y, dtype=float))
         if ys.shape != xs.shape:
-            raise ParameterError(f"needs one value per x ({xs.size}), got shape {ys.shape}", parameter=label)
+            raise ParameterError(f"{label} needs one value per x ({xs.size}), got shape {ys.shape}", parameter=side)
         (line,) = axis.plot(xs, ys, color=color, marker="o" if xs.size == 1 else None, label=label)
         handles.append(line)
         if std is not None:

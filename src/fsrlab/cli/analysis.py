@@ -124,7 +124,7 @@ def repeatability(
     try:
         res = grouped_repeatability(loads, sensors, readings, ddof=ddof)
     except ValueError as exc:  # a group's problem, said with the file it is in
-        raise ParameterError(f"{exc}", parameter=file) from None
+        raise ParameterError(f"{file}: {getattr(exc, 'reason', exc)}") from None
     if json_out:
         emit_json(res.to_dict())
         return
@@ -150,8 +150,8 @@ def _reference_option(run_file: Path, run, reference: str | None) -> None:
     if reference is not None and reference not in ("force_n", "stress_pa"):
         fail(f"must be force_n or stress_pa, got {reference!r}", "--reference")
     if reference is None and "force_n" not in run and "stress_pa" not in run:
-        raise ParameterError(f"no reference: column 'force_n' [N] or 'stress_pa' [Pa] missing (columns: "
-                         f"{', '.join(run.columns)})", parameter=run_file)
+        raise ParameterError(f"{run_file}: no reference: column 'force_n' [N] or 'stress_pa' [Pa] missing (columns: "
+                             f"{', '.join(run.columns)})")
     if reference == "force_n" and "force_n" not in run:
         missing_column(run_file, run, "force_n", " (the reference)", "--reference")
     if reference == "stress_pa" and "stress_pa" not in run and "force_n" not in run:
