@@ -51,3 +51,17 @@ def test_a_counts_calibration_is_not_applied_to_volts_unless_forced(runs, tmp_pa
     fl.save_calibration(cal, tmp_path / "cal.json")
     code, _, err = run_cli(["apply", tmp_path / "cal.json", runs["volts"], "-o", tmp_path / "out.csv"])
     assert code == 2 and len(err.strip().splitlines()) == 1 and "in V" in err and "count" in err
+
+
+def test_a_divider_calibration_is_not_applied_to_an_op_amp_voltage(runs, tmp_path):
+    """voltage_v of a divider (no op-amp in the calibration's runs) and of the op-amp readout of
+    examples/bench.csv (its sidecar names the op-amp) are different readouts: refused, naming both."""
+    from pathlib import Path
+
+    t = np.arange(400) * 0.05
+    force = 10 * np.abs(((t / 5) % 2) - 1)
+    write_run(tmp_path / "div.csv", {"time_s": t, "force_n": force, "voltage_v": 5 * force / (force + 4.0)})
+    cal = fl.calibrate(tmp_path / "div.csv", x="voltage_v", reference="force_n")
+    bench = Path(__file__).resolve().parents[2] / "examples" / "bench.csv"
+    with pytest.raises(ProvenanceError, match="op-amp"):
+        fl.apply(cal, bench)

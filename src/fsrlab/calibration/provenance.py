@@ -212,4 +212,7 @@ def mismatches(x: str, calibration: RecordedWith, run: RecordedWith,
     elif x == "voltage_v":
         if run.opamp is not None and calibration.opamp is not None and run.opamp != calibration.opamp:
             out.append(_difference(run.opamp, calibration.opamp, _OPAMP_PARTS))
+        elif (run.opamp is None) != (calibration.opamp is None):  # an op-amp's voltage is not a divider's
+            out.append(tuple("the op-amp readout" if o is not None else "voltage_v without the op-amp readout"
+                             for o in (run.opamp, calibration.opamp)))
     return out
