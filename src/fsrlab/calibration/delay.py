@@ -19,7 +19,7 @@ from collections import deque
 import numpy as np
 
 from fsrlab.errors import ParameterError
-from fsrlab.physics.params import check_at_least, check_finite, check_positive, float_array
+from fsrlab.physics.params import check_at_least, check_positive, float_array
 
 __all__ = ["DELAY_ROWS", "DELAY_MAX_S", "delay_trials", "delayed", "DelayLine"]
 
@@ -43,8 +43,7 @@ def delay_trials(row_s: float, best: float | None = None) -> list[float]:
     best : float, optional
         One of the delays tried first, the one to refine around. [1]
     """
-    check_positive("row_s", row_s, "s", scalar=True)
-    check_finite("row_s", row_s, scalar=True)
+    check_positive("row_s", row_s, "s", scalar=True)  # finite too
     grid = list(DELAY_ROWS)
     while grid and grid[-1] * row_s < DELAY_MAX_S:
         grid.append(2.0 * grid[-1])
@@ -77,8 +76,7 @@ def delayed(t, x, delay_s: float) -> np.ndarray:
     x = float_array("x", x)
     if x.ndim != 1:
         raise ParameterError(f"must be a sequence of readings, got shape {x.shape}", parameter="x")
-    check_at_least("delay_s", delay_s, 0.0, "s", scalar=True)
-    check_finite("delay_s", delay_s, scalar=True)
+    check_at_least("delay_s", delay_s, 0.0, "s", scalar=True)  # finite too
     if not delay_s > 0 or x.size == 0:
         return x
     t = float_array("t", t)
