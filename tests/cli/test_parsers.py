@@ -13,8 +13,23 @@ import typer
 
 from clirun import run_cli
 from fsrlab.cli import app
-from fsrlab.cli.options import (electronvolts, emit_json, fail, farads, fraction, hertz, metres, number, ohms,
-                                option_names, pascals, plain_numbers, seconds, volts)
+from fsrlab.cli.options import (
+    electronvolts,
+    emit_json,
+    fail,
+    farads,
+    fraction,
+    hertz,
+    metres,
+    number,
+    ohms,
+    option_names,
+    pascals,
+    plain_numbers,
+    seconds,
+    volts,
+)
+from fsrlab.errors import ParameterError
 
 PARSERS = {"--r": ohms, "--c": farads, "--v": volts, "--f": hertz, "--p": pascals, "--s": metres,
            "--ev": electronvolts, "--t": seconds, "--duty": fraction, "--n": number}
@@ -32,11 +47,12 @@ def probe():
         model_error_inside: bool = typer.Option(False, "--model-error-inside"),
     ) -> None:
         if model_error_inside:
-            with option_names({"modulus_pa": "--modulus"}):
-                raise ValueError(f"no solution: the film must be thinner than {np.float64(2.5)!r} nm")
+            with option_names({"modulus_pa": "--modulus"}):  # an error that names no parameter of the mapping
+                raise ParameterError(f"no solution: the film must be thinner than {np.float64(2.5)!r} nm")
         if model_error:
             with option_names({"modulus_pa": "--modulus", "sigma_f_pa": "--sigma-f"}):
-                raise ValueError(f"modulus_pa must be > sigma_f_pa ({np.float64(322e3)!r} Pa), got {np.float64(37.8)!r}")
+                raise ParameterError(f"must be above the fracture stress ({np.float64(322e3)!r} Pa), "
+                                     f"got {np.float64(37.8)!r}", parameter="modulus_pa")
         if fail_numpy:
             fail(f"must be > 0, got {np.float64(-1.5)!r}", "--r")
         emit_json({"r": r, "c": c, "v": v, "f": f, "p": p, "s": s, "ev": ev, "t": t, "duty": duty, "n": n})
@@ -92,14 +108,15 @@ def test_parsers_keep_numbers_given_as_defaults():
     assert ohms(10e3) == 10e3 and seconds(0.1) == 0.1 and fraction(0.25) == 0.25
 
 
-def test_model_errors_use_option_names_and_plain_numbers(probe):
+def test_library_errors_name_the_option_of_their_parameter_with_plain_numbers(probe):
     # Reference: numpy >= 2 writes np.float64(37.8); a user typed 37.8.
     code, _, err = probe("--model-error")
     assert code == 2
-    assert err == "fsrlab: error: Invalid value for --modulus: must be > --sigma-f (322000.0 Pa), got 37.8\n"
+    assert err == ("fsrlab: error: Invalid value for --modulus: must be above the fracture stress (322000.0 Pa), "
+                   "got 37.8\n")
 
 
-def test_model_errors_without_a_leading_option_are_one_plain_line(probe):
+def test_library_errors_of_no_option_are_one_plain_line(probe):
     # click's "Invalid value: ..." would read as if an option had been named.
     code, _, err = probe("--model-error-inside")
     assert code == 2 and err == "fsrlab: error: no solution: the film must be thinner than 2.5 nm\n"

@@ -186,18 +186,16 @@ def plain_numbers(message: str) -> str:
 
 @contextmanager
 def option_names(mapping: dict[str, str]) -> Iterator[None]:
-    """Re-raise a model's error as the invalid value of the option its parameter is.
+    """Re-raise a library error as the invalid value of the option its parameter is.
 
     An :class:`~fsrlab.errors.FsrlabError` whose ``parameter`` is in ``mapping`` becomes that option's
-    invalid value with the error's ``reason``; its message is not read. For a plain ``ValueError`` (library
-    code that does not raise ``ParameterError`` yet) the parameter names in the message are replaced by the
-    options; a message that then starts with an option is reported as that option's invalid value, any
-    other as it is. Numpy reprs become plain numbers (:func:`plain_numbers`).
+    invalid value with the error's ``reason`` (numpy reprs as plain numbers, :func:`plain_numbers`); its
+    message is not read. Any other error passes as it is (``fsrlab.cli.main`` says it in one line).
 
     Parameters
     ----------
     mapping : dict
-        Model parameter name → option, e.g. ``{"modulus_pa": "--modulus"}``.
+        Library parameter name → option, e.g. ``{"modulus_pa": "--modulus"}``.
     """
     from fsrlab.errors import FsrlabError
 
@@ -207,18 +205,6 @@ def option_names(mapping: dict[str, str]) -> Iterator[None]:
         if exc.parameter in mapping:  # the library names its parameter: no message is read
             raise typer.BadParameter(plain_numbers(exc.reason), param_hint=mapping[exc.parameter]) from None
         raise
-    except ValueError as exc:
-        # Plain ValueErrors of library code not yet raising ParameterError: its parameter's name leads the message.
-        message = plain_numbers(str(exc))
-        # Longest names first, so that "sigma_f_pa" is replaced before a shorter name inside it.
-        for name in sorted(mapping, key=len, reverse=True):
-            message = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])", mapping[name], message)
-        lead = re.match(r"^(--[\w-]+(?:/--[\w-]+)*)(?::\s*|\s+)(.+)$", message, re.DOTALL)
-        if lead and lead.group(1) in mapping.values():
-            raise typer.BadParameter(lead.group(2), param_hint=lead.group(1)) from None
-        # No option leads the message: one line as it is ("fsrlab: error: ..."), not click's bare
-        # "Invalid value: ...", which reads as if an option had been named.
-        raise ParameterError(message) from None
 
 
 # ------------------------------------------------------------------ pieces the commands share
