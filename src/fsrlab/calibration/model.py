@@ -98,7 +98,7 @@ class HeldoutCalibration:
         if len(names) > 3:
             return f"mean({len(names)} curves: {names[0]}…{names[-1]})"
         if names:
-            return "mean(" + "/".join(names) + ")"
+            return "mean(" + "/".join(names) + ")" if len(names) > 1 else names[0]
         return self.static.name
 
     def curve_estimate(self, x) -> np.ndarray:

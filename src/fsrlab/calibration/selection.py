@@ -560,14 +560,15 @@ def _static_step(search: _Search, statics: list[_Choice], falling=()) -> tuple[_
     rising = [c for c in statics if c.family != "polynomial"] or statics
     cur = next((c for c in rising if within(c, 1.0)), None) or min(rising, key=search.rmse)
     mixed = [c for c in statics if within(c, MIX_SE)]
-    mixed = mixed if len(mixed) > 1 else []
+    mixed = mixed if len(mixed) > 1 or best != cur else []  # a polynomial alone best: the static estimate
     search.sel.steps.append({"step": "static curve", "tried": len(statics), "chosen": cur.name,
                              "averaged": [c.name for c in mixed], "not_monotone": list(falling),
                              "why": "the simplest curve that cannot fall within one standard error of the best "
                                     "held-out error "
                                     f"({search.rmse(best):.4g}, {best.name})"
                                     + (f"; the static estimate the mean of the {len(mixed)} within {MIX_SE:g} "
-                                       "standard error" if mixed else "")})
+                                       "standard error" if len(mixed) > 1 else f"; the static estimate {best.name}"
+                                       if mixed else "")})
     for other in statics:
         if other != cur:
             scored.pop(other, None)
