@@ -214,6 +214,9 @@ METHODS: dict[str, Callable[[], object]] = {
     "fsrlab.calibration.result.Calibration.estimate": lambda: _cal(),
     "fsrlab.calibration.result.Calibration.readout": lambda: _cal(),
     "fsrlab.calibration.result.Calibration.estimator": lambda: _cal(),
+    "fsrlab.io.runformat.Run.circuit": lambda: _run(),
+    "fsrlab.io.runformat.Run.readout_values": lambda: _run(),
+    "fsrlab.io.runformat.Run.recorded_with": lambda: _run(),
 }
 """Methods of the classes a user holds, each with the instance it is called on (built in the test's directory)."""
 
@@ -423,7 +426,7 @@ OVERRIDES: dict[str, dict[str, Callable[[], object]]] = {
     "fsrlab.calibration.curves.fit_static": {"family": lambda: "polynomial", "size": lambda: 3,
                                              "variable": lambda: "readout", "sign": lambda: 1,
                                              "x": lambda: np.linspace(1, 2, 7), "y": lambda: np.linspace(0, 1, 7)},
-    "fsrlab.calibration.readout.run_readout": {"x": lambda: "frequency_hz"},
+    "fsrlab.io.runformat.Run.readout_values": {"x": lambda: "frequency_hz"},
     "fsrlab.bench.weights.plan_steps": {"masses_kg": lambda: [0.1, 0.2]},
     "fsrlab.io.outputs.check_output": {"path": lambda: "out.csv", "option": lambda: "out"},
     "fsrlab.io.outputs.refuse_inputs": {"path": lambda: "out.csv", "option": lambda: "out",

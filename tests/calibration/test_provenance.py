@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import pytest
 
-from fsrlab.calibration.provenance import RecordedWith, mismatches
-from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout
-from fsrlab.circuits.circuit import PAPER_CIRCUIT, PAPER_OPAMP
+from fsrlab.calibration.provenance import mismatches
+from fsrlab.circuits.circuit import PAPER_CIRCUIT, PAPER_OPAMP, OpAmpReadout
+from fsrlab.io.recorded import RecordedWith
 
 C0 = PAPER_CIRCUIT
 C470 = PAPER_CIRCUIT.replace(c_off_farad=470e-12)
@@ -48,7 +48,8 @@ def test_decoded_capacitance_compares_the_circuit_only_and_voltage_the_opamp():
     cal = RecordedWith(C470, PAPER_OPAMP, (0,))
     assert mismatches("c_fsr_farad", cal, RecordedWith(C470, OpAmpReadout(r_f_ohm=10e3, vcc_v=-5.0), (1,))) == []
     assert mismatches("c_fsr_farad", cal, RecordedWith(C0, None, (0,))) == [("C_off = 0 F", "C_off = 470 pF")]
-    assert mismatches("voltage_v", cal, RecordedWith(C0, OpAmpReadout(r_f_ohm=10e3, vcc_v=-5.0))) == [("R_F = 10 kΩ", "R_F = 20 kΩ")]
+    assert (mismatches("voltage_v", cal, RecordedWith(C0, OpAmpReadout(r_f_ohm=10e3, vcc_v=-5.0)))
+            == [("R_F = 10 kΩ", "R_F = 20 kΩ")])
     assert mismatches("stress_pa_estimate", cal, RecordedWith(C0, OpAmpReadout(r_f_ohm=10e3, vcc_v=-5.0))) == []
 
 

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from clirun import run_cli
-from fsrlab.calibration.readout import reference_reversed
+from fsrlab.calibration.runs import reference_reversed
 from fsrlab.io.runformat import load_run
 from fsrlab.io.runwriter import write_run
 from fsrlab.virtual.handloaded import fsr_bench_run

@@ -19,12 +19,12 @@ from __future__ import annotations
 
 import os
 
-from fsrlab.calibration.provenance import RecordedWith, mismatches, same_unit
-from fsrlab.calibration.readout import C_FSR, run_recorded_with
+from fsrlab.calibration.provenance import mismatches, same_unit
 from fsrlab.calibration.result import Calibration, as_margin, require_calibration
 from fsrlab.circuits.circuit import LM555Circuit
 from fsrlab.errors import FsrlabError, ParameterError, ProvenanceError
-from fsrlab.io.runformat import Run, as_run
+from fsrlab.io.recorded import RecordedWith
+from fsrlab.io.runformat import C_FSR, Run, as_run
 
 __all__ = ["readout_differences", "check_readout", "apply_calibration"]
 
@@ -44,8 +44,8 @@ def readout_differences(cal: Calibration, recorded: RecordedWith, subject: str,
         The calibration (its ``recorded_with``, readout column and, for C_FSR, its decoding circuit).
     recorded : RecordedWith
         What the data it would be used on are recorded with: a run's
-        (:func:`~fsrlab.calibration.readout.run_recorded_with`) or a meter's
-        (:func:`~fsrlab.calibration.provenance.recorded_with` of its circuit and range).
+        (:meth:`~fsrlab.io.runformat.Run.recorded_with`) or a meter's
+        (:func:`~fsrlab.io.recorded.recorded_with` of its circuit and range).
     subject : str
         The start of each sentence, naming the data: ``"run.csv was recorded with"``, ``"the meter has"``.
     circuit : LM555Circuit, optional
@@ -86,7 +86,7 @@ def check_readout(cal: Calibration, run: Run, circuit: LM555Circuit | None = Non
     """
     require_calibration(cal, "cal")
     run = as_run(run)
-    found = readout_differences(cal, run_recorded_with(run), f"{run.path} was recorded with", circuit)
+    found = readout_differences(cal, run.recorded_with(), f"{run.path} was recorded with", circuit)
     unit = run.units.get(cal.x_name, "")
     if cal.x_name in run and not same_unit(unit, cal.x_unit):
         name = "the calibration" if cal.path is None else str(cal.path)

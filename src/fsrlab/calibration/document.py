@@ -4,7 +4,7 @@ One JSON object (``"format": "fsrlab-calibration"``, ``"version": 2``): ``method
 ``model`` (its name), ``x`` and ``y`` (readout and reference columns) with their ``units``, the
 calibrated ``readout_range``, ``lag_s``, ``n``, ``r2``, ``created``, ``sources``, ``recorded_with``
 (the circuit and range the runs were recorded with, checked when applied:
-:meth:`fsrlab.calibration.provenance.RecordedWith.to_dict`), ``circuit`` (the LM555 C_FSR was decoded
+:meth:`fsrlab.io.recorded.RecordedWith.to_dict`), ``circuit`` (the LM555 C_FSR was decoded
 through, or null), ``selection`` (what was tried and why) and ``calibration`` (the curve, the memory,
 the uncertainty: :meth:`fsrlab.calibration.model.HeldoutCalibration.to_dict`). docs/calibration.md
 describes each entry.

@@ -3,7 +3,7 @@
 A calibration maps one readout to stress for one readout circuit: the frequency of an LM555 with
 R = 10 kΩ says nothing about the stress under R = 4.7 kΩ, and range 1 (C_off switched in) lowers
 every frequency. A calibration therefore records the circuits of the run it was fitted on and the
-ranges its readings were taken on (:class:`RecordedWith`), and :func:`mismatches` tells what
+ranges its readings were taken on (:class:`fsrlab.io.recorded.RecordedWith`), and :func:`mismatches` tells what
 differs in a run it is applied to. Which differences matter depends on the readout:
 
 =================================  ===========================================================
@@ -23,16 +23,12 @@ fsrlab recorded this) is not compared.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any
-
 import numpy as np
 
-from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout, readout_from_metadata
-from fsrlab.errors import FileFormatError
-from fsrlab.physics.params import float_array
+from fsrlab.circuits.circuit import LM555Circuit
+from fsrlab.io.recorded import RecordedWith
 
-__all__ = ["RecordedWith", "recorded_with", "mismatches", "describe_range"]
+__all__ = ["mismatches", "describe_range"]
 
 # How the parts are named and shown in messages (the sidecar's names are for files).
 _PARTS = {"r_ohm": ("R", "Ω"), "c_off_farad": ("C_off", "F"), "diode": ("D1", None),
@@ -40,70 +36,6 @@ _PARTS = {"r_ohm": ("R", "Ω"), "c_off_farad": ("C_off", "F"), "diode": ("D1", N
           "upper_fraction": ("upper threshold", "·Vcc"), "discharge_ohm": ("discharge resistance", "Ω"),
           "r_f_ohm": ("R_F", "Ω")}
 _OPAMP_PARTS = {"vcc_v": ("the op-amp's drive", "V")}
-
-
-@dataclass(frozen=True)
-class RecordedWith:
-    """The readout a calibration's data were recorded with.
-
-    Parameters
-    ----------
-    circuit : LM555Circuit or None
-        The run's LM555 circuit (its sidecar's), or None when the run's sidecar has none.
-    opamp : OpAmpReadout or None
-        The run's op-amp readout, or None.
-    ranges : tuple of int or None
-        The values of the run's ``range`` column among the readings used (0: C_off out, 1: in);
-        None for a run without a ``range`` column (C_off in circuit throughout).
-    """
-
-    circuit: LM555Circuit | None = None
-    opamp: OpAmpReadout | None = None
-    ranges: tuple[int, ...] | None = None
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON form (the calibration file's ``"recorded_with"``)."""
-        return {"circuit": None if self.circuit is None else self.circuit.to_dict(),
-                "opamp": None if self.opamp is None else self.opamp.to_dict(),
-                "range": None if self.ranges is None else list(self.ranges)}
-
-    @classmethod
-    def from_dict(cls, d: dict) -> RecordedWith:
-        """Inverse of :meth:`to_dict`."""
-        if not isinstance(d, dict):
-            raise FileFormatError(f"recorded_with: expected a mapping, got {type(d).__name__}")
-        ranges = d.get("range")
-        if ranges is not None and not (isinstance(ranges, list) and set(ranges) <= {0, 1}):
-            raise FileFormatError(f"recorded_with.range: must be a list of 0 and 1, got {ranges!r}")
-        return cls(None if d.get("circuit") is None else LM555Circuit.from_dict(d["circuit"]),
-                   None if d.get("opamp") is None else OpAmpReadout.from_dict(d["opamp"]),
-                   None if ranges is None else tuple(sorted(int(r) for r in ranges)))
-
-
-def recorded_with(metadata: dict, range_column=None, used=None) -> RecordedWith:
-    """The readout of a run, from its sidecar and its ``range`` column.
-
-    Parameters
-    ----------
-    metadata : dict
-        The run's sidecar (:attr:`fsrlab.io.runformat.Run.metadata`).
-    range_column : array_like, optional
-        The run's ``range`` column (NaN where empty); None for a run without one.
-    used : array_like of bool, optional
-        The readings that count (e.g. those with a readout and a reference); default all.
-
-    Returns
-    -------
-    RecordedWith
-    """
-    circuit, opamp = readout_from_metadata(metadata)
-    ranges = None
-    if range_column is not None:
-        r = float_array("range_column", range_column)
-        if used is not None:
-            r = r[np.asarray(used, dtype=bool)]
-        ranges = tuple(int(v) for v in np.unique(r[np.isfinite(r)]))
-    return RecordedWith(circuit, opamp, ranges)
 
 
 def same_unit(a: str, b: str) -> bool:
@@ -176,7 +108,7 @@ def mismatches(x: str, calibration: RecordedWith, run: RecordedWith,
     calibration : RecordedWith
         What the calibration's data were recorded with.
     run : RecordedWith
-        The run's (:func:`recorded_with`).
+        The run's (:meth:`fsrlab.io.runformat.Run.recorded_with`).
     decode_circuit : LM555Circuit, optional
         For ``x = "c_fsr_farad"``: the circuit C_FSR is decoded through, compared with the run's
         when the calibration does not know the circuit its run was recorded with.

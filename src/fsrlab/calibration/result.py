@@ -32,13 +32,12 @@ import numpy as np
 
 from fsrlab.calibration.legacy import LegacyModel, is_legacy
 from fsrlab.calibration.model import HeldoutCalibration
-from fsrlab.calibration.provenance import RecordedWith
-from fsrlab.calibration.readout import C_FSR, run_readout
 from fsrlab.calibration.selection import Selection
 from fsrlab.circuits.circuit import LM555Circuit
 from fsrlab.errors import FileFormatError, ParameterError
 from fsrlab.io.calibration_file import CALIBRATION_FORMAT, CALIBRATION_VERSION
-from fsrlab.io.runformat import Run, RunFormatError, as_run
+from fsrlab.io.recorded import RecordedWith
+from fsrlab.io.runformat import C_FSR, Run, RunFormatError, as_run
 
 __all__ = ["METHOD", "MARGIN", "Calibration", "Estimator", "as_margin", "require_calibration"]
 
@@ -237,7 +236,7 @@ class Calibration:
         if self.x_name not in run and self.x_name != C_FSR:
             raise RunFormatError(f"{run.path}: column {self.x_name!r} (the calibration's readout) missing "
                                  f"(columns: {', '.join(run.columns)})")
-        values, _ = run_readout(run, self.x_name, circuit if circuit is not None else self.circuit)
+        values, _ = run.readout_values(self.x_name, circuit if circuit is not None else self.circuit)
         return np.asarray(values, dtype=float)
 
     def estimate(self, run: Run, margin: float | None = None, compensation: bool = True,

@@ -22,15 +22,16 @@ from pathlib import Path
 
 import numpy as np
 
-from fsrlab.calibration.provenance import mismatches, recorded_with, same_unit
-from fsrlab.calibration.readout import C_FSR, reference_reversed, run_circuit, run_readout
+from fsrlab.calibration.provenance import mismatches, same_unit
 from fsrlab.calibration.result import METHOD, Calibration
 from fsrlab.calibration.scoring import Recording
 from fsrlab.calibration.selection import calibrate_recordings
 from fsrlab.errors import ParameterError
-from fsrlab.io.runformat import KNOWN_COLUMNS, Run, as_run
+from fsrlab.io.recorded import recorded_with
+from fsrlab.io.runformat import C_FSR, KNOWN_COLUMNS, Run, as_run
+from fsrlab.physics.params import float_array
 
-__all__ = ["METHOD", "MIN_READINGS", "REFERENCES", "calibrate_runs"]
+__all__ = ["METHOD", "MIN_READINGS", "REFERENCES", "calibrate_runs", "reference_reversed"]
 
 #: Fewest readings (readout and reference both present) of each run: held-out scoring cuts one run into
 #: 5 blocks and scores 3 of them in 8 chunks. [1]
@@ -136,12 +137,64 @@ def _lag_rows(lag, runs: list[Run]) -> int | str:
     return int(round(lag / step)) if step > 0 else 0
 
 
+def reference_reversed(y) -> str | None:
+    """Why a reference looks reversed (a load cell mounted or wired the wrong way round), or None.
+
+    It does when most of its values are below zero **and** its largest excursion is below zero
+    (``−min > max``): the presses go negative. A reference whose rest level sits below zero (a load
+    cell not tared, an offset that drifted) with presses going positive is mostly negative too, but
+    is not reversed: its estimate is of the reference as recorded.
+
+    Parameters
+    ----------
+    y : array_like
+        The reference's values (NaN ignored). [N or Pa]
+    """
+    y = float_array("y", y)
+    y = y[np.isfinite(y)]
+    if y.size == 0:
+        return None
+    neg = float(np.mean(y < 0))
+    if neg > 0.5 and -float(np.min(y)) > float(np.max(y)):
+        return (f"the reference is mostly negative ({100 * neg:.0f} % of the readings below 0, down to "
+                f"{float(np.min(y)):.4g}, up to {float(np.max(y)):.4g})")
+    return None
+
+
 def _recording(run: Run, x: str, ref: str, circuit) -> tuple[Recording, str, str]:
-    values, _ = run_readout(run, x, circuit)
+    values, _ = run.readout_values(x, circuit)
     t = np.asarray(run["time_s"], dtype=float) if "time_s" in run else np.arange(run.n_rows, dtype=float)
     rec = Recording(t, np.asarray(values, dtype=float), np.asarray(run[ref], dtype=float), str(run.path))
     xu = run.units.get(x) or KNOWN_COLUMNS.get(x, "") or ("F" if x == C_FSR else "")
     return rec, xu, run.units.get(ref) or KNOWN_COLUMNS.get(ref, "")
+
+
+def _recordings(runs: list[Run], x: str, ref: str, circuit) -> tuple[list[Recording], str, str, list]:
+    """The runs' recordings, the units of ``x`` and ``ref`` and what each run was recorded with; refused when the
+    runs' readouts differ, a run has too few readings, or the reference looks reversed."""
+    recs, xu, yu = [], "", ""
+    for run in runs:
+        rec, run_xu, yu = _recording(run, x, ref, circuit)
+        if not same_unit(run_xu, xu):
+            raise ParameterError(f"{run.path} has {x} in {run_xu}, {runs[0].path} in {xu}: calibrate runs of one "
+                                 "readout together", parameter="runs")
+        xu = xu or run_xu
+        recs.append(rec)
+        if int(rec.usable.sum()) < MIN_READINGS:
+            raise ParameterError(f"{run.path}: {x} and {ref}: fewer than {MIN_READINGS} readings with both values "
+                                 "present (held-out scoring cuts a run into blocks)", parameter="runs")
+    y_all = np.concatenate([r.y[r.usable] for r in recs])
+    reversed_why = reference_reversed(y_all)
+    if reversed_why:
+        raise ParameterError(f"{ref}: {reversed_why}: a load cell mounted or wired the wrong way round, or the "
+                             "wrong column", parameter="reference")
+    rws = [recorded_with(r.metadata, r.columns.get("range"), rec.usable) for r, rec in zip(runs, recs, strict=True)]
+    for other, run in zip(rws[1:], runs[1:], strict=True):
+        diff = mismatches(x, rws[0], other, circuit)
+        if diff:
+            raise ParameterError(f"{run.path}: recorded with {diff[0][0]}, {runs[0].path} with {diff[0][1]}: "
+                                 "calibrate runs of one readout together", parameter="runs")
+    return recs, xu, yu, rws
 
 
 def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, compensate: bool = False,
@@ -154,7 +207,7 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
         Recordings of the same sensor and readout.
     x : str
         Readout column, or ``c_fsr_farad``: C_FSR decoded from ``frequency_hz`` and ``duty_cycle``
-        through the circuit of the run's sidecar (:func:`fsrlab.calibration.readout.run_readout`). Its unit
+        through the circuit of the run's sidecar (:meth:`fsrlab.io.runformat.Run.readout_values`). Its unit
         and name pass to the engine: a resistance (a unit in ohms, a column named ``*_ohm``) is calibrated in
         its conductance (:func:`fsrlab.calibration.scoring.readout_variables`). [its unit]
     reference : {"force_n", "stress_pa"}, optional
@@ -194,29 +247,9 @@ def calibrate_runs(runs, x: str = "frequency_hz", reference: str | None = None, 
     runs = _as_runs(runs)
     ref = _check(runs, x, reference, compensate, rail, between_runs)
     lag_rows = _lag_rows(lag, runs)
-    circuit = run_circuit(runs[0]) if x == C_FSR and x not in runs[0] else None
-    recs, xu, yu = [], "", ""
-    for run in runs:
-        rec, run_xu, yu = _recording(run, x, ref, circuit)
-        if not same_unit(run_xu, xu):
-            raise ParameterError(f"{run.path} has {x} in {run_xu}, {runs[0].path} in {xu}: calibrate runs of one "
-                                 "readout together", parameter="runs")
-        xu = xu or run_xu
-        recs.append(rec)
-        if int(rec.usable.sum()) < MIN_READINGS:
-            raise ParameterError(f"{run.path}: {x} and {ref}: fewer than {MIN_READINGS} readings with both values "
-                                 "present (held-out scoring cuts a run into blocks)", parameter="runs")
+    circuit = runs[0].circuit() if x == C_FSR and x not in runs[0] else None
+    recs, xu, yu, rws = _recordings(runs, x, ref, circuit)
     y_all = np.concatenate([r.y[r.usable] for r in recs])
-    reversed_why = reference_reversed(y_all)
-    if reversed_why:
-        raise ParameterError(f"{ref}: {reversed_why}: a load cell mounted or wired the wrong way round, or the "
-                             "wrong column", parameter="reference")
-    rws = [recorded_with(r.metadata, r.columns.get("range"), rec.usable) for r, rec in zip(runs, recs, strict=True)]
-    for other, run in zip(rws[1:], runs[1:], strict=True):
-        diff = mismatches(x, rws[0], other, circuit)
-        if diff:
-            raise ParameterError(f"{run.path}: recorded with {diff[0][0]}, {runs[0].path} with {diff[0][1]}: "
-                                 "calibrate runs of one readout together", parameter="runs")
     try:
         model, sel = calibrate_recordings(recs, compensate=bool(compensate), lag=lag_rows,
                                           rail=_divider_rail(runs[0], x) if rail is None else float(rail),

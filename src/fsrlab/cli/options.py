@@ -467,7 +467,7 @@ def meter_differences(cal, metadata: dict, range_: int) -> list[str]:
     """How the meter a calibration would be used with (its circuit in ``metadata``, its range) differs from the
     readout the calibration was recorded with: :func:`fsrlab.calibration.apply.readout_differences`."""
     from fsrlab.calibration.apply import readout_differences
-    from fsrlab.calibration.provenance import recorded_with
+    from fsrlab.io.recorded import recorded_with
 
     return readout_differences(cal, recorded_with(metadata, [range_]), "the meter has")
 

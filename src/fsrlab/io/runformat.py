@@ -19,6 +19,7 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -37,6 +38,10 @@ from fsrlab.io.schema import (
 )
 from fsrlab.io.shown import shown, shown_list
 
+if TYPE_CHECKING:
+    from fsrlab.circuits.circuit import LM555Circuit
+    from fsrlab.io.recorded import RecordedWith
+
 __all__ = [
     "read_table",
     "where",
@@ -52,7 +57,11 @@ __all__ = [
     "sidecar_path",
     "check_columns",
     "read_json_document",
+    "C_FSR",
 ]
+
+#: The readout name of C_FSR decoded through a run's circuit (:meth:`Run.readout_values`). [F]
+C_FSR = "c_fsr_farad"
 
 
 def _names(header: Sequence[str]) -> str:
@@ -156,6 +165,91 @@ class Run:
             return readout_from_metadata(self.metadata)
         except ValueError as exc:
             raise RunFormatError(f"{sidecar_path(self.path).name}: {exc}") from None
+
+    def circuit(self, circuit: LM555Circuit | None = None) -> LM555Circuit:
+        """The LM555 circuit the run was recorded with.
+
+        Parameters
+        ----------
+        circuit : LM555Circuit, optional
+            Returned as is when given.
+
+        Returns
+        -------
+        LM555Circuit
+            ``circuit``, else the sidecar's (:func:`fsrlab.circuits.circuit.readout_from_metadata`),
+            else :data:`fsrlab.circuits.circuit.PAPER_CIRCUIT` (R = 10 kΩ, ideal D1, no C_off).
+        """
+        from fsrlab.circuits.circuit import PAPER_CIRCUIT, LM555Circuit, readout_from_metadata
+
+        if circuit is not None:
+            if not isinstance(circuit, LM555Circuit):
+                raise TypeError(f"circuit: must be an LM555Circuit, got {type(circuit).__name__}")
+            return circuit
+        found, _ = readout_from_metadata(self.metadata)
+        return PAPER_CIRCUIT if found is None else found
+
+    def readout_values(self, x: str, circuit: LM555Circuit | None = None) -> tuple[np.ndarray, LM555Circuit | None]:
+        """A calibration's readout of the run: a column, or C_FSR decoded through the run's circuit.
+
+        Parameters
+        ----------
+        x : str
+            A column (``frequency_hz``, ``duty_cycle``, ``voltage_v``, ...), or :data:`C_FSR`
+            (``c_fsr_farad``): C_FSR decoded from ``frequency_hz`` and ``duty_cycle`` (when the run has
+            no such column), honouring the ``range`` column.
+        circuit : LM555Circuit, optional
+            Circuit for the decoding (default: :meth:`circuit`).
+
+        Returns
+        -------
+        values : ndarray
+            One value per reading (NaN where missing or not decodable).
+        circuit : LM555Circuit or None
+            The circuit decoded through, or None for a column.
+
+        Raises
+        ------
+        fsrlab.errors.ParameterError
+            A column the run lacks (``parameter`` ``x``).
+        """
+        if not isinstance(x, str):
+            raise TypeError(f"x: must be the name of a column, got {type(x).__name__}")
+        if x != C_FSR and x not in self:
+            raise ParameterError(f"{self.path} has no column {x!r} (columns: {', '.join(self.columns)})",
+                                 parameter="x")
+        if x == C_FSR and x not in self:
+            from fsrlab.circuits.circuit import decode_capacitance
+
+            self.require("frequency_hz", "duty_cycle")
+            circ = self.circuit(circuit)
+            return decode_capacitance(self["frequency_hz"], self["duty_cycle"], circ, self.columns.get("range")), circ
+        return self[x], None
+
+    def recorded_with(self, used=None) -> RecordedWith:
+        """What the run was recorded with: its sidecar's circuits and the ranges of its readings.
+
+        Parameters
+        ----------
+        used : array_like of bool, optional
+            The readings that count (default all).
+
+        Returns
+        -------
+        RecordedWith
+            See :func:`fsrlab.io.recorded.recorded_with`.
+
+        Raises
+        ------
+        RunFormatError
+            A circuit part of the sidecar out of range or unknown.
+        """
+        from fsrlab.io.recorded import recorded_with
+
+        try:
+            return recorded_with(self.metadata, self.columns.get("range"), used)
+        except ValueError as exc:
+            raise RunFormatError(f"{self.path}: its sidecar's circuit: {exc}") from None
 
     def incomplete(self) -> str | None:
         """What to tell a user of a run whose writer never closed it, or None for a closed run.
