@@ -213,6 +213,37 @@ def test_readout_gives_the_sidecar_circuits(tmp_path):
         load_run(path).readout()
 
 
+def test_readout_values_decode_c_fsr_through_the_runs_circuit(tmp_path):
+    """Run.readout_values, Run.circuit and Run.recorded_with. Reference: the LM555 closed forms
+    (fsrlab.circuits.lm555.astable via LM555Circuit.astable) give each reading's frequency and duty
+    cycle from a known C_FSR, C_off counting only where ``range`` is 1; decoding gives C_FSR back."""
+    from fsrlab.circuits.circuit import PAPER_CIRCUIT, LM555Circuit
+    from fsrlab.errors import ParameterError
+    from fsrlab.io.recorded import RecordedWith
+
+    circuit = LM555Circuit(r_ohm=10e3, c_off_farad=1e-9, diode=True)
+    c_fsr, ranges = np.array([0.5e-9, 1.0e-9, 1.5e-9, 0.8e-9]), np.array([0.0, 1.0, 1.0, 0.0])
+    timing = [circuit.on_range(g).astable(2e5, c) for c, g in zip(c_fsr, ranges, strict=True)]
+    columns = {"time_s": np.arange(4.0), "frequency_hz": [float(a.frequency_hz) for a in timing],
+               "duty_cycle": [float(a.duty_cycle) for a in timing], "range": ranges}
+    run = load_run(write_run(tmp_path / "r.csv", columns, {"circuit": circuit.to_dict()}))
+    values, used = run.readout_values("c_fsr_farad")
+    np.testing.assert_allclose(values, c_fsr, rtol=1e-9)
+    assert used == circuit and run.circuit() == circuit and run.circuit(PAPER_CIRCUIT) is PAPER_CIRCUIT
+    values, used = run.readout_values("frequency_hz")
+    assert used is None and np.array_equal(values, run["frequency_hz"])
+    with pytest.raises(ParameterError) as err:
+        run.readout_values("voltage_v")
+    assert err.value.parameter == "x"
+    assert run.recorded_with() == RecordedWith(circuit, None, (0, 1))
+    assert run.recorded_with([True, False, False, True]) == RecordedWith(circuit, None, (0,))
+    bare = load_run(write_run(tmp_path / "bare.csv", {"time_s": [0.0]}))
+    assert bare.circuit() == PAPER_CIRCUIT and bare.recorded_with() == RecordedWith()
+    bad = load_run(write_run(tmp_path / "bad.csv", {"time_s": [0.0]}, {"circuit": {"r_ohm": -1.0}}))
+    with pytest.raises(RunFormatError, match=r"bad\.csv: its sidecar's circuit: .*r_ohm"):
+        bad.recorded_with()
+
+
 def test_skip_bad_rows_leaves_out_and_lists_them(tmp_path):
     # Reference: docs/data-format.md, "Bad rows": each bad row left out and listed with its reason,
     # the good rows kept in order, row numbers those of the file.
