@@ -123,7 +123,7 @@ RECORDS = {
     "GroupedRepeatability", "Table", "Imported", "BadRow", "Sensitivity", "Thevenin", "FrequencyDecomposition",
     "SeparationHistory", "SensorResponse", "PaperResponse", "MeterReadings", "MeterState", "Signal",
     "HandLoadedRun", "SyntheticRun", "Agreement", "PolynomialCurve", "SplineCurve", "MonotoneCurve", "CurveSystem",
-    "StaticCurve", "HeldoutCalibration", "Stepper", "RecordedWith", "LegacyModel", "LegacyStepper",
+    "StaticCurve", "HeldoutCalibration", "Stepper", "RecordedWith", "LegacyModel",
     "Measurement", "Identity", "Ack", "DeviceError", "Frame", "FrameParser", "WindowReference",
     "LoadCellCalibration", "ReadoutHysteresis", "PlacementRepeatability", "RunReport", "Step", "ProtocolRun",
     "SignalSource", "MemoryState", "DelayLine", "Gap", "Scan", "RecordStatus", "SensorPreset",

@@ -18,11 +18,12 @@ import math
 import numpy as np
 from numpy.polynomial import chebyshev
 
-from fsrlab.calibration.operators import MemoryState, directions, memory_features
+from fsrlab.calibration.model import Stepper
+from fsrlab.calibration.operators import directions, memory_features
 from fsrlab.calibration.uncertainty import LevelUncertainty
 from fsrlab.errors import FileFormatError
 
-__all__ = ["is_legacy", "LegacyModel", "LegacyStepper"]
+__all__ = ["is_legacy", "LegacyModel"]
 
 
 def is_legacy(d: dict) -> bool:
@@ -176,44 +177,33 @@ class LegacyModel:
         c = self.coef[k + 2 * n_p:]
         return out + creep @ c[:n_s] + (w[..., None] * creep) @ c[n_s:]
 
-    def stepper(self) -> LegacyStepper:
-        return LegacyStepper(self)
+    def stepper(self) -> Stepper:
+        """The same estimates one reading at a time (:class:`~fsrlab.calibration.model.Stepper`)."""
+        return Stepper(self)
 
     def to_dict(self) -> dict:
         """The document it was read from, as it was (these files are not written any more)."""
         return self.document
 
+    #: The memory counts readings, one row step each (:meth:`run`), not the readings' times.
+    timed = False
+    creep_start = 1.0
 
-class LegacyStepper:
-    """:meth:`LegacyModel.run` one reading at a time: ``step(x, t) -> (estimate or None, direction)``.
+    def level_at(self, x: float) -> float | None:
+        """The memory's level of one reading, for :class:`~fsrlab.calibration.model.Stepper`: the static
+        estimate over full scale, 0 at the floor, None where the curve gives no number."""
+        if self._at_floor(np.array([x]))[0]:
+            return 0.0
+        w = float(self.curve_estimate(np.array([x]))[0]) / self.full_scale
+        return w if math.isfinite(w) else None
 
-    Parameters
-    ----------
-    model : LegacyModel
-        The earlier file's model.
-    """
-
-    def __init__(self, model: LegacyModel):
-        self.model = model
-        self.state = MemoryState(model.thresholds, model.time_constants)
-        self.state.dt_default = model.row_s
-
-    def step(self, x: float | None, t: float | None = None) -> tuple[float | None, int]:
-        if x is None or not math.isfinite(x):
-            return None, 0
-        m = self.model
-        floor = bool(m._at_floor(np.array([float(x)]))[0])
-        y0 = math.nan if floor else float(m.curve_estimate(np.array([float(x)]))[0])
-        w = 0.0 if floor else y0 / m.full_scale
-        if not math.isfinite(w):
-            return None, 0
-        feats, d = self.state.advance(w, None)
-        if floor:
-            return None, d
-        if not m.has_memory:
-            return y0, d
-        est = m.full_scale * float(m._combine(np.array(w), np.asarray(feats, dtype=float)))
-        return est, d
+    def estimate_at(self, x: float, level: float, feats: list) -> float | None:
+        """:meth:`run`'s estimate of one reading from its level and memory features (None at the floor)."""
+        if self._at_floor(np.array([x]))[0]:
+            return None
+        if not self.has_memory:
+            return float(self.curve_estimate(np.array([x]))[0])
+        return self.full_scale * float(self._combine(np.array(level), np.asarray(feats, dtype=float)))
 
 
 def _uncertainty(table: dict) -> LevelUncertainty:

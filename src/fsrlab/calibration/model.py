@@ -149,6 +149,26 @@ class HeldoutCalibration:
         """The same estimates one reading at a time."""
         return Stepper(self)
 
+    #: The memory counts seconds (the readings' times) for :class:`Stepper`.
+    timed = True
+
+    def level_at(self, x: float) -> float:
+        """:meth:`level` of one reading (already delayed), for :class:`Stepper`."""
+        return (self.static.at(x) - self.static.rest) / self.full_scale
+
+    def estimate_at(self, x: float, level: float, feats: list) -> float:
+        """:meth:`estimate` of one reading (already delayed) from its memory features, for :class:`Stepper`
+        (:meth:`curve_estimate` and :func:`clip_hysteresis` without arrays)."""
+        est = self.curve.at(x)
+        if self.mix:
+            est += sum(m.at(x) for m in self.mix) / len(self.mix) - self.static.at(x)
+        if self.has_memory:
+            rng = self.hysteresis_range
+            for j in range(0 if rng is None else rng.shape[1]):
+                feats[j] = min(max(feats[j], float(rng[0, j])), float(rng[1, j]))
+            est += sum(f * float(w) for f, w in zip(feats, self.weights, strict=True))
+        return est
+
     def to_dict(self) -> dict:
         return {"static": self.static.to_dict(), "curve": self.curve.to_dict(), "thresholds": list(self.thresholds),
                 "time_constants_s": list(self.time_constants), "weights": self.weights.tolist(),
@@ -214,38 +234,36 @@ def clip_hysteresis(features: np.ndarray, hysteresis_range: np.ndarray | None) -
 class Stepper:
     """One reading at a time: ``step(x, t) -> (estimate, direction)``; None readings keep the memory.
 
+    The one stepper of every calibration model: it holds the memory's state
+    (:class:`~fsrlab.calibration.operators.MemoryState`) and the readout's delay line, and asks the model
+    for the level of a reading (:meth:`HeldoutCalibration.level_at`) and for the estimate from that
+    reading and its features (:meth:`HeldoutCalibration.estimate_at`). A model whose memory counts
+    readings instead of seconds (``timed`` False: an earlier fsrlab's files) takes one row step per reading.
+
     Parameters
     ----------
-    cal : HeldoutCalibration
-        The calibration whose :meth:`HeldoutCalibration.run` this gives reading by reading.
+    model : HeldoutCalibration or LegacyModel
+        The model whose ``run`` this gives reading by reading.
     """
 
-    def __init__(self, cal: HeldoutCalibration):
-        self.cal = cal
-        self.state = MemoryState(cal.thresholds, cal.time_constants, cal.scaled, cal.creep_start)
-        self.state.dt_default = cal.row_s
-        self.line = DelayLine(cal.delay_s)
+    def __init__(self, model):
+        self.model = model
+        self.state = MemoryState(model.thresholds, model.time_constants, model.scaled, model.creep_start)
+        self.state.dt_default = model.row_s
+        self.line = DelayLine(model.delay_s)
         self._t = None
-        self._rest = cal.static.rest
-        rng = cal.hysteresis_range  # clip_hysteresis's bounds as Python floats, for one reading at a time
-        self._clip = [] if rng is None else list(zip(rng[0].tolist(), rng[1].tolist(), strict=True))
 
     def step(self, x: float | None, t: float | None = None) -> tuple[float | None, int]:
         if x is None or not np.isfinite(x):
             return None, 0
-        cal = self.cal
-        if cal.delay_s > 0:
-            t = t if t is not None else (0.0 if self._t is None else self._t + cal.row_s)
+        m = self.model
+        if m.delay_s > 0:
+            t = t if t is not None else (0.0 if self._t is None else self._t + m.row_s)
             self._t = t
             x = self.line.push(t, float(x))
         x = float(x)
-        static = cal.static.at(x)
-        feats, d = self.state.advance((static - self._rest) / cal.full_scale, t)
-        est = cal.curve.at(x)  # curve_estimate and clip_hysteresis below, without arrays
-        if cal.mix:
-            est += sum(m.at(x) for m in cal.mix) / len(cal.mix) - static
-        if cal.has_memory:
-            for j, (lo, hi) in enumerate(self._clip):
-                feats[j] = min(max(feats[j], lo), hi)
-            est += sum(f * float(w) for f, w in zip(feats, cal.weights, strict=True))
-        return est, d
+        level = m.level_at(x)
+        if level is None:
+            return None, 0
+        feats, d = self.state.advance(level, t if m.timed else None)
+        return m.estimate_at(x, level, feats), d
