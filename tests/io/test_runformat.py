@@ -242,6 +242,8 @@ def test_readout_values_decode_c_fsr_through_the_runs_circuit(tmp_path):
     bad = load_run(write_run(tmp_path / "bad.csv", {"time_s": [0.0]}, {"circuit": {"r_ohm": -1.0}}))
     with pytest.raises(RunFormatError, match=r"bad\.csv: its sidecar's circuit: .*r_ohm"):
         bad.recorded_with()
+    with pytest.raises(RunFormatError, match=r"bad\.meta\.json: .*r_ohm"):  # as Run.readout() says it
+        bad.circuit()
 
 
 def test_skip_bad_rows_leaves_out_and_lists_them(tmp_path):

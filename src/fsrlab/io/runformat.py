@@ -179,14 +179,19 @@ class Run:
         LM555Circuit
             ``circuit``, else the sidecar's (:func:`fsrlab.circuits.circuit.readout_from_metadata`),
             else :data:`fsrlab.circuits.circuit.PAPER_CIRCUIT` (R = 10 kΩ, ideal D1, no C_off).
+
+        Raises
+        ------
+        RunFormatError
+            The sidecar's circuit out of range or unknown (as :meth:`readout`).
         """
-        from fsrlab.circuits.circuit import PAPER_CIRCUIT, LM555Circuit, readout_from_metadata
+        from fsrlab.circuits.circuit import PAPER_CIRCUIT, LM555Circuit
 
         if circuit is not None:
             if not isinstance(circuit, LM555Circuit):
                 raise TypeError(f"circuit: must be an LM555Circuit, got {type(circuit).__name__}")
             return circuit
-        found, _ = readout_from_metadata(self.metadata)
+        found, _ = self.readout()  # a sidecar's circuit out of range: RunFormatError naming the sidecar
         return PAPER_CIRCUIT if found is None else found
 
     def readout_values(self, x: str, circuit: LM555Circuit | None = None) -> tuple[np.ndarray, LM555Circuit | None]:
