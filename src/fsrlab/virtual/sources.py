@@ -153,6 +153,12 @@ VIRTUAL_CIRCUIT = PAPER_CIRCUIT.replace(c_off_farad=1e-9)
 """The virtual device's 555: the paper's circuit (:data:`~fsrlab.circuits.circuit.PAPER_CIRCUIT`) with a
 1 nF C_off that ``RANGE 1`` switches in."""
 
+#: The most samples of the two periods :class:`PhysicsSource` computes ahead (100 000 per period): a long
+#: period is sampled more coarsely than ``dt_s`` instead of taking time and memory in proportion to it
+#: (a 50 000 s period every 0.5 s, not 2·10⁷ samples every 5 ms). The sensor's response depends on the
+#: stress history, not on its rate, and the profile moves by 10⁻⁵ of a period from one sample to the next. [1]
+MAX_SAMPLES = 200_000
+
 
 def sensor_metadata(sensor) -> dict:
     """What a run's sidecar says about a virtual sensor.
@@ -193,7 +199,8 @@ class PhysicsSource:
         The traditional readout on A0 (eq. 38), with R_FSR taken at its |Vcc|
         (:attr:`OpAmpReadout.fsr_voltage_v`).
     dt_s : float
-        Time step on which the stress history is sampled. [s]
+        Time step on which the stress history is sampled (at most a twentieth of the period, at least
+        ``2·period/``:data:`MAX_SAMPLES`). [s]
     mux : Multiplexer, optional
         The sensor sits behind a multiplexer's switch (:mod:`fsrlab.circuits.mux`): its R_on and node
         capacitance enter the timing network (:attr:`circuit` becomes the 555 with ``R + R_on``, and
@@ -228,7 +235,7 @@ class PhysicsSource:
         self.circuit = circuit if mux is None else mux.timing_circuit(circuit)
         self.opamp = opamp
         period = self.profile.period_s
-        self.dt_s = min(dt_s, period / 20)
+        self.dt_s = max(min(dt_s, period / 20), 2 * period / MAX_SAMPLES)
         self._t = np.arange(0.0, 2 * period + self.dt_s, self.dt_s)
         stress = self.profile.stress(self._t)
         resp = self.sensor.respond(stress, voltage_v=circuit.fsr_voltage_v)
