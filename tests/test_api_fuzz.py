@@ -365,6 +365,7 @@ VALID: dict[str, Callable[[], object]] = {
 
 OVERRIDES: dict[str, dict[str, Callable[[], object]]] = {
     "fsrlab.units.parse_eng": {"text": lambda: "4k7"},
+    "fsrlab.virtual.arguments.random_generator": {"value": lambda: 7, "name": lambda: "seed"},  # an int seed
     "fsrlab.units.parse_quantity": {"text": lambda: "4k7", "quantity": lambda: "resistance", "name": lambda: "r_ohm"},
     "fsrlab.calibration.document.save_calibration": {"path": lambda: "out.json"},
     "fsrlab.io.runwriter.write_run": {"path": lambda: "out.csv"},
@@ -742,6 +743,7 @@ ALIASES = {
     ("fsrlab.physics.params.check_int", "value"): "r_ohm",
     ("fsrlab.physics.params.float_array", "value"): "r_ohm",
     ("fsrlab.circuits.checks.check_fraction", "value"): "upper_fraction",
+    ("fsrlab.virtual.arguments.random_generator", "value"): "seed",
     # A circuit's parts as a mapping: its errors name the sidecar's and the calibration file's key, circuit.
     ("fsrlab.circuits.circuit.LM555Circuit.from_dict", "d"): "circuit",
     ("fsrlab.circuits.circuit.OpAmpReadout.from_dict", "d"): "circuit",
