@@ -365,6 +365,8 @@ VALID: dict[str, Callable[[], object]] = {
 
 OVERRIDES: dict[str, dict[str, Callable[[], object]]] = {
     "fsrlab.units.parse_eng": {"text": lambda: "4k7"},
+    "fsrlab.physics.params.paired_series": {"x_name": lambda: "time_s", "x": lambda: np.arange(3.0),
+                                           "y_name": lambda: "reference", "y": lambda: np.ones(3)},
     "fsrlab.virtual.arguments.random_generator": {"value": lambda: 7, "name": lambda: "seed"},  # an int seed
     "fsrlab.units.parse_quantity": {"text": lambda: "4k7", "quantity": lambda: "resistance", "name": lambda: "r_ohm"},
     "fsrlab.calibration.document.save_calibration": {"path": lambda: "out.json"},
@@ -742,6 +744,8 @@ ALIASES = {
     ("fsrlab.physics.params.check_between", "value"): "r_ohm",
     ("fsrlab.physics.params.check_int", "value"): "r_ohm",
     ("fsrlab.physics.params.float_array", "value"): "r_ohm",
+    ("fsrlab.physics.params.paired_series", "x"): "time_s",
+    ("fsrlab.physics.params.paired_series", "y"): "reference",
     ("fsrlab.circuits.checks.check_fraction", "value"): "upper_fraction",
     ("fsrlab.virtual.arguments.random_generator", "value"): "seed",
     # A circuit's parts as a mapping: its errors name the sidecar's and the calibration file's key, circuit.

@@ -46,7 +46,15 @@ from fsrlab.circuits.checks import check_lm555, check_r_fsr, check_single
 from fsrlab.circuits.lm555 import astable
 from fsrlab.circuits.phases import timing_per_rc
 from fsrlab.errors import ParameterError
-from fsrlab.physics.params import check_at_least, check_finite, check_int, check_positive, float_array, plain
+from fsrlab.physics.params import (
+    check_at_least,
+    check_finite,
+    check_int,
+    check_positive,
+    float_array,
+    paired_series,
+    plain,
+)
 
 __all__ = ["SUBCKT_555", "SpiceResult", "netlist", "read_raw", "run_ngspice", "simulate_spice", "simulate_spice_many",
            "start_spice_many", "SpiceBatch", "ngspice_available",
@@ -353,12 +361,7 @@ def run_ngspice(text: str, output_file: str = "fsrlab_out.raw", timeout_s: float
 
 def _waveform(t_s, name: str, v):
     """A sampled waveform's times and values: two 1-D arrays of one length, or an error naming the culprit."""
-    t, v = float_array("t_s", t_s), float_array(name, v)
-    if t.ndim != 1:
-        raise ParameterError(f"must be one-dimensional, got shape {t.shape}", parameter="t_s")
-    if v.shape != t.shape:
-        raise ParameterError(f"must have the shape of t_s {t.shape}, got {v.shape}", parameter=name)
-    return t, v
+    return paired_series("t_s", t_s, name, v)
 
 
 def level_crossings(t_s, v_v, level_v: float, rising: bool) -> np.ndarray:

@@ -386,15 +386,10 @@ def interpolate_reference(t: np.ndarray, t_ref: np.ndarray, values: np.ndarray) 
         Same shape as ``t``: NaN outside ``[t_ref[0], t_ref[-1]]`` (no extrapolation) and between
         two samples of which one is missing; at a reference sample's own time, its value.
     """
-    from fsrlab.physics.params import float_array
+    from fsrlab.physics.params import float_array, paired_series
 
     t = float_array("t", t)
-    t_ref = float_array("t_ref", t_ref)
-    values = float_array("values", values)
-    if t_ref.ndim != 1:
-        raise ParameterError(f"must be a 1-D array of times, got shape {t_ref.shape}", parameter="t_ref")
-    if values.shape != t_ref.shape:
-        raise ParameterError(f"must have the shape of t_ref {t_ref.shape}, got {values.shape}", parameter="values")
+    t_ref, values = paired_series("t_ref", t_ref, "values", values)
     out = np.full(t.shape, np.nan)
     if t_ref.size == 0:
         return out

@@ -47,7 +47,7 @@ import numpy as np
 
 from fsrlab.errors import ParameterError
 from fsrlab.metrics.holds import Hold, find_holds
-from fsrlab.physics.params import check_between, check_positive, float_array
+from fsrlab.physics.params import check_between, check_positive, paired_series
 
 __all__ = ["Hold", "find_holds", "LogDrift", "log_drift", "FirstOrder", "first_order_fit", "HoldCreep",
            "RunCreep", "creep", "creep_of_run", "REFERENCES"]
@@ -87,17 +87,6 @@ class LogDrift:
     note: str = ""
 
 
-def _series(elapsed_s, readout, time_name: str = "elapsed_s", readout_name: str = "readout"):
-    """Times and readings as 1-D float arrays of one shape; an error naming the argument that is not."""
-    s = float_array(time_name, elapsed_s)
-    r = float_array(readout_name, readout)
-    if s.ndim != 1:
-        raise ParameterError(f"must be a 1-D array of times, got shape {s.shape}", parameter=time_name)
-    if r.shape != s.shape:
-        raise ParameterError(f"must have the shape of {time_name} {s.shape}, got {r.shape}", parameter=readout_name)
-    return s, r
-
-
 def log_drift(elapsed_s, readout) -> LogDrift:
     """Fit r = a + b·log10(elapsed) by least squares; drift per decade of time b, and 100·b/|a| in %.
 
@@ -113,7 +102,7 @@ def log_drift(elapsed_s, readout) -> LogDrift:
     LogDrift
         NaN numbers and a note when fewer than 3 readings, or a single distinct time, remain.
     """
-    s, r = _series(elapsed_s, readout)
+    s, r = paired_series("elapsed_s", elapsed_s, "readout", readout)
     keep = np.isfinite(s) & np.isfinite(r) & (s > 0)
     s, r = s[keep], r[keep]
     nan = float("nan")
@@ -217,7 +206,7 @@ def first_order_fit(elapsed_s, readout, hold_s: float | None = None) -> FirstOrd
     τ is "not determined" when the best τ exceeds ``hold_s``, is shorter than the readings'
     spacing, or \\|Δ\\| is within three standard errors of zero.
     """
-    s, r = _series(elapsed_s, readout)
+    s, r = paired_series("elapsed_s", elapsed_s, "readout", readout)
     if hold_s is not None:
         check_positive("hold_s", hold_s, "s", scalar=True)
     keep = np.isfinite(s) & np.isfinite(r)
@@ -473,8 +462,8 @@ def creep(time_s, readout, reference, band: float = 0.02, min_hold_s: float = 5.
     TypeError
         An array that is not numbers.
     """
-    t, xr = _series(time_s, readout, "time_s", "readout")
-    _, ref = _series(t, reference, "time_s", "reference")
+    t, xr = paired_series("time_s", time_s, "readout", readout)
+    _, ref = paired_series("time_s", t, "reference", reference)
     check_positive("min_hold_s", min_hold_s, "s", scalar=True)
     if settle_s is None:
         settle_s = min(0.5, min_hold_s / 5)

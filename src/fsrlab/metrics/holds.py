@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsrlab.errors import ParameterError
-from fsrlab.physics.params import check_between, check_positive, float_array
+from fsrlab.physics.params import check_between, check_positive, paired_series
 
 __all__ = ["Hold", "find_holds"]
 
@@ -100,12 +100,7 @@ def find_holds(time_s, reference, band: float = 0.02, min_hold_s: float = 5.0,
     stretch's mid-range) and lasts at least ``min_hold_s``. Stretches are grown left to right, each
     as long as it can be, so a hold is never split while its reference stays in one band.
     """
-    t = float_array("time_s", time_s)
-    ref = float_array("reference", reference)
-    if t.ndim != 1:
-        raise ParameterError(f"must be a 1-D array, got shape {t.shape}", parameter="time_s")
-    if t.shape != ref.shape:
-        raise ParameterError(f"must have the shape of time_s {t.shape}, got {ref.shape}", parameter="reference")
+    t, ref = paired_series("time_s", time_s, "reference", reference)
     check_between("band", band, 0.0, 0.5, "of full scale", lower_open=True, upper_open=True, scalar=True)
     check_positive("min_hold_s", min_hold_s, "s", scalar=True)
     rows = np.flatnonzero(np.isfinite(ref) & np.isfinite(t))

@@ -19,7 +19,15 @@ from scipy.optimize import minimize_scalar
 
 from fsrlab.errors import ParameterError
 from fsrlab.physics.electrical import capacitance_per_area, resistance_per_area
-from fsrlab.physics.params import PAPER, PaperParameters, check_between, check_int, check_positive, float_array
+from fsrlab.physics.params import (
+    PAPER,
+    PaperParameters,
+    check_between,
+    check_int,
+    check_positive,
+    float_array,
+    paired_series,
+)
 from fsrlab.physics.separation import _loading, _unloading, separation_loading, separation_unloading
 from fsrlab.physics.tunneling import _eq12
 
@@ -206,12 +214,7 @@ def check_response(stress_pa, q, name: str = "the readout", fraction: float = 0.
     taken for noise (its Δ is most of its full scale). Pure noise of a few hundred readings passes
     with a probability of about 0.1 % (Δ beyond 4 standard errors of a difference of medians).
     """
-    x = float_array("stress_pa", stress_pa)
-    y = float_array("q", q)
-    if x.ndim != 1:
-        raise ParameterError(f"must be a 1-D array, got shape {x.shape}", parameter="stress_pa")
-    if y.shape != x.shape:
-        raise ParameterError(f"must have the shape of stress_pa {x.shape}, got {y.shape}", parameter="q")
+    x, y = paired_series("stress_pa", stress_pa, "q", q)
     check_between("fraction", fraction, 0.0, 0.5, lower_open=True, scalar=True)
     ok = np.isfinite(x) & np.isfinite(y)
     x, y = x[ok], y[ok]

@@ -16,7 +16,7 @@ from dataclasses import asdict, dataclass
 from fsrlab.errors import ParameterError
 
 __all__ = ["PaperParameters", "PAPER", "check_positive", "check_finite", "check_at_least", "check_between", "check_int",
-           "float_array", "plain"]
+           "float_array", "paired_series", "plain"]
 
 #: The electronvolt in joules: CODATA 2018, exact since the 2019 SI (e = 1.602176634e-19 C); equal to
 #: ``scipy.constants.electron_volt``, written out so that importing the parameters does not import scipy.
@@ -54,6 +54,31 @@ def float_array(name: str, value):
     import numpy as np
 
     return np.asarray(_numbers(name, value), dtype=float)
+
+
+def paired_series(x_name: str, x, y_name: str, y):
+    """Two float arrays of one 1-D shape (times and readings, stress and charge, ...): ``x`` 1-D, ``y`` of its
+    shape; a ParameterError naming the one that is not (a TypeError when not numbers, :func:`float_array`).
+
+    Parameters
+    ----------
+    x_name, y_name : str
+        Parameter names for the messages.
+    x, y : array_like
+        The two series.
+
+    Returns
+    -------
+    (ndarray, ndarray)
+    """
+    from fsrlab.errors import ParameterError
+
+    xa, ya = float_array(x_name, x), float_array(y_name, y)
+    if xa.ndim != 1:
+        raise ParameterError(f"must be a 1-D array, got shape {xa.shape}", parameter=x_name)
+    if ya.shape != xa.shape:
+        raise ParameterError(f"must have the shape of {x_name} {xa.shape}, got {ya.shape}", parameter=y_name)
+    return xa, ya
 
 
 def plain(value) -> str:
