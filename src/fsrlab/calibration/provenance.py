@@ -27,6 +27,7 @@ import numpy as np
 
 from fsrlab.circuits.circuit import LM555Circuit
 from fsrlab.io.recorded import RecordedWith
+from fsrlab.io.runformat import C_FSR
 
 __all__ = ["mismatches", "describe_range"]
 
@@ -120,7 +121,7 @@ def mismatches(x: str, calibration: RecordedWith, run: RecordedWith,
         the readout's meaning (see the module's table); empty when nothing that is known differs.
     """
     out: list[tuple[str, str]] = []
-    if x == "c_fsr_farad":
+    if x == C_FSR:
         # Against the circuit the calibration run was recorded with: a part the user corrected
         # at calibration (--r) is corrected alike in a run recorded on the same bench.
         cal = calibration.circuit if calibration.circuit is not None else decode_circuit

@@ -256,12 +256,13 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
     and its JSON or table."""
     from fsrlab.calibration.document import save_calibration
     from fsrlab.calibration.runs import calibrate_runs
+    from fsrlab.io.runformat import C_FSR
 
     warnings: list[str] = []
     runs = []
     for run_file in run_files:
         run = load_run_warned(run_file, skip_bad_rows, warnings)
-        if x not in run and not (x == "c_fsr_farad" and "frequency_hz" in run and "duty_cycle" in run):
+        if x not in run and not (x == C_FSR and "frequency_hz" in run and "duty_cycle" in run):
             missing_column(run_file, run, x, option="--x")
         _reference_option(run_file, run, reference)
         runs.append(run)
@@ -383,6 +384,7 @@ def apply_cmd(
     from fsrlab.calibration.apply import apply_calibration, check_readout
     from fsrlab.calibration.document import load_calibration
     from fsrlab.errors import FsrlabError, ProvenanceError
+    from fsrlab.io.runformat import C_FSR
     from fsrlab.io.runwriter import write_run
 
     if margin is not None and not (math.isfinite(margin) and margin >= 0):
@@ -394,7 +396,7 @@ def apply_cmd(
             fail(exc.reason, "CAL.json")
     warnings: list[str] = []
     run = load_run_warned(run_file, skip_bad_rows, warnings)
-    if cal.x_name not in run and cal.x_name != "c_fsr_farad":
+    if cal.x_name not in run and cal.x_name != C_FSR:
         missing_column(run_file, run, cal.x_name, " (the calibration's readout)")
     checked(output, "--output", overwrite=overwrite, inputs=[cal_file, run_file], kind="run")
     if cal.recorded_with is None:
