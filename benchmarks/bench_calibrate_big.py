@@ -63,7 +63,7 @@ def run() -> str:
         ref, floor = results[0], results[-1]
         lines = ["| command | time (s) | peak memory (GiB) | time / reading the CSV | memory / reading the CSV |",
                  "|---|---:|---:|---:|---:|"]
-        for (name, _), (dt, gib) in zip(cases, results):
+        for (name, _), (dt, gib) in zip(cases, results, strict=True):
             lines.append(f"| {name} | {dt:.1f} | {gib:.2f} | {dt / floor[0]:.2f} | {gib / floor[1]:.2f} |")
         load = os.getloadavg()
         met_t, met_m = ref[0] <= 30, ref[1] <= 1.0

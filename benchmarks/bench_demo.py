@@ -42,13 +42,16 @@ def run() -> str:
     load = " / ".join(f"{x:.1f}" for x in os.getloadavg())
     met = "met" if med <= AIM_S else "not met"
     return (
-        f"Bench: {info['device']} ({'the digital twin, firmware in simavr' if info['device'] == 'twin' else 'Python virtual device'}).\n\n"
+        f"Bench: {info['device']} "
+        f"({'the digital twin, firmware in simavr' if info['device'] == 'twin' else 'Python virtual device'}).\n\n"
         "| way | runs | min | median | max | vs real time |\n|---|---|---|---|---|---|\n"
         f"| `--speed realtime` (the previous way) | 1 | {slow_t:.1f} s | {slow_t:.1f} s | {slow_t:.1f} s | 1 |\n"
-        f"| `--speed max` (the default) | {REPEAT} | {lo:.1f} s | {med:.1f} s | {hi:.1f} s | {slow_t / med:.2f}× faster |\n\n"
+        f"| `--speed max` (the default) | {REPEAT} | {lo:.1f} s | {med:.1f} s | {hi:.1f} s "
+        f"| {slow_t / med:.2f}× faster |\n\n"
         f"Steps of the median `--speed max` run: {steps}. Aim ≤ {AIM_S:g} s (median): **{met}** (load average "
         f"{load} on cores shared with other jobs). The recordings are simavr's work on the twin (three at once at "
-        "`--speed max`, one simavr process each): the section on the twin below gives simavr's pace here. The reproduction report is drawn in a process "
+        "`--speed max`, one simavr process each): the section on the twin below gives simavr's pace here. "
+        "The reproduction report is drawn in a process "
         "of its own at niceness +10 from the end of the spring runs, beside the dead weights (its step is the wait "
         "left when the chain is done).\n"
     )

@@ -38,13 +38,12 @@ return true;
 def _latency() -> tuple[list[float], int]:
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
     from browser import FIND_JS, chromium, wait_for
-
     from fsrlab.acquisition.serial_link import SerialLink
-    from fsrlab.virtual.sources import PhysicsSource, StressProfile
-    from fsrlab.virtual.device import VirtualDevice
     from fsrlab.live.page import Controller, make_document
     from fsrlab.live.server import start_server
     from fsrlab.live.session import LiveSession
+    from fsrlab.virtual.device import VirtualDevice
+    from fsrlab.virtual.sources import PhysicsSource, StressProfile
 
     sent: dict[int, float] = {}
 

@@ -55,7 +55,8 @@ def _scaling_rows():
         ratio = t_loop / t_fast
         if n == 10**6:
             met = ratio >= 100 and err <= 1e-10
-        rows.append(f"| {n:,} | {1e3 * t_fast:.3f} ms (best of {rep_fast}) | {1e3 * t_loop:.1f} ms (best of {rep_loop}) | "
+        rows.append(f"| {n:,} | {1e3 * t_fast:.3f} ms (best of {rep_fast}) "
+                    f"| {1e3 * t_loop:.1f} ms (best of {rep_loop}) | "
                     f"{1e9 * t_loop / n:.0f} ns → {1e9 * t_fast / n:.1f} ns | {err:.1e} | **{ratio:,.0f}×** |")
     return rows, met
 

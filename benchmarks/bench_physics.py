@@ -80,6 +80,7 @@ def numba_kernel():
     import math
 
     from scipy.constants import e, epsilon_0, h, m_e
+
     from fsrlab.physics.params import PAPER as p
 
     s0, mod, sf_pa, k, phi0, eps = p.s0_m, p.modulus_pa, p.sigma_f_pa, p.k, p.phi0_j, p.eps_r * epsilon_0
@@ -94,7 +95,8 @@ def numba_kernel():
             for branch in range(2):
                 s = s0 * (1 - x / mod) if branch == 0 else s_f + (s0 - s_f) * (1 - x / sf_pa) ** k
                 b = 8 * math.pi * s * math.sqrt(2 * m_e) * phi0**1.5 / (2.96 * h * e * u)
-                j = 2.2 * e**3 * u**2 / (8 * math.pi * h * phi0 * s**2) * (math.exp(-b) - r * math.exp(-b * math.sqrt(r)))
+                j = (2.2 * e**3 * u**2 / (8 * math.pi * h * phi0 * s**2)
+                     * (math.exp(-b) - r * math.exp(-b * math.sqrt(r))))
                 if branch == 0:
                     rl[i], cl[i] = u / j, eps / s
                 else:
@@ -121,9 +123,9 @@ def _best(fn, repeat):
 def run() -> str:
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
     import numpy as np
-    from reference_physics import table2_row
 
     from fsrlab.metrics.hysteresis import model_cycle_errors
+    from reference_physics import table2_row
 
     model_cycle_errors(2.0, n=1000)  # warm up imports
     public_functions_pipeline(2.0, 1000)
@@ -158,7 +160,8 @@ def run() -> str:
                      f"{N_POINTS:,} | {nb_rate:.3g} | {nb_rate / old_rate:.1f}× | {nb_rate / exp_rate:.0%} |\n")
         ahead = "ahead of" if new_rate > nb_rate else "behind"
         numba_vs = f"{new_rate / nb_rate:.2f}× numba"
-        numba_note = (f"numba {__import__('numba').__version__} (benchmark-only extra `bench`), compiled before timing, "
+        numba_note = (f"numba {__import__('numba').__version__} (benchmark-only extra `bench`), "
+                      "compiled before timing, "
                       f"best of 7; its R_A agrees with the public functions to {err:.1e} relative. fsrlab's kernel "
                       f"is **{ahead}** numba ({new_rate / nb_rate:.2f}×).")
     t_calls = _best(lambda: fsrlab_scalar_loop(2.0, N_SCALAR_CALLS), 2)

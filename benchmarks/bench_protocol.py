@@ -12,8 +12,8 @@ import binascii
 import random
 import time
 
-from fsrlab.hardware import ADC_COUNTS
 from fsrlab.acquisition.protocol import SEQ_MODULO, FrameParser, encode_frame, max_frame_rate, min_frame_length
+from fsrlab.hardware import ADC_COUNTS
 
 TITLE = "Serial protocol: host parser vs the 1 Mbaud frame rate"
 

@@ -108,7 +108,7 @@ def _speed(big):
     apply_s = time.perf_counter() - t0
     est = cal.estimator()
     t0 = time.perf_counter()
-    for v, ti in zip(x.tolist(), t.tolist()):
+    for v, ti in zip(x.tolist(), t.tolist(), strict=True):
         est.step(v, ti)
     live_s = time.perf_counter() - t0
     return n, fit_s, poly_s, apply_s, live_s
@@ -140,10 +140,12 @@ def run() -> str:
         "",
         "| method | RMS (% FS) | max (% FS) | RMS / best polynomial |",
         "|---|---:|---:|---:|",
-        f"| best plain polynomial (degree {best_d}, chosen on the held-out runs) | {poly_rms:.2f} | {poly_max:.2f} | 1.00 |",
+        f"| best plain polynomial (degree {best_d}, chosen on the held-out runs) | {poly_rms:.2f} | {poly_max:.2f} "
+        "| 1.00 |",
         f"| fsrlab, its static curve alone (`compensation=False`) | {plain_rms:.2f} | {plain_max:.2f} | "
         f"{plain_rms / poly_rms:.2f} |",
-        f"| fsrlab `compensate=True` ({cal.model_name}) | {comp_rms:.2f} | {comp_max:.2f} | {comp_rms / poly_rms:.2f} |",
+        f"| fsrlab `compensate=True` ({cal.model_name}) | {comp_rms:.2f} | {comp_max:.2f} "
+        f"| {comp_rms / poly_rms:.2f} |",
         "",
         f"Aim compensated RMS ≤ 0.6 × best polynomial: {ok(comp_rms <= 0.6 * poly_rms)} ({comp_rms / poly_rms:.2f}). "
         f"Held-out steps kept on the calibration run: {kept}.",

@@ -46,7 +46,8 @@ test runs alike): 1 % of the readings replaced by a number drawn from the run's 
 that garbles a value), readings in ADC counts written as volts (``x·5/1023``: a sketch that prints
 volts; no ``--rail``, so no conductance variable), time stamps of an unsteady loop (each step ×0.7 to
 ×1.3), and beside a readout of 20/s or more a reference held between the conversions of an amplifier
-at 10/s (each row the mean force of the last conversion ended: stair steps up to 0.2 s late). Each against the best polynomial fitted on the same altered rows, so the table says how much
+at 10/s (each row the mean force of the last conversion ended: stair steps up to 0.2 s late). Each
+against the best polynomial fitted on the same altered rows, so the table says how much
 the calibration loses to a fault that a plain polynomial also meets.
 """
 
@@ -62,16 +63,20 @@ TITLE = "Calibration on real recordings (held-out selection vs plain polynomials
 
 #: (name, train files or (file, part), test files or (file, part)); part: "first half" / "second half".
 PAIRS = (
-    ("FSR divider + HX711, hand: first half → second half", [("westfal_fsr__s02_manual", 0)], [("westfal_fsr__s02_manual", 1)]),
+    ("FSR divider + HX711, hand: first half → second half", [("westfal_fsr__s02_manual", 0)],
+     [("westfal_fsr__s02_manual", 1)]),
     ("same FSR: hand → servo triangle", ["westfal_fsr__s02_manual"], ["westfal_fsr__s02_motor"]),
     ("second FSR: hand → servo triangle", ["westfal_fsr__s06_manual"], ["westfal_fsr__s06_motor"]),
     ("servo triangle → hand", ["westfal_fsr__s02_motor"], ["westfal_fsr__s02_manual"]),
     ("second FSR: servo triangle → hand", ["westfal_fsr__s06_motor"], ["westfal_fsr__s06_manual"]),
-    ("FSR: two hand sessions → a third", ["westfal_fsr__s04_manual", "westfal_fsr__s05_manual"], ["westfal_fsr__s03_manual"]),
+    ("FSR: two hand sessions → a third", ["westfal_fsr__s04_manual", "westfal_fsr__s05_manual"],
+     ["westfal_fsr__s03_manual"]),
     ("Velostat, robot presses: first half → second half", [("lupasic_velostat__pike1_force_20_exp1", 0)],
      [("lupasic_velostat__pike1_force_20_exp1", 1)]),
-    ("Velostat, robot: run 1 → its repeat", ["lupasic_velostat__pike1_force_40_exp1"], ["lupasic_velostat__pike1_force_40_exp2"]),
-    ("force plate FSR: first half → second half", [("forceplate__exp13cQ2_fsr2", 0)], [("forceplate__exp13cQ2_fsr2", 1)]),
+    ("Velostat, robot: run 1 → its repeat", ["lupasic_velostat__pike1_force_40_exp1"],
+     ["lupasic_velostat__pike1_force_40_exp2"]),
+    ("force plate FSR: first half → second half", [("forceplate__exp13cQ2_fsr2", 0)],
+     [("forceplate__exp13cQ2_fsr2", 1)]),
     ("second FSR, hand: first half → second half", [("westfal_fsr__s06_manual", 0)], [("westfal_fsr__s06_manual", 1)]),
     ("FSR, hand: one session → the next", ["westfal_fsr__s03_manual"], ["westfal_fsr__s04_manual"]),
     ("FSR, hand: session 5 → session 6", ["westfal_fsr__s05_manual"], ["westfal_fsr__s06_manual"]),
@@ -90,7 +95,8 @@ PAIRS = (
     ("force plate, another FSR: first half → second half", [("forceplate__exp12b_fsr1", 0)],
      [("forceplate__exp12b_fsr1", 1)]),
     ("taxel (TAMS), bare → under a thin silicone layer", ["tams_tactile__r10k_nosil"], ["tams_tactile__r10k_thinsil"]),
-    ("taxel (TAMS), bare: first half → second half", [("tams_tactile__r10k_nosil", 0)], [("tams_tactile__r10k_nosil", 1)]),
+    ("taxel (TAMS), bare: first half → second half", [("tams_tactile__r10k_nosil", 0)],
+     [("tams_tactile__r10k_nosil", 1)]),
     # the pairs below were added after the calibration had been developed on those above (DEVELOPED_ON)
     ("force plate, one FSR: the other experiment → the first", ["forceplate__exp13a_fsr3"], ["forceplate__exp7a_fsr3"]),
     ("force plate, that FSR: first half → second half", [("forceplate__exp13a_fsr3", 0)],
@@ -112,14 +118,18 @@ PAIRS = (
      [("tams_tactile__r10k_thicksil", 1)]),
     ("taxel (TAMS) under thin silicone: first half → second half", [("tams_tactile__r10k_thinsil", 0)],
      [("tams_tactile__r10k_thinsil", 1)]),
-    ("capacitive insole taxel, air chamber: calibration run → three validation runs", ["belli_insole__left_t34_calibration"],
-     ["belli_insole__left_t34_validation1", "belli_insole__left_t34_validation2", "belli_insole__left_t34_validation3"]),
+    ("capacitive insole taxel, air chamber: calibration run → three validation runs",
+     ["belli_insole__left_t34_calibration"],
+     ["belli_insole__left_t34_validation1", "belli_insole__left_t34_validation2",
+      "belli_insole__left_t34_validation3"]),
     ("capacitive insole taxel: loading staircase → unloading staircase", [("belli_insole__left_t34_calibration", 0)],
      [("belli_insole__left_t34_calibration", 1)]),
-    ("capacitive insole taxel: slow staircase → fast rises on a preload", ["belli_insole__left_t34_steps1"], ["belli_insole__left_t34_dynamic2"]),
+    ("capacitive insole taxel: slow staircase → fast rises on a preload", ["belli_insole__left_t34_steps1"],
+     ["belli_insole__left_t34_dynamic2"]),
     ("capacitive insole taxel: calibration run → two runs of another day", ["belli_insole__left_t34_calibration"],
      ["belli_insole__left_t34_steps1", "belli_insole__left_t34_dynamic1"]),
-    ("capacitive insole taxel: one slow ramp → a validation run", ["belli_insole__left_t34_dynamic1"], ["belli_insole__left_t34_validation1"]),
+    ("capacitive insole taxel: one slow ramp → a validation run", ["belli_insole__left_t34_dynamic1"],
+     ["belli_insole__left_t34_validation1"]),
     ("capacitive insole, another taxel: calibration run → a validation run", ["belli_insole__left_t53_calibration"],
      ["belli_insole__left_t53_validation1"]),
     ("capacitive insole, other dielectric: one day → the next", ["belli_insole__right_t126_dyn2sep_a"],
@@ -151,7 +161,7 @@ def _write(out: Path, t, x, y) -> Path:
     """A run of the columns ``time_s,reading,force_n`` (an empty cell where a value is missing)."""
     with out.open("w") as fh:
         fh.write("time_s,reading,force_n\n")
-        for ti, xi, yi in zip(t, x, y):
+        for ti, xi, yi in zip(t, x, y, strict=True):
             fh.write(f"{ti:.6f}," + ",".join(f"{v:.10g}" if np.isfinite(v) else "" for v in (xi, yi)) + "\n")
     return out
 
@@ -236,7 +246,7 @@ def _best_polynomial(train, test) -> tuple[float, int]:
     xs = np.concatenate([_columns(p)[0] for p in train])
     ys = np.concatenate([_columns(p)[1] for p in train])
     ok = np.isfinite(xs) & np.isfinite(ys)
-    x, y = (np.concatenate(v) for v in zip(*(_columns(p) for p in test)))
+    x, y = (np.concatenate(v) for v in zip(*(_columns(p) for p in test), strict=True))
     loaded = y > 0.05 * np.nanmax(y)
     span = np.nanmax(y) - np.nanmin(y)
     best = None
@@ -258,7 +268,7 @@ def _as(x: np.ndarray, variable: str) -> np.ndarray:
 def physics_variable(train) -> str:
     """``1/reading`` when the pooled training reading is positive, spans more than a decade and falls as the
     force rises (Spearman ρ < 0: a resistance, whose conductance follows the force), else ``reading``."""
-    x, y = (np.concatenate(v) for v in zip(*(_columns(p) for p in train)))
+    x, y = (np.concatenate(v) for v in zip(*(_columns(p) for p in train), strict=True))
     ok = np.isfinite(x) & np.isfinite(y)
     x, y = x[ok], y[ok]
     if x.size < 3 or x.min() <= 0 or x.max() / x.min() <= 10:
@@ -295,8 +305,8 @@ def _fair_polynomial(train, test, variable: str = "reading") -> tuple[float, int
         return float(np.mean((np.polynomial.Polynomial.fit(x[:n], y[:n], d)(x[n:]) - y[n:]) ** 2))
 
     degree = min(range(1, 6), key=heldout)
-    xs, ys = (np.concatenate(v) for v in zip(*cols))
-    x, y = (np.concatenate(v) for v in zip(*(_columns(p) for p in test)))
+    xs, ys = (np.concatenate(v) for v in zip(*cols, strict=True))
+    x, y = (np.concatenate(v) for v in zip(*(_columns(p) for p in test), strict=True))
     loaded = y > 0.05 * np.nanmax(y)
     e = np.polynomial.Polynomial.fit(xs, ys, degree)(_as(x[loaded], variable)) - y[loaded]
     e = e[np.isfinite(e)]
@@ -441,14 +451,16 @@ def _summary(scores: dict) -> list[str]:
             "pairs": str(len(idx)),
             "compensated / plain: worst; pairs above ×1.05": f"{worst(cp)}; {int((cp > 1.05).sum())}",
             "`--compensate` vs the oracle: geometric mean; worst": f"{gm(comp)}; {worst(comp)}",
-            "`--compensate` vs the polynomial in the physics variable, degree chosen on training: geometric mean; worst":
+            "`--compensate` vs the polynomial in the physics variable, degree chosen on training: "
+            "geometric mean; worst":
                 f"{gm(comp / phys)}; {worst(comp / phys)}",
             "same, plain calibration": f"{gm(plain / phys)}; {worst(plain / phys)}",
             "`--compensate` vs the polynomial in the raw reading, degree chosen on training: geometric mean; worst":
                 f"{gm(comp / fair)}; {worst(comp / fair)}",
-            "±2u (compensated) ≥ 90 %, same-session pairs": f"{sum(got[i]['comp']['coverage'] >= 0.9 for i in same)} of "
-                                                             f"{len(same)}",
-            "loaded rows without an estimate: largest share": f"{100 * max(got[i]['comp']['missing'] for i in idx):.1f} %",
+            "±2u (compensated) ≥ 90 %, same-session pairs":
+                f"{sum(got[i]['comp']['coverage'] >= 0.9 for i in same)} of {len(same)}",
+            "loaded rows without an estimate: largest share":
+                f"{100 * max(got[i]['comp']['missing'] for i in idx):.1f} %",
         }))
     keys = next((list(v) for _, v in cols if v), [])
     out = [("**Summary** (the criteria: compensated ≤ ×1.05 plain on every pair; geometric mean ≤ ×0.80 and "

@@ -48,7 +48,8 @@ WHAT_CHANGED = (
     "checked its inputs at every step and ran once per response: `PaperFSR.respond_many` solves the two "
     "readouts, the dead weights' placements and the sensitivities' perturbations at once and "
     "`current_density(validate=False)` checks once (the same numbers to the bit; the experiment, its sensitivities "
-    "and the fitted quantities 0.73 s → 0.21 s of CPU here). **Figures**: a saved figure is cleared and drawn again for the next figure "
+    "and the fitted quantities 0.73 s → 0.21 s of CPU here). "
+    "**Figures**: a saved figure is cleared and drawn again for the next figure "
     "of its size (its axes and tick objects kept; the same PNG to the byte), the panels made at once "
     "(`new_figure(ncols=...)`), the log axes' decades as plain numbers (mathtext's parser cost ~0.15 s to build "
     "in each process), PNGs compressed at zlib level 3 (the same pixels, 3 % more bytes); matplotlib imported "
@@ -104,7 +105,8 @@ def _tree(rev: str | None, dest: Path) -> Path:
     if rev is None:
         shutil.copytree(REPO / "src", src, ignore=shutil.ignore_patterns("__pycache__"))
     else:
-        archive = subprocess.run(["git", "-C", str(REPO), "archive", rev, "src"], check=True, capture_output=True).stdout
+        archive = subprocess.run(["git", "-C", str(REPO), "archive", rev, "src"],
+                                 check=True, capture_output=True).stdout
         subprocess.run(["tar", "-x", "-C", str(dest)], input=archive, check=True)
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
     subprocess.run([sys.executable, "-m", "compileall", "-q", str(src)], check=True, env=env, capture_output=True)

@@ -39,7 +39,7 @@ def _times() -> list[list[float]]:
         subprocess.run(argv, check=True, capture_output=True, env=env)  # warm the file and bytecode caches
     out: list[list[float]] = [[] for _ in CASES]
     for _ in range(N):
-        for times, (_, argv, _) in zip(out, CASES):
+        for times, (_, argv, _) in zip(out, CASES, strict=True):
             t0 = time.perf_counter()
             subprocess.run(argv, check=True, capture_output=True, env=env)
             times.append(time.perf_counter() - t0)
@@ -71,7 +71,7 @@ def _own(floor: str, args: list[str]) -> float:
 def run() -> str:
     rows = []
     medians = []
-    for (label, _, aim), t in zip(CASES, _times()):
+    for (label, _, aim), t in zip(CASES, _times(), strict=True):
         med = statistics.median(t)
         medians.append(med)
         ratio = med / medians[0]

@@ -38,7 +38,8 @@ def machine() -> str:
     """One line naming the machine the figures come from."""
     import os
 
-    return f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, {time.strftime('%Y-%m-%d')}"
+    return (f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
+            f"{time.strftime('%Y-%m-%d')}")
 
 
 def main(names: list[str]) -> int:

@@ -54,7 +54,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
-from bench_realdata import DEVELOPED_ON, PAIRS  # the one list of pairs
+from bench_realdata import DEVELOPED_ON, PAIRS  # noqa: E402 (found on the sys.path set above); the one list of pairs
 
 #: Indices of PAIRS whose training and test rows come from one session: halves of one run, a repeat
 #: recorded minutes later on the same mounting (the robot's Velostat series, 25 Nov 2021, 13:58-15:19,
@@ -92,7 +92,7 @@ def plain_copy(root: Path, spec, tmp: Path, tag: str) -> tuple[Path, dict]:
     out = tmp / f"{tag}.csv"
     with out.open("w") as fh:
         fh.write("time_s,force_n,reading\n")
-        for t, y, x in zip(run["time_s"], run["force_n"], run["reading"]):
+        for t, y, x in zip(run["time_s"], run["force_n"], run["reading"], strict=True):
             fh.write(",".join("" if not np.isfinite(v) else f"{v:.10g}" for v in (t, y, x)) + "\n")
     return out, run
 
@@ -129,7 +129,7 @@ def fair_polynomial(train: list[dict], test: list[dict], variables: tuple[str, .
 
     def cols(variable: str) -> list[tuple[np.ndarray, np.ndarray]]:
         out = []
-        for r, y in zip(train, ys_runs):
+        for r, y in zip(train, ys_runs, strict=True):
             x = _var(r["reading"], variable)
             ok = np.isfinite(x) & np.isfinite(y)
             out.append((x[ok], y[ok]))
@@ -149,7 +149,7 @@ def fair_polynomial(train: list[dict], test: list[dict], variables: tuple[str, .
 
     by_var = {v: cols(v) for v in variables}
     _, variable, degree = min((heldout(by_var[v], d), v, d) for v in variables for d in range(1, 6))
-    xs, ys = (np.concatenate(v) for v in zip(*by_var[variable]))
+    xs, ys = (np.concatenate(v) for v in zip(*by_var[variable], strict=True))
     p = np.polynomial.Polynomial.fit(xs, ys, degree)
     x = _var(np.concatenate([r["reading"] for r in test]), variable)
     y = np.concatenate([r["force_n"] for r in test])
@@ -261,8 +261,8 @@ def summary(results: list[dict]) -> dict:
         cov = np.array([r["comp"]["coverage"] for r in same])
         miss = np.array([max(r["comp"]["missing"], r["plain"]["missing"]) for r in ok])
         if ok:
-            s["comp_vs_plain"] = {"worst": float(cvp.max()), "over": [r["index"] for r in ok
-                                                                        if r["comp_vs_plain"] > CRITERIA["comp_vs_plain"]],
+            s["comp_vs_plain"] = {"worst": float(cvp.max()),
+                                  "over": [r["index"] for r in ok if r["comp_vs_plain"] > CRITERIA["comp_vs_plain"]],
                                   "pass": bool(cvp.max() <= CRITERIA["comp_vs_plain"] and not failed)}
             s["vs_poly"] = {"geomean": float(np.exp(np.mean(np.log(vs)))), "worst": float(vs.max()),
                             "worst_pair": ok[int(vs.argmax())]["index"], "at_most_1": int((vs <= 1).sum()),
@@ -275,10 +275,11 @@ def summary(results: list[dict]) -> dict:
                             "pass": bool(np.exp(np.mean(np.log(vs))) <= CRITERIA["geomean_vs_poly"]
                                          and vs.max() <= CRITERIA["worst_vs_poly"] and not failed)}
             s["coverage_same_session"] = {"pairs": len(same), "at_least_90": int((cov >= CRITERIA["coverage"]).sum()),
-                                          "below": [r["index"] for r in same if r["comp"]["coverage"] < CRITERIA["coverage"]],
+                                          "below": [r["index"] for r in same
+                                                    if r["comp"]["coverage"] < CRITERIA["coverage"]],
                                           "lowest": float(cov.min()) if cov.size else None,
                                           "pass": bool(cov.size == 0 or cov.min() >= CRITERIA["coverage"])}
-            s["missing"] = {"worst": float(miss.max()), "over": [r["index"] for r, m in zip(ok, miss)
+            s["missing"] = {"worst": float(miss.max()), "over": [r["index"] for r, m in zip(ok, miss, strict=True)
                                                                    if m > CRITERIA["missing"]],
                             "pass": bool(miss.max() <= CRITERIA["missing"] and not failed)}
         out[g] = s
@@ -295,7 +296,8 @@ def _f(v, fmt):
 
 def table(results: list[dict], summ: dict, prefix: list[str]) -> str:
     lines = [f"fsrlab command: {shlex.join(prefix)}", "",
-             ("| # | pair | S | polynomial (training-chosen degree, variable) | plain: RMSE % span, ×poly, ±2u, missing | "
+             ("| # | pair | S | polynomial (training-chosen degree, variable) "
+              "| plain: RMSE % span, ×poly, ±2u, missing | "
               "compensated: RMSE % span, ×poly, ±2u, missing | comp/plain | model (compensated) |"),
              "|---:|---|:-:|---:|---:|---:|---:|---|"]
     for r in results:
@@ -306,30 +308,41 @@ def table(results: list[dict], summ: dict, prefix: list[str]) -> str:
         for k in ("plain", "comp"):
             s = r[k]
             cells.append(s["error"] if "error" in s else
-                         f"{s['rmse_pct']:.2f} %, ×{s['vs_poly']:.2f}, {100 * s['coverage']:.0f} %, {100 * s['missing']:.1f} %")
+                         f"{s['rmse_pct']:.2f} %, ×{s['vs_poly']:.2f}, {100 * s['coverage']:.0f} %, "
+                         f"{100 * s['missing']:.1f} %")
         p = r["poly"]
         var = "1/reading" if p["variable"] == "conductance" else "reading"
-        alt = f"; raw {r['poly_raw']['rmse_pct']:.2f} % ({r['poly_raw']['degree']})" if p["variable"] != "reading" else ""
-        lines.append(f"| {r['index']} | {r['name']} | {'S' if r['same_session'] else ''} | {p['rmse_pct']:.2f} % ({p['degree']}, {var}){alt} | "
-                     f"{cells[0]} | {cells[1]} | {_f(r.get('comp_vs_plain'), '.3f')} | {r['comp'].get('model') or ''} |")
+        alt = (f"; raw {r['poly_raw']['rmse_pct']:.2f} % ({r['poly_raw']['degree']})"
+               if p["variable"] != "reading" else "")
+        lines.append(f"| {r['index']} | {r['name']} | {'S' if r['same_session'] else ''} "
+                     f"| {p['rmse_pct']:.2f} % ({p['degree']}, {var}){alt} | "
+                     f"{cells[0]} | {cells[1]} | {_f(r.get('comp_vs_plain'), '.3f')} "
+                     f"| {r['comp'].get('model') or ''} |")
     lines += ["", "S: training and test rows from one session (±2u criterion applies).", "",
               "Issue 37, done when (on the compensated calibration; plain in brackets where it applies):"]
     for g, s in summ.items():
-        lines.append(f"\n{g}: {s['pairs']} pairs" + (f"; FAILED to run: {s['failed_pairs']}" if s["failed_pairs"] else ""))
+        lines.append(f"\n{g}: {s['pairs']} pairs"
+                     + (f"; FAILED to run: {s['failed_pairs']}" if s["failed_pairs"] else ""))
         if "comp_vs_plain" not in s:
             continue
         c, v, cv, m = s["comp_vs_plain"], s["vs_poly"], s["coverage_same_session"], s["missing"]
         lines.append(f"  compensated ≤ ×1.05 plain on every pair: worst ×{c['worst']:.3f}; over: {c['over'] or 'none'} "
                      f"-> {yes(c['pass'])}")
-        lines.append(f"  vs polynomial (degree chosen on training, physics variable): geometric mean ×{v['geomean']:.3f} "
-                     f"(≤ ×0.80), worst ×{v['worst']:.3f} on #{v['worst_pair']} (≤ ×1.25), {v['at_most_1']} at most ×1.00; "
+        lines.append(f"  vs polynomial (degree chosen on training, physics variable): "
+                     f"geometric mean ×{v['geomean']:.3f} "
+                     f"(≤ ×0.80), worst ×{v['worst']:.3f} on #{v['worst_pair']} (≤ ×1.25), "
+                     f"{v['at_most_1']} at most ×1.00; "
                      f"[plain ×{v['plain_geomean']:.3f}, worst ×{v['plain_worst']:.3f}] -> {yes(v['pass'])}")
-        lines.append(f"    for reference, compensated vs the polynomial in the raw reading: ×{v['poly_raw_geomean']:.3f}, worst "
-                     f"×{v['poly_raw_worst']:.3f}; vs the polynomial whose variable too (reading or 1/reading) is chosen "
+        lines.append(f"    for reference, compensated vs the polynomial in the raw reading: "
+                     f"×{v['poly_raw_geomean']:.3f}, worst "
+                     f"×{v['poly_raw_worst']:.3f}; vs the polynomial whose variable too (reading or 1/reading) "
+                     "is chosen "
                      f"on training: ×{v['poly_chosen_geomean']:.3f}, worst ×{v['poly_chosen_worst']:.3f}")
         lines.append(f"  ±2u ≥ 90 % on every same-session pair: {cv['at_least_90']} of {cv['pairs']}; below: "
-                     f"{cv['below'] or 'none'}; lowest {_f(cv['lowest'] and 100 * cv['lowest'], '.0f')} % -> {yes(cv['pass'])}")
-        lines.append(f"  ≤ 2 % loaded rows without estimate (plain and compensated): worst {100 * m['worst']:.1f} %; over: "
+                     f"{cv['below'] or 'none'}; lowest {_f(cv['lowest'] and 100 * cv['lowest'], '.0f')} % "
+                     f"-> {yes(cv['pass'])}")
+        lines.append(f"  ≤ 2 % loaded rows without estimate (plain and compensated): "
+                     f"worst {100 * m['worst']:.1f} %; over: "
                      f"{m['over'] or 'none'} -> {yes(m['pass'])}")
     return "\n".join(lines) + "\n"
 

@@ -14,7 +14,12 @@ from __future__ import annotations
 import numpy as np
 
 from fsrlab.paper.preset_fit import (
-    FIT_PARAMETERS, SHARED_FIT_PARAMETERS, SPREADS, fit_paper_preset, fit_placement_spread, re2_design
+    FIT_PARAMETERS,
+    SHARED_FIT_PARAMETERS,
+    SPREADS,
+    fit_paper_preset,
+    fit_placement_spread,
+    re2_design,
 )
 
 
@@ -41,12 +46,12 @@ def main(joint: bool = False, max_nfev: int = 300) -> None:
         spreads, _ = fit_placement_spread(fitted)
         fitted = [s.replace(**spreads) for s in fitted]
         gots = [quick_response(s) for s in fitted]
-    for i, (got, want) in enumerate(zip(gots, wants), start=1):
+    for i, (got, want) in enumerate(zip(gots, wants, strict=True), start=1):
         print(f"# sensor {i}: " + ", ".join(f"{k} {got[k]:.4g} (printed {want[k]:.4g})" for k in want))
     a, printed, labels = re2_design(fitted)
     pred = np.sqrt(a @ np.array([spreads[n] for n in SPREADS]) ** 2)
     print("# mean RE2 (linearised): " + "; ".join(f"{k}: {q:.2f} (printed {r:g})"
-                                               for k, q, r in zip(labels, pred, printed)))
+                                               for k, q, r in zip(labels, pred, printed, strict=True)))
     print("PAPER_SENSOR_PARAMETERS: tuple = (")
     for s in fitted:
         vals = {k: getattr(s, k) for k in (*SHARED_FIT_PARAMETERS, *FIT_PARAMETERS, *SPREADS)}

@@ -111,7 +111,7 @@ def write(out: Path, t, x, y, digits: int = 10) -> int:
     """``time_s,reading,force_n`` rows; the number of rows written."""
     with out.open("w") as fh:
         fh.write("time_s,reading,force_n\n")
-        for row in zip(t, x, y):
+        for row in zip(t, x, y, strict=True):
             fh.write(",".join(f"{v:.{digits}g}" for v in row) + "\n")
     return len(t)
 
@@ -239,7 +239,8 @@ def belli(src: Source, out: Path) -> list[str]:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("out", help="folder to write the CSV files into (created)")
     for name in ("westfal", "lupasic", "forceplate", "tams", "belli"):
         ap.add_argument(f"--{name}", metavar="PATH", help="local work tree, folder or bare git directory of the source")
