@@ -430,6 +430,7 @@ OVERRIDES: dict[str, dict[str, Callable[[], object]]] = {
                                              "variable": lambda: "readout", "sign": lambda: 1,
                                              "x": lambda: np.linspace(1, 2, 7), "y": lambda: np.linspace(0, 1, 7)},
     "fsrlab.io.runformat.Run.readout_values": {"x": lambda: "frequency_hz"},
+    "fsrlab.calibration.runs.check_arguments": {"x": lambda: "frequency_hz"},
     "fsrlab.bench.weights.plan_steps": {"masses_kg": lambda: [0.1, 0.2]},
     "fsrlab.io.outputs.check_output": {"path": lambda: "out.csv", "option": lambda: "out"},
     "fsrlab.io.outputs.refuse_inputs": {"path": lambda: "out.csv", "option": lambda: "out",

@@ -31,7 +31,7 @@ from fsrlab.io.recorded import recorded_with
 from fsrlab.io.runformat import C_FSR, KNOWN_COLUMNS, Run, as_run
 from fsrlab.physics.params import float_array
 
-__all__ = ["METHOD", "MIN_READINGS", "REFERENCES", "calibrate_runs", "reference_reversed"]
+__all__ = ["METHOD", "MIN_READINGS", "REFERENCES", "calibrate_runs", "check_arguments", "reference_reversed"]
 
 #: Fewest readings (readout and reference both present) of each run: held-out scoring cuts one run into
 #: 5 blocks and scores 3 of them in 8 chunks. [1]
@@ -86,20 +86,41 @@ def _positive(value, parameter: str, what: str) -> float | None:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise ParameterError(f"must be a number, {what}, got {value!r}", parameter=parameter)
     if not (math.isfinite(value) and value > 0):
-        raise ParameterError(f"must be {what} > 0, got {value!r}", parameter=parameter)
+        raise ParameterError(f"must be > 0 ({what}), got {value!r}", parameter=parameter)
     return float(value)
 
 
-def _check(runs: list[Run], x, reference, compensate, rail, between_runs) -> str:
-    """The arguments of :func:`calibrate_runs` checked; the reference column returned."""
+def check_arguments(x, reference=None, compensate=False, rail=None, between_runs=None) -> None:
+    """The arguments of :func:`calibrate_runs` that do not depend on the runs, checked before any is read.
+
+    Parameters
+    ----------
+    x : str
+        The readout column.
+    reference : {"force_n", "stress_pa"} or None
+        The reference column (None: the runs' own).
+    compensate : bool
+        Whether the memory is tried.
+    rail : float or None
+        The readout's full scale. [unit of the readout]
+    between_runs : float or None
+        Relative standard uncertainty between recordings, 0 to 1. [1]
+
+    Raises
+    ------
+    ParameterError
+        Naming the parameter: ``x`` not a column name or a reference column, ``reference`` not one of
+        :data:`REFERENCES`, ``compensate`` not a bool, ``rail`` not above zero, ``between_runs`` outside 0–1.
+    """
     if not isinstance(x, str) or not x:
         raise ParameterError(f"must be the name of the readout column, got {x!r}", parameter="x")
     if reference is not None and reference not in REFERENCES:
         raise ParameterError(f"must be one of {', '.join(REFERENCES)} (the reference column), got {reference!r}",
                              parameter="reference")
     if x in REFERENCES:
-        raise ParameterError(f"{x} is a reference column: a calibration of the reference against itself says nothing; "
-                             "give a readout such as frequency_hz", parameter="x")
+        raise ParameterError(f"{x} is a reference column: a calibration of the reference against itself (or against "
+                             "itself divided by the area) says nothing; give a readout such as frequency_hz",
+                             parameter="x")
     if not isinstance(compensate, (bool, np.bool_)):
         raise ParameterError(f"must be True or False, got {compensate!r}", parameter="compensate")
     _positive(rail, "rail", "the readout's full scale in its unit")
@@ -107,14 +128,22 @@ def _check(runs: list[Run], x, reference, compensate, rail, between_runs) -> str
             between_runs, (int, float, np.integer, np.floating)) or not 0 <= between_runs <= 1):
         raise ParameterError(f"must be a relative uncertainty from 0 to 1 (0 % to 100 %), got {between_runs!r}",
                              parameter="between_runs")
+
+
+def _check(runs: list[Run], x, reference, compensate, rail, between_runs) -> str:
+    """The arguments of :func:`calibrate_runs` checked (:func:`check_arguments`, then against the runs); the
+    reference column returned."""
+    check_arguments(x, reference, compensate, rail, between_runs)
     for run in runs:
         if x not in run and not (x == C_FSR and "frequency_hz" in run and "duty_cycle" in run):
-            raise ParameterError(f"{run.path}: no column {x!r} (columns: {', '.join(run.columns)})", parameter="x")
+            raise ParameterError(f"{run.path}: column {x!r} missing (columns: {', '.join(run.columns)})",
+                                 parameter="x")
     ref = reference or ("stress_pa" if all("stress_pa" in r for r in runs) else "force_n")
     for run in runs:
         if ref not in run:
-            raise ParameterError(f"{run.path}: no reference column {ref!r} (columns: {', '.join(run.columns)})",
-                                 parameter="reference")
+            missing = f"column {ref!r}" if reference else "column 'force_n' [N] or 'stress_pa' [Pa]"
+            raise ParameterError(f"{run.path}: no reference: {missing} missing (columns: {', '.join(run.columns)})",
+                                 parameter="reference" if reference else "runs")
     if rail is not None:
         for run in runs:
             v = np.asarray(run[x], dtype=float) if x in run else np.zeros(0)

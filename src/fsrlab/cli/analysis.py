@@ -225,13 +225,11 @@ def calibrate_cmd(
       fsrlab calibrate examples/bench.csv --compensate -o cal.json
       fsrlab calibrate examples/bench.csv examples/other.csv --x frequency_hz --compensate --json
     """
-    if x in ("stress_pa", "force_n"):
-        fail(f"{x} is a reference column: a calibration of the reference against itself (or against itself "
-             "divided by the area) says nothing; give a readout such as frequency_hz", "--x")
+    from fsrlab.calibration.runs import check_arguments
+
+    check_arguments(x, reference, compensate, rail, between_runs)  # before any run is read
     if output is not None:
         checked(output, "--output", overwrite=overwrite, inputs=runs)
-    if rail is not None and not (math.isfinite(rail) and rail > 0):
-        fail(f"must be a full scale > 0 in the readout's unit, got {rail:g}", "--rail")
     _calibrate_held_out(runs, x, reference, compensate, unit, lag, skip_bad_rows, output, json_out, rail=rail,
                         between_runs=between_runs)
 
@@ -256,21 +254,13 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
     and its JSON or table."""
     from fsrlab.calibration.document import save_calibration
     from fsrlab.calibration.runs import calibrate_runs
-    from fsrlab.io.runformat import C_FSR
 
     warnings: list[str] = []
-    runs = []
-    for run_file in run_files:
-        run = load_run_warned(run_file, skip_bad_rows, warnings)
-        if x not in run and not (x == C_FSR and "frequency_hz" in run and "duty_cycle" in run):
-            missing_column(run_file, run, x, option="--x")
-        _reference_option(run_file, run, reference)
-        runs.append(run)
+    runs = [load_run_warned(run_file, skip_bad_rows, warnings) for run_file in run_files]
     ref = reference or ("stress_pa" if all("stress_pa" in r for r in runs) else "force_n")
     _unit_option(unit, ref)
-    with option_names({"between_runs": "--between-runs", "rail": "--rail", "lag": "--lag",
-                       "reference": "--reference"}):
-        cal = calibrate_runs(runs, x=x, reference=ref, compensate=compensate, lag=_lag_option(lag), rail=rail,
+    with option_names({"lag": "--lag"}):  # the run's columns, the reference, the rail: the library's checks
+        cal = calibrate_runs(runs, x=x, reference=reference, compensate=compensate, lag=_lag_option(lag), rail=rail,
                              between_runs=between_runs)
     sel = cal.selection
     fs = cal.full_scale
@@ -383,12 +373,11 @@ def apply_cmd(
     """
     from fsrlab.calibration.apply import apply_calibration, check_readout
     from fsrlab.calibration.document import load_calibration
+    from fsrlab.calibration.result import as_margin
     from fsrlab.errors import FsrlabError, ProvenanceError
-    from fsrlab.io.runformat import C_FSR
     from fsrlab.io.runwriter import write_run
 
-    if margin is not None and not (math.isfinite(margin) and margin >= 0):
-        fail(f"must be a fraction >= 0 of the calibrated span, got {margin:g}", "--margin")
+    as_margin(margin)  # before any file is read
     with reading_file(cal_file):
         try:
             cal = load_calibration(cal_file)
@@ -396,8 +385,7 @@ def apply_cmd(
             fail(exc.reason, "CAL.json")
     warnings: list[str] = []
     run = load_run_warned(run_file, skip_bad_rows, warnings)
-    if cal.x_name not in run and cal.x_name != C_FSR:
-        missing_column(run_file, run, cal.x_name, " (the calibration's readout)")
+    cal.readout(run)  # a run without the calibration's readout: one line naming the file and the column
     checked(output, "--output", overwrite=overwrite, inputs=[cal_file, run_file], kind="run")
     if cal.recorded_with is None:
         warnings.append(f"{cal_file} does not record the circuit and range its data were recorded with (written by an "
