@@ -16,14 +16,13 @@ import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
-from toolcheck import require_tool
 
-from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout, readout_from_metadata
+from fsrlab.circuits.circuit import PAPER_CIRCUIT, LM555Circuit, OpAmpReadout, readout_from_metadata
 from fsrlab.circuits.decode import decode
 from fsrlab.circuits.lm555 import astable, sensitivity, thresholds_from_control
 from fsrlab.circuits.spice import netlist, simulate_spice
 from fsrlab.circuits.transient import simulate
-from fsrlab.circuits.circuit import PAPER_CIRCUIT
+from toolcheck import require_tool
 
 #: Every part away from its default (with D1 the discharge resistance does not matter, see NO_DIODE).
 FULL = LM555Circuit(r_ohm=12e3, c_off_farad=220e-12, diode=True, diode_drop_v=0.3, vcc_v=3.3,
@@ -140,8 +139,8 @@ def test_every_part_changes_the_result(base, change):
     other = base.replace(**change)
     assert astable(r_fsr_ohm=RF, c_fsr_farad=CF, **other.kwargs()).frequency_hz != pytest.approx(
         astable(r_fsr_ohm=RF, c_fsr_farad=CF, **base.kwargs()).frequency_hz, rel=1e-6)
-    assert other.simulate(RF, CF, periods=3).frequency_hz != pytest.approx(base.simulate(RF, CF, periods=3).frequency_hz,
-                                                                          rel=1e-6)
+    assert other.simulate(RF, CF, periods=3).frequency_hz != pytest.approx(
+        base.simulate(RF, CF, periods=3).frequency_hz, rel=1e-6)
 
 
 def test_netlist_takes_every_part():

@@ -25,7 +25,7 @@ def test_with_diode_each_curve_follows_eq35():
     rf = np.array([2e6, 1.5e6, 1e6])
     cf = np.array([500e-12, 600e-12, 700e-12])
     d = frequency_decomposition(r, rf, cf, diode=True)
-    np.testing.assert_allclose(d.frequency_hz, [eq35(r, a, b) for a, b in zip(rf, cf)], rtol=1e-12)
+    np.testing.assert_allclose(d.frequency_hz, [eq35(r, a, b) for a, b in zip(rf, cf, strict=True)], rtol=1e-12)
     np.testing.assert_allclose(d.c_only_hz, [eq35(r, rf[0], b) for b in cf], rtol=1e-12)
     np.testing.assert_allclose(d.r_only_hz, [eq35(r, a, cf[0]) for a in rf], rtol=1e-12)
     # Falling R_FSR raises f with D1; growing C_FSR lowers it.

@@ -5,9 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fsrlab.circuits.lm555 import astable, minimum_n_ratio
 from fsrlab.circuits.design import design
-from fsrlab.hardware import CAPTURE_MAX_HZ, TICK_S as TIMER_TICK_S
+from fsrlab.circuits.lm555 import astable, minimum_n_ratio
+from fsrlab.hardware import CAPTURE_MAX_HZ
+from fsrlab.hardware import TICK_S as TIMER_TICK_S
 
 SENSOR = dict(r_fsr_range_ohm=(100e3, 2e6), c_fsr_range_farad=(0.5e-9, 1.5e-9))
 

@@ -14,7 +14,14 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from fsrlab.circuits.lm555 import NoOscillationError, astable, duty_cycle_limits, minimum_n_ratio, oscillation_margin, tau_ratio
+from fsrlab.circuits.lm555 import (
+    NoOscillationError,
+    astable,
+    duty_cycle_limits,
+    minimum_n_ratio,
+    oscillation_margin,
+    tau_ratio,
+)
 
 LN2 = math.log(2.0)
 

@@ -13,9 +13,15 @@ import numpy as np
 import pytest
 
 from fsrlab.circuits.lm555 import tau_ratio
-from fsrlab.circuits.paper_ratio import (minimum_eq32_as_printed, n_where_ratio_equals, simulate_tau_ratios,
-                                         tau_ratio_eq32_as_printed, tau_ratio_eq37_as_printed, tau_ratio_table,
-                                         tau_ratio_times_n)
+from fsrlab.circuits.paper_ratio import (
+    minimum_eq32_as_printed,
+    n_where_ratio_equals,
+    simulate_tau_ratios,
+    tau_ratio_eq32_as_printed,
+    tau_ratio_eq37_as_printed,
+    tau_ratio_table,
+    tau_ratio_times_n,
+)
 from toolcheck import require_tool
 
 

@@ -1,8 +1,8 @@
 """ngspice validation of the LM555 closed forms (fsrlab.circuits.spice).
 
 Reference: ngspice (an independent circuit simulator) running fsrlab's behavioural 555 netlist.
-Tolerance 0.1 % (fsrlab's stated agreement with ngspice); ngspice's own accuracy with the chosen step control is ~5e-5 (measured:
-worst 4e-5 on this grid), the rest is margin. The grid: without/with the ideal diode and with a
+Tolerance 0.1 % (fsrlab's stated agreement with ngspice); ngspice's own accuracy with the chosen step control is
+~5e-5 (measured: worst 4e-5 on this grid), the rest is margin. The grid: without/with the ideal diode and with a
 0.6 V drop, with and without C_off, N = R_FSR/R from 4.5 to 1000.
 """
 
@@ -11,10 +11,10 @@ from __future__ import annotations
 import math
 
 import pytest
-from toolcheck import require_tool
 
 from fsrlab.circuits.lm555 import astable
 from fsrlab.circuits.spice import edges_from_waveform, level_crossings, netlist, simulate_spice
+from toolcheck import require_tool
 
 VARIANTS = [dict(), dict(diode=True), dict(diode=True, diode_drop_v=0.6)]
 GRID = [(v, coff, n) for v in VARIANTS for coff in (0.0, 470e-12) for n in (4.5, 10, 100, 1000)
@@ -173,7 +173,7 @@ def test_concurrent_runs_equal_sequential_runs():
     alone = [simulate_spice(**c, periods=4) for c in cases]
     assert [t.frequency_hz for t in together] == [a.frequency_hz for a in alone]
     assert [t.duty_cycle for t in together] == [a.duty_cycle for a in alone]
-    for t, c in zip(together, cases):  # in the order of the cases: each near its own closed form
+    for t, c in zip(together, cases, strict=True):  # in the order of the cases: each near its own closed form
         assert t.frequency_hz == pytest.approx(float(astable(**c).frequency_hz), rel=1e-3)
 
 

@@ -88,9 +88,11 @@ def _reference_ode(r, t, rf, cf, diode, v0):
         ta = t[k]
         while True:
             if high and v >= 10 / 3:
-                falling.append(ta); high = False
+                falling.append(ta)
+                high = False
             elif not high and v <= 5 / 3:
-                rising.append(ta); high = True
+                rising.append(ta)
+                high = True
 
             def rhs(_t, y, high=high, k=k):
                 vc = y[0]
@@ -106,11 +108,14 @@ def _reference_ode(r, t, rf, cf, diode, v0):
             ev.terminal = True
             sol = solve_ivp(rhs, (ta, t[k + 1]), [v], method="DOP853", rtol=1e-11, atol=1e-14, events=ev)
             if sol.t_events[0].size:
-                ta = float(sol.t_events[0][0]); v = level
+                ta = float(sol.t_events[0][0])
+                v = level
                 if high:
-                    falling.append(ta); high = False
+                    falling.append(ta)
+                    high = False
                 else:
-                    rising.append(ta); high = True
+                    rising.append(ta)
+                    high = True
                 continue
             v = float(sol.y[0, -1])
             break

@@ -24,7 +24,14 @@ import typer
 from clirun import run_cli
 from fsrlab.cli import app
 from fsrlab.errors import FileFormatError
-from fsrlab.io.foreign import FORCE_UNITS, TIME_UNITS, ForeignFormatError, import_foreign, interpolate_reference, read_table
+from fsrlab.io.foreign import (
+    FORCE_UNITS,
+    TIME_UNITS,
+    ForeignFormatError,
+    import_foreign,
+    interpolate_reference,
+    read_table,
+)
 from fsrlab.io.runformat import load_run
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
@@ -58,7 +65,8 @@ def test_force_units_are_their_definitions():
 @pytest.mark.parametrize("unit, cell, newtons", [
     ("lbf", "1", 4.4482216152605), ("lbf", "2.5", 2.5 * 4.4482216152605), ("g", "1000", 9.80665),
     ("g", "1", 9.80665e-3), ("kg", "0.5", 4.903325), ("mN", "250", 0.25), ("N", "3.5", 3.5), ("kN", "5", 5000.0),
-    ("ozf", "16", 4.4482216152605), ("oz", "1", 4.4482216152605 / 16), ("kgf", "2", 2 * 9.80665), ("lb", "1", 4.4482216152605),
+    ("ozf", "16", 4.4482216152605), ("oz", "1", 4.4482216152605 / 16), ("kgf", "2", 2 * 9.80665),
+    ("lb", "1", 4.4482216152605),
 ])
 def test_force_column_converted_to_newtons(tmp_path, unit, cell, newtons):
     code, _, err, run = _import(tmp_path, f"time,fsr,force\n0,100,0\n1,200,{cell}\n", "--force-unit", unit)
@@ -169,7 +177,8 @@ DIALECTS = {
     "tab, decimal comma": "time_ms\tfsr\tforce_g\n0\t100\t0,5\n10\t200\t1,5\n",
     "white space (Serial Monitor)": "time_ms  fsr   force_g\n0   100  0.5\n10  200  1.5\n",
     "comma, quoted decimal comma": 'time_ms,fsr,force_g\n0,100,"0,5"\n10,200,"1,5"\n',
-    "comments, blank lines, CRLF": "# logger v2\r\n\r\n# rate 100 Hz\r\ntime_ms,fsr,force_g\r\n0,100,0.5\r\n# pause\r\n10,200,1.5\r\n",
+    "comments, blank lines, CRLF": "# logger v2\r\n\r\n# rate 100 Hz\r\ntime_ms,fsr,force_g\r\n0,100,0.5\r\n"
+                                   "# pause\r\n10,200,1.5\r\n",
     "units row": "time;fsr;force\nms;counts;g\n0;100;0,5\n10;200;1,5\n",
     "comma with spaces": "time_ms, fsr, force_g\n0, 100, 0.5\n10, 200, 1.5\n",
 }
@@ -219,9 +228,11 @@ def test_empty_cells_are_missing(tmp_path):
 def _two_files(tmp_path, shift=0.0):
     """Sensor at 10 Hz for 10 s; a reference F = 2 + 3t [N] at 4 Hz over 0.05 … 5.05 s of its own clock + shift."""
     t = np.arange(0, 100) / 10
-    sensor = _write(tmp_path / "fsr.csv", "time_ms,fsr\n" + "".join(f"{round(1000 * x)},{k}\n" for k, x in enumerate(t)))
+    sensor = _write(tmp_path / "fsr.csv",
+                    "time_ms,fsr\n" + "".join(f"{round(1000 * x)},{k}\n" for k, x in enumerate(t)))
     tr = 0.05 + np.arange(0, 21) * 0.25
-    ref = _write(tmp_path / "cell.csv", "t_s,force_N\n" + "".join(f"{float(x + shift)!r},{float(2 + 3 * x)!r}\n" for x in tr))
+    ref = _write(tmp_path / "cell.csv",
+                 "t_s,force_N\n" + "".join(f"{float(x + shift)!r},{float(2 + 3 * x)!r}\n" for x in tr))
     return sensor, ref, t
 
 
@@ -279,27 +290,39 @@ def test_python_api(tmp_path):
 # ------------------------------------------------------------------------------------------------
 
 BAD = [
-    ("unknown column", "time,fsr\n0,1\n", ["--reading", "fsx"], r"in\.csv: line 1 \(header\): no column 'fsx' for the reading"),
-    ("column number too big", "time,fsr\n0,1\n", ["--force", "3"], r"in\.csv: line 1 \(header\): no column '3' for the force .*1\.\.2"),
-    ("non-numeric cell", "# c\ntime,fsr\n0,1\n1,abc\n", [], r"in\.csv: line 4, column 'fsr' \(2\): non-numeric cell 'abc'"),
+    ("unknown column", "time,fsr\n0,1\n", ["--reading", "fsx"],
+     r"in\.csv: line 1 \(header\): no column 'fsx' for the reading"),
+    ("column number too big", "time,fsr\n0,1\n", ["--force", "3"],
+     r"in\.csv: line 1 \(header\): no column '3' for the force .*1\.\.2"),
+    ("non-numeric cell", "# c\ntime,fsr\n0,1\n1,abc\n", [],
+     r"in\.csv: line 4, column 'fsr' \(2\): non-numeric cell 'abc'"),
     ("nan cell", "time,fsr\n0,1\n1,nan\n", [], r"in\.csv: line 3, column 'fsr' \(2\): 'nan' is not a finite number"),
     ("short row", "time,fsr,force_N\n0,1,2\n1,2\n", [], r"in\.csv: line 3, column 'force_N' \(3\): missing cell"),
-    ("time not increasing", "time,fsr\n0,1\n2,1\n2,1\n", [], r"in\.csv: line 4, column 'time' \(1\): time does not increase \('2' after '2' on line 3\)"),
-    ("time going back", "t_ms,fsr\n0,1\n20,1\n10,1\n", [], r"in\.csv: line 4, column 't_ms' \(1\): time does not increase"),
+    ("time not increasing", "time,fsr\n0,1\n2,1\n2,1\n", [],
+     r"in\.csv: line 4, column 'time' \(1\): time does not increase \('2' after '2' on line 3\)"),
+    ("time going back", "t_ms,fsr\n0,1\n20,1\n10,1\n", [],
+     r"in\.csv: line 4, column 't_ms' \(1\): time does not increase"),
     ("empty time", "time,fsr\n0,1\n,1\n", [], r"in\.csv: line 3, column 'time' \(1\): empty cell, expected a time"),
-    ("force beyond a run", "time,fsr,force_N\n0,1,1e300\n", [], r"in\.csv: line 2, column 'force_N' \(3\): 1e300 N is beyond"),
+    ("force beyond a run", "time,fsr,force_N\n0,1,1e300\n", [],
+     r"in\.csv: line 2, column 'force_N' \(3\): 1e300 N is beyond"),
     ("empty file", "", [], r"in\.csv: empty file"),
     ("comments only", "# nothing\n\n", [], r"in\.csv: empty file"),
     ("header only", "time,fsr\n", [], r"in\.csv: no data rows \(line 1 is the header\)"),
-    ("duplicate header", "time,fsr,fsr\n0,1,2\n", [], r"in\.csv: line 1 \(header\), column 'fsr' \(2 and 3\): the same header name twice"),
-    ("force unit", "time,fsr\n0,1\n", ["--force-unit", "stone"], r"Invalid value for --force-unit: 'stone' is not one of N, kN, mN, g, kg, lbf, ozf"),
-    ("time unit", "time,fsr\n0,1\n", ["--time-unit", "d"], r"Invalid value for --time-unit: 'd' is not one of s, ms, us, min, h"),
-    ("reading unit", "time,fsr\n0,1\n", ["--reading-unit", "A"], r"Invalid value for --reading-unit: 'A' is not one of counts, V, mV, ohm, kohm"),
+    ("duplicate header", "time,fsr,fsr\n0,1,2\n", [],
+     r"in\.csv: line 1 \(header\), column 'fsr' \(2 and 3\): the same header name twice"),
+    ("force unit", "time,fsr\n0,1\n", ["--force-unit", "stone"],
+     r"Invalid value for --force-unit: 'stone' is not one of N, kN, mN, g, kg, lbf, ozf"),
+    ("time unit", "time,fsr\n0,1\n", ["--time-unit", "d"],
+     r"Invalid value for --time-unit: 'd' is not one of s, ms, us, min, h"),
+    ("reading unit", "time,fsr\n0,1\n", ["--reading-unit", "A"],
+     r"Invalid value for --reading-unit: 'A' is not one of counts, V, mV, ohm, kohm"),
     ("zero rate", "fsr\n1\n", ["--rate", "0"], r"Invalid value for --rate: must be > 0 Hz, got 0"),
     ("negative rate", "fsr\n1\n", ["--rate", "-5"], r"Invalid value for --rate: must be > 0 Hz, got -5"),
-    ("rate and time column", "t,fsr\n0,1\n", ["--time", "t", "--rate", "10"], r"Invalid value for --rate: .*in\.csv has a time column"),
+    ("rate and time column", "t,fsr\n0,1\n", ["--time", "t", "--rate", "10"],
+     r"Invalid value for --rate: .*in\.csv has a time column"),
     ("no readout", "time,force_N\n0,1\n", [], r"in\.csv: no readout column found .*--reading"),
-    ("headless, three columns", "0,1,2\n1,2,3\n", [], r"in\.csv: line 1: no header and 3 columns: say which column .* reading \(--reading\)"),
+    ("headless, three columns", "0,1,2\n1,2,3\n", [],
+     r"in\.csv: line 1: no header and 3 columns: say which column .* reading \(--reading\)"),
     ("not text", "\x00\x01\x02", [], r"in\.csv: not a text file"),
 ]
 
@@ -367,13 +390,18 @@ def test_round_trip_import_calibrate_apply(tmp_path):
     force = 10 * (1 - np.abs(2 * ((t % 10) / 10) - 1))
     g = 1e-5 * force ** 0.9
     counts = np.round(1023 * 10e3 * g / (1 + 10e3 * g) + rng.normal(0, 1, t.size))
-    sensor = _write(tmp_path / "fsr.csv", "millis,analog\n" + "".join(f"{round(1000 * a)},{c:.0f}\n" for a, c in zip(t, counts)))
+    sensor = _write(tmp_path / "fsr.csv",
+                    "millis,analog\n" + "".join(f"{round(1000 * a)},{c:.0f}\n"
+                                                 for a, c in zip(t, counts, strict=True)))
     tr = np.arange(0, 40, 0.1)
     grams = 1000 * 10 * (1 - np.abs(2 * ((tr % 10) / 10) - 1)) / 9.80665
-    ref = _write(tmp_path / "scale.csv", "time (s);weight (g)\n" + "".join(f"{a:.2f};{w:.2f}\n".replace(".", ",") for a, w in zip(tr, grams)))
+    ref = _write(tmp_path / "scale.csv",
+                 "time (s);weight (g)\n" + "".join(f"{a:.2f};{w:.2f}\n".replace(".", ",")
+                                                    for a, w in zip(tr, grams, strict=True)))
     run = tmp_path / "run.csv"
     assert run_cli(["import", sensor, "--reference", ref, "-o", run])[0] == 0
-    code, out, err = run_cli(["calibrate", run, "--x", "reading", "--reference", "force_n", "-o", tmp_path / "cal.json", "--json"])
+    code, out, err = run_cli(["calibrate", run, "--x", "reading", "--reference", "force_n",
+                              "-o", tmp_path / "cal.json", "--json"])
     assert code == 0, err
     # The calibration's own scored error, cross-validated or held out, whichever method calibrate used.
     scored = {k: v for k, v in json.loads(out).items() if k.endswith("rmse_percent_fs") and v is not None}
@@ -436,7 +464,8 @@ def test_a_separator_in_every_row_is_not_a_header(tmp_path):
 # ------------------------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("header, cell, newtons", [
-    ("force (kN)", "5", 5000.0), ("force_kN", "5", 5000.0), ("load [mN]", "250", 0.25), ("force_oz", "16", 4.4482216152605),
+    ("force (kN)", "5", 5000.0), ("force_kN", "5", 5000.0), ("load [mN]", "250", 0.25),
+    ("force_oz", "16", 4.4482216152605),
     ("weight (lb)", "1", 4.4482216152605), ("force_kgf", "1", 9.80665),
 ])
 def test_force_unit_said_by_the_header_is_converted(tmp_path, header, cell, newtons):
@@ -457,7 +486,8 @@ def test_time_unit_said_by_the_header_is_converted(tmp_path, header, cells, seco
 @pytest.mark.parametrize("text, where, unit, option", [
     ("time,fsr,force_stone\n0,1,5\n1,2,6\n", "line 1 (header), column 'force_stone' (3)", "stone", "--force-unit"),
     ("time,fsr,force (MN)\n0,1,5\n1,2,6\n", "line 1 (header), column 'force (MN)' (3)", "MN", "--force-unit"),
-    ("time;fsr;force\ns;counts;dyn\n0;1;5\n1;2;6\n", "column 'force' (3): the units row under it", "dyn", "--force-unit"),
+    ("time;fsr;force\ns;counts;dyn\n0;1;5\n1;2;6\n", "column 'force' (3): the units row under it",
+     "dyn", "--force-unit"),
     ("time (days),fsr\n0,1\n1,2\n", "column 'time (days)' (1)", "days", "--time-unit"),
     ("time,fsr (uA)\n0,1\n1,2\n", "column 'fsr (uA)' (2)", "uA", "--reading-unit"),
 ])
@@ -492,7 +522,8 @@ def test_empty_output_and_huge_offset_are_one_line(tmp_path, recwarn):
     sensor = _write(tmp_path / "s.csv", "time,fsr\n0,1\n1,2\n")
     ref = _write(tmp_path / "r.csv", "time,force_N\n0,1\n1,2\n")
     code, _, err = run_cli(["import", sensor, "-o", ""])
-    assert code == 2 and err.startswith("fsrlab: error: Invalid value for --output: is empty") and "PosixPath" not in err
+    assert code == 2 and err.startswith("fsrlab: error: Invalid value for --output: is empty")
+    assert "PosixPath" not in err
     code, _, err = run_cli(["import", sensor, "--reference", ref, "-o", tmp_path / "o.csv", "--offset-s", "1e300"])
     assert code == 2 and "Invalid value for --offset-s: must be a time within" in err
     close = _write(tmp_path / "c.csv", "time,force_N\n0,1\n0.01,2\n")
@@ -513,8 +544,9 @@ def test_a_large_file_reads_as_a_small_one(tmp_path):
     """The numbers' fast path (numpy's parser) and the cell-by-cell path give the same run: the same file with
     and without a quoted cell (which sends every column cell by cell)."""
     rng = np.random.default_rng(0)
-    rows = "".join(f"{k * 10},{v},{f!r}\n" for k, (v, f) in enumerate(zip(rng.integers(0, 1023, 3000).tolist(),
-                                                                           rng.normal(500, 100, 3000).tolist())))
+    rows = "".join(f"{k * 10},{v},{f!r}\n"
+                   for k, (v, f) in enumerate(zip(rng.integers(0, 1023, 3000).tolist(),
+                                                  rng.normal(500, 100, 3000).tolist(), strict=True)))
     fast = import_foreign(_write(tmp_path / "a.csv", "millis,fsr,force_g\n" + rows))
     slow = import_foreign(_write(tmp_path / "b.csv", "millis,fsr,force_g\n" + rows.replace("0,", '"0",', 1)))
     for name in fast.columns:

@@ -21,11 +21,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
+from clirun import run_cli
 from fsrlab.io.runformat import RunFormatError, load_run, sidecar_path
 from fsrlab.io.runwriter import RunWriter, write_run
-from clirun import run_cli
 
 
 def test_writer_roundtrip_with_sidecar(tmp_path):
@@ -91,7 +92,8 @@ def test_force_column_gives_stress_with_area(tmp_path):
     [
         ("time_s,frequency_hz\n0,1\n0.1,5.1k\n", r"row 2 \(line 3\), column 'frequency_hz': non-numeric cell '5.1k'"),
         ("time_s,frequency_hz\n0,1\n0.1,nan\n", r"row 2 \(line 3\), column 'frequency_hz': 'nan' is not a finite"),
-        ("time_s,frequency_hz\n0,1\n0.1,\n0.2,NaN\n", r"row 3 \(line 4\), column 'frequency_hz': 'NaN' is not a finite"),
+        ("time_s,frequency_hz\n0,1\n0.1,\n0.2,NaN\n",
+         r"row 3 \(line 4\), column 'frequency_hz': 'NaN' is not a finite"),
         ("time_s,frequency_hz\n0,1\n0.2,2\n0.1,3\n", r"row 3 \(line 4\), column 'time_s': time goes backwards"),
         ("time_s,frequency_hz\n0,1\n,2\n", r"row 2 \(line 3\), column 'time_s': empty time cell"),
         ("time_s,frequency_hz,stress_pa\n0,1,2\n0.1,2\n", r"row 2 \(line 3\), column 'stress_pa': missing"),
@@ -99,9 +101,11 @@ def test_force_column_gives_stress_with_area(tmp_path):
         ("time_s,inf_col\n0,1\n1,inf\n", r"row 2 \(line 3\), column 'inf_col'"),
         # Corrupt values in a known column: beyond the column's values in docs/data-format.md.
         ("time_s,frequency_hz\n0,1\n0.1,1e308\n", r"row 2 \(line 3\), column 'frequency_hz': 1e\+308 is beyond"),
-        ("time_s,frequency_hz\n0,1\n0.1,-3\n", r"row 2 \(line 3\), column 'frequency_hz': -3 is beyond .*0 to 1e\+09 Hz"),
+        ("time_s,frequency_hz\n0,1\n0.1,-3\n",
+         r"row 2 \(line 3\), column 'frequency_hz': -3 is beyond .*0 to 1e\+09 Hz"),
         ("time_s,duty_cycle\n0,0.5\n0.1,1.5\n", r"row 2 \(line 3\), column 'duty_cycle': 1.5 is beyond .*0 to 1;"),
-        ("time_s,range\n0,0\n0.1,2\n", r"row 2 \(line 3\), column 'range': 2 is not one of 0 \(C_off out\), 1 \(C_off in\)"),
+        ("time_s,range\n0,0\n0.1,2\n",
+         r"row 2 \(line 3\), column 'range': 2 is not one of 0 \(C_off out\), 1 \(C_off in\)"),
         ("time_s,my_column\n0,1\n0.1,1e200\n", r"row 2 \(line 3\), column 'my_column': 1e\+200 is beyond"),
         # The first bad row in the file is named, whatever its kind.
         ("time_s,frequency_hz,duty_cycle\n0,1,0.5\n0.1,1,2\n0.2,x,0.5\n", r"row 2 \(line 3\), column 'duty_cycle'"),
@@ -320,7 +324,7 @@ def test_error_example_is_what_fsrlab_prints(tmp_path, monkeypatch):
     lines = _block("## Errors").strip().splitlines()
     assert len(lines) == len(BAD_RUNS)
     monkeypatch.chdir(tmp_path)
-    for body, line in zip(BAD_RUNS, lines):
+    for body, line in zip(BAD_RUNS, lines, strict=True):
         Path("run.csv").write_text(body, encoding="utf-8")
         code, out, err = run_cli(["hysteresis", "run.csv"])
         assert (code, out, err) == (2, "", line + "\n")

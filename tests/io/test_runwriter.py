@@ -219,8 +219,8 @@ def test_write_run_stopped_between_its_two_renames_leaves_no_pair_that_passes_fo
         write_run(path, *_OLD)
     else:
         with RunWriter(path, list(_OLD[0]), _OLD[1]) as w:
-            for row in zip(*_OLD[0].values()):
-                w.write(dict(zip(_OLD[0], row)))
+            for row in zip(*_OLD[0].values(), strict=True):
+                w.write(dict(zip(_OLD[0], row, strict=True)))
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
     done = subprocess.run([sys.executable, "-c", _STOPPED_BETWEEN_THE_RENAMES, path, how], env=env,
                           capture_output=True, text=True)

@@ -24,7 +24,7 @@ def test_grouped_csv_reads_the_printed_readings_back(paper, tmp_path):
     p = tmp_path / "t5.csv"
     p.write_text("\n".join(lines) + "\n")
     loads, sensors, readings = load_grouped_csv(p)
-    assert list(zip(loads, sensors)) == [(e[0], e[1]) for e in expected]
+    assert list(zip(loads, sensors, strict=True)) == [(e[0], e[1]) for e in expected]
     assert all(isinstance(s, int) for s in sensors)  # numeric labels become numbers
     np.testing.assert_array_equal(readings, [e[2] for e in expected])
 

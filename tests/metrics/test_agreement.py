@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 from clirun import run_cli
-from fsrlab.metrics.agreement import COVERAGE_AIM, LOADED, agreement
 from fsrlab.io.runformat import load_run
 from fsrlab.io.runwriter import write_run
+from fsrlab.metrics.agreement import COVERAGE_AIM, LOADED, agreement
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "real" / "belli-insole"
 
@@ -83,7 +83,8 @@ def test_apply_states_how_the_calibration_holds_on_a_validation_run(insole):
     ag, err = _apply(cal, new, d / "new.csv")
     assert ag["coverage_percent"] >= 90 and "±2u covers only" not in err  # measured 98-99 % (bench_realdata)
     scaled, err = _apply(cal, shifted, d / "shifted_out.csv")
-    assert scaled["slope"] == pytest.approx(1.5 * ag["slope"]) and scaled["intercept"] == pytest.approx(1.5 * ag["intercept"])
+    assert scaled["slope"] == pytest.approx(1.5 * ag["slope"])
+    assert scaled["intercept"] == pytest.approx(1.5 * ag["intercept"])
     assert scaled["coverage_percent"] < 90 and "±2u covers only" in err and "shifted.csv" in err
     none, _ = _apply(cal, blind, d / "blind_out.csv")
     assert none is None
@@ -118,7 +119,8 @@ def test_apply_says_when_some_loaded_rows_have_no_estimate(insole):
     write_run(beyond, {**run.columns, "reading": x}, {"units": run.units})
     # a margin of 0: readings beyond the calibrated range are left empty, and the statistics say so
     code, stdout, err = run_cli(["apply", cal, beyond, "-o", d / "margin0.csv", "--margin", "0", "--overwrite"])
-    out = json.loads(run_cli(["apply", cal, beyond, "-o", d / "margin0.csv", "--margin", "0", "--overwrite", "--json"])[1])
+    out = json.loads(run_cli(["apply", cal, beyond, "-o", d / "margin0.csv",
+                              "--margin", "0", "--overwrite", "--json"])[1])
     ag = out["agreement"]
     assert code == 0, err
     assert ag["estimated_rows"] == ag["loaded_rows"] - 50

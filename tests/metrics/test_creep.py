@@ -27,10 +27,10 @@ import numpy as np
 import pytest
 
 from clirun import run_cli
-from fsrlab.metrics.creep import creep, creep_of_run, first_order_fit, log_drift
-from fsrlab.metrics.holds import find_holds
 from fsrlab.io.runformat import load_run, sidecar_path
 from fsrlab.io.runwriter import write_run
+from fsrlab.metrics.creep import creep, creep_of_run, first_order_fit, log_drift
+from fsrlab.metrics.holds import find_holds
 
 ROOT = Path(__file__).resolve().parents[2]
 DT = 0.1  # readout window [s]
@@ -38,7 +38,7 @@ DT = 0.1  # readout window [s]
 
 def _profile(knots):
     """Reference through (time [s], level) knots, linear in between, sampled every DT."""
-    kt, kv = zip(*knots)
+    kt, kv = zip(*knots, strict=True)
     t = np.round(np.arange(0.0, kt[-1] + DT / 2, DT), 10)
     return t, np.interp(t, kt, kv)
 
@@ -91,7 +91,7 @@ def test_noise_within_the_band_does_not_split_a_hold_and_a_spike_is_ignored():
 def test_reference_with_empty_cells_like_a_slow_hx711_still_finds_the_hold():
     # Readout every 12.5 ms (80 Hz), reference every 8th row (10 Hz), NaN in between.
     t = np.arange(0, 90, 0.0125)
-    ref = np.interp(t, *zip(*ONE_HOLD))
+    ref = np.interp(t, *zip(*ONE_HOLD, strict=True))
     ref[np.arange(t.size) % 8 != 3] = np.nan
     loaded = [h for h in find_holds(t, ref) if h.level > 25]
     assert len(loaded) == 1
@@ -137,7 +137,8 @@ def test_log_readout_gives_its_drift_per_decade_exactly():
     # Total drift: medians of the first and last five readings from t0 + 0.5 s (settling) on.
     s = np.arange(5, 601) * DT  # t − t0 = 0.5 s (settled) to 60 s
     r = a + b * np.log10(s)
-    assert h.total_drift_percent == pytest.approx(100 * (np.median(r[-5:]) - np.median(r[:5])) / np.median(r[:5]), rel=1e-9)
+    assert h.total_drift_percent == pytest.approx(100 * (np.median(r[-5:]) - np.median(r[:5])) / np.median(r[:5]),
+                                                  rel=1e-9)
     assert res.unloaded == 2  # the rests before and after
 
 
@@ -220,7 +221,8 @@ def test_cli_json_equals_the_library(log_run):
         if isinstance(value, float) and value != value:
             assert got["holds"][0][key] is None, key
         else:
-            assert got["holds"][0][key] == pytest.approx(value) if isinstance(value, float) else got["holds"][0][key] == value
+            assert (got["holds"][0][key] == pytest.approx(value) if isinstance(value, float)
+                    else got["holds"][0][key] == value)
     assert {k: v for k, v in got.items() if k != "holds"} == {k: v for k, v in want.items() if k != "holds"}
     assert "level_N" in got["holds"][0] and "full_scale_N" in got
 
@@ -268,7 +270,8 @@ def test_cli_finds_the_hold_with_empty_reference_cells(tmp_path):
     code, out, err = run_cli(["creep", path, "--json"])
     assert code == 0, err
     (h,) = json.loads(out)["holds"]
-    assert h["start_s"] == pytest.approx(11.0, abs=0.2) and h["drift_percent_per_decade"] == pytest.approx(3.0, rel=0.01)
+    assert h["start_s"] == pytest.approx(11.0, abs=0.2)
+    assert h["drift_percent_per_decade"] == pytest.approx(3.0, rel=0.01)
 
 
 @pytest.mark.parametrize("args, names", [
@@ -352,7 +355,8 @@ def test_help_ends_with_examples_that_run(tmp_path, monkeypatch):
 
     out = _help()
     description = out.split("\nArguments:")[0].split("\nOptions:")[0].rstrip()
-    examples = [ln.strip() for ln in description.split("Examples", 1)[1].splitlines() if ln.strip().startswith("fsrlab ")]
+    examples = [ln.strip() for ln in description.split("Examples", 1)[1].splitlines()
+                if ln.strip().startswith("fsrlab ")]
     assert len(examples) == 2 and description.splitlines()[-1].strip() == examples[-1]
     shutil.copytree(ROOT / "examples", tmp_path / "examples")
     monkeypatch.chdir(tmp_path)
@@ -400,7 +404,8 @@ def test_default_settling_is_half_a_second_at_most_a_fifth_of_min_hold(tmp_path)
     t, ref = _profile(ONE_HOLD)
     assert creep(t, _log_readout(t), ref).settle_s == 0.5
     assert creep(t, _log_readout(t), ref, min_hold_s=1.0).settle_s == pytest.approx(0.2)
-    code, out, err = run_cli(["creep", _write(tmp_path / "h.csv", t, ref, _log_readout(t)), "--min-hold", "1s", "--json"])
+    code, out, err = run_cli(["creep", _write(tmp_path / "h.csv", t, ref, _log_readout(t)),
+                              "--min-hold", "1s", "--json"])
     assert code == 0, err
     assert json.loads(out)["settle_s"] == pytest.approx(0.2)
 

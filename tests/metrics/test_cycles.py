@@ -8,10 +8,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
-from fsrlab.physics.history import branch_directions, turning_points
 from fsrlab.metrics.cycles import split_cycles
+from fsrlab.physics.history import branch_directions, turning_points
 
 
 def triangle(cycles=3, per_ramp=50, peak=10e3, dwell=0):
@@ -115,10 +116,10 @@ def test_run_hysteresis_on_synthetic_bench_run_matches_noiseless_model():
     62.5 ns quantization, 100 ms windows). Reference: the same chain without noise and quantization
     sampled finely (eq. 13 on exact branches). Tolerance 1 percentage point: 3 σ of 0.2 % noise on
     a difference of two readings relative to full scale is ≈ 0.85 pp."""
-    from fsrlab.metrics.hysteresis import hysteresis_error
-    from fsrlab.virtual.synthetic import synthetic_run, triangle_stress
     from fsrlab.circuits.lm555 import astable
+    from fsrlab.metrics.hysteresis import hysteresis_error
     from fsrlab.physics.sensor import VirtualFSR
+    from fsrlab.virtual.synthetic import synthetic_run, triangle_stress
 
     run = synthetic_run(cycles=2, peak_pa=50e3, points_per_ramp=100, seed=3)
     c = run.columns

@@ -2,7 +2,8 @@
 
 import numpy as np
 import pytest
-from hypothesis import assume, given, strategies as st
+from hypothesis import assume, given
+from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from fsrlab.metrics.hysteresis import hysteresis_error, hysteresis_error_curves
@@ -55,7 +56,9 @@ def test_properties(ql, qu, scale):
 
 def test_curves_refine_sigma_d_of_a_closed_form():
     # Closed form: Q_u − Q_l = σ(1 − σ) has its maximum 1/4 at σd = 1/2; Q_l(1) = 2.
-    r = hysteresis_error_curves(lambda x: 1 + np.asarray(x), lambda x: 1 + np.asarray(x) + np.asarray(x) * (1 - np.asarray(x)), 1.0, n=8)
+    r = hysteresis_error_curves(lambda x: 1 + np.asarray(x),
+                                lambda x: 1 + np.asarray(x) + np.asarray(x) * (1 - np.asarray(x)),
+                                1.0, n=8)
     assert r.stress_at_max_pa == pytest.approx(0.5, abs=1e-7)
     assert r.percent == pytest.approx(100 * 0.25 / 2, rel=1e-9)
 

@@ -100,15 +100,16 @@ def test_validation():
 def test_csv_loader_and_cli(tmp_path, capsys):
     import json
 
-    from fsrlab.io.tables import load_iso376_csv
     from fsrlab.cli import main
+    from fsrlab.io.tables import load_iso376_csv
 
     lines = ["series,rotation_deg,force_n,reading,direction"]
-    for label, s in zip("1235", full_calibration()):
+    for label, s in zip("1235", full_calibration(), strict=True):
         lines.append(f"{label},{s.rotation_deg},0,{s.zero_before},1")
-        lines += [f"{label},{s.rotation_deg},{float(f)!r},{float(x)!r},1" for f, x in zip(F, s.increasing)]
+        lines += [f"{label},{s.rotation_deg},{float(f)!r},{float(x)!r},1" for f, x in zip(F, s.increasing, strict=True)]
         if s.decreasing is not None:
-            lines += [f"{label},{s.rotation_deg},{float(f)!r},{float(x)!r},-1" for f, x in zip(F, s.decreasing)]
+            lines += [f"{label},{s.rotation_deg},{float(f)!r},{float(x)!r},-1"
+                      for f, x in zip(F, s.decreasing, strict=True)]
         lines.append(f"{label},{s.rotation_deg},0,{float(s.zero_after)!r},-1")
     p = tmp_path / "cal.csv"
     p.write_text("\n".join(lines) + "\n")

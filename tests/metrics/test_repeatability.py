@@ -11,13 +11,18 @@ import statistics
 
 import numpy as np
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from fsrlab.metrics.repeatability import (
-    ddof_finding, force_repeatability, grouped_repeatability, recompute_printed_table, repeatability
-)
 from fsrlab.io.tables import load_grouped_csv
+from fsrlab.metrics.repeatability import (
+    ddof_finding,
+    force_repeatability,
+    grouped_repeatability,
+    recompute_printed_table,
+    repeatability,
+)
 
 TABLES = ["table4_repeatability_capacitive_kHz", "table5_repeatability_traditional_V"]
 LOADS = ["200g", "400g"]
@@ -41,7 +46,7 @@ def test_population_std_misses_five_printed_re2_values(paper):
         for load in LOADS:
             t = paper[table][load]
             r = repeatability(t["readings"], ddof=0)
-            for i, (c, p) in enumerate(zip(r.re2_percent, t["RE2_percent"])):
+            for i, (c, p) in enumerate(zip(r.re2_percent, t["RE2_percent"], strict=True)):
                 if abs(c - p) > 0.5:
                     misses.append((table[:6], load, i + 1))
             if abs(np.mean(r.re2_percent) - t["mean_RE2"]) > 0.5:

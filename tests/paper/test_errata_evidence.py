@@ -61,6 +61,7 @@ def test_printed_eps0_changes_no_hysteresis_error():
     sig = np.linspace(0, PAPER.sigma_f_pa, 401)
     sl = separation_loading(sig, PAPER.s0_m, PAPER.modulus_pa)
     su = separation_unloading(sig, PAPER.sigma_f_pa, PAPER.s0_m, PAPER.modulus_pa, PAPER.k)
-    he = [hysteresis_error(sig, PAPER.eps_r * e0 / sl, sig, PAPER.eps_r * e0 / su).percent for e0 in (8.85e-12, epsilon_0)]
+    he = [hysteresis_error(sig, PAPER.eps_r * e0 / sl, sig, PAPER.eps_r * e0 / su).percent
+          for e0 in (8.85e-12, epsilon_0)]
     assert he[0] == pytest.approx(he[1], rel=1e-12)
     assert 8.85e-12 / epsilon_0 - 1 == pytest.approx(-4.7e-4, abs=0.1e-4)

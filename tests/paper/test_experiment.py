@@ -8,8 +8,8 @@ mechanisms cannot close are asserted as documented there, so a change of the mod
 import numpy as np
 import pytest
 
-from fsrlab.paper.preset_fit import SPREADS, fit_paper_sensor, preset_targets, quick_response, re2_design
 from fsrlab.paper.experiment import dead_weights, run_experiment, spring_cycle
+from fsrlab.paper.preset_fit import SPREADS, fit_paper_sensor, preset_targets, quick_response, re2_design
 from fsrlab.physics.paper_sensor import PAPER_SENSOR_PARAMETERS, paper_sensor, paper_sensors
 from fsrlab.physics.sensor import VirtualFSR
 from fsrlab.reference import paper_values
@@ -54,7 +54,7 @@ def expected_re2():
     sensors = paper_sensors()
     a, printed, labels = re2_design(sensors)
     sd = np.array([getattr(sensors[0], n) for n in SPREADS])
-    return dict(zip(labels, np.sqrt(a @ sd**2))), dict(zip(labels, printed))
+    return dict(zip(labels, np.sqrt(a @ sd**2), strict=True)), dict(zip(labels, printed, strict=True))
 
 
 def test_re2_of_the_right_size(expected_re2):

@@ -39,7 +39,8 @@ def test_held_out_predictions_as_recorded(held):
 
 
 def test_cross_readout_prediction():
-    # Spreads fitted to Table 5's printed mean RE2 (5 %, 6 %) meet them; Table 4's (printed 1 %, 1 %) come out 1.8 / 2.9 %.
+    # Spreads fitted to Table 5's printed mean RE2 (5 %, 6 %) meet them; Table 4's (printed 1 %, 1 %) come out
+    # 1.8 / 2.9 %.
     a, printed, labels = re2_design(paper_sensors())
     c = cross_readout_spreads(a, printed, labels, fit_on="table5")
     assert c["rows"]["table5 200g"]["predicted"] == pytest.approx(5.0, rel=1e-3)

@@ -12,7 +12,7 @@ import pytest
 
 from fsrlab.paper import split
 from fsrlab.paper.experiment import run_experiment
-from fsrlab.paper.preset_fit import FIT_WEIGHTS, fit_target_list, quick_response, re2_design_per_sensor, SPREADS
+from fsrlab.paper.preset_fit import FIT_WEIGHTS, SPREADS, fit_target_list, quick_response, re2_design_per_sensor
 from fsrlab.physics.paper_sensor import paper_sensors
 
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "experiment.md"
@@ -24,7 +24,7 @@ def lists():
     exp = run_experiment(sensors)
     a, _, labels, per = re2_design_per_sensor(sensors)
     sd2 = np.array([getattr(sensors[0], n) for n in SPREADS]) ** 2
-    expected = dict(zip(labels, np.sqrt(a @ sd2)))
+    expected = dict(zip(labels, np.sqrt(a @ sd2), strict=True))
     per_sensor = {lab: np.sqrt(per[j] @ sd2).tolist() for j, lab in enumerate(labels)}
     return (split.targets(sensors, [quick_response(s) for s in sensors], expected),
             split.predictions(exp, per_sensor))
@@ -55,7 +55,8 @@ def test_at_least_twenty_predictions_with_their_printed_values(lists, paper):
     _, predictions = lists
     assert len(predictions) >= 20
     by_id = {p["id"]: p for p in predictions}
-    assert by_id["table5.200g.sensor1.RE2"]["printed"] == paper["table5_repeatability_traditional_V"]["200g"]["RE2_percent"][0]
+    assert (by_id["table5.200g.sensor1.RE2"]["printed"]
+            == paper["table5_repeatability_traditional_V"]["200g"]["RE2_percent"][0])
     assert by_id["figure17.cubic_r2"]["printed"] == paper["figure17_fit_r2"]["cubic"]
     assert by_id["table5.400g.sensor2.mean_reading"]["printed"] == pytest.approx(
         np.mean(paper["table5_repeatability_traditional_V"]["400g"]["readings"][1]))

@@ -8,8 +8,8 @@ import pytest
 from scipy.constants import electron_volt
 
 from fsrlab.metrics.hysteresis import model_cycle_errors
-from fsrlab.physics.params import PAPER
 from fsrlab.paper.table2 import current_maximum_voltage, cycle_error_table, fit_barrier_height, voltage_sweep
+from fsrlab.physics.params import PAPER
 from reference_physics import E, j12, table2_row
 
 U = [3, 2, 1]
@@ -38,7 +38,7 @@ def test_resistance_column_differs_from_paper_as_documented(paper):
     printed = paper["table2_hysteresis_error_percent"]["resistance_per_area"]
     ours = [model_cycle_errors(u).resistance.percent for u in U]
     assert ours == pytest.approx([1.47, 5.62, 10.23], abs=0.005)
-    assert all(abs(o - p) > 0.3 for o, p in zip(ours, printed))
+    assert all(abs(o - p) > 0.3 for o, p in zip(ours, printed, strict=True))
 
 
 def test_barrier_height_0_2295_eV_reproduces_the_printed_resistance_column(paper):

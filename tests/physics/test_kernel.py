@@ -80,7 +80,7 @@ def test_table2_kernel_equals_the_public_functions(u, change, n):
         change["phi0_j"] = change.pop("phi0_ev") * electron_volt
     p = dataclasses.replace(PAPER, **change)
     got = model_cycle_errors(u, p, n)
-    for res, ref in zip((got.resistance, got.capacitance), _pipeline_from_public_functions(u, p, n)):
+    for res, ref in zip((got.resistance, got.capacitance), _pipeline_from_public_functions(u, p, n), strict=True):
         np.testing.assert_allclose([res.percent, res.stress_at_max_pa, res.difference, res.full_scale],
                                    [ref.percent, ref.stress_at_max_pa, ref.difference, ref.full_scale], rtol=1e-12)
         np.testing.assert_allclose(res.q_load, ref.q_load, rtol=1e-14)
@@ -125,7 +125,7 @@ def test_table2_kernel_split_between_cores_equals_one_pass(monkeypatch, cores):
     one = model_cycle_errors(2.0, PAPER, n)
     monkeypatch.setattr(os, "cpu_count", lambda: cores)
     split = model_cycle_errors(2.0, PAPER, n)
-    for a, b in zip((one.resistance, one.capacitance), (split.resistance, split.capacitance)):
+    for a, b in zip((one.resistance, one.capacitance), (split.resistance, split.capacitance), strict=True):
         assert (a.percent, a.stress_at_max_pa, a.difference) == (b.percent, b.stress_at_max_pa, b.difference)
         np.testing.assert_array_equal(a.q_load, b.q_load)
         np.testing.assert_array_equal(a.q_unload, b.q_unload)

@@ -199,7 +199,7 @@ def test_respond_many_gives_each_respond_to_the_bit():
              dict(stress_pa=[], voltage_v=5.0)]
     together = fsr.respond_many(asked)
     assert len(together) == len(asked) and fsr.respond_many([]) == []
-    for got, a in zip(together, asked):
+    for got, a in zip(together, asked, strict=True):
         alone = fsr.respond(**a)
         for name in ("r_fsr_ohm", "c_fsr_farad", "film_voltage_v", "contact_ohm", "area_m2", "separation_m"):
             assert np.array_equal(getattr(got, name), getattr(alone, name)), name

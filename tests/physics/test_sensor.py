@@ -32,7 +32,8 @@ def test_hysteresis_follows_eqs_1_and_9():
     r = v.respond(x)
     n = 61
     np.testing.assert_allclose(r.separation_m[:n], separation_loading(x[:n], v.s0_m, v.modulus_pa), rtol=1e-12)
-    np.testing.assert_allclose(r.separation_m[n:], separation_unloading(x[n:], 60e3, v.s0_m, v.modulus_pa, v.k), rtol=1e-12)
+    np.testing.assert_allclose(r.separation_m[n:], separation_unloading(x[n:], 60e3, v.s0_m, v.modulus_pa, v.k),
+                               rtol=1e-12)
     a0 = v.dielectric_fraction_0
     area = A201_AREA_M2 * (a0 + (1 - a0) * x / (x + v.dielectric_half_pa))
     np.testing.assert_allclose(r.c_fsr_farad, capacitance(v.layers * r.separation_m, area, v.eps_r), rtol=1e-12)
@@ -41,7 +42,8 @@ def test_hysteresis_follows_eqs_1_and_9():
     assert r.r_fsr_ohm[n + 29] < r.r_fsr_ohm[n - 31]
 
 
-@pytest.mark.parametrize("field, value", [("area_m2", 0.0), ("layers", -1.0), ("k", 0.5), ("conductive_fraction_0", 2.0)])
+@pytest.mark.parametrize("field, value", [("area_m2", 0.0), ("layers", -1.0), ("k", 0.5),
+                                          ("conductive_fraction_0", 2.0)])
 def test_bad_parameters_are_named(field, value):
     with pytest.raises(ValueError, match=field):
         VirtualFSR(**{field: value})

@@ -44,7 +44,8 @@ materials = dict(
 def test_branches_meet_at_zero_and_sigma_f(s0, modulus, frac, k):
     # Property (eq. 5): s_l(0) = s_u(0) = s0 and s_l(σf) = s_u(σf) = s_f.
     sf = frac * modulus
-    assert separation_unloading(0.0, sf, s0, modulus, k) == pytest.approx(separation_loading(0.0, s0, modulus), rel=1e-12)
+    assert separation_unloading(0.0, sf, s0, modulus, k) == pytest.approx(separation_loading(0.0, s0, modulus),
+                                                                          rel=1e-12)
     assert separation_unloading(sf, sf, s0, modulus, k) == pytest.approx(separation_loading(sf, s0, modulus), rel=1e-12)
 
 
@@ -107,7 +108,8 @@ def test_minor_loop_closes_and_is_wiped_out():
 
 def test_reload_beyond_old_peak_rejoins_virgin_line():
     # Property (wiping out): loading past the old peak continues on eq. (1).
-    path = np.concatenate([np.linspace(0, 200e3, 20), np.linspace(200e3, 50e3, 20)[1:], np.linspace(50e3, 300e3, 40)[1:]])
+    path = np.concatenate([np.linspace(0, 200e3, 20), np.linspace(200e3, 50e3, 20)[1:],
+                           np.linspace(50e3, 300e3, 40)[1:]])
     h = separation_history(path)
     beyond = path > 200e3
     beyond[:20] = False

@@ -30,7 +30,8 @@ def test_figures_and_tables(built):
     for name in ("Figure 17", "Figure 19a", "Figure 19b"):
         assert name in titles
     for f in s.figures:
-        assert (out / f.filename).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and (out / f.filename).stat().st_size > 10_000
+        assert (out / f.filename).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        assert (out / f.filename).stat().st_size > 10_000
     tables = " ".join(t.title for t in s.tables)
     for name in ("Table 3", "Table 4", "Table 5", "Figure 17", "preset", "Targets", "Predictions"):
         assert name in tables
@@ -55,7 +56,8 @@ def test_paper_json_experiment_has_printed_beside_virtual_bench(built, paper):
     assert d["table3"]["proposed"]["printed"] == t3["proposed"]
     assert len(d["table3"]["traditional"]["virtual_bench"]) == 4
     assert d["table3"]["mean"]["traditional"]["printed"] == t3["traditional_mean"]
-    for key, name in (("table4", "table4_repeatability_capacitive_kHz"), ("table5", "table5_repeatability_traditional_V")):
+    for key, name in (("table4", "table4_repeatability_capacitive_kHz"),
+                      ("table5", "table5_repeatability_traditional_V")):
         for load in ("200g", "400g"):
             assert d[key][load]["readings"]["printed"] == paper[name][load]["readings"]
             assert d[key][load]["mean_RE2_percent"]["printed"] == paper[name][load]["mean_RE2"]

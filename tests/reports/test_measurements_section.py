@@ -22,7 +22,8 @@ def built(tmp_path_factory):
 
 def test_section_quotes_the_transcription(built, paper):
     s, _ = built
-    for key, name in (("table4", "table4_repeatability_capacitive_kHz"), ("table5", "table5_repeatability_traditional_V")):
+    for key, name in (("table4", "table4_repeatability_capacitive_kHz"),
+                      ("table5", "table5_repeatability_traditional_V")):
         assert s.data[key]["printed"] == {k: v for k, v in paper[name].items() if k != "note"}
     assert s.data["table3"]["printed"] == paper["table3_hysteresis_error_percent"]
     assert s.data["figure17_synthetic"]["paper"] == {"linear_r2": paper["figure17_fit_r2"]["linear"],
@@ -38,7 +39,8 @@ def test_section_builds_with_all_rows_and_errata(built):
         assert all(r["re1_match"] and r["re2_n_minus_1_match"] for r in rec["rows"] + rec["means"])
     f = s.data["repeatability_ddof_finding"]
     assert (f["rows"], f["re2_match_n_minus_1"], f["re2_match_n"], f["re1_match"]) == (20, 20, 15, 20)
-    assert s.data["compensation_synthetic"]["he_before_percent"] >= 3 * s.data["compensation_synthetic"]["he_after_percent"]
+    synthetic = s.data["compensation_synthetic"]
+    assert synthetic["he_before_percent"] >= 3 * synthetic["he_after_percent"]
     for fig in s.figures:
         assert (out / fig.filename).stat().st_size > 10_000
     json.dumps(s.data, allow_nan=False)
