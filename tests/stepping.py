@@ -12,7 +12,8 @@ def assert_steps_as_batch(cal, run, reference: str = "force_n") -> None:
 
     batch = apply_calibration(cal, run)
     est = cal.estimator()
-    stepped = [est.step(x, t) for x, t in zip(cal.readout(batch), batch["time_s"])]  # C_FSR decoded when asked
+    # C_FSR decoded when asked
+    stepped = [est.step(x, t) for x, t in zip(cal.readout(batch), batch["time_s"], strict=True)]
     e = np.array([np.nan if s[0] is None else s[0] for s in stepped])
     u = np.array([np.nan if s[1] is None else s[1] for s in stepped])
     assert np.allclose(e, batch[f"{reference}_estimate"], rtol=0, atol=1e-9, equal_nan=True)

@@ -24,14 +24,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from clirun import run_cli
 from fsrlab.acquisition.recorder import record
 from fsrlab.acquisition.serial_link import SerialLink
-from fsrlab.virtual.sources import ConstantSource
-from fsrlab.virtual.device import VirtualDevice
 from fsrlab.io.runformat import load_run, sidecar_path
 from fsrlab.io.runwriter import RunWriter
-from clirun import run_cli
-from recording import CLI, rows as _rows, wait as _wait
+from fsrlab.virtual.device import VirtualDevice
+from fsrlab.virtual.sources import ConstantSource
+from recording import CLI
+from recording import rows as _rows
+from recording import wait as _wait
 
 
 def _existing_run(path: Path, rows: int = 600) -> dict:

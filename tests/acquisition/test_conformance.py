@@ -18,13 +18,13 @@ import time
 from pathlib import Path
 
 import pytest
-from toolcheck import require_file, require_tool
 
 from fsrlab.acquisition.messages import Measurement
 from fsrlab.acquisition.protocol import FrameParser
 from fsrlab.acquisition.serial_link import SerialLink
-from fsrlab.virtual.sources import ConstantSource
 from fsrlab.virtual.device import VirtualDevice
+from fsrlab.virtual.sources import ConstantSource
+from toolcheck import require_file, require_tool
 
 FIRMWARE = Path(__file__).resolve().parents[2] / "firmware"
 F_HZ, DUTY, ADC_MV = 5000.0, 0.25, 2000
@@ -122,7 +122,7 @@ def test_the_session_in_the_protocol_document_is_the_firmwares(simulator):
         line[line.index("$"):] + "\r\n" for line in section.splitlines() if "$" in line).encode())
     real = _firmware_frames(simulator)
     assert len(documented) == len(real)
-    for d, r in zip(documented, real):
+    for d, r in zip(documented, real, strict=True):
         if r.kind == "M":
             assert len(d.fields) == len(r.fields), (d, r)
             keep = [i for i in range(len(r.fields)) if i not in (3, 4)]  # all but sum_period_ticks, sum_high_ticks

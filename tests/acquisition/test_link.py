@@ -16,11 +16,16 @@ from fsrlab.acquisition import protocol as P
 from fsrlab.acquisition.messages import DeviceError, Measurement
 from fsrlab.acquisition.protocol import encode_frame
 from fsrlab.acquisition.serial_link import (
-    CommandRejected, HandshakeError, LinkError, SerialLink, UsbPort, find_uno,
+    CommandRejected,
+    HandshakeError,
+    LinkError,
+    SerialLink,
+    UsbPort,
+    find_uno,
 )
-from fsrlab.virtual.sources import ConstantSource, PhysicsSource, StressProfile
-from fsrlab.virtual.device import VirtualDevice
 from fsrlab.circuits.circuit import PAPER_CIRCUIT
+from fsrlab.virtual.device import VirtualDevice
+from fsrlab.virtual.sources import ConstantSource, PhysicsSource, StressProfile
 
 
 def _collect(link: SerialLink, n: int, kinds=("M",), limit_s: float = 10.0):
@@ -135,7 +140,8 @@ def test_physics_source_matches_the_closed_forms_at_constant_stress():
 
 def test_range_switch_adds_c_off_and_lowers_the_frequency():
     # Closed form: more timing capacitance C = C_FSR + C_off, lower frequency (f ∝ 1/C at fixed N).
-    src = PhysicsSource(StressProfile("hold", peak_pa=20e3, period_s=1.0), circuit=PAPER_CIRCUIT.replace(c_off_farad=1e-9))
+    src = PhysicsSource(StressProfile("hold", peak_pa=20e3, period_s=1.0),
+                        circuit=PAPER_CIRCUIT.replace(c_off_farad=1e-9))
     with VirtualDevice(src, seed=4) as dev, SerialLink(dev.port) as link:
         link.handshake()
         link.set_window(20)

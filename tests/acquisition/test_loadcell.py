@@ -17,8 +17,16 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from fsrlab.acquisition.loadcell import (
-    STANDARD_GRAVITY, LoadCellCalibration, LoadCellError, LoadCellModel, load_loadcell, raw_to_force,
-    WindowReference, scale_from_readings, tare_from_readings, window_reference,
+    STANDARD_GRAVITY,
+    LoadCellCalibration,
+    LoadCellError,
+    LoadCellModel,
+    WindowReference,
+    load_loadcell,
+    raw_to_force,
+    scale_from_readings,
+    tare_from_readings,
+    window_reference,
 )
 from fsrlab.acquisition.protocol import HX711_MAX, HX711_MIN
 
@@ -96,7 +104,8 @@ def test_scale_from_a_known_mass_and_the_5_percent_warning():
 
 
 def test_file_round_trip_and_bad_files(tmp_path):
-    cal, _ = scale_from_readings(tare_from_readings([100.0, 101, 99, 100, 100, 101]), [1100.0, 1101, 1099, 1100, 1100], 0.01)
+    cal, _ = scale_from_readings(tare_from_readings([100.0, 101, 99, 100, 100, 101]),
+                                 [1100.0, 1101, 1099, 1100, 1100], 0.01)
     cal.save(tmp_path / "lc.json")
     back = load_loadcell(tmp_path / "lc.json")
     assert back == cal and back.force(1100.0) == pytest.approx(0.01 * STANDARD_GRAVITY, rel=1e-3)

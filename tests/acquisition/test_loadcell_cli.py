@@ -127,7 +127,8 @@ def test_measure_ages_the_memory_by_the_rows_time_as_apply_does(tmp_path, monkey
     model.update({"time_constants_s": [0.5, 2.0], "weights": [0.3 * span, 0.2 * span],
                   "row_s": 10 * float(model["row_s"])})
     Path("cal.json").write_text(json.dumps(doc))
-    code, out, err = run_cli(["measure", "--virtual", "--cal", "cal.json", "--duration", "2s", "--quiet", "-o", "live.csv"])
+    code, out, err = run_cli(["measure", "--virtual", "--cal", "cal.json", "--duration", "2s",
+                              "--quiet", "-o", "live.csv"])
     assert code == 0, err
     code, out, err = run_cli(["apply", "cal.json", "live.csv", "-o", "again.csv"])
     assert code == 0, err

@@ -90,7 +90,8 @@ def test_live_records_the_circuit_and_blanks_the_estimate_on_a_range_it_does_not
     source = ConstantSource(frequency_hz=5000.0)  # inside the calibration's readout range (1.3 to 9.8 kHz)
     with VirtualDevice(source, seed=4) as dev:
         code, out, err = run_cli(["live", "--port", dev.port, *PAPER_AS_BUILT, "--c-off", "1n", "--cal", CAL,
-                                  "--sensor", "flexiforce-a201", "--out", tmp_path / "rec.csv", "--http-port", "0", "--duration", "2s", "--json"])
+                                  "--sensor", "flexiforce-a201", "--out", tmp_path / "rec.csv",
+                                  "--http-port", "0", "--duration", "2s", "--json"])
     assert code == 0 and "warning" not in err, err
     assert load_run(tmp_path / "rec.csv").readout()[0] == LM555Circuit(r_ohm=10e3, c_off_farad=1e-9, diode=True)
     rows = list(sessions[0]._rows)

@@ -20,7 +20,14 @@ from hypothesis import strategies as st
 from fsrlab.acquisition import protocol as P
 from fsrlab.acquisition.messages import Ack, DeviceError, Identity, Measurement
 from fsrlab.acquisition.protocol import (
-    CommandError, Frame, FrameParser, crc16, encode_command, encode_frame, max_frame_rate, min_frame_length,
+    CommandError,
+    Frame,
+    FrameParser,
+    crc16,
+    encode_command,
+    encode_frame,
+    max_frame_rate,
+    min_frame_length,
     parse_command,
 )
 
@@ -101,7 +108,8 @@ def test_crc_equals_independent_bitwise_crc(data):
 def test_worked_examples_of_docs_protocol_md():
     # The frames printed in docs/protocol.md (worked CRC example and the sample session).
     assert encode_frame("ACK", 1, ("START",)) == b"$ACK,1,START*79E7\r\n"
-    assert encode_frame("ID", 0, ("fsrlab-meter", "1.0.0", 1, 16000000)) == b"$ID,0,fsrlab-meter,1.0.0,1,16000000*6B4D\r\n"
+    assert encode_frame("ID", 0, ("fsrlab-meter", "1.0.0", 1, 16000000)) == \
+        b"$ID,0,fsrlab-meter,1.0.0,1,16000000*6B4D\r\n"
     assert encode_frame("M", 5, (1234, 100, 1000, 1600000, 800000, 0, 512, 0)) == \
         b"$M,5,1234,100,1000,1600000,800000,0,512,0*9CDE\r\n"
 
@@ -117,7 +125,8 @@ def test_version_2_worked_example_and_reference_fields():
     assert (m.frequency_hz, m.duty_cycle) == (10000.0, 0.5)  # v1 fields unchanged
     # The extremes of the 24-bit range are accepted; no sample means NaN, never 0.
     for value in (P.HX711_MIN, P.HX711_MAX):
-        assert Measurement.from_frame(Frame("M", 0, ("0", "100", "0", "0", "0", "0", "0", "0", "1", "1", str(value)))).ref_mean == value
+        assert Measurement.from_frame(Frame("M", 0, ("0", "100", "0", "0", "0", "0", "0", "0", "1", "1",
+                                                     str(value)))).ref_mean == value
     none = Measurement.from_frame(Frame("M", 0, ("0", "100", "0", "0", "0", "0", "0", "0", "1", "0", "0")))
     assert none.ref_ok == 1 and none.ref_n == 0 and math.isnan(none.ref_mean)
     # A version-1 frame: no reference input at all.

@@ -84,7 +84,8 @@ def test_v3_frame_values_out_of_range_are_malformed(channel, scan):
 
 def test_scan_settings_are_checked():
     assert Scan((3, 1)).channels == (1, 3) and Scan((3, 1)).mask == 0b1010
-    for kwargs, parameter in (({"dwell_ms": 0}, "dwell_ms"), ({"settle": 101}, "settle"), ({"dwell_ms": 2.5}, "dwell_ms")):
+    for kwargs, parameter in (({"dwell_ms": 0}, "dwell_ms"), ({"settle": 101}, "settle"),
+                              ({"dwell_ms": 2.5}, "dwell_ms")):
         with pytest.raises(ParameterError) as err:
             Scan((0, 1), **kwargs)
         assert err.value.parameter == parameter

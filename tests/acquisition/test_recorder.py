@@ -17,14 +17,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from clirun import run_cli
 from fsrlab.acquisition.recorder import COLUMNS, record
 from fsrlab.acquisition.serial_link import SerialLink
-from fsrlab.virtual.sources import ConstantSource
-from fsrlab.virtual.device import Faults, VirtualDevice
 from fsrlab.circuits.circuit import PAPER_CIRCUIT, PAPER_OPAMP
 from fsrlab.io.runformat import load_run
-from clirun import run_cli
-from recording import CLI, rows as _rows, wait as _wait
+from fsrlab.virtual.device import Faults, VirtualDevice
+from fsrlab.virtual.sources import ConstantSource
+from recording import CLI
+from recording import rows as _rows
+from recording import wait as _wait
 
 
 def test_recording_writes_a_valid_run(tmp_path):

@@ -23,7 +23,8 @@ CELL = LoadCellModel()
 def test_virtual_run_carries_force_from_the_load_cell(tmp_path):
     out = tmp_path / "run.csv"
     code, stdout, err = run_cli(["acquire", "--virtual", "--speed", "max", "--quiet", "--duration", "1.5", "--window",
-                                 "50ms", "--profile", "hold", "--peak", "30k", "--sensor", "interlink-402", "-o", str(out),
+                                 "50ms", "--profile", "hold", "--peak", "30k", "--sensor", "interlink-402",
+                                 "-o", str(out),
                                  "--json"])
     assert code == 0, err
     run = load_run(out)

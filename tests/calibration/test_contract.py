@@ -2,7 +2,8 @@
 
 Every kind the engine can produce -- each static curve family, each readout variable its curves are
 fitted in and each memory variant (read from the engine's candidates, :data:`fsrlab.calibration.monotone.VARIABLES`
-and ``selection.MEMORY_VARIANTS``, so a new one is covered), with and without memory, each readout column (a 555's frequency, ADC counts, C_FSR decoded through the sidecar's
+and ``selection.MEMORY_VARIANTS``, so a new one is covered), with and without memory, each readout column (a 555's
+frequency, ADC counts, C_FSR decoded through the sidecar's
 circuit) -- and a version-1 file of each earlier layout, pass the same checks, each a property that must hold:
 
 * stepping one reading at a time (``estimator()``) gives the batch estimate and uncertainty (to 1e-9);
@@ -25,14 +26,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from fsrlab.calibration import selection
 from fsrlab.calibration.apply import apply_calibration
 from fsrlab.calibration.document import load_calibration, save_calibration
-from fsrlab.calibration import selection
-from fsrlab.calibration.scoring import Recording
-from fsrlab.calibration.selection import calibrate_recordings
-from fsrlab.calibration.runs import calibrate_runs
 from fsrlab.calibration.monotone import VARIABLES
 from fsrlab.calibration.result import Calibration
+from fsrlab.calibration.runs import calibrate_runs
+from fsrlab.calibration.scoring import Recording
+from fsrlab.calibration.selection import calibrate_recordings
 from fsrlab.io.runformat import Run, load_run
 from fsrlab.virtual.handloaded import fsr_bench_run
 from stepping import assert_steps_as_batch

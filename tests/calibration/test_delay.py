@@ -16,8 +16,8 @@ import pytest
 from fsrlab.calibration import delay as dl
 from fsrlab.calibration import selection as hm
 from fsrlab.calibration.delay import DelayLine, delayed
-from fsrlab.calibration.scoring import ALIGNED, Recording, _rank_correlation
 from fsrlab.calibration.model import HeldoutCalibration
+from fsrlab.calibration.scoring import ALIGNED, Recording, _rank_correlation
 from fsrlab.calibration.selection import calibrate_recordings
 
 
@@ -40,14 +40,14 @@ def test_the_line_gives_the_batch_values_one_reading_at_a_time():
     x[rng.choice(t.size, 20, replace=False)] = np.nan
     for delay in (0.03, 0.1, 0.27):
         line = DelayLine(delay)
-        stepped = np.array([line.push(ti, xi) if np.isfinite(xi) else np.nan for ti, xi in zip(t, x)])
+        stepped = np.array([line.push(ti, xi) if np.isfinite(xi) else np.nan for ti, xi in zip(t, x, strict=True)])
         assert np.allclose(stepped, delayed(t, x, delay), rtol=0, atol=1e-12, equal_nan=True)
     # a millisecond clock at a high rate: many rows share a time, and delays of whole milliseconds land on them
     t = np.round(np.cumsum(rng.uniform(0.0, 0.003, 3000)), 3)
     x = rng.normal(size=t.size)
     for delay in (0.001, 0.0015, 0.004):
         line = DelayLine(delay)
-        stepped = np.array([line.push(ti, xi) for ti, xi in zip(t, x)])
+        stepped = np.array([line.push(ti, xi) for ti, xi in zip(t, x, strict=True)])
         assert np.allclose(stepped, delayed(t, x, delay), rtol=0, atol=1e-12)
 
 
@@ -61,7 +61,7 @@ def _hx711_recording(seed: int, instant: bool = False, noise_counts: float = 2.0
     fine = np.arange(n * 100) * 1e-3  # 1 ms steps
     periods = rng.uniform(1.5, 4.0, 6)
     phases = rng.uniform(0, 2 * np.pi, 6)
-    f = sum(np.sin(2 * np.pi * fine / p + ph) for p, ph in zip(periods, phases))
+    f = sum(np.sin(2 * np.pi * fine / p + ph) for p, ph in zip(periods, phases, strict=True))
     force = 12.0 * np.clip(f / 3.0, 0.0, None) ** 1.2
     t = (np.arange(n) + 1) * 0.1
     idx = np.round(t / 1e-3).astype(int) - 1
@@ -129,7 +129,7 @@ def test_the_delay_survives_the_file_and_the_stepper():
     batch, _ = again.run(other.t, other.x)
     assert np.array_equal(batch, cal.run(other.t, other.x)[0])
     st = cal.stepper()
-    stepped = np.array([st.step(x, t)[0] for t, x in zip(other.t, other.x)])
+    stepped = np.array([st.step(x, t)[0] for t, x in zip(other.t, other.x, strict=True)])
     assert np.allclose(stepped, batch, rtol=0, atol=1e-9)
     bad = cal.to_dict()
     bad["delay_s"] = -0.1
@@ -182,7 +182,7 @@ def test_a_time_that_goes_back_starts_the_delay_again():
     assert d[10] == 100.0 and np.allclose(d[11:], 100 + np.arange(1, 10) - 0.5)
     assert np.allclose(d[1:10], np.arange(1, 10) - 0.5)
     line = DelayLine(0.05)
-    assert np.allclose([line.push(a, b) for a, b in zip(t, x)], d, rtol=0, atol=1e-12)
+    assert np.allclose([line.push(a, b) for a, b in zip(t, x, strict=True)], d, rtol=0, atol=1e-12)
 
 
 def _half_row_late(seed: int, sigma: float, n: int = 8000, rate_hz: float = 100.0) -> Recording:
@@ -216,7 +216,7 @@ def _rows_late(seed: int, rows: float, n: int = 6000, rate_hz: float = 100.0) ->
     t = np.arange(n) / rate_hz
     periods, phases = rng.uniform(1.0, 3.0, 4), rng.uniform(0, 2 * np.pi, 4)
     force = lambda tt: 10.0 * np.clip(sum(np.sin(2 * np.pi * tt / p + ph) for p, ph in  # noqa: E731
-                                          zip(periods, phases)) / 2.0, 0.0, None) ** 1.2
+                                          zip(periods, phases, strict=True)) / 2.0, 0.0, None) ** 1.2
     g = (force(t) / 5.0) ** 0.8
     x = np.round(1023 * g / (1 + g) + rng.normal(0, 1.0, n))
     return Recording(t, x, force(t - rows / rate_hz) + rng.normal(0, 0.02, n))

@@ -72,7 +72,8 @@ def _presses(rng, n: int, rest_s: tuple) -> np.ndarray:
 def test_a_creep_the_static_curve_cannot_describe_refits_the_curve(seed, monkeypatch):
     rng = np.random.default_rng(seed)
     f_cal, f_new = _presses(rng, 60, (0.1, 0.5)), _presses(rng, 12, (15.0, 30.0))
-    rec = Recording(np.arange(f_cal.size) / RATE_HZ, _creeping_film(f_cal, rng), f_cal + rng.normal(0, 0.05, f_cal.size))
+    rec = Recording(np.arange(f_cal.size) / RATE_HZ, _creeping_film(f_cal, rng),
+                    f_cal + rng.normal(0, 0.05, f_cal.size))
     t_new, x_new = np.arange(f_new.size) / RATE_HZ, _creeping_film(f_new, rng)
 
     def new_rmse(cal):
@@ -114,5 +115,5 @@ def test_on_a_real_unloading_after_a_loading_calibration_the_curve_is_held(monke
     assert rmse(cal) < 1.05 * poly
     assert rmse(cal) < 0.9 * rmse(refit)
     stepper = cal.stepper()
-    live = np.array([stepper.step(xi, ti)[0] for ti, xi in zip(t[:400], x[:400])])
+    live = np.array([stepper.step(xi, ti)[0] for ti, xi in zip(t[:400], x[:400], strict=True)])
     np.testing.assert_allclose(live, cal.run(t[:400], x[:400])[0], rtol=1e-9, atol=1e-9)

@@ -13,9 +13,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fsrlab.calibration.curves import fit_static
-from fsrlab.calibration.scoring import BLOCKS, Recording, held_out_splits, paired_gain
 from fsrlab.calibration.monotone import MonotoneCurve, adc_full_scale, readout_variable
 from fsrlab.calibration.operators import MemoryState, directions, memory_features
+from fsrlab.calibration.scoring import BLOCKS, Recording, held_out_splits, paired_gain
 
 
 def _rec(n, name=""):

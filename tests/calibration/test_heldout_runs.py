@@ -13,8 +13,8 @@ import pytest
 from clirun import run_cli
 from fsrlab.calibration.apply import apply_calibration
 from fsrlab.calibration.document import load_calibration, save_calibration
-from fsrlab.calibration.runs import calibrate_runs
 from fsrlab.calibration.result import Calibration
+from fsrlab.calibration.runs import calibrate_runs
 from fsrlab.errors import ProvenanceError
 from fsrlab.io.runformat import load_run
 from fsrlab.io.runwriter import write_run
@@ -146,7 +146,8 @@ def test_cli_says_in_one_line_why_the_compensation_was_not_kept(tmp_path):
     t = np.arange(3000) * 0.02
     force = 10 * np.abs(np.sin(2 * np.pi * t / 7.3))
     reading = np.round(1023 * (force / 12) ** 0.7 / (1 + (force / 12) ** 0.7) + rng.normal(0, 3, t.size))
-    p = write_run(tmp_path / "static.csv", {"time_s": t, "reading": reading, "force_n": force + rng.normal(0, .3, t.size)},
+    p = write_run(tmp_path / "static.csv", {"time_s": t, "reading": reading,
+                                            "force_n": force + rng.normal(0, .3, t.size)},
                   {"units": {"time_s": "s", "reading": "counts", "force_n": "N"}})
     code, stdout, err = run_cli(["calibrate", p, "--x", "reading", "--compensate"])
     assert code == 0, err

@@ -134,7 +134,7 @@ def test_the_memory_is_weighted_by_stacking_and_the_blend_is_exact(hand):
     estimate's (w = 0) and at most the full correction's (w = 1), a property of the least-squares
     weight; and the calibration written is that blend exactly (its curve a monotone one)."""
     from fsrlab.calibration.scoring import Part
-    from fsrlab.calibration.selection import _blend, _Choice, _fit, PLAY_THRESHOLDS
+    from fsrlab.calibration.selection import PLAY_THRESHOLDS, _blend, _Choice, _fit
 
     rec, _ = hand
     cal, sel = calibrate_recordings([rec], compensate=True)
@@ -211,7 +211,7 @@ def test_a_memory_does_no_harm_on_loading_only_and_unloading_only_runs(train, se
         assert _comp_over_plain(cal, other, truth) <= 1.05, name
     other, _ = _ramp_parts(seed)["unloading"]
     stepper = cal.stepper()
-    stepped = [stepper.step(x, t)[0] for x, t in zip(other.x, other.t)]
+    stepped = [stepper.step(x, t)[0] for x, t in zip(other.x, other.t, strict=True)]
     np.testing.assert_allclose(stepped, cal.run(other.t, other.x)[0], rtol=0, atol=1e-9)
 
 
@@ -267,8 +267,8 @@ def test_a_memory_that_fails_in_one_held_out_block_is_not_kept(seed):
 def test_one_recording_measures_the_gain_spread_of_its_held_out_blocks():
     """Property: with one recording the relative term between recordings is at least the RMS gain error of its
     held-out blocks. Triangles through a power law, the sensor's sensitivity tripling over the run (each later
-    block reads higher than the earlier ones predict; measured spread 0.20 on three seeds): the spread exceeds the assumed 15 % and becomes
-    the term; the same run without the drift keeps the assumed floor."""
+    block reads higher than the earlier ones predict; measured spread 0.20 on three seeds): the spread exceeds the
+    assumed 15 % and becomes the term; the same run without the drift keeps the assumed floor."""
     from fsrlab.calibration.uncertainty import REPEATABILITY
 
     rng = np.random.default_rng(5)

@@ -15,10 +15,10 @@ import json
 import numpy as np
 import pytest
 
-from fsrlab.calibration.scoring import Part, Recording
 from fsrlab.calibration.model import HeldoutCalibration, clip_hysteresis
-from fsrlab.calibration.selection import _Choice, _fit
 from fsrlab.calibration.operators import CREEP_TIME_CONSTANTS_S, PLAY_THRESHOLDS, memory_features
+from fsrlab.calibration.scoring import Part, Recording
+from fsrlab.calibration.selection import _Choice, _fit
 
 RATE_HZ = 20.0
 
@@ -115,7 +115,7 @@ def test_the_stepper_and_a_file_give_the_batch_numbers():
     again = HeldoutCalibration.from_dict(json.loads(json.dumps(cal.to_dict())))
     np.testing.assert_allclose(again.run(t, x)[0], batch, rtol=1e-12, atol=1e-9)
     st = again.stepper()
-    live = np.array([st.step(float(v), float(s))[0] for v, s in zip(x, t)])
+    live = np.array([st.step(float(v), float(s))[0] for v, s in zip(x, t, strict=True)])
     np.testing.assert_allclose(live, batch, rtol=1e-9, atol=1e-6)
     old = cal.to_dict()
     old.pop("hysteresis_range")  # a file written before the range: read, not clipped

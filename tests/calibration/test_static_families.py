@@ -19,10 +19,10 @@ from fsrlab.calibration.curves import (
     curve_from_dict,
     fit_static,
 )
-from fsrlab.calibration.scoring import Recording
 from fsrlab.calibration.model import HeldoutCalibration
-from fsrlab.calibration.selection import calibrate_recordings
 from fsrlab.calibration.monotone import MonotoneCurve
+from fsrlab.calibration.scoring import Recording
+from fsrlab.calibration.selection import calibrate_recordings
 from fsrlab.io.runwriter import write_run
 
 N, CYCLES = 800, 4
@@ -232,5 +232,5 @@ def test_a_smooth_calibration_with_memory_round_trips_and_steps_as_the_batch(smo
     batch = cal.run(rec.t, x)[0]
     np.testing.assert_array_equal(back.run(rec.t, x)[0], batch)
     stepper = cal.stepper()
-    stepped = np.array([stepper.step(v, t)[0] for v, t in zip(x, rec.t)])
+    stepped = np.array([stepper.step(v, t)[0] for v, t in zip(x, rec.t, strict=True)])
     np.testing.assert_allclose(stepped, batch, rtol=0, atol=1e-9)

@@ -14,8 +14,8 @@ import pytest
 
 from fsrlab.calibration import selection as hm
 from fsrlab.calibration.delay import delayed
-from fsrlab.calibration.scoring import Recording
 from fsrlab.calibration.model import HeldoutCalibration
+from fsrlab.calibration.scoring import Recording
 from fsrlab.calibration.selection import calibrate_recordings
 from fsrlab.virtual.handloaded import fsr_bench_run
 
@@ -87,7 +87,7 @@ def test_the_stepper_and_a_file_give_the_batch_numbers(averaged):
     again = HeldoutCalibration.from_dict(json.loads(json.dumps(cal.to_dict())))
     np.testing.assert_allclose(again.run(rec.t, rec.x)[0], batch, rtol=1e-12, atol=1e-9)
     st = again.stepper()
-    live = np.array([st.step(float(v), float(s))[0] for v, s in zip(rec.x, rec.t)])
+    live = np.array([st.step(float(v), float(s))[0] for v, s in zip(rec.x, rec.t, strict=True)])
     np.testing.assert_allclose(live, batch, rtol=1e-9, atol=1e-6)
 
 
