@@ -89,7 +89,7 @@ def write_corpus(root: Path) -> None:
     synthetic_run(cycles=2, points_per_ramp=15, seed=7).write(root / "other.csv")
     c = synthetic_run(cycles=2, points_per_ramp=20, seed=2).columns
     (root / "min.csv").write_text("stress_pa,frequency_hz\n" + "".join(
-        f"{float(s)!r},{float(f)!r}\n" for s, f in zip(c["stress_pa"], c["frequency_hz"])))
+        f"{float(s)!r},{float(f)!r}\n" for s, f in zip(c["stress_pa"], c["frequency_hz"], strict=True)))
     (root / "table.csv").write_text("load,sensor,reading\n" + "".join(
         f"{load},{s},{1.0 + 0.1 * load / 200 + 0.01 * s + 0.003 * k}\n"
         for load in (200, 400) for s in (1, 2) for k in range(3)))

@@ -77,7 +77,8 @@ def _page_steps(page: str) -> list[tuple[str, str, str | None]]:
             shown = blocks[i + 1][1] if i + 1 < len(blocks) and blocks[i + 1][0] == "" else None
             steps.append(("python", code, shown))
         elif kind == "sh":
-            steps += [("setup", shlex.split(line)[2], None) for line in code.splitlines() if line.startswith("python -c ")]
+            steps += [("setup", shlex.split(line)[2], None) for line in code.splitlines()
+                      if line.startswith("python -c ")]
     return steps
 
 

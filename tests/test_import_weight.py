@@ -54,7 +54,8 @@ def test_command_line_runs_without_heavy_packages(args, absent):
     # numpy, and no command's option parsing needs pydantic (fsrlab.cli's light coercion; typer would
     # import it, ~0.1 s). The oscillator's closed form needs numpy, not scipy or matplotlib.
     code = ("import atexit, json, sys\n"
-            f"atexit.register(lambda: print(json.dumps(sorted(m for m in {absent!r} if m in sys.modules)), file=sys.stderr))\n"
+            f"atexit.register(lambda: print(json.dumps(sorted(m for m in {absent!r} if m in sys.modules)), "
+            "file=sys.stderr))\n"
             "from fsrlab.cli import main\n"
             f"main({args!r})\n")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)

@@ -54,7 +54,8 @@ def test_readme_has_the_examples_this_test_runs():
 @pytest.mark.parametrize("index", range(len(_blocks("python"))))
 def test_readme_python_block_runs(index, workdir):
     # In a fresh interpreter, as a reader pastes it: a block must not lean on this test process's imports.
-    proc = subprocess.run([sys.executable, "-c", "import matplotlib; matplotlib.use('Agg')\n" + _blocks("python")[index]],
+    proc = subprocess.run([sys.executable, "-c",
+                           "import matplotlib; matplotlib.use('Agg')\n" + _blocks("python")[index]],
                           cwd=workdir, capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr[-3000:]
 

@@ -47,7 +47,8 @@ from fsrlab.units import QUANTITIES, parse_quantity  # noqa: E402
     ("4.418n", "length", 4.418e-9), ("4.418nm", "length", 4.418e-9),
     ("0.223", "energy", 0.223), ("0.223eV", "energy", 0.223), ("223meV", "energy", 0.223),
     ("90", "duration", 90.0), ("90s", "duration", 90.0), ("1.5min", "duration", 90.0), ("2h", "duration", 7200.0),
-    ("500ms", "duration", 0.5), ("250us", "duration", 250e-6), ("250µs", "duration", 250e-6), ("1.5 min", "duration", 90.0),
+    ("500ms", "duration", 0.5), ("250us", "duration", 250e-6), ("250µs", "duration", 250e-6),
+    ("1.5 min", "duration", 90.0),
     ("10%", "fraction", 0.1), ("0.1", "fraction", 0.1), ("1", "fraction", 1.0), ("150%", "fraction", 1.5),
     ("2", "number", 2.0), ("1e3", "number", 1e3), (7, "number", 7.0), (0.25, "fraction", 0.25),
 ])

@@ -12,9 +12,9 @@ import json
 import numpy as np
 import pytest
 
-from fsrlab.virtual.synthetic import synthetic_run
 from clirun import run_cli
 from fsrlab.io.runformat import load_run
+from fsrlab.virtual.synthetic import synthetic_run
 
 
 def test_hysteresis_json_keys(runs, capsys):
@@ -30,7 +30,8 @@ def test_hysteresis_json_keys(runs, capsys):
 def test_minimal_csv_works_for_hysteresis_and_calibrate(tmp_path, capsys):
     # Only stress_pa and one quantity, no sidecar, rows in time order.
     c = synthetic_run(cycles=2, seed=2).columns
-    lines = ["stress_pa,frequency_hz"] + [f"{float(s)!r},{float(f)!r}" for s, f in zip(c["stress_pa"], c["frequency_hz"])]
+    lines = ["stress_pa,frequency_hz"] + [f"{float(s)!r},{float(f)!r}"
+                                          for s, f in zip(c["stress_pa"], c["frequency_hz"], strict=True)]
     p = tmp_path / "min.csv"
     p.write_text("\n".join(lines) + "\n")
     code, out, _ = run_cli(["hysteresis", p, "--json"], capsys)

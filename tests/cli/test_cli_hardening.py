@@ -14,10 +14,9 @@ import numpy as np
 import pytest
 
 from clirun import run_cli
-from fsrlab.virtual.synthetic import synthetic_run
-from fsrlab.circuits.circuit import LM555Circuit
-from fsrlab.circuits.circuit import PAPER_CIRCUIT
+from fsrlab.circuits.circuit import PAPER_CIRCUIT, LM555Circuit
 from fsrlab.io.runformat import load_run, sidecar_path
+from fsrlab.virtual.synthetic import synthetic_run
 
 
 @pytest.fixture(scope="module")
@@ -118,7 +117,8 @@ def test_apply_json_counts_are_true(runs, cal, tmp_path):
     from fsrlab.io.runwriter import write_run
 
     meta = json.loads(sidecar_path(runs / "other.csv").read_text())
-    write_run(tmp_path / "r.csv", {k: v for k, v in c.items() if k not in ("c_fsr_farad", "r_fsr_ohm")}, meta, overwrite=True)
+    write_run(tmp_path / "r.csv", {k: v for k, v in c.items() if k not in ("c_fsr_farad", "r_fsr_ohm")},
+              meta, overwrite=True)
     code, out, err = run_cli(["apply", cal, tmp_path / "r.csv", "-o", tmp_path / "e.csv", "--json", "--margin", "10%"])
     assert code == 0, err
     d = json.loads(out)

@@ -31,7 +31,8 @@ def _options(help_text: str) -> dict[str, str]:
     entries: dict[str, str] = {}
     key = None
     for line in section.splitlines():
-        m = re.match(r"^  (-\S+(?:, -\S+)*(?: <\w+>)?)\s{2,}(.*)$", line) or re.match(r"^  (-\S+(?:, -\S+)*(?: <\w+>)?)$", line)
+        m = (re.match(r"^  (-\S+(?:, -\S+)*(?: <\w+>)?)\s{2,}(.*)$", line)
+             or re.match(r"^  (-\S+(?:, -\S+)*(?: <\w+>)?)$", line))
         if m:
             key = m.group(1)
             entries[key] = m.group(2) if m.lastindex == 2 else ""

@@ -12,8 +12,8 @@ import json
 import numpy as np
 
 from clirun import run_cli
-from fsrlab.hardware import CAPTURE_MAX_HZ
 from fsrlab.circuits.lm555 import astable
+from fsrlab.hardware import CAPTURE_MAX_HZ
 
 SENSOR = ["design", "--rfsr-min", "100k", "--rfsr-max", "2M", "--cfsr-min", "0.5n", "--cfsr-max", "1.5n"]
 

@@ -14,8 +14,8 @@ import shutil
 from types import SimpleNamespace
 
 import pytest
-from clirun import run_cli
 
+from clirun import run_cli
 from fsrlab.acquisition import firmware
 from fsrlab.acquisition.ports import list_serial_ports, resolve_port
 from fsrlab.acquisition.serial_link import LinkError

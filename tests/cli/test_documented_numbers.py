@@ -43,7 +43,7 @@ def test_the_documented_transcript_of_a_faulty_link_is_what_acquire_prints(tmp_p
     printed = out.strip()
     number = r"\d+(?:\.\d+)?"
     assert re.sub(number, "N", printed) == re.sub(number, "N", shown), (printed, shown)
-    for a, b in zip(re.findall(number, printed), re.findall(number, shown)):
+    for a, b in zip(re.findall(number, printed), re.findall(number, shown), strict=True):
         assert abs(float(a) - float(b)) <= 1, (printed, shown)
 
 

@@ -10,8 +10,8 @@ from __future__ import annotations
 import json
 
 import pytest
-from clirun import run_cli
 
+from clirun import run_cli
 from fsrlab.acquisition import firmware
 
 COMMANDS = [["firmware", "hex"], ["firmware", "sketch"], ["firmware", "flash"], ["ports"], ["doctor"]]
@@ -58,7 +58,8 @@ def test_flash_bad_input_is_one_line_naming_the_option(args, option, monkeypatch
     assert code == 2 and out == "" and err.count("\n") == 1 and option in err
 
 
-@pytest.mark.parametrize("directory, said", [("", "is empty"), ("/nonexistent/deep/dir", "/nonexistent/deep does not exist")])
+@pytest.mark.parametrize("directory, said", [("", "is empty"),
+                                             ("/nonexistent/deep/dir", "/nonexistent/deep does not exist")])
 def test_sketch_refuses_an_empty_or_unrooted_folder(directory, said):
     """The output policy: "" is not "here", and a mistyped path is not made from / (issue 40)."""
     code, out, err = run_cli(["firmware", "sketch", directory])
@@ -81,7 +82,8 @@ def test_shipped_image_is_intel_hex():
 
 
 @pytest.mark.parametrize("change, said", [
-    (lambda t: t.replace(t.splitlines()[0], t.splitlines()[0][:-2] + ("00" if t.splitlines()[0][-2:] != "00" else "01")), "checksum"),
+    (lambda t: t.replace(t.splitlines()[0],
+                         t.splitlines()[0][:-2] + ("00" if t.splitlines()[0][-2:] != "00" else "01")), "checksum"),
     (lambda t: "\n".join(t.splitlines()[:-1]) + "\n", "no end-of-file record"),
     (lambda t: ":020000040001F9\n" + t, "beyond an ATmega328P"),
     (lambda t: "time_s,frequency_hz\n0,1\n", "is not an Intel hex record"),

@@ -53,9 +53,27 @@ from hypothesis import strategies as st
 
 import fsrlab
 from fsrlab.cli import app
-from fuzzing import (ELSEWHERE, ENG, FILE_NAME, GARBAGE, INPUTS, NON_FINITE, OTHER_UNITS, RAW_CONTROL, RKM, TEXT,
-                     VALID, apply_corruptions, columns_of, copy_named, corruption, execute, hashes, listing,
-                     write_corpus)
+from fuzzing import (
+    ELSEWHERE,
+    ENG,
+    FILE_NAME,
+    GARBAGE,
+    INPUTS,
+    NON_FINITE,
+    OTHER_UNITS,
+    RAW_CONTROL,
+    RKM,
+    TEXT,
+    VALID,
+    apply_corruptions,
+    columns_of,
+    copy_named,
+    corruption,
+    execute,
+    hashes,
+    listing,
+    write_corpus,
+)
 
 REPO = Path(fsrlab.__file__).resolve().parents[2]
 GROUP = typer.main.get_command(app)

@@ -12,9 +12,9 @@ import shutil
 from pathlib import Path
 
 import pytest
-from fuzzing import OUTPUT_CASES, WRITERS, output_case, tree_hashes
 
 from clirun import run_cli
+from fuzzing import OUTPUT_CASES, WRITERS, output_case, tree_hashes
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 

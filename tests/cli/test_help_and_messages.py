@@ -98,7 +98,8 @@ def _one_line_naming(err: str, option: str) -> None:
     # Were exit 0 with "inf Hz", "nan %" and numpy RuntimeWarnings on stderr.
     (["oscillator", "--r", "1e-300", "--rfsr", "200k", "--cfsr", "1n"], "--r/--rfsr/--cfsr/--coff"),
     (["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1e308"], "--r/--rfsr/--cfsr/--coff"),
-    (["decode", "--r", "1e308", "--frequency", "6478.5", "--duty", "0.10189", "--diode"], "--r/--frequency/--duty/--coff"),
+    (["decode", "--r", "1e308", "--frequency", "6478.5", "--duty", "0.10189", "--diode"],
+     "--r/--frequency/--duty/--coff"),
     (["decode", "--r", "10k", "--frequency", "6478.5", "--duty", "1e-300", "--diode"], "--r/--frequency/--duty/--coff"),
     # Was "Invalid value: no oscillation: ..." without an option.
     (["decode", "--r", "10k", "--frequency", "6478.5", "--duty", "0.10189", "--diode-drop", "5"], "--diode-drop"),

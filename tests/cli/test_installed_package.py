@@ -21,6 +21,7 @@ import zipfile
 from pathlib import Path
 
 import pytest
+
 from toolcheck import require_file, require_tool
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -73,8 +73,8 @@ def run(args):
 
 def imported():
     topics = sorted(m for m in COMMAND_MODULES if f"fsrlab.cli.{m}" in sys.modules)
-    return topics, sorted(m for m in %r if m in sys.modules)
-""" % (HEAVY,)
+    return topics, sorted(m for m in """ + repr(HEAVY) + """ if m in sys.modules)
+"""
 
 
 @pytest.mark.parametrize("columns", [50, 80, 200])

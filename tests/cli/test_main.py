@@ -108,8 +108,8 @@ def test_light_coercion_gives_what_typers_pydantic_coercion_gives():
     from pathlib import Path
 
     import typer
-    from typer._coercion import build_runtime_param
     from typer._click.exceptions import BadParameter
+    from typer._coercion import build_runtime_param
 
     from fsrlab.cli import app
 
@@ -125,7 +125,8 @@ def test_light_coercion_gives_what_typers_pydantic_coercion_gives():
             values = [v for v in [param.default] if v is not None and not callable(v)]
             values += samples.get(desc.annotation, []) if desc.parameter_info.parser is None else []
             for value in values:
-                def outcome(runtime):
+                # Bound as defaults: each closure is called at once, in its own iteration (ruff B023).
+                def outcome(runtime, value=value, param=param, ctx=ctx):
                     try:
                         out = runtime.coerce(value, param=param, ctx=ctx)
                         return type(out), out

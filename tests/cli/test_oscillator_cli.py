@@ -9,11 +9,11 @@ from __future__ import annotations
 import json
 
 import pytest
-from toolcheck import require_tool
 
-from fsrlab.circuits.lm555 import astable
-from fsrlab.circuits.decode import decode
 from clirun import run_cli
+from fsrlab.circuits.decode import decode
+from fsrlab.circuits.lm555 import astable
+from toolcheck import require_tool
 
 
 def test_oscillator_json_keys_and_values(capsys):
@@ -42,7 +42,8 @@ def test_oscillator_spice_keys(capsys):
     code, out, _ = run_cli(["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1n", "--spice", "--json"], capsys)
     data = json.loads(out)
     assert code == 0 and {"spice_frequency_hz", "spice_duty_cycle"} <= set(data)
-    assert data["spice_frequency_hz"] == pytest.approx(data["frequency_hz"], rel=1e-3)  # as tests/circuits/test_spice.py
+    # as tests/circuits/test_spice.py
+    assert data["spice_frequency_hz"] == pytest.approx(data["frequency_hz"], rel=1e-3)
 
 
 def test_oscillator_text_output(capsys):
@@ -105,7 +106,8 @@ def test_design_text_and_json(capsys):
 
 
 def test_control_pin_option(capsys):
-    code, out, _ = run_cli(["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1n", "--vctrl", "4", "--json"], capsys)
+    code, out, _ = run_cli(["oscillator", "--r", "10k", "--rfsr", "200k", "--cfsr", "1n",
+                            "--vctrl", "4", "--json"], capsys)
     ref = astable(10e3, 200e3, 1e-9, lower_fraction=0.4, upper_fraction=0.8)
     assert code == 0 and json.loads(out)["frequency_hz"] == pytest.approx(ref.frequency_hz, rel=1e-12)
     code, _, err = run_cli(["oscillator", "--r", "10k", "--rfsr", "70k", "--cfsr", "1n", "--vctrl", "4"], capsys)

@@ -83,9 +83,12 @@ def test_decode_duty_in_percent_is_a_fraction():
 
 
 @pytest.mark.parametrize("command, option, plain, spelled", [
-    ("oscillator", "--r", "10k", "10kΩ"), ("oscillator", "--r", "10k", "10kohm"), ("oscillator", "--rfsr", "200k", "200kΩ"),
-    ("oscillator", "--cfsr", "1n", "1nF"), ("oscillator", "--cfsr", "1n", "1000p"), ("oscillator", "--coff", "470p", "470pF"),
-    ("oscillator", "--vcc", "5", "5V"), ("oscillator", "--vctrl", "3", "3000mV"), ("oscillator", "--rfsr", "1M", "1meg"),
+    ("oscillator", "--r", "10k", "10kΩ"), ("oscillator", "--r", "10k", "10kohm"),
+    ("oscillator", "--rfsr", "200k", "200kΩ"),
+    ("oscillator", "--cfsr", "1n", "1nF"), ("oscillator", "--cfsr", "1n", "1000p"),
+    ("oscillator", "--coff", "470p", "470pF"),
+    ("oscillator", "--vcc", "5", "5V"), ("oscillator", "--vctrl", "3", "3000mV"),
+    ("oscillator", "--rfsr", "1M", "1meg"),
     ("decode", "--frequency", "6478.5", "6.4785kHz"), ("decode", "--r", "10k", "10000"),
     ("design", "--margin", "0.3", "30%"), ("design", "--window", "0.5", "500ms"), ("design", "--fmax", "20k", "20kHz"),
     ("design", "--rfsr-max", "2M", "2meg"), ("design", "--cfsr-min", "0.5n", "500pF"),

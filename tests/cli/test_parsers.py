@@ -41,9 +41,12 @@ def probe():
         r: float = typer.Option(None, "--r", parser=ohms), c: float = typer.Option(None, "--c", parser=farads),
         v: float = typer.Option(None, "--v", parser=volts), f: float = typer.Option(None, "--f", parser=hertz),
         p: float = typer.Option(None, "--p", parser=pascals), s: float = typer.Option(None, "--s", parser=metres),
-        ev: float = typer.Option(None, "--ev", parser=electronvolts), t: float = typer.Option(None, "--t", parser=seconds),
-        duty: float = typer.Option(None, "--duty", parser=fraction), n: float = typer.Option(None, "--n", parser=number),
-        model_error: bool = typer.Option(False, "--model-error"), fail_numpy: bool = typer.Option(False, "--fail-numpy"),
+        ev: float = typer.Option(None, "--ev", parser=electronvolts),
+        t: float = typer.Option(None, "--t", parser=seconds),
+        duty: float = typer.Option(None, "--duty", parser=fraction),
+        n: float = typer.Option(None, "--n", parser=number),
+        model_error: bool = typer.Option(False, "--model-error"),
+        fail_numpy: bool = typer.Option(False, "--fail-numpy"),
         model_error_inside: bool = typer.Option(False, "--model-error-inside"),
     ) -> None:
         if model_error_inside:

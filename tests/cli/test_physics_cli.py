@@ -14,7 +14,6 @@ from fsrlab.metrics.hysteresis import model_cycle_errors
 from fsrlab.physics.params import PAPER
 from fsrlab.physics.separation import separation_loading
 from fsrlab.physics.tunneling import voltage_limit
-
 from reference_physics import REL, TABLE1, j12
 
 S_F = TABLE1["s0"] * (1 - TABLE1["sigma_f"] / TABLE1["modulus"])
