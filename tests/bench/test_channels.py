@@ -105,9 +105,9 @@ def test_crosstalk_matrix_in_the_twin(built):
 def test_cli_calibrate_channels_writes_one_file_keyed_by_sensor(four_channel_run, tmp_path):
     import json
 
-    import fsrlab.cli.channels  # noqa: F401 - registers the commands (until fsrlab.cli.COMMANDS lists them)
     from typer.testing import CliRunner
 
+    import fsrlab.cli.channels  # noqa: F401 - registers the commands (until fsrlab.cli.COMMANDS lists them)
     from fsrlab.cli import app
 
     out = tmp_path / "channels.json"
@@ -121,9 +121,9 @@ def test_cli_calibrate_channels_writes_one_file_keyed_by_sensor(four_channel_run
 def test_cli_crosstalk_json():
     import json
 
-    import fsrlab.cli.channels  # noqa: F401
     from typer.testing import CliRunner
 
+    import fsrlab.cli.channels  # noqa: F401
     from fsrlab.cli import app
 
     r = CliRunner().invoke(app, ["crosstalk", "--channels", "0-2", "--duration", "0.3s", "--json"])

@@ -1,7 +1,7 @@
 """The demo (``make demo`` = ``fsrlab demo``) with very short recordings: the whole chain runs and links its reports.
 
-References: the chain the module's docstring lists (fsrlab/bench/demo.py, fsrlab/reports/demo.py) and the files each step must
-leave; the demo's numbers are checked against the measurement report it wrote (report.json), and
+References: the chain the module's docstring lists (fsrlab/bench/demo.py, fsrlab/reports/demo.py) and the files
+each step must leave; the demo's numbers are checked against the measurement report it wrote (report.json), and
 the hysteresis error of the compensated estimate against the raw frequency's (the compensation's
 purpose). The virtual bench runs faster than real time (the default ``speed="max"``).
 """

@@ -13,7 +13,8 @@ import json
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from clirun import run_cli
 from fsrlab.bench.protocols import CreepPlan, SpringPlan, WeightsPlan, run_protocol, twin_status
@@ -109,7 +110,8 @@ def test_bench_spring_virtual_end_to_end(tmp_path):
 
 def test_bench_weights_virtual_end_to_end(tmp_path):
     out = tmp_path / "w.csv"
-    code, stdout, err = run_cli(["bench", "weights", "--virtual", "--speed", "max", "--masses", "200g,400g", "--repeat", "2",
+    code, stdout, err = run_cli(["bench", "weights", "--virtual", "--speed", "max",
+                                 "--masses", "200g,400g", "--repeat", "2",
                                  "--settle-hold", "100ms", "--seed", "4", "--out", out, "--json", "--quiet"])
     assert code == 0, err
     info = json.loads(stdout)
@@ -200,7 +202,8 @@ def test_bench_twin_path_with_a_device_that_sends_no_reference(tmp_path, monkeyp
     monkeypatch.setitem(sys.modules, "fsrlab.virtual.twin", twin)
     assert twin_status() == (True, "")
     out = tmp_path / "t.csv"
-    code, stdout, err = run_cli(["bench", "spring", "--twin", "--cycles", "1", "--period", "1s", "--out", out, "--json"])
+    code, stdout, err = run_cli(["bench", "spring", "--twin", "--cycles", "1", "--period", "1s",
+                                 "--out", out, "--json"])
     assert code == 0, err
     assert json.loads(stdout)["device"] == "twin"
     run = load_run(out)
@@ -240,9 +243,9 @@ def test_bench_on_a_port_prompts_and_records_with_the_load_cell(tmp_path):
     # command sees only a port). Standard input is closed under pytest: every prompt is answered "go on".
     # Reference: stress_pa = force_n / area with the preset's area (data-format.md), the load cell's
     # calibration being the virtual HX711's own.
-    from fsrlab.virtual.sources import PhysicsSource, StressProfile
-    from fsrlab.virtual.device import VirtualDevice
     from fsrlab.physics.presets import SENSOR_PRESETS
+    from fsrlab.virtual.device import VirtualDevice
+    from fsrlab.virtual.sources import PhysicsSource, StressProfile
 
     dev = VirtualDevice(PhysicsSource(StressProfile("triangle", 10e3, 1.0)), seed=6)
     port = dev.open()

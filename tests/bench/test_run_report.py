@@ -20,8 +20,8 @@ import pytest
 
 from clirun import run_cli
 from fsrlab.bench.measurement import measure_run
-from fsrlab.virtual.synthetic import triangle_stress
 from fsrlab.io.runwriter import write_run
+from fsrlab.virtual.synthetic import triangle_stress
 
 PEAK = 10e3
 
@@ -91,7 +91,8 @@ def test_re_per_load_against_eq39_closed_form(tmp_path):
     rep = measure_run(_weights_run(tmp_path / "w.csv"), calibrate=False)
     got = {(p.quantity, p.load_g): p for p in rep.repeatability}
     assert set(got) == {("frequency_hz", 200.0), ("frequency_hz", 400.0), ("voltage_v", 200.0), ("voltage_v", 400.0)}
-    for (q, load), x in {("frequency_hz", 200.0): [r * 1e3 for r in F200], ("frequency_hz", 400.0): [r * 1e3 for r in F400],
+    for (q, load), x in {("frequency_hz", 200.0): [r * 1e3 for r in F200],
+                         ("frequency_hz", 400.0): [r * 1e3 for r in F400],
                          ("voltage_v", 200.0): V200, ("voltage_v", 400.0): V400}.items():
         re1, re2 = _eq39(x)
         p = got[(q, load)]
@@ -215,8 +216,8 @@ def test_creep_part_is_fsrlab_creeps_numbers_and_says_why_when_absent(tmp_path):
     # for 30 s and 3.2 N for 45 s (examples/README.md).
     from pathlib import Path
 
-    from fsrlab.metrics.creep import creep_of_run
     from fsrlab.io.runformat import load_run
+    from fsrlab.metrics.creep import creep_of_run
 
     path = Path(__file__).resolve().parents[2] / "examples" / "creep.csv"
     rep = measure_run(path, calibrate=False)

@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 import pytest
+
 from toolcheck import require_file, require_tool
 
 ROOT = Path(__file__).resolve().parents[2]

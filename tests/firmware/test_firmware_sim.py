@@ -27,7 +27,9 @@ import stress  # noqa: E402
 from simrun import Segment  # noqa: E402
 
 from fsrlab.acquisition.protocol import (  # noqa: E402
-    CommandError, FrameParser, parse_command,
+    CommandError,
+    FrameParser,
+    parse_command,
 )
 
 # Supported range checked here: every edge captured (missed == 0) and values within
@@ -105,7 +107,7 @@ def test_frequency_steps(fw):
     for m in ms:
         start = (m.t_ms - m.window_ms) / 1000
         end = m.t_ms / 1000
-        for s, nxt in zip(segs, segs[1:] + [Segment(9.0, 0)]):
+        for s, nxt in zip(segs, segs[1:] + [Segment(9.0, 0)], strict=True):
             if s.t0_s + 0.002 <= start and end <= nxt.t0_s:
                 _check_window(m, s.freq_hz, s.duty)
     assert any(s.t0_s < m.t_ms / 1000 - m.window_ms / 1000 for s in segs for m in by_end.values())
@@ -188,7 +190,7 @@ def test_commands_answer_like_the_host_parser(fw):
     r = fw.run([Segment(0.0, 1000, 0.5)], cmds, time_s=0.01 + 0.01 * len(LINES) + 0.02)
     replies = [f for f in r.frames if f.kind in ("ACK", "ERR")]
     assert len(replies) == len(LINES), [f.kind + ",".join(f.fields) for f in replies]
-    for line, f in zip(LINES, replies):
+    for line, f in zip(LINES, replies, strict=True):
         kind, fields = _expected_reply(line)
         assert (f.kind, f.fields) == (kind, fields), line
     ids = r.of_kind("ID")
@@ -214,7 +216,7 @@ def test_window_range_and_stop(fw):
     assert [m.t_ms for m in before] == [110, 210] and all(m.window_ms == 100 for m in before)
     assert len(after) >= 4 and all(m.window_ms == 50 for m in after)
     ends = [m.t_ms for m in after]
-    assert all(b - a == 50 for a, b in zip(ends, ends[1:]))
+    assert all(b - a == 50 for a, b in zip(ends, ends[1:], strict=False))
     assert {m.range for m in after if 322 < m.t_ms - m.window_ms and m.t_ms < 420} == {1}
     assert {m.range for m in ms if m.t_ms < 320} == {0}
     for m in ms[1:]:
@@ -287,7 +289,7 @@ def test_short_windows_and_commands_at_the_top_of_the_range(fw, duty):
     ms = _steady(r.measurements())
     assert len(ms) >= 33  # 38 windows end before 0.39 s; at most a few frames still on the way
     ends = [m.t_ms for m in ms]
-    assert all(b - a == 10 for a, b in zip(ends, ends[1:]))
+    assert all(b - a == 10 for a, b in zip(ends, ends[1:], strict=False))
     for m in ms:
         assert abs(m.periods - TOP * m.window_ms / 1000) <= PERIOD_SLACK, m
         _check_window(m, TOP, duty)

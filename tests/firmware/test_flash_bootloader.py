@@ -18,10 +18,10 @@ import tty
 from pathlib import Path
 
 import pytest
-from clirun import run_cli
-from toolcheck import require_tool
 
+from clirun import run_cli
 from fsrlab.acquisition import firmware
+from toolcheck import require_tool
 
 ROOT = Path(__file__).resolve().parents[2]
 BUILD = ROOT / "firmware" / "build"
@@ -36,7 +36,7 @@ def _ihex(path: Path) -> dict[int, int]:
     for line in path.read_text().split():
         rec = bytes.fromhex(line[1:])
         assert line[0] == ":" and sum(rec) % 256 == 0 and len(rec) == rec[0] + 5, line
-        n, addr, kind, data = rec[0], (rec[1] << 8) | rec[2], rec[3], rec[4:-1]
+        addr, kind, data = (rec[1] << 8) | rec[2], rec[3], rec[4:-1]
         if kind == 0:
             mem.update((base + addr + i, b) for i, b in enumerate(data))
         elif kind == 1:

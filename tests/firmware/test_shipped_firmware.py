@@ -13,9 +13,9 @@ import subprocess
 from pathlib import Path
 
 import pytest
-from toolcheck import require_file, require_tool
 
 from fsrlab.acquisition import firmware
+from toolcheck import require_file, require_tool
 
 ROOT = Path(__file__).resolve().parents[2]
 SKETCH_SRC = ROOT / "firmware" / "fsrlab_meter"

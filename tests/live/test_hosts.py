@@ -15,11 +15,10 @@ import os
 import re
 
 import pytest
-from browser import LiveServer
 
+from browser import LiveServer
 from clirun import run_cli
 from fsrlab.live.hosts import HostPolicy, check_bind_host, host_name
-
 
 # ---- the rules -----------------------------------------------------------------------------------
 

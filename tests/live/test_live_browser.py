@@ -11,11 +11,9 @@ import urllib.error
 import urllib.request
 
 import pytest
-from browser import (ARTIFACTS, LiveServer, button_disabled, chromium, click_button, model_length, text, texts,
-                     wait_for)
 
+from browser import ARTIFACTS, LiveServer, button_disabled, chromium, click_button, model_length, text, texts, wait_for
 from clirun import run_cli
-
 from fsrlab.io.runformat import load_run, sidecar_path
 
 
@@ -167,10 +165,11 @@ def test_guided_known_weights_from_the_page_write_a_run_calibrate_accepts(driver
     steps = sorted(set(int(s) for s in run["step"]))
     assert steps == [0, 1, 2, 3, 4]
     g = 9.80665
-    for s, mass, direction in zip(steps, (0.0, 0.1, 0.2, 0.1, 0.0), (1, 1, 1, -1, -1)):
+    for s, mass, direction in zip(steps, (0.0, 0.1, 0.2, 0.1, 0.0), (1, 1, 1, -1, -1), strict=True):
         rows = run["step"] == s
         assert rows.sum() >= 20  # ~1 s of 20 ms windows held per placement
         assert set(run["force_nominal_n"][rows]) == {mass * g}
         assert set(run["direction"][rows]) == {direction}
-    code, out_json, err = run_cli(["calibrate", str(weights), "--x", "frequency_hz", "--reference", "force_n", "--json"])
+    code, out_json, err = run_cli(["calibrate", str(weights), "--x", "frequency_hz",
+                                   "--reference", "force_n", "--json"])
     assert code == 0, err

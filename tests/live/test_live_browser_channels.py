@@ -4,7 +4,8 @@ Reference: the run file the same session recorded (the host's recording loop, re
 reader): every value the page's sensor map shows is a reading of that channel in the file. The ordering
 of the channels is the physics': channel k is held under the triangle at peak · (k + 1)/8, and an FSR's
 frequency rises with its stress (paper §5, Fig. 19a). The rate bound is the page's own contract
-(the map is patched with the status line, at most every :data:`fsrlab.live.page.STATUS_S`), counted by BokehJS's ``patching`` signal in the browser.
+(the map is patched with the status line, at most every :data:`fsrlab.live.page.STATUS_S`), counted by BokehJS's
+``patching`` signal in the browser.
 """
 
 from __future__ import annotations

@@ -13,8 +13,8 @@ import re
 import urllib.request
 
 import pytest
-from browser import CHROMEDRIVER, CHROMIUM, LiveServer
 
+from browser import CHROMEDRIVER, CHROMIUM, LiveServer
 from toolcheck import require_file
 
 # Open a websocket to the page's own origin with Bokeh's subprotocols; report whether it opened.
@@ -59,7 +59,8 @@ def test_a_page_under_another_host_name_cannot_open_the_session(evil_driver):
         assert body.startswith("403") and "answers only to" in body, body
         assert d.execute_script("return typeof Bokeh") == "undefined"  # no page, no BokehJS
         fetched = d.execute_async_script(
-            "const done = arguments[0]; fetch('/static/js/bokeh.min.js').then(r => done(r.status), e => done(String(e)));")
+            "const done = arguments[0]; "
+            "fetch('/static/js/bokeh.min.js').then(r => done(r.status), e => done(String(e)));")
         assert fetched == 403
         assert d.execute_async_script(WS_JS, token) != "open"  # even holding a real session token
         # The control: the page's own origin opens the same websocket.

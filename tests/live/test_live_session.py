@@ -12,11 +12,11 @@ import time
 
 import numpy as np
 import pytest
-from clirun import run_cli
 
+from clirun import run_cli
 from fsrlab.acquisition.recorder import COLUMNS, REFERENCE_COLUMNS
-from fsrlab.live.page import Controller
 from fsrlab.io.runformat import load_run, sidecar_path
+from fsrlab.live.page import Controller
 
 
 def _virtual_session(tmp_path, capacity=20000, profile="triangle"):
@@ -180,11 +180,11 @@ def test_tare_while_the_load_moves_is_refused_saying_why(tmp_path):
 
 
 def test_a_calibration_recorded_on_another_range_is_refused_with_the_reason(tmp_path, monkeypatch):
-    from fsrlab.virtual.sources import VIRTUAL_CIRCUIT
     from fsrlab.calibration.document import save_calibration
     from fsrlab.calibration.runs import calibrate_runs
-    from fsrlab.virtual.synthetic import synthetic_run
     from fsrlab.io.runwriter import write_run
+    from fsrlab.virtual.sources import VIRTUAL_CIRCUIT
+    from fsrlab.virtual.synthetic import synthetic_run
 
     monkeypatch.chdir(tmp_path)
     run = synthetic_run(cycles=2, points_per_ramp=60, seed=1)  # recorded on range 0 of the virtual circuit

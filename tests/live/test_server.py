@@ -15,8 +15,8 @@ import re
 import socket
 
 import pytest
-from browser import LiveServer
 
+from browser import LiveServer
 from fsrlab.live.hosts import HostPolicy, origin_netloc, redacted
 from fsrlab.live.server import page_url
 

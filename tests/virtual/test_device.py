@@ -15,12 +15,12 @@ import numpy as np
 import pytest
 
 from fsrlab.acquisition.messages import Measurement
-from fsrlab.hardware import ADC_V_PER_COUNT
 from fsrlab.acquisition.serial_link import SerialLink
-from fsrlab.virtual.sources import VIRTUAL_CIRCUIT, PhysicsSource, StressProfile
-from fsrlab.virtual.device import VirtualDevice
-from fsrlab.virtual.synthetic import synthetic_run
+from fsrlab.hardware import ADC_V_PER_COUNT
 from fsrlab.physics.sensor import VirtualFSR
+from fsrlab.virtual.device import VirtualDevice
+from fsrlab.virtual.sources import VIRTUAL_CIRCUIT, PhysicsSource, StressProfile
+from fsrlab.virtual.synthetic import synthetic_run
 
 SIGMA = 30e3  # Pa
 
@@ -57,7 +57,8 @@ def test_opamp_voltage_is_eq38_at_5_v():
 def test_virtual_device_and_synthetic_run_agree(range_):
     """The same constant signal (the sensor held at 30 kPa, 10 ms windows, the same noise settings)
     through the virtual device window by window and through synthetic_run all at once. The first
-    window after START (it only opens a period) is left out; the device runs on its simulated clock (``speed="max"``). Bounds for n ≈ 150 windows: means
+    window after START (it only opens a period) is left out; the device runs on its simulated clock
+    (``speed="max"``). Bounds for n ≈ 150 windows: means
     within 4 standard errors of their difference; standard deviations within a factor 1.4 (the
     ratio of two sample deviations of 150 normal values stays within exp(±3.3/√149) = 0.76..1.31
     with probability 0.999)."""

@@ -13,10 +13,11 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import assume, given, settings, strategies as st
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 
-from fsrlab.virtual.meter import MeterState, adc_code, measure
 from fsrlab.hardware import F_CPU, TICK_S
+from fsrlab.virtual.meter import MeterState, adc_code, measure
 
 
 @pytest.mark.parametrize("volts, code", [(2.5, 512), (4.999, 1023), (-0.1, 0), (5.2, 1023), (0.0, 0),
@@ -72,7 +73,7 @@ def test_window_by_window_equals_all_at_once():
     w = rng.choice([0.01, 0.02, 0.05], 40)
     whole, end = measure(f, duty, 1.0, w, MeterState(0.3), rng=1, start_s=2.0)
     state, start, parts = MeterState(0.3), 2.0, []
-    for fi, di, wi in zip(f, duty, w):
+    for fi, di, wi in zip(f, duty, w, strict=True):
         r, state = measure(fi, di, 1.0, wi, state, rng=2, start_s=start)
         parts.append(r)
         start += wi

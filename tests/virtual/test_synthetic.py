@@ -14,12 +14,11 @@ import math
 import numpy as np
 import pytest
 
-from fsrlab.physics.history import cycle_numbers
-from fsrlab.virtual.synthetic import synthetic_run
-from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout
-from fsrlab.circuits.circuit import PAPER_CIRCUIT, PAPER_OPAMP
-from fsrlab.physics.sensor import VirtualFSR
+from fsrlab.circuits.circuit import PAPER_CIRCUIT, PAPER_OPAMP, LM555Circuit, OpAmpReadout
 from fsrlab.io.runformat import load_run
+from fsrlab.physics.history import cycle_numbers
+from fsrlab.physics.sensor import VirtualFSR
+from fsrlab.virtual.synthetic import synthetic_run
 
 
 def test_sidecar_stores_the_circuits_and_the_run_gives_them_back(tmp_path):

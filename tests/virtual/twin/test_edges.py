@@ -53,7 +53,7 @@ def test_chunks_joined_equal_one_run(kind, peak, seed):
     while t < 0.6:
         t += float(rng.uniform(1e-4, 0.03))  # look-aheads from shorter than a period to many grid steps
         chunks.append(stream.advance(t))
-    for a, b in zip(chunks, chunks[1:]):
+    for a, b in zip(chunks, chunks[1:], strict=False):
         assert b.first_index == a.first_index + a.t_s.size  # indices continue: nothing lost or repeated
         assert b.done_s >= a.done_s
     rising, falling = joined(chunks)

@@ -13,10 +13,10 @@ import csv
 import numpy as np
 
 from fsrlab.bench.protocols import WeightsPlan, run_protocol
-from fsrlab.virtual.bench_source import BenchSource
-from fsrlab.physics.sensor import VirtualFSR
 from fsrlab.io.runformat import load_run
+from fsrlab.physics.sensor import VirtualFSR
 from fsrlab.units import STANDARD_GRAVITY
+from fsrlab.virtual.bench_source import BenchSource
 
 
 def test_bench_source_parts_are_what_its_windows_average():

@@ -9,10 +9,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from toolcheck import require_file, require_tool
-
 from fsrlab.acquisition import firmware
 from fsrlab.virtual.twin import build
+from toolcheck import require_file, require_tool
 
 
 def test_harness_built_into_the_cache_runs_the_shipped_image(tmp_path, monkeypatch):

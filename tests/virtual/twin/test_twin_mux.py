@@ -8,7 +8,8 @@ peak stress, channel k at peak × (k + 1)/8, since the sensor's frequency rises 
 branch of the triangle (load or unload), the reading itself left out, agrees within 1 % (seen: at most
 0.18 % away from the apex and the trough). A reading that counted the period spanning the switch
 (the previous channel's partial period, 0..1 of a period of 0.1–0.8 ms in a 3 ms dwell: several
-percent) would break that bound; the firmware's first discarded edge is what keeps it. The twin runs with --speed max on the device's clock.
+percent) would break that bound; the firmware's first discarded edge is what keeps it. The twin runs with
+--speed max on the device's clock.
 """
 
 from __future__ import annotations

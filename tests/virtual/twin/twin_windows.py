@@ -42,7 +42,7 @@ def from_measurements(ms) -> list[Window]:
 def from_rows(periods, frequency_hz, duty_cycle) -> list[Window]:
     """Windows from a run file's columns (the sums recovered from f and duty)."""
     out = []
-    for p, f, d in zip(periods, frequency_hz, duty_cycle):
+    for p, f, d in zip(periods, frequency_hz, duty_cycle, strict=True):
         s = p * F_CPU / f
         out.append(Window(int(p), s, d * s, f, d))
     return out
