@@ -29,9 +29,9 @@ demo: venv
 	$(BIN)/fsrlab demo --out $(DEMO)
 
 # ruff with the configuration in pyproject.toml ([tool.ruff]: pyflakes, pycodestyle, bugbear, import order,
-# pyupgrade, McCabe complexity at most 15) over the package.
+# pyupgrade, McCabe complexity at most 15) over the package, its tests, the benchmarks and the scripts.
 lint: venv
-	$(BIN)/ruff check src
+	$(BIN)/ruff check src tests benchmarks scripts
 
 test: venv lint sysdeps firmware
 	$(BIN)/python -m pytest
