@@ -17,6 +17,10 @@ from toolcheck import require_file
 CHROMIUM = "/usr/bin/chromium"
 CHROMEDRIVER = "/usr/bin/chromedriver"
 ARTIFACTS = Path(__file__).resolve().parents[1] / "build" / "test-artifacts"
+#: How long a script call or a page load may take before the test fails (a guard against a hang). [s]
+SCRIPT_TIMEOUT_S = 300.0
+#: How long :func:`wait_for` waits by default (a guard against a hang, not a speed requirement). [s]
+WAIT_S = 180.0
 
 # Find the first element matching a CSS selector in the document or any shadow root below it.
 FIND_JS = """
@@ -43,7 +47,12 @@ def chromium(width: int = 1400, height: int = 1000):
     for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
                 f"--window-size={width},{height}"):
         opts.add_argument(arg)
-    return webdriver.Chrome(service=Service(CHROMEDRIVER), options=opts)
+    driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=opts)
+    # A guard, not a limit: a script call waits for the page's main thread, which a loaded machine can keep
+    # busy for tens of seconds (Selenium's default of 30 s failed a run under load; docs/live.md, Rates).
+    driver.set_script_timeout(SCRIPT_TIMEOUT_S)
+    driver.set_page_load_timeout(SCRIPT_TIMEOUT_S)
+    return driver
 
 
 def text(driver, selector: str) -> str | None:
@@ -108,7 +117,7 @@ def model_length(driver, name: str, column: str) -> int:
       return col.length;""", name, column)
 
 
-def wait_for(fn, timeout_s: float = 60.0, interval_s: float = 0.1):
+def wait_for(fn, timeout_s: float = WAIT_S, interval_s: float = 0.1):
     """Call ``fn`` until it returns a truthy value; that value, or the last one at the timeout."""
     deadline = time.monotonic() + timeout_s
     value = fn()

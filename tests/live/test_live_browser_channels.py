@@ -62,7 +62,7 @@ def test_sensor_map_updates_with_each_channels_readings(driver, tmp_path):
         ARTIFACTS.mkdir(parents=True, exist_ok=True)
         driver.save_screenshot(str(ARTIFACTS / "live-channels.png"))
         assert click_button(driver, "Stop recording")
-        assert wait_for(lambda: text(driver, "#recording") is None, timeout_s=5)
+        assert wait_for(lambda: text(driver, "#recording") is None)
     finally:
         server.stop()
     assert first["channel"] == list(range(8))
