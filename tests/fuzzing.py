@@ -232,7 +232,7 @@ def hashes(root: Path) -> dict[str, str]:
     return out
 
 
-SKIP_DIRS = {".venv", ".git", ".hypothesis", ".pytest_cache", "__pycache__", "build", "report"}
+SKIP_DIRS = {".venv", ".git", ".hypothesis", ".pytest_cache", ".ruff_cache", "__pycache__", "build", "report"}
 
 
 def listing(root: Path) -> dict[str, tuple[int, int]]:
