@@ -21,6 +21,10 @@ ARTIFACTS = Path(__file__).resolve().parents[1] / "build" / "test-artifacts"
 SCRIPT_TIMEOUT_S = 300.0
 #: How long :func:`wait_for` waits by default (a guard against a hang, not a speed requirement). [s]
 WAIT_S = 180.0
+#: ``fsrlab live`` options for a page that keeps up on a busy machine: at the default 40 ms the page took 1.1
+#: cores of this 2-core machine, and with one other busy process it fell minutes behind (docs/live.md, Rates).
+#: The tests that do not measure the rate use it; tests/live/test_page_refresh.py checks the rate itself.
+LIGHT = ("--refresh", "250ms")
 
 # Find the first element matching a CSS selector in the document or any shadow root below it.
 FIND_JS = """

@@ -12,7 +12,18 @@ import urllib.request
 
 import pytest
 
-from browser import ARTIFACTS, LiveServer, button_disabled, chromium, click_button, model_length, text, texts, wait_for
+from browser import (
+    ARTIFACTS,
+    LIGHT,
+    LiveServer,
+    button_disabled,
+    chromium,
+    click_button,
+    model_length,
+    text,
+    texts,
+    wait_for,
+)
 from clirun import run_cli
 from fsrlab.io.runformat import load_run, sidecar_path
 
@@ -26,7 +37,7 @@ def driver():
 
 def test_page_shows_the_windows_the_recorder_wrote_and_the_loop_grows(driver, tmp_path):
     out = tmp_path / "live.csv"
-    server = LiveServer("--virtual", "--seed", "3", "--out", str(out), "--window", "50ms")
+    server = LiveServer("--virtual", "--seed", "3", "--out", str(out), "--window", "50ms", *LIGHT)
     try:
         driver.get(server.url)
         assert wait_for(lambda: text(driver, "#latest-seq"))
@@ -68,7 +79,7 @@ def test_unplugged_device_shows_on_the_page_and_the_file_keeps_its_rows(driver, 
     # unplugged after 3000 windows (60 s): time for a loaded machine to start Chromium, load the page and
     # start the recording first (after 500 windows a busy CI run once saw the device gone before that; with
     # one other busy process on this 2-core machine the page took 20 s to take its first click)
-    server = LiveServer("--virtual", "--out", str(out), "--window", "20ms", "--unplug-after", "3000")
+    server = LiveServer("--virtual", "--out", str(out), "--window", "20ms", "--unplug-after", "3000", *LIGHT)
     try:
         driver.get(server.url)
         assert wait_for(lambda: text(driver, "#latest-seq"))
@@ -98,7 +109,7 @@ def _shadow_text_has(driver, word: str) -> bool:
 
 
 def test_second_tab_watches_and_cannot_control(driver, tmp_path):
-    server = LiveServer("--virtual", "--out", str(tmp_path / "two.csv"))
+    server = LiveServer("--virtual", "--out", str(tmp_path / "two.csv"), *LIGHT)
     try:
         driver.get(server.url)
         assert wait_for(lambda: text(driver, "#latest-seq"))
@@ -149,7 +160,7 @@ def test_guided_known_weights_from_the_page_write_a_run_calibrate_accepts(driver
     # steady readout and keeps 1 s of windows per placement (bench.weights). Reference: the plan
     # (mass × g per step, loading then unloading) and fsrlab calibrate reading the run back.
     out = tmp_path / "w.csv"
-    server = LiveServer("--virtual", "--seed", "2", "--window", "20ms", "--out", str(out),
+    server = LiveServer("--virtual", "--seed", "2", "--window", "20ms", "--out", str(out), *LIGHT,
                         "--masses", "0,100g,200g", "--unload")
     try:
         driver.get(server.url)

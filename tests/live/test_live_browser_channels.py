@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from browser import ARTIFACTS, LiveServer, chromium, click_button, model_length, text, wait_for
+from browser import ARTIFACTS, LIGHT, LiveServer, chromium, click_button, model_length, text, wait_for
 from fsrlab.io.runformat import load_run
 from fsrlab.live.page import STATUS_S
 
@@ -44,7 +44,7 @@ def _map(driver):
 
 def test_sensor_map_updates_with_each_channels_readings(driver, tmp_path):
     out = tmp_path / "eight.csv"
-    server = LiveServer("--virtual", "--channels", "0-7", "--seed", "5", "--out", str(out), "--period", "4s")
+    server = LiveServer("--virtual", "--channels", "0-7", "--seed", "5", "--out", str(out), "--period", "4s", *LIGHT)
     try:
         driver.get(server.url)
         assert wait_for(lambda: (m := _map(driver)) is not None and min(m["readings"]) > 0)

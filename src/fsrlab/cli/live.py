@@ -100,6 +100,10 @@ def live(
             "protocol-3 meter, docs/multiplexing.md): 0-7, 0,2,5; the page shows a sensor map, every channel's "
             "frequency and its link health. With --virtual: channel k under the profile at peak x (k+1)/(highest "
             "channel+1)."),
+    refresh_s: float = typer.Option("40ms", "--refresh", parser=seconds, metavar="TIME", help="Shortest time "
+            "between two updates of the page's numbers [s], 40ms to 10s, e.g. 250ms on a small computer; its plots "
+            "redraw every 100 ms or this, if longer. The browser's work grows with the rate (docs/live.md: headless "
+            "Chromium on a 2-core machine took about 1.15 cores at 40 ms, 0.47 at 250 ms)."),
     unplug_after: int = typer.Option(None, "--unplug-after", help="Virtual device (tests): pull the cable after this "
             "many windows [1]."),
     json_out: bool = typer.Option(False, "--json", help='Print JSON lines: {"url", "token"} when the page is up, '
@@ -110,7 +114,7 @@ def live(
     loading/unloading loop, the link's health, and controls (recording, range, window).
 
     The page shows the latest window's numbers every 40 ms and redraws the plots every 100 ms
-    (docs/live.md), and works offline (BokehJS comes with the bokeh package). It is
+    (--refresh for slower; docs/live.md), and works offline (BokehJS comes with the bokeh package). It is
     served on 127.0.0.1 only unless --host names another interface; then every request needs the
     token printed with the URL. One browser tab controls the meter; more tabs watch. With --port, the
     meter's circuit as built (--r with --c-off, --diode, --vcc; --r-f, --drive for the op-amp) goes into
@@ -127,6 +131,9 @@ def live(
 
     window_ms, host = _checked_options(port, virtual, window, range_, http_port, duration, host)
     from fsrlab.cli.acquisition import scan_options
+    from fsrlab.live.page import check_refresh
+
+    check_refresh(refresh_s)  # before the meter or the page starts
 
     scan, _ = scan_options(channels, None, None)
     if scan is not None and masses is not None:
@@ -171,7 +178,8 @@ def live(
                           estimator=estimator, health=health, metadata=metadata, weights=weights, scan=scan)
     session.start()
     controller = Controller(out)
-    srv = _start_server(lambda doc: make_document(doc, session, controller, "force", "N", 1.0), host, http_port,
+    srv = _start_server(lambda doc: make_document(doc, session, controller, "force", "N", 1.0, refresh_s=refresh_s),
+                        host, http_port,
                         (session, link, device))
     _serve(srv, session, link, device, json_out, open_browser, duration)
     if json_out:

@@ -19,10 +19,12 @@ from pathlib import Path
 from fsrlab.live.page_text import fmt as _fmt
 from fsrlab.live.page_text import html_text as _html
 
-__all__ = ["UPDATE_S", "PLOT_S", "STATUS_S", "POINTS", "Controller", "make_document"]
+__all__ = ["UPDATE_S", "REFRESH_MAX_S", "PLOT_S", "STATUS_S", "POINTS", "Controller", "check_refresh", "make_document"]
 
 UPDATE_S = 0.04
-"""Period of a page's update callback. [s]"""
+"""Period of a page's update callback by default, and the shortest allowed (:func:`check_refresh`). [s]"""
+REFRESH_MAX_S = 10.0
+"""Longest period of a page's update callback. [s]"""
 PLOT_S = 0.1
 """Shortest time between two redraws of the plots (the numbers update every :data:`UPDATE_S`). [s]"""
 STATUS_S = 0.25
@@ -77,8 +79,32 @@ class Controller:
 
 
 
+def check_refresh(refresh_s) -> float:
+    """``refresh_s`` as the period of a page's update callback, from :data:`UPDATE_S` to :data:`REFRESH_MAX_S`.
+
+    Parameters
+    ----------
+    refresh_s : float
+        Shortest time between two updates of the page's numbers; its plots redraw at most every
+        ``max(refresh_s, PLOT_S)``. [s]
+
+    Raises
+    ------
+    ParameterError
+        Not a number in that range.
+    """
+    from fsrlab.errors import ParameterError
+
+    if isinstance(refresh_s, bool) or not isinstance(refresh_s, (int, float)) or not (
+            UPDATE_S <= refresh_s <= REFRESH_MAX_S):
+        raise ParameterError(f"must be a time from {UPDATE_S * 1e3:g} ms to {REFRESH_MAX_S:g} s, got {refresh_s!r}",
+                             parameter="refresh_s")
+    return float(refresh_s)
+
+
 def make_document(doc, session, controller: Controller, reference_label: str = "reference",
-                  reference_unit: str = "", reference_scale: float = 1.0, title: str = "fsrlab live") -> None:
+                  reference_unit: str = "", reference_scale: float = 1.0, title: str = "fsrlab live",
+                  refresh_s: float = UPDATE_S) -> None:
     """Fill a Bokeh document (one browser tab) with the live view of ``session``.
 
     Parameters
@@ -95,6 +121,9 @@ def make_document(doc, session, controller: Controller, reference_label: str = "
         Reference and estimate as shown = value in SI units × this (1e-3 for kPa). [1]
     title : str
         Page title.
+    refresh_s : float
+        Shortest time between two updates of the numbers (:func:`check_refresh`); the plots redraw at most
+        every ``max(refresh_s, PLOT_S)``: the browser's work grows with the rate (docs/live.md). [s]
     """
     from bokeh.layouts import column
     from bokeh.models import Div
@@ -106,8 +135,9 @@ def make_document(doc, session, controller: Controller, reference_label: str = "
 
         plots = ChannelPlots(session)
     panel = ControlPanel(doc, session, controller)
-    update = Updater(session, plots, panel, reference_label, reference_unit, reference_scale)
-    doc.add_periodic_callback(update, int(UPDATE_S * 1000))
+    refresh_s = check_refresh(refresh_s)
+    update = Updater(session, plots, panel, reference_label, reference_unit, reference_scale, refresh_s)
+    doc.add_periodic_callback(update, round(refresh_s * 1000))
     doc.on_session_destroyed(lambda ctx: controller.release(doc))
     doc.title = title
     doc.add_root(column(Div(text=f"<h2 style='margin:4px 0'>{_html(title)}</h2>"), panel.status, update.latest,
@@ -269,8 +299,8 @@ class ControlPanel:
 
 
 class Updater:
-    """The page's periodic callback: the latest window in numbers every call (:data:`UPDATE_S`), the plots at
-    most every :data:`PLOT_S`, the status lines at most every :data:`STATUS_S`.
+    """The page's periodic callback: the latest window in numbers every call (every ``refresh_s``), the plots at
+    most every ``max(refresh_s, PLOT_S)``, the status lines at most every ``max(refresh_s, STATUS_S)``.
 
     Parameters
     ----------
@@ -281,12 +311,19 @@ class Updater:
     reference_label, reference_unit : str
     reference_scale : float
         Shown = SI value × this. [1]
+    refresh_s : float
+        Period of the callback (:func:`check_refresh`). [s]
     """
 
     def __init__(self, session, plots, panel: ControlPanel, reference_label: str, reference_unit: str,
-                 reference_scale: float) -> None:
+                 reference_scale: float, refresh_s: float = UPDATE_S) -> None:
         from bokeh.models import Div
 
+        # the plots (the status lines) every call when the calls are PLOT_S (STATUS_S) or more apart: no call is
+        # missed to a clock's jitter
+        refresh_s = check_refresh(refresh_s)
+        self.plot_s = PLOT_S if refresh_s < PLOT_S else 0.0
+        self.status_s = STATUS_S if refresh_s < STATUS_S else 0.0
         self.session, self.plots, self.panel = session, plots, panel
         self.label, self.unit, self.scale = reference_label, reference_unit, reference_scale
         self.latest = Div(text="", name="latest", sizing_mode="stretch_width", height=22)
@@ -298,10 +335,10 @@ class Updater:
             self.plots.add(cols)
             self.latest.text = self.latest_text(cols, len(cols["seq"]) - 1)
         now = time.monotonic()
-        if now - self.plot_at >= PLOT_S:  # the plots redraw at most every PLOT_S
+        if now - self.plot_at >= self.plot_s:  # the plots redraw at most every max(refresh_s, PLOT_S)
             self.plot_at = now
             self.plots.flush()
-        if now - self.status_at >= STATUS_S:
+        if now - self.status_at >= self.status_s:
             self.status_at = now
             self.panel.refresh()
             self.plots.refresh()
