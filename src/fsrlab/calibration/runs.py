@@ -31,7 +31,8 @@ from fsrlab.io.recorded import recorded_with
 from fsrlab.io.runformat import C_FSR, KNOWN_COLUMNS, Run, as_run
 from fsrlab.physics.params import float_array
 
-__all__ = ["METHOD", "MIN_READINGS", "REFERENCES", "calibrate_runs", "check_arguments", "reference_reversed"]
+__all__ = ["METHOD", "MIN_READINGS", "REFERENCES", "calibrate_runs", "check_arguments", "reference_column",
+           "reference_reversed"]
 
 #: Fewest readings (readout and reference both present) of each run: held-out scoring cuts one run into
 #: 5 blocks and scores 3 of them in 8 chunks. [1]
@@ -90,6 +91,14 @@ def _positive(value, parameter: str, what: str) -> float | None:
     return float(value)
 
 
+def _check_reference(reference):
+    """``reference`` itself when it is None or one of :data:`REFERENCES`, else a ParameterError naming it."""
+    if reference is not None and reference not in REFERENCES:
+        raise ParameterError(f"must be one of {', '.join(REFERENCES)} (the reference column), got {reference!r}",
+                             parameter="reference")
+    return reference
+
+
 def check_arguments(x, reference=None, compensate=False, rail=None, between_runs=None) -> None:
     """The arguments of :func:`calibrate_runs` that do not depend on the runs, checked before any is read.
 
@@ -114,9 +123,7 @@ def check_arguments(x, reference=None, compensate=False, rail=None, between_runs
     """
     if not isinstance(x, str) or not x:
         raise ParameterError(f"must be the name of the readout column, got {x!r}", parameter="x")
-    if reference is not None and reference not in REFERENCES:
-        raise ParameterError(f"must be one of {', '.join(REFERENCES)} (the reference column), got {reference!r}",
-                             parameter="reference")
+    _check_reference(reference)
     if x in REFERENCES:
         raise ParameterError(f"{x} is a reference column: a calibration of the reference against itself (or against "
                              "itself divided by the area) says nothing; give a readout such as frequency_hz",
@@ -130,6 +137,26 @@ def check_arguments(x, reference=None, compensate=False, rail=None, between_runs
                              parameter="between_runs")
 
 
+def reference_column(runs, reference: str | None = None) -> str:
+    """The reference column a calibration of ``runs`` is made against (not checked against the runs:
+    :func:`calibrate_runs` does that).
+
+    Parameters
+    ----------
+    runs : Run, path, or a sequence of them
+        The runs.
+    reference : {"force_n", "stress_pa"} or None
+        The column asked for (None: ``stress_pa`` when every run has it, else ``force_n``).
+
+    Returns
+    -------
+    str
+    """
+    if _check_reference(reference) is not None:
+        return reference
+    return "stress_pa" if all("stress_pa" in r for r in _as_runs(runs)) else "force_n"
+
+
 def _check(runs: list[Run], x, reference, compensate, rail, between_runs) -> str:
     """The arguments of :func:`calibrate_runs` checked (:func:`check_arguments`, then against the runs); the
     reference column returned."""
@@ -138,7 +165,7 @@ def _check(runs: list[Run], x, reference, compensate, rail, between_runs) -> str
         if x not in run and not (x == C_FSR and "frequency_hz" in run and "duty_cycle" in run):
             raise ParameterError(f"{run.path}: column {x!r} missing (columns: {', '.join(run.columns)})",
                                  parameter="x")
-    ref = reference or ("stress_pa" if all("stress_pa" in r for r in runs) else "force_n")
+    ref = reference_column(runs, reference)
     for run in runs:
         if ref not in run:
             missing = f"column {ref!r}" if reference else "column 'force_n' [N] or 'stress_pa' [Pa]"

@@ -359,11 +359,6 @@ def run_ngspice(text: str, output_file: str = "fsrlab_out.raw", timeout_s: float
     return _NgspiceRun(text, output_file).result(timeout_s)
 
 
-def _waveform(t_s, name: str, v):
-    """A sampled waveform's times and values: two 1-D arrays of one length, or an error naming the culprit."""
-    return paired_series("t_s", t_s, name, v)
-
-
 def level_crossings(t_s, v_v, level_v: float, rising: bool) -> np.ndarray:
     """Times a sampled waveform crosses a level, by linear interpolation between samples.
 
@@ -383,7 +378,7 @@ def level_crossings(t_s, v_v, level_v: float, rising: bool) -> np.ndarray:
     ndarray
         Crossing times. [s]
     """
-    t, v = _waveform(t_s, "v_v", v_v)
+    t, v = paired_series("t_s", t_s, "v_v", v_v)
     check_finite("level_v", level_v)
     if np.ndim(level_v):
         raise ParameterError(f"must be a single level, got {plain(level_v)}", parameter="level_v")
@@ -410,7 +405,7 @@ def edges_from_waveform(t_s, v_out_v, vcc_v: float = 5.0, skip_periods: int = 2)
         Edge arrays in [s], mean frequency [Hz] and duty cycle [1] over the complete periods
         (NaN when fewer than one complete period remains).
     """
-    t, v = _waveform(t_s, "v_out_v", v_out_v)
+    t, v = paired_series("t_s", t_s, "v_out_v", v_out_v)
     check_positive("vcc_v", vcc_v, "V", scalar=True)
     skip_periods = check_int("skip_periods", skip_periods, 0)
     rising = level_crossings(t, v, vcc_v / 2, True)[skip_periods:]

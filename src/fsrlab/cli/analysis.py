@@ -253,12 +253,11 @@ def _calibrate_held_out(run_files: list[Path], x: str, reference: str | None, co
     """``fsrlab calibrate`` (:func:`fsrlab.calibration.runs.calibrate_runs`): the calibration, its file,
     and its JSON or table."""
     from fsrlab.calibration.document import save_calibration
-    from fsrlab.calibration.runs import calibrate_runs
+    from fsrlab.calibration.runs import calibrate_runs, reference_column
 
     warnings: list[str] = []
     runs = [load_run_warned(run_file, skip_bad_rows, warnings) for run_file in run_files]
-    ref = reference or ("stress_pa" if all("stress_pa" in r for r in runs) else "force_n")
-    _unit_option(unit, ref)
+    _unit_option(unit, reference_column(runs, reference))
     with option_names({"lag": "--lag"}):  # the run's columns, the reference, the rail: the library's checks
         cal = calibrate_runs(runs, x=x, reference=reference, compensate=compensate, lag=_lag_option(lag), rail=rail,
                              between_runs=between_runs)

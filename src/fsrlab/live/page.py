@@ -91,14 +91,11 @@ def check_refresh(refresh_s) -> float:
     Raises
     ------
     ParameterError
-        Not a number in that range.
+        Not in that range (a TypeError when not a number).
     """
-    from fsrlab.errors import ParameterError
+    from fsrlab.physics.params import check_between
 
-    if isinstance(refresh_s, bool) or not isinstance(refresh_s, (int, float)) or not (
-            UPDATE_S <= refresh_s <= REFRESH_MAX_S):
-        raise ParameterError(f"must be a time from {UPDATE_S * 1e3:g} ms to {REFRESH_MAX_S:g} s, got {refresh_s!r}",
-                             parameter="refresh_s")
+    check_between("refresh_s", refresh_s, UPDATE_S, REFRESH_MAX_S, "s", scalar=True)
     return float(refresh_s)
 
 
@@ -135,9 +132,8 @@ def make_document(doc, session, controller: Controller, reference_label: str = "
 
         plots = ChannelPlots(session)
     panel = ControlPanel(doc, session, controller)
-    refresh_s = check_refresh(refresh_s)
     update = Updater(session, plots, panel, reference_label, reference_unit, reference_scale, refresh_s)
-    doc.add_periodic_callback(update, round(refresh_s * 1000))
+    doc.add_periodic_callback(update, round(update.refresh_s * 1000))
     doc.on_session_destroyed(lambda ctx: controller.release(doc))
     doc.title = title
     doc.add_root(column(Div(text=f"<h2 style='margin:4px 0'>{_html(title)}</h2>"), panel.status, update.latest,
@@ -321,7 +317,7 @@ class Updater:
 
         # the plots (the status lines) every call when the calls are PLOT_S (STATUS_S) or more apart: no call is
         # missed to a clock's jitter
-        refresh_s = check_refresh(refresh_s)
+        self.refresh_s = refresh_s = check_refresh(refresh_s)
         self.plot_s = PLOT_S if refresh_s < PLOT_S else 0.0
         self.status_s = STATUS_S if refresh_s < STATUS_S else 0.0
         self.session, self.plots, self.panel = session, plots, panel
