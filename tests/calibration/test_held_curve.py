@@ -91,6 +91,9 @@ def test_a_creep_the_static_curve_cannot_describe_refits_the_curve(seed, monkeyp
 
 
 def test_on_a_real_unloading_after_a_loading_calibration_the_curve_is_held(monkeypatch):
+    """A real loading staircase calibrates an unloading one. The memory's trial keeps the curve held; the memory
+    itself is not written (fitted on the later blocks it does not help the earlier ones), so the plain curve
+    is; refitting the curve with the memory would be far worse on the unloading."""
     d = np.genfromtxt(DATA / "left_t34_calibration.csv", delimiter=",", names=True)
     half = d.size // 2
     up, down = d[:half], d[half:]
@@ -103,7 +106,7 @@ def test_on_a_real_unloading_after_a_loading_calibration_the_curve_is_held(monke
 
     cal, sel = hm.calibrate_recordings([rec])
     memory = next(s for s in sel.steps if s["step"] == "memory")
-    assert memory["kept"] and not memory["curve_refitted"]
+    assert not memory["curve_refitted"]
     assert "curve held" in memory["tried"] and "the static curve held" in memory["why"]
     monkeypatch.setattr(hm, "_refit_wins", lambda *a: True)  # the ablation: the curve always refitted
     refit, sel_refit = hm.calibrate_recordings([rec])
@@ -111,7 +114,7 @@ def test_on_a_real_unloading_after_a_loading_calibration_the_curve_is_held(monke
     # the oracle polynomial: the best of degrees 1–5 in the reading, chosen on the unloading itself
     poly = min(float(np.sqrt(np.mean((np.polynomial.Polynomial.fit(rec.x, rec.y, k)(x)[loaded] - y[loaded]) ** 2)))
                for k in range(1, 6))
-    # measured: held 1.00x the oracle polynomial, refitted 1.23x (benchmarks/bench_realdata.py)
+    # measured: the calibration written 0.99x the oracle polynomial, the memory with the curve refitted 1.41x
     assert rmse(cal) < 1.05 * poly
     assert rmse(cal) < 0.9 * rmse(refit)
     stepper = cal.stepper()

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from fsrlab.calibration.curves import fit_static
 from fsrlab.calibration.monotone import MonotoneCurve, adc_full_scale, readout_variable
 from fsrlab.calibration.operators import MemoryState, directions, memory_features
-from fsrlab.calibration.scoring import BLOCKS, Recording, held_out_splits, paired_gain
+from fsrlab.calibration.scoring import BLOCKS, Recording, backward_splits, held_out_splits, paired_gain
 
 
 def _rec(n, name=""):
@@ -43,6 +43,26 @@ def test_forward_chaining_scores_only_rows_after_every_fitted_row():
         scored = np.flatnonzero(test[0].rows)
         assert scored.min() == last_fit + 1  # the next contiguous block
         assert np.all(np.diff(scored) == 1)
+
+
+def test_backward_splits_mirror_forward_chaining_and_none_with_several_recordings():
+    """Property: each backward split scores the block just before every fitted row, the fitted rows run to the
+    end, and the blocks scored are the first BLOCKS − 2, the earliest first; they are the forward splits of
+    the recording read backwards. Leaving one recording out already runs both ways: no backward splits."""
+    rec = _rec(500)
+    splits = backward_splits([rec])
+    assert len(splits) == BLOCKS - 2
+    firsts = []
+    for fit, test in splits:
+        fitted, scored = np.flatnonzero(fit[0].rows), np.flatnonzero(test[0].rows)
+        assert scored.max() + 1 == fitted.min() and fitted.max() == 499 and np.all(np.diff(fitted) == 1)
+        assert np.all(np.diff(scored) == 1)
+        firsts.append(scored.min())
+    assert firsts[0] == 0 and firsts == sorted(firsts)
+    mirror = held_out_splits([Recording(rec.t, rec.x[::-1], rec.y[::-1])])
+    assert sorted(int(np.flatnonzero(t[0].rows).size) for _, t in splits) == sorted(
+        int(np.flatnonzero(t[0].rows).size) for _, t in mirror)
+    assert backward_splits([_rec(50, "a"), _rec(60, "b")]) == []
 
 
 def test_paired_gain_is_the_mean_chunk_difference_with_its_standard_error():

@@ -7,7 +7,10 @@ creep state -- and flatters every added complexity. Here a choice is scored wher
 * with two or more recordings, **leave one recording out**: fit on the others, score on it;
 * within a single recording, **forward chaining**: cut it into :data:`BLOCKS` contiguous blocks (equal
   numbers of rows with both readout and reference), fit on the first k and score on block k + 1
-  (k = 2..BLOCKS−1), so the score is always on later readings than the fit.
+  (k = 2..BLOCKS−1), so the score is always on later readings than the fit. A memory must also hold
+  **backward** (:func:`backward_splits`: fit on the last blocks, score on the one before them): forward
+  alone favours a term that rides a trend through the run -- creep building under a load that stays on,
+  a sensor settling -- which the next recording, in another state, does not share.
 
 The memory of a model (play operators, creep averages) runs over the whole recording it is scored
 on -- it depends on the readout alone, not on the reference -- and only the rows of the held-out
@@ -27,8 +30,8 @@ import numpy as np
 from fsrlab.calibration.monotone import adc_full_scale
 from fsrlab.errors import ParameterError
 
-__all__ = ["BLOCKS", "CHUNKS", "Recording", "Part", "held_out_splits", "scheme_name", "paired_gain", "orientation",
-           "readout_rail", "RESISTANCE_UNITS", "readout_variables"]
+__all__ = ["BLOCKS", "CHUNKS", "Recording", "Part", "held_out_splits", "backward_splits", "scheme_name",
+           "paired_gain", "orientation", "readout_rail", "RESISTANCE_UNITS", "readout_variables"]
 
 #: Contiguous blocks of a single recording for forward chaining. [1]
 BLOCKS = 5
@@ -107,17 +110,43 @@ def held_out_splits(recs: list[Recording]) -> list[tuple[list[Part], list[Part]]
         return [([Part(r, r.usable) for j, r in enumerate(recs) if j != i], [Part(recs[i], recs[i].usable)])
                 for i in range(len(recs))]
     rec = recs[0]
-    n = rec.t.size
-    # block edges at equal counts of usable rows: a stretch without a reference makes no empty block
+    inside = _blocks(rec)
+    return [([Part(rec, rec.usable & np.logical_or.reduce(inside[:k]))], [Part(rec, rec.usable & inside[k])])
+            for k in range(2, BLOCKS)]
+
+
+def backward_splits(recs: list[Recording]) -> list[tuple[list[Part], list[Part]]]:
+    """The mirror of forward chaining within a single recording: fit on the last k blocks, score on the block
+    before them (k = 2..BLOCKS−1); none with two or more recordings (leaving one out runs both ways).
+
+    Parameters
+    ----------
+    recs : list of Recording
+        The recordings.
+
+    Returns
+    -------
+    list of (list of Part, list of Part)
+        The parts to fit on and the parts to score on, per split (the earliest block scored first).
+    """
+    if len(recs) >= 2:
+        return []
+    rec = recs[0]
+    inside = _blocks(rec)
+    return [([Part(rec, rec.usable & np.logical_or.reduce(inside[k + 1:]))], [Part(rec, rec.usable & inside[k])])
+            for k in range(BLOCKS - 2)]
+
+
+def _blocks(rec: Recording) -> list[np.ndarray]:
+    """The rows of each of the :data:`BLOCKS` contiguous blocks of ``rec``, cut at equal counts of usable
+    rows (a stretch without a reference makes no empty block)."""
     used = np.flatnonzero(rec.usable)
     if used.size < BLOCKS:
         raise ParameterError(f"fewer than {BLOCKS} readings with both the readout and the reference")
     cut = used[np.linspace(0, used.size, BLOCKS + 1).astype(int)[1:-1]]
-    edges = np.r_[0, cut, n]
-    idx = np.arange(n)
-    return [([Part(rec, rec.usable & (idx < edges[k]))],
-             [Part(rec, rec.usable & (idx >= edges[k]) & (idx < edges[k + 1]))])
-            for k in range(2, BLOCKS)]
+    edges = np.r_[0, cut, rec.t.size]
+    idx = np.arange(rec.t.size)
+    return [(idx >= edges[k]) & (idx < edges[k + 1]) for k in range(BLOCKS)]
 
 
 def chunk_ids(n: int) -> np.ndarray:

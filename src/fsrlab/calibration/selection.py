@@ -25,7 +25,8 @@ complexity:
 Steps 2 to 4 are kept only when they **win**: the delay and the lag by a held-out MSE lower by more
 than one standard error (paired over chunks) and :data:`MIN_GAIN`, lower in most held-out parts and
 higher in none; the memory by more than :data:`MEMORY_Z` standard errors (it is the best of many
-trials) and :data:`MIN_GAIN`, and higher in no held-out part at all. Otherwise the simpler calibration
+trials) and :data:`MIN_GAIN`, and higher in no held-out part at all, forward or, for one recording,
+backward (:func:`fsrlab.calibration.scoring.backward_splits`). Otherwise the simpler calibration
 is kept and the :class:`Selection` says why. What each rule did on real recordings: docs/calibration.md.
 The uncertainty (:class:`LevelUncertainty`) comes from the held-out errors of the chosen model, by
 level and direction, with a relative term for what changes between recordings.
@@ -50,6 +51,7 @@ from fsrlab.calibration.operators import (
 from fsrlab.calibration.scoring import (
     Part,
     Recording,
+    backward_splits,
     chunk_ids,
     held_out_splits,
     orientation,
@@ -362,6 +364,32 @@ def _memory_step(sel: Selection, score, scored: dict, cache: _Cache, base: _Choi
     return (best, alpha) if kept else (None, 1.0)
 
 
+def _holds_backward(search: _Search, cur: _Choice, mem: _Choice, alpha: float, mixed: list) -> bool:
+    """Whether the memory kept (``mem``, weighted ``alpha``, around ``cur``) is higher in none of the blocks of a
+    single recording scored backward (:func:`fsrlab.calibration.scoring.backward_splits`), against the static
+    estimate (``cur``'s, or the mean of ``mixed``); recorded in the memory step. True with several recordings."""
+    splits = backward_splits(search.delayed_recs(cur.delay)[0])
+    if not splits:
+        return True
+    cache = _Cache()  # its keys name a split by its place: not those of the forward splits
+
+    def held(ch):
+        return _held_out(splits, ch, search.sign, search.adc, cache)
+
+    e_c, ids, _, parts = held(cur)
+    e_p = np.mean([held(m)[0] for m in mixed], axis=0) if mixed else e_c
+    folds = _fold_gains((e_p, ids, None, parts), (e_p + alpha * (held(mem)[0] - e_c), ids, None, parts))
+    worse = sum(f < 0 for f in folds)
+    step = search.sel.steps[-1]
+    step["heldout_gain_by_earlier_part"] = folds
+    if worse:
+        step["kept"] = False
+        step["why"] = (step["why"].split(" (more than")[0] + f"; fitted on the later blocks it is higher in {worse} of "
+                       f"{len(folds)} earlier ones (a trend through the run, not a memory the next one shares), so "
+                       "the simpler calibration is kept")
+    return not worse
+
+
 def _best_of(trials, errors, let_go):
     """The trial of least RMS ``errors(trial)`` (held-out errors), scoring them in turn; ``let_go(trial)`` is
     called on each one beaten as soon as it is, so only the best so far keeps its held-out errors."""
@@ -666,6 +694,8 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
     alpha, mem = 1.0, None
     if compensate:
         mem, alpha = _memory_step(sel, search.score, search.scored, search.cache, cur, plain)
+        if mem is not None and not _holds_backward(search, cur, mem, alpha, mixed):
+            mem, alpha = None, 1.0
     return _final(search, cur, mem, alpha, mixed, plain, between_runs)
 
 
