@@ -32,7 +32,7 @@ def test_the_circuit_given_is_recorded_and_the_calibration_compares_it(tmp_path)
         assert code == 0, err
     assert "no circuit recorded" not in err
     other = load_run(tmp_path / "other.csv")
-    assert other.readout() == (LM555Circuit(r_ohm=4.7e3, c_off_farad=1e-9, diode=True, vcc_v=5.0),
+    assert other.circuits() == (LM555Circuit(r_ohm=4.7e3, c_off_farad=1e-9, diode=True, vcc_v=5.0),
                                OpAmpReadout(r_f_ohm=20e3, vcc_v=-5.0))
     # A calibration recorded with the paper's circuit refuses the 4.7 kΩ run and takes the 10 kΩ one
     # (range 0: its C_off is out of circuit).
@@ -74,4 +74,4 @@ def test_without_r_the_run_says_it_records_no_circuit(tmp_path):
                                   "--out", tmp_path / "x.csv"])
     assert code == 0, err
     assert " windows, " in out and "no circuit recorded (give the meter's --r" in err
-    assert load_run(tmp_path / "x.csv").readout() == (None, None)
+    assert load_run(tmp_path / "x.csv").circuits() == (None, None)

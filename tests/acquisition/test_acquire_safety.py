@@ -137,7 +137,7 @@ def test_options_in_their_units_reach_the_device_and_the_sidecar(tmp_path):
     run = load_run(out)
     acq = run.metadata["acquisition"]
     assert acq["window_ms"] == 20 and acq["duration_s"] == 0.5 and acq["stall_s"] == 2.0  # 5 windows < 2 s
-    assert run.readout()[0].c_off_farad == pytest.approx(2.2e-9)
+    assert run.circuits()[0].c_off_farad == pytest.approx(2.2e-9)
     assert "peak 60000 Pa, period 1.5 s" in run.metadata["notes"]
 
 

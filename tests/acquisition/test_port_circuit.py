@@ -42,7 +42,7 @@ def test_measure_records_the_circuit_and_refuses_a_calibration_of_another(tmp_pa
         code, _, err = run_cli(["measure", "--port", dev.port, *PAPER_AS_BUILT, "--cal", CAL, "--duration", "0.5",
                                 "--quiet", "-o", tmp_path / "same.csv"])
     assert code == 0 and "warning" not in err, err
-    assert load_run(tmp_path / "same.csv").readout()[0] == LM555Circuit(r_ohm=10e3, diode=True)
+    assert load_run(tmp_path / "same.csv").circuits()[0] == LM555Circuit(r_ohm=10e3, diode=True)
     code, _, err = run_cli(["apply", CAL, tmp_path / "same.csv", "-o", tmp_path / "est.csv"])
     assert code == 0, err  # the run says the circuit the calibration was made on
 
@@ -53,7 +53,7 @@ def test_measure_without_r_says_nothing_is_checked(tmp_path):
                                 "-o", tmp_path / "x.csv"])
     assert code == 0, err
     assert "no circuit recorded (give the meter's --r" in err and f"{CAL} cannot be checked against the meter" in err
-    assert load_run(tmp_path / "x.csv").readout() == (None, None)
+    assert load_run(tmp_path / "x.csv").circuits() == (None, None)
 
 
 def test_live_refuses_a_calibration_of_another_circuit_before_the_device(tmp_path):
@@ -93,7 +93,7 @@ def test_live_records_the_circuit_and_blanks_the_estimate_on_a_range_it_does_not
                                   "--sensor", "flexiforce-a201", "--out", tmp_path / "rec.csv",
                                   "--http-port", "0", "--duration", "2s", "--json"])
     assert code == 0 and "warning" not in err, err
-    assert load_run(tmp_path / "rec.csv").readout()[0] == LM555Circuit(r_ohm=10e3, c_off_farad=1e-9, diode=True)
+    assert load_run(tmp_path / "rec.csv").circuits()[0] == LM555Circuit(r_ohm=10e3, c_off_farad=1e-9, diode=True)
     rows = list(sessions[0]._rows)
     on = {r: [row["estimate"] for row in rows if row["range"] == r] for r in (0, 1)}
     assert on[0] and on[1], json.loads(out.strip().splitlines()[-1])
@@ -112,9 +112,9 @@ def test_bench_and_weights_on_a_port_record_the_circuit(tmp_path):
         code, _, err = run_cli(["bench", "creep", "--port", dev.port, "--mass", "100g", "--hold", "0.2s", "--quiet",
                                 "-o", tmp_path / "creep.csv"])
     assert code == 0 and "no circuit recorded (give the meter's --r" in err, err
-    assert load_run(tmp_path / "spring.csv").readout()[0] == LM555Circuit(r_ohm=4.7e3, diode=True)
-    assert load_run(tmp_path / "w.csv").readout()[0] == LM555Circuit(r_ohm=4.7e3, diode=True, vcc_v=3.3)
-    assert load_run(tmp_path / "creep.csv").readout() == (None, None)
+    assert load_run(tmp_path / "spring.csv").circuits()[0] == LM555Circuit(r_ohm=4.7e3, diode=True)
+    assert load_run(tmp_path / "w.csv").circuits()[0] == LM555Circuit(r_ohm=4.7e3, diode=True, vcc_v=3.3)
+    assert load_run(tmp_path / "creep.csv").circuits() == (None, None)
     # What the sidecar says is what apply checks: the paper-circuit calibration refuses the 4.7 kΩ run.
     code, _, err = run_cli(["apply", CAL, tmp_path / "spring.csv", "-o", tmp_path / "est.csv"])
     assert code == 2 and "R = 4.7 kΩ" in err and "R = 10 kΩ" in err, err

@@ -192,7 +192,7 @@ def test_cli_json_contract(tmp_path):
         assert col in run.columns and np.all(np.isfinite(run[col]))
     # The sidecar names the virtual circuits (docs/data-format.md): the paper's 555 with the 1 nF C_off
     # of --c-off's default, and the paper's op-amp.
-    assert run.readout() == (PAPER_CIRCUIT.replace(c_off_farad=1e-9), PAPER_OPAMP)
+    assert run.circuits() == (PAPER_CIRCUIT.replace(c_off_farad=1e-9), PAPER_OPAMP)
 
 
 @pytest.mark.parametrize("argv, field", [
@@ -254,7 +254,7 @@ def test_a_virtual_recording_is_analysable(tmp_path):
     code, _, err = run_cli(["acquire", "--virtual", "--duration", "2.05", "--period", "1", "--window", "20ms",
                          "--out", str(out), "--quiet", "--seed", "1", "--c-off", "2.2n"])
     assert code == 0, err
-    circuit = load_run(out).readout()[0]  # --c-off builds the circuit
+    circuit = load_run(out).circuits()[0]  # --c-off builds the circuit
     assert circuit.c_off_farad == pytest.approx(2.2e-9) and circuit.replace(c_off_farad=0.0) == PAPER_CIRCUIT
     code, stdout, err = run_cli(["hysteresis", str(out), "--json"])
     assert code == 0, err

@@ -197,24 +197,24 @@ def test_to_pandas(tmp_path):
 
 
 def test_readout_gives_the_sidecar_circuits(tmp_path):
-    """Run.readout(): the circuits of the sidecar as objects (fsrlab.circuits.circuit), in the
+    """Run.circuits(): the circuits of the sidecar as objects (fsrlab.circuits.circuit), in the
     layout written today ("circuit" and "opamp") and in the earlier one (op-amp parts under
     circuit.traditional); none without circuits; a bad part names the sidecar."""
     from fsrlab.circuits.circuit import LM555Circuit, OpAmpReadout
 
     lm, op = LM555Circuit(r_ohm=22e3, c_off_farad=1e-9, diode=True), OpAmpReadout(r_f_ohm=20e3, vcc_v=-5.0)
     path = write_run(tmp_path / "new.csv", {"time_s": [0.0]}, {"circuit": lm.to_dict(), "opamp": op.to_dict()})
-    assert load_run(path).readout() == (lm, op)
+    assert load_run(path).circuits() == (lm, op)
     earlier = {"circuit": {"topology": "lm555-astable (paper Fig. 16)", "r_ohm": 22e3, "c_off_farad": 1e-9,
                            "diode": True, "diode_drop_v": 0.0, "vcc_v": 5.0,
                            "traditional": {"r_f_ohm": 20e3, "vcc_v": -5.0}}}
     path = write_run(tmp_path / "old.csv", {"time_s": [0.0]}, earlier)
-    assert load_run(path).readout() == (lm, op)
+    assert load_run(path).circuits() == (lm, op)
     path = write_run(tmp_path / "none.csv", {"time_s": [0.0]})
-    assert load_run(path).readout() == (None, None)
+    assert load_run(path).circuits() == (None, None)
     path = write_run(tmp_path / "bad.csv", {"time_s": [0.0]}, {"circuit": {"r_ohm": -1.0}})
     with pytest.raises(RunFormatError, match=r"bad\.meta\.json: .*r_ohm"):
-        load_run(path).readout()
+        load_run(path).circuits()
 
 
 def test_readout_values_decode_c_fsr_through_the_runs_circuit(tmp_path):
@@ -246,7 +246,7 @@ def test_readout_values_decode_c_fsr_through_the_runs_circuit(tmp_path):
     bad = load_run(write_run(tmp_path / "bad.csv", {"time_s": [0.0]}, {"circuit": {"r_ohm": -1.0}}))
     with pytest.raises(RunFormatError, match=r"bad\.csv: its sidecar's circuit: .*r_ohm"):
         bad.recorded_with()
-    with pytest.raises(RunFormatError, match=r"bad\.meta\.json: .*r_ohm"):  # as Run.readout() says it
+    with pytest.raises(RunFormatError, match=r"bad\.meta\.json: .*r_ohm"):  # as Run.circuits() says it
         bad.circuit()
 
 

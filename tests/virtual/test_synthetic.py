@@ -27,7 +27,7 @@ def test_sidecar_stores_the_circuits_and_the_run_gives_them_back(tmp_path):
     run = synthetic_run(cycles=1, points_per_ramp=10, circuit=circuit, opamp=opamp)
     assert run.metadata["circuit"] == circuit.to_dict() and run.metadata["opamp"] == opamp.to_dict()
     run.write(tmp_path / "r.csv")
-    assert load_run(tmp_path / "r.csv").readout() == (circuit, opamp)
+    assert load_run(tmp_path / "r.csv").circuits() == (circuit, opamp)
     default = synthetic_run(cycles=1, points_per_ramp=10)
     assert default.metadata["circuit"] == PAPER_CIRCUIT.to_dict()
     assert default.metadata["opamp"] == PAPER_OPAMP.to_dict()

@@ -144,7 +144,7 @@ class Run:
             return self.columns["force_n"] / float(area)
         raise RunFormatError(f"{self.path}: column 'stress_pa' missing (or 'force_n' with a sensor area)")
 
-    def readout(self):
+    def circuits(self):
         """The readout circuits the sidecar describes (:func:`fsrlab.circuits.circuit.readout_from_metadata`).
 
         Returns
@@ -183,7 +183,7 @@ class Run:
         Raises
         ------
         RunFormatError
-            The sidecar's circuit out of range or unknown (as :meth:`readout`).
+            The sidecar's circuit out of range or unknown (as :meth:`circuits`).
         """
         from fsrlab.circuits.circuit import PAPER_CIRCUIT, LM555Circuit
 
@@ -191,7 +191,7 @@ class Run:
             if not isinstance(circuit, LM555Circuit):
                 raise TypeError(f"circuit: must be an LM555Circuit, got {type(circuit).__name__}")
             return circuit
-        found, _ = self.readout()  # a sidecar's circuit out of range: RunFormatError naming the sidecar
+        found, _ = self.circuits()  # a sidecar's circuit out of range: RunFormatError naming the sidecar
         return PAPER_CIRCUIT if found is None else found
 
     def readout_values(self, x: str, circuit: LM555Circuit | None = None) -> tuple[np.ndarray, LM555Circuit | None]:
