@@ -19,7 +19,8 @@ from pathlib import Path
 from fsrlab.live.page_text import fmt as _fmt
 from fsrlab.live.page_text import html_text as _html
 
-__all__ = ["UPDATE_S", "REFRESH_MAX_S", "PLOT_S", "STATUS_S", "POINTS", "Controller", "check_refresh", "make_document"]
+__all__ = ["UPDATE_S", "REFRESH_MAX_S", "PLOT_S", "STATUS_S", "BEHIND_S", "POINTS", "Controller", "check_refresh",
+           "make_document"]
 
 UPDATE_S = 0.04
 """Period of a page's update callback by default, and the shortest allowed (:func:`check_refresh`). [s]"""
@@ -29,6 +30,10 @@ PLOT_S = 0.1
 """Shortest time between two redraws of the plots (the numbers update every :data:`UPDATE_S`). [s]"""
 STATUS_S = 0.25
 """Period of the status line's refresh. [s]"""
+BEHIND_S = 1.0
+"""Updates a tab's browser may have been sent and not yet applied, in seconds of refresh: the next numbers, plots
+and status lines wait until it has applied the earlier ones (back-pressure: a starved browser gets fewer updates
+instead of falling behind). At least two. [s]"""
 POINTS = 10_000
 """Windows a page keeps per plot (the oldest roll over). [1]"""
 WINDOWS_MS = ("20", "50", "100", "200", "500", "1000")
@@ -137,7 +142,7 @@ def make_document(doc, session, controller: Controller, reference_label: str = "
     doc.on_session_destroyed(lambda ctx: controller.release(doc))
     doc.title = title
     doc.add_root(column(Div(text=f"<h2 style='margin:4px 0'>{_html(title)}</h2>"), panel.status, update.latest,
-                        *panel.rows, plots.layout, panel.events, sizing_mode="stretch_width"))
+                        *panel.rows, plots.layout, panel.events, update.ack, sizing_mode="stretch_width"))
 
 
 class WindowPlots:
@@ -199,6 +204,7 @@ class WindowPlots:
                "upper": [e + u for e, u in zip(est, unc, strict=True)]}
         for key, values in new.items():
             self.pending[key].extend(values)
+            del self.pending[key][:-POINTS]  # a tab held back (BEHIND_S) keeps no more than its plots show
 
     def refresh(self) -> None:
         """Nothing beside the plots to refresh (the status line says the link's health)."""
@@ -309,11 +315,18 @@ class Updater:
         Shown = SI value × this. [1]
     refresh_s : float
         Period of the callback (:func:`check_refresh`). [s]
+
+    Each update of the numbers is counted in ``latest.tags``; the browser copies the count it has applied into
+    the hidden ``ack`` model's tags, which comes back to the server. Once a count has come back, no more than
+    :data:`BEHIND_S` of updates go out ahead of the browser: the windows read meanwhile wait for the plots and
+    only the latest is shown in numbers. A browser that never answers is updated as if it kept up.
     """
 
     def __init__(self, session, plots, panel: ControlPanel, reference_label: str, reference_unit: str,
                  reference_scale: float, refresh_s: float = UPDATE_S) -> None:
-        from bokeh.models import Div
+        import math
+
+        from bokeh.models import CustomJS, Div
 
         # the plots (the status lines) every call when the calls are PLOT_S (STATUS_S) or more apart: no call is
         # missed to a clock's jitter
@@ -322,14 +335,34 @@ class Updater:
         self.status_s = STATUS_S if refresh_s < STATUS_S else 0.0
         self.session, self.plots, self.panel = session, plots, panel
         self.label, self.unit, self.scale = reference_label, reference_unit, reference_scale
-        self.latest = Div(text="", name="latest", sizing_mode="stretch_width", height=22)
+        self.latest = Div(text="", name="latest", sizing_mode="stretch_width", height=22, tags=[0])
+        self.ack = Div(text="", name="ack", visible=False)
+        self.latest.js_on_change("tags", CustomJS(args={"ack": self.ack}, code="ack.tags = [cb_obj.tags[0]]"))
+        self.ack.on_change("tags", self._acknowledged)
+        self.ahead = max(2, math.ceil(BEHIND_S / refresh_s))  # updates that may be out unapplied
+        self.sent, self.acked, self.text = 0, None, None
         self.cursor, self.plot_at, self.status_at = 0, 0.0, 0.0
+
+    def _acknowledged(self, attr, old, new) -> None:
+        """The browser has applied the update counted ``new[0]`` (anything else from it is ignored)."""
+        if isinstance(new, list) and new and isinstance(new[0], int) and 0 <= new[0] <= self.sent:
+            self.acked = new[0]
+
+    def behind(self) -> bool:
+        """Whether this tab's browser is more than :data:`BEHIND_S` of updates behind what it was sent."""
+        return self.acked is not None and self.sent - self.acked >= self.ahead
 
     def __call__(self) -> None:
         self.cursor, cols = self.session.since(self.cursor)
         if cols["seq"]:
             self.plots.add(cols)
-            self.latest.text = self.latest_text(cols, len(cols["seq"]) - 1)
+            self.text = self.latest_text(cols, len(cols["seq"]) - 1)
+        if self.behind():  # the windows wait in the plots' queue, the latest line in self.text
+            return
+        if self.text is not None:
+            self.latest.text, self.text = self.text, None
+            self.sent += 1
+            self.latest.tags = [self.sent]
         now = time.monotonic()
         if now - self.plot_at >= self.plot_s:  # the plots redraw at most every max(refresh_s, PLOT_S)
             self.plot_at = now

@@ -148,6 +148,7 @@ class ChannelPlots:
                 self.open = {}
             self.open[f"t{k}"] = t
             self.open[f"f{k}"] = f / 1e3 if f is not None and math.isfinite(f) else math.nan
+        del self.scans[:-CHANNEL_POINTS]  # a tab held back (page.BEHIND_S) keeps no more than its plots show
 
     def flush(self) -> None:
         """Stream the complete scans queued (one message; a channel missing from a scan is NaN there)."""
