@@ -86,9 +86,13 @@ def test_an_acknowledgement_that_is_no_count_sent_is_ignored(monkeypatch, value)
     assert update.acked is None
 
 
-def test_at_the_slowest_refresh_two_updates_may_be_out():
-    # BEHIND_S / 10 s rounds up to one; at least two, so one in flight never stops the next
-    assert Updater.__init__ and max(2, math.ceil(BEHIND_S / 10.0)) == 2
+def test_at_the_slowest_refresh_two_updates_may_be_out(monkeypatch):
+    """BEHIND_S of 10 s updates is less than one: at least two go out, so one in flight never stops the next."""
+    update, _, call = _updater(monkeypatch, refresh_s=10.0)
+    call()
+    update.ack.tags = [1]
+    call(5)
+    assert update.sent == 3 and _shown(update) == 3
 
 
 def test_the_plots_queue_of_a_held_tab_keeps_only_what_the_plot_shows():
