@@ -345,11 +345,12 @@ class Updater:
 
     def _acknowledged(self, attr, old, new) -> None:
         """The browser has applied the update counted ``new[0]`` (anything else from it is ignored)."""
-        if isinstance(new, list) and new and isinstance(new[0], int) and 0 <= new[0] <= self.sent:
+        if isinstance(new, list) and new and type(new[0]) is int and 0 <= new[0] <= self.sent:
             self.acked = new[0]
 
     def behind(self) -> bool:
-        """Whether this tab's browser is more than :data:`BEHIND_S` of updates behind what it was sent."""
+        """Whether this tab's browser has not applied the last ``ahead`` updates it was sent (:data:`BEHIND_S` of
+        refresh, at least two): then no more go out until it has."""
         return self.acked is not None and self.sent - self.acked >= self.ahead
 
     def __call__(self) -> None:
