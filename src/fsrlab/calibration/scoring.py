@@ -116,19 +116,9 @@ def held_out_splits(recs: list[Recording]) -> list[tuple[list[Part], list[Part]]
 
 
 def backward_splits(recs: list[Recording]) -> list[tuple[list[Part], list[Part]]]:
-    """The mirror of forward chaining within a single recording: fit on the last k blocks, score on the block
-    before them (k = 2..BLOCKS−1); none with two or more recordings (leaving one out runs both ways).
-
-    Parameters
-    ----------
-    recs : list of Recording
-        The recordings.
-
-    Returns
-    -------
-    list of (list of Part, list of Part)
-        The parts to fit on and the parts to score on, per split (the earliest block scored first).
-    """
+    """The mirror of forward chaining within a single recording (as :func:`held_out_splits`): fit on the last k
+    blocks, score on the block before them (k = 2..BLOCKS−1), the earliest block first; none with two or more
+    recordings (leaving one out runs both ways)."""
     if len(recs) >= 2:
         return []
     rec = recs[0]

@@ -111,6 +111,10 @@ CREEP_SIGNS = (1, -1)
 LAG_PROBE_RIDGE = 1e-2
 #: Lags tried, in rows of the recording (the reference shifted against the readout). [1]
 LAG_ROWS = (-3, -2, -1, 1, 2, 3)
+#: Most readings a choice is fitted on while scored (every k-th; the memory runs over every reading, every held-out
+#: row is scored, the calibration written is fitted on all): at most ~20 coefficients on 10^5 readings. On 10^6:
+#: the same choices, every candidate's held-out RMSE within 0.05 % of the full fits', 31 s instead of 40. [1]
+FIT_ROWS = 100_000
 
 
 @dataclass
@@ -234,9 +238,23 @@ class _Cache:
         return (f @ weights.astype(np.float32)).astype(float)
 
 
+def _thinned(parts: list[Part]) -> list[Part]:
+    """``parts`` with every k-th of their rows, k the least that leaves at most :data:`FIT_ROWS`."""
+    k, out = -(-sum(int(p.rows.sum()) for p in parts) // FIT_ROWS), []
+    if k <= 1:
+        return parts
+    for p in parts:
+        out.append(Part(p.rec, np.zeros_like(p.rows)))
+        out[-1].rows[np.flatnonzero(p.rows)[::k]] = True
+    return out
+
+
 def _fit(parts: list[Part], ch: _Choice, sign: int, adc, cache: _Cache | None = None,
          split: int = -1) -> HeldoutCalibration:
+    """``ch`` fitted on ``parts``; on a held-out split (``split`` ≥ 0) on at most :data:`FIT_ROWS` of their rows."""
     cache = cache or _Cache()
+    if split >= 0:
+        parts = _thinned(parts)
     x = np.concatenate([p.rec.x[p.rows] for p in parts])
     y = np.concatenate([_shifted(p.rec, ch.lag)[p.rows] for p in parts])
     ok = np.isfinite(y)
