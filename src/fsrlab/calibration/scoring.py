@@ -118,7 +118,13 @@ def held_out_splits(recs: list[Recording]) -> list[tuple[list[Part], list[Part]]
 def backward_splits(recs: list[Recording]) -> list[tuple[list[Part], list[Part]]]:
     """The mirror of forward chaining within a single recording (as :func:`held_out_splits`): fit on the last k
     blocks, score on the block before them (k = 2..BLOCKS−1), the earliest block first; none with two or more
-    recordings (leaving one out runs both ways)."""
+    recordings (leaving one out runs both ways).
+
+    Parameters
+    ----------
+    recs : list of Recording
+        The recordings.
+    """
     if len(recs) >= 2:
         return []
     rec = recs[0]
@@ -128,8 +134,7 @@ def backward_splits(recs: list[Recording]) -> list[tuple[list[Part], list[Part]]
 
 
 def _blocks(rec: Recording) -> list[np.ndarray]:
-    """The rows of each of the :data:`BLOCKS` contiguous blocks of ``rec``, cut at equal counts of usable
-    rows (a stretch without a reference makes no empty block)."""
+    """The rows of each of the :data:`BLOCKS` blocks of ``rec``, at equal counts of usable rows (no empty block)."""
     used = np.flatnonzero(rec.usable)
     if used.size < BLOCKS:
         raise ParameterError(f"fewer than {BLOCKS} readings with both the readout and the reference")

@@ -111,9 +111,8 @@ CREEP_SIGNS = (1, -1)
 LAG_PROBE_RIDGE = 1e-2
 #: Lags tried, in rows of the recording (the reference shifted against the readout). [1]
 LAG_ROWS = (-3, -2, -1, 1, 2, 3)
-#: Most readings a choice is fitted on while scored (every k-th; the memory runs over every reading, every held-out
-#: row is scored, the calibration written is fitted on all): at most ~20 coefficients on 10^5 readings. On 10^6:
-#: the same choices, every candidate's held-out RMSE within 0.05 % of the full fits', 31 s instead of 40. [1]
+#: Most readings a choice is fitted on while scored (every k-th; the memory and the scoring take every reading): ~20
+#: coefficients on 10^5 readings. On 10^6: the same choices, held-out RMSEs within 0.05 %, 31 s instead of 40. [1]
 FIT_ROWS = 100_000
 
 
@@ -383,9 +382,8 @@ def _memory_step(sel: Selection, score, scored: dict, cache: _Cache, base: _Choi
 
 
 def _holds_backward(search: _Search, cur: _Choice, mem: _Choice, alpha: float, mixed: list) -> bool:
-    """Whether the memory kept (``mem``, weighted ``alpha``, around ``cur``) is higher in none of the blocks of a
-    single recording scored backward (:func:`fsrlab.calibration.scoring.backward_splits`), against the static
-    estimate (``cur``'s, or the mean of ``mixed``); recorded in the memory step. True with several recordings."""
+    """Whether the memory kept (``mem`` at ``alpha``) is higher in no block scored backward (``backward_splits``)
+    than the static estimate (``cur``'s, or the mean of ``mixed``); recorded. True with several recordings."""
     splits = backward_splits(search.delayed_recs(cur.delay)[0])
     if not splits:
         return True
@@ -397,14 +395,12 @@ def _holds_backward(search: _Search, cur: _Choice, mem: _Choice, alpha: float, m
     e_c, ids, _, parts = held(cur)
     e_p = np.mean([held(m)[0] for m in mixed], axis=0) if mixed else e_c
     folds = _fold_gains((e_p, ids, None, parts), (e_p + alpha * (held(mem)[0] - e_c), ids, None, parts))
-    worse = sum(f < 0 for f in folds)
-    step = search.sel.steps[-1]
+    worse, step = sum(f < 0 for f in folds), search.sel.steps[-1]
     step["heldout_gain_by_earlier_part"] = folds
     if worse:
         step["kept"] = False
         step["why"] = (step["why"].split(" (more than")[0] + f"; fitted on the later blocks it is higher in {worse} of "
-                       f"{len(folds)} earlier ones (a trend through the run, not a memory the next one shares), so "
-                       "the simpler calibration is kept")
+                       f"{len(folds)} earlier ones (a trend through the run), so the simpler calibration is kept")
     return not worse
 
 
