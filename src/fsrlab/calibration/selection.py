@@ -322,14 +322,15 @@ def _blend(static: HeldoutCalibration, mem: HeldoutCalibration, alpha: float) ->
                               creep_start=mem.creep_start)
 
 
-def _memory_step(sel: Selection, score, scored: dict, cache: _Cache, base: _Choice, plain):
+def _memory_step(sel: Selection, score, scored: dict, cache: _Cache, base: _Choice, plain, backward):
     """The memory trial of lowest held-out error, and the weight ``alpha`` in [0, 1] of its correction
     (trial − base) that minimises the held-out error of ``plain + alpha·(trial − base)`` (stacking);
     (None, 1) unless that blend wins over ``plain`` (:data:`MEMORY_Z`, :data:`MIN_GAIN`, no part worse). The trials with
     the static curve held come first: one with the curve refitted is taken only when it wins over the
     best of them by more than one standard error and :data:`MIN_GAIN`. ``plain``: the held-out
     errors, chunk ids, estimates and parts of the static estimate (``base``'s, or the mean of the
-    static candidates). Recorded in ``sel``."""
+    static candidates); ``backward(trial, alpha)``: its gain in each block scored backward, none worse either
+    (:func:`_backward_folds`). Recorded in ``sel``."""
     cache.features.clear()  # the features of the lag step's probes are not needed again
     cache.systems.clear()
     held = [base.but(thresholds=h, time_constants=c, scaled=sc, ridge=r, held=True) for h, c, sc in MEMORY_VARIANTS
@@ -358,7 +359,10 @@ def _memory_step(sel: Selection, score, scored: dict, cache: _Cache, base: _Choi
     folds = _fold_gains(plain, (blended, ids, None, parts))
     least = MIN_GAIN * float(np.mean(e_s ** 2))
     worse = sum(f < 0 for f in folds)
-    kept = bool(alpha > 0 and gain > MEMORY_Z * se and gain >= least and not worse)
+    forward = bool(alpha > 0 and gain > MEMORY_Z * se and gain >= least and not worse)
+    earlier = backward(best, alpha) if forward else []  # scored backward only when it wins forward
+    before = sum(f < 0 for f in earlier)
+    kept = forward and not before
     lower = sum(f > 0 for f in folds)
     curve = (f"the curve refitted with it (held-out MSE lower by {g_refit:.4g} ± {se_refit:.4g} than with the curve "
              "held)" if refitted else f"the static curve held (refitting it: {g_refit:.4g} ± {se_refit:.4g})")
@@ -366,10 +370,13 @@ def _memory_step(sel: Selection, score, scored: dict, cache: _Cache, base: _Choi
             f"lower in {lower} of {len(folds)} held-out parts")
     short = (f"not more than {MEMORY_Z:g} standard errors" if not gain > MEMORY_Z * se else
              f"less than {100 * MIN_GAIN:.0f} % of the simpler calibration's" if gain < least else
-             f"higher in {worse} held-out part(s)")
+             f"higher in {worse} held-out part(s)" if worse or not before else
+             f"fitted on the later blocks it is higher in {before} of {len(earlier)} earlier ones (a trend through "
+             "the run)")
     sel.steps.append({"step": "memory", "tried": best.name, "weight": alpha, "gain": gain, "se": se, "kept": kept,
                       "curve_refitted": refitted, "refit_gain": g_refit, "refit_se": se_refit,
                       "heldout_rmse_at_weight_1": _rmse(e_s + d), "heldout_gain_by_part": folds,
+                      "heldout_gain_by_earlier_part": earlier,
                       "why": head + (f" (more than {MEMORY_Z:g} standard errors and {100 * MIN_GAIN:.0f} % of the "
                                      "simpler calibration's, no held-out part worse)" if kept else
                                      f": {short}, so the simpler calibration is kept")})
@@ -381,27 +388,20 @@ def _memory_step(sel: Selection, score, scored: dict, cache: _Cache, base: _Choi
     return (best, alpha) if kept else (None, 1.0)
 
 
-def _holds_backward(search: _Search, cur: _Choice, mem: _Choice, alpha: float, mixed: list) -> bool:
-    """Whether the memory kept (``mem`` at ``alpha``) is higher in no block scored backward (``backward_splits``)
-    than the static estimate (``cur``'s, or the mean of ``mixed``); recorded. True with several recordings."""
+def _backward_folds(search: _Search, cur: _Choice, mixed: list, mem: _Choice, alpha: float) -> list[float]:
+    """Relative MSE saved by the memory ``mem`` at ``alpha`` over the static estimate (``cur``'s, or the mean of
+    ``mixed``) in each block of a single recording scored backward (``backward_splits``); none with several."""
     splits = backward_splits(search.delayed_recs(cur.delay)[0])
-    if not splits:
-        return True
     cache = _Cache()  # its keys name a split by its place: not those of the forward splits
 
     def held(ch):
         return _held_out(splits, ch, search.sign, search.adc, cache)
 
+    if not splits:
+        return []
     e_c, ids, _, parts = held(cur)
     e_p = np.mean([held(m)[0] for m in mixed], axis=0) if mixed else e_c
-    folds = _fold_gains((e_p, ids, None, parts), (e_p + alpha * (held(mem)[0] - e_c), ids, None, parts))
-    worse, step = sum(f < 0 for f in folds), search.sel.steps[-1]
-    step["heldout_gain_by_earlier_part"] = folds
-    if worse:
-        step["kept"] = False
-        step["why"] = (step["why"].split(" (more than")[0] + f"; fitted on the later blocks it is higher in {worse} of "
-                       f"{len(folds)} earlier ones (a trend through the run), so the simpler calibration is kept")
-    return not worse
+    return _fold_gains((e_p, ids, None, parts), (e_p + alpha * (held(mem)[0] - e_c), ids, None, parts))
 
 
 def _best_of(trials, errors, let_go):
@@ -707,9 +707,8 @@ def calibrate_recordings(recs: list[Recording], compensate: bool = True, lag: in
     sel.heldout_rmse_plain = _rmse(plain[0])  # the calibration the memory is tried on (delay, lag kept)
     alpha, mem = 1.0, None
     if compensate:
-        mem, alpha = _memory_step(sel, search.score, search.scored, search.cache, cur, plain)
-        if mem is not None and not _holds_backward(search, cur, mem, alpha, mixed):
-            mem, alpha = None, 1.0
+        mem, alpha = _memory_step(sel, search.score, search.scored, search.cache, cur, plain,
+                                  lambda m, a: _backward_folds(search, cur, mixed, m, a))
     return _final(search, cur, mem, alpha, mixed, plain, between_runs)
 
 

@@ -12,6 +12,7 @@ the latest window in numbers every :data:`UPDATE_S` and streams the windows it h
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from pathlib import Path
@@ -324,8 +325,6 @@ class Updater:
 
     def __init__(self, session, plots, panel: ControlPanel, reference_label: str, reference_unit: str,
                  reference_scale: float, refresh_s: float = UPDATE_S) -> None:
-        import math
-
         from bokeh.models import CustomJS, Div
 
         # the plots (the status lines) every call when the calls are PLOT_S (STATUS_S) or more apart: no call is
@@ -340,7 +339,7 @@ class Updater:
         self.latest.js_on_change("tags", CustomJS(args={"ack": self.ack}, code="ack.tags = [cb_obj.tags[0]]"))
         self.ack.on_change("tags", self._acknowledged)
         self.ahead = max(2, math.ceil(BEHIND_S / refresh_s))  # updates that may be out unapplied
-        self.sent, self.acked, self.text = 0, None, None
+        self.sent, self.acked, self.unsent = 0, None, None
         self.cursor, self.plot_at, self.status_at = 0, 0.0, 0.0
 
     def _acknowledged(self, attr, old, new) -> None:
@@ -357,11 +356,11 @@ class Updater:
         self.cursor, cols = self.session.since(self.cursor)
         if cols["seq"]:
             self.plots.add(cols)
-            self.text = self.latest_text(cols, len(cols["seq"]) - 1)
-        if self.behind():  # the windows wait in the plots' queue, the latest line in self.text
+            self.unsent = self.latest_text(cols, len(cols["seq"]) - 1)
+        if self.behind():  # the windows wait in the plots' queue, the latest line in self.unsent
             return
-        if self.text is not None:
-            self.latest.text, self.text = self.text, None
+        if self.unsent is not None:
+            self.latest.text, self.unsent = self.unsent, None
             self.sent += 1
             self.latest.tags = [self.sent]
         now = time.monotonic()
